@@ -1,0 +1,73 @@
+#include "fusion/cluster_stats.h"
+
+#include <algorithm>
+#include <iterator>
+#include <utility>
+
+#include "geometry/convex_hull2.h"
+
+namespace mapd::fusion {
+
+ClusterStats ClusterStats::OfFeature(const GroundFeature& f, ObservationId observation,
+                                     RobotId robot) {
+  ClusterStats s;
+  s.id = f.id;
+  s.member_count = 1;
+  s.plane_members = f.origin == FeatureOrigin::kPlane ? 1 : 0;
+  s.moments.Add(f.segment.a);
+  s.moments.Add(f.segment.b);
+  s.hull = {f.segment.a, f.segment.b};
+  s.z_min_m = f.z_min_m;
+  s.z_max_m = f.z_max_m;
+  s.observations.insert(observation);
+  s.robots = {robot};
+  return s;
+}
+
+void ClusterStats::Merge(ClusterStats&& other) {
+  id = std::min(id, other.id);
+  member_count += other.member_count;
+  plane_members += other.plane_members;
+  moments.Merge(other.moments);
+  z_min_m = std::min(z_min_m, other.z_min_m);
+  z_max_m = std::max(z_max_m, other.z_max_m);
+
+  // hull(A u B) = hull(hull(A) u hull(B)).
+  std::vector<geometry::Vec2> points;
+  points.reserve(hull.size() + other.hull.size());
+  points.insert(points.end(), hull.begin(), hull.end());
+  points.insert(points.end(), other.hull.begin(), other.hull.end());
+  hull = geometry::ConvexHull(std::move(points));
+
+  if (observations.size() < other.observations.size()) observations.swap(other.observations);
+  observations.insert(other.observations.begin(), other.observations.end());
+
+  std::vector<RobotId> robots_union;
+  robots_union.reserve(robots.size() + other.robots.size());
+  std::set_union(robots.begin(), robots.end(), other.robots.begin(), other.robots.end(),
+                 std::back_inserter(robots_union));
+  robots = std::move(robots_union);
+}
+
+ClusterStats::Fit ClusterStats::Refit() const {
+  Fit fit;
+  fit.line = geometry::FitLine(moments);
+  fit.segment = geometry::ExtremeProjections(fit.line, hull);
+  return fit;
+}
+
+FusedFeature ClusterStats::ToFused(const Fit& fit) const {
+  FusedFeature f;
+  f.id = id;
+  f.segment = fit.segment;
+  f.fitted = fit.segment;
+  f.z_min_m = z_min_m;
+  f.z_max_m = z_max_m;
+  f.support = support();
+  f.member_count = member_count;
+  f.plane_members = plane_members;
+  f.robots = robots;
+  return f;
+}
+
+}  // namespace mapd::fusion

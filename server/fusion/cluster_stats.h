@@ -1,0 +1,49 @@
+// What the engine keeps per cluster: enough to refit the fused feature of
+// ALGORITHMS.md section A after a merge without revisiting the members.
+#ifndef MAPD_FUSION_CLUSTER_STATS_H_
+#define MAPD_FUSION_CLUSTER_STATS_H_
+
+#include <cstdint>
+#include <unordered_set>
+#include <vector>
+
+#include "fusion/engine.h"
+#include "geometry/line_fit.h"
+
+namespace mapd::fusion {
+
+struct ClusterStats {
+  ClusterId id = 0;                      // smallest member FeatureId
+  uint32_t member_count = 0;
+  uint32_t plane_members = 0;            // members projected from vertical planes
+  geometry::PointMoments2 moments;       // of all member endpoints
+  std::vector<geometry::Vec2> hull;      // convex hull of all member endpoints
+  double z_min_m = 0.0;
+  double z_max_m = 0.0;
+  std::unordered_set<ObservationId> observations;  // distinct: the support
+  std::vector<RobotId> robots;                     // distinct, ascending
+
+  static ClusterStats OfFeature(const GroundFeature& f, ObservationId observation, RobotId robot);
+
+  // Absorbs `other` (which is left in an unspecified state). Costs
+  // O(min(support)) expected for the observation sets (small into large) and
+  // O(h log h) for the hulls, h = number of hull vertices.
+  void Merge(ClusterStats&& other);
+
+  uint32_t support() const { return static_cast<uint32_t>(observations.size()); }
+
+  // The total-least-squares fit of the member endpoints and the segment of its
+  // extreme projections (paper section 3.2, Figure 6).
+  struct Fit {
+    geometry::Line2 line;
+    geometry::Segment2 segment;
+  };
+  Fit Refit() const;
+
+  // The fused feature before corner optimisation (segment == fitted).
+  FusedFeature ToFused(const Fit& fit) const;
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_CLUSTER_STATS_H_

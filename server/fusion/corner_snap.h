@@ -1,0 +1,81 @@
+// Corner optimisation of the published fused features (paper section 3.2,
+// Figure 7; ALGORITHMS.md section A, "Corner optimisation").
+//
+// The rule, chosen to be a function of the published set alone (so independent
+// of arrival order) and local (so the engine recomputes only near a change):
+//  - E is the set of fitted endpoints of all published features.
+//  - N(e) is the endpoint e' of ANOTHER feature nearest to e with |e - e'| < snap_m;
+//    ties go to the smaller (cluster id, end index), end 0 = fitted.a, 1 = fitted.b.
+//  - e and e' snap iff N(e) = e' and N(e') = e (mutual nearest neighbours), so
+//    every endpoint snaps at most once. Three walls meeting at one point: only
+//    the mutual pair snaps.
+//  - The joint point is their midpoint (CornerMode::kMidpoint, the paper), or the
+//    intersection of the two fitted lines (kIntersection) when they cross at more
+//    than kMinCornerAngleRad and the intersection lies within snap_m of both
+//    endpoints; otherwise the midpoint.
+// The result for e depends only on endpoints within 2 * snap_m of e (N(e) is
+// within snap_m, and N(N(e)) within snap_m of that).
+#ifndef MAPD_FUSION_CORNER_SNAP_H_
+#define MAPD_FUSION_CORNER_SNAP_H_
+
+#include <unordered_map>
+#include <vector>
+
+#include "fusion/engine.h"
+#include "fusion/grid_index.h"
+#include "fusion/params.h"
+#include "geometry/line_fit.h"
+
+namespace mapd::fusion {
+
+// Lines crossing at less than this are "near-parallel": their intersection is
+// ill-conditioned, so the corner falls back to the midpoint.
+constexpr double kMinCornerAngleRad = 10.0 * 3.14159265358979323846 / 180.0;
+
+// The joint point of endpoint p (of line lp) and q (of line lq). Symmetric bit
+// for bit when the caller passes the pair in a fixed order.
+geometry::Vec2 CornerPoint(const geometry::Vec2& p, const geometry::Line2& lp,
+                           const geometry::Vec2& q, const geometry::Line2& lq, double snap_m,
+                           CornerMode mode);
+
+class CornerSnapper {
+ public:
+  CornerSnapper(double snap_m, CornerMode mode);
+
+  // Adds or replaces published feature `id`.
+  void Upsert(ClusterId id, const geometry::Segment2& fitted, const geometry::Line2& line);
+  void Erase(ClusterId id);
+
+  // Appends the ids of published features with an endpoint within radius_m of p.
+  void CollectNear(const geometry::Vec2& p, double radius_m, std::vector<ClusterId>* ids) const;
+
+  // The corner-optimised segment of published feature `id`. REQUIRES: id is present.
+  geometry::Segment2 Snapped(ClusterId id) const;
+
+  double snap_m() const { return snap_m_; }
+
+ private:
+  struct Entry {
+    geometry::Segment2 fitted;
+    geometry::Line2 line;
+  };
+  struct EndRef {
+    ClusterId id;
+    int end;  // 0 = a, 1 = b
+    geometry::Vec2 p;
+  };
+  // Nearest endpoint of another feature within snap_m; false if none.
+  bool Nearest(ClusterId id, const geometry::Vec2& p, EndRef* nearest) const;
+  static const geometry::Vec2& EndOf(const Entry& e, int end) {
+    return end == 0 ? e.fitted.a : e.fitted.b;
+  }
+
+  double snap_m_;
+  CornerMode mode_;
+  std::unordered_map<ClusterId, Entry> entries_;
+  UniformGrid<EndRef> grid_;
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_CORNER_SNAP_H_

@@ -1,0 +1,319 @@
+#include "fusion/engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "fusion/cluster_stats.h"
+#include "fusion/corner_snap.h"
+#include "fusion/criteria.h"
+#include "fusion/engine_inspector.h"
+#include "fusion/grid_index.h"
+
+namespace mapd::fusion {
+
+using geometry::Segment2;
+using geometry::Vec2;
+
+namespace {
+
+// Input bounds (engine.h): coordinates beyond this are refused as absurd.
+constexpr double kMaxAbsCoordinateM = 1e6;
+// Shorter segments are refused as zero-length: they have no direction.
+constexpr double kMinSegmentLengthM = 1e-9;
+// Cell size of the feature-centre grid. Queries cover R_f + eta, so cells of
+// the order of a typical wall segment keep both the probed cell count and the
+// per-cell candidate count small.
+constexpr double kFeatureCellM = 2.0;
+// Added to exact search radii so that rounding never hides a candidate.
+constexpr double kSearchSlackM = 1e-6;
+
+Status CheckPoint(const Vec2& p, size_t index, const char* name) {
+  if (!p.allFinite()) {
+    return Status::InvalidArgument("features[" + std::to_string(index) + "].segment." + name +
+                                   " is not finite");
+  }
+  if (p.cwiseAbs().maxCoeff() > kMaxAbsCoordinateM) {
+    return Status::InvalidArgument("features[" + std::to_string(index) + "].segment." + name +
+                                   " is beyond 1e6 m");
+  }
+  return Status::Ok();
+}
+
+// A raw feature as filed in the centre grid: what the criteria need, inline,
+// so that a candidate scan touches one cache line per candidate.
+struct IndexedFeature {
+  Segment2 segment;
+  Vec2 centre;
+  double radius_m;
+  uint32_t node;
+};
+
+}  // namespace
+
+class FusionEngine::Impl {
+ public:
+  explicit Impl(const FusionParams& params)
+      : params_(params), grid_(kFeatureCellM), snapper_(params.snap_m, params.corner_mode) {}
+
+  Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
+  void Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
+           ChangeFeed* changes);
+  std::optional<FusedFeature> Get(ClusterId id) const;
+
+  const FusionParams params_;
+  std::unordered_set<ObservationId> observations_;
+  std::unordered_map<FeatureId, uint32_t> node_of_;
+  // Union-find over nodes (one per raw feature); stats_ is non-null at roots only.
+  std::vector<uint32_t> parent_;
+  std::vector<uint32_t> size_;
+  std::vector<std::unique_ptr<ClusterStats>> stats_;
+  size_t cluster_count_ = 0;
+  UniformGrid<IndexedFeature> grid_;
+  CornerSnapper snapper_;
+  std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
+
+  uint32_t FindConst(uint32_t x) const;  // no path compression, for const readers
+
+ private:
+  uint32_t Find(uint32_t x);
+  // Returns the surviving root; records the ids of both clusters in `merged_ids`.
+  uint32_t Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids);
+  void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
+  void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
+               ChangeFeed* feed);
+};
+
+uint32_t FusionEngine::Impl::Find(uint32_t x) {
+  uint32_t root = x;
+  while (parent_[root] != root) root = parent_[root];
+  while (parent_[x] != root) {  // path compression
+    const uint32_t next = parent_[x];
+    parent_[x] = root;
+    x = next;
+  }
+  return root;
+}
+
+uint32_t FusionEngine::Impl::FindConst(uint32_t x) const {
+  while (parent_[x] != x) x = parent_[x];
+  return x;
+}
+
+uint32_t FusionEngine::Impl::Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids) {
+  if (size_[a] < size_[b]) std::swap(a, b);  // union by size: a survives
+  merged_ids->push_back(stats_[a]->id);
+  merged_ids->push_back(stats_[b]->id);
+  parent_[b] = a;
+  size_[a] += size_[b];
+  stats_[a]->Merge(std::move(*stats_[b]));
+  stats_[b].reset();
+  --cluster_count_;
+  return a;
+}
+
+Status FusionEngine::Impl::Validate(ObservationId observation,
+                                    const std::vector<GroundFeature>& features) const {
+  if (observations_.count(observation) != 0) {
+    return Status::InvalidArgument("observation " + std::to_string(observation) +
+                                   " was added before");
+  }
+  std::unordered_set<FeatureId> batch_ids;
+  for (size_t i = 0; i < features.size(); ++i) {
+    const GroundFeature& f = features[i];
+    const std::string name = "features[" + std::to_string(i) + "]";
+    MAPD_RETURN_IF_ERROR(CheckPoint(f.segment.a, i, "a"));
+    MAPD_RETURN_IF_ERROR(CheckPoint(f.segment.b, i, "b"));
+    if (!(f.segment.length() >= kMinSegmentLengthM)) {
+      return Status::InvalidArgument(name + " has zero length");
+    }
+    if (!std::isfinite(f.z_min_m) || !std::isfinite(f.z_max_m) ||
+        std::abs(f.z_min_m) > kMaxAbsCoordinateM || std::abs(f.z_max_m) > kMaxAbsCoordinateM ||
+        f.z_min_m > f.z_max_m) {
+      return Status::InvalidArgument(name + " has an invalid z range");
+    }
+    if (node_of_.count(f.id) != 0 || !batch_ids.insert(f.id).second) {
+      return Status::InvalidArgument(name + ": feature id " + std::to_string(f.id) +
+                                     " is not unique");
+    }
+  }
+  return Status::Ok();
+}
+
+void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
+                                       std::vector<ClusterId>* merged_ids) {
+  const FeatureCircle circle = CircleOf(f.segment);
+  // Criterion 3 bounds the centre distance: dist(O_g, segment f) >= D - R_f,
+  // so d_max <= eta implies D <= min(R_f, R_g) + eta. This holds for every
+  // gamma (gamma = 0 included), so the centre grid finds every candidate.
+  const double reach_m = circle.radius_m + params_.eta_m + kSearchSlackM;
+  uint32_t root = Find(node);
+  grid_.ForEachNear(circle.centre, reach_m, [&](const IndexedFeature& g) {
+    const double bound_m = std::min(circle.radius_m, g.radius_m) + params_.eta_m + kSearchSlackM;
+    if ((g.centre - circle.centre).squaredNorm() > bound_m * bound_m) return;
+    const uint32_t other_root = Find(g.node);
+    if (other_root == root) return;  // an edge inside a component changes nothing
+    if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
+    root = Union(root, other_root, merged_ids);
+  });
+}
+
+void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
+                             const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+  observations_.insert(observation);
+  const uint32_t first_node = static_cast<uint32_t>(parent_.size());
+  for (const GroundFeature& f : features) {
+    const uint32_t node = static_cast<uint32_t>(parent_.size());
+    parent_.push_back(node);
+    size_.push_back(1);
+    stats_.push_back(std::make_unique<ClusterStats>(ClusterStats::OfFeature(f, observation, robot)));
+    node_of_.emplace(f.id, node);
+    ++cluster_count_;
+  }
+  // Features of one observation are never linked directly (the paper compares
+  // time k with k - i only), so the batch is filed only after all its queries.
+  std::vector<ClusterId> merged_ids;
+  for (size_t i = 0; i < features.size(); ++i) {
+    LinkToEarlier(first_node + static_cast<uint32_t>(i), features[i], &merged_ids);
+  }
+  for (size_t i = 0; i < features.size(); ++i) {
+    const FeatureCircle c = CircleOf(features[i].segment);
+    grid_.Insert(c.centre, {features[i].segment, c.centre, c.radius_m,
+                            first_node + static_cast<uint32_t>(i)});
+  }
+  std::vector<uint32_t> roots;
+  for (size_t i = 0; i < features.size(); ++i) {
+    roots.push_back(Find(first_node + static_cast<uint32_t>(i)));
+  }
+  std::sort(roots.begin(), roots.end());
+  roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+  ChangeFeed feed;
+  Publish(roots, merged_ids, &feed);
+  if (changes != nullptr) *changes = std::move(feed);
+}
+
+void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
+                                 const std::vector<ClusterId>& merged_ids, ChangeFeed* feed) {
+  // Fitted endpoints that appeared, moved or vanished: the corner result can
+  // change within 2 * snap_m of them (corner_snap.h).
+  std::vector<Vec2> moved_points;
+  // Published clusters absorbed into another: removed.
+  for (ClusterId id : merged_ids) {
+    auto it = published_.find(id);
+    if (it == published_.end()) continue;
+    if (stats_[FindConst(node_of_.at(id))]->id == id) continue;  // it survived
+    moved_points.push_back(it->second.fitted.a);
+    moved_points.push_back(it->second.fitted.b);
+    snapper_.Erase(id);
+    published_.erase(it);
+    feed->removed.push_back(id);
+  }
+  // Clusters that gained members: refit once each, publish at min_support.
+  for (uint32_t root : roots) {
+    const ClusterStats& stats = *stats_[root];
+    if (stats.support() < params_.min_support) continue;  // support never shrinks
+    const ClusterStats::Fit fit = stats.Refit();
+    auto it = published_.find(stats.id);
+    if (it == published_.end()) {
+      feed->added.push_back(stats.id);
+    } else {
+      feed->updated.push_back(stats.id);
+      moved_points.push_back(it->second.fitted.a);
+      moved_points.push_back(it->second.fitted.b);
+    }
+    moved_points.push_back(fit.segment.a);
+    moved_points.push_back(fit.segment.b);
+    snapper_.Upsert(stats.id, fit.segment, fit.line);
+    published_[stats.id] = stats.ToFused(fit);
+  }
+  // The corner pass, local to the moved endpoints.
+  std::vector<ClusterId> dirty = feed->added;
+  dirty.insert(dirty.end(), feed->updated.begin(), feed->updated.end());
+  if (params_.snap_m > 0.0) {
+    for (const Vec2& p : moved_points) {
+      snapper_.CollectNear(p, 2.0 * params_.snap_m + kSearchSlackM, &dirty);
+    }
+  }
+  std::sort(dirty.begin(), dirty.end());
+  dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
+  std::vector<ClusterId> changed(feed->added);
+  changed.insert(changed.end(), feed->updated.begin(), feed->updated.end());
+  std::sort(changed.begin(), changed.end());
+  for (ClusterId id : dirty) {
+    FusedFeature& fused = published_.at(id);
+    const Segment2 snapped = snapper_.Snapped(id);
+    const bool moved = snapped.a != fused.segment.a || snapped.b != fused.segment.b;
+    fused.segment = snapped;
+    if (moved && !std::binary_search(changed.begin(), changed.end(), id)) {
+      feed->updated.push_back(id);  // a neighbour's corner moved it
+    }
+  }
+  std::sort(feed->added.begin(), feed->added.end());
+  std::sort(feed->updated.begin(), feed->updated.end());
+  std::sort(feed->removed.begin(), feed->removed.end());
+}
+
+std::optional<FusedFeature> FusionEngine::Impl::Get(ClusterId id) const {
+  if (auto it = published_.find(id); it != published_.end()) return it->second;
+  auto node = node_of_.find(id);
+  if (node == node_of_.end()) return std::nullopt;
+  const ClusterStats& stats = *stats_[FindConst(node->second)];
+  if (stats.id != id) return std::nullopt;  // a member, not the name of its cluster
+  return stats.ToFused(stats.Refit());
+}
+
+FusionEngine::FusionEngine(const FusionParams& params) : impl_(std::make_unique<Impl>(params)) {}
+FusionEngine::~FusionEngine() = default;
+FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
+FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
+
+StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::Create(const FusionParams& params) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  return std::make_unique<FusionEngine>(params);
+}
+
+Status FusionEngine::Add(ObservationId observation, RobotId robot,
+                         const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+  if (changes != nullptr) *changes = ChangeFeed();
+  // Everything is checked before anything is touched: a refusal changes nothing.
+  MAPD_RETURN_IF_ERROR(impl_->Validate(observation, features));
+  impl_->Add(observation, robot, features, changes);
+  return Status::Ok();
+}
+
+std::vector<FusedFeature> FusionEngine::Published() const {
+  std::vector<FusedFeature> out;
+  out.reserve(impl_->published_.size());
+  for (const auto& [id, fused] : impl_->published_) out.push_back(fused);
+  return out;
+}
+
+std::optional<FusedFeature> FusionEngine::Get(ClusterId id) const { return impl_->Get(id); }
+size_t FusionEngine::feature_count() const { return impl_->parent_.size(); }
+size_t FusionEngine::cluster_count() const { return impl_->cluster_count_; }
+size_t FusionEngine::published_count() const { return impl_->published_.size(); }
+const FusionParams& FusionEngine::params() const { return impl_->params_; }
+
+}  // namespace mapd::fusion
+
+namespace mapd::fusion {
+
+// Defined here because it needs Impl.
+std::vector<std::vector<FeatureId>> EngineInspector::Partition(const FusionEngine& engine) {
+  const FusionEngine::Impl& impl = *engine.impl_;
+  std::unordered_map<uint32_t, std::vector<FeatureId>> by_root;
+  for (const auto& [id, node] : impl.node_of_) by_root[impl.FindConst(node)].push_back(id);
+  std::vector<std::vector<FeatureId>> out;
+  for (auto& [root, members] : by_root) {
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace mapd::fusion

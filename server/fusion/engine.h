@@ -1,0 +1,101 @@
+// The incremental three-criteria fusion engine (ALGORITHMS.md section A).
+//
+// Features arrive observation by observation, already in the map frame and
+// projected onto the ground plane (see projection.h). Each new feature is
+// linked to earlier features of OTHER observations that meet all three
+// criteria; clusters are the connected components of that graph (union-find).
+// The result is exactly what the batch algorithm gives on the same features,
+// whatever the arrival order.
+//
+// Thread safety: none. The caller serialises all calls (mapd calls it from its
+// single writer thread).
+#ifndef MAPD_FUSION_ENGINE_H_
+#define MAPD_FUSION_ENGINE_H_
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "common/status.h"
+#include "fusion/params.h"
+#include "geometry/segment2.h"
+
+namespace mapd::fusion {
+
+using FeatureId = uint64_t;      // unique per raw feature, assigned by the caller
+using ObservationId = uint64_t;  // unique per observation batch, assigned by the caller
+using RobotId = uint64_t;
+// A cluster is named by the smallest FeatureId among its members: stable while
+// the cluster grows, and independent of arrival order.
+using ClusterId = uint64_t;
+
+enum class FeatureOrigin { kLine, kPlane };
+
+// A raw feature in the map's ground plane.
+struct GroundFeature {
+  FeatureId id = 0;
+  geometry::Segment2 segment;  // map frame, metres; non-zero length
+  double z_min_m = 0.0;        // height range the feature spans (map frame)
+  double z_max_m = 0.0;
+  FeatureOrigin origin = FeatureOrigin::kLine;
+};
+
+// One fused feature: a cluster of raw features.
+struct FusedFeature {
+  ClusterId id = 0;
+  geometry::Segment2 segment;  // after corner optimisation
+  geometry::Segment2 fitted;   // total-least-squares fit, before corner optimisation
+  double z_min_m = 0.0;
+  double z_max_m = 0.0;
+  uint32_t support = 0;       // distinct observations among the members
+  uint32_t member_count = 0;  // raw features in the cluster
+  uint32_t plane_members = 0;  // members that came from vertical planes (origin kPlane)
+  std::vector<RobotId> robots;  // distinct contributing robots, ascending
+};
+
+// What one Add() changed in the published map (support >= min_support).
+struct ChangeFeed {
+  std::vector<ClusterId> added;    // newly published
+  std::vector<ClusterId> updated;  // published before and after, geometry or support changed
+  std::vector<ClusterId> removed;  // published before, gone now (merged into another cluster)
+  bool empty() const { return added.empty() && updated.empty() && removed.empty(); }
+};
+
+class FusionEngine {
+ public:
+  // REQUIRES: params.Validate().ok() (use Create() to check).
+  explicit FusionEngine(const FusionParams& params);
+  ~FusionEngine();
+  FusionEngine(FusionEngine&&) noexcept;
+  FusionEngine& operator=(FusionEngine&&) noexcept;
+
+  static StatusOr<std::unique_ptr<FusionEngine>> Create(const FusionParams& params);
+
+  // Adds all features of one observation. All-or-nothing: a NaN or absurd
+  // (|x| > 1e6 m) coordinate, a zero-length segment, a reused FeatureId or
+  // ObservationId is refused with InvalidArgument and the engine is unchanged.
+  // `changes`, if not null, receives what changed in the published map.
+  Status Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
+             ChangeFeed* changes = nullptr);
+
+  // Published fused features (support >= min_support), ascending by id.
+  std::vector<FusedFeature> Published() const;
+  // One cluster, published or not; nullopt if no such cluster.
+  std::optional<FusedFeature> Get(ClusterId id) const;
+
+  size_t feature_count() const;
+  size_t cluster_count() const;
+  size_t published_count() const;
+  const FusionParams& params() const;
+
+ private:
+  // Read-only access to the raw cluster partition, for tests (engine_inspector.h).
+  friend class EngineInspector;
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_ENGINE_H_

@@ -1,0 +1,62 @@
+#include "fusion/params.h"
+
+#include <cmath>
+
+namespace mapd::fusion {
+namespace {
+
+constexpr double kHalfPi = 1.57079632679489661923;
+
+Status CheckRange(const char* field, double value, double lo, double hi) {
+  if (!std::isfinite(value)) {
+    return Status::InvalidArgument(std::string("fusion params: ") + field + " must be finite");
+  }
+  if (value < lo || value > hi) {
+    return Status::InvalidArgument(std::string("fusion params: ") + field + " = " +
+                                   std::to_string(value) + " is outside [" + std::to_string(lo) +
+                                   ", " + std::to_string(hi) + "]");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status FusionParams::Validate() const {
+  // The included angle beta lies in [0, pi/2], so delta above pi/2 means nothing.
+  MAPD_RETURN_IF_ERROR(CheckRange("delta_rad", delta_rad, 0.0, kHalfPi));
+  // gamma = 0 is allowed: the engine's candidate search relies on criterion 3
+  // (D <= min(R_f, R_g) + eta), not on criterion 2, so it stays exact.
+  MAPD_RETURN_IF_ERROR(CheckRange("gamma", gamma, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(CheckRange("eta_m", eta_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckRange("snap_m", snap_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckRange("max_plane_tilt_rad", max_plane_tilt_rad, 0.0, kHalfPi));
+  if (min_support == 0) {
+    return Status::InvalidArgument("fusion params: min_support must be at least 1");
+  }
+  if (corner_mode != CornerMode::kMidpoint && corner_mode != CornerMode::kIntersection) {
+    return Status::InvalidArgument("fusion params: corner_mode is not a known mode");
+  }
+  return Status::Ok();
+}
+
+const char* CornerModeName(CornerMode mode) {
+  switch (mode) {
+    case CornerMode::kMidpoint: return "midpoint";
+    case CornerMode::kIntersection: return "intersection";
+  }
+  return "unknown";
+}
+
+Status ParseCornerMode(const std::string& name, CornerMode* mode) {
+  if (name == "midpoint") {
+    *mode = CornerMode::kMidpoint;
+  } else if (name == "intersection") {
+    *mode = CornerMode::kIntersection;
+  } else {
+    return Status::InvalidArgument("corner_mode \"" + name +
+                                   "\" is unknown; expected \"midpoint\" or \"intersection\"");
+  }
+  return Status::Ok();
+}
+
+}  // namespace mapd::fusion

@@ -1,0 +1,40 @@
+// Parameters of the three-criteria feature fusion (ALGORITHMS.md section A,
+// feature-fusion-paper.txt section 3). One validated struct; units in names.
+#ifndef MAPD_FUSION_PARAMS_H_
+#define MAPD_FUSION_PARAMS_H_
+
+#include <cstdint>
+#include <string>
+
+#include "common/status.h"
+
+namespace mapd::fusion {
+
+enum class CornerMode {
+  kMidpoint,      // the paper: snapped endpoints meet at their midpoint
+  kIntersection,  // the intersection of the two fused lines (falls back to midpoint)
+};
+
+struct FusionParams {
+  double delta_rad = 5.0 * 3.14159265358979323846 / 180.0;  // criterion 1: max included angle
+  // Criterion 2: min feature-circle overlap ratio, in [0, 1]. 0 is allowed (criterion 2
+  // off): the engine's candidate search is bounded by criterion 3, not by the circles.
+  double gamma = 0.3;
+  double eta_m = 0.3;          // criterion 3: max centre-to-segment distance, metres
+  uint32_t min_support = 3;    // observations a cluster needs to be published
+  double snap_m = 0.5;         // corner optimisation: endpoints closer than this meet
+  CornerMode corner_mode = CornerMode::kIntersection;
+  double max_plane_tilt_rad = 10.0 * 3.14159265358979323846 / 180.0;  // vertical-plane test
+
+  // InvalidArgument naming the offending field if any value is out of range
+  // (negative thresholds, gamma outside [0, 1], non-finite values, ...).
+  Status Validate() const;
+};
+
+// "midpoint" / "intersection".
+const char* CornerModeName(CornerMode mode);
+Status ParseCornerMode(const std::string& name, CornerMode* mode);
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_PARAMS_H_

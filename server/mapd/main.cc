@@ -1,0 +1,62 @@
+// mapd: the multi-robot map server.
+#include <csignal>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "service/config.h"
+#include "service/log.h"
+#include "service/server.h"
+
+namespace {
+
+mapd::service::LogLevel ParseLevel(const std::string& s) {
+  using mapd::service::LogLevel;
+  if (s == "debug") return LogLevel::kDebug;
+  if (s == "warn") return LogLevel::kWarn;
+  if (s == "error") return LogLevel::kError;
+  return LogLevel::kInfo;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace mapd::service;
+  ServerConfig config;
+  bool help = false;
+  mapd::Status s = ParseFlags(std::vector<std::string>(argv + 1, argv + argc), &config, &help);
+  if (help) {
+    std::fputs(FlagsHelp().c_str(), stdout);
+    return 0;
+  }
+  if (!s.ok()) {
+    std::fprintf(stderr, "mapd: %s\n", s.message().c_str());
+    return 2;
+  }
+  SetLogLevel(ParseLevel(config.log_level));
+
+  // SIGTERM/SIGINT are taken by one thread with sigwait: no work in a signal handler.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  mapd::StatusOr<std::unique_ptr<MapServer>> server = MapServer::Start(config);
+  if (!server.ok()) {
+    std::fprintf(stderr, "mapd: %s\n", server.status().ToString().c_str());
+    return 1;
+  }
+  std::thread waiter([&signals, srv = server->get()] {
+    int sig = 0;
+    sigwait(&signals, &sig);
+    Log(LogLevel::kInfo, "signal", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}});
+    srv->Shutdown();
+  });
+  (*server)->Wait();
+  waiter.join();
+  server->reset();
+  return 0;
+}

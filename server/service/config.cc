@@ -1,0 +1,223 @@
+#include "service/config.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace mapd::service {
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+Status ParseDouble(const std::string& key, const std::string& v, double* out) {
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !std::isfinite(d)) {
+    return Status::InvalidArgument(key + ": '" + v + "' is not a finite number");
+  }
+  *out = d;
+  return Status::Ok();
+}
+
+template <typename T>
+Status ParseUnsigned(const std::string& key, const std::string& v, T* out) {
+  char* end = nullptr;
+  const unsigned long long u = std::strtoull(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || v[0] == '-') {
+    return Status::InvalidArgument(key + ": '" + v + "' is not a non-negative integer");
+  }
+  *out = static_cast<T>(u);
+  return Status::Ok();
+}
+
+Status ParseBool(const std::string& key, const std::string& v, bool* out) {
+  if (v == "true" || v == "1" || v == "yes") return *out = true, Status::Ok();
+  if (v == "false" || v == "0" || v == "no") return *out = false, Status::Ok();
+  return Status::InvalidArgument(key + ": '" + v + "' is not true or false");
+}
+
+using Setter = std::function<Status(const std::string& key, const std::string& v, ServerConfig* c)>;
+
+struct Setting {
+  Setter set;
+  const char* help;
+};
+
+const std::map<std::string, Setting>& Settings() {
+  static const std::map<std::string, Setting> kSettings = {
+      {"listen", {[](auto&, auto& v, auto* c) { c->listen = v; return Status::Ok(); },
+                  "host:port to serve on (default 127.0.0.1:50051; port 0 = any free port)"}},
+      {"db", {[](auto&, auto& v, auto* c) { c->db_path = v; return Status::Ok(); },
+              "SQLite database file (default $MAPD_DATA_DIR/map.db or ~/.local/share/mapd/map.db)"}},
+      {"sync", {[](auto& k, auto& v, auto* c) {
+                  if (v != "normal" && v != "full") return Status::InvalidArgument(k + ": use normal or full");
+                  c->sync_full = v == "full";
+                  return Status::Ok();
+                },
+                "normal (survives a crash of mapd) or full (survives power loss; slower)"}},
+      {"fusion.delta_deg", {[](auto& k, auto& v, auto* c) {
+                              double d;
+                              MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));
+                              c->fusion.delta_rad = d * kDegToRad;
+                              return Status::Ok();
+                            },
+                            "criterion 1: max included angle, degrees (5)"}},
+      {"fusion.gamma", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->fusion.gamma); },
+                        "criterion 2: min feature-circle overlap ratio, [0, 1] (0.3)"}},
+      {"fusion.eta_m", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->fusion.eta_m); },
+                        "criterion 3: max centre-to-segment distance, metres (0.3)"}},
+      {"fusion.min_support", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->fusion.min_support); },
+                              "observations a fused feature needs to be published (3)"}},
+      {"fusion.snap_m", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->fusion.snap_m); },
+                         "corner optimisation: endpoints closer than this meet, metres (0.5)"}},
+      {"fusion.corner_mode", {[](auto&, auto& v, auto* c) { return fusion::ParseCornerMode(v, &c->fusion.corner_mode); },
+                              "midpoint or intersection (intersection)"}},
+      {"fusion.max_plane_tilt_deg", {[](auto& k, auto& v, auto* c) {
+                                       double d;
+                                       MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));
+                                       c->fusion.max_plane_tilt_rad = d * kDegToRad;
+                                       return Status::Ok();
+                                     },
+                                     "planes tilted less than this from vertical become walls, degrees (10)"}},
+      {"limits.max_features_per_batch",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->ingest.limits.max_features_per_batch); },
+        "lines + planes in one batch (1024, at most 4096)"}},
+      {"limits.max_boundary_points",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->ingest.limits.max_boundary_points); },
+        "boundary points of one plane (1024)"}},
+      {"limits.max_in_flight", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->ingest.max_in_flight); },
+                                "unacknowledged batches per stream before reading pauses (1024)"}},
+      {"limits.max_message_bytes", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->max_message_bytes); },
+                                    "largest gRPC message accepted, bytes (16777216)"}},
+      {"limits.max_group_batches", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->max_group_batches); },
+                                    "batches committed in one transaction at most (4096)"}},
+      {"shutdown_grace_s", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->shutdown_grace_s); },
+                            "on SIGTERM, seconds streams get to finish (5)"}},
+      {"tls_cert", {[](auto&, auto& v, auto* c) { c->tls_cert = v; return Status::Ok(); },
+                    "PEM certificate chain; TLS is required off loopback"}},
+      {"tls_key", {[](auto&, auto& v, auto* c) { c->tls_key = v; return Status::Ok(); }, "PEM private key"}},
+      {"allow_insecure_remote", {[](auto& k, auto& v, auto* c) { return ParseBool(k, v, &c->allow_insecure_remote); },
+                                 "serve plaintext on a non-loopback address anyway (false)"}},
+      {"log_level", {[](auto& k, auto& v, auto* c) {
+                       if (v != "debug" && v != "info" && v != "warn" && v != "error") {
+                         return Status::InvalidArgument(k + ": use debug, info, warn or error");
+                       }
+                       c->log_level = v;
+                       return Status::Ok();
+                     },
+                     "debug, info, warn or error (info)"}},
+  };
+  return kSettings;
+}
+
+std::string Trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const size_t e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+bool IsLoopback(const std::string& listen) {
+  return listen.rfind("127.", 0) == 0 || listen.rfind("localhost:", 0) == 0 ||
+         listen.rfind("[::1]:", 0) == 0 || listen.rfind("unix:", 0) == 0;
+}
+
+}  // namespace
+
+std::string DefaultDbPath() {
+  if (const char* d = std::getenv("MAPD_DATA_DIR"); d && *d) return std::string(d) + "/map.db";
+  if (const char* x = std::getenv("XDG_DATA_HOME"); x && *x) return std::string(x) + "/mapd/map.db";
+  const char* home = std::getenv("HOME");
+  return std::string(home && *home ? home : ".") + "/.local/share/mapd/map.db";
+}
+
+Status ServerConfig::Validate() const {
+  Status f = fusion.Validate();
+  if (!f.ok()) return Status::InvalidArgument("fusion: " + f.message());
+  Status l = ingest.limits.Validate();
+  if (!l.ok()) return Status::InvalidArgument("limits: " + l.message());
+  if (ingest.max_in_flight == 0) return Status::InvalidArgument("limits.max_in_flight must be >= 1");
+  if (max_group_batches == 0) return Status::InvalidArgument("limits.max_group_batches must be >= 1");
+  if (max_message_bytes < 1024) return Status::InvalidArgument("limits.max_message_bytes must be >= 1024");
+  if (listen.empty() || listen.find(':') == std::string::npos) {
+    return Status::InvalidArgument("listen: '" + listen + "' is not host:port");
+  }
+  if (tls_cert.empty() != tls_key.empty()) {
+    return Status::InvalidArgument("tls_cert and tls_key must be given together");
+  }
+  if (!IsLoopback(listen) && tls_cert.empty() && !allow_insecure_remote) {
+    return Status::InvalidArgument("listen: '" + listen +
+                                   "' is not loopback; give tls_cert and tls_key, or "
+                                   "allow_insecure_remote=true on a trusted network");
+  }
+  if (!(shutdown_grace_s >= 0)) return Status::InvalidArgument("shutdown_grace_s must be >= 0");
+  return Status::Ok();
+}
+
+Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config) {
+  auto it = Settings().find(key);
+  if (it == Settings().end()) return Status::InvalidArgument("unknown setting '" + key + "' (see mapd --help)");
+  return it->second.set(key, value, config);
+}
+
+Status LoadConfigFile(const std::string& path, ServerConfig* config) {
+  std::ifstream in(path);
+  if (!in) return Status::NotFound("cannot read config file '" + path + "'");
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    line = Trim(line.substr(0, line.find('#')));
+    if (line.empty()) continue;
+    const size_t eq = line.find('=');
+    if (eq == std::string::npos) {
+      return Status::InvalidArgument(path + ":" + std::to_string(n) + ": expected key = value");
+    }
+    Status s = ApplySetting(Trim(line.substr(0, eq)), Trim(line.substr(eq + 1)), config);
+    if (!s.ok()) return Status::InvalidArgument(path + ":" + std::to_string(n) + ": " + s.message());
+  }
+  return Status::Ok();
+}
+
+Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, bool* help) {
+  *help = false;
+  // The config file first, so that flags override it wherever they stand.
+  std::vector<std::pair<std::string, std::string>> settings;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--help" || a == "-h") {
+      *help = true;
+      return Status::Ok();
+    }
+    if (a.rfind("--", 0) != 0) return Status::InvalidArgument("unexpected argument '" + a + "'");
+    std::string key = a.substr(2), value;
+    if (const size_t eq = key.find('='); eq != std::string::npos) {
+      value = key.substr(eq + 1);
+      key = key.substr(0, eq);
+    } else if (i + 1 < args.size()) {
+      value = args[++i];
+    } else {
+      return Status::InvalidArgument("--" + key + " needs a value");
+    }
+    if (key == "config") {
+      MAPD_RETURN_IF_ERROR(LoadConfigFile(value, config));
+    } else {
+      settings.emplace_back(key, value);
+    }
+  }
+  for (const auto& [k, v] : settings) MAPD_RETURN_IF_ERROR(ApplySetting(k, v, config));
+  return config->Validate();
+}
+
+std::string FlagsHelp() {
+  std::ostringstream out;
+  out << "usage: mapd [--config FILE] [--KEY VALUE | --KEY=VALUE ...]\n\n"
+         "Serves the mapserver.v1 gRPC API. Every KEY may also be set in the config file as\n"
+         "'KEY = VALUE'; flags override the file.\n\n";
+  out << "  --config FILE\n      read settings from FILE first\n";
+  for (const auto& [key, s] : Settings()) out << "  --" << key << "\n      " << s.help << "\n";
+  return out.str();
+}
+
+}  // namespace mapd::service

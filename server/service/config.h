@@ -1,0 +1,45 @@
+// mapd's configuration: one struct, filled from defaults, then a config file,
+// then command-line flags. The file holds `key = value` lines (# comments);
+// every key is also a flag: `--fusion.gamma=0.4` or `--fusion.gamma 0.4`.
+#ifndef MAPD_SERVICE_CONFIG_H_
+#define MAPD_SERVICE_CONFIG_H_
+
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "fusion/params.h"
+#include "service/ingest_reactor.h"
+
+namespace mapd::service {
+
+struct ServerConfig {
+  std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
+  std::string db_path;                     // empty: DefaultDbPath()
+  bool sync_full = false;                  // synchronous=FULL (survives power loss)
+  fusion::FusionParams fusion;
+  IngestOptions ingest;
+  size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted
+  size_t max_group_batches = 4096;         // batches per group commit at most
+  double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish
+  std::string tls_cert;                    // PEM files; required off loopback
+  std::string tls_key;
+  bool allow_insecure_remote = false;      // serve plaintext off loopback anyway
+  std::string log_level = "info";          // debug, info, warn, error
+
+  Status Validate() const;
+};
+
+// $MAPD_DATA_DIR/map.db, else $XDG_DATA_HOME/mapd/map.db, else ~/.local/share/mapd/map.db.
+std::string DefaultDbPath();
+
+// Sets one key (see the table in config.cc); InvalidArgument names the key.
+Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config);
+Status LoadConfigFile(const std::string& path, ServerConfig* config);
+// Parses argv (without argv[0]). Sets *help when --help was given.
+Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, bool* help);
+std::string FlagsHelp();
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_CONFIG_H_

@@ -1,0 +1,123 @@
+#include "service/ingest_reactor.h"
+
+#include "service/log.h"
+#include "service/status_mapping.h"
+
+namespace mapd::service {
+
+namespace pb = mapserver::v1;
+
+IngestReactor::IngestReactor(grpc::CallbackServerContext* context, MapCore* core,
+                             const IngestOptions* options, const std::atomic<bool>* draining)
+    : core_(core), options_(options), draining_(draining), peer_(context->peer()) {
+  std::lock_guard<std::mutex> lock(mu_);
+  reading_ = true;
+  StartRead(&request_);
+}
+
+void IngestReactor::OnReadDone(bool ok) {
+  if (!ok) {
+    std::lock_guard<std::mutex> lock(mu_);
+    reading_ = false;
+    read_closed_ = true;
+    MaybeFinishLocked();
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    ++in_flight_;
+    if (robot_.empty()) robot_ = request_.robot_id();
+  }
+  // reading_ stays true while request_ is being processed, so that no one
+  // starts another read into it.
+  pb::IngestAck ack;
+  ack.set_session_id(request_.session_id());
+  ack.set_seq(request_.seq());
+  if (draining_->load()) {
+    ack.set_result(pb::IngestAck::REJECTED);
+    ack.set_code(grpc::StatusCode::UNAVAILABLE);
+    ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
+    Complete(std::move(ack));
+  } else {
+    StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits);
+    if (!batch.ok()) {
+      Log(LogLevel::kWarn, "ingest_rejected",
+          {{"robot", request_.robot_id().substr(0, 64)}, {"session", request_.session_id().substr(0, 64)},
+           {"seq", std::to_string(request_.seq())}, {"peer", peer_}, {"error", batch.status().ToString()}});
+      ack.set_result(pb::IngestAck::REJECTED);
+      ack.set_code(ToGrpcCode(batch.status().code()));
+      ack.set_message(batch.status().message());
+      Complete(std::move(ack));
+    } else {
+      core_->Submit(std::move(batch).value(), [this, ack](const BatchOutcome& outcome) mutable {
+        switch (outcome.kind) {
+          case BatchOutcome::Kind::kStored: ack.set_result(pb::IngestAck::STORED); break;
+          case BatchOutcome::Kind::kDuplicate: ack.set_result(pb::IngestAck::DUPLICATE); break;
+          case BatchOutcome::Kind::kRejected:
+            ack.set_result(pb::IngestAck::REJECTED);
+            ack.set_code(ToGrpcCode(outcome.status.code()));
+            ack.set_message(outcome.status.message());
+            break;
+        }
+        Complete(std::move(ack));
+      });
+    }
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  reading_ = false;
+  MaybeReadLocked();
+}
+
+void IngestReactor::Complete(pb::IngestAck ack) {
+  std::lock_guard<std::mutex> lock(mu_);
+  --in_flight_;
+  if (!broken_) acks_.push_back(std::move(ack));
+  if (!writing_) StartNextWriteLocked();
+  MaybeReadLocked();
+  MaybeFinishLocked();
+}
+
+void IngestReactor::StartNextWriteLocked() {
+  if (acks_.empty() || broken_) return;
+  writing_ack_ = std::move(acks_.front());
+  acks_.pop_front();
+  writing_ = true;
+  // While more acks are queued, let gRPC coalesce them into fewer frames.
+  grpc::WriteOptions options;
+  if (!acks_.empty()) options.set_buffer_hint();
+  StartWrite(&writing_ack_, options);
+}
+
+void IngestReactor::OnWriteDone(bool ok) {
+  std::lock_guard<std::mutex> lock(mu_);
+  writing_ = false;
+  if (!ok) {
+    broken_ = true;
+    acks_.clear();
+  }
+  StartNextWriteLocked();
+  MaybeFinishLocked();
+}
+
+void IngestReactor::MaybeReadLocked() {
+  if (reading_ || read_closed_ || finished_ || in_flight_ >= options_->max_in_flight) return;
+  reading_ = true;
+  StartRead(&request_);
+}
+
+void IngestReactor::OnCancel() {
+  std::lock_guard<std::mutex> lock(mu_);
+  Log(LogLevel::kInfo, "ingest_cancelled", {{"robot", robot_}, {"peer", peer_}});
+  MaybeFinishLocked();
+}
+
+void IngestReactor::MaybeFinishLocked() {
+  // Finish only when no callback of MapCore can still reach this reactor.
+  if (finished_ || !read_closed_ || reading_ || in_flight_ > 0 || writing_ || !acks_.empty()) return;
+  finished_ = true;
+  Finish(grpc::Status::OK);
+}
+
+void IngestReactor::OnDone() { delete this; }
+
+}  // namespace mapd::service

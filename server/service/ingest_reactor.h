@@ -1,0 +1,67 @@
+// The Ingest RPC: one reactor per robot stream (gRPC callback API).
+//
+// Batches are read continuously and handed to MapCore; acknowledgements are
+// written as the writer commits them, so a robot can keep up to
+// `max_in_flight` batches in flight on one stream (reading pauses above that:
+// flow control rather than unbounded memory). A refused batch gets a REJECTED
+// ack and the stream goes on.
+#ifndef MAPD_SERVICE_INGEST_REACTOR_H_
+#define MAPD_SERVICE_INGEST_REACTOR_H_
+
+#include <atomic>
+#include <deque>
+#include <mutex>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "mapserver/v1/map_service.pb.h"
+#include "service/ingest_batch.h"
+#include "service/map_core.h"
+
+namespace mapd::service {
+
+struct IngestOptions {
+  IngestLimits limits;
+  uint32_t max_in_flight = 1024;  // per stream
+};
+
+// Owned by gRPC; deletes itself in OnDone().
+class IngestReactor
+    : public grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck> {
+ public:
+  IngestReactor(grpc::CallbackServerContext* context, MapCore* core, const IngestOptions* options,
+                const std::atomic<bool>* draining);
+
+  void OnReadDone(bool ok) override;
+  void OnWriteDone(bool ok) override;
+  void OnCancel() override;
+  void OnDone() override;
+
+ private:
+  void Complete(mapserver::v1::IngestAck ack);           // a batch's outcome is final
+  void StartNextWriteLocked();                           // REQUIRES: mu_ held
+  void MaybeReadLocked();                                // REQUIRES: mu_ held
+  void MaybeFinishLocked();                              // REQUIRES: mu_ held
+
+  MapCore* const core_;
+  const IngestOptions* const options_;
+  const std::atomic<bool>* const draining_;
+  const std::string peer_;
+
+  std::mutex mu_;
+  mapserver::v1::ObservationBatch request_;  // the buffer of the outstanding read
+  mapserver::v1::IngestAck writing_ack_;     // the buffer of the outstanding write
+  std::deque<mapserver::v1::IngestAck> acks_;  // GUARDED_BY(mu_), waiting to be written
+  uint32_t in_flight_ = 0;   // GUARDED_BY(mu_), batches handed out, outcome pending
+  bool reading_ = false;     // GUARDED_BY(mu_), a read is outstanding or being processed
+  bool writing_ = false;     // GUARDED_BY(mu_)
+  bool read_closed_ = false; // GUARDED_BY(mu_), the client half-closed or the call ended
+  bool broken_ = false;      // GUARDED_BY(mu_), a write failed: the client is gone
+  bool finished_ = false;    // GUARDED_BY(mu_)
+  std::string robot_;        // for logs, from the first batch
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_INGEST_REACTOR_H_

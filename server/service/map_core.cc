@@ -1,0 +1,348 @@
+#include "service/map_core.h"
+
+#include <algorithm>
+
+#include "fusion/projection.h"
+#include "service/log.h"
+
+namespace mapd::service {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Records one change feed into the group's delta; the last event for a cluster wins.
+void Accumulate(const fusion::ChangeFeed& feed, std::unordered_map<fusion::ClusterId, bool>* delta) {
+  for (fusion::ClusterId id : feed.added) (*delta)[id] = true;
+  for (fusion::ClusterId id : feed.updated) (*delta)[id] = true;
+  for (fusion::ClusterId id : feed.removed) (*delta)[id] = false;
+}
+
+bool SameRow(const storage::FusedRow& a, const storage::FusedRow& b) {
+  return a.id == b.id && a.kind == b.kind && a.segment.a == b.segment.a &&
+         a.segment.b == b.segment.b && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
+         a.support == b.support && a.member_count == b.member_count && a.robots == b.robots;
+}
+
+}  // namespace
+
+MapCore::MapCore(const MapCoreOptions& options) : options_(options) {}
+
+StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) {
+  Status params = options.fusion.Validate();
+  if (!params.ok()) return Status::InvalidArgument("fusion parameters: " + params.message());
+  std::unique_ptr<MapCore> core(new MapCore(options));
+  StatusOr<std::unique_ptr<storage::Store>> store = storage::Store::Open(options.db_path, options.store);
+  if (!store.ok()) return store.status();
+  core->store_ = std::move(store).value();
+  MAPD_RETURN_IF_ERROR(core->Rebuild());
+  MAPD_RETURN_IF_ERROR(core->SyncFusedTable());
+  core->writer_ = std::thread([c = core.get()] { c->WriterLoop(); });
+  return core;
+}
+
+MapCore::~MapCore() { Stop(); }
+
+Status MapCore::Rebuild() {
+  const auto t0 = Clock::now();
+  auto engine = std::make_unique<fusion::FusionEngine>(options_.fusion);
+  StatusOr<std::vector<storage::SessionFrame>> sessions = store_->ListSessions();
+  if (!sessions.ok()) return sessions.status();
+  std::unordered_map<int64_t, storage::SessionFrame> frames;
+  for (const auto& s : *sessions) frames[s.session_id] = s;
+  {
+    std::lock_guard<std::mutex> lock(names_mu_);
+    StatusOr<std::vector<storage::RobotSummary>> robots = store_->ListRobots();
+    if (!robots.ok()) return robots.status();
+    for (const auto& r : *robots) robot_names_[r.id] = r.name;
+  }
+  uint64_t observations = 0;
+  std::unique_lock<std::shared_mutex> lock(engine_mu_);
+  engine_ = std::move(engine);
+  Status s = store_->ForEachObservation([&](const storage::StoredObservation& obs) {
+    ++observations;
+    const storage::SessionFrame& frame = frames[obs.session_id];
+    if (frame.tied) Fuse(obs.features, obs.id, obs.robot_id, frame.T_map_frame, nullptr);
+    return Status::Ok();
+  });
+  if (!s.ok()) return s;
+  map_version_ += 1;
+  Log(LogLevel::kInfo, "map_rebuilt",
+      {{"observations", std::to_string(observations)},
+       {"raw_features", std::to_string(engine_->feature_count())},
+       {"fused", std::to_string(engine_->published_count())},
+       {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
+  return Status::Ok();
+}
+
+Status MapCore::SyncFusedTable() {
+  StatusOr<std::vector<storage::FusedRow>> stored = store_->LoadFused();
+  if (!stored.ok()) return stored.status();
+  std::unordered_map<uint64_t, storage::FusedRow> old_rows;
+  for (auto& r : *stored) old_rows.emplace(r.id, std::move(r));
+  StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+  if (!txn.ok()) return txn.status();
+  size_t written = 0, deleted = 0;
+  for (const fusion::FusedFeature& f : engine_->Published()) {
+    storage::FusedRow row = ToRow(f);
+    auto it = old_rows.find(row.id);
+    if (it == old_rows.end() || !SameRow(it->second, row)) {
+      MAPD_RETURN_IF_ERROR((*txn)->UpsertFused(row));
+      ++written;
+    }
+    if (it != old_rows.end()) old_rows.erase(it);
+  }
+  for (const auto& [id, row] : old_rows) {
+    MAPD_RETURN_IF_ERROR((*txn)->DeleteFused(id));
+    ++deleted;
+  }
+  MAPD_RETURN_IF_ERROR((*txn)->Commit());
+  if (written + deleted > 0) {
+    Log(LogLevel::kInfo, "fused_table_synced",
+        {{"written", std::to_string(written)}, {"deleted", std::to_string(deleted)}});
+  }
+  return Status::Ok();
+}
+
+void MapCore::Submit(IngestBatch batch, DoneCallback done) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    if (!stopping_) {
+      queue_.push_back({std::move(batch), std::move(done)});
+      queue_cv_.notify_one();
+      return;
+    }
+  }
+  done({BatchOutcome::Kind::kRejected,
+        Status::Unavailable("mapd is shutting down; resend this batch after reconnecting")});
+}
+
+void MapCore::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    if (stopping_) {
+      // Already stopping; fall through to join if we own the thread.
+    }
+    stopping_ = true;
+    queue_cv_.notify_all();
+  }
+  if (writer_.joinable()) writer_.join();
+}
+
+void MapCore::WriterLoop() {
+  std::vector<Pending> group;
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(queue_mu_);
+      queue_cv_.wait(lock, [this] { return !queue_.empty() || stopping_; });
+      if (queue_.empty()) break;  // stopping, and everything is committed
+      const size_t n = std::min(queue_.size(), options_.max_group_batches);
+      group.reserve(n);
+      for (size_t i = 0; i < n; ++i) {
+        group.push_back(std::move(queue_.front()));
+        queue_.pop_front();
+      }
+    }
+    CommitGroup(group);
+    group.clear();
+  }
+  Status s = store_->Checkpoint();
+  if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
+}
+
+void MapCore::CommitGroup(std::vector<Pending>& group) {
+  std::vector<BatchOutcome> outcomes(group.size());
+  Status failure;
+  bool fused_any = false;
+  uint64_t features_stored = 0, batches_stored = 0;
+  StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+  if (!txn.ok()) failure = txn.status();
+
+  FusedDelta delta;
+  for (size_t i = 0; i < group.size() && failure.ok(); ++i) {
+    const IngestBatch& b = group[i].batch;
+    storage::NewObservation row;
+    row.robot = b.robot;
+    row.session = b.session;
+    row.seq = b.seq;
+    row.stamp_ns = b.stamp_ns;
+    row.received_ns = NowNs();
+    row.frame_kind = b.frame_kind;
+    row.features = &b.features;
+    StatusOr<storage::InsertResult> r = (*txn)->InsertObservation(row);
+    if (!r.ok()) {
+      if (r.status().code() == StatusCode::kInvalidArgument) {
+        outcomes[i] = {BatchOutcome::Kind::kRejected, r.status()};
+        continue;
+      }
+      failure = r.status();
+      break;
+    }
+    {
+      std::lock_guard<std::mutex> lock(names_mu_);
+      robot_names_[r->frame.robot_id] = b.robot;
+    }
+    if (!r->stored) {
+      outcomes[i] = {BatchOutcome::Kind::kDuplicate, Status::Ok()};
+      continue;
+    }
+    outcomes[i] = {BatchOutcome::Kind::kStored, Status::Ok()};
+    ++batches_stored;
+    features_stored += b.features.lines.size() + b.features.planes.size();
+    if (r->frame.tied) {
+      std::unique_lock<std::shared_mutex> lock(engine_mu_);
+      Fuse(b.features, r->observation_id, r->frame.robot_id, r->frame.T_map_frame, &delta);
+      fused_any = true;
+    }
+  }
+  if (failure.ok()) {
+    for (const auto& [id, upsert] : delta) {
+      std::optional<fusion::FusedFeature> f = upsert ? engine_->Get(id) : std::nullopt;
+      const bool published = f && f->support >= options_.fusion.min_support;
+      failure = published ? (*txn)->UpsertFused(ToRow(*f)) : (*txn)->DeleteFused(id);
+      if (!failure.ok()) break;
+    }
+  }
+  if (failure.ok()) failure = (*txn)->Commit();
+  txn = Status::Ok();  // ends the transaction (rolls back if Commit did not happen)
+
+  if (!failure.ok()) {
+    Log(LogLevel::kError, "group_commit_failed",
+        {{"batches", std::to_string(group.size())}, {"error", failure.ToString()}});
+    for (BatchOutcome& o : outcomes) {
+      if (o.kind == BatchOutcome::Kind::kRejected && !o.status.ok()) continue;
+      o = {BatchOutcome::Kind::kRejected,
+           Status::Unavailable("the batch could not be stored (" + failure.message() +
+                               "); nothing was kept, resend it")};
+    }
+    // The engine may now hold features the database does not: rebuild it.
+    if (fused_any) {
+      Status s = Rebuild();
+      if (!s.ok()) Log(LogLevel::kError, "rebuild_failed", {{"error", s.ToString()}});
+    }
+  } else {
+    batches_stored_ += batches_stored;
+    features_stored_ += features_stored;
+    if (!delta.empty()) map_version_ += 1;
+    RecordRate();
+  }
+  for (size_t i = 0; i < group.size(); ++i) group[i].done(outcomes[i]);
+}
+
+void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observation_id,
+                   int64_t robot_id, const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
+  const fusion::FeatureId first_id = static_cast<fusion::FeatureId>(observation_id) << kFeatureIdBits;
+  StatusOr<fusion::ProjectedObservation> projected =
+      fusion::ProjectToGround(features, T_map_frame, first_id, options_.fusion);
+  Status s = projected.status();
+  fusion::ChangeFeed feed;
+  if (s.ok() && !projected->ground.empty()) {
+    s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
+                     static_cast<fusion::RobotId>(robot_id), projected->ground,
+                     delta ? &feed : nullptr);
+  }
+  if (!s.ok()) {
+    // Stored raw but not fused: the data stays, and a rebuild with other
+    // parameters may use it. Never seen with validated input.
+    Log(LogLevel::kWarn, "fusion_refused",
+        {{"observation", std::to_string(observation_id)}, {"error", s.ToString()}});
+    return;
+  }
+  if (delta) Accumulate(feed, delta);
+}
+
+storage::FusedRow MapCore::ToRow(const fusion::FusedFeature& f) const {
+  storage::FusedRow row;
+  row.id = f.id;
+  row.kind = f.plane_members > 0 ? 2 : 1;
+  row.segment = f.segment;
+  row.z_min_m = f.z_min_m;
+  row.z_max_m = f.z_max_m;
+  row.support = f.support;
+  row.member_count = f.member_count;
+  for (const std::string& name : RobotNames(f.robots)) {
+    if (!row.robots.empty()) row.robots += ',';
+    row.robots += name;
+  }
+  return row;
+}
+
+std::vector<std::string> MapCore::RobotNames(const std::vector<fusion::RobotId>& ids) const {
+  std::vector<std::string> names;
+  names.reserve(ids.size());
+  std::lock_guard<std::mutex> lock(names_mu_);
+  for (fusion::RobotId id : ids) {
+    auto it = robot_names_.find(static_cast<int64_t>(id));
+    names.push_back(it == robot_names_.end() ? "robot-" + std::to_string(id) : it->second);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const {
+  const uint32_t min_support = std::max(query.min_support, options_.fusion.min_support);
+  std::vector<fusion::FusedFeature> published;
+  {
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    published = engine_->Published();
+    if (map_version) *map_version = map_version_.load();
+  }
+  std::vector<FusedView> out;
+  for (fusion::FusedFeature& f : published) {
+    if (f.support < min_support) continue;
+    const KindFilter kind = f.plane_members > 0 ? KindFilter::kPlane : KindFilter::kLine;
+    if (query.kind != KindFilter::kAny && query.kind != kind) continue;
+    if (query.bbox && !geometry::Intersects(f.segment, *query.bbox)) continue;
+    FusedView v;
+    v.robots = RobotNames(f.robots);
+    v.feature = std::move(f);
+    v.kind = kind;
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
+void MapCore::RecordRate() {
+  const auto now = Clock::now();
+  std::lock_guard<std::mutex> lock(rate_mu_);
+  if (!rate_samples_.empty() && now - rate_samples_.back().t < std::chrono::milliseconds(250)) return;
+  rate_samples_.push_back({now, batches_stored_.load(), features_stored_.load()});
+  while (rate_samples_.size() > 2 && now - rate_samples_[1].t > std::chrono::seconds(10)) {
+    rate_samples_.pop_front();
+  }
+}
+
+CoreStats MapCore::Stats() const {
+  CoreStats s;
+  const auto now = Clock::now();
+  s.batches_stored = batches_stored_.load();
+  s.features_stored = features_stored_.load();
+  s.uptime_s = std::chrono::duration<double>(now - started_).count();
+  {
+    std::lock_guard<std::mutex> lock(rate_mu_);
+    // Rate over the window back to the oldest sample within 10 s (or the start).
+    auto base_t = started_;
+    uint64_t base_b = 0, base_f = 0;
+    for (const RateSample& r : rate_samples_) {
+      if (now - r.t <= std::chrono::seconds(10)) break;
+      base_t = r.t;
+      base_b = r.batches;
+      base_f = r.features;
+    }
+    const double window = std::max(1e-3, std::chrono::duration<double>(now - base_t).count());
+    s.batches_per_s = static_cast<double>(s.batches_stored - base_b) / window;
+    s.features_per_s = static_cast<double>(s.features_stored - base_f) / window;
+  }
+  std::shared_lock<std::shared_mutex> lock(engine_mu_);
+  s.fused_features = engine_->published_count();
+  s.clusters = engine_->cluster_count();
+  s.map_version = map_version_.load();
+  return s;
+}
+
+}  // namespace mapd::service

@@ -1,0 +1,146 @@
+// MapCore: the map server's state behind the RPC handlers.
+//
+// It owns the database (storage::Store), the fusion engine and the single
+// writer thread. Ingest handlers Submit() validated batches; the writer takes
+// everything queued, writes it in ONE transaction (group commit), fuses the
+// new observations, persists the changed fused features in the same
+// transaction, commits, and only then calls each batch's callback. So an Ack
+// always means "durable", and many robots share the cost of a commit.
+//
+// Thread safety: every public method may be called from any thread.
+#ifndef MAPD_SERVICE_MAP_CORE_H_
+#define MAPD_SERVICE_MAP_CORE_H_
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <shared_mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "common/status.h"
+#include "fusion/engine.h"
+#include "fusion/params.h"
+#include "geometry/box2.h"
+#include "service/ingest_batch.h"
+#include "storage/store.h"
+
+namespace mapd::service {
+
+struct MapCoreOptions {
+  std::string db_path;
+  storage::StoreOptions store;
+  fusion::FusionParams fusion;
+  size_t max_group_batches = 4096;  // batches in one commit at most
+};
+
+struct BatchOutcome {
+  enum class Kind { kStored, kDuplicate, kRejected };
+  Kind kind = Kind::kRejected;
+  Status status;  // why, when kRejected
+};
+using DoneCallback = std::function<void(const BatchOutcome&)>;
+
+enum class KindFilter { kAny = 0, kLine = 1, kPlane = 2 };
+
+struct FeatureQuery {
+  std::optional<geometry::Box2> bbox;  // only features whose segment meets the box
+  uint32_t min_support = 0;            // raised to the fusion min_support
+  KindFilter kind = KindFilter::kAny;
+};
+
+// A published fused feature, ready for the API.
+struct FusedView {
+  fusion::FusedFeature feature;
+  KindFilter kind = KindFilter::kLine;  // kPlane when a member came from a plane
+  std::vector<std::string> robots;      // names, sorted
+};
+
+struct CoreStats {
+  uint64_t batches_stored = 0;    // by this process since it started
+  uint64_t features_stored = 0;
+  double batches_per_s = 0;       // over the last 10 s
+  double features_per_s = 0;
+  uint64_t fused_features = 0;
+  uint64_t clusters = 0;
+  uint64_t map_version = 0;
+  double uptime_s = 0;
+};
+
+class MapCore {
+ public:
+  // Opens (or creates) the database and rebuilds the fused map from the stored
+  // observations, so a restarted server serves the map it served before.
+  static StatusOr<std::unique_ptr<MapCore>> Open(const MapCoreOptions& options);
+  ~MapCore();  // Stop()
+
+  // Queues a validated batch. `done` runs on the writer thread once the batch
+  // is committed, found to be a duplicate, or refused; after Stop() it runs at
+  // once with Unavailable.
+  void Submit(IngestBatch batch, DoneCallback done);
+
+  // Stops taking batches, commits everything queued, checkpoints. Idempotent.
+  void Stop();
+
+  std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const;
+  CoreStats Stats() const;
+  storage::Store& store() { return *store_; }
+  const MapCoreOptions& options() const { return options_; }
+
+ private:
+  struct Pending {
+    IngestBatch batch;
+    DoneCallback done;
+  };
+  // What one group changed in the published map: true = upsert, false = delete.
+  using FusedDelta = std::unordered_map<fusion::ClusterId, bool>;
+
+  explicit MapCore(const MapCoreOptions& options);
+  Status Rebuild();                     // engine_ from the stored observations
+  Status SyncFusedTable();              // fused_features := engine_'s published map
+  void WriterLoop();
+  void CommitGroup(std::vector<Pending>& group);
+  void Fuse(const geometry::SensorObservation& features, int64_t observation_id, int64_t robot_id,
+            const geometry::Rigid3& T_map_frame, FusedDelta* delta);
+  storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
+  std::vector<std::string> RobotNames(const std::vector<fusion::RobotId>& ids) const;
+  void RecordRate();
+
+  const MapCoreOptions options_;
+  const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  std::unique_ptr<storage::Store> store_;
+
+  mutable std::shared_mutex engine_mu_;  // writer: exclusive while fusing; queries: shared
+  std::unique_ptr<fusion::FusionEngine> engine_;
+  std::atomic<uint64_t> map_version_{0};
+
+  mutable std::mutex names_mu_;
+  std::unordered_map<int64_t, std::string> robot_names_;
+
+  std::mutex queue_mu_;
+  std::condition_variable queue_cv_;
+  std::deque<Pending> queue_;  // GUARDED_BY(queue_mu_)
+  bool stopping_ = false;      // GUARDED_BY(queue_mu_)
+  std::thread writer_;
+
+  std::atomic<uint64_t> batches_stored_{0};
+  std::atomic<uint64_t> features_stored_{0};
+  mutable std::mutex rate_mu_;
+  struct RateSample {
+    std::chrono::steady_clock::time_point t;
+    uint64_t batches, features;
+  };
+  std::deque<RateSample> rate_samples_;  // GUARDED_BY(rate_mu_), one per 250 ms, 10 s deep
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MAP_CORE_H_

@@ -1,0 +1,61 @@
+// The mapserver.v1.MapService implementation. Ingest runs on gRPC's callback
+// API (one reactor per robot stream, see ingest_reactor.h); the other RPCs are
+// short and use the synchronous API. Handlers translate between protobuf and
+// library types and reach the state through MapCore.
+#ifndef MAPD_SERVICE_MAP_SERVICE_H_
+#define MAPD_SERVICE_MAP_SERVICE_H_
+
+#include <atomic>
+
+#include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/ingest_reactor.h"
+#include "service/map_core.h"
+
+namespace mapd::service {
+
+class MapServiceImpl final
+    : public mapserver::v1::MapService::WithCallbackMethod_Ingest<mapserver::v1::MapService::Service> {
+ public:
+  MapServiceImpl(MapCore* core, IngestOptions ingest_options);
+
+  // From now on new batches are refused with UNAVAILABLE (shutdown).
+  void StartDraining() { draining_ = true; }
+
+  grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>* Ingest(
+      grpc::CallbackServerContext* context) override;
+
+  grpc::Status GetFeatureMap(grpc::ServerContext* context,
+                             const mapserver::v1::FeatureMapRequest* request,
+                             grpc::ServerWriter<mapserver::v1::FeatureMapPage>* writer) override;
+  grpc::Status ListRobots(grpc::ServerContext* context, const mapserver::v1::ListRobotsRequest* request,
+                          mapserver::v1::ListRobotsResponse* response) override;
+  grpc::Status GetStats(grpc::ServerContext* context, const mapserver::v1::GetStatsRequest* request,
+                        mapserver::v1::Stats* response) override;
+
+  // Voxel submaps: not built yet; each answers UNIMPLEMENTED with a clear message.
+  grpc::Status UploadSubmap(grpc::ServerContext* context,
+                            grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
+                            mapserver::v1::SubmapInfo* response) override;
+  grpc::Status ListSubmaps(grpc::ServerContext* context, const mapserver::v1::ListSubmapsRequest* request,
+                           mapserver::v1::ListSubmapsResponse* response) override;
+  grpc::Status GetSubmap(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest* request,
+                         grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
+  grpc::Status DeleteSubmap(grpc::ServerContext* context,
+                            const mapserver::v1::DeleteSubmapRequest* request,
+                            mapserver::v1::DeleteSubmapResponse* response) override;
+  grpc::Status MergeSubmaps(grpc::ServerContext* context,
+                            const mapserver::v1::MergeSubmapsRequest* request,
+                            grpc::ServerWriter<mapserver::v1::MergeProgress>* writer) override;
+  grpc::Status GetGlobalMap(grpc::ServerContext* context,
+                            const mapserver::v1::GetGlobalMapRequest* request,
+                            grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
+
+ private:
+  MapCore* const core_;
+  const IngestOptions ingest_options_;
+  std::atomic<bool> draining_{false};
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MAP_SERVICE_H_

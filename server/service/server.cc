@@ -1,0 +1,98 @@
+#include "service/server.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include "service/log.h"
+
+namespace mapd::service {
+namespace {
+
+StatusOr<std::string> ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::NotFound("cannot read '" + path + "'");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config) {
+  MAPD_RETURN_IF_ERROR(config.Validate());
+  std::unique_ptr<MapServer> server(new MapServer());
+  server->config_ = config;
+  if (server->config_.db_path.empty()) server->config_.db_path = DefaultDbPath();
+  const std::string& db = server->config_.db_path;
+  std::error_code ec;
+  const auto parent = std::filesystem::path(db).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  if (ec) return Status::FailedPrecondition("cannot create the directory of --db '" + db + "': " + ec.message());
+
+  MapCoreOptions core_options;
+  core_options.db_path = db;
+  core_options.store.synchronous_full = config.sync_full;
+  core_options.fusion = config.fusion;
+  core_options.max_group_batches = config.max_group_batches;
+  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
+  if (!core.ok()) return core.status();
+  server->core_ = std::move(core).value();
+  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest);
+
+  std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
+  if (!config.tls_cert.empty()) {
+    StatusOr<std::string> cert = ReadFile(config.tls_cert);
+    if (!cert.ok()) return Status::InvalidArgument("tls_cert: " + cert.status().message());
+    StatusOr<std::string> key = ReadFile(config.tls_key);
+    if (!key.ok()) return Status::InvalidArgument("tls_key: " + key.status().message());
+    grpc::SslServerCredentialsOptions ssl;
+    ssl.pem_key_cert_pairs.push_back({*key, *cert});
+    credentials = grpc::SslServerCredentials(ssl);
+  }
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(config.listen, credentials, &server->port_);
+  builder.RegisterService(server->service_.get());
+  builder.SetMaxReceiveMessageSize(static_cast<int>(config.max_message_bytes));
+  builder.SetMaxSendMessageSize(static_cast<int>(config.max_message_bytes));
+  server->server_ = builder.BuildAndStart();
+  if (!server->server_ || server->port_ == 0) {
+    return Status::Unavailable("cannot listen on '" + config.listen +
+                               "' (address in use, or not an address of this host?)");
+  }
+  server->server_->GetHealthCheckService()->SetServingStatus(true);
+  Log(LogLevel::kInfo, "serving",
+      {{"address", server->address()}, {"db", db}, {"sync", config.sync_full ? "full" : "normal"},
+       {"corner_mode", fusion::CornerModeName(config.fusion.corner_mode)}});
+  return server;
+}
+
+std::string MapServer::address() const {
+  const std::string& l = config_.listen;
+  return l.substr(0, l.rfind(':')) + ":" + std::to_string(port_);
+}
+
+void MapServer::Shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
+  server_->GetHealthCheckService()->SetServingStatus(false);
+  service_->StartDraining();
+  const auto deadline = std::chrono::system_clock::now() +
+                        std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
+  server_->Shutdown(deadline);  // returns once every RPC has ended
+  core_->Stop();                // commits what is queued, checkpoints
+  Log(LogLevel::kInfo, "stopped");
+}
+
+void MapServer::Wait() { server_->Wait(); }
+
+MapServer::~MapServer() { Shutdown(); }
+
+}  // namespace mapd::service

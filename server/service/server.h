@@ -1,0 +1,46 @@
+// MapServer: MapCore + the gRPC server around it (health, reflection, TLS).
+#ifndef MAPD_SERVICE_SERVER_H_
+#define MAPD_SERVICE_SERVER_H_
+
+#include <memory>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "common/status.h"
+#include "service/config.h"
+#include "service/map_core.h"
+#include "service/map_service.h"
+
+namespace mapd::service {
+
+class MapServer {
+ public:
+  // Opens the database, rebuilds the map, and starts serving.
+  static StatusOr<std::unique_ptr<MapServer>> Start(const ServerConfig& config);
+  ~MapServer();
+
+  // The port actually bound (useful with port 0).
+  int port() const { return port_; }
+  std::string address() const;
+
+  // Graceful stop: new batches are refused, streams get shutdown_grace_s to
+  // finish, everything accepted is committed, the WAL is checkpointed.
+  void Shutdown();
+  // Blocks until the gRPC server has shut down.
+  void Wait();
+
+ private:
+  MapServer() = default;
+
+  ServerConfig config_;
+  std::unique_ptr<MapCore> core_;
+  std::unique_ptr<MapServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+  bool shut_down_ = false;
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_SERVER_H_

@@ -1,0 +1,135 @@
+#include "storage/schema.h"
+
+#include <string>
+#include <vector>
+
+#include "storage/sqlite.h"
+
+namespace mapd::storage {
+namespace {
+
+// Migration i takes the schema from version i to i + 1. Append only: never edit
+// a migration that has shipped.
+const std::vector<const char*>& Migrations() {
+  static const std::vector<const char*> kMigrations = {
+      // 0 -> 1: the initial schema.
+      R"sql(
+      CREATE TABLE robots (
+        id            INTEGER PRIMARY KEY,
+        name          TEXT NOT NULL UNIQUE,
+        first_seen_ns INTEGER NOT NULL,
+        last_seen_ns  INTEGER NOT NULL,
+        batches       INTEGER NOT NULL DEFAULT 0,
+        features      INTEGER NOT NULL DEFAULT 0
+      );
+      -- One frame per robot session. T_map_frame is NULL until the frame is tied to the map.
+      CREATE TABLE sessions (
+        id         INTEGER PRIMARY KEY,
+        robot_id   INTEGER NOT NULL REFERENCES robots(id),
+        name       TEXT NOT NULL,
+        created_ns INTEGER NOT NULL,
+        frame_kind INTEGER NOT NULL,   -- 1 = poses in the map frame, 2 = own frame
+        tied       INTEGER NOT NULL,   -- 1 when T_map_frame is known
+        qw REAL, qx REAL, qy REAL, qz REAL, tx REAL, ty REAL, tz REAL,
+        UNIQUE (robot_id, name)
+      );
+      -- Raw observations, never discarded. payload = the batch's lines and planes
+      -- in the sensor frame (storage/observation_codec.h), so the fused map can
+      -- always be recomputed, with other parameters if need be.
+      CREATE TABLE observations (
+        id          INTEGER PRIMARY KEY,
+        session_id  INTEGER NOT NULL REFERENCES sessions(id),
+        seq         INTEGER NOT NULL,
+        stamp_ns    INTEGER NOT NULL,
+        received_ns INTEGER NOT NULL,
+        qw REAL NOT NULL, qx REAL NOT NULL, qy REAL NOT NULL, qz REAL NOT NULL,
+        tx REAL NOT NULL, ty REAL NOT NULL, tz REAL NOT NULL,
+        line_count  INTEGER NOT NULL,
+        plane_count INTEGER NOT NULL,
+        payload     BLOB NOT NULL,
+        UNIQUE (session_id, seq)
+      );
+      -- The published fused map (derived: recomputable from observations).
+      -- Membership: a raw feature's id is (observation id << 12 | index in batch);
+      -- a cluster's id is its smallest member's id.
+      CREATE TABLE fused_features (
+        id           INTEGER PRIMARY KEY,
+        kind         INTEGER NOT NULL,
+        ax REAL NOT NULL, ay REAL NOT NULL, bx REAL NOT NULL, by REAL NOT NULL,
+        z_min REAL NOT NULL, z_max REAL NOT NULL,
+        support      INTEGER NOT NULL,
+        member_count INTEGER NOT NULL,
+        robots       TEXT NOT NULL,
+        updated_ns   INTEGER NOT NULL
+      );
+      CREATE TABLE submaps (
+        id          INTEGER PRIMARY KEY,
+        robot_id    INTEGER NOT NULL REFERENCES robots(id),
+        session_id  INTEGER REFERENCES sessions(id),
+        name        TEXT NOT NULL,
+        format      INTEGER NOT NULL,
+        resolution  REAL NOT NULL,
+        occupied    INTEGER NOT NULL,
+        free        INTEGER NOT NULL,
+        min_x REAL, min_y REAL, min_z REAL, max_x REAL, max_y REAL, max_z REAL,
+        created_ns  INTEGER NOT NULL,
+        data        BLOB NOT NULL,
+        UNIQUE (robot_id, name)
+      );
+      CREATE TABLE merges (
+        id               INTEGER PRIMARY KEY,
+        created_ns       INTEGER NOT NULL,
+        status           TEXT NOT NULL,   -- accepted / refused
+        reason           TEXT NOT NULL,
+        merged_submap_id INTEGER REFERENCES submaps(id)
+      );
+      CREATE TABLE merge_inputs (
+        merge_id        INTEGER NOT NULL REFERENCES merges(id),
+        submap_id       INTEGER NOT NULL,
+        qw REAL, qx REAL, qy REAL, qz REAL, tx REAL, ty REAL, tz REAL,
+        matched_corners INTEGER, residual_m REAL, overlap_score REAL,
+        PRIMARY KEY (merge_id, submap_id)
+      );
+      )sql",
+  };
+  return kMigrations;
+}
+
+StatusOr<int> ReadVersion(sqlite3* db) {
+  MAPD_RETURN_IF_ERROR(Exec(db, "CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)"));
+  StatusOr<Statement> q = Statement::Prepare(db, "SELECT max(version) FROM schema_version");
+  if (!q.ok()) return q.status();
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  return (*row && !q->ColumnIsNull(0)) ? static_cast<int>(q->ColumnInt(0)) : 0;
+}
+
+}  // namespace
+
+int CurrentSchemaVersion() { return static_cast<int>(Migrations().size()); }
+
+Status Migrate(sqlite3* db) {
+  StatusOr<int> version = ReadVersion(db);
+  if (!version.ok()) return version.status();
+  if (*version > CurrentSchemaVersion()) {
+    return Status::FailedPrecondition(
+        "database schema version " + std::to_string(*version) + " is newer than this mapd (" +
+        std::to_string(CurrentSchemaVersion()) + "); upgrade mapd or use another --db");
+  }
+  for (int v = *version; v < CurrentSchemaVersion(); ++v) {
+    MAPD_RETURN_IF_ERROR(Exec(db, "BEGIN IMMEDIATE"));
+    Status s = Exec(db, Migrations()[static_cast<size_t>(v)]);
+    if (s.ok()) {
+      s = Exec(db, "INSERT INTO schema_version (version) VALUES (" + std::to_string(v + 1) + ")");
+    }
+    if (!s.ok()) {
+      (void)Exec(db, "ROLLBACK");
+      return Status(s.code(), "migrating schema to version " + std::to_string(v + 1) + ": " +
+                                  s.message());
+    }
+    MAPD_RETURN_IF_ERROR(Exec(db, "COMMIT"));
+  }
+  return Status::Ok();
+}
+
+}  // namespace mapd::storage

@@ -1,0 +1,377 @@
+#include "storage/store.h"
+
+#include <sys/stat.h>
+
+#include "storage/observation_codec.h"
+#include "storage/schema.h"
+
+namespace mapd::storage {
+namespace {
+
+void BindPose(Statement& s, int first, const geometry::Rigid3& T) {
+  s.Bind(first, T.rotation.w())
+      .Bind(first + 1, T.rotation.x())
+      .Bind(first + 2, T.rotation.y())
+      .Bind(first + 3, T.rotation.z())
+      .Bind(first + 4, T.translation.x())
+      .Bind(first + 5, T.translation.y())
+      .Bind(first + 6, T.translation.z());
+}
+
+geometry::Rigid3 ColumnPose(const Statement& s, int first) {
+  geometry::Rigid3 T;
+  T.rotation = Eigen::Quaterniond(s.ColumnDouble(first), s.ColumnDouble(first + 1),
+                                  s.ColumnDouble(first + 2), s.ColumnDouble(first + 3));
+  T.translation = {s.ColumnDouble(first + 4), s.ColumnDouble(first + 5), s.ColumnDouble(first + 6)};
+  return T;
+}
+
+uint64_t FileSize(const std::string& path) {
+  struct stat st {};
+  return stat(path.c_str(), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
+}
+
+// Prepares `sql` into *out or returns the error.
+Status PrepareInto(sqlite3* db, const char* sql, Statement* out) {
+  StatusOr<Statement> s = Statement::Prepare(db, sql);
+  if (!s.ok()) return s.status();
+  *out = std::move(s).value();
+  return Status::Ok();
+}
+
+}  // namespace
+
+StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const StoreOptions& options) {
+  std::unique_ptr<Store> store(new Store());
+  store->path_ = path;
+  StatusOr<DbHandle> writer = OpenDatabase(path, /*read_only=*/false);
+  if (!writer.ok()) return writer.status();
+  store->writer_ = std::move(writer).value();
+  sqlite3* w = store->writer_.get();
+  StatusOr<Statement> mode = Statement::Prepare(w, "PRAGMA journal_mode=WAL");
+  if (!mode.ok()) return mode.status();
+  StatusOr<bool> mode_row = mode->Step();
+  if (!mode_row.ok()) return mode_row.status();
+  if (mode->ColumnText(0) != "wal") {
+    return Status::FailedPrecondition("database '" + path + "' cannot use WAL mode (got " +
+                                      mode->ColumnText(0) + "); is it on a network file system?");
+  }
+  mode = Status::Ok();  // finalize before further statements
+  MAPD_RETURN_IF_ERROR(Exec(w, options.synchronous_full ? "PRAGMA synchronous=FULL"
+                                                        : "PRAGMA synchronous=NORMAL"));
+  MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA cache_size=-65536; PRAGMA temp_store=MEMORY"));
+  MAPD_RETURN_IF_ERROR(Migrate(w));
+
+  StatusOr<DbHandle> reader = OpenDatabase(path, /*read_only=*/true);
+  if (!reader.ok()) return reader.status();
+  store->reader_ = std::move(reader).value();
+  MAPD_RETURN_IF_ERROR(store->Prepare());
+  return store;
+}
+
+Store::~Store() {
+  if (writer_) (void)Checkpoint();
+}
+
+Status Store::Prepare() {
+  sqlite3* w = writer_.get();
+  MAPD_RETURN_IF_ERROR(PrepareInto(w, "BEGIN IMMEDIATE", &begin_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(w, "COMMIT", &commit_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(w, "ROLLBACK", &rollback_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "INSERT INTO robots (name, first_seen_ns, last_seen_ns) VALUES (?1, ?2, ?2)",
+      &insert_robot_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "INSERT INTO sessions (robot_id, name, created_ns, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz) "
+         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+      &insert_session_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "INSERT OR IGNORE INTO observations (session_id, seq, stamp_ns, received_ns, "
+         "qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload) "
+         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+      &insert_obs_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "SELECT id FROM observations WHERE session_id = ?1 AND seq = ?2", &find_obs_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "UPDATE robots SET batches = batches + ?2, features = features + ?3, "
+         "last_seen_ns = max(last_seen_ns, ?4) WHERE id = ?1",
+      &update_robot_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(
+      w, "INSERT OR REPLACE INTO fused_features (id, kind, ax, ay, bx, by, z_min, z_max, support, "
+         "member_count, robots, updated_ns) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+      &upsert_fused_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(w, "DELETE FROM fused_features WHERE id = ?1", &delete_fused_));
+
+  // Warm the caches of robots and sessions.
+  StatusOr<Statement> robots = Statement::Prepare(w, "SELECT id, name FROM robots");
+  if (!robots.ok()) return robots.status();
+  for (;;) {
+    StatusOr<bool> row = robots->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) break;
+    robot_ids_[robots->ColumnText(1)] = robots->ColumnInt(0);
+    robot_names_[robots->ColumnInt(0)] = robots->ColumnText(1);
+  }
+  StatusOr<Statement> sessions = Statement::Prepare(
+      w, "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz FROM sessions");
+  if (!sessions.ok()) return sessions.status();
+  for (;;) {
+    StatusOr<bool> row = sessions->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) break;
+    SessionFrame f;
+    f.session_id = sessions->ColumnInt(0);
+    f.robot_id = sessions->ColumnInt(1);
+    f.kind = static_cast<FrameKind>(sessions->ColumnInt(3));
+    f.tied = sessions->ColumnInt(4) != 0;
+    if (f.tied) f.T_map_frame = ColumnPose(*sessions, 5);
+    sessions_[SessionKey(f.robot_id, sessions->ColumnText(2))] = f;
+  }
+  return Status::Ok();
+}
+
+StatusOr<std::unique_ptr<WriteTransaction>> Store::BeginWrite() {
+  MAPD_RETURN_IF_ERROR(begin_.Run());
+  return std::unique_ptr<WriteTransaction>(new WriteTransaction(this));
+}
+
+Status Store::Checkpoint() {
+  return Exec(writer_.get(), "PRAGMA wal_checkpoint(TRUNCATE)");
+}
+
+// ---------------------------------------------------------------------------
+// WriteTransaction
+
+WriteTransaction::~WriteTransaction() {
+  if (open_) (void)store_->rollback_.Run();
+}
+
+StatusOr<int64_t> WriteTransaction::RobotId(const std::string& name, int64_t now_ns) {
+  if (auto it = new_robots_.find(name); it != new_robots_.end()) return it->second;
+  {
+    std::lock_guard<std::mutex> lock(store_->cache_mu_);
+    if (auto it = store_->robot_ids_.find(name); it != store_->robot_ids_.end()) return it->second;
+  }
+  store_->insert_robot_.Bind(1, name).Bind(2, now_ns);
+  MAPD_RETURN_IF_ERROR(store_->insert_robot_.Run());
+  const int64_t id = sqlite3_last_insert_rowid(store_->writer_.get());
+  new_robots_[name] = id;
+  return id;
+}
+
+StatusOr<SessionFrame> WriteTransaction::Session(int64_t robot_id, const std::string& name,
+                                                 FrameKind kind, int64_t now_ns) {
+  const std::string key = Store::SessionKey(robot_id, name);
+  if (auto it = new_sessions_.find(key); it != new_sessions_.end()) return it->second;
+  {
+    std::lock_guard<std::mutex> lock(store_->cache_mu_);
+    if (auto it = store_->sessions_.find(key); it != store_->sessions_.end()) return it->second;
+  }
+  SessionFrame f;
+  f.robot_id = robot_id;
+  f.kind = kind;
+  f.tied = kind == FrameKind::kMap;  // a map-frame session is tied by identity
+  Statement& s = store_->insert_session_;
+  s.Bind(1, robot_id).Bind(2, name).Bind(3, now_ns).Bind(4, static_cast<int64_t>(kind));
+  s.Bind(5, static_cast<int64_t>(f.tied ? 1 : 0));
+  if (f.tied) BindPose(s, 6, f.T_map_frame);
+  MAPD_RETURN_IF_ERROR(s.Run());
+  f.session_id = sqlite3_last_insert_rowid(store_->writer_.get());
+  new_sessions_[key] = f;
+  return f;
+}
+
+StatusOr<InsertResult> WriteTransaction::InsertObservation(const NewObservation& obs) {
+  StatusOr<int64_t> robot_id = RobotId(obs.robot, obs.received_ns);
+  if (!robot_id.ok()) return robot_id.status();
+  StatusOr<SessionFrame> frame = Session(*robot_id, obs.session, obs.frame_kind, obs.received_ns);
+  if (!frame.ok()) return frame.status();
+  if (frame->kind != obs.frame_kind) {
+    return Status::InvalidArgument(
+        "session_frame disagrees with session '" + obs.session + "' of robot '" + obs.robot +
+        "', which was opened with " + (frame->kind == FrameKind::kMap ? "SESSION_FRAME_MAP" : "SESSION_FRAME_LOCAL") +
+        "; start a new session_id to change it");
+  }
+  InsertResult result;
+  result.frame = *frame;
+
+  const geometry::SensorObservation& f = *obs.features;
+  payload_.clear();
+  EncodeFeatures(f, &payload_);
+  Statement& s = store_->insert_obs_;
+  s.Bind(1, frame->session_id).Bind(2, static_cast<int64_t>(obs.seq)).Bind(3, obs.stamp_ns);
+  s.Bind(4, obs.received_ns);
+  BindPose(s, 5, f.T_frame_sensor);
+  s.Bind(12, static_cast<int64_t>(f.lines.size())).Bind(13, static_cast<int64_t>(f.planes.size()));
+  s.BindBlob(14, payload_.data(), payload_.size());
+  MAPD_RETURN_IF_ERROR(s.Run());
+  sqlite3* w = store_->writer_.get();
+  if (sqlite3_changes(w) == 1) {
+    result.stored = true;
+    result.observation_id = sqlite3_last_insert_rowid(w);
+    RobotDelta& d = robot_deltas_[*robot_id];
+    d.batches += 1;
+    d.features += f.lines.size() + f.planes.size();
+    d.last_seen_ns = std::max(d.last_seen_ns, obs.received_ns);
+    return result;
+  }
+  // A duplicate: report the earlier row.
+  Statement& q = store_->find_obs_;
+  q.Bind(1, frame->session_id).Bind(2, static_cast<int64_t>(obs.seq));
+  StatusOr<bool> row = q.Step();
+  if (row.ok() && *row) result.observation_id = q.ColumnInt(0);
+  q.Reset();
+  if (!row.ok()) return row.status();
+  return result;
+}
+
+Status WriteTransaction::UpsertFused(const FusedRow& r) {
+  Statement& s = store_->upsert_fused_;
+  s.Bind(1, static_cast<int64_t>(r.id)).Bind(2, static_cast<int64_t>(r.kind));
+  s.Bind(3, r.segment.a.x()).Bind(4, r.segment.a.y()).Bind(5, r.segment.b.x()).Bind(6, r.segment.b.y());
+  s.Bind(7, r.z_min_m).Bind(8, r.z_max_m);
+  s.Bind(9, static_cast<int64_t>(r.support)).Bind(10, static_cast<int64_t>(r.member_count));
+  s.Bind(11, r.robots).Bind(12, static_cast<int64_t>(0));
+  return s.Run();
+}
+
+Status WriteTransaction::DeleteFused(uint64_t id) {
+  store_->delete_fused_.Bind(1, static_cast<int64_t>(id));
+  return store_->delete_fused_.Run();
+}
+
+Status WriteTransaction::Commit() {
+  for (const auto& [robot_id, d] : robot_deltas_) {
+    Statement& s = store_->update_robot_;
+    s.Bind(1, robot_id).Bind(2, static_cast<int64_t>(d.batches));
+    s.Bind(3, static_cast<int64_t>(d.features)).Bind(4, d.last_seen_ns);
+    MAPD_RETURN_IF_ERROR(s.Run());
+  }
+  MAPD_RETURN_IF_ERROR(store_->commit_.Run());
+  open_ = false;
+  std::lock_guard<std::mutex> lock(store_->cache_mu_);
+  for (const auto& [name, id] : new_robots_) {
+    store_->robot_ids_[name] = id;
+    store_->robot_names_[id] = name;
+  }
+  for (const auto& [key, frame] : new_sessions_) store_->sessions_[key] = frame;
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------
+// Reads
+
+Status Store::ForEachObservation(const std::function<Status(const StoredObservation&)>& fn) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(),
+      "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
+      "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.id = o.session_id "
+      "ORDER BY o.id");
+  if (!q.ok()) return q.status();
+  StoredObservation obs;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return Status::Ok();
+    obs.id = q->ColumnInt(0);
+    obs.robot_id = q->ColumnInt(1);
+    obs.session_id = q->ColumnInt(2);
+    obs.seq = static_cast<uint64_t>(q->ColumnInt(3));
+    obs.stamp_ns = q->ColumnInt(4);
+    obs.features.T_frame_sensor = ColumnPose(*q, 5);
+    Status s = DecodeFeatures(q->ColumnBlob(12), &obs.features);
+    if (!s.ok()) return Status(s.code(), "observation " + std::to_string(obs.id) + ": " + s.message());
+    MAPD_RETURN_IF_ERROR(fn(obs));
+  }
+}
+
+StatusOr<std::vector<SessionFrame>> Store::ListSessions() {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  std::vector<SessionFrame> out;
+  out.reserve(sessions_.size());
+  for (const auto& [key, f] : sessions_) out.push_back(f);
+  return out;
+}
+
+StatusOr<std::vector<FusedRow>> Store::LoadFused() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(),
+      "SELECT id, kind, ax, ay, bx, by, z_min, z_max, support, member_count, robots "
+      "FROM fused_features ORDER BY id");
+  if (!q.ok()) return q.status();
+  std::vector<FusedRow> out;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return out;
+    FusedRow r;
+    r.id = static_cast<uint64_t>(q->ColumnInt(0));
+    r.kind = static_cast<int>(q->ColumnInt(1));
+    r.segment.a = {q->ColumnDouble(2), q->ColumnDouble(3)};
+    r.segment.b = {q->ColumnDouble(4), q->ColumnDouble(5)};
+    r.z_min_m = q->ColumnDouble(6);
+    r.z_max_m = q->ColumnDouble(7);
+    r.support = static_cast<uint32_t>(q->ColumnInt(8));
+    r.member_count = static_cast<uint32_t>(q->ColumnInt(9));
+    r.robots = q->ColumnText(10);
+    out.push_back(std::move(r));
+  }
+}
+
+StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(),
+      "SELECT r.id, r.name, r.first_seen_ns, r.last_seen_ns, r.batches, r.features, "
+      "count(s.id), coalesce(min(s.tied), 0) FROM robots r LEFT JOIN sessions s ON s.robot_id = r.id "
+      "GROUP BY r.id ORDER BY r.name");
+  if (!q.ok()) return q.status();
+  std::vector<RobotSummary> out;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return out;
+    RobotSummary r;
+    r.id = q->ColumnInt(0);
+    r.name = q->ColumnText(1);
+    r.first_seen_ns = q->ColumnInt(2);
+    r.last_seen_ns = q->ColumnInt(3);
+    r.batches = static_cast<uint64_t>(q->ColumnInt(4));
+    r.features = static_cast<uint64_t>(q->ColumnInt(5));
+    r.sessions = static_cast<uint32_t>(q->ColumnInt(6));
+    r.all_sessions_tied = q->ColumnInt(7) != 0;
+    out.push_back(std::move(r));
+  }
+}
+
+StatusOr<StoreCounts> Store::Counts() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(),
+      "SELECT (SELECT count(*) FROM robots), (SELECT count(*) FROM sessions), "
+      "(SELECT coalesce(sum(batches), 0) FROM robots), (SELECT coalesce(sum(features), 0) FROM robots), "
+      "(SELECT count(*) FROM fused_features), (SELECT count(*) FROM submaps)");
+  if (!q.ok()) return q.status();
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  StoreCounts c;
+  c.robots = static_cast<uint64_t>(q->ColumnInt(0));
+  c.sessions = static_cast<uint64_t>(q->ColumnInt(1));
+  c.observations = static_cast<uint64_t>(q->ColumnInt(2));
+  c.raw_features = static_cast<uint64_t>(q->ColumnInt(3));
+  c.fused = static_cast<uint64_t>(q->ColumnInt(4));
+  c.submaps = static_cast<uint64_t>(q->ColumnInt(5));
+  return c;
+}
+
+std::string Store::RobotName(int64_t robot_id) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  auto it = robot_names_.find(robot_id);
+  return it == robot_names_.end() ? std::string() : it->second;
+}
+
+uint64_t Store::SizeBytes() const { return FileSize(path_) + FileSize(path_ + "-wal"); }
+
+}  // namespace mapd::storage

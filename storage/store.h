@@ -1,0 +1,190 @@
+// The map server's persistence: one SQLite database file in WAL mode.
+//
+// Writes go through ONE connection, used by one thread (mapd's writer), in
+// group transactions: SQLite 3.40's WAL-reset race needs two concurrent
+// writers, and a single writer also lets many robots' batches share a commit.
+// Reads (queries, restart) use a second connection of their own.
+//
+// Thread safety: BeginWrite(), WriteTransaction and Checkpoint() belong to the
+// writer thread. The read methods may be called from any thread; they are
+// serialised on the reader connection.
+#ifndef MAPD_STORAGE_STORE_H_
+#define MAPD_STORAGE_STORE_H_
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "common/status.h"
+#include "geometry/observation.h"
+#include "geometry/rigid3.h"
+#include "geometry/segment2.h"
+#include "storage/sqlite.h"
+
+namespace mapd::storage {
+
+struct StoreOptions {
+  // false: synchronous=NORMAL, a commit survives a crash of mapd but maybe not
+  // of the machine. true: synchronous=FULL, it survives power loss too.
+  bool synchronous_full = false;
+};
+
+enum class FrameKind : int {
+  kMap = 1,    // the session's poses are in the map frame
+  kLocal = 2,  // the session has its own frame, tied later by a submap merge
+};
+
+// A robot session's frame and how it relates to the map frame.
+struct SessionFrame {
+  int64_t session_id = 0;
+  int64_t robot_id = 0;
+  FrameKind kind = FrameKind::kMap;
+  bool tied = false;               // T_map_frame is known
+  geometry::Rigid3 T_map_frame;    // valid when tied
+};
+
+// One batch to store.
+struct NewObservation {
+  std::string robot;
+  std::string session;
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  int64_t received_ns = 0;
+  FrameKind frame_kind = FrameKind::kMap;
+  const geometry::SensorObservation* features = nullptr;  // pose + lines + planes, sensor frame
+};
+
+struct InsertResult {
+  bool stored = false;          // false: (robot, session, seq) was stored before
+  int64_t observation_id = 0;   // the row id (of the earlier row for a duplicate)
+  SessionFrame frame;
+};
+
+// A stored observation, as read back.
+struct StoredObservation {
+  int64_t id = 0;
+  int64_t robot_id = 0;
+  int64_t session_id = 0;
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  geometry::SensorObservation features;
+};
+
+// A row of the published fused map.
+struct FusedRow {
+  uint64_t id = 0;
+  int kind = 1;  // 1 = line, 2 = plane (mapserver.v1.FeatureKind)
+  geometry::Segment2 segment;
+  double z_min_m = 0, z_max_m = 0;
+  uint32_t support = 0;
+  uint32_t member_count = 0;
+  std::string robots;  // comma-separated robot names
+};
+
+struct RobotSummary {
+  int64_t id = 0;
+  std::string name;
+  int64_t first_seen_ns = 0;
+  int64_t last_seen_ns = 0;
+  uint64_t batches = 0;
+  uint64_t features = 0;
+  uint32_t sessions = 0;
+  bool all_sessions_tied = false;
+};
+
+struct StoreCounts {
+  uint64_t robots = 0, sessions = 0, observations = 0, raw_features = 0, fused = 0, submaps = 0;
+};
+
+class Store;
+
+// A group of writes committed together. Rolls back unless Commit() succeeds.
+class WriteTransaction {
+ public:
+  ~WriteTransaction();
+  WriteTransaction(const WriteTransaction&) = delete;
+  WriteTransaction& operator=(const WriteTransaction&) = delete;
+
+  // Inserts one batch unless (robot, session, seq) is stored already. Creates
+  // the robot and session on first sight. A batch whose frame kind disagrees
+  // with its session's is refused with InvalidArgument; the transaction goes on.
+  StatusOr<InsertResult> InsertObservation(const NewObservation& obs);
+  Status UpsertFused(const FusedRow& row);
+  Status DeleteFused(uint64_t id);
+  // Durable once this returns OK (per StoreOptions::synchronous_full).
+  Status Commit();
+
+ private:
+  friend class Store;
+  explicit WriteTransaction(Store* store) : store_(store) {}
+  struct RobotDelta {
+    uint64_t batches = 0, features = 0;
+    int64_t last_seen_ns = 0;
+  };
+  StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
+  StatusOr<SessionFrame> Session(int64_t robot_id, const std::string& name, FrameKind kind,
+                                 int64_t now_ns);
+
+  Store* store_;
+  bool open_ = true;
+  std::unordered_map<std::string, int64_t> new_robots_;
+  std::unordered_map<std::string, SessionFrame> new_sessions_;  // key: robot_id/name
+  std::unordered_map<int64_t, RobotDelta> robot_deltas_;
+  std::string payload_;  // scratch
+};
+
+class Store {
+ public:
+  static StatusOr<std::unique_ptr<Store>> Open(const std::string& path, const StoreOptions& options);
+  ~Store();
+
+  // --- Writer thread only.
+  StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite();
+  // Copies the WAL into the database file and truncates it (shutdown, idle).
+  Status Checkpoint();
+
+  // --- Any thread.
+  // Every stored observation in id (= arrival) order.
+  Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
+  StatusOr<std::vector<SessionFrame>> ListSessions();
+  StatusOr<std::vector<FusedRow>> LoadFused();
+  StatusOr<std::vector<RobotSummary>> ListRobots();
+  StatusOr<StoreCounts> Counts();
+  // Robot name by id, from the cache (empty if unknown).
+  std::string RobotName(int64_t robot_id) const;
+  // Database file plus WAL, bytes.
+  uint64_t SizeBytes() const;
+  const std::string& path() const { return path_; }
+
+ private:
+  friend class WriteTransaction;
+  Store() = default;
+  Status Prepare();
+  static std::string SessionKey(int64_t robot_id, const std::string& name) {
+    return std::to_string(robot_id) + "/" + name;
+  }
+
+  std::string path_;
+  DbHandle writer_;
+  DbHandle reader_;
+  std::mutex reader_mu_;  // guards reader_ and its statements
+
+  // Writer statements.
+  Statement begin_, commit_, rollback_;
+  Statement insert_robot_, insert_session_, insert_obs_, find_obs_, update_robot_;
+  Statement upsert_fused_, delete_fused_;
+
+  // Committed robots and sessions (writer thread; names also read by RobotName).
+  mutable std::mutex cache_mu_;
+  std::unordered_map<std::string, int64_t> robot_ids_;
+  std::unordered_map<int64_t, std::string> robot_names_;
+  std::unordered_map<std::string, SessionFrame> sessions_;
+};
+
+}  // namespace mapd::storage
+
+#endif  // MAPD_STORAGE_STORE_H_

@@ -1,0 +1,34 @@
+// A scratch directory removed at the end of the test (shared fixture helper).
+#ifndef MAPD_TESTS_COMMON_TEMP_DIR_H_
+#define MAPD_TESTS_COMMON_TEMP_DIR_H_
+
+#include <stdlib.h>
+
+#include <filesystem>
+#include <string>
+
+namespace mapd::testing {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "mapd-test-XXXXXX").string();
+    path_ = mkdtemp(tmpl.data());
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  std::string path() const { return path_; }
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace mapd::testing
+
+#endif  // MAPD_TESTS_COMMON_TEMP_DIR_H_

@@ -1,0 +1,37 @@
+// A plain batch implementation of ALGORITHMS.md section A, written for
+// obviousness, not speed: all pairs, BFS components, the scatter matrix built
+// from the member endpoints, every endpoint projected, the corner rule of
+// fusion/corner_snap.h evaluated by brute force. The criteria themselves are the
+// library's (fusion/criteria.h), which criteria_test.cc checks by hand.
+#ifndef MAPD_TESTS_FUSION_BATCH_REFERENCE_H_
+#define MAPD_TESTS_FUSION_BATCH_REFERENCE_H_
+
+#include <vector>
+
+#include "fusion/engine.h"
+#include "fusion/params.h"
+
+namespace mapd::fusion::testing {
+
+struct BatchObservation {
+  ObservationId id = 0;
+  RobotId robot = 0;
+  std::vector<GroundFeature> features;
+};
+
+struct BatchCluster {
+  std::vector<FeatureId> members;  // ascending
+  ClusterId id = 0;                // members.front()
+  geometry::Segment2 fitted;
+  geometry::Segment2 segment;      // corner-optimised if published, else == fitted
+  uint32_t support = 0;
+  bool published = false;
+};
+
+// All clusters, ascending by id.
+std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observations,
+                                    const FusionParams& params);
+
+}  // namespace mapd::fusion::testing
+
+#endif  // MAPD_TESTS_FUSION_BATCH_REFERENCE_H_

@@ -1,0 +1,67 @@
+#include "fusion/params.h"
+
+#include <cmath>
+#include <limits>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+namespace mapd::fusion {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(FusionParamsTest, DefaultsAreValid) { EXPECT_TRUE(FusionParams().Validate().ok()); }
+
+TEST(FusionParamsTest, RefusalsNameTheField) {
+  FusionParams p;
+  p.eta_m = -0.1;
+  EXPECT_EQ(p.Validate().code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(p.Validate().message(), HasSubstr("eta_m"));
+
+  p = FusionParams();
+  p.gamma = 1.5;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("gamma"));
+
+  p = FusionParams();
+  p.delta_rad = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THAT(p.Validate().message(), HasSubstr("delta_rad"));
+
+  p = FusionParams();
+  p.min_support = 0;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("min_support"));
+
+  p = FusionParams();
+  p.max_plane_tilt_rad = 2.0;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("max_plane_tilt_rad"));
+
+  p = FusionParams();
+  p.snap_m = std::numeric_limits<double>::infinity();
+  EXPECT_THAT(p.Validate().message(), HasSubstr("snap_m"));
+}
+
+TEST(FusionParamsTest, BoundaryValuesAreAccepted) {
+  FusionParams p;
+  p.gamma = 0.0;
+  p.eta_m = 0.0;
+  p.snap_m = 0.0;
+  p.min_support = 1;
+  EXPECT_TRUE(p.Validate().ok());
+  p.gamma = 1.0;
+  EXPECT_TRUE(p.Validate().ok());
+}
+
+TEST(CornerModeTest, NamesRoundTrip) {
+  for (CornerMode mode : {CornerMode::kMidpoint, CornerMode::kIntersection}) {
+    CornerMode parsed = CornerMode::kMidpoint;
+    ASSERT_TRUE(ParseCornerMode(CornerModeName(mode), &parsed).ok());
+    EXPECT_EQ(parsed, mode);
+  }
+  CornerMode parsed = CornerMode::kMidpoint;
+  const Status s = ParseCornerMode("nearest", &parsed);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("nearest"));
+}
+
+}  // namespace
+}  // namespace mapd::fusion

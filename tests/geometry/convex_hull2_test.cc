@@ -1,0 +1,42 @@
+#include "geometry/convex_hull2.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace mapd::geometry {
+namespace {
+
+TEST(ConvexHullTest, SquareWithInteriorAndCollinearPoints) {
+  const std::vector<Vec2> hull =
+      ConvexHull({{0, 0}, {1, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 1}, {0, 1}, {2, 2}});
+  ASSERT_EQ(hull.size(), 4u);
+  EXPECT_EQ(hull[0], Vec2(0, 0));  // lowest-leftmost first, counter-clockwise
+  EXPECT_EQ(hull[1], Vec2(2, 0));
+  EXPECT_EQ(hull[2], Vec2(2, 2));
+  EXPECT_EQ(hull[3], Vec2(0, 2));
+}
+
+TEST(ConvexHullTest, DegenerateInputs) {
+  EXPECT_TRUE(ConvexHull({}).empty());
+  EXPECT_EQ(ConvexHull({{1, 1}, {1, 1}}).size(), 1u);
+  EXPECT_EQ(ConvexHull({{0, 0}, {1, 1}, {2, 2}, {3, 3}}).size(), 2u);  // collinear
+}
+
+TEST(ConvexHullTest, ExtremeProjectionIsAttainedAtAVertex) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Vec2> points;
+  for (int i = 0; i < 500; ++i) points.emplace_back(n(rng), 0.1 * n(rng));
+  const std::vector<Vec2> hull = ConvexHull(points);
+  for (double angle = 0.0; angle < 6.3; angle += 0.05) {
+    const Vec2 d(std::cos(angle), std::sin(angle));
+    double best_all = -1e300, best_hull = -1e300;
+    for (const Vec2& p : points) best_all = std::max(best_all, p.dot(d));
+    for (const Vec2& p : hull) best_hull = std::max(best_hull, p.dot(d));
+    EXPECT_EQ(best_all, best_hull);
+  }
+}
+
+}  // namespace
+}  // namespace mapd::geometry

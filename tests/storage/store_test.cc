@@ -1,0 +1,155 @@
+#include "storage/store.h"
+
+#include <gtest/gtest.h>
+
+#include "common/temp_dir.h"
+
+namespace mapd::storage {
+namespace {
+
+class StoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override { Reopen(); }
+
+  void Reopen() {
+    store_.reset();
+    auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
+    ASSERT_TRUE(opened.ok()) << opened.status().ToString();
+    store_ = std::move(opened).value();
+  }
+
+  NewObservation Batch(const std::string& robot, const std::string& session, uint64_t seq,
+                       FrameKind kind = FrameKind::kMap) {
+    NewObservation o;
+    o.robot = robot;
+    o.session = session;
+    o.seq = seq;
+    o.stamp_ns = 1000 + static_cast<int64_t>(seq);
+    o.received_ns = 2000 + static_cast<int64_t>(seq);
+    o.frame_kind = kind;
+    o.features = &features_;
+    return o;
+  }
+
+  StatusOr<InsertResult> InsertOne(const NewObservation& o) {
+    auto txn = store_->BeginWrite();
+    if (!txn.ok()) return txn.status();
+    StatusOr<InsertResult> r = (*txn)->InsertObservation(o);
+    if (!r.ok()) return r;
+    Status c = (*txn)->Commit();
+    if (!c.ok()) return c;
+    return r;
+  }
+
+  mapd::testing::TempDir dir_;
+  std::unique_ptr<Store> store_;
+  geometry::SensorObservation features_ = [] {
+    geometry::SensorObservation f;
+    f.T_frame_sensor.translation = {1, 2, 0};
+    f.lines.push_back({{0, 0, 0}, {3, 0, 0}});
+    f.lines.push_back({{0, 1, 0}, {3, 1, 0}});
+    return f;
+  }();
+};
+
+TEST_F(StoreTest, StoresABatchOnceAndReportsTheDuplicate) {
+  auto first = InsertOne(Batch("r1", "s1", 1));
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  EXPECT_TRUE(first->stored);
+  auto again = InsertOne(Batch("r1", "s1", 1));
+  ASSERT_TRUE(again.ok());
+  EXPECT_FALSE(again->stored);
+  EXPECT_EQ(again->observation_id, first->observation_id);
+
+  auto counts = store_->Counts();
+  ASSERT_TRUE(counts.ok());
+  EXPECT_EQ(counts->observations, 1u);
+  EXPECT_EQ(counts->raw_features, 2u);
+}
+
+TEST_F(StoreTest, SameSeqInAnotherSessionOrRobotIsNew) {
+  ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1)).ok());
+  EXPECT_TRUE(InsertOne(Batch("r1", "s2", 1))->stored);
+  EXPECT_TRUE(InsertOne(Batch("r2", "s1", 1))->stored);
+  auto robots = store_->ListRobots();
+  ASSERT_TRUE(robots.ok());
+  ASSERT_EQ(robots->size(), 2u);
+  EXPECT_EQ((*robots)[0].name, "r1");
+  EXPECT_EQ((*robots)[0].batches, 2u);
+  EXPECT_EQ((*robots)[0].sessions, 2u);
+}
+
+TEST_F(StoreTest, RefusesAFrameKindThatDisagreesWithTheSession) {
+  ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1, FrameKind::kMap)).ok());
+  auto bad = InsertOne(Batch("r1", "s1", 2, FrameKind::kLocal));
+  EXPECT_EQ(bad.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status().message().find("session_frame"), std::string::npos);
+}
+
+TEST_F(StoreTest, UncommittedTransactionLeavesNothing) {
+  {
+    auto txn = store_->BeginWrite();
+    ASSERT_TRUE(txn.ok());
+    ASSERT_TRUE((*txn)->InsertObservation(Batch("ghost", "s", 1)).ok());
+  }  // rolled back here
+  auto counts = store_->Counts();
+  EXPECT_EQ(counts->robots, 0u);
+  EXPECT_EQ(counts->observations, 0u);
+  // The rolled-back robot must not linger in the cache either.
+  EXPECT_TRUE(InsertOne(Batch("ghost", "s", 1))->stored);
+  EXPECT_EQ(store_->Counts()->robots, 1u);
+}
+
+TEST_F(StoreTest, EverythingSurvivesAReopen) {
+  ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1)).ok());
+  ASSERT_TRUE(InsertOne(Batch("r1", "s1", 2)).ok());
+  {
+    auto txn = store_->BeginWrite();
+    FusedRow row;
+    row.id = 7;
+    row.segment = {{0, 0}, {3, 0}};
+    row.support = 2;
+    row.robots = "r1";
+    ASSERT_TRUE((*txn)->UpsertFused(row).ok());
+    ASSERT_TRUE((*txn)->Commit().ok());
+  }
+  Reopen();
+  std::vector<StoredObservation> seen;
+  ASSERT_TRUE(store_->ForEachObservation([&](const StoredObservation& o) {
+                      seen.push_back(o);
+                      return Status::Ok();
+                    }).ok());
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[1].seq, 2u);
+  EXPECT_EQ(seen[0].features.lines.size(), 2u);
+  EXPECT_EQ(seen[0].features.T_frame_sensor.translation, Eigen::Vector3d(1, 2, 0));
+  auto fused = store_->LoadFused();
+  ASSERT_TRUE(fused.ok());
+  ASSERT_EQ(fused->size(), 1u);
+  EXPECT_EQ((*fused)[0].segment.b, Eigen::Vector2d(3, 0));
+  // And a duplicate is still recognised after the restart.
+  EXPECT_FALSE(InsertOne(Batch("r1", "s1", 2))->stored);
+}
+
+TEST_F(StoreTest, RefusesADatabaseFromANewerMapd) {
+  store_.reset();
+  {
+    auto db = OpenDatabase(dir_.File("map.db"), false);
+    ASSERT_TRUE(db.ok());
+    ASSERT_TRUE(Exec(db->get(), "INSERT INTO schema_version VALUES (999)").ok());
+  }
+  auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
+  EXPECT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
+}
+
+TEST_F(StoreTest, RefusesAFileThatIsNotADatabase) {
+  store_.reset();
+  FILE* f = fopen(dir_.File("junk.db").c_str(), "w");
+  fputs("this is not an SQLite database, just some text long enough to be read as a header...", f);
+  fclose(f);
+  auto opened = Store::Open(dir_.File("junk.db"), StoreOptions{});
+  EXPECT_FALSE(opened.ok());
+}
+
+}  // namespace
+}  // namespace mapd::storage
