@@ -1,0 +1,129 @@
+#include "service/ingest_batch.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "common/batches.h"
+
+namespace mapd::service {
+namespace {
+
+using ::testing::HasSubstr;
+
+class ValidateBatchTest : public ::testing::Test {
+ protected:
+  mapserver::v1::ObservationBatch Good() { return mapd::testing::RoomBatch("r1", "s1", 1, 2, 3, 0.5, &rng_); }
+  Status Check(const mapserver::v1::ObservationBatch& b) { return ValidateBatch(b, limits_).status(); }
+
+  std::mt19937_64 rng_{7};
+  IngestLimits limits_;
+};
+
+TEST_F(ValidateBatchTest, AcceptsAGoodBatchAndNormalisesTheQuaternion) {
+  auto b = Good();
+  b.mutable_t_frame_sensor()->mutable_rotation()->set_w(b.t_frame_sensor().rotation().w() * 1.0005);
+  StatusOr<IngestBatch> r = ValidateBatch(b, limits_);
+  ASSERT_TRUE(r.ok()) << r.status().ToString();
+  EXPECT_NEAR(r->features.T_frame_sensor.rotation.norm(), 1.0, 1e-12);
+  EXPECT_EQ(r->features.lines.size(), 4u);
+  EXPECT_EQ(r->frame_kind, storage::FrameKind::kMap);
+}
+
+TEST_F(ValidateBatchTest, NamesANaNCoordinate) {
+  auto b = Good();
+  b.mutable_lines(2)->mutable_a()->set_y(std::nan(""));
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("lines[2].a.y is NaN"));
+}
+
+TEST_F(ValidateBatchTest, NamesAnInfiniteTranslation) {
+  auto b = Good();
+  b.mutable_t_frame_sensor()->mutable_translation()->set_x(std::numeric_limits<double>::infinity());
+  EXPECT_THAT(Check(b).message(), HasSubstr("T_frame_sensor.translation.x is infinite"));
+}
+
+TEST_F(ValidateBatchTest, RefusesAbsurdCoordinates) {
+  auto b = Good();
+  b.mutable_lines(0)->mutable_b()->set_x(5e6);
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("lines[0].b.x"));
+}
+
+TEST_F(ValidateBatchTest, RefusesAZeroLengthSegment) {
+  auto b = Good();
+  *b.mutable_lines(1)->mutable_b() = b.lines(1).a();
+  EXPECT_THAT(Check(b).message(), HasSubstr("lines[1] has zero length"));
+}
+
+TEST_F(ValidateBatchTest, RefusesANonUnitQuaternion) {
+  auto b = Good();
+  b.mutable_t_frame_sensor()->mutable_rotation()->set_w(2.0);
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("T_frame_sensor.rotation has norm"));
+}
+
+TEST_F(ValidateBatchTest, RefusesAMissingPose) {
+  auto b = Good();
+  b.clear_t_frame_sensor();
+  EXPECT_THAT(Check(b).message(), HasSubstr("T_frame_sensor"));
+}
+
+TEST_F(ValidateBatchTest, RefusesAPlaneWithTwoBoundaryPoints) {
+  auto b = Good();
+  auto* p = b.add_planes();
+  p->mutable_normal()->set_x(1);
+  p->add_boundary()->set_y(1);
+  p->add_boundary()->set_z(1);
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("planes[0].boundary has 2 points"));
+}
+
+TEST_F(ValidateBatchTest, RefusesANonUnitPlaneNormal) {
+  auto b = Good();
+  auto* p = b.add_planes();
+  p->mutable_normal()->set_x(0.5);
+  for (int i = 0; i < 3; ++i) p->add_boundary()->set_y(i);
+  EXPECT_THAT(Check(b).message(), HasSubstr("planes[0].normal has norm"));
+}
+
+TEST_F(ValidateBatchTest, OverLimitBatchIsResourceExhausted) {
+  auto b = Good();
+  limits_.max_features_per_batch = 3;
+  EXPECT_EQ(Check(b).code(), StatusCode::kResourceExhausted);
+  EXPECT_THAT(Check(b).message(), HasSubstr("limit is 3"));
+}
+
+TEST_F(ValidateBatchTest, OverLimitPlaneBoundaryIsResourceExhausted) {
+  auto b = Good();
+  limits_.max_boundary_points = 4;
+  auto* p = b.add_planes();
+  p->mutable_normal()->set_x(1);
+  for (int i = 0; i < 5; ++i) p->add_boundary()->set_y(i);
+  EXPECT_EQ(Check(b).code(), StatusCode::kResourceExhausted);
+}
+
+TEST_F(ValidateBatchTest, RefusesBadIdsAndSeqZero) {
+  auto b = Good();
+  b.set_robot_id("");
+  EXPECT_THAT(Check(b).message(), HasSubstr("robot_id"));
+  b = Good();
+  b.set_session_id("has space");
+  EXPECT_THAT(Check(b).message(), HasSubstr("session_id"));
+  b = Good();
+  b.set_seq(0);
+  EXPECT_THAT(Check(b).message(), HasSubstr("seq is 0"));
+}
+
+TEST(IngestLimitsTest, RefusesLimitsBeyondTheFeatureIdSpace) {
+  IngestLimits l;
+  EXPECT_TRUE(l.Validate().ok());
+  l.max_features_per_batch = kMaxFeaturesPerBatchHard + 1;
+  EXPECT_FALSE(l.Validate().ok());
+}
+
+}  // namespace
+}  // namespace mapd::service
