@@ -16,11 +16,11 @@ int64_t NowNs() {
       .count();
 }
 
-// Records one change feed into the group's delta; the last event for a cluster wins.
-void Accumulate(const fusion::ChangeFeed& feed, std::unordered_map<fusion::ClusterId, bool>* delta) {
-  for (fusion::ClusterId id : feed.added) (*delta)[id] = true;
-  for (fusion::ClusterId id : feed.updated) (*delta)[id] = true;
-  for (fusion::ClusterId id : feed.removed) (*delta)[id] = false;
+// Records one change feed into the set of clusters to rewrite.
+void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
+  delta->insert(feed.added.begin(), feed.added.end());
+  delta->insert(feed.updated.begin(), feed.updated.end());
+  delta->insert(feed.removed.begin(), feed.removed.end());
 }
 
 bool SameRow(const storage::FusedRow& a, const storage::FusedRow& b) {
@@ -43,6 +43,7 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   MAPD_RETURN_IF_ERROR(core->Rebuild());
   MAPD_RETURN_IF_ERROR(core->SyncFusedTable());
   core->writer_ = std::thread([c = core.get()] { c->WriterLoop(); });
+  core->fuser_ = std::thread([c = core.get()] { c->FuserLoop(); });
   return core;
 }
 
@@ -125,45 +126,73 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
 void MapCore::Stop() {
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
-    if (stopping_) {
-      // Already stopping; fall through to join if we own the thread.
-    }
     stopping_ = true;
     queue_cv_.notify_all();
   }
-  if (writer_.joinable()) writer_.join();
+  if (writer_.joinable()) writer_.join();  // every queued batch is committed and acknowledged
+  {
+    std::lock_guard<std::mutex> lock(fuse_mu_);
+    fuser_stopping_ = true;
+    fuse_cv_.notify_all();
+  }
+  if (fuser_.joinable()) fuser_.join();  // every committed observation is fused
+  // The writer is gone, so this thread is now the one writer: persist the last
+  // fused changes and checkpoint.
+  FusedDelta last;
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    last.swap(fused_pending_);
+  }
+  if (!last.empty() && store_) {
+    StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+    Status s = txn.ok() ? WriteFusedDelta(last, txn->get()) : txn.status();
+    if (s.ok()) s = (*txn)->Commit();
+    if (!s.ok()) Log(LogLevel::kWarn, "fused_table_write_failed", {{"error", s.ToString()}});
+  }
+  if (store_) {
+    Status s = store_->Checkpoint();
+    if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
+  }
 }
 
 void MapCore::WriterLoop() {
   std::vector<Pending> group;
+  FusedDelta fused;
   for (;;) {
     {
+      // Backpressure: while the fuser is far behind, commit nothing new, so
+      // robots see slower acks instead of the server growing without bound.
+      std::unique_lock<std::mutex> lock(fuse_mu_);
+      fuse_cv_.wait(lock, [this] {
+        return committed_count_ - fused_count_ <= options_.max_fusion_backlog || fuser_stopping_;
+      });
+    }
+    {
       std::unique_lock<std::mutex> lock(queue_mu_);
-      queue_cv_.wait(lock, [this] { return !queue_.empty() || stopping_; });
-      if (queue_.empty()) break;  // stopping, and everything is committed
+      queue_cv_.wait(lock, [this] { return !queue_.empty() || !fused_pending_.empty() || stopping_; });
+      if (queue_.empty() && fused_pending_.empty()) break;  // stopping, and nothing is left
       const size_t n = std::min(queue_.size(), options_.max_group_batches);
       group.reserve(n);
       for (size_t i = 0; i < n; ++i) {
         group.push_back(std::move(queue_.front()));
         queue_.pop_front();
       }
+      fused.swap(fused_pending_);
     }
-    CommitGroup(group);
+    CommitGroup(group, fused);
     group.clear();
+    fused.clear();
   }
-  Status s = store_->Checkpoint();
-  if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
 }
 
-void MapCore::CommitGroup(std::vector<Pending>& group) {
+void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   std::vector<BatchOutcome> outcomes(group.size());
+  std::vector<std::pair<size_t, storage::InsertResult>> to_fuse;  // (index in group, result)
   Status failure;
-  bool fused_any = false;
   uint64_t features_stored = 0, batches_stored = 0;
   StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
   if (!txn.ok()) failure = txn.status();
 
-  FusedDelta delta;
   for (size_t i = 0; i < group.size() && failure.ok(); ++i) {
     const IngestBatch& b = group[i].batch;
     storage::NewObservation row;
@@ -194,20 +223,9 @@ void MapCore::CommitGroup(std::vector<Pending>& group) {
     outcomes[i] = {BatchOutcome::Kind::kStored, Status::Ok()};
     ++batches_stored;
     features_stored += b.features.lines.size() + b.features.planes.size();
-    if (r->frame.tied) {
-      std::unique_lock<std::shared_mutex> lock(engine_mu_);
-      Fuse(b.features, r->observation_id, r->frame.robot_id, r->frame.T_map_frame, &delta);
-      fused_any = true;
-    }
+    if (r->frame.tied) to_fuse.emplace_back(i, *r);
   }
-  if (failure.ok()) {
-    for (const auto& [id, upsert] : delta) {
-      std::optional<fusion::FusedFeature> f = upsert ? engine_->Get(id) : std::nullopt;
-      const bool published = f && f->support >= options_.fusion.min_support;
-      failure = published ? (*txn)->UpsertFused(ToRow(*f)) : (*txn)->DeleteFused(id);
-      if (!failure.ok()) break;
-    }
-  }
+  if (failure.ok() && !fused.empty()) failure = WriteFusedDelta(fused, txn->get());
   if (failure.ok()) failure = (*txn)->Commit();
   txn = Status::Ok();  // ends the transaction (rolls back if Commit did not happen)
 
@@ -220,18 +238,81 @@ void MapCore::CommitGroup(std::vector<Pending>& group) {
            Status::Unavailable("the batch could not be stored (" + failure.message() +
                                "); nothing was kept, resend it")};
     }
-    // The engine may now hold features the database does not: rebuild it.
-    if (fused_any) {
-      Status s = Rebuild();
-      if (!s.ok()) Log(LogLevel::kError, "rebuild_failed", {{"error", s.ToString()}});
-    }
+    // The fused rows were not written either: keep them for the next commit.
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    fused_pending_.insert(fused.begin(), fused.end());
   } else {
     batches_stored_ += batches_stored;
     features_stored_ += features_stored;
-    if (!delta.empty()) map_version_ += 1;
     RecordRate();
+    if (!to_fuse.empty()) {
+      // Handed to the fuser BEFORE the acks go out, so that a query sent after
+      // an ack waits for that batch to be fused (read-your-writes).
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      for (auto& [index, result] : to_fuse) {
+        fuse_queue_.push_back({result.observation_id, result.frame.robot_id,
+                               result.frame.T_map_frame, std::move(group[index].batch.features)});
+      }
+      committed_count_ += to_fuse.size();
+      fuse_cv_.notify_all();
+    }
   }
   for (size_t i = 0; i < group.size(); ++i) group[i].done(outcomes[i]);
+}
+
+void MapCore::FuserLoop() {
+  std::deque<ToFuse> work;
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(fuse_mu_);
+      fuse_cv_.wait(lock, [this] { return !fuse_queue_.empty() || fuser_stopping_; });
+      if (fuse_queue_.empty()) break;
+      work.swap(fuse_queue_);
+    }
+    FusedDelta delta;
+    for (const ToFuse& t : work) {
+      // Locked per observation, so queries never wait for a whole backlog.
+      std::unique_lock<std::shared_mutex> lock(engine_mu_);
+      Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
+    }
+    if (!delta.empty()) {
+      map_version_ += 1;
+      std::lock_guard<std::mutex> lock(queue_mu_);
+      fused_pending_.insert(delta.begin(), delta.end());
+      queue_cv_.notify_one();
+    }
+    {
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      fused_count_ += work.size();
+    }
+    fuse_cv_.notify_all();
+    work.clear();
+  }
+}
+
+Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn) {
+  std::vector<storage::FusedRow> upserts;
+  std::vector<fusion::ClusterId> deletes;
+  {
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    for (fusion::ClusterId id : delta) {
+      std::optional<fusion::FusedFeature> f = engine_->Get(id);
+      if (f && f->support >= options_.fusion.min_support) {
+        upserts.push_back(ToRow(*f));
+      } else {
+        deletes.push_back(id);
+      }
+    }
+  }
+  for (const storage::FusedRow& row : upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFused(row));
+  for (fusion::ClusterId id : deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFused(id));
+  return Status::Ok();
+}
+
+void MapCore::WaitForFuser(std::chrono::duration<double> timeout) const {
+  std::unique_lock<std::mutex> lock(fuse_mu_);
+  const uint64_t target = committed_count_;
+  fuse_cv_.wait_for(lock, timeout, [&] { return fused_count_ >= target || fuser_stopping_; });
 }
 
 void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observation_id,
@@ -285,6 +366,7 @@ std::vector<std::string> MapCore::RobotNames(const std::vector<fusion::RobotId>&
 }
 
 std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const {
+  WaitForFuser(std::chrono::duration<double>(options_.max_query_wait_s));
   const uint32_t min_support = std::max(query.min_support, options_.fusion.min_support);
   std::vector<fusion::FusedFeature> published;
   {
@@ -337,6 +419,10 @@ CoreStats MapCore::Stats() const {
     const double window = std::max(1e-3, std::chrono::duration<double>(now - base_t).count());
     s.batches_per_s = static_cast<double>(s.batches_stored - base_b) / window;
     s.features_per_s = static_cast<double>(s.features_stored - base_f) / window;
+  }
+  {
+    std::lock_guard<std::mutex> lock(fuse_mu_);
+    s.fusion_backlog = committed_count_ - fused_count_;
   }
   std::shared_lock<std::shared_mutex> lock(engine_mu_);
   s.fused_features = engine_->published_count();

@@ -1,11 +1,17 @@
 // MapCore: the map server's state behind the RPC handlers.
 //
-// It owns the database (storage::Store), the fusion engine and the single
-// writer thread. Ingest handlers Submit() validated batches; the writer takes
-// everything queued, writes it in ONE transaction (group commit), fuses the
-// new observations, persists the changed fused features in the same
-// transaction, commits, and only then calls each batch's callback. So an Ack
-// always means "durable", and many robots share the cost of a commit.
+// It owns the database (storage::Store), the fusion engine and two threads:
+// - the writer: takes every queued batch, writes them in ONE transaction
+//   (group commit) together with the fused-map rows that changed since the
+//   last commit, commits, and only then calls each batch's callback. So an Ack
+//   means "durable", and many robots share the cost of a commit.
+// - the fuser: fuses committed observations in commit order and hands the
+//   changed fused features back to the writer (one connection writes).
+// Acks therefore never wait for fusion; the raw observations are the truth and
+// the fused map follows them (a restart recomputes it from them). Queries see
+// every batch acknowledged before they arrived (they wait for the fuser to
+// catch up, up to a bound), and the writer stops taking batches while the
+// fuser is more than max_fusion_backlog observations behind (backpressure).
 //
 // Thread safety: every public method may be called from any thread.
 #ifndef MAPD_SERVICE_MAP_CORE_H_
@@ -24,6 +30,7 @@
 #include <string>
 #include <thread>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "common/status.h"
@@ -39,7 +46,9 @@ struct MapCoreOptions {
   std::string db_path;
   storage::StoreOptions store;
   fusion::FusionParams fusion;
-  size_t max_group_batches = 4096;  // batches in one commit at most
+  size_t max_group_batches = 4096;     // batches in one commit at most
+  size_t max_fusion_backlog = 50000;   // committed, not yet fused observations at most
+  double max_query_wait_s = 5.0;       // a query waits this long for the fuser at most
 };
 
 struct BatchOutcome {
@@ -72,6 +81,7 @@ struct CoreStats {
   uint64_t fused_features = 0;
   uint64_t clusters = 0;
   uint64_t map_version = 0;
+  uint64_t fusion_backlog = 0;    // committed observations not fused yet
   double uptime_s = 0;
 };
 
@@ -100,14 +110,21 @@ class MapCore {
     IngestBatch batch;
     DoneCallback done;
   };
-  // What one group changed in the published map: true = upsert, false = delete.
-  using FusedDelta = std::unordered_map<fusion::ClusterId, bool>;
+  // Clusters whose published state changed (added, updated or removed); the
+  // writer reads their current state from the engine when it writes them.
+  using FusedDelta = std::unordered_set<fusion::ClusterId>;
 
   explicit MapCore(const MapCoreOptions& options);
   Status Rebuild();                     // engine_ from the stored observations
   Status SyncFusedTable();              // fused_features := engine_'s published map
   void WriterLoop();
-  void CommitGroup(std::vector<Pending>& group);
+  void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
+  void FuserLoop();
+  // Writes the fused rows of `delta` (read from the engine) into `txn`.
+  Status WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn);
+  // Waits until every observation committed so far is fused (or the timeout).
+  void WaitForFuser(std::chrono::duration<double> timeout) const;
+  // REQUIRES: engine_mu_ held exclusively.
   void Fuse(const geometry::SensorObservation& features, int64_t observation_id, int64_t robot_id,
             const geometry::Rigid3& T_map_frame, FusedDelta* delta);
   storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
@@ -126,10 +143,26 @@ class MapCore {
   std::unordered_map<int64_t, std::string> robot_names_;
 
   std::mutex queue_mu_;
-  std::condition_variable queue_cv_;
+  std::condition_variable queue_cv_;  // the writer waits for work or for the fuser's backlog to drop
   std::deque<Pending> queue_;  // GUARDED_BY(queue_mu_)
   bool stopping_ = false;      // GUARDED_BY(queue_mu_)
+  FusedDelta fused_pending_;   // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
   std::thread writer_;
+
+  // Committed observations on their way to the fuser, in commit order.
+  struct ToFuse {
+    int64_t observation_id;
+    int64_t robot_id;
+    geometry::Rigid3 T_map_frame;
+    geometry::SensorObservation features;
+  };
+  mutable std::mutex fuse_mu_;
+  mutable std::condition_variable fuse_cv_;  // the fuser waits for work; queries wait for the fuser
+  std::deque<ToFuse> fuse_queue_;  // GUARDED_BY(fuse_mu_)
+  uint64_t committed_count_ = 0;   // GUARDED_BY(fuse_mu_), observations handed to the fuser
+  uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
+  bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
+  std::thread fuser_;
 
   std::atomic<uint64_t> batches_stored_{0};
   std::atomic<uint64_t> features_stored_{0};

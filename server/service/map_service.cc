@@ -125,6 +125,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   response->set_map_version(s.map_version);
   response->set_db_path(core_->store().path());
   response->set_version(kVersion);
+  response->set_fusion_backlog(s.fusion_backlog);
   return grpc::Status::OK;
 }
 
