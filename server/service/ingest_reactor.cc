@@ -71,6 +71,11 @@ void IngestReactor::OnReadDone(bool ok) {
 void IngestReactor::Complete(pb::IngestAck ack) {
   std::lock_guard<std::mutex> lock(mu_);
   --in_flight_;
+  switch (ack.result()) {
+    case pb::IngestAck::STORED: ++stored_; break;
+    case pb::IngestAck::DUPLICATE: ++duplicates_; break;
+    default: ++rejected_;
+  }
   if (!broken_) acks_.push_back(std::move(ack));
   if (!writing_) StartNextWriteLocked();
   MaybeReadLocked();
@@ -107,7 +112,7 @@ void IngestReactor::MaybeReadLocked() {
 
 void IngestReactor::OnCancel() {
   std::lock_guard<std::mutex> lock(mu_);
-  Log(LogLevel::kInfo, "ingest_cancelled", {{"robot", robot_}, {"peer", peer_}});
+  Log(LogLevel::kDebug, "ingest_cancelled", {{"robot", robot_}, {"peer", peer_}});
   MaybeFinishLocked();
 }
 
@@ -115,6 +120,10 @@ void IngestReactor::MaybeFinishLocked() {
   // Finish only when no callback of MapCore can still reach this reactor.
   if (finished_ || !read_closed_ || reading_ || in_flight_ > 0 || writing_ || !acks_.empty()) return;
   finished_ = true;
+  Log(LogLevel::kInfo, "ingest_stream_closed",
+      {{"robot", robot_}, {"peer", peer_}, {"stored", std::to_string(stored_)},
+       {"duplicate", std::to_string(duplicates_)}, {"rejected", std::to_string(rejected_)},
+       {"client_gone", broken_ ? "true" : "false"}});
   Finish(grpc::Status::OK);
 }
 

@@ -60,6 +60,7 @@ class IngestReactor
   bool broken_ = false;      // GUARDED_BY(mu_), a write failed: the client is gone
   bool finished_ = false;    // GUARDED_BY(mu_)
   std::string robot_;        // for logs, from the first batch
+  uint64_t stored_ = 0, duplicates_ = 0, rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
 };
 
 }  // namespace mapd::service

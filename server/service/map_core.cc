@@ -72,7 +72,9 @@ Status MapCore::Rebuild() {
     return Status::Ok();
   });
   if (!s.ok()) return s;
-  map_version_ += 1;
+  // The version counts the observations the map reflects: monotonic across
+  // restarts, since stored observations are never removed.
+  map_version_ = observations;
   Log(LogLevel::kInfo, "map_rebuilt",
       {{"observations", std::to_string(observations)},
        {"raw_features", std::to_string(engine_->feature_count())},
@@ -275,8 +277,8 @@ void MapCore::FuserLoop() {
       std::unique_lock<std::shared_mutex> lock(engine_mu_);
       Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
     }
+    map_version_ += work.size();
     if (!delta.empty()) {
-      map_version_ += 1;
       std::lock_guard<std::mutex> lock(queue_mu_);
       fused_pending_.insert(delta.begin(), delta.end());
       queue_cv_.notify_one();

@@ -137,7 +137,7 @@ class MapCore {
 
   mutable std::shared_mutex engine_mu_;  // writer: exclusive while fusing; queries: shared
   std::unique_ptr<fusion::FusionEngine> engine_;
-  std::atomic<uint64_t> map_version_{0};
+  std::atomic<uint64_t> map_version_{0};  // observations reflected in the map
 
   mutable std::mutex names_mu_;
   std::unordered_map<int64_t, std::string> robot_names_;

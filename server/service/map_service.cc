@@ -11,7 +11,7 @@ namespace {
 namespace pb = mapserver::v1;
 
 constexpr int kFeaturesPerPage = 4096;
-const char* const kVersion = "0.1.0";
+const char* const kVersion = MAPD_VERSION;
 
 grpc::Status NotYet(const char* rpc) {
   return grpc::Status(grpc::StatusCode::UNIMPLEMENTED,

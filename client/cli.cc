@@ -1,0 +1,196 @@
+#include "client/cli.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+
+namespace mapd::client {
+
+namespace pb = mapserver::v1;
+
+std::unique_ptr<grpc::ClientContext> Context::NewCallContext() const {
+  auto context = std::make_unique<grpc::ClientContext>();
+  context->set_deadline(std::chrono::system_clock::now() + timeout());
+  return context;
+}
+
+std::chrono::milliseconds Context::timeout() const {
+  return std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000));
+}
+
+const char* StatusCodeName(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK: return "OK";
+    case grpc::StatusCode::CANCELLED: return "CANCELLED";
+    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
+    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+    case grpc::StatusCode::ABORTED: return "ABORTED";
+    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
+    case grpc::StatusCode::INTERNAL: return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
+    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
+    default: return "UNKNOWN";
+  }
+}
+
+void PrintError(const std::string& message) { std::fprintf(stderr, "mapctl: %s\n", message.c_str()); }
+
+int ReportRpcError(const Context& ctx, const std::string& what, const grpc::Status& status) {
+  // A deadline is "unreachable" only if the channel never got connected.
+  const bool unreachable =
+      status.error_code() == grpc::StatusCode::UNAVAILABLE ||
+      (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED && ctx.channel != nullptr &&
+       ctx.channel->GetState(false) != GRPC_CHANNEL_READY);
+  std::string message = status.error_message();
+  for (char& c : message) {
+    if (c == '\n') c = ' ';
+  }
+  const std::string prefix = unreachable ? "cannot reach mapd at " + ctx.server + ": " + what : what;
+  std::fprintf(stderr, "mapctl: %s: %s (%s)\n", prefix.c_str(), message.c_str(),
+               StatusCodeName(status.error_code()));
+  return unreachable ? kExitUnreachable : kExitFailed;
+}
+
+int UsageError(const std::string& command, const std::string& message) {
+  std::fprintf(stderr, "mapctl%s%s: %s (see 'mapctl %s--help')\n", command.empty() ? "" : " ", command.c_str(),
+               message.c_str(), command.empty() ? "" : (command + " ").c_str());
+  return kExitUsage;
+}
+
+int CheckReachable(const Context& ctx, const std::string& what) {
+  pb::Stats stats;
+  auto call = ctx.NewCallContext();
+  const grpc::Status status = ctx.stub->GetStats(call.get(), pb::GetStatsRequest(), &stats);
+  return status.ok() ? kExitOk : ReportRpcError(ctx, what, status);
+}
+
+bool Args::Parse(const std::vector<std::string>& args, const std::vector<FlagSpec>& specs, std::string* error) {
+  bool flags_done = false;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (flags_done || arg == "-" || arg.empty() || arg[0] != '-') {
+      positionals_.push_back(arg);
+      continue;
+    }
+    if (arg == "--") {
+      flags_done = true;
+      continue;
+    }
+    const size_t eq = arg.find('=');
+    const std::string name = arg.substr(0, eq);
+    const FlagSpec* spec = nullptr;
+    for (const FlagSpec& s : specs) {
+      if (s.name == name) spec = &s;
+    }
+    if (spec == nullptr) {
+      *error = "unknown flag '" + name + "'";
+      return false;
+    }
+    if (!spec->takes_value) {
+      if (eq != std::string::npos) {
+        *error = "flag " + name + " takes no value";
+        return false;
+      }
+      values_[name] = "";
+    } else if (eq != std::string::npos) {
+      values_[name] = arg.substr(eq + 1);
+    } else if (i + 1 < args.size()) {
+      values_[name] = args[++i];
+    } else {
+      *error = "flag " + name + " needs a value";
+      return false;
+    }
+  }
+  return true;
+}
+
+int ParseCommandArgs(const std::string& command, const char* help, const std::vector<std::string>& args,
+                     std::vector<FlagSpec> specs, Args* out) {
+  specs.push_back({"--help", false});
+  specs.push_back({"-h", false});
+  std::string error;
+  if (!out->Parse(args, specs, &error)) return UsageError(command, error);
+  if (out->Has("--help") || out->Has("-h")) {
+    std::fputs(help, stdout);
+    return kExitOk;
+  }
+  return kContinue;
+}
+
+std::string Args::Get(const std::string& name, const std::string& fallback) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? fallback : it->second;
+}
+
+bool ParseDouble(const std::string& s, double* out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s.c_str(), &end);
+  if (errno != 0 || end != s.c_str() + s.size() || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
+
+bool ParseUint(const std::string& s, uint64_t* out) {
+  if (s.empty() || s[0] < '0' || s[0] > '9') return false;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(s.c_str(), &end, 10);
+  if (errno != 0 || end != s.c_str() + s.size()) return false;
+  *out = v;
+  return true;
+}
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> out(1);
+  for (char c : s) {
+    if (c == sep) out.emplace_back();
+    else out.back().push_back(c);
+  }
+  return out;
+}
+
+bool WriteOutput(const std::string& path, const std::string& data, std::string* error) {
+  if (path == "-") {
+    if (std::fwrite(data.data(), 1, data.size(), stdout) != data.size() || std::fflush(stdout) != 0) {
+      *error = "cannot write to stdout";
+      return false;
+    }
+    return true;
+  }
+  const std::string tmp = path + ".part";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      *error = "cannot open " + tmp + ": " + std::strerror(errno);
+      return false;
+    }
+    out.write(data.data(), static_cast<std::streamsize>(data.size()));
+    out.close();
+    if (!out) {
+      *error = "cannot write " + tmp + ": " + std::strerror(errno);
+      std::remove(tmp.c_str());
+      return false;
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    *error = "cannot rename " + tmp + " to " + path + ": " + std::strerror(errno);
+    std::remove(tmp.c_str());
+    return false;
+  }
+  return true;
+}
+
+}  // namespace mapd::client

@@ -1,0 +1,219 @@
+#include "client/format.h"
+
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+
+#include <google/protobuf/util/json_util.h>
+
+#include "client/text_util.h"
+
+namespace mapd::client {
+namespace {
+
+namespace pb = mapserver::v1;
+
+// A finite number with at most 4 decimals and no trailing zeros; null otherwise.
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::string s = Printf("%.4f", v);
+  while (s.back() == '0') s.pop_back();
+  if (s.back() == '.') s.pop_back();
+  if (s == "-0") s = "0";
+  return s;
+}
+
+std::string Join(const google::protobuf::RepeatedPtrField<std::string>& items, const char* sep) {
+  std::string out;
+  for (const std::string& s : items) {
+    if (!out.empty()) out += sep;
+    out += s;
+  }
+  return out;
+}
+
+std::string HumanBytes(uint64_t bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double v = static_cast<double>(bytes);
+  int u = 0;
+  while (v >= 1024 && u < 4) {
+    v /= 1024;
+    ++u;
+  }
+  return u == 0 ? Printf("%llu B", static_cast<unsigned long long>(bytes)) : Printf("%.1f %s", v, units[u]);
+}
+
+std::string HumanDuration(double seconds) {
+  const long s = static_cast<long>(seconds);
+  if (s < 60) return Printf("%.1f s", seconds);
+  if (s < 3600) return Printf("%ldm %02lds", s / 60, s % 60);
+  if (s < 86400) return Printf("%ldh %02ldm", s / 3600, (s / 60) % 60);
+  return Printf("%ldd %02ldh", s / 86400, (s / 3600) % 24);
+}
+
+std::string IsoTime(int64_t ns) {
+  if (ns <= 0) return "-";
+  const std::time_t secs = static_cast<std::time_t>(ns / 1000000000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char out[32];
+  std::strftime(out, sizeof(out), "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return out;
+}
+
+}  // namespace
+
+bool ParseOutputFormat(const std::string& name, OutputFormat* out) {
+  if (name == "table") *out = OutputFormat::kTable;
+  else if (name == "json") *out = OutputFormat::kJson;
+  else if (name == "geojson") *out = OutputFormat::kGeoJson;
+  else if (name == "svg") *out = OutputFormat::kSvg;
+  else return false;
+  return true;
+}
+
+OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback) {
+  auto ends_with = [&path](const std::string& suffix) {
+    return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  if (ends_with(".geojson")) return OutputFormat::kGeoJson;
+  if (ends_with(".json")) return OutputFormat::kJson;
+  if (ends_with(".svg")) return OutputFormat::kSvg;
+  return fallback;
+}
+
+std::string KindName(pb::FeatureKind kind) {
+  switch (kind) {
+    case pb::FEATURE_KIND_LINE: return "line";
+    case pb::FEATURE_KIND_PLANE: return "plane";
+    default: return "any";
+  }
+}
+
+std::string JsonQuote(const std::string& s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (c < 0x20) out += Printf("\\u%04x", c);
+        else out.push_back(static_cast<char>(c));
+    }
+  }
+  return out + "\"";
+}
+
+std::string MessageToJson(const google::protobuf::Message& message) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.always_print_primitive_fields = true;
+  options.preserve_proto_field_names = true;
+  std::string out;
+  if (!google::protobuf::util::MessageToJsonString(message, &out, options).ok()) return "{}\n";
+  if (out.empty() || out.back() != '\n') out += '\n';
+  return out;
+}
+
+std::string FormatFeatureTable(const FeatureList& features) {
+  std::string out = Printf("%-8s %-5s %21s %21s %7s %15s %7s %7s  %s\n", "ID", "KIND", "A (x, y) m",
+                           "B (x, y) m", "LEN m", "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
+  for (const pb::FusedFeature& f : features) {
+    const double length = std::hypot(f.b().x() - f.a().x(), f.b().y() - f.a().y());
+    out += Printf("%-8llu %-5s %21s %21s %7.2f %15s %7u %7u  %s\n", static_cast<unsigned long long>(f.id()),
+                  KindName(f.kind()).c_str(), Printf("(%.2f, %.2f)", f.a().x(), f.a().y()).c_str(),
+                  Printf("(%.2f, %.2f)", f.b().x(), f.b().y()).c_str(), length,
+                  Printf("%.2f..%.2f", f.z_min(), f.z_max()).c_str(), f.support(), f.member_count(),
+                  Join(f.robots(), ",").c_str());
+  }
+  out += Printf("%zu feature%s\n", features.size(), features.size() == 1 ? "" : "s");
+  return out;
+}
+
+std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version) {
+  pb::FeatureMapPage page;
+  for (const pb::FusedFeature& f : features) *page.add_features() = f;
+  page.set_total(features.size());
+  page.set_map_version(map_version);
+  return MessageToJson(page);
+}
+
+std::string FormatGeoJson(const FeatureList& features) {
+  std::string out =
+      "{\n  \"type\": \"FeatureCollection\",\n"
+      "  \"properties\": {\"frame\": \"map\", \"units\": \"m\", \"note\": \"coordinates are map-frame "
+      "metres (x, y), not longitude/latitude\"},\n"
+      "  \"features\": [";
+  for (size_t i = 0; i < features.size(); ++i) {
+    const pb::FusedFeature& f = features[i];
+    std::string robots;
+    for (const std::string& r : f.robots()) robots += (robots.empty() ? "" : ", ") + JsonQuote(r);
+    out += i == 0 ? "\n" : ",\n";
+    out += "    {\"type\": \"Feature\", \"id\": " + std::to_string(f.id()) +
+           ", \"geometry\": {\"type\": \"LineString\", \"coordinates\": [[" + JsonNumber(f.a().x()) + ", " +
+           JsonNumber(f.a().y()) + "], [" + JsonNumber(f.b().x()) + ", " + JsonNumber(f.b().y()) + "]]}" +
+           ", \"properties\": {\"id\": " + std::to_string(f.id()) + ", \"kind\": " +
+           JsonQuote(KindName(f.kind())) + ", \"support\": " + std::to_string(f.support()) +
+           ", \"member_count\": " + std::to_string(f.member_count()) + ", \"z_min\": " +
+           JsonNumber(f.z_min()) + ", \"z_max\": " + JsonNumber(f.z_max()) + ", \"robots\": [" + robots +
+           "]}}";
+  }
+  out += features.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  return out;
+}
+
+std::string FormatStats(const pb::Stats& s, const std::string& server) {
+  std::string out = Printf("mapd %s at %s\n", s.version().c_str(), server.c_str());
+  auto row = [&out](const char* name, const std::string& value) {
+    out += Printf("  %-16s %s\n", name, value.c_str());
+  };
+  auto num = [](uint64_t v) { return std::to_string(v); };
+  row("uptime", HumanDuration(s.uptime_s()));
+  row("database", s.db_path() + " (" + HumanBytes(s.db_size_bytes()) + ")");
+  row("robots", num(s.robots()));
+  row("sessions", num(s.sessions()));
+  row("batches", num(s.batches()));
+  row("raw features", num(s.raw_features()));
+  row("fused features", num(s.fused_features()) + " published, " + num(s.clusters()) + " clusters");
+  row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
+  row("submaps", num(s.submaps()));
+  row("map version", num(s.map_version()));
+  row("ingest rate", Printf("%.1f batches/s, %.1f features/s (last 10 s)", s.ingest_batches_per_s(),
+                            s.ingest_features_per_s()));
+  return out;
+}
+
+std::string FormatRobots(const pb::ListRobotsResponse& robots, int64_t now_ns) {
+  std::string out = Printf("%-24s %8s %9s %10s %-6s %-20s %s\n", "ROBOT", "SESSIONS", "BATCHES", "FEATURES",
+                           "FRAME", "FIRST SEEN (UTC)", "LAST SEEN");
+  for (const pb::RobotInfo& r : robots.robots()) {
+    std::string last = IsoTime(r.last_seen_ns());
+    if (now_ns > 0 && r.last_seen_ns() > 0 && now_ns >= r.last_seen_ns()) {
+      last += " (" + HumanDuration(static_cast<double>(now_ns - r.last_seen_ns()) * 1e-9) + " ago)";
+    }
+    out += Printf("%-24s %8u %9llu %10llu %-6s %-20s %s\n", r.robot_id().c_str(), r.sessions(),
+                  static_cast<unsigned long long>(r.batches()), static_cast<unsigned long long>(r.features()),
+                  r.frame_tied() ? "map" : "local", IsoTime(r.first_seen_ns()).c_str(), last.c_str());
+  }
+  out += Printf("%d robot%s\n", robots.robots_size(), robots.robots_size() == 1 ? "" : "s");
+  return out;
+}
+
+std::string FormatSubmaps(const pb::ListSubmapsResponse& submaps) {
+  std::string out = Printf("%-6s %-16s %-20s %-4s %7s %10s %10s %10s\n", "ID", "ROBOT", "NAME", "FMT", "RES m",
+                           "OCCUPIED", "FREE", "SIZE");
+  for (const pb::SubmapInfo& m : submaps.submaps()) {
+    out += Printf("%-6llu %-16s %-20s %-4s %7.3f %10llu %10llu %10s\n", static_cast<unsigned long long>(m.id()),
+                  m.robot_id().c_str(), m.name().c_str(),
+                  m.format() == pb::SUBMAP_FORMAT_OCTOMAP_OT ? "ot" : "bt", m.resolution(),
+                  static_cast<unsigned long long>(m.occupied_voxels()),
+                  static_cast<unsigned long long>(m.free_voxels()), HumanBytes(m.size_bytes()).c_str());
+  }
+  out += Printf("%d submap%s\n", submaps.submaps_size(), submaps.submaps_size() == 1 ? "" : "s");
+  return out;
+}
+
+}  // namespace mapd::client

@@ -1,0 +1,63 @@
+// Rendering of server answers for people and for other tools. Pure functions:
+// no I/O, no gRPC calls; every one returns the whole text.
+//
+// Coordinates are map-frame metres throughout (the fused map's frame), not
+// geographic longitude/latitude.
+#ifndef MAPD_CLIENT_FORMAT_H_
+#define MAPD_CLIENT_FORMAT_H_
+
+#include <string>
+#include <vector>
+
+#include <google/protobuf/message.h>
+
+#include "mapserver/v1/map_service.pb.h"
+
+namespace mapd::client {
+
+using FeatureList = std::vector<mapserver::v1::FusedFeature>;
+
+enum class OutputFormat { kTable, kJson, kGeoJson, kSvg };
+
+// "table", "json", "geojson", "svg" -> format; false for anything else.
+bool ParseOutputFormat(const std::string& name, OutputFormat* out);
+// From a file name's extension (.json, .geojson, .svg); `fallback` otherwise.
+OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback);
+
+// Any message in the protobuf JSON mapping, with the .proto field names
+// (snake_case), default values printed and two-space indentation. Note that
+// the mapping writes 64-bit integers as strings ("batches": "120").
+std::string MessageToJson(const google::protobuf::Message& message);
+
+// One line per feature with a header, then a count.
+std::string FormatFeatureTable(const FeatureList& features);
+// A FeatureMapPage holding every feature, as protobuf JSON.
+std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version);
+// A GeoJSON FeatureCollection: one LineString per feature; properties id, kind,
+// support, member_count, z_min, z_max, robots.
+std::string FormatGeoJson(const FeatureList& features);
+
+struct SvgOptions {
+  double pixels_per_metre = 40;  // the pixel size is clamped to [400, 1600] wide
+  std::string title = "mapd fused feature map";
+};
+// An SVG drawing fitted to the features: y axis up, a metre grid, one <line
+// class="feature ..."> per feature coloured by kind with a width growing with
+// support, a scale bar and a legend.
+std::string FormatSvg(const FeatureList& features, const SvgOptions& options = {});
+
+// `mapctl status` for people.
+std::string FormatStats(const mapserver::v1::Stats& stats, const std::string& server);
+// `mapctl robots` table; `now_ns` (server clock) makes "last seen 3 s ago".
+std::string FormatRobots(const mapserver::v1::ListRobotsResponse& robots, int64_t now_ns);
+// `mapctl submaps` table.
+std::string FormatSubmaps(const mapserver::v1::ListSubmapsResponse& submaps);
+
+// "line", "plane" or "any".
+std::string KindName(mapserver::v1::FeatureKind kind);
+// A string as a JSON string literal, quotes included.
+std::string JsonQuote(const std::string& s);
+
+}  // namespace mapd::client
+
+#endif  // MAPD_CLIENT_FORMAT_H_

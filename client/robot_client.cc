@@ -1,0 +1,235 @@
+#include "client/robot_client.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <optional>
+
+namespace mapd::client {
+
+namespace pb = mapserver::v1;
+
+RobotClient::RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options)
+    : channel_(std::move(channel)), stub_(pb::MapService::NewStub(channel_)), options_(options) {
+  reader_ = std::thread([this] { ReaderLoop(); });
+}
+
+RobotClient::~RobotClient() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    CancelLocked();
+  }
+  if (reader_.joinable()) reader_.join();
+}
+
+void RobotClient::Send(pb::ObservationBatch batch) {
+  {
+    // Back-pressure: wait for room in the window of unacknowledged batches.
+    std::unique_lock<std::mutex> lock(mu_);
+    cv_.wait(lock, [this] {
+      return pending_.size() < options_.max_unacknowledged || gave_up_ || stopping_ || reader_done_;
+    });
+  }
+  // write_mu_ is held from queueing to writing so that a reconnect (which
+  // resends everything queued) cannot interleave and send this batch twice.
+  std::lock_guard<std::mutex> write_lock(write_mu_);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    const Key key(batch.session_id(), batch.seq());
+    auto it = order_of_.find(key);
+    if (it != order_of_.end()) pending_.erase(it->second);  // sent again before its ack
+    const uint64_t order = next_order_++;
+    order_of_[key] = order;
+    pending_.emplace(order, batch);  // a copy: an ack may erase it while we write
+    ++counts_.sent;
+    if (gave_up_ || stopping_) return;
+  }
+  // Without a stream (between reconnects) the reader sends it on reconnecting.
+  // A failed Write means a broken stream: the reader sees it and reconnects.
+  if (stream_ != nullptr && !half_closed_) stream_->Write(batch);
+}
+
+bool RobotClient::WaitForAcks(std::chrono::milliseconds timeout) {
+  std::unique_lock<std::mutex> lock(mu_);
+  cv_.wait_for(lock, timeout, [this] { return pending_.empty() || gave_up_ || reader_done_; });
+  return pending_.empty();
+}
+
+grpc::Status RobotClient::Finish(std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const bool all_acked = WaitForAcks(timeout);
+  if (all_acked) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      closing_ = true;
+    }
+    // Half-close: the server ends the stream once its last ack is written.
+    std::lock_guard<std::mutex> write_lock(write_mu_);
+    if (stream_ != nullptr && !half_closed_) {
+      stream_->WritesDone();
+      half_closed_ = true;
+    }
+  }
+  {
+    std::unique_lock<std::mutex> lock(mu_);
+    cv_.wait_until(lock, deadline + std::chrono::seconds(1), [this] { return reader_done_; });
+    if (!reader_done_) CancelLocked();
+  }
+  if (reader_.joinable()) reader_.join();
+
+  std::lock_guard<std::mutex> lock(mu_);
+  if (pending_.empty()) return grpc::Status::OK;
+  if (gave_up_) return last_error_;
+  char message[128];
+  std::snprintf(message, sizeof(message), "%zu batches still unacknowledged after %.1f s",
+                pending_.size(), std::chrono::duration<double>(timeout).count());
+  return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, message);
+}
+
+IngestCounts RobotClient::counts() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return counts_;
+}
+
+std::vector<Rejection> RobotClient::rejections() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return rejections_;
+}
+
+size_t RobotClient::unacknowledged() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return pending_.size();
+}
+
+void RobotClient::CancelLocked() {
+  stopping_ = true;
+  if (cancel_target_ != nullptr) cancel_target_->TryCancel();
+  cv_.notify_all();
+}
+
+void RobotClient::OpenStreamLocked() {
+  context_ = std::make_unique<grpc::ClientContext>();
+  stream_ = stub_->Ingest(context_.get());
+  half_closed_ = false;
+  std::vector<pb::ObservationBatch> resend;
+  bool closing = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    cancel_target_ = context_.get();
+    if (stopping_) context_->TryCancel();
+    resend.reserve(pending_.size());
+    for (const auto& [order, batch] : pending_) resend.push_back(batch);
+    closing = closing_;
+  }
+  for (const pb::ObservationBatch& batch : resend) {
+    if (!stream_->Write(batch)) break;  // broken again; the reader will see it
+  }
+  if (closing) {
+    stream_->WritesDone();
+    half_closed_ = true;
+  }
+}
+
+void RobotClient::ReaderLoop() {
+  using Clock = std::chrono::steady_clock;
+  std::optional<Clock::time_point> failing_since;  // start of the current run of failures
+  auto backoff = options_.initial_backoff;
+  bool first_stream = true;
+  for (;;) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stopping_ || (closing_ && pending_.empty())) break;
+      if (!first_stream) ++counts_.reconnects;
+    }
+    Stream* stream = nullptr;
+    {
+      std::lock_guard<std::mutex> write_lock(write_mu_);
+      OpenStreamLocked();
+      stream = stream_.get();
+    }
+    first_stream = false;
+
+    bool got_ack = false;
+    pb::IngestAck ack;
+    while (stream->Read(&ack)) {
+      HandleAck(ack);
+      got_ack = true;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      cancel_target_ = nullptr;
+    }
+    grpc::Status status;
+    {
+      std::lock_guard<std::mutex> write_lock(write_mu_);
+      status = stream_->Finish();
+      stream_.reset();
+      context_.reset();
+    }
+
+    std::unique_lock<std::mutex> lock(mu_);
+    if (stopping_ || (closing_ && pending_.empty())) break;
+    const Clock::time_point now = Clock::now();
+    if (got_ack || !failing_since) {
+      failing_since = now;
+      if (got_ack) backoff = options_.initial_backoff;
+    }
+    last_error_ = status.ok() ? grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                                             "the server ended the Ingest stream with " +
+                                                 std::to_string(pending_.size()) +
+                                                 " batches unacknowledged")
+                              : status;
+    const Clock::time_point give_up_at = *failing_since + options_.give_up_after;
+    if (now >= give_up_at) {
+      gave_up_ = true;
+      break;
+    }
+    cv_.wait_for(lock, backoff, [this] { return stopping_; });
+    backoff = std::min(backoff * 2, options_.max_backoff);
+    lock.unlock();
+    WaitForChannel(give_up_at);
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  reader_done_ = true;
+  cv_.notify_all();
+}
+
+void RobotClient::WaitForChannel(std::chrono::steady_clock::time_point deadline) {
+  // In slices, so that Stop is noticed; GetState(true) starts a connection attempt.
+  constexpr auto kSlice = std::chrono::milliseconds(200);
+  for (;;) {
+    const grpc_connectivity_state state = channel_->GetState(true);
+    if (state == GRPC_CHANNEL_READY) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) return;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stopping_) return;
+    }
+    const auto until = std::min(deadline, now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(kSlice));
+    channel_->WaitForStateChange(state, std::chrono::system_clock::now() + (until - now));
+  }
+}
+
+void RobotClient::HandleAck(const pb::IngestAck& ack) {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = order_of_.find(Key(ack.session_id(), ack.seq()));
+  if (it == order_of_.end()) return;  // not pending (e.g. a resend's second answer)
+  switch (ack.result()) {
+    case pb::IngestAck::STORED: ++counts_.stored; break;
+    case pb::IngestAck::DUPLICATE: ++counts_.duplicate; break;
+    case pb::IngestAck::REJECTED:
+      // UNAVAILABLE is the server draining: not a verdict on the batch. Keep it;
+      // it is resent on the next stream.
+      if (ack.code() == grpc::StatusCode::UNAVAILABLE) return;
+      ++counts_.rejected;
+      rejections_.push_back({ack.session_id(), ack.seq(), static_cast<grpc::StatusCode>(ack.code()),
+                             ack.message()});
+      break;
+    default: return;  // RESULT_UNSPECIFIED: not final
+  }
+  pending_.erase(it->second);
+  order_of_.erase(it);
+  cv_.notify_all();
+}
+
+}  // namespace mapd::client

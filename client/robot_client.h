@@ -1,0 +1,138 @@
+// RobotClient: how a robot streams observation batches to mapd.
+//
+// One Ingest stream per client. Send() writes a batch at once and returns
+// without waiting for its acknowledgement (pipelining); the client keeps every
+// batch until the server's IngestAck for it arrives. When the stream fails the
+// client reconnects (with backoff) and resends, in the original order, every
+// batch not yet acknowledged. Resending is safe: the server answers a batch it
+// already stored with DUPLICATE and applies nothing twice.
+//
+// Acks are matched to batches by (session_id, seq), so those must be unique
+// among the batches a client has in flight.
+//
+// Threading: Send(), WaitForAcks(), Finish() and the accessors may be called
+// from any thread. One internal reader thread collects the acks and owns
+// reconnection.
+#ifndef MAPD_CLIENT_ROBOT_CLIENT_H_
+#define MAPD_CLIENT_ROBOT_CLIENT_H_
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "mapserver/v1/map_service.grpc.pb.h"
+
+namespace mapd::client {
+
+// How quickly a restarted server is found again also depends on the channel's
+// own reconnect backoff (GRPC_ARG_INITIAL/MAX_RECONNECT_BACKOFF_MS; gRPC's
+// default grows to 120 s): mapctl sets it to 0.2..2 s.
+struct RobotClientOptions {
+  // Give up when streams keep failing for this long with no ack in between.
+  std::chrono::milliseconds give_up_after{30000};
+  std::chrono::milliseconds initial_backoff{100};  // pause before a reconnect, doubled each time
+  std::chrono::milliseconds max_backoff{2000};
+  // Send() blocks while this many batches are unacknowledged (back-pressure).
+  size_t max_unacknowledged = 1000;
+};
+
+// What the server answered, over the client's lifetime.
+struct IngestCounts {
+  uint64_t sent = 0;        // distinct batches passed to Send()
+  uint64_t stored = 0;      // acknowledged STORED
+  uint64_t duplicate = 0;   // acknowledged DUPLICATE (sent before, e.g. resent after a drop)
+  uint64_t rejected = 0;    // acknowledged REJECTED (final: the batch is wrong)
+  uint64_t reconnects = 0;  // streams opened after the first one
+};
+
+// One batch the server refused.
+struct Rejection {
+  std::string session_id;
+  uint64_t seq = 0;
+  grpc::StatusCode code = grpc::StatusCode::UNKNOWN;
+  std::string message;  // names the offending field, e.g. "lines[3].a.x is NaN"
+};
+
+class RobotClient {
+ public:
+  explicit RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options = {});
+  // Cancels the stream (unacknowledged batches stay unacknowledged) and joins
+  // the reader thread. Call Finish() first for a clean end.
+  ~RobotClient();
+
+  RobotClient(const RobotClient&) = delete;
+  RobotClient& operator=(const RobotClient&) = delete;
+
+  // Writes `batch` to the stream and keeps it until it is acknowledged. Does not
+  // wait for the ack. May block while gRPC flow control holds the stream.
+  // REQUIRES: Finish() has not been called.
+  void Send(mapserver::v1::ObservationBatch batch);
+
+  // Blocks until every batch sent so far has a final ack, the client has given
+  // up, or `timeout` has passed. True when nothing is left unacknowledged.
+  bool WaitForAcks(std::chrono::milliseconds timeout);
+
+  // Waits for the acks (as WaitForAcks), closes the stream and joins the
+  // reader. OK when every batch was acknowledged (rejected ones included: see
+  // counts()); otherwise the reason, e.g. UNAVAILABLE with the server's message
+  // when it could not be reached, DEADLINE_EXCEEDED when acks were missing.
+  grpc::Status Finish(std::chrono::milliseconds timeout);
+
+  IngestCounts counts() const;
+  std::vector<Rejection> rejections() const;
+  size_t unacknowledged() const;
+
+ private:
+  using Key = std::pair<std::string, uint64_t>;  // (session_id, seq)
+  using Stream = grpc::ClientReaderWriter<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>;
+
+  void ReaderLoop();
+  // Opens a stream and writes every pending batch to it. REQUIRES: write_mu_ held.
+  void OpenStreamLocked();
+  void HandleAck(const mapserver::v1::IngestAck& ack);
+  // Asks the channel to connect and waits until it is ready, `deadline` or Stop.
+  void WaitForChannel(std::chrono::steady_clock::time_point deadline);
+  // Ends the reader as soon as possible: stops waiting, cancels the stream.
+  void CancelLocked();  // REQUIRES: mu_ held
+
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<mapserver::v1::MapService::Stub> stub_;
+  const RobotClientOptions options_;
+
+  // Lock order: write_mu_ before mu_.
+  std::mutex write_mu_;  // serialises writes to and replacement of the stream
+  std::unique_ptr<grpc::ClientContext> context_;  // GUARDED_BY(write_mu_)
+  std::unique_ptr<Stream> stream_;                // GUARDED_BY(write_mu_)
+  bool half_closed_ = false;                      // GUARDED_BY(write_mu_)
+
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  // Unacknowledged batches in sending order (key: order of first Send()).
+  std::map<uint64_t, mapserver::v1::ObservationBatch> pending_;  // GUARDED_BY(mu_)
+  std::map<Key, uint64_t> order_of_;                             // GUARDED_BY(mu_)
+  uint64_t next_order_ = 0;                                      // GUARDED_BY(mu_)
+  IngestCounts counts_;                                          // GUARDED_BY(mu_)
+  std::vector<Rejection> rejections_;                            // GUARDED_BY(mu_)
+  bool closing_ = false;  // Finish() called                     // GUARDED_BY(mu_)
+  bool stopping_ = false;  // destructor: stop at once            // GUARDED_BY(mu_)
+  bool gave_up_ = false;                                         // GUARDED_BY(mu_)
+  bool reader_done_ = false;                                     // GUARDED_BY(mu_)
+  grpc::Status last_error_;                                      // GUARDED_BY(mu_)
+  // The current stream's context, for cancelling without write_mu_.
+  grpc::ClientContext* cancel_target_ = nullptr;                 // GUARDED_BY(mu_)
+
+  std::thread reader_;
+};
+
+}  // namespace mapd::client
+
+#endif  // MAPD_CLIENT_ROBOT_CLIENT_H_

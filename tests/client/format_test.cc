@@ -1,0 +1,137 @@
+#include "client/format.h"
+
+#include <string>
+
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
+#include <gtest/gtest.h>
+
+namespace mapd::client {
+namespace {
+
+namespace pb = mapserver::v1;
+
+pb::FusedFeature Feature(uint64_t id, pb::FeatureKind kind, double ax, double ay, double bx, double by,
+                         uint32_t support, std::vector<std::string> robots) {
+  pb::FusedFeature f;
+  f.set_id(id);
+  f.set_kind(kind);
+  f.mutable_a()->set_x(ax);
+  f.mutable_a()->set_y(ay);
+  f.mutable_b()->set_x(bx);
+  f.mutable_b()->set_y(by);
+  f.set_z_min(0);
+  f.set_z_max(2.5);
+  f.set_support(support);
+  f.set_member_count(support + 1);
+  for (auto& r : robots) f.add_robots(r);
+  return f;
+}
+
+FeatureList ThreeFeatures() {
+  return {Feature(7, pb::FEATURE_KIND_LINE, 0, 0, 10, 0, 12, {"r1", "r2"}),
+          Feature(42, pb::FEATURE_KIND_PLANE, 10, 0, 10, 8, 3, {"r1"}),
+          Feature(4096, pb::FEATURE_KIND_LINE, 10, 8, 0, 8.5, 1, {"robot \"quoted\""})};
+}
+
+size_t Count(const std::string& text, const std::string& needle) {
+  size_t n = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+// Parses JSON text into a Struct (fails the test on invalid JSON).
+google::protobuf::Struct ParseJson(const std::string& text) {
+  google::protobuf::Struct s;
+  const auto status = google::protobuf::util::JsonStringToMessage(text, &s);
+  EXPECT_TRUE(status.ok()) << status.message() << "\n" << text;
+  return s;
+}
+
+TEST(FormatGeoJsonTest, IsAFeatureCollectionWithOneLineStringPerFeature) {
+  const google::protobuf::Struct doc = ParseJson(FormatGeoJson(ThreeFeatures()));
+  EXPECT_EQ(doc.fields().at("type").string_value(), "FeatureCollection");
+  const auto& features = doc.fields().at("features").list_value().values();
+  ASSERT_EQ(features.size(), 3);
+  for (const auto& f : features) {
+    const auto& fields = f.struct_value().fields();
+    EXPECT_EQ(fields.at("type").string_value(), "Feature");
+    const auto& geometry = fields.at("geometry").struct_value().fields();
+    EXPECT_EQ(geometry.at("type").string_value(), "LineString");
+    const auto& coordinates = geometry.at("coordinates").list_value().values();
+    ASSERT_EQ(coordinates.size(), 2);
+    for (const auto& point : coordinates) EXPECT_EQ(point.list_value().values_size(), 2);
+    const auto& props = fields.at("properties").struct_value().fields();
+    for (const char* key : {"id", "kind", "support", "member_count", "z_min", "z_max", "robots"}) {
+      EXPECT_TRUE(props.count(key)) << key;
+    }
+  }
+  const auto& second = features[1].struct_value().fields();
+  EXPECT_EQ(second.at("properties").struct_value().fields().at("kind").string_value(), "plane");
+  EXPECT_EQ(second.at("properties").struct_value().fields().at("id").number_value(), 42);
+  const auto& b = second.at("geometry").struct_value().fields().at("coordinates").list_value().values(1);
+  EXPECT_EQ(b.list_value().values(0).number_value(), 10);
+  EXPECT_EQ(b.list_value().values(1).number_value(), 8);
+  const auto& robots =
+      features[2].struct_value().fields().at("properties").struct_value().fields().at("robots").list_value();
+  EXPECT_EQ(robots.values(0).string_value(), "robot \"quoted\"");
+}
+
+TEST(FormatGeoJsonTest, EmptyMapIsValid) {
+  const google::protobuf::Struct doc = ParseJson(FormatGeoJson({}));
+  EXPECT_EQ(doc.fields().at("features").list_value().values_size(), 0);
+}
+
+TEST(FormatSvgTest, HasViewBoxAndOneLinePerFeature) {
+  const std::string svg = FormatSvg(ThreeFeatures());
+  EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
+  EXPECT_NE(svg.find("viewBox=\""), std::string::npos);
+  EXPECT_EQ(Count(svg, "<line class=\"feature"), 3u);
+  EXPECT_EQ(Count(svg, "<line class=\"feature plane\""), 1u);
+  EXPECT_NE(svg.find("class=\"grid\""), std::string::npos);
+  EXPECT_NE(svg.find("class=\"scalebar\""), std::string::npos);
+  EXPECT_NE(svg.find("class=\"legend\""), std::string::npos);
+  // y up: the map point (10, 8) is drawn at SVG y = -8.
+  EXPECT_NE(svg.find("x2=\"10.000\" y2=\"-8.000\""), std::string::npos);
+  // Quotes in robot names are escaped.
+  EXPECT_NE(svg.find("robot &quot;quoted&quot;"), std::string::npos);
+  EXPECT_EQ(svg.find("robot \"quoted\""), std::string::npos);
+}
+
+TEST(FormatSvgTest, EmptyMapStillDraws) {
+  const std::string svg = FormatSvg({});
+  EXPECT_NE(svg.find("viewBox=\""), std::string::npos);
+  EXPECT_EQ(Count(svg, "<line class=\"feature"), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+}
+
+TEST(FormatTableTest, ListsEveryId) {
+  const std::string table = FormatFeatureTable(ThreeFeatures());
+  for (const char* id : {"\n7 ", "\n42 ", "\n4096 "}) EXPECT_NE(table.find(id), std::string::npos) << id;
+  EXPECT_NE(table.find("r1,r2"), std::string::npos);
+  EXPECT_NE(table.find("3 features"), std::string::npos);
+}
+
+TEST(FormatJsonTest, RoundTripsThroughFeatureMapPage) {
+  const FeatureList features = ThreeFeatures();
+  pb::FeatureMapPage page;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(FormatFeatureJson(features, 9), &page).ok());
+  ASSERT_EQ(page.features_size(), 3);
+  EXPECT_EQ(page.total(), 3u);
+  EXPECT_EQ(page.map_version(), 9u);
+  EXPECT_EQ(page.features(1).SerializeAsString(), features[1].SerializeAsString());
+}
+
+TEST(OutputFormatTest, GuessedFromExtension) {
+  EXPECT_EQ(GuessOutputFormat("map.geojson", OutputFormat::kTable), OutputFormat::kGeoJson);
+  EXPECT_EQ(GuessOutputFormat("map.json", OutputFormat::kTable), OutputFormat::kJson);
+  EXPECT_EQ(GuessOutputFormat("dir/map.svg", OutputFormat::kTable), OutputFormat::kSvg);
+  EXPECT_EQ(GuessOutputFormat("map.txt", OutputFormat::kTable), OutputFormat::kTable);
+  OutputFormat f;
+  EXPECT_TRUE(ParseOutputFormat("geojson", &f));
+  EXPECT_EQ(f, OutputFormat::kGeoJson);
+  EXPECT_FALSE(ParseOutputFormat("png", &f));
+}
+
+}  // namespace
+}  // namespace mapd::client

@@ -1,0 +1,156 @@
+// mapctl against the real mapd: a server on a free loopback port with a
+// temporary database, driven through the command line as a script would.
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "common/process.h"
+#include "common/temp_dir.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+class MapctlE2eTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    mapd_ = StartMapd(dir_.File("map.db"), {}, MAPD_BINARY);
+    ASSERT_GT(mapd_.port, 0) << "mapd did not come up:\n" << mapd_.log();
+  }
+  void TearDown() override {
+    if (mapd_.pid > 0) Stop(mapd_.pid, SIGKILL);
+  }
+
+  CommandResult Mapctl(std::vector<std::string> args, const std::string& stdin_data = "") {
+    args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd_.address});
+    return RunCommand(args, stdin_data);
+  }
+
+  static size_t FileSize(const std::string& path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    return ec ? 0 : static_cast<size_t>(size);
+  }
+  static size_t Count(const std::string& text, const std::string& needle) {
+    size_t n = 0;
+    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+    return n;
+  }
+
+  TempDir dir_;
+  MapdProcess mapd_;
+};
+
+TEST_F(MapctlE2eTest, ScriptedSession) {
+  // Two simulated robots stream 60 scans each.
+  CommandResult r = Mapctl({"simulate", "--robots", "2", "--scans", "60", "--session", "e2e"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("120 stored"));
+
+  r = Mapctl({"status", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": \"120\""));
+  EXPECT_THAT(r.out, HasSubstr("\"robots\": \"2\""));
+
+  r = Mapctl({"robots"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("sim-robot-1"));
+  EXPECT_THAT(r.out, HasSubstr("sim-robot-2"));
+
+  // Exports, format from the extension.
+  const std::string geojson = dir_.File("map.geojson"), svg = dir_.File("map.svg");
+  r = Mapctl({"features", "-o", geojson});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl({"features", "-o", svg});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_GT(FileSize(geojson), 0u);
+  ASSERT_GT(FileSize(svg), 0u);
+  std::ifstream g(geojson), s(svg);
+  const std::string geojson_text((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+  const std::string svg_text((std::istreambuf_iterator<char>(s)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(geojson_text, HasSubstr("FeatureCollection"));
+  EXPECT_GT(Count(geojson_text, "\"LineString\""), 3u);
+  EXPECT_GT(Count(svg_text, "<line class=\"feature"), 3u);
+  EXPECT_EQ(Count(geojson_text, "\"LineString\""), Count(svg_text, "<line class=\"feature"));
+
+  // Re-sending the same session is answered duplicate, and exits 0.
+  r = Mapctl({"simulate", "--robots", "1", "--scans", "5", "--session", "e2e"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("5 duplicate"));
+
+  // SIGTERM: the server drains, checkpoints and exits 0.
+  EXPECT_EQ(Stop(mapd_.pid, SIGTERM), 0) << mapd_.log();
+  mapd_.pid = -1;
+}
+
+TEST_F(MapctlE2eTest, IngestReportsTheRejectedLine) {
+  // Three batches as JSON lines; the second gets a NaN coordinate.
+  const std::string jsonl = dir_.File("batches.jsonl");
+  CommandResult r = Mapctl({"simulate", "--robots", "1", "--scans", "3", "--session", "file", "--export", jsonl});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(jsonl);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u);
+  const std::string key = "\"translation\":{\"x\":";
+  const size_t at = lines[1].find(key);
+  ASSERT_NE(at, std::string::npos) << lines[1];
+  const size_t value_end = lines[1].find_first_of(",}", at + key.size());
+  lines[1].replace(at + key.size(), value_end - at - key.size(), "\"NaN\"");
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+
+  r = Mapctl({"ingest", "-"}, text);
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 stored"));
+  EXPECT_THAT(r.out, HasSubstr("1 rejected"));
+  EXPECT_THAT(r.err, HasSubstr("line 2"));
+  EXPECT_THAT(r.err, HasSubstr("NaN"));
+  EXPECT_THAT(r.err, HasSubstr("INVALID_ARGUMENT"));
+
+  // A line that is not an ObservationBatch is named by its number.
+  r = Mapctl({"ingest", "-"}, lines[0] + "\n{\"robotId\": 12, \"nope\": true}\n");
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("line 2"));
+}
+
+TEST_F(MapctlE2eTest, ExitCodesForScripts) {
+  CommandResult r = Mapctl({"features", "--bbox", "1,2"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--bbox"));
+
+  r = Mapctl({"no-such-command"});
+  EXPECT_EQ(r.exit_code, 2);
+
+  r = RunCommand({MAPCTL_BINARY, "--server", "127.0.0.1:1", "status"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("UNAVAILABLE"));
+  EXPECT_EQ(Count(r.err, "\n"), 1u) << "one line: " << r.err;
+
+  // Submap RPCs are not implemented by this mapd: one readable line, exit 1.
+  r = Mapctl({"merge", "1", "2", "--wait"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("(UNIMPLEMENTED)"));
+  EXPECT_EQ(Count(r.err, "\n"), 1u) << r.err;
+
+  r = Mapctl({"features", "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("--bbox"));
+}
+
+TEST_F(MapctlE2eTest, ServerExitsCleanlyOnSigterm) {
+  CommandResult r = Mapctl({"simulate", "--robots", "2", "--scans", "20"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Stop(mapd_.pid, SIGTERM), 0) << mapd_.log();
+  mapd_.pid = -1;
+}
+
+}  // namespace
+}  // namespace mapd::testing
