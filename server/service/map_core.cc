@@ -38,7 +38,10 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (!params.ok()) return Status::InvalidArgument("fusion parameters: " + params.message());
   std::unique_ptr<MapCore> core(new MapCore(options));
   StatusOr<std::unique_ptr<storage::Store>> store = storage::Store::Open(options.db_path, options.store);
-  if (!store.ok()) return store.status();
+  if (!store.ok()) {
+    return Status(store.status().code(), "cannot open the database '" + options.db_path +
+                                             "': " + store.status().message());
+  }
   core->store_ = std::move(store).value();
   MAPD_RETURN_IF_ERROR(core->Rebuild());
   MAPD_RETURN_IF_ERROR(core->SyncFusedTable());

@@ -61,6 +61,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   builder.RegisterService(server->service_.get());
   builder.SetMaxReceiveMessageSize(static_cast<int>(config.max_message_bytes));
   builder.SetMaxSendMessageSize(static_cast<int>(config.max_message_bytes));
+  // gRPC sets SO_REUSEPORT by default: a second mapd on the same port would
+  // silently share it. One server per port.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   server->server_ = builder.BuildAndStart();
   if (!server->server_ || server->port_ == 0) {
     return Status::Unavailable("cannot listen on '" + config.listen +
@@ -79,7 +82,7 @@ std::string MapServer::address() const {
 }
 
 void MapServer::Shutdown() {
-  if (shut_down_) return;
+  if (shut_down_ || !server_) return;  // never started: nothing to drain
   shut_down_ = true;
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
   server_->GetHealthCheckService()->SetServingStatus(false);
@@ -91,7 +94,9 @@ void MapServer::Shutdown() {
   Log(LogLevel::kInfo, "stopped");
 }
 
-void MapServer::Wait() { server_->Wait(); }
+void MapServer::Wait() {
+  if (server_) server_->Wait();
+}
 
 MapServer::~MapServer() { Shutdown(); }
 

@@ -7,11 +7,7 @@
 //                [--sync normal|full] [--mapd PATH] [--server HOST:PORT]
 //
 // Not a test: run it on demand (see docs/benchmarks.md).
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
 #include <sqlite3.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -32,10 +28,9 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "common/process.h"
 #include "common/temp_dir.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
-
-extern char** environ;
 
 namespace {
 
@@ -237,34 +232,14 @@ int main(int argc, char** argv) {
   pid_t pid = 0;
   std::string address = opt.server;
   if (address.empty()) {
-    const std::string log = dir.File("mapd.log");
-    const std::string db = dir.File("map.db");
-    // The port is picked by the kernel; mapd logs it.
-    std::vector<std::string> args = {opt.mapd, "--db", db, "--listen", "127.0.0.1:0", "--sync", opt.sync};
-    std::vector<char*> cargs;
-    for (auto& a : args) cargs.push_back(a.data());
-    cargs.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (posix_spawn(&pid, opt.mapd.c_str(), &fa, nullptr, cargs.data(), environ) != 0) {
-      std::fprintf(stderr, "ingest_bench: cannot start %s\n", opt.mapd.c_str());
+    const mapd::testing::MapdProcess mapd =
+        mapd::testing::StartMapd(dir.File("map.db"), {"--sync", opt.sync}, opt.mapd);
+    if (mapd.port == 0) {
+      std::fprintf(stderr, "ingest_bench: mapd did not start:\n%s\n", mapd.log().c_str());
       return 1;
     }
-    for (int i = 0; i < 100 && address.empty(); ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      std::ifstream in(log);
-      std::string line;
-      while (std::getline(in, line)) {
-        const size_t p = line.find("address=");
-        if (p != std::string::npos) address = line.substr(p + 8, line.find(' ', p) - p - 8);
-      }
-    }
-    if (address.empty()) {
-      std::fprintf(stderr, "ingest_bench: mapd did not start (see its log)\n");
-      kill(pid, SIGKILL);
-      return 1;
-    }
+    pid = mapd.pid;
+    address = mapd.address;
   }
   grpc::ChannelArguments ch_args;
   ch_args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
@@ -324,12 +299,7 @@ int main(int argc, char** argv) {
   std::printf("server: RSS %s, peak RSS %s, CPU %.2f s (%.0f%% of one core)\n", rss.c_str(),
               hwm.c_str(), server_cpu, 100 * server_cpu / seconds);
 
-  if (pid) {
-    kill(pid, SIGTERM);
-    int status = 0;
-    waitpid(pid, &status, 0);
-    std::printf("mapd exit status: %d\n", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-  }
+  if (pid) std::printf("mapd exit status: %d\n", mapd::testing::Stop(pid, SIGTERM));
   // SQLite's own ceiling on the same disk, same sync mode, batch-sized blobs.
   const size_t blob = 12 + static_cast<size_t>(opt.features) * 48;
   const double one = SqliteRowsPerSecond(dir.File("ceiling1.db"), opt.sync, 1, blob, 2.0);
