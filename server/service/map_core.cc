@@ -249,6 +249,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   } else {
     batches_stored_ += batches_stored;
     features_stored_ += features_stored;
+    commits_ += 1;
     RecordRate();
     if (!to_fuse.empty()) {
       // Handed to the fuser BEFORE the acks go out, so that a query sent after
@@ -409,6 +410,7 @@ CoreStats MapCore::Stats() const {
   const auto now = Clock::now();
   s.batches_stored = batches_stored_.load();
   s.features_stored = features_stored_.load();
+  s.commits = commits_.load();
   s.uptime_s = std::chrono::duration<double>(now - started_).count();
   {
     std::lock_guard<std::mutex> lock(rate_mu_);

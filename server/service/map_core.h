@@ -82,6 +82,7 @@ struct CoreStats {
   uint64_t clusters = 0;
   uint64_t map_version = 0;
   uint64_t fusion_backlog = 0;    // committed observations not fused yet
+  uint64_t commits = 0;           // group commits by this process
   double uptime_s = 0;
 };
 
@@ -166,6 +167,7 @@ class MapCore {
 
   std::atomic<uint64_t> batches_stored_{0};
   std::atomic<uint64_t> features_stored_{0};
+  std::atomic<uint64_t> commits_{0};
   mutable std::mutex rate_mu_;
   struct RateSample {
     std::chrono::steady_clock::time_point t;

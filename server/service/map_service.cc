@@ -126,6 +126,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   response->set_db_path(core_->store().path());
   response->set_version(kVersion);
   response->set_fusion_backlog(s.fusion_backlog);
+  response->set_commits(s.commits);
   return grpc::Status::OK;
 }
 

@@ -281,6 +281,9 @@ int main(int argc, char** argv) {
     duplicate += r.duplicate;
     if (!r.error.empty()) std::fprintf(stderr, "robot error: %s\n", r.error.c_str());
   }
+  std::printf("group commit: %llu commits, %.1f batches per commit\n",
+              static_cast<unsigned long long>(stats.commits()),
+              stats.commits() ? static_cast<double>(stored) / static_cast<double>(stats.commits()) : 0.0);
   std::printf("fused map: %llu fused features from %llu raw, caught up %.2f s after the last ack "
               "(fusion rate %.0f features/s)\n",
               static_cast<unsigned long long>(stats.fused_features()),
