@@ -60,6 +60,7 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
   MAPD_RETURN_IF_ERROR(Exec(w, options.synchronous_full ? "PRAGMA synchronous=FULL"
                                                         : "PRAGMA synchronous=NORMAL"));
   MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA cache_size=-65536; PRAGMA temp_store=MEMORY"));
+  sqlite3_busy_timeout(w, options.busy_timeout_ms);
   MAPD_RETURN_IF_ERROR(Migrate(w));
 
   StatusOr<DbHandle> reader = OpenDatabase(path, /*read_only=*/true);

@@ -31,6 +31,9 @@ struct StoreOptions {
   // false: synchronous=NORMAL, a commit survives a crash of mapd but maybe not
   // of the machine. true: synchronous=FULL, it survives power loss too.
   bool synchronous_full = false;
+  // How long a write waits for a lock held by another process (e.g. a backup
+  // or an operator's sqlite3 shell) before it fails, milliseconds.
+  int busy_timeout_ms = 5000;
 };
 
 enum class FrameKind : int {

@@ -58,6 +58,8 @@ const std::map<std::string, Setting>& Settings() {
                   return Status::Ok();
                 },
                 "normal (survives a crash of mapd) or full (survives power loss; slower)"}},
+      {"busy_timeout_ms", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->busy_timeout_ms); },
+                           "how long a commit waits for a database lock held by another process, ms (5000)"}},
       {"fusion.delta_deg", {[](auto& k, auto& v, auto* c) {
                               double d;
                               MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));

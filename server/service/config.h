@@ -17,6 +17,7 @@ struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   std::string db_path;                     // empty: DefaultDbPath()
   bool sync_full = false;                  // synchronous=FULL (survives power loss)
+  int busy_timeout_ms = 5000;              // wait for a database lock held by another process
   fusion::FusionParams fusion;
   IngestOptions ingest;
   size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted

@@ -36,6 +36,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   MapCoreOptions core_options;
   core_options.db_path = db;
   core_options.store.synchronous_full = config.sync_full;
+  core_options.store.busy_timeout_ms = config.busy_timeout_ms;
   core_options.fusion = config.fusion;
   core_options.max_group_batches = config.max_group_batches;
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);

@@ -1,5 +1,7 @@
 // The service end to end, in process: ingest, duplicates, bad input, queries,
 // restart. (The SIGKILL crash test with the real binary is crash_restart_test.cc.)
+#include <sqlite3.h>
+
 #include <cmath>
 
 #include <gmock/gmock.h>
@@ -195,6 +197,29 @@ TEST_F(ServerFixture, ARestartedServerServesTheSameMap) {
   EXPECT_EQ(Stats().batches(), stats_before.batches());
   // A robot resending after the restart is recognised: (robot, session, seq) is the key.
   EXPECT_EQ(Count(Stream(Walk("r1", 3)), pb::IngestAck::DUPLICATE), 3);
+}
+
+TEST_F(ServerFixture, ALockedDatabaseRefusesBatchesRetryablyAndLosesNothing) {
+  Stream(Walk("r1", 5));
+  const auto before = Features();
+  Restart();  // with a short busy timeout
+  // Another process (an operator's sqlite3 shell, a backup) holds the write lock.
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open(config_.db_path.c_str(), &other), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr), SQLITE_OK);
+  const auto refused = Stream(Walk("r1", 3, 6));
+  ASSERT_EQ(refused.size(), 3u);
+  for (const auto& a : refused) {
+    EXPECT_EQ(a.result(), pb::IngestAck::REJECTED);
+    EXPECT_EQ(a.code(), static_cast<int>(grpc::StatusCode::UNAVAILABLE));
+    EXPECT_THAT(a.message(), HasSubstr("resend"));
+  }
+  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(other);
+  // The server is still up, the earlier map intact, and the resend is stored.
+  EXPECT_EQ(Count(Stream(Walk("r1", 3, 6)), pb::IngestAck::STORED), 3);
+  EXPECT_EQ(Stats().batches(), 8u);
+  EXPECT_EQ(Features().size(), before.size());
 }
 
 TEST_F(ServerFixture, SubmapRpcsAnswerUnimplementedClearly) {

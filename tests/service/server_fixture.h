@@ -25,6 +25,7 @@ class ServerFixture : public ::testing::Test {
     config_.listen = "127.0.0.1:0";
     config_.db_path = dir_.File("map.db");
     config_.shutdown_grace_s = 1.0;
+    config_.busy_timeout_ms = 300;
     StartServer();
   }
 
