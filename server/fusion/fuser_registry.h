@@ -1,0 +1,34 @@
+// Fusion strategies by name (ALGORITHMS.md section A, "Baselines"):
+//   "three_criteria"  the proposed method (FusionEngine, fusion/engine.h)
+//   "mean_shift"      competing algorithm 1 (fusion/baselines/mean_shift_fuser.h)
+//   "density"         competing algorithm 2 (fusion/baselines/density_fuser.h)
+#ifndef MAPD_FUSION_FUSER_REGISTRY_H_
+#define MAPD_FUSION_FUSER_REGISTRY_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "fusion/baselines/density_fuser.h"
+#include "fusion/baselines/mean_shift_fuser.h"
+#include "fusion/fuser.h"
+#include "fusion/params.h"
+
+namespace mapd::fusion {
+
+struct FuserOptions {
+  FusionParams three_criteria;
+  baselines::MeanShiftFuserParams mean_shift;
+  baselines::DensityFuserParams density;
+};
+
+// The registry names, in the order above.
+std::vector<std::string> FuserNames();
+
+// InvalidArgument for an unknown name (listing the known ones) or invalid parameters.
+StatusOr<std::unique_ptr<Fuser>> MakeFuser(const std::string& name, const FuserOptions& options);
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_FUSER_REGISTRY_H_
