@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libeigen3-dev libsqlite3-dev
+  libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
   libgtest-dev libgmock-dev
 )
 

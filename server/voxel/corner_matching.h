@@ -1,0 +1,147 @@
+// Corner matching between two voxel submaps (ALGORITHMS.md B.4, B.5;
+// grid-map-fusion-paper.txt section IV).
+//
+// Correspondences M = {(a_i, b_i)} must satisfy the paper's eq. (4):
+//   | |a_i - a_j| - |b_i - b_j| | < D  for every two of them,
+// i.e. M is a clique of the consistency graph whose vertices are candidate
+// pairs (a, b). Pipeline:
+//   1. Candidate pairs: every corner keeps its top_k most similar partners in
+//      the other map (union over both sides). Similarity = rotation-invariant
+//      local signatures: the sorted angles between the corner's three planes
+//      (a gate), then the number of other corners that would be consistent
+//      with the pair (its degree in the all-to-all graph, a "distance
+//      context"), which also checks the directions to those corners against
+//      the corner's own normals.
+//   2. The consistency graph over candidate pairs (eq. (4), distinct corners,
+//      optionally the same direction-vs-normals check).
+//   3. Its maximum clique: exact branch and bound (max_clique.h, default) or
+//      the paper's backtracking search with its five-match transform shortcut.
+//   4. T_a_b by Umeyama without scaling on the matched corner positions.
+// Ties on the clique size go to a caller's score of the transform (the paper:
+// the most coinciding occupied voxels).
+//
+// Pure Eigen; thread compatible (no shared state).
+#ifndef MAPD_VOXEL_CORNER_MATCHING_H_
+#define MAPD_VOXEL_CORNER_MATCHING_H_
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "common/status.h"
+#include "voxel/corner.h"
+#include "voxel/max_clique.h"
+
+namespace mapd::voxel {
+
+enum class MatchMethod {
+  kMaxClique,     // exact maximum clique, colouring bounds (default: faster, see docs/voxel-matching.md)
+  kBacktracking,  // the paper's Algorithm 1 with the five-match shortcut
+};
+
+const char* MatchMethodName(MatchMethod method);
+
+struct CornerMatchingParams {
+  MatchMethod method = MatchMethod::kMaxClique;
+  // D of eq. (4), metres. Default: 2 voxels of 10 cm; use 2 * voxel size.
+  double consistency_distance_m = 0.2;
+  // Candidate partners kept per corner, for each corner of A and of B.
+  int top_k = 8;
+  // Candidates must agree on every sorted inter-plane angle within this.
+  double signature_tolerance_rad = 10.0 * M_PI / 180.0;
+  // Check the direction to other corners against the corner's normals (in
+  // the signature score and in the graph's edges). Tolerated angular error of
+  // a normal; the position part (2 D / distance) is added automatically.
+  bool use_normals = true;
+  double normal_tolerance_rad = 6.0 * M_PI / 180.0;
+  // Fewer consistent matches than this: no transform (transform_valid false).
+  int min_matches = 3;
+  // With a tie-break score: at most this many equal-size solutions are scored.
+  int max_tied_solutions = 16;
+  // Backtracking: matches after which the transform shortcut closes a branch
+  // (the paper: 5). 0 turns the shortcut off (exhaustive, exact, slow).
+  int backtracking_shortcut = 5;
+  // Search budget; exhausted => proven_optimal false, best found returned.
+  int64_t max_search_nodes = 0;     // 0 = unlimited
+  double max_search_seconds = 10.0;  // 0 = unlimited
+
+  // InvalidArgument naming the first bad field.
+  Status Validate() const;
+};
+
+// Rotation-invariant signature of one corner.
+struct CornerSignature {
+  // Angles between the three planes (normals as unoriented lines), radians in
+  // [0, pi/2], ascending.
+  std::array<double, 3> plane_angles_rad{};
+};
+
+CornerSignature ComputeSignature(const Corner& corner);
+
+struct CornerPair {
+  int a = 0;  // index into corners (points) of A
+  int b = 0;  // index into corners (points) of B
+  bool operator==(const CornerPair& o) const { return a == o.a && b == o.b; }
+  bool operator<(const CornerPair& o) const { return a != o.a ? a < o.a : b < o.b; }
+};
+
+// Candidate pairs for the consistency graph (step 1), sorted, unique.
+std::vector<CornerPair> SelectCandidatePairs(const CornerSet& corners_a, const CornerSet& corners_b,
+                                             const CornerMatchingParams& params);
+
+// An optional extra edge test on two candidate pairs (e.g. normals).
+using PairConsistency = std::function<bool(const CornerPair&, const CornerPair&)>;
+
+// Vertex v of the graph is pairs[v]. Edge when the pairs use distinct corners
+// on both sides, satisfy eq. (4) with D = consistency_distance_m, and pass
+// `extra` if given.
+BitGraph BuildConsistencyGraph(const std::vector<Eigen::Vector3d>& points_a,
+                               const std::vector<Eigen::Vector3d>& points_b,
+                               const std::vector<CornerPair>& pairs, double consistency_distance_m,
+                               const PairConsistency& extra = nullptr);
+
+// Scores a candidate T_a_b; higher is better (e.g. coinciding occupied voxels).
+using TransformScore = std::function<double(const Eigen::Isometry3d& T_a_b)>;
+
+struct CornerMatchResult {
+  std::vector<CornerPair> correspondences;                  // sorted by a
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  // maps B's frame into A's
+  bool transform_valid = false;  // >= min_matches, not collinear
+  double rms_residual_m = 0.0;   // of T_a_b on the correspondences
+  int matched_count = 0;         // correspondences.size()
+  MatchMethod method = MatchMethod::kMaxClique;
+  // Diagnostics.
+  int candidate_pairs = 0;  // graph vertices
+  int64_t graph_edges = 0;
+  double graph_density = 0.0;
+  int64_t search_nodes = 0;
+  int tied_solutions = 1;     // equal-size solutions compared (>1 only with a score)
+  double tie_score = 0.0;     // the score callback's value of the chosen T_a_b, if given
+  bool proven_optimal = false;  // the clique is maximum in the graph (not for the shortcut)
+  double search_seconds = 0.0;
+  double total_seconds = 0.0;  // signatures + graph + search + fit
+};
+
+// The full pipeline on two corner sets. InvalidArgument for bad params or
+// non-finite input. An OK result may have transform_valid == false: too
+// little evidence is an answer, not an error.
+StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const CornerSet& corners_b,
+                                         const CornerMatchingParams& params,
+                                         const TransformScore& tie_score = nullptr);
+
+// Steps 2-4 on given candidate pairs between two point sets (no signatures,
+// no normals; e.g. putative correspondences from descriptors).
+StatusOr<CornerMatchResult> MatchCandidatePairs(const std::vector<Eigen::Vector3d>& points_a,
+                                                const std::vector<Eigen::Vector3d>& points_b,
+                                                const std::vector<CornerPair>& pairs,
+                                                const CornerMatchingParams& params,
+                                                const TransformScore& tie_score = nullptr);
+
+}  // namespace mapd::voxel
+
+#endif  // MAPD_VOXEL_CORNER_MATCHING_H_

@@ -1,0 +1,143 @@
+// Corner matching: the exact maximum clique vs the paper's backtracking search
+// (ALGORITHMS.md B.4) on generated corner sets with a known transform.
+// Writes a markdown table to docs/voxel-matching.md (or argv[1]).
+//
+//   voxel_matching_bench [out.md] [seeds]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "voxel/corner_matching.h"
+#include "voxel/support/corner_scene.h"
+
+namespace {
+
+using mapd::voxel::CornerMatchingParams;
+using mapd::voxel::CornerMatchResult;
+using mapd::voxel::MatchMethod;
+
+struct Row {
+  int seeds = 0;
+  int success = 0, proven = 0;
+  double candidate_pairs = 0, density = 0, matched = 0, correct = 0;
+  std::vector<double> seconds;
+  std::vector<double> search_seconds;
+};
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string out_path = argc > 1 ? argv[1] : MAPD_DOCS_DIR "/voxel-matching.md";
+  const int seeds = argc > 2 ? std::stoi(argv[2]) : 5;
+  std::ostringstream table;
+  table << "| corners A | corners B | true pairs | noise (m) | method | candidate pairs | density | "
+           "median time (s) | max time (s) | matched | correct | success | proven optimal |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  struct Scenario {
+    int num_a;
+    double overlap, outlier_fraction, noise_m, normal_noise_deg;
+  };
+  // Three sizes of the scenes, then one like the paper's maps (about
+  // 85 corners each of which 20 are shared; half-voxel noise, 3 deg normals).
+  const Scenario scenarios[] = {{50, 0.5, 0.5, 0.0, 1.0},
+                                {100, 0.5, 0.5, 0.0, 1.0},
+                                {200, 0.5, 0.5, 0.0, 1.0},
+                                {85, 20.0 / 85, 65.0 / 85, 0.05, 3.0}};
+  for (const Scenario& sc : scenarios) {
+    const int num_a = sc.num_a;
+    for (MatchMethod method : {MatchMethod::kMaxClique, MatchMethod::kBacktracking}) {
+      Row row;
+      int num_b = 0, truth = 0;
+      for (int seed = 1; seed <= seeds; ++seed) {
+        mapd::testing::CornerSceneOptions o;
+        o.num_a = num_a;
+        o.seed = 1000 + seed;
+        o.overlap = sc.overlap;
+        o.outlier_fraction = sc.outlier_fraction;
+        o.noise_m = sc.noise_m > 0.0 ? sc.noise_m : 0.01 + 0.01 * (seed % 2);
+        o.normal_noise_rad = sc.normal_noise_deg * M_PI / 180.0;
+        const mapd::testing::CornerScene scene = mapd::testing::MakeCornerScene(o);
+        num_b = static_cast<int>(scene.b.size());
+        truth = static_cast<int>(scene.truth.size());
+        CornerMatchingParams params;
+        params.method = method;
+        params.max_search_seconds = 30.0;
+        const auto r = mapd::voxel::MatchCorners(scene.a, scene.b, params);
+        if (!r.ok()) {
+          std::cerr << r.status().ToString() << "\n";
+          return 1;
+        }
+        int correct = 0;
+        for (const auto& p : r->correspondences) {
+          correct += std::binary_search(scene.truth.begin(), scene.truth.end(), p);
+        }
+        const bool ok = r->transform_valid &&
+                        mapd::testing::RotationErrorDeg(r->T_a_b, scene.T_a_b) < 1.0 &&
+                        mapd::testing::TranslationError(r->T_a_b, scene.T_a_b) < 0.05;
+        ++row.seeds;
+        row.success += ok;
+        row.proven += r->proven_optimal;
+        row.candidate_pairs += r->candidate_pairs;
+        row.density += r->graph_density;
+        row.matched += r->matched_count;
+        row.correct += correct;
+        row.seconds.push_back(r->total_seconds);
+        row.search_seconds.push_back(r->search_seconds);
+        std::fprintf(stderr, "%3d %-12s seed %d: %.3f s (search %.3f s, %lld nodes) matched %d correct %d %s\n",
+                     num_a, mapd::voxel::MatchMethodName(method), seed, r->total_seconds,
+                     r->search_seconds, static_cast<long long>(r->search_nodes), r->matched_count,
+                     correct, ok ? "ok" : "FAIL");
+      }
+      char line[512];
+      std::snprintf(line, sizeof(line),
+                    "| %d | %d | %d | %s | %s | %.0f | %.3f | %.3f | %.3f | %.1f | %.1f | %d/%d | %d/%d |\n",
+                    num_a, num_b, truth, sc.noise_m > 0.0 ? "0.05" : "0.01-0.02",
+                    mapd::voxel::MatchMethodName(method),
+                    row.candidate_pairs / row.seeds, row.density / row.seeds, Median(row.seconds),
+                    *std::max_element(row.seconds.begin(), row.seconds.end()),
+                    row.matched / row.seeds, row.correct / row.seeds, row.success, row.seeds,
+                    row.proven, row.seeds);
+      table << line;
+    }
+  }
+  std::cout << table.str();
+  std::ofstream out(out_path);
+  out << "# Voxel corner matching: maximum clique vs backtracking\n\n"
+      << "Generated by `voxel_matching_bench` (tests/bench/voxel_matching_bench.cc); rerun it to\n"
+      << "refresh. Scenes (tests/voxel/support/corner_scene.h): A has N corners uniform in a\n"
+      << "30 m box, half of them Manhattan (three orthogonal planes); B sees 50% of them,\n"
+      << "moved by a random rigid transform with 1-2 cm position noise and 1 deg normal noise,\n"
+      << "plus as many random outlier corners. Default CornerMatchingParams (D = 0.2 m,\n"
+      << "top_k = 8, normals checked), search budget 30 s. Success: rotation within 1 deg and\n"
+      << "translation within 5 cm of the truth. The last rows are like the paper's maps: about\n"
+      << "85 corners each, 20 shared, 5 cm noise (half a 10 cm voxel), 3 deg normal noise.\n"
+      << "Backtracking = the paper's Algorithm 1 with its five-match shortcut.\n"
+      << "Density is that of the consistency graph over the candidate pairs. " << seeds << " seeds per row; time is the whole\n"
+      << "MatchCorners call (signatures, graph, search, fit), single thread.\n\n"
+      << table.str()
+      << "\nReading (as of the first run; check against the table after a rerun):\n\n"
+      << "- max_clique is proven optimal on every scene in tens of milliseconds. Its search\n"
+      << "  expands about as many nodes as the clique has vertices: after the signature\n"
+      << "  top-k and the direction-vs-normals edge test the consistency graph is very\n"
+      << "  sparse. Most of its time goes to signatures and building the graph.\n"
+      << "- backtracking (the paper's Algorithm 1 with the five-match shortcut) finds the\n"
+      << "  same matches early, but exhausting its search space takes about 0.5 s at 50\n"
+      << "  corners and runs into the 30 s budget at 100 and 200: the shortcut is re-run\n"
+      << "  for many 5-subsets of the same clique. It never claims optimality.\n"
+      << "- A failure on the paper-like rows with all matches correct is an estimation\n"
+      << "  limit (5 cm noise, corners up to 30 m apart), not a matching error: ICP on\n"
+      << "  the voxels refines it.\n"
+      << "- Hence MatchMethod::kMaxClique is the default.\n";
+  std::cerr << "wrote " << out_path << "\n";
+  return 0;
+}
