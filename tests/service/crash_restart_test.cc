@@ -72,8 +72,16 @@ StreamResult Stream(const std::string& address, const std::vector<pb::Observatio
   return result;
 }
 
+// The map once the fuser has caught up with every acknowledged batch (a query
+// waits for it only up to a bound, which a sanitizer build on a busy machine exceeds).
 std::vector<pb::FusedFeature> FetchMap(const std::string& address) {
   auto stub = pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  for (int i = 0; i < 1200; ++i) {
+    grpc::ClientContext stats_ctx;
+    pb::Stats stats;
+    if (stub->GetStats(&stats_ctx, {}, &stats).ok() && stats.fusion_backlog() == 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   grpc::ClientContext ctx;
   auto reader = stub->GetFeatureMap(&ctx, {});
   std::vector<pb::FusedFeature> out;
