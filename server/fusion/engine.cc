@@ -8,11 +8,13 @@
 #include <unordered_set>
 #include <utility>
 
+#include "fusion/chain_guard.h"
 #include "fusion/cluster_stats.h"
 #include "fusion/corner_snap.h"
 #include "fusion/criteria.h"
 #include "fusion/engine_inspector.h"
 #include "fusion/grid_index.h"
+#include "geometry/convex_hull2.h"
 
 namespace mapd::fusion {
 
@@ -58,7 +60,10 @@ struct IndexedFeature {
 class FusionEngine::Impl {
  public:
   explicit Impl(const FusionParams& params)
-      : params_(params), grid_(kFeatureCellM), snapper_(params.snap_m, params.corner_mode) {}
+      : params_(params),
+        guard_on_(params.chain_max_rms_m > 0.0),
+        grid_(kFeatureCellM),
+        snapper_(params.snap_m, params.corner_mode) {}
 
   Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
   void Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
@@ -66,18 +71,41 @@ class FusionEngine::Impl {
   std::optional<FusedFeature> Get(ClusterId id) const;
 
   const FusionParams params_;
+  const bool guard_on_;  // chain guard (chain_guard.h) enabled
   std::unordered_set<ObservationId> observations_;
   std::unordered_map<FeatureId, uint32_t> node_of_;
   // Union-find over nodes (one per raw feature); stats_ is non-null at roots only.
   std::vector<uint32_t> parent_;
   std::vector<uint32_t> size_;
   std::vector<std::unique_ptr<ClusterStats>> stats_;
-  size_t cluster_count_ = 0;
+  size_t cluster_count_ = 0;  // components
+  // Chain guard only, per node: the raw feature and where it came from (the
+  // guard refits subsets), and the next member of its component (a circular
+  // list per component: a union splices two lists in O(1)).
+  std::vector<GroundFeature> features_;
+  std::vector<ObservationId> observation_of_;
+  std::vector<RobotId> robot_of_;
+  std::vector<uint32_t> next_member_;
+  // Components the guard cut into more than one group, by component id: the
+  // ids of their published groups and their group count.
+  struct SplitRecord {
+    std::vector<ClusterId> published;
+    uint32_t group_count = 0;
+  };
+  std::unordered_map<ClusterId, SplitRecord> split_;
+  size_t extra_groups_ = 0;  // sum over split_ of (group_count - 1)
   UniformGrid<IndexedFeature> grid_;
   CornerSnapper snapper_;
   std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
 
   uint32_t FindConst(uint32_t x) const;  // no path compression, for const readers
+  // Whether the guard may cut the component at `root` (else it is one group).
+  bool MayCut(uint32_t root) const {
+    return guard_on_ && ChainMayNeedSplit(stats_[root]->moments, params_.chain_max_rms_m);
+  }
+  // The guard's groups of the component at `root`, as member nodes and stats.
+  std::vector<std::vector<uint32_t>> GroupNodes(uint32_t root) const;
+  ClusterStats StatsOf(const std::vector<uint32_t>& nodes) const;
 
  private:
   uint32_t Find(uint32_t x);
@@ -86,7 +114,52 @@ class FusionEngine::Impl {
   void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
   void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
                ChangeFeed* feed);
+  // Publishes one group (support >= min_support) unless it is unchanged.
+  void PublishGroup(const ClusterStats& stats, ChangeFeed* feed, std::vector<Vec2>* moved_points);
 };
+
+std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root) const {
+  std::vector<uint32_t> nodes;
+  nodes.reserve(size_[root]);
+  uint32_t node = root;
+  do {
+    nodes.push_back(node);
+    node = next_member_[node];
+  } while (node != root);
+  std::vector<GuardMember> members;
+  members.reserve(nodes.size());
+  for (uint32_t n : nodes) members.push_back({features_[n].id, features_[n].segment});
+  std::vector<std::vector<uint32_t>> groups =
+      SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
+  for (std::vector<uint32_t>& group : groups) {
+    for (uint32_t& index : group) index = nodes[index];
+  }
+  return groups;
+}
+
+ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) const {
+  ClusterStats s = ClusterStats::OfFeature(features_[nodes.front()], observation_of_[nodes.front()],
+                                           robot_of_[nodes.front()]);
+  std::vector<Vec2> points = s.hull;
+  for (size_t i = 1; i < nodes.size(); ++i) {
+    const GroundFeature& f = features_[nodes[i]];
+    s.id = std::min(s.id, f.id);
+    ++s.member_count;
+    s.plane_members += f.origin == FeatureOrigin::kPlane ? 1 : 0;
+    s.moments.Add(f.segment.a);
+    s.moments.Add(f.segment.b);
+    points.push_back(f.segment.a);
+    points.push_back(f.segment.b);
+    s.z_min_m = std::min(s.z_min_m, f.z_min_m);
+    s.z_max_m = std::max(s.z_max_m, f.z_max_m);
+    s.observations.insert(observation_of_[nodes[i]]);
+    s.robots.push_back(robot_of_[nodes[i]]);
+  }
+  s.hull = geometry::ConvexHull(std::move(points));
+  std::sort(s.robots.begin(), s.robots.end());
+  s.robots.erase(std::unique(s.robots.begin(), s.robots.end()), s.robots.end());
+  return s;
+}
 
 uint32_t FusionEngine::Impl::Find(uint32_t x) {
   uint32_t root = x;
@@ -110,6 +183,7 @@ uint32_t FusionEngine::Impl::Union(uint32_t a, uint32_t b, std::vector<ClusterId
   merged_ids->push_back(stats_[b]->id);
   parent_[b] = a;
   size_[a] += size_[b];
+  if (guard_on_) std::swap(next_member_[a], next_member_[b]);  // splice the member lists
   stats_[a]->Merge(std::move(*stats_[b]));
   stats_[b].reset();
   --cluster_count_;
@@ -172,6 +246,12 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
     size_.push_back(1);
     stats_.push_back(std::make_unique<ClusterStats>(ClusterStats::OfFeature(f, observation, robot)));
     node_of_.emplace(f.id, node);
+    if (guard_on_) {
+      features_.push_back(f);
+      observation_of_.push_back(observation);
+      robot_of_.push_back(robot);
+      next_member_.push_back(node);
+    }
     ++cluster_count_;
   }
   // Features of one observation are never linked directly (the paper compares
@@ -201,34 +281,59 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   // Fitted endpoints that appeared, moved or vanished: the corner result can
   // change within 2 * snap_m of them (corner_snap.h).
   std::vector<Vec2> moved_points;
-  // Published clusters absorbed into another: removed.
+  // The groups published before by the components this Add touched: every such
+  // component was merged into a root of `roots`, so its id is in merged_ids.
+  std::vector<ClusterId> old_groups;
   for (ClusterId id : merged_ids) {
+    if (auto split = split_.find(id); split != split_.end()) {
+      old_groups.insert(old_groups.end(), split->second.published.begin(),
+                        split->second.published.end());
+      extra_groups_ -= split->second.group_count - 1;
+      split_.erase(split);
+    } else if (published_.count(id) != 0) {
+      old_groups.push_back(id);
+    }
+  }
+  // The touched components' groups now: refit once each, publish at min_support.
+  std::vector<ClusterId> new_groups;
+  for (uint32_t root : roots) {
+    const ClusterStats& whole = *stats_[root];
+    if (!MayCut(root)) {  // one group: the component itself
+      if (whole.support() < params_.min_support) continue;
+      PublishGroup(whole, feed, &moved_points);
+      new_groups.push_back(whole.id);
+      continue;
+    }
+    const std::vector<std::vector<uint32_t>> groups = GroupNodes(root);
+    if (groups.size() == 1) {
+      if (whole.support() < params_.min_support) continue;
+      PublishGroup(whole, feed, &moved_points);
+      new_groups.push_back(whole.id);
+      continue;
+    }
+    SplitRecord& record = split_[whole.id];
+    record.group_count = static_cast<uint32_t>(groups.size());
+    extra_groups_ += groups.size() - 1;
+    for (const std::vector<uint32_t>& group : groups) {
+      const ClusterStats stats = StatsOf(group);
+      if (stats.support() < params_.min_support) continue;
+      PublishGroup(stats, feed, &moved_points);
+      new_groups.push_back(stats.id);
+      record.published.push_back(stats.id);
+    }
+  }
+  // Groups published before and gone now: removed.
+  std::sort(new_groups.begin(), new_groups.end());
+  std::sort(old_groups.begin(), old_groups.end());
+  old_groups.erase(std::unique(old_groups.begin(), old_groups.end()), old_groups.end());
+  for (ClusterId id : old_groups) {
+    if (std::binary_search(new_groups.begin(), new_groups.end(), id)) continue;
     auto it = published_.find(id);
-    if (it == published_.end()) continue;
-    if (stats_[FindConst(node_of_.at(id))]->id == id) continue;  // it survived
     moved_points.push_back(it->second.fitted.a);
     moved_points.push_back(it->second.fitted.b);
     snapper_.Erase(id);
     published_.erase(it);
     feed->removed.push_back(id);
-  }
-  // Clusters that gained members: refit once each, publish at min_support.
-  for (uint32_t root : roots) {
-    const ClusterStats& stats = *stats_[root];
-    if (stats.support() < params_.min_support) continue;  // support never shrinks
-    const ClusterStats::Fit fit = stats.Refit();
-    auto it = published_.find(stats.id);
-    if (it == published_.end()) {
-      feed->added.push_back(stats.id);
-    } else {
-      feed->updated.push_back(stats.id);
-      moved_points.push_back(it->second.fitted.a);
-      moved_points.push_back(it->second.fitted.b);
-    }
-    moved_points.push_back(fit.segment.a);
-    moved_points.push_back(fit.segment.b);
-    snapper_.Upsert(stats.id, fit.segment, fit.line);
-    published_[stats.id] = stats.ToFused(fit);
   }
   // The corner pass, local to the moved endpoints.
   std::vector<ClusterId> dirty = feed->added;
@@ -257,11 +362,42 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   std::sort(feed->removed.begin(), feed->removed.end());
 }
 
+void FusionEngine::Impl::PublishGroup(const ClusterStats& stats, ChangeFeed* feed,
+                                      std::vector<Vec2>* moved_points) {
+  const ClusterStats::Fit fit = stats.Refit();
+  auto it = published_.find(stats.id);
+  if (it == published_.end()) {
+    feed->added.push_back(stats.id);
+  } else {
+    const FusedFeature& old = it->second;
+    if (old.member_count == stats.member_count && old.support == stats.support() &&
+        old.fitted.a == fit.segment.a && old.fitted.b == fit.segment.b) {
+      return;  // a group of a cut component that this Add did not change
+    }
+    feed->updated.push_back(stats.id);
+    moved_points->push_back(old.fitted.a);
+    moved_points->push_back(old.fitted.b);
+  }
+  moved_points->push_back(fit.segment.a);
+  moved_points->push_back(fit.segment.b);
+  snapper_.Upsert(stats.id, fit.segment, fit.line);
+  published_[stats.id] = stats.ToFused(fit);
+}
+
 std::optional<FusedFeature> FusionEngine::Impl::Get(ClusterId id) const {
   if (auto it = published_.find(id); it != published_.end()) return it->second;
   auto node = node_of_.find(id);
   if (node == node_of_.end()) return std::nullopt;
-  const ClusterStats& stats = *stats_[FindConst(node->second)];
+  const uint32_t root = FindConst(node->second);
+  if (MayCut(root)) {
+    for (const std::vector<uint32_t>& group : GroupNodes(root)) {
+      if (std::find(group.begin(), group.end(), node->second) == group.end()) continue;
+      const ClusterStats stats = StatsOf(group);
+      if (stats.id != id) return std::nullopt;  // a member, not the name of its group
+      return stats.ToFused(stats.Refit());
+    }
+  }
+  const ClusterStats& stats = *stats_[root];
   if (stats.id != id) return std::nullopt;  // a member, not the name of its cluster
   return stats.ToFused(stats.Refit());
 }
@@ -294,7 +430,9 @@ std::vector<FusedFeature> FusionEngine::Published() const {
 
 std::optional<FusedFeature> FusionEngine::Get(ClusterId id) const { return impl_->Get(id); }
 size_t FusionEngine::feature_count() const { return impl_->parent_.size(); }
-size_t FusionEngine::cluster_count() const { return impl_->cluster_count_; }
+size_t FusionEngine::cluster_count() const {
+  return impl_->cluster_count_ + impl_->extra_groups_;
+}
 size_t FusionEngine::published_count() const { return impl_->published_.size(); }
 const FusionParams& FusionEngine::params() const { return impl_->params_; }
 
@@ -309,6 +447,15 @@ std::vector<std::vector<FeatureId>> EngineInspector::Partition(const FusionEngin
   for (const auto& [id, node] : impl.node_of_) by_root[impl.FindConst(node)].push_back(id);
   std::vector<std::vector<FeatureId>> out;
   for (auto& [root, members] : by_root) {
+    if (impl.MayCut(root)) {  // the guard's groups, not the raw component
+      for (const std::vector<uint32_t>& group : impl.GroupNodes(root)) {
+        std::vector<FeatureId> ids;
+        for (uint32_t node : group) ids.push_back(impl.features_[node].id);
+        std::sort(ids.begin(), ids.end());
+        out.push_back(std::move(ids));
+      }
+      continue;
+    }
     std::sort(members.begin(), members.end());
     out.push_back(std::move(members));
   }

@@ -4,6 +4,9 @@
 // projected onto the ground plane (see projection.h). Each new feature is
 // linked to earlier features of OTHER observations that meet all three
 // criteria; clusters are the connected components of that graph (union-find).
+// With the chain guard on (FusionParams::chain_max_rms_m > 0, chain_guard.h) a
+// component that does not fit one line is published as the guard's groups, a
+// function of its member set; "cluster" below then means such a group.
 // The result is exactly what the batch algorithm gives on the same features,
 // whatever the arrival order.
 //
@@ -58,7 +61,9 @@ struct FusedFeature {
 struct ChangeFeed {
   std::vector<ClusterId> added;    // newly published
   std::vector<ClusterId> updated;  // published before and after, geometry or support changed
-  std::vector<ClusterId> removed;  // published before, gone now (merged into another cluster)
+  // Published before, gone now: merged into another cluster, or (chain guard)
+  // no longer the smallest id of a group, or its group fell below min_support.
+  std::vector<ClusterId> removed;
   bool empty() const { return added.empty() && updated.empty() && removed.empty(); }
 };
 
@@ -85,7 +90,7 @@ class FusionEngine {
   std::optional<FusedFeature> Get(ClusterId id) const;
 
   size_t feature_count() const;
-  size_t cluster_count() const;
+  size_t cluster_count() const;  // clusters (the guard's groups), published or not
   size_t published_count() const;
   const FusionParams& params() const;
 

@@ -30,6 +30,8 @@ Status FusionParams::Validate() const {
   MAPD_RETURN_IF_ERROR(CheckRange("eta_m", eta_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(CheckRange("snap_m", snap_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(CheckRange("max_plane_tilt_rad", max_plane_tilt_rad, 0.0, kHalfPi));
+  MAPD_RETURN_IF_ERROR(CheckRange("chain_max_rms_m", chain_max_rms_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckRange("chain_max_sse_ratio", chain_max_sse_ratio, 0.0, 1.0));
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }

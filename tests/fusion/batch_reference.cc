@@ -50,6 +50,72 @@ Vec2 Joint(const Vec2& p, const Fit& lp, const Vec2& q, const Fit& lq, const Fus
   return x;
 }
 
+// Sum of squared orthogonal distances of `points` to their TLS line: the
+// smaller eigenvalue of the scatter about the mean.
+double Sse(const std::vector<Vec2>& points) {
+  Vec2 mean = Vec2::Zero();
+  for (const Vec2& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+  for (const Vec2& p : points) scatter += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
+  return eig.eigenvalues()(0);  // ascending
+}
+
+std::vector<Vec2> EndpointsOf(const std::vector<Flat>& all, const std::vector<size_t>& members) {
+  std::vector<Vec2> points;
+  for (size_t i : members) {
+    points.push_back(all[i].feature.segment.a);
+    points.push_back(all[i].feature.segment.b);
+  }
+  return points;
+}
+
+// The chain guard's rule (fusion/chain_guard.h), literally and recursively:
+// appends the groups of `members` (indices into `all`) to `groups`.
+void GuardGroups(const std::vector<Flat>& all, const std::vector<size_t>& members,
+                 const FusionParams& params, std::vector<std::vector<size_t>>* groups) {
+  const std::vector<Vec2> points = EndpointsOf(all, members);
+  const double sse = Sse(points);
+  const double rms = std::sqrt(std::max(0.0, sse) / static_cast<double>(points.size()));
+  if (params.chain_max_rms_m == 0.0 || members.size() < 2 || rms <= params.chain_max_rms_m) {
+    groups->push_back(members);
+    return;
+  }
+  // Order along the fitted direction, its sign fixed by the reference
+  // direction at 0.3 rad; ties by feature id.
+  Fit fit = FitEndpoints(points);
+  if (fit.direction.dot(Vec2(std::cos(0.3), std::sin(0.3))) < 0.0) fit.direction = -fit.direction;
+  std::vector<size_t> order = members;
+  const auto key = [&](size_t i) {
+    return (all[i].feature.segment.midpoint() - fit.point).dot(fit.direction);
+  };
+  std::sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+    if (key(x) != key(y)) return key(x) < key(y);
+    return all[x].feature.id < all[y].feature.id;
+  });
+  size_t best_k = 0;
+  double best_cost = 0.0;
+  for (size_t k = 1; k < order.size(); ++k) {
+    const std::vector<size_t> head(order.begin(), order.begin() + static_cast<long>(k));
+    const std::vector<size_t> tail(order.begin() + static_cast<long>(k), order.end());
+    const double cost = std::max(0.0, Sse(EndpointsOf(all, head))) +
+                        std::max(0.0, Sse(EndpointsOf(all, tail)));
+    if (best_k == 0 || cost < best_cost) {
+      best_k = k;
+      best_cost = cost;
+    }
+  }
+  if (!(best_cost < params.chain_max_sse_ratio * sse)) {
+    groups->push_back(members);
+    return;
+  }
+  GuardGroups(all, std::vector<size_t>(order.begin(), order.begin() + static_cast<long>(best_k)),
+              params, groups);
+  GuardGroups(all, std::vector<size_t>(order.begin() + static_cast<long>(best_k), order.end()),
+              params, groups);
+}
+
 }  // namespace
 
 std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observations,
@@ -89,29 +155,33 @@ std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observa
         }
       }
     }
-    BatchCluster c;
-    std::vector<Vec2> endpoints;
-    std::set<ObservationId> support;
-    for (size_t i : component) {
-      c.members.push_back(all[i].feature.id);
-      endpoints.push_back(all[i].feature.segment.a);
-      endpoints.push_back(all[i].feature.segment.b);
-      support.insert(all[i].observation);
+    std::vector<std::vector<size_t>> groups;
+    GuardGroups(all, component, params, &groups);
+    for (const std::vector<size_t>& group : groups) {
+      BatchCluster c;
+      std::vector<Vec2> endpoints;
+      std::set<ObservationId> support;
+      for (size_t i : group) {
+        c.members.push_back(all[i].feature.id);
+        endpoints.push_back(all[i].feature.segment.a);
+        endpoints.push_back(all[i].feature.segment.b);
+        support.insert(all[i].observation);
+      }
+      std::sort(c.members.begin(), c.members.end());
+      c.id = c.members.front();
+      c.support = static_cast<uint32_t>(support.size());
+      c.published = c.support >= params.min_support;
+      const Fit fit = FitEndpoints(endpoints);
+      double t_min = 1e300, t_max = -1e300;
+      for (const Vec2& p : endpoints) {
+        t_min = std::min(t_min, (p - fit.point).dot(fit.direction));
+        t_max = std::max(t_max, (p - fit.point).dot(fit.direction));
+      }
+      c.fitted = {fit.point + t_min * fit.direction, fit.point + t_max * fit.direction};
+      c.segment = c.fitted;
+      clusters.push_back(c);
+      fits.push_back(fit);
     }
-    std::sort(c.members.begin(), c.members.end());
-    c.id = c.members.front();
-    c.support = static_cast<uint32_t>(support.size());
-    c.published = c.support >= params.min_support;
-    const Fit fit = FitEndpoints(endpoints);
-    double t_min = 1e300, t_max = -1e300;
-    for (const Vec2& p : endpoints) {
-      t_min = std::min(t_min, (p - fit.point).dot(fit.direction));
-      t_max = std::max(t_max, (p - fit.point).dot(fit.direction));
-    }
-    c.fitted = {fit.point + t_min * fit.direction, fit.point + t_max * fit.direction};
-    c.segment = c.fitted;
-    clusters.push_back(c);
-    fits.push_back(fit);
   }
 
   // Corner rule: mutual nearest endpoints of different published features.

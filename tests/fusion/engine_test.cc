@@ -1,5 +1,6 @@
 #include "fusion/engine.h"
 
+#include <cmath>
 #include <limits>
 
 #include <gmock/gmock.h>
@@ -34,7 +35,11 @@ void ExpectNear(const Vec2& actual, const Vec2& expected, double tolerance_m) {
 }
 
 TEST(FusionEngineTest, TwoObservationsOfOneWallFuse) {
-  FusionEngine engine(Support(2));
+  // Two walls 10 cm apart fit their TLS line with an RMS of 5 cm, at the chain
+  // guard's default bound: the guard is off here, this test is the paper's fit.
+  FusionParams params = Support(2);
+  params.chain_max_rms_m = 0.0;
+  FusionEngine engine(params);
   ASSERT_TRUE(engine.Add(1, 7, {Wall(10, {0, 0}, {10, 0})}).ok());
   ASSERT_TRUE(engine.Add(2, 8, {Wall(20, {0, 0.1}, {10, 0.1})}).ok());
   EXPECT_EQ(engine.feature_count(), 2u);
@@ -176,6 +181,97 @@ TEST(FusionEngineTest, CreateRefusesInvalidParams) {
   params.gamma = 2.0;
   EXPECT_EQ(FusionEngine::Create(params).status().code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(FusionEngine::Create(FusionParams()).ok());
+}
+
+// A quarter circle of radius 5 m seen by `scans` observations as 0.5 m chords,
+// each scan's chords shifted by a fraction of a chord so that they chain.
+void AddArc(FusionEngine* engine, int scans, FeatureId* next_id) {
+  constexpr double kRadiusM = 5.0;
+  constexpr double kStepRad = 0.5 / kRadiusM;
+  for (int s = 0; s < scans; ++s) {
+    std::vector<GroundFeature> features;
+    for (double angle = kStepRad * s / scans; angle + kStepRad <= 1.5707963; angle += kStepRad) {
+      features.push_back(Wall((*next_id)++, kRadiusM * Vec2(std::cos(angle), std::sin(angle)),
+                              kRadiusM * Vec2(std::cos(angle + kStepRad), std::sin(angle + kStepRad))));
+    }
+    ASSERT_TRUE(engine->Add(100 + s, 0, features).ok());
+  }
+}
+
+TEST(FusionEngineTest, ChainGuardCutsACurvedWallIntoPieces) {
+  FusionParams off = Support(2);
+  off.chain_max_rms_m = 0.0;
+  FusionEngine chained(off);
+  FeatureId id = 1;
+  AddArc(&chained, 4, &id);
+  // The paper's method: one cluster, a straight chord far from the wall.
+  ASSERT_EQ(chained.published_count(), 1u);
+  EXPECT_GT(geometry::PointSegmentDistance(Vec2(5.0, 5.0).normalized() * 5.0,
+                                           chained.Published()[0].fitted),
+            0.4);
+
+  FusionEngine guarded(Support(2));  // the default guard
+  id = 1;
+  AddArc(&guarded, 4, &id);
+  const std::vector<FusedFeature> pieces = guarded.Published();
+  ASSERT_GE(pieces.size(), 3u);
+  uint32_t members = 0;
+  for (const FusedFeature& f : pieces) {
+    members += f.member_count;
+    // Every piece follows the wall: its ends and middle within 12 cm of the
+    // circle (the guard bounds the RMS residual by 5 cm, not the largest one).
+    EXPECT_NEAR(f.fitted.a.norm(), 5.0, 0.12);
+    EXPECT_NEAR(f.fitted.b.norm(), 5.0, 0.12);
+    EXPECT_NEAR(f.fitted.midpoint().norm(), 5.0, 0.12);
+  }
+  EXPECT_EQ(members, guarded.feature_count());
+  EXPECT_EQ(guarded.cluster_count(), pieces.size());
+  // Named by the smallest member id: the piece holding feature 1 is called 1.
+  EXPECT_EQ(pieces.front().id, 1u);
+}
+
+TEST(FusionEngineTest, ChainGuardKeepsAStraightWallWhole) {
+  FusionParams off = Support(2);
+  off.chain_max_rms_m = 0.0;
+  FusionEngine plain(off);
+  FusionEngine guarded(Support(2));
+  for (int s = 0; s < 6; ++s) {
+    // 3 cm offsets from scan to scan: the fit's RMS stays below 5 cm.
+    const double y = 0.03 * (s % 3);
+    const GroundFeature f = Wall(10 + s, {0.5 * s, y}, {6.0 + 0.5 * s, y});
+    ASSERT_TRUE(plain.Add(s, 0, {f}).ok());
+    ChangeFeed feed;
+    ASSERT_TRUE(guarded.Add(s, 0, {f}, &feed).ok());
+    EXPECT_THAT(feed.removed, IsEmpty());
+  }
+  ASSERT_EQ(guarded.published_count(), 1u);
+  EXPECT_EQ(guarded.Published()[0].fitted.a, plain.Published()[0].fitted.a);
+  EXPECT_EQ(guarded.Published()[0].fitted.b, plain.Published()[0].fitted.b);
+}
+
+TEST(FusionEngineTest, ChainGuardFeedFollowsTheNamesOfPieces) {
+  // Two parallel walls 40 cm apart, linked (eta = 0.5) but published apart by
+  // the guard. Then feature 1 close to wall 5: the piece {1, 5} is named 1, so
+  // 5 is removed and 1 added, while the untouched piece 3 is not reported.
+  FusionParams params = Support(1);
+  params.eta_m = 0.5;
+  FusionEngine engine(params);
+  ASSERT_TRUE(engine.Add(1, 0, {Wall(5, {0, 0}, {4, 0})}).ok());
+  ChangeFeed feed;
+  ASSERT_TRUE(engine.Add(2, 0, {Wall(3, {-1, 0.4}, {3, 0.4})}, &feed).ok());
+  EXPECT_EQ(EngineInspector::Partition(engine), (std::vector<std::vector<FeatureId>>{{3}, {5}}));
+  EXPECT_THAT(feed.added, ElementsAre(3u));
+  EXPECT_THAT(feed.removed, IsEmpty());
+  ASSERT_TRUE(engine.Add(3, 0, {Wall(1, {0.5, 0.02}, {4.5, 0.02})}, &feed).ok());
+  EXPECT_EQ(EngineInspector::Partition(engine),
+            (std::vector<std::vector<FeatureId>>{{1, 5}, {3}}));
+  EXPECT_THAT(feed.added, ElementsAre(1u));
+  EXPECT_THAT(feed.removed, ElementsAre(5u));
+  EXPECT_THAT(feed.updated, IsEmpty());
+  EXPECT_EQ(engine.cluster_count(), 2u);
+  ASSERT_TRUE(engine.Get(1).has_value());
+  EXPECT_EQ(engine.Get(1)->member_count, 2u);
+  EXPECT_FALSE(engine.Get(5).has_value());
 }
 
 }  // namespace

@@ -38,6 +38,14 @@ TEST(FusionParamsTest, RefusalsNameTheField) {
   p = FusionParams();
   p.snap_m = std::numeric_limits<double>::infinity();
   EXPECT_THAT(p.Validate().message(), HasSubstr("snap_m"));
+
+  p = FusionParams();
+  p.chain_max_rms_m = -0.01;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("chain_max_rms_m"));
+
+  p = FusionParams();
+  p.chain_max_sse_ratio = 1.5;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("chain_max_sse_ratio"));
 }
 
 TEST(FusionParamsTest, BoundaryValuesAreAccepted) {
@@ -46,6 +54,8 @@ TEST(FusionParamsTest, BoundaryValuesAreAccepted) {
   p.eta_m = 0.0;
   p.snap_m = 0.0;
   p.min_support = 1;
+  p.chain_max_rms_m = 0.0;  // guard off
+  p.chain_max_sse_ratio = 0.0;
   EXPECT_TRUE(p.Validate().ok());
   p.gamma = 1.0;
   EXPECT_TRUE(p.Validate().ok());

@@ -1,11 +1,13 @@
 // The incremental engine against the plain batch reference (batch_reference.h)
 // on seeded random scenes, in shuffled arrival orders (ALGORITHMS.md section A,
-// "Incremental, exact").
+// "Incremental, exact"), with the chain guard off and on, on scenes of rooms and
+// on scenes that add curved walls seen as arcs of short chords.
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -31,10 +33,19 @@ struct Scene {
   std::vector<BatchObservation> observations;
 };
 
+struct Arc {
+  Vec2 centre;
+  double radius_m;
+  double start_rad;
+  double span_rad;
+};
+
 // Walls of a few rotated rectangular rooms (corners), some near-parallel walls
 // close to others, some free walls; each observation sees a random subset of
-// walls as partial, noisy segments.
-Scene MakeScene(uint32_t seed) {
+// walls as partial, noisy segments. With `curved`, also a few curved walls:
+// each sighting covers part of the arc with chords of about 0.5 m whose phase
+// differs from sighting to sighting, so that they chain along the arc.
+Scene MakeScene(uint32_t seed, bool curved, bool guard) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, 0.02);
@@ -65,16 +76,23 @@ Scene MakeScene(uint32_t seed) {
     const double yaw = uniform(0, 2 * kPi);
     walls.push_back({a, a + uniform(1, 8) * Vec2(std::cos(yaw), std::sin(yaw))});
   }
+  std::vector<Arc> arcs;
+  for (int k = 0; curved && k < 3; ++k) {
+    arcs.push_back({Vec2(uniform(-35, 35), uniform(-35, 35)), uniform(3, 10), uniform(0, 2 * kPi),
+                    uniform(kPi / 3, kPi)});
+  }
 
   Scene scene;
   scene.params.min_support = 2 + seed % 2;
   scene.params.corner_mode = seed % 3 == 0 ? CornerMode::kMidpoint : CornerMode::kIntersection;
   if (seed % 5 == 4) scene.params.gamma = 0.0;  // criterion 2 off: the search must still be exact
   if (seed % 7 == 3) scene.params.eta_m = 0.6;
+  scene.params.chain_max_rms_m = guard ? (seed % 4 == 1 ? 0.03 : 0.05) : 0.0;
+  if (seed % 6 == 5) scene.params.chain_max_sse_ratio = 0.8;
 
   // Feature ids are a permutation, so id order is unrelated to arrival order.
   const int observation_count = 60;
-  std::vector<FeatureId> ids(observation_count * 40);
+  std::vector<FeatureId> ids(observation_count * 160);
   for (size_t i = 0; i < ids.size(); ++i) ids[i] = 1000 + i;
   std::shuffle(ids.begin(), ids.end(), rng);
   size_t next_id = 0;
@@ -103,6 +121,19 @@ Scene MakeScene(uint32_t seed) {
       const double sigma = unit(rng) < 0.1 ? 5.0 : 1.0;
       add(wall.a + t0 * wall.direction() + sigma * Vec2(noise(rng), noise(rng)),
           wall.a + t1 * wall.direction() + sigma * Vec2(noise(rng), noise(rng)));
+    }
+    for (const Arc& arc : arcs) {
+      if (unit(rng) > 0.3) continue;
+      const double step = 0.5 / arc.radius_m;  // chord angle, rad
+      const double from = arc.start_rad + uniform(0, 0.5) * arc.span_rad;
+      const double to = std::min(arc.start_rad + arc.span_rad, from + uniform(0.3, 0.7) * arc.span_rad);
+      const auto on_arc = [&](double angle) -> Vec2 {
+        return arc.centre + arc.radius_m * Vec2(std::cos(angle), std::sin(angle)) +
+               Vec2(noise(rng), noise(rng)) / 2.0;
+      };
+      for (double angle = from + uniform(0, step); angle + step <= to; angle += step) {
+        add(on_arc(angle), on_arc(angle + step));
+      }
     }
     const int clutter = static_cast<int>(rng() % 4);  // small things, mostly seen once
     for (int k = 0; k < clutter; ++k) {
@@ -148,14 +179,25 @@ void ExpectFeedExplains(const std::vector<FusedFeature>& before,
       EXPECT_TRUE(removed.count(id)) << id;
     }
   }
+  // And the feed claims nothing false.
+  for (ClusterId id : added) EXPECT_TRUE(!old_by_id.count(id) && new_by_id.count(id)) << id;
+  for (ClusterId id : updated) EXPECT_TRUE(old_by_id.count(id) && new_by_id.count(id)) << id;
+  for (ClusterId id : removed) EXPECT_TRUE(old_by_id.count(id) && !new_by_id.count(id)) << id;
 }
 
-class PropertyTest : public ::testing::TestWithParam<uint32_t> {};
+// (seed, curved walls, chain guard on).
+class PropertyTest : public ::testing::TestWithParam<std::tuple<uint32_t, bool, bool>> {};
 
 TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
-  const uint32_t seed = GetParam();
-  const Scene scene = MakeScene(seed);
+  const auto [seed, curved, guard] = GetParam();
+  const Scene scene = MakeScene(seed, curved, guard);
   const std::vector<BatchCluster> reference = BatchFuse(scene.observations, scene.params);
+  if (curved && guard) {
+    // The guard must have something to do: it cuts at least one component.
+    FusionParams off = scene.params;
+    off.chain_max_rms_m = 0.0;
+    ASSERT_GT(reference.size(), BatchFuse(scene.observations, off).size());
+  }
   std::vector<std::vector<FeatureId>> reference_partition;
   std::vector<ClusterId> reference_published;
   for (const BatchCluster& c : reference) {
@@ -181,7 +223,8 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
     for (const BatchObservation& obs : arrival) {
       const std::vector<FusedFeature> before = order == 0 ? engine.Published() : std::vector<FusedFeature>();
       ChangeFeed feed;
-      ASSERT_TRUE(engine.Add(obs.id, obs.robot, obs.features, &feed).ok());
+      const Status added = engine.Add(obs.id, obs.robot, obs.features, &feed);
+      ASSERT_TRUE(added.ok()) << added.ToString();
       if (order == 0) ExpectFeedExplains(before, engine.Published(), feed);
     }
 
@@ -202,7 +245,9 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, PropertyTest, ::testing::Range(1u, 25u));
+INSTANTIATE_TEST_SUITE_P(Seeds, PropertyTest,
+                         ::testing::Combine(::testing::Range(1u, 25u), ::testing::Bool(),
+                                            ::testing::Bool()));
 
 }  // namespace
 }  // namespace mapd::fusion

@@ -1,0 +1,114 @@
+#include "geometry/split_and_merge.h"
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace mapd::geometry {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// n points evenly spaced from a to b, both included.
+std::vector<Vec2> Sample(const Vec2& a, const Vec2& b, int n) {
+  std::vector<Vec2> out;
+  for (int i = 0; i < n; ++i) out.push_back(a + (b - a) * (static_cast<double>(i) / (n - 1)));
+  return out;
+}
+
+// Endpoint distance, whichever way round.
+double SegmentDistance(const Segment2& s, const Segment2& t) {
+  return std::min(std::max((s.a - t.a).norm(), (s.b - t.b).norm()),
+                  std::max((s.a - t.b).norm(), (s.b - t.a).norm()));
+}
+
+TEST(SplitAndMergeTest, StraightRunIsOneSegmentClippedToItsPoints) {
+  const std::vector<Vec2> points = Sample({1, 2}, {4, 6}, 30);
+  const std::vector<ExtractedLine> lines = SplitAndMerge(points, SplitAndMergeParams());
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_LE(SegmentDistance(lines[0].segment, {{1, 2}, {4, 6}}), 1e-9);
+  EXPECT_EQ(lines[0].first, 0u);
+  EXPECT_EQ(lines[0].last, 29u);
+  EXPECT_NEAR(lines[0].rms_m, 0.0, 1e-6);  // sqrt of rounding noise
+}
+
+TEST(SplitAndMergeTest, CornerSplitsIntoTwoWalls) {
+  std::vector<Vec2> points = Sample({0, 0}, {3, 0}, 31);
+  const std::vector<Vec2> up = Sample({3, 0}, {3, 2}, 21);
+  points.insert(points.end(), up.begin() + 1, up.end());  // the corner once
+  const std::vector<ExtractedLine> lines = SplitAndMerge(points, SplitAndMergeParams());
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_LE(SegmentDistance(lines[0].segment, {{0, 0}, {3, 0}}), 1e-9);
+  EXPECT_LE(SegmentDistance(lines[1].segment, {{3, 0}, {3, 2}}), 1e-9);
+}
+
+TEST(SplitAndMergeTest, NeverBridgesAGap) {
+  // Two collinear pieces 0.5 m apart: one line with a large gap, two without.
+  std::vector<Vec2> points = Sample({0, 0}, {2, 0}, 21);
+  const std::vector<Vec2> far = Sample({2.5, 0}, {4.5, 0}, 21);
+  points.insert(points.end(), far.begin(), far.end());
+  SplitAndMergeParams params;
+  params.max_gap_m = 0.3;
+  EXPECT_EQ(SplitAndMerge(points, params).size(), 2u);
+  params.max_gap_m = 0.6;
+  EXPECT_EQ(SplitAndMerge(points, params).size(), 1u);
+}
+
+TEST(SplitAndMergeTest, DropsShortAndSparsePieces) {
+  SplitAndMergeParams params;
+  params.min_points = 6;
+  params.min_length_m = 0.3;
+  EXPECT_TRUE(SplitAndMerge(Sample({0, 0}, {1, 0}, 5), params).empty());     // too few points
+  EXPECT_TRUE(SplitAndMerge(Sample({0, 0}, {0.2, 0}, 20), params).empty());  // too short
+  EXPECT_EQ(SplitAndMerge(Sample({0, 0}, {1, 0}, 6), params).size(), 1u);
+}
+
+TEST(SplitAndMergeTest, SpikeAboveThresholdCutsTheWall) {
+  // A straight wall with a bump below split_m stays one line; a spike above
+  // split_m cuts it, and the two-point pieces around the spike are dropped.
+  std::vector<Vec2> points = Sample({0, 0}, {4, 0}, 41);
+  points[20].y() = 0.03;
+  EXPECT_EQ(SplitAndMerge(points, SplitAndMergeParams()).size(), 1u);
+  points[20].y() = 0.3;
+  const std::vector<ExtractedLine> lines = SplitAndMerge(points, SplitAndMergeParams());
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_LT(lines[0].last, lines[1].first + 1);
+}
+
+TEST(SplitAndMergeTest, NoisyRoomFromAScanHasItsWalls) {
+  // A robot at the centre of a 6 x 4 m room, 360 beams with 1 cm range noise.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Vec2> points;
+  for (int i = 0; i < 360; ++i) {
+    const double angle = -kPi + 2.0 * kPi * i / 360.0;
+    const Vec2 u(std::cos(angle), std::sin(angle));
+    // Distance to the box |x| <= 3, |y| <= 2 along u.
+    const double r = std::min(std::abs(u.x()) > 1e-12 ? 3.0 / std::abs(u.x()) : 1e9,
+                              std::abs(u.y()) > 1e-12 ? 2.0 / std::abs(u.y()) : 1e9);
+    points.push_back((r + noise(rng)) * u);
+  }
+  const std::vector<ExtractedLine> lines = SplitAndMerge(points, SplitAndMergeParams());
+  // Four walls; the wall at x = -3 is cut by the scan's start and end into two.
+  // A short piece may remain at a corner that falls between two beams.
+  size_t long_lines = 0;
+  for (const ExtractedLine& line : lines) {
+    EXPECT_LT(line.rms_m, 0.02);
+    if (line.segment.length() < 1.0) continue;
+    ++long_lines;
+    const Vec2 d = line.segment.direction().normalized();
+    EXPECT_GT(std::max(std::abs(d.x()), std::abs(d.y())), std::cos(1.0 * kPi / 180.0));
+  }
+  EXPECT_EQ(long_lines, 5u);
+  EXPECT_LE(lines.size(), 7u);
+}
+
+TEST(SplitAndMergeTest, EmptyAndTinyInputs) {
+  EXPECT_TRUE(SplitAndMerge({}, SplitAndMergeParams()).empty());
+  EXPECT_TRUE(SplitAndMerge({Vec2(1, 1)}, SplitAndMergeParams()).empty());
+}
+
+}  // namespace
+}  // namespace mapd::geometry
