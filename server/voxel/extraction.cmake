@@ -4,5 +4,9 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/octree_reader.cc
   ${CMAKE_CURRENT_LIST_DIR}/voxel_grid.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_window.cc
+  ${CMAKE_CURRENT_LIST_DIR}/corner_voxel_index.cc
+  ${CMAKE_CURRENT_LIST_DIR}/normals_grid.cc
+  ${CMAKE_CURRENT_LIST_DIR}/plane_regions.cc
+  ${CMAKE_CURRENT_LIST_DIR}/corner_faces.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_extraction.cc
 )

@@ -1,0 +1,71 @@
+// Internal to corner extraction: O(1) look-up from a voxel key to the index of
+// that occupied voxel, and cheap enumeration of the occupied voxels in a cube.
+// Memory follows the occupied voxels (8^3 bricks, only where occupied), not
+// the bounding box, so sparse outdoor maps cost no more than dense rooms.
+#ifndef MAPD_VOXEL_CORNER_VOXEL_INDEX_H_
+#define MAPD_VOXEL_CORNER_VOXEL_INDEX_H_
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel::internal {
+
+class VoxelIndex {
+ public:
+  static constexpr int kBrickBits = 3;  // bricks of 8^3 voxels
+  static constexpr int kBrick = 1 << kBrickBits;
+
+  // keys[i] gets index i. Duplicate keys: the last one wins.
+  explicit VoxelIndex(const std::vector<VoxelKey>& keys);
+
+  // The index of the occupied voxel `key`, -1 when it is not occupied.
+  int Find(const VoxelKey& key) const;
+
+  // Calls visit(index, offset) for every occupied voxel in the cube of
+  // half-width `h` (voxels) centred on `centre`; offset = key - centre.
+  template <typename Visit>
+  void ForEachInCube(const VoxelKey& centre, int h, Visit&& visit) const {
+    const VoxelKey lo = centre - VoxelKey::Constant(h);
+    const VoxelKey hi = centre + VoxelKey::Constant(h);
+    for (int bx = lo.x() >> kBrickBits; bx <= (hi.x() >> kBrickBits); ++bx) {
+      for (int by = lo.y() >> kBrickBits; by <= (hi.y() >> kBrickBits); ++by) {
+        for (int bz = lo.z() >> kBrickBits; bz <= (hi.z() >> kBrickBits); ++bz) {
+          const std::int32_t* brick = Brick(bx, by, bz);
+          if (brick == nullptr) continue;
+          const VoxelKey base(bx * kBrick, by * kBrick, bz * kBrick);
+          const VoxelKey a = lo.cwiseMax(base) - base;
+          const VoxelKey b = hi.cwiseMin(base + VoxelKey::Constant(kBrick - 1)) - base;
+          for (int x = a.x(); x <= b.x(); ++x) {
+            for (int y = a.y(); y <= b.y(); ++y) {
+              const std::int32_t* row = brick + ((x << kBrickBits) + y) * kBrick;
+              for (int z = a.z(); z <= b.z(); ++z) {
+                if (row[z] >= 0) visit(row[z], VoxelKey(base + VoxelKey(x, y, z) - centre));
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+
+ private:
+  static std::uint64_t Pack(int bx, int by, int bz) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx) & 0x1fffff) << 42) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(by) & 0x1fffff) << 21) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bz) & 0x1fffff));
+  }
+  const std::int32_t* Brick(int bx, int by, int bz) const {
+    const auto it = bricks_.find(Pack(bx, by, bz));
+    return it == bricks_.end() ? nullptr : cells_.data() + it->second;
+  }
+
+  std::unordered_map<std::uint64_t, std::size_t> bricks_;  // brick -> offset in cells_
+  std::vector<std::int32_t> cells_;                        // kBrick^3 per brick, -1 = empty
+};
+
+}  // namespace mapd::voxel::internal
+
+#endif  // MAPD_VOXEL_CORNER_VOXEL_INDEX_H_
