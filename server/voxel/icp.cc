@@ -1,0 +1,309 @@
+#include "voxel/icp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+namespace mapd::voxel {
+namespace {
+
+using Box = Eigen::AlignedBox3d;
+
+Box BoundsOf(const std::vector<Eigen::Vector3d>& points) {
+  Box box;
+  for (const auto& p : points) box.extend(p);
+  return box;
+}
+
+// The axis-aligned box of `box` moved by T.
+Box Transformed(const Box& box, const Eigen::Isometry3d& T) {
+  Box out;
+  for (int corner = 0; corner < 8; ++corner) {
+    out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
+  }
+  return out;
+}
+
+Box Grown(Box box, double margin) {
+  box.min().array() -= margin;
+  box.max().array() += margin;
+  return box;
+}
+
+bool AllFinite(const std::vector<Eigen::Vector3d>& points) {
+  return std::all_of(points.begin(), points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); });
+}
+
+// Closed-form rigid fit of dst ~ T src (Umeyama without scaling).
+Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.matrix() = Eigen::umeyama(src, dst, false);
+  return T;
+}
+
+// Exact nearest neighbour within a radius on a hash of one-voxel cells.
+class VoxelHashIndex {
+ public:
+  VoxelHashIndex(const std::vector<Eigen::Vector3d>& points, double cell_m) : points_(points), cell_m_(cell_m) {
+    std::vector<std::pair<std::uint64_t, int>> keyed;
+    keyed.reserve(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) keyed.push_back({Pack(Cell(points[i])), static_cast<int>(i)});
+    std::sort(keyed.begin(), keyed.end());
+    order_.reserve(keyed.size());
+    cells_.reserve(keyed.size());
+    for (std::size_t i = 0; i < keyed.size(); ++i) {
+      if (i == 0 || keyed[i].first != keyed[i - 1].first) {
+        cells_[keyed[i].first] = {static_cast<int>(i), 0};
+      }
+      ++cells_[keyed[i].first].second;
+      order_.push_back(keyed[i].second);
+    }
+  }
+
+  // Index of the nearest point within max_m (-1 if none) and its squared distance.
+  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
+    const Eigen::Vector3i c = Cell(q);
+    const int max_ring = static_cast<int>(std::ceil(max_m / cell_m_));
+    double best = max_m * max_m;
+    int best_index = -1;
+    for (int ring = 0; ring <= max_ring; ++ring) {
+      for (int dx = -ring; dx <= ring; ++dx) {
+        for (int dy = -ring; dy <= ring; ++dy) {
+          const bool face = std::abs(dx) == ring || std::abs(dy) == ring;
+          for (int dz = -ring; dz <= ring; dz += (face ? 1 : 2 * std::max(ring, 1))) {
+            auto it = cells_.find(Pack(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == cells_.end()) continue;
+            for (int k = it->second.first; k < it->second.first + it->second.second; ++k) {
+              const int index = order_[static_cast<std::size_t>(k)];
+              const double d = (points_[static_cast<std::size_t>(index)] - q).squaredNorm();
+              if (d <= best) {
+                best = d;
+                best_index = index;
+              }
+            }
+          }
+        }
+      }
+      // Points in rings beyond `ring` are at least ring * cell away.
+      const double bound = static_cast<double>(ring) * cell_m_;
+      if (best_index >= 0 && best <= bound * bound) break;
+    }
+    *squared_m2 = static_cast<float>(best);
+    return best_index;
+  }
+
+ private:
+  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d s = (p / cell_m_).array().floor().cwiseMax(-1e6).cwiseMin(1e6);
+    return s.cast<int>();
+  }
+  static std::uint64_t Pack(const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1FFFFF) << 42) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1FFFFF) << 21) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1FFFFF));
+  }
+
+  const std::vector<Eigen::Vector3d>& points_;
+  double cell_m_;
+  std::vector<int> order_;
+  std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
+};
+
+// The nearest target of a query point under either index.
+class NearestTarget {
+ public:
+  NearestTarget(const std::vector<Eigen::Vector3d>& target, double voxel_m, NeighbourSearch search)
+      : search_(search) {
+    if (search == NeighbourSearch::kVoxelHash) {
+      hash_ = std::make_unique<VoxelHashIndex>(target, voxel_m);
+      return;
+    }
+    pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+    for (const auto& p : target) {
+      cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                     static_cast<float>(p.z())));
+    }
+    tree_.setInputCloud(cloud);
+  }
+
+  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
+    if (search_ == NeighbourSearch::kVoxelHash) return hash_->Nearest(q, max_m, squared_m2);
+    const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+    if (tree_.nearestKSearch(p, 1, index_, sq_) < 1 || sq_[0] > max_m * max_m) return -1;
+    *squared_m2 = sq_[0];
+    return index_[0];
+  }
+
+ private:
+  NeighbourSearch search_;
+  std::unique_ptr<VoxelHashIndex> hash_;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
+  mutable std::vector<int> index_ = std::vector<int>(1);
+  mutable std::vector<float> sq_ = std::vector<float>(1);
+};
+
+struct Pairs {
+  std::vector<int> source_index;
+  std::vector<int> target_index;
+  std::vector<float> squared_distance_m2;
+};
+
+// Nearest target of every source point under T, within max_distance_m, then
+// the closest trim_fraction of them.
+Pairs Correspond(const NearestTarget& nearest, const std::vector<Eigen::Vector3d>& source,
+                 const Eigen::Isometry3d& T, double max_distance_m, double trim_fraction) {
+  std::vector<std::pair<float, std::pair<int, int>>> found;
+  found.reserve(source.size());
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    float sq = 0.0f;
+    const int index = nearest.Nearest(T * source[i], max_distance_m, &sq);
+    if (index < 0) continue;
+    found.push_back({sq, {static_cast<int>(i), index}});
+  }
+  const std::size_t keep =
+      static_cast<std::size_t>(std::ceil(trim_fraction * static_cast<double>(found.size())));
+  if (keep < found.size()) {
+    std::nth_element(found.begin(), found.begin() + static_cast<std::ptrdiff_t>(keep), found.end());
+    found.resize(keep);
+  }
+  Pairs pairs;
+  for (const auto& f : found) {
+    pairs.squared_distance_m2.push_back(f.first);
+    pairs.source_index.push_back(f.second.first);
+    pairs.target_index.push_back(f.second.second);
+  }
+  return pairs;
+}
+
+}  // namespace
+
+Status IcpParams::Validate() const {
+  if (max_iterations < 1) return Status::InvalidArgument("icp.max_iterations must be >= 1");
+  if (!(max_correspondence_voxels > 0) || !std::isfinite(max_correspondence_voxels)) {
+    return Status::InvalidArgument("icp.max_correspondence_voxels must be finite and > 0");
+  }
+  if (!(trim_fraction > 0 && trim_fraction <= 1)) {
+    return Status::InvalidArgument("icp.trim_fraction must be in (0, 1]");
+  }
+  if (!(convergence_rotation_rad >= 0) || !std::isfinite(convergence_rotation_rad)) {
+    return Status::InvalidArgument("icp.convergence_rotation_rad must be finite and >= 0");
+  }
+  if (!(convergence_translation_voxels >= 0) || !std::isfinite(convergence_translation_voxels)) {
+    return Status::InvalidArgument("icp.convergence_translation_voxels must be finite and >= 0");
+  }
+  if (!(convergence_rms_relative >= 0) || !std::isfinite(convergence_rms_relative)) {
+    return Status::InvalidArgument("icp.convergence_rms_relative must be finite and >= 0");
+  }
+  if (search != NeighbourSearch::kVoxelHash && search != NeighbourSearch::kKdTree) {
+    return Status::InvalidArgument("icp.search is not a known neighbour search");
+  }
+  if (min_inliers < 3) return Status::InvalidArgument("icp.min_inliers must be >= 3");
+  return Status::Ok();
+}
+
+StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
+                              const std::vector<Eigen::Vector3d>& source,
+                              const Eigen::Isometry3d& T_init, double voxel_size_m,
+                              const IcpParams& params) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (!(voxel_size_m > 0) || !std::isfinite(voxel_size_m)) {
+    return Status::InvalidArgument("voxel size must be finite and > 0");
+  }
+  if (!T_init.matrix().allFinite() || !AllFinite(target) || !AllFinite(source)) {
+    return Status::InvalidArgument("ICP input is not finite");
+  }
+  const double max_distance_m = params.max_correspondence_voxels * voxel_size_m;
+  IcpResult result;
+  result.T_target_source = T_init;
+  if (target.empty() || source.empty()) {
+    return Status::FailedPrecondition("ICP: empty point set");
+  }
+
+  // The overlap, judged from the initial transform.
+  // Source points within the target's box grown by half a voxel only: beyond
+  // the cut end of a wall, source points would pair with the target's last
+  // column of voxels and pull the fit along the wall.
+  const Box target_box = Grown(BoundsOf(target), 0.5 * voxel_size_m);
+  const Box source_box = Grown(Transformed(BoundsOf(source), T_init), max_distance_m);
+  std::vector<Eigen::Vector3d> src;
+  for (const auto& p : source) {
+    if (target_box.contains(T_init * p)) src.push_back(p);
+  }
+  if (params.max_source_points > 0 && src.size() > params.max_source_points) {
+    // Even stride over the (lexicographically ordered) points: deterministic.
+    std::vector<Eigen::Vector3d> sub;
+    sub.reserve(params.max_source_points);
+    const double stride = static_cast<double>(src.size()) / static_cast<double>(params.max_source_points);
+    for (std::size_t i = 0; i < params.max_source_points; ++i) {
+      sub.push_back(src[static_cast<std::size_t>(static_cast<double>(i) * stride)]);
+    }
+    src.swap(sub);
+  }
+  std::vector<Eigen::Vector3d> tgt;
+  for (const auto& p : target) {
+    if (source_box.contains(p)) tgt.push_back(p);
+  }
+  result.source_points = src.size();
+  result.target_points = tgt.size();
+  if (static_cast<int>(src.size()) < params.min_inliers || static_cast<int>(tgt.size()) < params.min_inliers) {
+    return Status::FailedPrecondition("ICP: the maps do not overlap (" + std::to_string(src.size()) +
+                                      " source and " + std::to_string(tgt.size()) +
+                                      " target points in the overlap)");
+  }
+  const NearestTarget tree(tgt, voxel_size_m, params.search);
+  double previous_rms = -1.0;
+
+  Eigen::Isometry3d T = T_init;
+  for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
+    const Pairs pairs = Correspond(tree, src, T, max_distance_m, params.trim_fraction);
+    const int n = static_cast<int>(pairs.source_index.size());
+    if (n < params.min_inliers) {
+      return Status::FailedPrecondition("ICP: only " + std::to_string(n) + " correspondences within " +
+                                        std::to_string(params.max_correspondence_voxels) +
+                                        " voxels, need " + std::to_string(params.min_inliers));
+    }
+    Eigen::Matrix3Xd s(3, n), d(3, n);
+    for (int i = 0; i < n; ++i) {
+      s.col(i) = src[static_cast<std::size_t>(pairs.source_index[static_cast<std::size_t>(i)])];
+      d.col(i) = tgt[static_cast<std::size_t>(pairs.target_index[static_cast<std::size_t>(i)])];
+    }
+    double sum = 0.0;
+    for (float sq : pairs.squared_distance_m2) sum += sq;
+    const double rms = std::sqrt(sum / n);
+    const bool rms_settled =
+        previous_rms >= 0 && std::abs(previous_rms - rms) <= params.convergence_rms_relative * previous_rms;
+    previous_rms = rms;
+    const Eigen::Isometry3d T_new = FitPairs(s, d);
+    const Eigen::Isometry3d step = T_new * T.inverse();
+    T = T_new;
+    result.iterations = iteration + 1;
+    const double rotation = Eigen::AngleAxisd(step.linear()).angle();
+    const double translation = step.translation().norm() / voxel_size_m;
+    if ((rotation < params.convergence_rotation_rad && translation < params.convergence_translation_voxels) ||
+        rms_settled) {
+      result.converged = true;
+      break;
+    }
+  }
+  // Final evaluation with the final transform.
+  const Pairs pairs = Correspond(tree, src, T, max_distance_m, params.trim_fraction);
+  if (static_cast<int>(pairs.source_index.size()) < params.min_inliers) {
+    return Status::FailedPrecondition("ICP: too few correspondences after refinement");
+  }
+  double sum = 0.0;
+  for (float sq : pairs.squared_distance_m2) sum += sq;
+  result.T_target_source = T;
+  result.inliers = static_cast<int>(pairs.source_index.size());
+  result.rms_residual_m = std::sqrt(sum / static_cast<double>(result.inliers));
+  return result;
+}
+
+}  // namespace mapd::voxel

@@ -1,0 +1,90 @@
+// Point-to-point ICP on occupied voxel centres (ALGORITHMS.md B.5: "we also
+// refine with ICP on the occupied voxel centres of the overlap").
+//
+// Besl & McKay 1992 with two robustifications: correspondences farther than
+// max_correspondence_voxels are ignored, and of the rest only the closest
+// trim_fraction are used (trimmed ICP, Chetverikov et al. 2002), so the
+// non-overlapping part of the source does not pull the fit. Each iteration
+// solves the rigid fit in closed form (Umeyama 1991 eq. (39)-(42), c = 1).
+// Point-to-point: no normals to estimate on one-voxel-thick rasterised walls.
+// Its linear convergence is the price: on geb079.bt (8 cm voxels) from 1 deg
+// and 7 cm off it reaches 0.02 deg / 3 mm and stops by the RMS criterion
+// after 18 iterations (point-to-plane would need fewer; not done).
+//
+// Nearest neighbours, exact within max_correspondence_voxels, two choices:
+// kVoxelHash (default): the target points hashed into cells of one voxel; a
+// query scans rings of cells outwards and stops as soon as the best distance
+// is below the ring's bound (usually after the 27 cells around it).
+// kKdTree: PCL's KdTreeFLANN. Measured on geb079.bt (186k voxels, 8 cm),
+// whole RefineIcp, 18 iterations, CPU s on a loaded 2-core machine: 10k
+// source points 0.42 (hash) vs 0.67 (k-d tree), 20k 0.59 vs 1.23; on
+// fr_078_tidyup.bt (288k, 5 cm), 10k points 0.79 vs 0.92. Same results.
+// Pure function; thread compatible.
+#ifndef MAPD_VOXEL_ICP_H_
+#define MAPD_VOXEL_ICP_H_
+
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "common/status.h"
+
+namespace mapd::voxel {
+
+enum class NeighbourSearch { kVoxelHash, kKdTree };
+
+// Distances in voxels (multiples of `voxel_size_m` given to RefineIcp).
+struct IcpParams {
+  NeighbourSearch search = NeighbourSearch::kVoxelHash;
+  int max_iterations = 50;
+  // Pairs farther apart than this are not correspondences.
+  double max_correspondence_voxels = 3.0;
+  // Of the pairs within max_correspondence_voxels, the closest fraction is
+  // used. Default 1 (no trimming): the distance gate already drops the
+  // non-overlapping part, and on geb079.bt trimming 10% halved the speed of
+  // convergence (the largest residuals carry most of the correction).
+  double trim_fraction = 1.0;
+  // Converged when one iteration changes the rotation by less than this
+  // (radians) and the translation by less than this (voxels).
+  double convergence_rotation_rad = 1e-4;
+  double convergence_translation_voxels = 1e-2;
+  // ... or when the RMS of the used pairs changes by less than this fraction
+  // (trimming on a voxel grid can make the pose jitter below a voxel forever).
+  double convergence_rms_relative = 1e-4;
+  // Source points used (an even, deterministic subsample of the overlap);
+  // 0 = all. A few ten thousand fix a rigid transform far below a voxel.
+  std::size_t max_source_points = 10'000;
+  // Fewer inliers than this in an iteration: FailedPrecondition.
+  int min_inliers = 10;
+
+  // InvalidArgument naming the first bad field.
+  Status Validate() const;
+};
+
+struct IcpResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
+  double rms_residual_m = 0.0;  // RMS distance of the final inliers, metres
+  int inliers = 0;              // correspondences used in the final evaluation
+  int iterations = 0;
+  bool converged = false;         // the last step was below the convergence thresholds
+  std::size_t source_points = 0;  // source points in the overlap (after subsampling)
+  std::size_t target_points = 0;  // target points in the k-d tree
+};
+
+// Refines T_target_source, starting from T_init. Only the overlap takes part:
+// source points whose initial image lies within the target's bounding box
+// grown by half a voxel (source points beyond a cut end of the target would
+// pull the fit), target points within the source's transformed bounding box
+// grown by max_correspondence_voxels. Errors: InvalidArgument for bad
+// params, a voxel size that is not finite and > 0, or non-finite input;
+// FailedPrecondition when the overlap has fewer than min_inliers pairs.
+StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
+                              const std::vector<Eigen::Vector3d>& source,
+                              const Eigen::Isometry3d& T_init, double voxel_size_m,
+                              const IcpParams& params = {});
+
+}  // namespace mapd::voxel
+
+#endif  // MAPD_VOXEL_ICP_H_

@@ -1,0 +1,219 @@
+#include "voxel/merge.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <set>
+#include <string>
+#include <utility>
+
+#include <octomap/OcTree.h>
+
+#include "voxel/merge_graph.h"
+#include "voxel/merge_pair.h"
+#include "voxel/octree_reader.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string Metres(double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%g m", value);
+  return buffer;
+}
+
+std::string Name(uint64_t id) { return "submap " + std::to_string(id); }
+
+// Progress over the stages: corners 0-0.4, matching and alignment 0.4-0.8,
+// fusion 0.8-1.
+class Progress {
+ public:
+  explicit Progress(const ProgressCallback& callback) : callback_(callback) {}
+  void Report(const std::string& stage, double fraction) const {
+    if (callback_) callback_(stage, std::clamp(fraction, 0.0, 1.0));
+  }
+
+ private:
+  const ProgressCallback& callback_;
+};
+
+struct Submap {
+  uint64_t id = 0;
+  OcTreePtr tree;
+  VoxelGrid grid;
+  CornerSet corners;
+};
+
+Status OverBudget(Clock::time_point start, const MergeParams& params, const char* stage) {
+  if (SecondsSince(start) <= params.max_seconds) return Status::Ok();
+  return Status::ResourceExhausted("merge exceeded max_seconds = " + std::to_string(params.max_seconds) +
+                                   " s during " + stage);
+}
+
+// Why `node` has no accepted edge to the tree: its refused pairs.
+std::string RefusalsOf(uint64_t id, const std::vector<PairReport>& pairs) {
+  std::string out;
+  for (const auto& pair : pairs) {
+    if (pair.accepted || (pair.id_a != id && pair.id_b != id)) continue;
+    if (!out.empty()) out += "; ";
+    out += "with " + Name(pair.id_a == id ? pair.id_b : pair.id_a) + ": " + pair.reason;
+  }
+  return out;
+}
+
+}  // namespace
+
+StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, const MergeParams& params,
+                                    const ProgressCallback& progress_callback) {
+  const Clock::time_point start = Clock::now();
+  const Progress progress(progress_callback);
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (inputs.size() < 2) {
+    return Status::InvalidArgument("a merge needs at least two submaps, got " + std::to_string(inputs.size()));
+  }
+  std::set<uint64_t> ids;
+  for (const auto& input : inputs) {
+    if (!ids.insert(input.id).second) return Status::InvalidArgument(Name(input.id) + " is given twice");
+  }
+  MergeOutcome outcome;
+
+  // Parse (the safe reader) and view every input.
+  Clock::time_point stage_start = Clock::now();
+  std::vector<Submap> submaps(inputs.size());
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    submaps[i].id = inputs[i].id;
+    auto tree = ReadOctree(inputs[i].bytes);
+    if (!tree.ok()) return Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
+    auto grid = VoxelGrid::FromOcTree(**tree);
+    if (!grid.ok()) return Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
+    submaps[i].tree = std::move(tree).value();
+    submaps[i].grid = std::move(grid).value();
+  }
+  outcome.times.reading_s = SecondsSince(stage_start);
+  double finest = submaps[0].grid.resolution();
+  for (const auto& submap : submaps) {
+    const double resolution = submap.grid.resolution();
+    if (resolution != submaps[0].grid.resolution() && params.resolution_policy == ResolutionPolicy::kRefuse) {
+      return Status::FailedPrecondition(Name(submaps[0].id) + " has resolution " +
+                                        Metres(submaps[0].grid.resolution()) + ", " + Name(submap.id) +
+                                        " has " + Metres(resolution) +
+                                        "; resolution_policy kRefuse does not resample");
+    }
+    finest = std::min(finest, resolution);
+  }
+  outcome.resolution = finest;
+
+  // B.1-B.3: corners of every submap.
+  stage_start = Clock::now();
+  progress.Report("corners", 0.0);
+  for (std::size_t i = 0; i < submaps.size(); ++i) {
+    auto corners = ExtractCorners(submaps[i].grid, params.corners);
+    if (!corners.ok()) {
+      return Status(corners.status().code(), Name(submaps[i].id) + ": " + corners.status().message());
+    }
+    submaps[i].corners = std::move(corners->corners);
+    const std::size_t found = submaps[i].corners.size();
+    outcome.corners.push_back(found);
+    if (found == 0) return Status::FailedPrecondition("no corners found in " + Name(submaps[i].id));
+    if (static_cast<int>(found) < params.min_matched_corners) {
+      return Status::FailedPrecondition("only " + std::to_string(found) + " corners found in " +
+                                        Name(submaps[i].id) + ", need " +
+                                        std::to_string(params.min_matched_corners));
+    }
+    progress.Report("corners", 0.4 * static_cast<double>(i + 1) / static_cast<double>(submaps.size()));
+    MAPD_RETURN_IF_ERROR(OverBudget(start, params, "corner extraction"));
+  }
+  outcome.times.corners_s = SecondsSince(stage_start);
+
+  // B.4-B.5: every pair.
+  const std::size_t num_pairs = submaps.size() * (submaps.size() - 1) / 2;
+  std::vector<MergeEdge> edges;
+  progress.Report("matching", 0.4);
+  for (std::size_t i = 0; i < submaps.size(); ++i) {
+    for (std::size_t j = i + 1; j < submaps.size(); ++j) {
+      const PairSide a{submaps[i].id, &submaps[i].grid, &submaps[i].corners};
+      const PairSide b{submaps[j].id, &submaps[j].grid, &submaps[j].corners};
+      const double seconds_left = params.max_seconds - SecondsSince(start);
+      auto pair = AlignPair(a, b, params, finest, seconds_left, &outcome.times);
+      if (!pair.ok()) return pair.status();
+      if (pair->accepted) {
+        // Matched corners first; the overlap score (< 1) breaks ties.
+        edges.push_back({static_cast<int>(i), static_cast<int>(j), pair->T_a_b,
+                         pair->matched_corners + pair->overlap_score});
+      }
+      outcome.pairs.push_back(std::move(pair).value());
+      progress.Report("alignment", 0.4 + 0.4 * static_cast<double>(outcome.pairs.size()) /
+                                             static_cast<double>(num_pairs));
+      MAPD_RETURN_IF_ERROR(OverBudget(start, params, "matching and alignment"));
+    }
+  }
+
+  // B.7: the maximum spanning tree from the first input.
+  const TreePlacement placement = PlaceAlongMaximumSpanningTree(static_cast<int>(submaps.size()), edges, 0);
+  if (submaps.size() == 2 && !placement.placed[1]) {
+    const PairReport& pair = outcome.pairs.front();
+    return Status::FailedPrecondition(Name(pair.id_a) + " and " + Name(pair.id_b) + " not merged: " +
+                                      pair.reason);
+  }
+  std::string unplaced;
+  for (std::size_t i = 1; i < submaps.size(); ++i) {
+    if (placement.placed[i]) continue;
+    if (!unplaced.empty()) unplaced += " | ";
+    unplaced += Name(submaps[i].id) + " (" + RefusalsOf(submaps[i].id, outcome.pairs) + ")";
+  }
+  if (!unplaced.empty()) {
+    return Status::FailedPrecondition("not connected to " + Name(submaps[0].id) +
+                                      " by accepted merges: " + unplaced);
+  }
+  for (std::size_t i = 0; i < submaps.size(); ++i) {
+    Alignment alignment;
+    alignment.id = submaps[i].id;
+    alignment.T_reference_submap = placement.T_root_node[i];
+    const int parent = placement.parent[i];
+    // The evidence of the tree edge that placed it.
+    for (const auto& pair : outcome.pairs) {
+      if (parent < 0 || !pair.accepted) continue;
+      const uint64_t pid = submaps[static_cast<std::size_t>(parent)].id;
+      if ((pair.id_a == pid && pair.id_b == alignment.id) || (pair.id_b == pid && pair.id_a == alignment.id)) {
+        alignment.matched_corners = pair.matched_corners;
+        alignment.residual_m = pair.residual_m;
+        alignment.overlap_score = pair.overlap_score;
+      }
+    }
+    outcome.alignments.push_back(alignment);
+  }
+
+  // B.6: fusion into the first input's frame, breadth-first along the tree.
+  stage_start = Clock::now();
+  progress.Report("fusion", 0.8);
+  FusionParams fusion;
+  fusion.rule = params.fusion_rule;
+  fusion.max_free_voxels = params.max_fusion_free_voxels;
+  FusionStats stats;
+  auto merged = StartMergedMap(*submaps[0].tree, finest, fusion, &stats);
+  if (!merged.ok()) return merged.status();
+  for (std::size_t k = 1; k < placement.order.size(); ++k) {
+    const auto i = static_cast<std::size_t>(placement.order[k]);
+    MAPD_RETURN_IF_ERROR(FuseInto(*submaps[i].tree, placement.T_root_node[i], fusion, merged->get(), &stats));
+    progress.Report("fusion", 0.8 + 0.2 * static_cast<double>(k) / static_cast<double>(placement.order.size()));
+    MAPD_RETURN_IF_ERROR(OverBudget(start, params, "fusion"));
+  }
+  auto bytes = WriteBinaryOctree(**merged);
+  if (!bytes.ok()) return bytes.status();
+  outcome.merged_bt = std::move(bytes).value();
+  outcome.occupied_voxels = CountOccupiedVoxels(**merged);
+  outcome.free_voxels_skipped = stats.free_voxels_skipped;
+  outcome.times.fusion_s = SecondsSince(stage_start);
+  outcome.times.total_s = SecondsSince(start);
+  progress.Report("fusion", 1.0);
+  return outcome;
+}
+
+}  // namespace mapd::voxel

@@ -1,0 +1,86 @@
+#include "voxel/merge_pair.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include "voxel/icp.h"
+#include "voxel/merge_overlap.h"
+
+namespace mapd::voxel {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string Fixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
+  return buffer;
+}
+
+}  // namespace
+
+StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
+                               double finest_resolution_m, double seconds_left, StageTimes* times) {
+  PairReport report;
+  report.id_a = a.id;
+  report.id_b = b.id;
+
+  // B.4: corners, the maximum clique, Umeyama; ties go to the transform that
+  // makes the most occupied voxels coincide (the paper, section IV.C).
+  auto start = std::chrono::steady_clock::now();
+  CornerMatchingParams matching = params.matching;
+  matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
+  if (matching.max_search_seconds <= 0 || matching.max_search_seconds > seconds_left) {
+    matching.max_search_seconds = std::max(seconds_left, 1e-3);
+  }
+  const TransformScore tie_score = [&](const Eigen::Isometry3d& T_a_b) {
+    return static_cast<double>(ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
+  };
+  auto match = MatchCorners(*a.corners, *b.corners, matching, tie_score);
+  times->matching_s += SecondsSince(start);
+  if (!match.ok()) return match.status();
+  report.matched_corners = match->transform_valid ? match->matched_count : 0;
+  if (!match->transform_valid || match->matched_count < params.min_matched_corners) {
+    report.reason = "only " + std::to_string(match->transform_valid ? match->matched_count : 0) +
+                    " matched corners, need " + std::to_string(params.min_matched_corners);
+    return report;
+  }
+  report.T_a_b = match->T_a_b;
+
+  // B.5: ICP on the occupied voxel centres of the overlap, then acceptance.
+  start = std::chrono::steady_clock::now();
+  auto icp = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), match->T_a_b,
+                       finest_resolution_m, params.icp);
+  if (!icp.ok()) {
+    times->alignment_s += SecondsSince(start);
+    if (icp.status().code() != StatusCode::kFailedPrecondition) return icp.status();
+    report.reason = icp.status().message();
+    return report;
+  }
+  report.T_a_b = icp->T_target_source;
+  report.residual_m = icp->rms_residual_m;
+  report.icp_iterations = icp->iterations;
+  const OverlapScore overlap = ComputeOverlapScore(*a.grid, *b.grid, report.T_a_b, params.overlap_points);
+  report.overlap_score = overlap.score;
+  times->alignment_s += SecondsSince(start);
+
+  const double residual_voxels = report.residual_m / finest_resolution_m;
+  if (residual_voxels > params.max_residual_voxels) {
+    report.reason = "residual " + Fixed(report.residual_m, 3) + " m (" + Fixed(residual_voxels, 2) +
+                    " voxels) above " + Fixed(params.max_residual_voxels, 2) + " voxels";
+    return report;
+  }
+  if (report.overlap_score < params.min_overlap_score) {
+    report.reason = "overlap score " + Fixed(report.overlap_score, 2) + " below " +
+                    Fixed(params.min_overlap_score, 2);
+    return report;
+  }
+  report.accepted = true;
+  return report;
+}
+
+}  // namespace mapd::voxel

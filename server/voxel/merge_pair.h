@@ -1,0 +1,33 @@
+// One pairwise merge attempt of the pipeline (ALGORITHMS.md B.4, B.5): corner
+// matching with the overlap tie-break, ICP refinement, and the acceptance
+// test of MergeParams. Internal to merge*.cc.
+#ifndef MAPD_VOXEL_MERGE_PAIR_H_
+#define MAPD_VOXEL_MERGE_PAIR_H_
+
+#include <cstdint>
+
+#include "common/status.h"
+#include "voxel/corner.h"
+#include "voxel/merge.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel {
+
+struct PairSide {
+  uint64_t id = 0;
+  const VoxelGrid* grid = nullptr;
+  const CornerSet* corners = nullptr;
+};
+
+// Aligns b to a. A refusal (weak evidence) is an OK result with
+// accepted == false and the reason, e.g. "only 2 matched corners, need 4",
+// "overlap score 0.12 below 0.30", "residual 0.25 m (2.5 voxels) above 2.0
+// voxels". Errors only for bad parameters or input. Adds its seconds to
+// times->matching_s and times->alignment_s. `finest_resolution_m` sets the
+// voxel unit of the thresholds; `seconds_left` caps the corner search.
+StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
+                               double finest_resolution_m, double seconds_left, StageTimes* times);
+
+}  // namespace mapd::voxel
+
+#endif  // MAPD_VOXEL_MERGE_PAIR_H_

@@ -1,0 +1,37 @@
+#include <cmath>
+
+#include "voxel/merge.h"
+
+namespace mapd::voxel {
+
+Status MergeParams::Validate() const {
+  if (min_matched_corners < 3) {
+    return Status::InvalidArgument("min_matched_corners must be >= 3 (a rigid transform needs 3)");
+  }
+  if (!(max_residual_voxels > 0) || !std::isfinite(max_residual_voxels)) {
+    return Status::InvalidArgument("max_residual_voxels must be finite and > 0");
+  }
+  if (!(min_overlap_score >= 0 && min_overlap_score <= 1)) {
+    return Status::InvalidArgument("min_overlap_score must be in [0, 1]");
+  }
+  if (fusion_rule != FusionRule::kOverlapRule && fusion_rule != FusionRule::kLogOdds) {
+    return Status::InvalidArgument("fusion_rule is not a known rule");
+  }
+  if (resolution_policy != ResolutionPolicy::kRefuse &&
+      resolution_policy != ResolutionPolicy::kResampleToFinest) {
+    return Status::InvalidArgument("resolution_policy is not a known policy");
+  }
+  if (!(max_seconds > 0) || !std::isfinite(max_seconds)) {
+    return Status::InvalidArgument("max_seconds must be finite and > 0");
+  }
+  if (!(consistency_distance_voxels > 0) || !std::isfinite(consistency_distance_voxels)) {
+    return Status::InvalidArgument("consistency_distance_voxels must be finite and > 0");
+  }
+  Status status = corners.Validate();
+  if (!status.ok()) return Status::InvalidArgument("corners." + status.message());
+  status = matching.Validate();
+  if (!status.ok()) return Status::InvalidArgument("matching." + status.message());
+  return icp.Validate();
+}
+
+}  // namespace mapd::voxel

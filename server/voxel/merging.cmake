@@ -1,0 +1,12 @@
+# Part 3 of the voxel library: ICP, overlap score, occupancy fusion and the
+# merge pipeline (ALGORITHMS.md B.5-B.7). Included by CMakeLists.txt.
+list(APPEND VOXEL_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/icp.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_overlap.cc
+  ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_pair.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_params.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_inspect.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge.cc
+)

@@ -1,0 +1,288 @@
+#include "voxel/occupancy_fusion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include <octomap/OcTree.h>
+
+namespace mapd::voxel {
+namespace {
+
+using Box = Eigen::AlignedBox3d;
+
+// One leaf of a tree: an axis-aligned cube in the tree's frame.
+struct Leaf {
+  Eigen::Vector3d min_m;
+  double edge_m = 0.0;
+  float log_odds = 0.0f;
+  bool occupied = false;
+  int level = 0;  // edge = 2^level voxels of the tree
+  octomap::OcTreeKey key;
+};
+
+std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
+  std::vector<Leaf> leaves;
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    Leaf leaf;
+    leaf.edge_m = it.getSize();
+    const octomap::point3d c = it.getCoordinate();
+    leaf.min_m = Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
+    leaf.log_odds = it->getLogOdds();
+    leaf.occupied = tree.isNodeOccupied(*it);
+    leaf.level = depth - static_cast<int>(it.getDepth());
+    leaf.key = it.getKey();
+    leaves.push_back(leaf);
+  }
+  // Free leaves smallest first, so that the cap drops the big open cubes.
+  std::stable_sort(leaves.begin(), leaves.end(), [](const Leaf& x, const Leaf& y) { return x.level < y.level; });
+  return leaves;
+}
+
+Box BoundsOf(const std::vector<Leaf>& leaves) {
+  Box box;
+  for (const auto& leaf : leaves) {
+    box.extend(leaf.min_m);
+    box.extend(leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
+  }
+  return box;
+}
+
+Box Transformed(const Box& box, const Eigen::Isometry3d& T) {
+  Box out;
+  if (box.isEmpty()) return out;
+  for (int corner = 0; corner < 8; ++corner) out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
+  return out;
+}
+
+// Keys of `out` whose centre lies in box_out (axis-aligned, out's frame),
+// clipped to the key range. False when nothing is left.
+bool KeyRange(const octomap::OcTree& out, const Box& box_out, octomap::OcTreeKey* lo, octomap::OcTreeKey* hi) {
+  const double res = out.getResolution();
+  for (unsigned axis = 0; axis < 3; ++axis) {
+    // Centre of key k is (k - 32768 + 0.5) * res.
+    const double first = std::ceil(box_out.min()[axis] / res - 0.5) + 32768.0;
+    const double last = std::floor(box_out.max()[axis] / res - 0.5) + 32768.0;
+    const double a = std::max(first, 0.0), b = std::min(last, 65535.0);
+    if (!(a <= b)) return false;
+    (*lo)[axis] = static_cast<octomap::key_type>(a);
+    (*hi)[axis] = static_cast<octomap::key_type>(b);
+  }
+  return true;
+}
+
+std::uint64_t RangeVolume(const octomap::OcTreeKey& lo, const octomap::OcTreeKey& hi) {
+  std::uint64_t v = 1;
+  for (unsigned axis = 0; axis < 3; ++axis) v *= static_cast<std::uint64_t>(hi[axis] - lo[axis] + 1);
+  return v;
+}
+
+// Inverse mapping of one source leaf into `out`: calls visit(key, centre_out)
+// for every voxel of `out` whose centre, mapped back into the source frame,
+// lies inside the leaf's cube. Returns false (doing nothing) when the voxels
+// to test exceed *budget (when budget is non-null), else subtracts them.
+template <typename Visit>
+bool Rasterise(const Leaf& leaf, const Eigen::Isometry3d& T_out_src, const Eigen::Isometry3d& T_src_out,
+               const octomap::OcTree& out, std::uint64_t* budget, Visit&& visit) {
+  const Box cube(leaf.min_m, leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
+  octomap::OcTreeKey lo, hi;
+  if (!KeyRange(out, Transformed(cube, T_out_src), &lo, &hi)) return true;
+  if (budget != nullptr) {
+    const std::uint64_t volume = RangeVolume(lo, hi);
+    if (volume > *budget) return false;
+    *budget -= volume;
+  }
+  const Eigen::Vector3d max_m = cube.max();
+  octomap::OcTreeKey key;
+  for (unsigned x = lo[0]; x <= hi[0]; ++x) {
+    for (unsigned y = lo[1]; y <= hi[1]; ++y) {
+      for (unsigned z = lo[2]; z <= hi[2]; ++z) {
+        key[0] = static_cast<octomap::key_type>(x);
+        key[1] = static_cast<octomap::key_type>(y);
+        key[2] = static_cast<octomap::key_type>(z);
+        const octomap::point3d c = out.keyToCoord(key);
+        const Eigen::Vector3d centre(c.x(), c.y(), c.z());
+        const Eigen::Vector3d q = T_src_out * centre;
+        // Half-open cube, as voxels are.
+        if ((q.array() < leaf.min_m.array()).any() || (q.array() >= max_m.array()).any()) continue;
+        visit(key, centre);
+      }
+    }
+  }
+  return true;
+}
+
+std::uint64_t LeafVoxels(const Leaf& leaf) { return std::uint64_t{1} << (3 * leaf.level); }
+
+// Makes one finest voxel unknown. Not OcTree::deleteNode: OctoMap 1.9.7 leaves
+// an all-NULL child array on a node whose last child it deleted and then
+// deletes that node, which its own destructor asserts against (and leaks in
+// a release build). Here a node never loses its last child: it is collapsed
+// (the other seven children re-created equal, then pruned) and removed whole
+// by its parent. Returns true when `node` must be removed by its parent; it
+// is then a leaf without a child array.
+bool ClearRecurs(octomap::OcTree* tree, octomap::OcTreeNode* node, unsigned depth,
+                 const octomap::OcTreeKey& key) {
+  const unsigned tree_depth = tree->getTreeDepth();
+  if (depth == tree_depth) return true;
+  const unsigned pos = octomap::computeChildIdx(key, static_cast<int>(tree_depth - 1 - depth));
+  if (!tree->nodeChildExists(node, pos)) {
+    if (tree->nodeHasChildren(node)) return false;  // unknown already
+    tree->expandNode(node);                         // a pruned leaf: split it
+  }
+  octomap::OcTreeNode* child = tree->getNodeChild(node, pos);
+  if (!ClearRecurs(tree, child, depth + 1, key)) {
+    node->updateOccupancyChildren();
+    return false;
+  }
+  int others = 0;
+  for (unsigned i = 0; i < 8; ++i) others += (i != pos && tree->nodeChildExists(node, i)) ? 1 : 0;
+  if (others > 0) {
+    tree->deleteNodeChild(node, pos);
+    node->updateOccupancyChildren();
+    return false;
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if (i != pos) tree->createNodeChild(node, i)->copyData(*child);
+  }
+  tree->pruneNode(node);
+  return true;
+}
+
+void ClearVoxel(octomap::OcTree* tree, const octomap::OcTreeKey& key) {
+  octomap::OcTreeNode* root = tree->getRoot();
+  if (root != nullptr && ClearRecurs(tree, root, 0, key)) tree->clear();
+}
+
+}  // namespace
+
+Status FusionParams::Validate() const {
+  if (rule != FusionRule::kOverlapRule && rule != FusionRule::kLogOdds) {
+    return Status::InvalidArgument("fusion.rule is not a known rule");
+  }
+  return Status::Ok();
+}
+
+StatusOr<OcTreePtr> StartMergedMap(const octomap::OcTree& reference, double resolution_m,
+                                   const FusionParams& params, FusionStats* stats) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (!(resolution_m > 0) || !std::isfinite(resolution_m)) {
+    return Status::InvalidArgument("merged resolution must be finite and > 0");
+  }
+  if (resolution_m == reference.getResolution()) return OcTreePtr(new octomap::OcTree(reference));
+  OcTreePtr out(new octomap::OcTree(resolution_m));
+  FusionStats local;
+  if (stats == nullptr) stats = &local;
+  std::uint64_t budget = params.max_free_voxels;
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  for (const Leaf& leaf : CollectLeaves(reference)) {
+    const bool done = Rasterise(leaf, identity, identity, *out, leaf.occupied ? nullptr : &budget,
+                                [&](const octomap::OcTreeKey& key, const Eigen::Vector3d&) {
+                                  out->setNodeValue(key, leaf.log_odds, true);
+                                });
+    if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
+  }
+  out->updateInnerOccupancy();
+  out->prune();
+  return out;
+}
+
+Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged_submap,
+                const FusionParams& params, octomap::OcTree* merged, FusionStats* stats) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (merged == nullptr) return Status::InvalidArgument("merged tree is null");
+  if (!T_merged_submap.matrix().allFinite()) return Status::InvalidArgument("transform is not finite");
+  FusionStats local;
+  if (stats == nullptr) stats = &local;
+  const Eigen::Isometry3d T_submap_merged = T_merged_submap.inverse();
+  const std::vector<Leaf> submap_leaves = CollectLeaves(submap);
+  std::uint64_t budget = params.max_free_voxels;
+
+  if (params.rule == FusionRule::kLogOdds) {
+    for (const Leaf& leaf : submap_leaves) {
+      const bool done = Rasterise(leaf, T_merged_submap, T_submap_merged, *merged,
+                                  leaf.occupied ? nullptr : &budget,
+                                  [&](const octomap::OcTreeKey& key, const Eigen::Vector3d&) {
+                                    merged->updateNode(key, leaf.log_odds, true);
+                                    ++(leaf.occupied ? stats->occupied_written : stats->free_written);
+                                  });
+      if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
+    }
+    merged->updateInnerOccupancy();
+    merged->prune();
+    return Status::Ok();
+  }
+
+  // kOverlapRule. The overlap region: inside the merged map's observed box
+  // and inside the submap's observed box (tested in the submap's frame).
+  const std::vector<Leaf> merged_leaves = CollectLeaves(*merged);
+  const Box merged_box = BoundsOf(merged_leaves);
+  const Box submap_box = BoundsOf(submap_leaves);
+  const Box submap_box_in_merged = Transformed(submap_box, T_merged_submap);
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+
+  // 1. Free in the merged map, unknown in the submap, inside the overlap: unknown.
+  std::vector<octomap::OcTreeKey> to_clear;
+  for (const Leaf& leaf : merged_leaves) {
+    if (leaf.occupied) continue;
+    const Box cube(leaf.min_m, leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
+    if (!cube.intersects(submap_box_in_merged)) continue;
+    const bool done = Rasterise(leaf, identity, identity, *merged, &budget,
+                                [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
+                                  const Eigen::Vector3d q = T_submap_merged * centre;
+                                  if (!submap_box.contains(q)) return;
+                                  if (submap.search(q.x(), q.y(), q.z()) == nullptr) to_clear.push_back(key);
+                                });
+    if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
+  }
+  for (const auto& key : to_clear) ClearVoxel(merged, key);
+  stats->free_cleared += to_clear.size();
+
+  // 2. Occupied in the submap: occupied, in or outside the overlap.
+  const float occupied_log_odds = merged->getClampingThresMaxLog();
+  const float free_log_odds = merged->getClampingThresMinLog();
+  for (const Leaf& leaf : submap_leaves) {
+    if (!leaf.occupied) continue;
+    Rasterise(leaf, T_merged_submap, T_submap_merged, *merged, nullptr,
+              [&](const octomap::OcTreeKey& key, const Eigen::Vector3d&) {
+                merged->setNodeValue(key, occupied_log_odds, true);
+                ++stats->occupied_written;
+              });
+  }
+  // 3. Free in the submap, outside the merged map's box (so outside the
+  // overlap), and not written yet: free. Inside the box it is free in both
+  // (already free), occupied in the merged map, or unknown there (unknown).
+  for (const Leaf& leaf : submap_leaves) {
+    if (leaf.occupied) continue;
+    const bool done = Rasterise(leaf, T_merged_submap, T_submap_merged, *merged, &budget,
+                                [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
+                                  if (merged_box.contains(centre) || merged->search(key) != nullptr) return;
+                                  merged->setNodeValue(key, free_log_odds, true);
+                                  ++stats->free_written;
+                                });
+    if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
+  }
+  merged->updateInnerOccupancy();
+  merged->prune();
+  return Status::Ok();
+}
+
+StatusOr<std::string> WriteBinaryOctree(const octomap::OcTree& tree) {
+  std::stringstream out;
+  if (!tree.writeBinaryConst(out)) return Status::Internal("OctoMap could not write the merged tree");
+  return out.str();
+}
+
+std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree) {
+  std::uint64_t count = 0;
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (tree.isNodeOccupied(*it)) count += std::uint64_t{1} << (3 * (depth - static_cast<int>(it.getDepth())));
+  }
+  return count;
+}
+
+}  // namespace mapd::voxel

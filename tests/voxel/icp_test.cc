@@ -1,0 +1,117 @@
+#include "voxel/icp.h"
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "voxel/octree_reader.h"
+#include "voxel/support/corner_scene.h"
+#include "voxel/support/voxel_scene.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel {
+namespace {
+
+using testing::Pose;
+
+constexpr double kRes = 0.1;
+
+std::vector<Eigen::Vector3d> Centres(const std::string& bytes) {
+  auto tree = ReadOctree(bytes);
+  EXPECT_TRUE(tree.ok()) << tree.status().ToString();
+  auto grid = VoxelGrid::FromOcTree(**tree);
+  EXPECT_TRUE(grid.ok());
+  return grid->occupied_centres();
+}
+
+Eigen::AlignedBox3d CropX(double x0, double x1) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.0, -1.0), Eigen::Vector3d(x1, 5.5, 3.5));
+}
+
+class IcpSearchTest : public ::testing::TestWithParam<NeighbourSearch> {};
+
+// Two rasterisations of one room (different crops, B's grid rotated): ICP
+// from a start 1 deg and ~1 voxel off lands within a fraction of a voxel.
+TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
+  const Eigen::Isometry3d T_a_b = Pose(23, 6, -4, Eigen::Vector3d(0.7, -1.2, 0.3));
+  const auto a = Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(-0.5, 5.6),
+                                                  Eigen::Isometry3d::Identity(), kRes));
+  const auto b = Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(2.2, 9.5), T_a_b, kRes));
+  const Eigen::Isometry3d start =
+      Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b;  // 1 deg, ~1 voxel at the origin
+  IcpParams params;
+  params.search = GetParam();
+  auto result = RefineIcp(a, b, start, kRes, params);
+  ASSERT_TRUE(result.ok()) << result.status().ToString();
+  EXPECT_LT(testing::RotationErrorDeg(result->T_target_source, T_a_b), 0.3);
+  EXPECT_LT(testing::TranslationError(result->T_target_source, T_a_b), 0.5 * kRes);
+  EXPECT_GT(testing::RotationErrorDeg(start, T_a_b), 0.9);  // the test starts off, really
+  EXPECT_LT(result->rms_residual_m, 0.8 * kRes);
+  EXPECT_GT(result->inliers, 1000);
+  EXPECT_GT(result->iterations, 1);
+  EXPECT_TRUE(result->converged);
+}
+
+INSTANTIATE_TEST_SUITE_P(Searches, IcpSearchTest,
+                         ::testing::Values(NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree));
+
+// Exact correspondences (the same points moved): recovered to numerical
+// precision, both ways.
+TEST(IcpTest, RecoversAnExactTransformAndItsInverse) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 3.0);
+  std::vector<Eigen::Vector3d> target;
+  // Three perpendicular patches: a well-constrained shape.
+  for (int i = 0; i < 3000; ++i) {
+    const int face = i % 3;
+    Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    p[face] = 0.0;
+    target.push_back(p);
+  }
+  const Eigen::Isometry3d T_t_s = Pose(3, -1, 1.5, Eigen::Vector3d(0.08, -0.05, 0.1));
+  std::vector<Eigen::Vector3d> source;
+  for (const auto& p : target) source.push_back(T_t_s.inverse() * p);
+  IcpParams params;
+  params.convergence_rms_relative = 0.0;
+  params.convergence_rotation_rad = 1e-10;
+  params.convergence_translation_voxels = 1e-8;
+  params.max_iterations = 100;
+  auto forward = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRes, params);
+  ASSERT_TRUE(forward.ok()) << forward.status().ToString();
+  EXPECT_LT(testing::RotationErrorDeg(forward->T_target_source, T_t_s), 1e-3);
+  EXPECT_LT(testing::TranslationError(forward->T_target_source, T_t_s), 1e-4);
+  auto backward = RefineIcp(source, target, Eigen::Isometry3d::Identity(), kRes, params);
+  ASSERT_TRUE(backward.ok());
+  EXPECT_LT(testing::RotationErrorDeg(backward->T_target_source, T_t_s.inverse()), 1e-3);
+  EXPECT_LT(testing::TranslationError(backward->T_target_source, T_t_s.inverse()), 1e-4);
+}
+
+TEST(IcpTest, NoOverlapIsAFailedPrecondition) {
+  const std::vector<Eigen::Vector3d> target(50, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> source;
+  for (int i = 0; i < 50; ++i) source.emplace_back(100.0 + i * 0.1, 0.0, 0.0);
+  auto result = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRes);
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.status().code(), StatusCode::kFailedPrecondition);
+}
+
+TEST(IcpTest, RejectsBadParametersAndInput) {
+  const std::vector<Eigen::Vector3d> points(20, Eigen::Vector3d::Ones());
+  IcpParams params;
+  params.max_correspondence_voxels = 0.0;
+  auto result = RefineIcp(points, points, Eigen::Isometry3d::Identity(), kRes, params);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.status().message().find("icp.max_correspondence_voxels"), std::string::npos);
+  result = RefineIcp(points, points, Eigen::Isometry3d::Identity(), 0.0);
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+  std::vector<Eigen::Vector3d> bad = points;
+  bad[3].x() = std::nan("");
+  result = RefineIcp(points, bad, Eigen::Isometry3d::Identity(), kRes);
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace mapd::voxel

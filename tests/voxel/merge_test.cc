@@ -1,0 +1,287 @@
+#include "voxel/merge.h"
+#include "voxel/merge_graph.h"
+#include "voxel/merge_overlap.h"
+#include "voxel/voxel_grid.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "voxel/support/corner_scene.h"
+#include "voxel/support/voxel_scene.h"
+
+namespace mapd::voxel {
+namespace {
+
+using testing::FurnishedRoom;
+using testing::Pose;
+using testing::RasteriseSubmap;
+
+constexpr double kRes = 0.1;
+
+// The room cut along x (scene frame), all of y and z.
+Eigen::AlignedBox3d CropX(double x0, double x1) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.0, -1.0), Eigen::Vector3d(x1, 5.5, 3.5));
+}
+
+// Submap A is in the scene frame; B in the frame T_scene_b.
+struct Pair {
+  std::string a, b;
+};
+
+Pair MakePair(const Eigen::Isometry3d& T_scene_b) {
+  return {RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes),
+          RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_b, kRes)};
+}
+
+void ExpectFusedMapCoversBoth(const MergeOutcome& outcome, const std::string& a_bytes) {
+  auto merged = InspectSubmap(outcome.merged_bt);
+  ASSERT_TRUE(merged.ok()) << merged.status().ToString();
+  EXPECT_EQ(merged->resolution, kRes);
+  EXPECT_EQ(merged->occupied_voxels, outcome.occupied_voxels);
+  EXPECT_LT(merged->bounds_min.x(), 0.05);  // A's wall at x = 0.05 m
+  EXPECT_GT(merged->bounds_max.x(), 8.9);   // B's far wall at x = 9.05 m, in A's frame
+  const auto a = InspectSubmap(a_bytes);
+  ASSERT_TRUE(a.ok());
+  EXPECT_GT(merged->occupied_voxels, a->occupied_voxels);
+}
+
+class MergeKnownTransformTest : public ::testing::TestWithParam<Eigen::Isometry3d> {};
+
+TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
+  const Eigen::Isometry3d T_a_b = GetParam();
+  const Pair pair = MakePair(T_a_b);
+  std::vector<std::pair<std::string, double>> progress;
+  auto outcome = MergeSubmaps({{11, pair.a}, {12, pair.b}}, MergeParams{},
+                              [&](const std::string& stage, double f) { progress.emplace_back(stage, f); });
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  ASSERT_EQ(outcome->alignments.size(), 2u);
+  EXPECT_EQ(outcome->alignments[0].id, 11u);
+  EXPECT_TRUE(outcome->alignments[0].T_reference_submap.isApprox(Eigen::Isometry3d::Identity()));
+  const Alignment& b = outcome->alignments[1];
+  EXPECT_EQ(b.id, 12u);
+  EXPECT_LT(testing::RotationErrorDeg(b.T_reference_submap, T_a_b), 1.0);
+  EXPECT_LT(testing::TranslationError(b.T_reference_submap, T_a_b), 2 * kRes);
+  EXPECT_GE(b.matched_corners, 4);
+  EXPECT_GE(b.overlap_score, 0.9);
+  EXPECT_LE(b.residual_m, kRes);
+  ExpectFusedMapCoversBoth(*outcome, pair.a);
+
+  ASSERT_FALSE(progress.empty());
+  for (std::size_t i = 1; i < progress.size(); ++i) EXPECT_GE(progress[i].second, progress[i - 1].second);
+  EXPECT_EQ(progress.back().first, "fusion");
+  EXPECT_EQ(progress.back().second, 1.0);
+  EXPECT_GT(outcome->times.total_s, 0.0);
+}
+
+// Poses (yaw, pitch, roll up to 10 deg) where corner matching finds the true
+// clique on this scene.
+INSTANTIATE_TEST_SUITE_P(Poses, MergeKnownTransformTest,
+                         ::testing::Values(Pose(0, 0, 0, Eigen::Vector3d(0, 0, 0)),
+                                           Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4)),
+                                           Pose(-128, -10, 8, Eigen::Vector3d(-4.0, 3.3, -0.7))));
+
+// The room is nearly symmetric under a half turn, and for some poses the
+// largest consistent corner set is a wrong one (the room flipped, walls on
+// walls). Whatever the matcher returns, a merge must be either right or
+// refused: a wrong merge is worse than none (ALGORITHMS.md B.5).
+TEST(MergeTest, NeverAcceptsAWrongTransform) {
+  int right = 0, refused = 0;
+  for (const Eigen::Isometry3d& T_a_b :
+       {Pose(172, 9, 10, Eigen::Vector3d(12.0, 0.5, 2.0)), Pose(172, 9, 10, Eigen::Vector3d(-4.0, 3.3, -0.7)),
+        Pose(64, 3, -5, Eigen::Vector3d(2.0, 1.0, 0.3)), Pose(-97, -7, 2, Eigen::Vector3d(-1.5, 6.0, -0.2)),
+        Pose(90, 0, 0, Eigen::Vector3d(0.3, 0.2, 0.1))}) {
+    const Pair pair = MakePair(T_a_b);
+    auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, MergeParams{});
+    if (!outcome.ok()) {
+      EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition) << outcome.status().ToString();
+      ++refused;
+      continue;
+    }
+    EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_a_b), 1.0);
+    EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_a_b), 2 * kRes);
+    ++right;
+  }
+  std::printf("[ info ] NeverAcceptsAWrongTransform: %d right, %d refused\n", right, refused);
+}
+
+// Three submaps, every pair overlapping: the spanning tree places all three.
+// (A true chain, with the first and the last not overlapping, is covered on
+// synthetic edges by MergeGraphTest: on cuts of this room with smaller
+// overlaps the corner matcher returned wrong cliques, which were refused.)
+TEST(MergeTest, PlacesThreeSubmapsInTheFirstFrame) {
+  const Eigen::Isometry3d T_scene_b = Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4));
+  const Eigen::Isometry3d T_scene_c = Pose(-128, -10, 8, Eigen::Vector3d(-4.0, 3.3, -0.7));
+  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes);
+  const std::string b = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_b, kRes);
+  const std::string c = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_c, kRes);
+  auto outcome = MergeSubmaps({{1, a}, {2, b}, {3, c}}, MergeParams{});
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  ASSERT_EQ(outcome->alignments.size(), 3u);
+  EXPECT_EQ(outcome->pairs.size(), 3u);
+  EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_scene_b), 1.0);
+  EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_scene_b), 2 * kRes);
+  EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[2].T_reference_submap, T_scene_c), 1.0);
+  EXPECT_LT(testing::TranslationError(outcome->alignments[2].T_reference_submap, T_scene_c), 2 * kRes);
+  ExpectFusedMapCoversBoth(*outcome, a);
+}
+
+// A chain 0 - 1 - 2 (no edge 0 - 2) and a weaker cycle edge: the tree keeps
+// the strong edges and composes the transforms along them.
+TEST(MergeGraphTest, PlacesAChainAndLeavesTheUnconnectedOut) {
+  const Eigen::Isometry3d T01 = Pose(30, 0, 0, Eigen::Vector3d(1, 0, 0));
+  const Eigen::Isometry3d T12 = Pose(-70, 5, 0, Eigen::Vector3d(0, 2, 0));
+  const Eigen::Isometry3d T_wrong = Pose(10, 0, 0, Eigen::Vector3d(9, 9, 9));
+  // Edge 2 -> 1 given the other way round (a = 2, b = 1).
+  const std::vector<MergeEdge> edges = {
+      {0, 1, T01, 8.5}, {2, 1, T12.inverse(), 7.9}, {0, 2, T_wrong, 4.2}};
+  const TreePlacement placement = PlaceAlongMaximumSpanningTree(4, edges, 0);
+  EXPECT_TRUE(placement.placed[0] && placement.placed[1] && placement.placed[2]);
+  EXPECT_FALSE(placement.placed[3]);
+  EXPECT_TRUE(placement.T_root_node[1].isApprox(T01, 1e-12));
+  EXPECT_TRUE(placement.T_root_node[2].isApprox(T01 * T12, 1e-12));
+  EXPECT_EQ(placement.parent[2], 1);
+  EXPECT_EQ(placement.order, (std::vector<int>{0, 1, 2}));
+}
+
+TEST(MergeTest, RefusesAMapWithoutCorners) {
+  const std::string room = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string wall = RasteriseSubmap(testing::FlatWall(),
+                                           Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(6, 1, 3)),
+                                           Eigen::Isometry3d::Identity(), kRes);
+  auto outcome = MergeSubmaps({{1, room}, {7, wall}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(outcome.status().message(), "no corners found in submap 7");
+}
+
+TEST(MergeTest, RefusesMapsThatDoNotOverlap) {
+  const std::string room = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string other =
+      RasteriseSubmap(testing::OtherRoom(), Eigen::AlignedBox3d(Eigen::Vector3d(19, 19, -1), Eigen::Vector3d(28, 27, 4)),
+                      Pose(30, 0, 0, Eigen::Vector3d(-20, -10, 0)), kRes);
+  auto outcome = MergeSubmaps({{1, room}, {2, other}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("submap 1 and submap 2 not merged: "), std::string::npos)
+      << outcome.status().message();
+}
+
+TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
+  const Pair pair = MakePair(Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4)));
+  MergeParams params;
+  params.min_matched_corners = 1000;
+  auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("corners found in submap 1, need 1000"), std::string::npos)
+      << outcome.status().message();
+
+  params = MergeParams{};
+  params.max_residual_voxels = 0.01;  // voxel centres of rotated grids are never that close
+  outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("voxels) above 0.01 voxels"), std::string::npos)
+      << outcome.status().message();
+}
+
+TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
+  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string b = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), Eigen::Isometry3d::Identity(), 0.2);
+  auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(outcome.status().message(),
+            "submap 1 has resolution 0.1 m, submap 2 has 0.2 m; resolution_policy kRefuse does not resample");
+}
+
+TEST(MergeTest, RefusesMalformedInputAndFewerThanTwoMaps) {
+  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  auto outcome = MergeSubmaps({{1, a}, {9, "# Octomap OcTree binary file\nid OcTree\nsize 3\n"}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(outcome.status().message().rfind("submap 9: ", 0), 0u) << outcome.status().message();
+
+  outcome = MergeSubmaps({{1, a}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(outcome.status().message(), "a merge needs at least two submaps, got 1");
+
+  outcome = MergeSubmaps({{1, a}, {1, a}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().message(), "submap 1 is given twice");
+}
+
+TEST(MergeTest, ValidateNamesTheBadField) {
+  MergeParams params;
+  params.min_matched_corners = 2;
+  EXPECT_NE(params.Validate().message().find("min_matched_corners"), std::string::npos);
+  params = MergeParams{};
+  params.min_overlap_score = 1.5;
+  EXPECT_NE(params.Validate().message().find("min_overlap_score"), std::string::npos);
+  params = MergeParams{};
+  params.icp.trim_fraction = 0.0;
+  EXPECT_NE(params.Validate().message().find("icp.trim_fraction"), std::string::npos);
+  params = MergeParams{};
+  params.max_seconds = -1;
+  EXPECT_NE(params.Validate().message().find("max_seconds"), std::string::npos);
+  EXPECT_TRUE(MergeParams{}.Validate().ok());
+}
+
+TEST(MergeTest, StopsWhenTheTimeBudgetIsSpent) {
+  const Pair pair = MakePair(Eigen::Isometry3d::Identity());
+  MergeParams params;
+  params.max_seconds = 1e-9;
+  auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(outcome.status().message().find("during corner extraction"), std::string::npos)
+      << outcome.status().message();
+}
+
+// The definition in merge.h, voxel by voxel.
+TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
+  std::vector<VoxelKey> a_occupied, a_free;
+  for (int x = 0; x < 10; ++x) {
+    a_occupied.emplace_back(x, 0, 0);  // a wall along x
+    for (int y = 1; y <= 3; ++y) a_free.emplace_back(x, y, 0);
+  }
+  const std::vector<VoxelKey> b_occupied = {
+      {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0},  // on A's wall
+      {5, 1, 0},                                   // next to it: one voxel of tolerance
+      {0, 3, 0}, {1, 3, 0},                        // in A's free space
+      {50, 0, 0}, {51, 0, 0}, {52, 0, 0}};         // in A's unknown space: not counted
+  auto a = VoxelGrid::FromKeys(kRes, a_occupied, a_free);
+  auto b = VoxelGrid::FromKeys(kRes, b_occupied);
+  ASSERT_TRUE(a.ok() && b.ok());
+  const OverlapScore score = ComputeOverlapScore(*a, *b, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(score.observed, 7u);
+  EXPECT_EQ(score.coinciding, 5u);
+  EXPECT_DOUBLE_EQ(score.score, 5.0 / 7.0);
+  // Moved 3 voxels along y, B's wall lies in A's free space.
+  const OverlapScore moved =
+      ComputeOverlapScore(*a, *b, Eigen::Isometry3d(Eigen::Translation3d(0.0, 3 * kRes, 0.0)));
+  EXPECT_LT(moved.score, 0.2);
+}
+
+TEST(InspectSubmapTest, SummarisesAValidMap) {
+  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  auto summary = InspectSubmap(a);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  EXPECT_EQ(summary->resolution, kRes);
+  EXPECT_GT(summary->occupied_voxels, 10000u);
+  EXPECT_GT(summary->free_voxels, 40000u);
+  // The wall x = 0.05 m is the voxel [0, 0.1), the ceiling z = 2.55 m [2.5, 2.6).
+  EXPECT_NEAR(summary->bounds_min.x(), 0.0, 1e-9);
+  EXPECT_NEAR(summary->bounds_max.z(), 2.6, 1e-9);
+  auto bad = InspectSubmap("not an octree");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.status().code(), StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace mapd::voxel
