@@ -256,6 +256,148 @@ Status WriteTransaction::Commit() {
     store_->robot_names_[id] = name;
   }
   for (const auto& [key, frame] : new_sessions_) store_->sessions_[key] = frame;
+  for (const auto& [session_id, T] : new_ties_) {
+    for (auto& [key, frame] : store_->sessions_) {
+      if (frame.session_id != session_id) continue;
+      frame.tied = true;
+      frame.T_map_frame = T;
+    }
+  }
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------
+// Submaps and merges (rare, large writes: statements are prepared per call).
+
+StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
+  const SubmapMeta& m = submap.meta;
+  StatusOr<int64_t> robot_id = RobotId(m.robot, m.created_ns);
+  if (!robot_id.ok()) return robot_id.status();
+  int64_t session_id = 0;
+  if (!submap.session.empty()) {
+    const std::string key = Store::SessionKey(*robot_id, submap.session);
+    if (auto it = new_sessions_.find(key); it != new_sessions_.end()) {
+      session_id = it->second.session_id;
+    } else {
+      std::lock_guard<std::mutex> lock(store_->cache_mu_);
+      if (auto c = store_->sessions_.find(key); c != store_->sessions_.end()) session_id = c->second.session_id;
+    }
+    if (session_id == 0) {
+      return Status::FailedPrecondition("session '" + submap.session + "' of robot '" + m.robot +
+                                        "' is unknown: stream at least one batch in it before uploading "
+                                        "a submap built in its frame, or leave session_id empty");
+    }
+  }
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> exists = Statement::Prepare(w, "SELECT id FROM submaps WHERE robot_id = ?1 AND name = ?2");
+  if (!exists.ok()) return exists.status();
+  exists->Bind(1, *robot_id).Bind(2, m.name);
+  StatusOr<bool> found = exists->Step();
+  if (!found.ok()) return found.status();
+  if (*found) {
+    return Status::AlreadyExists("robot '" + m.robot + "' already has a submap named '" + m.name +
+                                 "' (id " + std::to_string(exists->ColumnInt(0)) +
+                                 "); choose another name or delete that one first");
+  }
+  StatusOr<Statement> q = Statement::Prepare(
+      w, "INSERT INTO submaps (robot_id, session_id, name, format, resolution, occupied, free, "
+         "min_x, min_y, min_z, max_x, max_y, max_z, created_ns, data) "
+         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, *robot_id);
+  if (session_id != 0) q->Bind(2, session_id);  // else NULL
+  q->Bind(3, m.name).Bind(4, static_cast<int64_t>(m.format)).Bind(5, m.resolution_m);
+  q->Bind(6, static_cast<int64_t>(m.occupied_voxels)).Bind(7, static_cast<int64_t>(m.free_voxels));
+  for (int i = 0; i < 3; ++i) {
+    q->Bind(8 + i, m.bounds_min[i]);
+    q->Bind(11 + i, m.bounds_max[i]);
+  }
+  q->Bind(14, m.created_ns);
+  q->BindBlob(15, submap.data.data(), submap.data.size());
+  MAPD_RETURN_IF_ERROR(q->Run());
+  return sqlite3_last_insert_rowid(w);
+}
+
+Status WriteTransaction::DeleteSubmap(int64_t id) {
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> pinned = Statement::Prepare(
+      w, "SELECT m.id FROM merges m WHERE m.status = 'accepted' AND (m.merged_submap_id = ?1 OR "
+         "EXISTS (SELECT 1 FROM merge_inputs i WHERE i.merge_id = m.id AND i.submap_id = ?1)) "
+         "ORDER BY m.id LIMIT 1");
+  if (!pinned.ok()) return pinned.status();
+  pinned->Bind(1, id);
+  StatusOr<bool> row = pinned->Step();
+  if (!row.ok()) return row.status();
+  if (*row) {
+    return Status::FailedPrecondition("submap " + std::to_string(id) + " belongs to accepted merge " +
+                                      std::to_string(pinned->ColumnInt(0)) +
+                                      " (as an input or its result) and is kept with it");
+  }
+  StatusOr<Statement> del = Statement::Prepare(w, "DELETE FROM submaps WHERE id = ?1");
+  if (!del.ok()) return del.status();
+  del->Bind(1, id);
+  MAPD_RETURN_IF_ERROR(del->Run());
+  if (sqlite3_changes(w) == 0) return Status::NotFound("no submap with id " + std::to_string(id));
+  return Status::Ok();
+}
+
+StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
+  const MergeRecord& r = merge.record;
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> q = Statement::Prepare(
+      w, "INSERT INTO merges (created_ns, status, reason, merged_submap_id) VALUES (?1, ?2, ?3, NULL)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, r.created_ns).Bind(2, std::string_view(r.accepted ? "accepted" : "refused")).Bind(3, r.reason);
+  MAPD_RETURN_IF_ERROR(q->Run());
+  MergeIds ids;
+  ids.merge_id = sqlite3_last_insert_rowid(w);
+
+  StatusOr<Statement> in = Statement::Prepare(
+      w, "INSERT INTO merge_inputs (merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, matched_corners, "
+         "residual_m, overlap_score) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
+  if (!in.ok()) return in.status();
+  for (const MergeInputRecord& i : r.inputs) {
+    in->Bind(1, ids.merge_id).Bind(2, i.submap_id);
+    if (i.aligned) {
+      BindPose(*in, 3, i.T_reference_submap);
+      in->Bind(10, static_cast<int64_t>(i.matched_corners)).Bind(11, i.residual_m).Bind(12, i.overlap_score);
+    }
+    MAPD_RETURN_IF_ERROR(in->Run());
+  }
+  if (!r.accepted) return ids;
+
+  NewSubmap merged = merge.merged;
+  merged.meta.robot = kMergedRobot;
+  merged.meta.name = "merge-" + std::to_string(ids.merge_id);
+  merged.session.clear();
+  StatusOr<int64_t> submap_id = InsertSubmap(merged);
+  if (!submap_id.ok()) return submap_id.status();
+  ids.merged_submap_id = *submap_id;
+  StatusOr<Statement> link = Statement::Prepare(w, "UPDATE merges SET merged_submap_id = ?2 WHERE id = ?1");
+  if (!link.ok()) return link.status();
+  link->Bind(1, ids.merge_id).Bind(2, ids.merged_submap_id);
+  MAPD_RETURN_IF_ERROR(link->Run());
+  return ids;
+}
+
+Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
+  if (new_ties_.count(session_id) != 0) {
+    return Status::FailedPrecondition("session " + std::to_string(session_id) + " is tied already");
+  }
+  StatusOr<SessionFrame> current = store_->GetSession(session_id);
+  if (!current.ok()) return current.status();
+  if (current->tied) {
+    return Status::FailedPrecondition("session " + std::to_string(session_id) + " is tied already");
+  }
+  StatusOr<Statement> q = Statement::Prepare(
+      store_->writer_.get(),
+      "UPDATE sessions SET tied = 1, qw = ?2, qx = ?3, qy = ?4, qz = ?5, tx = ?6, ty = ?7, tz = ?8 "
+      "WHERE id = ?1");
+  if (!q.ok()) return q.status();
+  q->Bind(1, session_id);
+  BindPose(*q, 2, T_map_frame);
+  MAPD_RETURN_IF_ERROR(q->Run());
+  new_ties_[session_id] = T_map_frame;
   return Status::Ok();
 }
 
@@ -295,6 +437,156 @@ StatusOr<std::vector<SessionFrame>> Store::ListSessions() {
   return out;
 }
 
+StatusOr<SessionFrame> Store::GetSession(int64_t session_id) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  for (const auto& [key, f] : sessions_) {
+    if (f.session_id == session_id) return f;
+  }
+  return Status::NotFound("no session with id " + std::to_string(session_id));
+}
+
+StatusOr<SessionFrame> Store::FindSession(const std::string& robot, const std::string& session) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  auto r = robot_ids_.find(robot);
+  if (r != robot_ids_.end()) {
+    auto it = sessions_.find(SessionKey(r->second, session));
+    if (it != sessions_.end()) return it->second;
+  }
+  return Status::NotFound("robot '" + robot + "' has no session '" + session + "'");
+}
+
+namespace {
+
+constexpr char kSubmapColumns[] =
+    "SELECT s.id, r.name, s.name, coalesce(s.session_id, 0), s.format, s.resolution, s.occupied, "
+    "s.free, s.min_x, s.min_y, s.min_z, s.max_x, s.max_y, s.max_z, s.created_ns, length(s.data) "
+    "FROM submaps s JOIN robots r ON r.id = s.robot_id ";
+
+SubmapMeta ColumnSubmap(const Statement& q) {
+  SubmapMeta m;
+  m.id = q.ColumnInt(0);
+  m.robot = q.ColumnText(1);
+  m.name = q.ColumnText(2);
+  m.session_id = q.ColumnInt(3);
+  m.format = static_cast<SubmapFormat>(q.ColumnInt(4));
+  m.resolution_m = q.ColumnDouble(5);
+  m.occupied_voxels = static_cast<uint64_t>(q.ColumnInt(6));
+  m.free_voxels = static_cast<uint64_t>(q.ColumnInt(7));
+  m.bounds_min = {q.ColumnDouble(8), q.ColumnDouble(9), q.ColumnDouble(10)};
+  m.bounds_max = {q.ColumnDouble(11), q.ColumnDouble(12), q.ColumnDouble(13)};
+  m.created_ns = q.ColumnInt(14);
+  m.size_bytes = static_cast<uint64_t>(q.ColumnInt(15));
+  return m;
+}
+
+}  // namespace
+
+StatusOr<std::vector<SubmapMeta>> Store::ListSubmaps(const std::string& robot) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), std::string(kSubmapColumns) + "WHERE ?1 = '' OR r.name = ?1 ORDER BY s.id");
+  if (!q.ok()) return q.status();
+  q->Bind(1, robot);
+  std::vector<SubmapMeta> out;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return out;
+    out.push_back(ColumnSubmap(*q));
+  }
+}
+
+StatusOr<SubmapMeta> Store::GetSubmap(int64_t id) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(reader_.get(), std::string(kSubmapColumns) + "WHERE s.id = ?1");
+  if (!q.ok()) return q.status();
+  q->Bind(1, id);
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  if (!*row) return Status::NotFound("no submap with id " + std::to_string(id));
+  return ColumnSubmap(*q);
+}
+
+StatusOr<std::string> Store::GetSubmapData(int64_t id) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(reader_.get(), "SELECT data FROM submaps WHERE id = ?1");
+  if (!q.ok()) return q.status();
+  q->Bind(1, id);
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  if (!*row) return Status::NotFound("no submap with id " + std::to_string(id));
+  return std::string(q->ColumnBlob(0));
+}
+
+StatusOr<SubmapMeta> Store::LatestGlobalMap() {
+  int64_t id = 0;
+  {
+    std::lock_guard<std::mutex> lock(reader_mu_);
+    StatusOr<Statement> q = Statement::Prepare(
+        reader_.get(),
+        "SELECT merged_submap_id FROM merges WHERE status = 'accepted' AND merged_submap_id IS NOT NULL "
+        "ORDER BY id DESC LIMIT 1");
+    if (!q.ok()) return q.status();
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return Status::NotFound("no global map yet: no merge has been accepted (see MergeSubmaps)");
+    id = q->ColumnInt(0);
+  }
+  return GetSubmap(id);
+}
+
+StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), "SELECT id, created_ns, status, reason, coalesce(merged_submap_id, 0) FROM merges ORDER BY id");
+  if (!q.ok()) return q.status();
+  std::vector<MergeRecord> out;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) break;
+    MergeRecord r;
+    r.id = q->ColumnInt(0);
+    r.created_ns = q->ColumnInt(1);
+    r.accepted = q->ColumnText(2) == "accepted";
+    r.reason = q->ColumnText(3);
+    r.merged_submap_id = q->ColumnInt(4);
+    out.push_back(std::move(r));
+  }
+  StatusOr<Statement> in = Statement::Prepare(
+      reader_.get(),
+      "SELECT merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, coalesce(matched_corners, 0), "
+      "coalesce(residual_m, 0), coalesce(overlap_score, 0), qw IS NOT NULL FROM merge_inputs "
+      "ORDER BY merge_id, rowid");
+  if (!in.ok()) return in.status();
+  std::unordered_map<int64_t, size_t> index;
+  for (size_t i = 0; i < out.size(); ++i) index[out[i].id] = i;
+  for (;;) {
+    StatusOr<bool> row = in->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) return out;
+    auto it = index.find(in->ColumnInt(0));
+    if (it == index.end()) continue;
+    MergeInputRecord i;
+    i.submap_id = in->ColumnInt(1);
+    i.aligned = in->ColumnInt(12) != 0;
+    if (i.aligned) i.T_reference_submap = ColumnPose(*in, 2);
+    i.matched_corners = static_cast<int>(in->ColumnInt(9));
+    i.residual_m = in->ColumnDouble(10);
+    i.overlap_score = in->ColumnDouble(11);
+    out[it->second].inputs.push_back(i);
+  }
+}
+
+StatusOr<MergeRecord> Store::GetMerge(int64_t id) {
+  StatusOr<std::vector<MergeRecord>> all = ListMerges();
+  if (!all.ok()) return all.status();
+  for (MergeRecord& r : *all) {
+    if (r.id == id) return std::move(r);
+  }
+  return Status::NotFound("no merge with id " + std::to_string(id));
+}
+
 StatusOr<std::vector<FusedRow>> Store::LoadFused() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
@@ -327,7 +619,7 @@ StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
       reader_.get(),
       "SELECT r.id, r.name, r.first_seen_ns, r.last_seen_ns, r.batches, r.features, "
       "count(s.id), coalesce(min(s.tied), 0) FROM robots r LEFT JOIN sessions s ON s.robot_id = r.id "
-      "GROUP BY r.id ORDER BY r.name");
+      "WHERE r.name NOT GLOB '@*' GROUP BY r.id ORDER BY r.name");
   if (!q.ok()) return q.status();
   std::vector<RobotSummary> out;
   for (;;) {
@@ -351,7 +643,7 @@ StatusOr<StoreCounts> Store::Counts() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
-      "SELECT (SELECT count(*) FROM robots), (SELECT count(*) FROM sessions), "
+      "SELECT (SELECT count(*) FROM robots WHERE name NOT GLOB '@*'), (SELECT count(*) FROM sessions), "
       "(SELECT coalesce(sum(batches), 0) FROM robots), (SELECT coalesce(sum(features), 0) FROM robots), "
       "(SELECT count(*) FROM fused_features), (SELECT count(*) FROM submaps)");
   if (!q.ok()) return q.status();

@@ -16,8 +16,11 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "common/status.h"
 #include "geometry/observation.h"
@@ -99,6 +102,66 @@ struct RobotSummary {
   bool all_sessions_tied = false;
 };
 
+// --- Voxel submaps and merges.
+
+// Robot name under which merged maps are stored. '@' is outside the API's
+// robot_id alphabet ([A-Za-z0-9_.-]), so no real robot can collide with it,
+// and ListRobots / Counts leave such rows out.
+inline constexpr char kMergedRobot[] = "@merged";
+
+enum class SubmapFormat : int { kOctomapBt = 1, kOctomapOt = 2 };  // = mapserver.v1.SubmapFormat
+
+// What is stored about a submap besides its bytes.
+struct SubmapMeta {
+  int64_t id = 0;
+  std::string robot;
+  std::string name;
+  int64_t session_id = 0;  // 0 = built in no known session frame
+  SubmapFormat format = SubmapFormat::kOctomapBt;
+  double resolution_m = 0;
+  uint64_t occupied_voxels = 0;
+  uint64_t free_voxels = 0;
+  Eigen::Vector3d bounds_min = Eigen::Vector3d::Zero();  // metres, submap frame
+  Eigen::Vector3d bounds_max = Eigen::Vector3d::Zero();
+  int64_t created_ns = 0;
+  uint64_t size_bytes = 0;
+};
+
+struct NewSubmap {
+  SubmapMeta meta;         // id, session_id and size_bytes are filled in by the store
+  std::string session;     // the robot's session the map is built in; empty = none
+  std::string_view data;   // the validated file; must outlive InsertSubmap()
+};
+
+// One input of a merge as recorded. For a refused merge only submap_id is meaningful.
+struct MergeInputRecord {
+  int64_t submap_id = 0;
+  bool aligned = false;                 // the transform and scores below are set
+  geometry::Rigid3 T_reference_submap;  // maps the submap into the first input's frame
+  int matched_corners = 0;
+  double residual_m = 0;
+  double overlap_score = 0;
+};
+
+struct MergeRecord {
+  int64_t id = 0;
+  int64_t created_ns = 0;
+  bool accepted = false;
+  std::string reason;             // why it was refused (empty when accepted)
+  int64_t merged_submap_id = 0;   // 0 unless accepted
+  std::vector<MergeInputRecord> inputs;
+};
+
+struct NewMerge {
+  MergeRecord record;    // id and merged_submap_id are filled in by the store
+  NewSubmap merged;      // accepted merges only: the merged map, stored as a submap
+};
+
+struct MergeIds {
+  int64_t merge_id = 0;
+  int64_t merged_submap_id = 0;
+};
+
 struct StoreCounts {
   uint64_t robots = 0, sessions = 0, observations = 0, raw_features = 0, fused = 0, submaps = 0;
 };
@@ -117,6 +180,24 @@ class WriteTransaction {
   // with its session's is refused with InvalidArgument; the transaction goes on.
   StatusOr<InsertResult> InsertObservation(const NewObservation& obs);
   Status UpsertFused(const FusedRow& row);
+
+  // Stores a validated submap. AlreadyExists when the robot has a submap of
+  // that name; FailedPrecondition when `session` is given but unknown (the
+  // robot must have streamed a batch in it). Creates the robot on first sight.
+  StatusOr<int64_t> InsertSubmap(const NewSubmap& submap);
+  // NotFound when there is no such submap. FailedPrecondition when an accepted
+  // merge used it as an input or produced it: the merge record and the session
+  // frames it tied derive from those bytes, so they stay. Refused merges do
+  // not pin their inputs.
+  Status DeleteSubmap(int64_t id);
+  // Records a merge. An accepted one also stores `merged` as a submap of robot
+  // kMergedRobot named "merge-<merge id>".
+  StatusOr<MergeIds> RecordMerge(const NewMerge& merge);
+  // Ties a session frame to the map frame (T_map_frame). FailedPrecondition
+  // if it is tied already: a tie is never moved, so the map stays consistent.
+  Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame);
+  // True once TieSession() succeeded in this transaction.
+  bool ties_sessions() const { return !new_ties_.empty(); }
   Status DeleteFused(uint64_t id);
   // Durable once this returns OK (per StoreOptions::synchronous_full).
   Status Commit();
@@ -137,6 +218,7 @@ class WriteTransaction {
   std::unordered_map<std::string, int64_t> new_robots_;
   std::unordered_map<std::string, SessionFrame> new_sessions_;  // key: robot_id/name
   std::unordered_map<int64_t, RobotDelta> robot_deltas_;
+  std::unordered_map<int64_t, geometry::Rigid3> new_ties_;  // session id -> T_map_frame
   std::string payload_;  // scratch
 };
 
@@ -154,6 +236,18 @@ class Store {
   // Every stored observation in id (= arrival) order.
   Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
   StatusOr<std::vector<SessionFrame>> ListSessions();
+  // A committed session by id, or by robot and session name (from the cache).
+  StatusOr<SessionFrame> GetSession(int64_t session_id) const;
+  StatusOr<SessionFrame> FindSession(const std::string& robot, const std::string& session) const;
+
+  // Submaps, by id; `robot` empty = all robots (merged maps included).
+  StatusOr<std::vector<SubmapMeta>> ListSubmaps(const std::string& robot);
+  StatusOr<SubmapMeta> GetSubmap(int64_t id);          // NotFound
+  StatusOr<std::string> GetSubmapData(int64_t id);     // the stored file; NotFound
+  // The merged map of the latest accepted merge; NotFound before the first.
+  StatusOr<SubmapMeta> LatestGlobalMap();
+  StatusOr<MergeRecord> GetMerge(int64_t id);          // NotFound
+  StatusOr<std::vector<MergeRecord>> ListMerges();     // by id
   StatusOr<std::vector<FusedRow>> LoadFused();
   StatusOr<std::vector<RobotSummary>> ListRobots();
   StatusOr<StoreCounts> Counts();

@@ -96,6 +96,43 @@ const std::map<std::string, Setting>& Settings() {
                                     "largest gRPC message accepted, bytes (16777216)"}},
       {"limits.max_group_batches", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->max_group_batches); },
                                     "batches committed in one transaction at most (4096)"}},
+      {"limits.max_submap_bytes",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->submaps.max_submap_bytes); },
+        "largest submap file accepted by UploadSubmap, bytes (67108864)"}},
+      {"limits.max_concurrent_merges",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->submaps.max_concurrent_merges); },
+        "submap merges computed at once (1, at most 64)"}},
+      {"limits.max_queued_merges",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->submaps.max_queued_merges); },
+        "merges waiting for a slot; beyond it MergeSubmaps answers RESOURCE_EXHAUSTED (4)"}},
+      {"merge.min_matched_corners",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->submaps.min_matched_corners); },
+        "matched corners a pairwise merge needs to be accepted (4, at least 3)"}},
+      {"merge.max_residual_voxels",
+       {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->submaps.max_residual_voxels); },
+        "largest accepted RMS residual after ICP, voxels of the finer map (2)"}},
+      {"merge.min_overlap_score",
+       {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->submaps.min_overlap_score); },
+        "smallest accepted overlap score, [0, 1] (0.3)"}},
+      {"merge.max_seconds",
+       {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->submaps.max_merge_seconds); },
+        "time budget of one merge, seconds (60)"}},
+      {"merge.resolution_policy", {[](auto& k, auto& v, auto* c) {
+                                     if (v != "refuse" && v != "resample") {
+                                       return Status::InvalidArgument(k + ": use refuse or resample");
+                                     }
+                                     c->submaps.resample_resolutions = v == "resample";
+                                     return Status::Ok();
+                                   },
+                                   "submaps of different resolutions: refuse or resample (to the finest) (refuse)"}},
+      {"merge.fusion_rule", {[](auto& k, auto& v, auto* c) {
+                               if (v != "overlap" && v != "log_odds") {
+                                 return Status::InvalidArgument(k + ": use overlap or log_odds");
+                               }
+                               c->submaps.log_odds_fusion = v == "log_odds";
+                               return Status::Ok();
+                             },
+                             "occupancy fusion: overlap (the paper's rule) or log_odds (overlap)"}},
       {"shutdown_grace_s", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->shutdown_grace_s); },
                             "on SIGTERM, seconds streams get to finish (5)"}},
       {"tls_cert", {[](auto&, auto& v, auto* c) { c->tls_cert = v; return Status::Ok(); },
@@ -136,6 +173,27 @@ std::string DefaultDbPath() {
   return std::string(home && *home ? home : ".") + "/.local/share/mapd/map.db";
 }
 
+Status SubmapOptions::Validate() const {
+  if (max_submap_bytes < 64) return Status::InvalidArgument("limits.max_submap_bytes must be >= 64");
+  if (max_concurrent_merges < 1 || max_concurrent_merges > 64) {
+    return Status::InvalidArgument("limits.max_concurrent_merges must be in [1, 64]");
+  }
+  if (max_queued_merges > 1024) return Status::InvalidArgument("limits.max_queued_merges must be <= 1024");
+  if (min_matched_corners < 3) {
+    return Status::InvalidArgument("merge.min_matched_corners must be >= 3 (a rigid transform needs 3)");
+  }
+  if (!(max_residual_voxels > 0) || !std::isfinite(max_residual_voxels)) {
+    return Status::InvalidArgument("merge.max_residual_voxels must be finite and > 0");
+  }
+  if (!(min_overlap_score >= 0 && min_overlap_score <= 1)) {
+    return Status::InvalidArgument("merge.min_overlap_score must be in [0, 1]");
+  }
+  if (!(max_merge_seconds > 0) || !std::isfinite(max_merge_seconds)) {
+    return Status::InvalidArgument("merge.max_seconds must be finite and > 0");
+  }
+  return Status::Ok();
+}
+
 Status ServerConfig::Validate() const {
   Status f = fusion.Validate();
   if (!f.ok()) return Status::InvalidArgument("fusion: " + f.message());
@@ -156,7 +214,7 @@ Status ServerConfig::Validate() const {
                                    "allow_insecure_remote=true on a trusted network");
   }
   if (!(shutdown_grace_s >= 0)) return Status::InvalidArgument("shutdown_grace_s must be >= 0");
-  return Status::Ok();
+  return submaps.Validate();
 }
 
 Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config) {

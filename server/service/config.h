@@ -13,6 +13,25 @@
 
 namespace mapd::service {
 
+// Voxel submaps and merges. The merge thresholds are voxel::MergeParams's
+// (server/voxel/merge.h); they live here as plain values so that the config
+// builds without the voxel library (MAPD_WITH_VOXEL=OFF).
+struct SubmapOptions {
+  size_t max_submap_bytes = size_t{64} << 20;  // one uploaded file at most, bytes
+  size_t max_concurrent_merges = 1;            // merges computed at once
+  // Merges waiting for a slot at most; one more is refused with
+  // RESOURCE_EXHAUSTED (the caller retries later) rather than queued unbounded.
+  size_t max_queued_merges = 4;
+  int min_matched_corners = 4;          // evidence to accept a pairwise merge
+  double max_residual_voxels = 1.0;     // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
+  double min_overlap_score = 0.9;       // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
+  double max_merge_seconds = 60.0;      // budget of one merge, seconds
+  bool resample_resolutions = false;    // false: different resolutions are refused
+  bool log_odds_fusion = false;         // false: the paper's overlap rule
+
+  Status Validate() const;
+};
+
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   std::string db_path;                     // empty: DefaultDbPath()
@@ -20,6 +39,7 @@ struct ServerConfig {
   int busy_timeout_ms = 5000;              // wait for a database lock held by another process
   fusion::FusionParams fusion;
   IngestOptions ingest;
+  SubmapOptions submaps;
   size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted
   size_t max_group_batches = 4096;         // batches per group commit at most
   double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish

@@ -31,6 +31,11 @@ bool SameRow(const storage::FusedRow& a, const storage::FusedRow& b) {
 
 }  // namespace
 
+struct MapCore::WriteJob {
+  std::function<Status(storage::WriteTransaction*)> write;
+  std::promise<Status> done;
+};
+
 MapCore::MapCore(const MapCoreOptions& options) : options_(options) {}
 
 StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) {
@@ -52,38 +57,116 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
 
 MapCore::~MapCore() { Stop(); }
 
-Status MapCore::Rebuild() {
-  const auto t0 = Clock::now();
-  auto engine = std::make_unique<fusion::FusionEngine>(options_.fusion);
+StatusOr<MapCore::BuiltEngine> MapCore::BuildEngine() {
+  BuiltEngine built;
+  built.engine = std::make_unique<fusion::FusionEngine>(options_.fusion);
   StatusOr<std::vector<storage::SessionFrame>> sessions = store_->ListSessions();
   if (!sessions.ok()) return sessions.status();
   std::unordered_map<int64_t, storage::SessionFrame> frames;
   for (const auto& s : *sessions) frames[s.session_id] = s;
+  Status s = store_->ForEachObservation([&](const storage::StoredObservation& obs) {
+    ++built.observations;
+    built.last_observation_id = std::max(built.last_observation_id, obs.id);
+    const storage::SessionFrame& frame = frames[obs.session_id];
+    if (frame.tied) {
+      FuseInto(built.engine.get(), obs.features, obs.id, obs.robot_id, frame.T_map_frame, nullptr);
+    }
+    return Status::Ok();
+  });
+  if (!s.ok()) return s;
+  return built;
+}
+
+Status MapCore::Rebuild() {
+  const auto t0 = Clock::now();
   {
     std::lock_guard<std::mutex> lock(names_mu_);
     StatusOr<std::vector<storage::RobotSummary>> robots = store_->ListRobots();
     if (!robots.ok()) return robots.status();
     for (const auto& r : *robots) robot_names_[r.id] = r.name;
   }
-  uint64_t observations = 0;
+  StatusOr<BuiltEngine> built = BuildEngine();
+  if (!built.ok()) return built.status();
   std::unique_lock<std::shared_mutex> lock(engine_mu_);
-  engine_ = std::move(engine);
-  Status s = store_->ForEachObservation([&](const storage::StoredObservation& obs) {
-    ++observations;
-    const storage::SessionFrame& frame = frames[obs.session_id];
-    if (frame.tied) Fuse(obs.features, obs.id, obs.robot_id, frame.T_map_frame, nullptr);
-    return Status::Ok();
-  });
-  if (!s.ok()) return s;
+  engine_ = std::move(built->engine);
   // The version counts the observations the map reflects: monotonic across
   // restarts, since stored observations are never removed.
-  map_version_ = observations;
+  map_version_ = built->observations;
   Log(LogLevel::kInfo, "map_rebuilt",
-      {{"observations", std::to_string(observations)},
+      {{"observations", std::to_string(built->observations)},
        {"raw_features", std::to_string(engine_->feature_count())},
        {"fused", std::to_string(engine_->published_count())},
        {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
   return Status::Ok();
+}
+
+void MapCore::RebuildForNewFrames() {
+  const auto t0 = Clock::now();
+  // Built without the lock (queries go on against the old map), then swapped.
+  StatusOr<BuiltEngine> built = BuildEngine();
+  if (!built.ok()) {
+    // The ties are committed, so the next start rebuilds with them; until then
+    // the map lacks the newly tied sessions. Never seen unless storage fails.
+    Log(LogLevel::kError, "frame_rebuild_failed", {{"error", built.status().ToString()}});
+    return;
+  }
+  FusedDelta delta;
+  {
+    std::unique_lock<std::shared_mutex> lock(engine_mu_);
+    // Every cluster published before or after changes or disappears: rewrite
+    // them all (WriteFusedDelta deletes those the new engine lacks).
+    for (const fusion::FusedFeature& f : engine_->Published()) delta.insert(f.id);
+    engine_ = std::move(built->engine);
+    for (const fusion::FusedFeature& f : engine_->Published()) delta.insert(f.id);
+    map_version_ = std::max<uint64_t>(map_version_.load(), built->observations);
+  }
+  rebuilt_through_id_ = built->last_observation_id;
+  if (!delta.empty()) {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    fused_pending_.insert(delta.begin(), delta.end());
+    queue_cv_.notify_one();
+  }
+  Log(LogLevel::kInfo, "map_rebuilt_for_new_frames",
+      {{"observations", std::to_string(built->observations)},
+       {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
+}
+
+Status MapCore::ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write) {
+  auto job = std::make_shared<WriteJob>();
+  job->write = std::move(write);
+  std::future<Status> done = job->done.get_future();
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    if (stopping_) return Status::Unavailable("mapd is shutting down; nothing was written");
+    write_jobs_.push_back(std::move(job));
+    queue_cv_.notify_one();
+  }
+  return done.get();
+}
+
+void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
+  for (const std::shared_ptr<WriteJob>& job : jobs) {
+    StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+    Status s = txn.status();
+    bool frames_changed = false;
+    if (s.ok()) s = job->write(txn->get());
+    if (s.ok()) {
+      frames_changed = (*txn)->ties_sessions();
+      s = (*txn)->Commit();
+    }
+    txn = Status::Ok();  // ends the transaction (rolls back unless committed)
+    if (s.ok() && frames_changed) {
+      // In commit order with the observations: everything committed before is
+      // queued ahead of the marker, and the rebuild reads all of it.
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      ToFuse marker{0, 0, geometry::Rigid3(), geometry::SensorObservation(), true};
+      fuse_queue_.push_back(std::move(marker));
+      committed_count_ += 1;
+      fuse_cv_.notify_all();
+    }
+    job->done.set_value(s);
+  }
+  jobs.clear();
 }
 
 Status MapCore::SyncFusedTable() {
@@ -163,6 +246,7 @@ void MapCore::Stop() {
 void MapCore::WriterLoop() {
   std::vector<Pending> group;
   FusedDelta fused;
+  std::deque<std::shared_ptr<WriteJob>> jobs;
   for (;;) {
     {
       // Backpressure: while the fuser is far behind, commit nothing new, so
@@ -174,8 +258,11 @@ void MapCore::WriterLoop() {
     }
     {
       std::unique_lock<std::mutex> lock(queue_mu_);
-      queue_cv_.wait(lock, [this] { return !queue_.empty() || !fused_pending_.empty() || stopping_; });
-      if (queue_.empty() && fused_pending_.empty()) break;  // stopping, and nothing is left
+      queue_cv_.wait(lock, [this] {
+        return !queue_.empty() || !fused_pending_.empty() || !write_jobs_.empty() || stopping_;
+      });
+      if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty()) break;  // stopping, nothing left
+      jobs.swap(write_jobs_);
       const size_t n = std::min(queue_.size(), options_.max_group_batches);
       group.reserve(n);
       for (size_t i = 0; i < n; ++i) {
@@ -184,9 +271,10 @@ void MapCore::WriterLoop() {
       }
       fused.swap(fused_pending_);
     }
-    CommitGroup(group, fused);
+    if (!group.empty() || !fused.empty()) CommitGroup(group, fused);
     group.clear();
     fused.clear();
+    RunWriteJobs(jobs);
   }
 }
 
@@ -256,8 +344,8 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
       // an ack waits for that batch to be fused (read-your-writes).
       std::lock_guard<std::mutex> lock(fuse_mu_);
       for (auto& [index, result] : to_fuse) {
-        fuse_queue_.push_back({result.observation_id, result.frame.robot_id,
-                               result.frame.T_map_frame, std::move(group[index].batch.features)});
+        fuse_queue_.push_back({result.observation_id, result.frame.robot_id, result.frame.T_map_frame,
+                               std::move(group[index].batch.features), false});
       }
       committed_count_ += to_fuse.size();
       fuse_cv_.notify_all();
@@ -277,11 +365,24 @@ void MapCore::FuserLoop() {
     }
     FusedDelta delta;
     for (const ToFuse& t : work) {
+      if (t.rebuild) {
+        // The delta so far is about clusters of the old engine; the rebuild
+        // rewrites every published cluster of both anyway.
+        if (!delta.empty()) {
+          std::lock_guard<std::mutex> lock(queue_mu_);
+          fused_pending_.insert(delta.begin(), delta.end());
+          delta.clear();
+        }
+        RebuildForNewFrames();
+        continue;
+      }
+      // Already in the rebuilt engine (and counted in map_version_).
+      if (t.observation_id <= rebuilt_through_id_) continue;
       // Locked per observation, so queries never wait for a whole backlog.
       std::unique_lock<std::shared_mutex> lock(engine_mu_);
       Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
+      ++map_version_;
     }
-    map_version_ += work.size();
     if (!delta.empty()) {
       std::lock_guard<std::mutex> lock(queue_mu_);
       fused_pending_.insert(delta.begin(), delta.end());
@@ -321,15 +422,16 @@ void MapCore::WaitForFuser(std::chrono::duration<double> timeout) const {
   fuse_cv_.wait_for(lock, timeout, [&] { return fused_count_ >= target || fuser_stopping_; });
 }
 
-void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observation_id,
-                   int64_t robot_id, const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
+void MapCore::FuseInto(fusion::FusionEngine* engine, const geometry::SensorObservation& features,
+                       int64_t observation_id, int64_t robot_id, const geometry::Rigid3& T_map_frame,
+                       FusedDelta* delta) const {
   const fusion::FeatureId first_id = static_cast<fusion::FeatureId>(observation_id) << kFeatureIdBits;
   StatusOr<fusion::ProjectedObservation> projected =
       fusion::ProjectToGround(features, T_map_frame, first_id, options_.fusion);
   Status s = projected.status();
   fusion::ChangeFeed feed;
   if (s.ok() && !projected->ground.empty()) {
-    s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
+    s = engine->Add(static_cast<fusion::ObservationId>(observation_id),
                      static_cast<fusion::RobotId>(robot_id), projected->ground,
                      delta ? &feed : nullptr);
   }

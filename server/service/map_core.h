@@ -13,6 +13,12 @@
 // catch up, up to a bound), and the writer stops taking batches while the
 // fuser is more than max_fusion_backlog observations behind (backpressure).
 //
+// Other writes (submaps, merges, session ties) run on the writer thread too,
+// each in a transaction of its own (ExecuteWrite). When a write ties session
+// frames to the map frame, the fuser rebuilds the engine from the stored
+// observations with the new frames (DESIGN.md, Frames): the engine has no
+// removal, and a rebuild keeps the served map equal to a batch recomputation.
+//
 // Thread safety: every public method may be called from any thread.
 #ifndef MAPD_SERVICE_MAP_CORE_H_
 #define MAPD_SERVICE_MAP_CORE_H_
@@ -23,6 +29,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -98,6 +105,15 @@ class MapCore {
   // once with Unavailable.
   void Submit(IngestBatch batch, DoneCallback done);
 
+  // Runs `write` on the writer thread in a transaction of its own and commits
+  // it if `write` succeeds (else rolls back); returns once that is done, with
+  // write's error or the commit's. When the transaction tied session frames
+  // (WriteTransaction::TieSession), the fuser then re-projects every stored
+  // observation with the new frames; a query sent after this returns waits
+  // for that (like for any committed batch). After Stop(): Unavailable,
+  // nothing runs.
+  Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write);
+
   // Stops taking batches, commits everything queued, checkpoints. Idempotent.
   void Stop();
 
@@ -116,7 +132,17 @@ class MapCore {
   using FusedDelta = std::unordered_set<fusion::ClusterId>;
 
   explicit MapCore(const MapCoreOptions& options);
+  struct WriteJob;
+  // A fresh engine fused from every stored observation of a tied session.
+  struct BuiltEngine {
+    std::unique_ptr<fusion::FusionEngine> engine;
+    int64_t last_observation_id = 0;  // the newest observation it read
+    uint64_t observations = 0;        // stored observations, tied or not
+  };
+  StatusOr<BuiltEngine> BuildEngine();
   Status Rebuild();                     // engine_ from the stored observations
+  void RebuildForNewFrames();           // fuser thread: BuildEngine, swap, publish the delta
+  void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);
   Status SyncFusedTable();              // fused_features := engine_'s published map
   void WriterLoop();
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
@@ -127,7 +153,12 @@ class MapCore {
   void WaitForFuser(std::chrono::duration<double> timeout) const;
   // REQUIRES: engine_mu_ held exclusively.
   void Fuse(const geometry::SensorObservation& features, int64_t observation_id, int64_t robot_id,
-            const geometry::Rigid3& T_map_frame, FusedDelta* delta);
+            const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
+    FuseInto(engine_.get(), features, observation_id, robot_id, T_map_frame, delta);
+  }
+  void FuseInto(fusion::FusionEngine* engine, const geometry::SensorObservation& features,
+                int64_t observation_id, int64_t robot_id, const geometry::Rigid3& T_map_frame,
+                FusedDelta* delta) const;
   storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
   std::vector<std::string> RobotNames(const std::vector<fusion::RobotId>& ids) const;
   void RecordRate();
@@ -146,6 +177,7 @@ class MapCore {
   std::mutex queue_mu_;
   std::condition_variable queue_cv_;  // the writer waits for work or for the fuser's backlog to drop
   std::deque<Pending> queue_;  // GUARDED_BY(queue_mu_)
+  std::deque<std::shared_ptr<WriteJob>> write_jobs_;  // GUARDED_BY(queue_mu_)
   bool stopping_ = false;      // GUARDED_BY(queue_mu_)
   FusedDelta fused_pending_;   // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
   std::thread writer_;
@@ -156,6 +188,7 @@ class MapCore {
     int64_t robot_id;
     geometry::Rigid3 T_map_frame;
     geometry::SensorObservation features;
+    bool rebuild;  // a marker, not an observation: session frames changed, rebuild the engine
   };
   mutable std::mutex fuse_mu_;
   mutable std::condition_variable fuse_cv_;  // the fuser waits for work; queries wait for the fuser
@@ -163,6 +196,9 @@ class MapCore {
   uint64_t committed_count_ = 0;   // GUARDED_BY(fuse_mu_), observations handed to the fuser
   uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
   bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
+  // Fuser thread only: observations up to this id are in the engine from a
+  // rebuild, so queued copies of them are skipped.
+  int64_t rebuilt_through_id_ = 0;
   std::thread fuser_;
 
   std::atomic<uint64_t> batches_stored_{0};

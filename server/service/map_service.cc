@@ -13,13 +13,6 @@ namespace pb = mapserver::v1;
 constexpr int kFeaturesPerPage = 4096;
 const char* const kVersion = MAPD_VERSION;
 
-grpc::Status NotYet(const char* rpc) {
-  return grpc::Status(grpc::StatusCode::UNIMPLEMENTED,
-                      std::string(rpc) +
-                          " is not implemented in this mapd yet (voxel submap merging is a "
-                          "planned capability); the feature map RPCs are available");
-}
-
 void ToProto(const FusedView& v, pb::FusedFeature* out) {
   const fusion::FusedFeature& f = v.feature;
   out->set_id(f.id);
@@ -58,8 +51,8 @@ Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
 
 }  // namespace
 
-MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options)
-    : core_(core), ingest_options_(ingest_options) {}
+MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options)
+    : core_(core), ingest_options_(ingest_options), submaps_(core, submap_options) {}
 
 grpc::ServerBidiReactor<pb::ObservationBatch, pb::IngestAck>* MapServiceImpl::Ingest(
     grpc::CallbackServerContext* context) {
@@ -130,29 +123,31 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::UploadSubmap(grpc::ServerContext*, grpc::ServerReader<pb::UploadSubmapRequest>*,
-                                          pb::SubmapInfo*) {
-  return NotYet("UploadSubmap");
+grpc::Status MapServiceImpl::UploadSubmap(grpc::ServerContext* context,
+                                          grpc::ServerReader<pb::UploadSubmapRequest>* reader,
+                                          pb::SubmapInfo* response) {
+  if (draining_) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down");
+  return submaps_.Upload(context, reader, response);
 }
-grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext*, const pb::ListSubmapsRequest*,
-                                         pb::ListSubmapsResponse*) {
-  return NotYet("ListSubmaps");
+grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext*, const pb::ListSubmapsRequest* request,
+                                         pb::ListSubmapsResponse* response) {
+  return submaps_.List(*request, response);
 }
-grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext*, const pb::GetSubmapRequest*,
-                                       grpc::ServerWriter<pb::DataChunk>*) {
-  return NotYet("GetSubmap");
+grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context, const pb::GetSubmapRequest* request,
+                                       grpc::ServerWriter<pb::DataChunk>* writer) {
+  return submaps_.Get(context, *request, writer);
 }
-grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext*, const pb::DeleteSubmapRequest*,
+grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext*, const pb::DeleteSubmapRequest* request,
                                           pb::DeleteSubmapResponse*) {
-  return NotYet("DeleteSubmap");
+  return submaps_.Delete(*request);
 }
-grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext*, const pb::MergeSubmapsRequest*,
-                                          grpc::ServerWriter<pb::MergeProgress>*) {
-  return NotYet("MergeSubmaps");
+grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context, const pb::MergeSubmapsRequest* request,
+                                          grpc::ServerWriter<pb::MergeProgress>* writer) {
+  return submaps_.Merge(context, *request, writer);
 }
-grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext*, const pb::GetGlobalMapRequest*,
-                                          grpc::ServerWriter<pb::DataChunk>*) {
-  return NotYet("GetGlobalMap");
+grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context, const pb::GetGlobalMapRequest*,
+                                          grpc::ServerWriter<pb::DataChunk>* writer) {
+  return submaps_.GetGlobalMap(context, writer);
 }
 
 }  // namespace mapd::service

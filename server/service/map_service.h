@@ -6,20 +6,26 @@
 #define MAPD_SERVICE_MAP_SERVICE_H_
 
 #include <atomic>
+#include <memory>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/ingest_reactor.h"
 #include "service/map_core.h"
+#include "service/submap_service.h"
 
 namespace mapd::service {
 
 class MapServiceImpl final
     : public mapserver::v1::MapService::WithCallbackMethod_Ingest<mapserver::v1::MapService::Service> {
  public:
-  MapServiceImpl(MapCore* core, IngestOptions ingest_options);
+  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {});
 
-  // From now on new batches are refused with UNAVAILABLE (shutdown).
-  void StartDraining() { draining_ = true; }
+  // From now on new batches, uploads and merges are refused with UNAVAILABLE
+  // and merges in flight are abandoned (shutdown).
+  void StartDraining() {
+    draining_ = true;
+    submaps_.StartDraining();
+  }
 
   grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>* Ingest(
       grpc::CallbackServerContext* context) override;
@@ -32,7 +38,7 @@ class MapServiceImpl final
   grpc::Status GetStats(grpc::ServerContext* context, const mapserver::v1::GetStatsRequest* request,
                         mapserver::v1::Stats* response) override;
 
-  // Voxel submaps: not built yet; each answers UNIMPLEMENTED with a clear message.
+  // Voxel submaps: delegated to SubmapService (submap_service.h).
   grpc::Status UploadSubmap(grpc::ServerContext* context,
                             grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
                             mapserver::v1::SubmapInfo* response) override;
@@ -54,6 +60,7 @@ class MapServiceImpl final
   MapCore* const core_;
   const IngestOptions ingest_options_;
   std::atomic<bool> draining_{false};
+  SubmapService submaps_;
 };
 
 }  // namespace mapd::service

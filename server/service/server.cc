@@ -42,7 +42,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();
-  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest);
+  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
   if (!config.tls_cert.empty()) {

@@ -58,5 +58,41 @@ TEST(ConfigTest, RemoteListenNeedsTlsOrAnExplicitOptOut) {
   EXPECT_TRUE(Parse({"--listen", "0.0.0.0:50051", "--allow_insecure_remote", "true"}, &d).ok());
 }
 
+TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
+  ServerConfig c;
+  ASSERT_TRUE(Parse({"--limits.max_submap_bytes", "1048576", "--limits.max_concurrent_merges=2",
+                     "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
+                     "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5", "--merge.max_seconds=10",
+                     "--merge.resolution_policy=resample", "--merge.fusion_rule=log_odds"},
+                    &c)
+                  .ok());
+  EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
+  EXPECT_EQ(c.submaps.max_concurrent_merges, 2u);
+  EXPECT_EQ(c.submaps.max_queued_merges, 0u);
+  EXPECT_EQ(c.submaps.min_matched_corners, 6);
+  EXPECT_EQ(c.submaps.max_residual_voxels, 1.5);
+  EXPECT_EQ(c.submaps.min_overlap_score, 0.5);
+  EXPECT_EQ(c.submaps.max_merge_seconds, 10.0);
+  EXPECT_TRUE(c.submaps.resample_resolutions);
+  EXPECT_TRUE(c.submaps.log_odds_fusion);
+
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--limits.max_concurrent_merges=0", "limits.max_concurrent_merges"},
+      {"--limits.max_submap_bytes=10", "limits.max_submap_bytes"},
+      {"--merge.min_matched_corners=2", "merge.min_matched_corners"},
+      {"--merge.max_residual_voxels=0", "merge.max_residual_voxels"},
+      {"--merge.min_overlap_score=1.5", "merge.min_overlap_score"},
+      {"--merge.max_seconds=-1", "merge.max_seconds"},
+      {"--merge.resolution_policy=guess", "merge.resolution_policy"},
+      {"--merge.fusion_rule=max", "merge.fusion_rule"},
+  };
+  for (const auto& [flag, name] : bad) {
+    ServerConfig d;
+    const Status s = Parse({flag}, &d);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << flag;
+    EXPECT_THAT(s.message(), HasSubstr(name)) << flag;
+  }
+}
+
 }  // namespace
 }  // namespace mapd::service

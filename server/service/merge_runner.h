@@ -1,0 +1,94 @@
+// MergeRunner: computes submap merges off the RPC threads, with a concurrency
+// limit and a bounded wait queue.
+//
+// A merge may take seconds and voxel::MergeSubmaps cannot be interrupted
+// (it stops itself after MergeParams::max_seconds). So a job owns copies of
+// its inputs and runs on a detached worker thread that shares nothing with the
+// server but the runner's own reference-counted state: a handler whose client
+// went away, or a server that shuts down, abandons the job and returns at
+// once; the worker finishes in the background and its result is dropped.
+// Abandoned jobs keep their slot until their computation ends, so the limit
+// on concurrent merges holds for CPU and memory, not only for RPCs.
+//
+// Storing results is the handler's business (on its own thread, through
+// MapCore), never the worker's: nothing is written after an abandon.
+//
+// Thread safety: every method may be called from any thread.
+#ifndef MAPD_SERVICE_MERGE_RUNNER_H_
+#define MAPD_SERVICE_MERGE_RUNNER_H_
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "voxel/merge.h"
+
+namespace mapd::service {
+
+struct MergeProgressEvent {
+  std::string stage;    // "corners", "matching", "alignment", "fusion"
+  double fraction = 0;  // [0, 1] of the whole merge
+};
+
+// One merge, shared by the handler that waits for it and the worker.
+class MergeJob {
+ public:
+  // Waits up to `timeout` for news; moves the progress events since the last
+  // call into *events. True once the result is there (TakeResult()).
+  bool Wait(std::chrono::milliseconds timeout, std::vector<MergeProgressEvent>* events);
+  // REQUIRES: Wait() returned true. Once.
+  StatusOr<voxel::MergeOutcome> TakeResult();
+  // The handler gives up: the job is skipped if it has not started, and its
+  // result is dropped when it ends.
+  void Abandon();
+
+ private:
+  friend class MergeRunner;
+  void Publish(MergeProgressEvent event);
+  void Finish(StatusOr<voxel::MergeOutcome> result);
+  bool abandoned();
+
+  std::vector<uint64_t> ids_;
+  std::vector<std::string> bytes_;
+  voxel::MergeParams params_;
+
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<MergeProgressEvent> events_;                // GUARDED_BY(mu_)
+  std::optional<StatusOr<voxel::MergeOutcome>> result_;  // GUARDED_BY(mu_)
+  bool abandoned_ = false;                               // GUARDED_BY(mu_)
+};
+
+class MergeRunner {
+ public:
+  MergeRunner(size_t max_concurrent, size_t max_queued);
+  ~MergeRunner();  // Shutdown()
+
+  // Starts the merge now, or queues it behind the running ones.
+  // ResourceExhausted when max_concurrent run and max_queued wait already;
+  // Unavailable after Shutdown().
+  StatusOr<std::shared_ptr<MergeJob>> Submit(std::vector<uint64_t> ids,
+                                             std::vector<std::string> bytes,
+                                             const voxel::MergeParams& params);
+  // Refuses new jobs; queued ones end with Unavailable; running ones finish
+  // in the background and are dropped. Does not wait for them.
+  void Shutdown();
+
+  size_t running() const;  // computations in progress, abandoned ones included
+
+ private:
+  struct State;
+  static void Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> job);
+  std::shared_ptr<State> state_;
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MERGE_RUNNER_H_

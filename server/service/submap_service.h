@@ -1,0 +1,90 @@
+// The voxel-submap RPCs of mapserver.v1.MapService: UploadSubmap, ListSubmaps,
+// GetSubmap, DeleteSubmap, MergeSubmaps, GetGlobalMap. MapServiceImpl
+// delegates to this class; it translates between protobuf and the voxel and
+// storage libraries and writes through MapCore (one writer thread).
+//
+// Rules it implements (see also storage/store.h):
+// - Upload: header first (robot_id, name, format required), then chunks of at
+//   most 1 MiB, at most SubmapOptions::max_submap_bytes in all. The bytes are
+//   validated by our own depth-limited parser (voxel::InspectSubmap), never by
+//   OctoMap's reader directly; the header's format must match the file's magic
+//   line and a non-zero header resolution the file's. Only then is it stored.
+// - Delete: refused with FAILED_PRECONDITION while an accepted merge uses the
+//   submap as an input or produced it.
+// - Merge: computed by a MergeRunner (max_concurrent_merges at once, at most
+//   max_queued_merges waiting, beyond that RESOURCE_EXHAUSTED); progress is
+//   streamed as it comes. A refusal (weak evidence, no corners, no overlap,
+//   mismatched resolutions, over budget) is recorded as a refused merge with
+//   its reason and returned with the library's code (FAILED_PRECONDITION for
+//   weak evidence); no merged map is stored. An accepted merge stores the
+//   merged map as a submap of robot "@merged" named "merge-<id>", the merge
+//   record, and the session ties below, in ONE transaction, and streams the
+//   result last. A cancelled call or a server shutdown abandons the merge:
+//   nothing is stored.
+// - Frames (DESIGN.md, Frames): the first input is the reference R. Its
+//   session frame's pose in the map, T_map_R, is: R's own if R's session is
+//   tied; else T_map_k * T_R_k^-1 from the first input k whose session is
+//   tied; else the identity (the reference's frame becomes the map frame: the
+//   first tie of a fleet that has no map-frame session yet). Every input i
+//   whose session is not tied yet is then tied with T_map_i = T_map_R * T_R_i;
+//   ties are never moved later. Submaps uploaded without a session tie
+//   nothing. The fuser then re-projects every stored observation with the new
+//   frames, so the robots' walls fuse into one feature map.
+// - GetGlobalMap: the merged map of the latest accepted merge (NOT_FOUND
+//   before the first).
+// Built with MAPD_WITH_VOXEL=OFF, UploadSubmap and MergeSubmaps answer
+// UNIMPLEMENTED ("built without voxel support"); listing, fetching and
+// deleting stored submaps still work.
+//
+// Thread safety: the handlers may run concurrently on any threads.
+#ifndef MAPD_SERVICE_SUBMAP_SERVICE_H_
+#define MAPD_SERVICE_SUBMAP_SERVICE_H_
+
+#include <atomic>
+#include <memory>
+
+#include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/config.h"
+#include "service/map_core.h"
+
+namespace mapd::service {
+
+class MergeRunner;
+
+class SubmapService {
+ public:
+  SubmapService(MapCore* core, const SubmapOptions& options);
+  ~SubmapService();
+
+  // Shutdown: new uploads and merges are refused with UNAVAILABLE, merges in
+  // flight are abandoned (their handlers return at once).
+  void StartDraining();
+
+  grpc::Status Upload(grpc::ServerContext* context,
+                      grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
+                      mapserver::v1::SubmapInfo* response);
+  grpc::Status List(const mapserver::v1::ListSubmapsRequest& request,
+                    mapserver::v1::ListSubmapsResponse* response);
+  grpc::Status Get(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest& request,
+                   grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
+  grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request);
+  grpc::Status Merge(grpc::ServerContext* context,
+                     const mapserver::v1::MergeSubmapsRequest& request,
+                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer);
+  grpc::Status GetGlobalMap(grpc::ServerContext* context,
+                            grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
+
+ private:
+  // Streams a stored submap: info on the first chunk, then 1 MiB chunks.
+  grpc::Status StreamSubmap(grpc::ServerContext* context, int64_t id,
+                            grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
+
+  MapCore* const core_;
+  const SubmapOptions options_;
+  std::atomic<bool> draining_{false};
+  std::unique_ptr<MergeRunner> merges_;  // null without voxel support
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_SUBMAP_SERVICE_H_

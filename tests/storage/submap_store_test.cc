@@ -1,0 +1,315 @@
+// Submaps, merges and session ties in the store (storage/store.h).
+#include <gtest/gtest.h>
+
+#include "common/temp_dir.h"
+#include "storage/store.h"
+
+namespace mapd::storage {
+namespace {
+
+class SubmapStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override { Reopen(); }
+
+  void Reopen() {
+    store_.reset();
+    auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
+    ASSERT_TRUE(opened.ok()) << opened.status().ToString();
+    store_ = std::move(opened).value();
+  }
+
+  // Runs `fn` in one write transaction and commits it when fn succeeds.
+  template <typename Fn>
+  Status Write(Fn fn) {
+    auto txn = store_->BeginWrite();
+    if (!txn.ok()) return txn.status();
+    Status s = fn(txn->get());
+    if (!s.ok()) return s;
+    return (*txn)->Commit();
+  }
+
+  NewSubmap Submap(const std::string& robot, const std::string& name, const std::string& data,
+                   const std::string& session = "") {
+    NewSubmap m;
+    m.meta.robot = robot;
+    m.meta.name = name;
+    m.meta.format = SubmapFormat::kOctomapBt;
+    m.meta.resolution_m = 0.1;
+    m.meta.occupied_voxels = 12;
+    m.meta.free_voxels = 34;
+    m.meta.bounds_min = {-1, -2, -3};
+    m.meta.bounds_max = {4, 5, 6};
+    m.meta.created_ns = 777;
+    m.session = session;
+    m.data = data;
+    return m;
+  }
+
+  StatusOr<int64_t> Insert(const NewSubmap& m) {
+    int64_t id = 0;
+    Status s = Write([&](WriteTransaction* t) {
+      StatusOr<int64_t> r = t->InsertSubmap(m);
+      if (!r.ok()) return r.status();
+      id = *r;
+      return Status::Ok();
+    });
+    if (!s.ok()) return s;
+    return id;
+  }
+
+  // One observation in a local-frame session, so that the session exists.
+  void OpenLocalSession(const std::string& robot, const std::string& session) {
+    NewObservation o;
+    o.robot = robot;
+    o.session = session;
+    o.seq = 1;
+    o.frame_kind = FrameKind::kLocal;
+    o.features = &features_;
+    ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->InsertObservation(o).status(); }).ok());
+  }
+
+  StatusOr<MergeIds> Record(const NewMerge& merge) {
+    MergeIds ids;
+    Status s = Write([&](WriteTransaction* t) {
+      StatusOr<MergeIds> r = t->RecordMerge(merge);
+      if (!r.ok()) return r.status();
+      ids = *r;
+      return Status::Ok();
+    });
+    if (!s.ok()) return s;
+    return ids;
+  }
+
+  NewMerge Accepted(int64_t a, int64_t b, const std::string& merged_bytes) {
+    NewMerge m;
+    m.record.accepted = true;
+    m.record.created_ns = 99;
+    MergeInputRecord ia;
+    ia.submap_id = a;
+    ia.aligned = true;
+    MergeInputRecord ib;
+    ib.submap_id = b;
+    ib.aligned = true;
+    ib.T_reference_submap.translation = {1.5, -2, 0.25};
+    ib.T_reference_submap.rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+    ib.matched_corners = 9;
+    ib.residual_m = 0.04;
+    ib.overlap_score = 0.8;
+    m.record.inputs = {ia, ib};
+    m.merged = Submap("", "", merged_bytes);
+    return m;
+  }
+
+  static MergeInputRecord Input(int64_t submap_id) {
+    MergeInputRecord i;
+    i.submap_id = submap_id;
+    return i;
+  }
+
+  mapd::testing::TempDir dir_;
+  std::unique_ptr<Store> store_;
+  geometry::SensorObservation features_ = [] {
+    geometry::SensorObservation f;
+    f.lines.push_back({{0, 0, 0}, {3, 0, 0}});
+    return f;
+  }();
+};
+
+TEST_F(SubmapStoreTest, StoresListsAndReadsBackBytesAndMetadata) {
+  std::string bytes = "# Octomap OcTree binary file\n";
+  bytes += std::string("\0\x01\xff\x80", 4);  // binary, with a NUL
+  auto id = Insert(Submap("r1", "hall", bytes));
+  ASSERT_TRUE(id.ok()) << id.status().ToString();
+  ASSERT_TRUE(Insert(Submap("r2", "hall", "x")).ok());  // same name, other robot
+
+  auto meta = store_->GetSubmap(*id);
+  ASSERT_TRUE(meta.ok()) << meta.status().ToString();
+  EXPECT_EQ(meta->robot, "r1");
+  EXPECT_EQ(meta->name, "hall");
+  EXPECT_EQ(meta->format, SubmapFormat::kOctomapBt);
+  EXPECT_EQ(meta->resolution_m, 0.1);
+  EXPECT_EQ(meta->occupied_voxels, 12u);
+  EXPECT_EQ(meta->free_voxels, 34u);
+  EXPECT_EQ(meta->bounds_min, Eigen::Vector3d(-1, -2, -3));
+  EXPECT_EQ(meta->bounds_max, Eigen::Vector3d(4, 5, 6));
+  EXPECT_EQ(meta->size_bytes, bytes.size());
+  EXPECT_EQ(meta->session_id, 0);
+  auto data = store_->GetSubmapData(*id);
+  ASSERT_TRUE(data.ok());
+  EXPECT_EQ(*data, bytes);
+
+  auto all = store_->ListSubmaps("");
+  ASSERT_TRUE(all.ok());
+  EXPECT_EQ(all->size(), 2u);
+  auto r2 = store_->ListSubmaps("r2");
+  ASSERT_TRUE(r2.ok());
+  ASSERT_EQ(r2->size(), 1u);
+  EXPECT_EQ((*r2)[0].robot, "r2");
+  EXPECT_TRUE(store_->ListSubmaps("nobody")->empty());
+  EXPECT_EQ(store_->Counts()->submaps, 2u);
+
+  Reopen();  // survives a restart
+  EXPECT_EQ(*store_->GetSubmapData(*id), bytes);
+}
+
+TEST_F(SubmapStoreTest, NameIsUniquePerRobot) {
+  ASSERT_TRUE(Insert(Submap("r1", "hall", "a")).ok());
+  auto again = Insert(Submap("r1", "hall", "b"));
+  EXPECT_EQ(again.status().code(), StatusCode::kAlreadyExists);
+  EXPECT_NE(again.status().message().find("hall"), std::string::npos);
+  EXPECT_EQ(*store_->GetSubmapData(store_->ListSubmaps("r1")->at(0).id), "a");
+}
+
+TEST_F(SubmapStoreTest, UnknownSessionIsRefusedKnownOneIsLinked) {
+  auto unknown = Insert(Submap("r1", "hall", "a", "s1"));
+  EXPECT_EQ(unknown.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_TRUE(store_->ListSubmaps("")->empty());
+
+  OpenLocalSession("r1", "s1");
+  auto id = Insert(Submap("r1", "hall", "a", "s1"));
+  ASSERT_TRUE(id.ok()) << id.status().ToString();
+  auto session = store_->FindSession("r1", "s1");
+  ASSERT_TRUE(session.ok());
+  EXPECT_EQ(store_->GetSubmap(*id)->session_id, session->session_id);
+}
+
+TEST_F(SubmapStoreTest, DeleteRemovesAndReportsNotFound) {
+  auto id = Insert(Submap("r1", "hall", "a"));
+  ASSERT_TRUE(id.ok());
+  ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(*id); }).ok());
+  EXPECT_EQ(store_->GetSubmap(*id).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(store_->GetSubmapData(*id).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(Write([&](WriteTransaction* t) { return t->DeleteSubmap(*id); }).code(),
+            StatusCode::kNotFound);
+  // The name is free again.
+  EXPECT_TRUE(Insert(Submap("r1", "hall", "b")).ok());
+}
+
+TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
+
+  auto ids = Record(Accepted(a, b, "MERGED"));
+  ASSERT_TRUE(ids.ok()) << ids.status().ToString();
+  EXPECT_GT(ids->merge_id, 0);
+  EXPECT_GT(ids->merged_submap_id, 0);
+
+  auto global = store_->LatestGlobalMap();
+  ASSERT_TRUE(global.ok()) << global.status().ToString();
+  EXPECT_EQ(global->id, ids->merged_submap_id);
+  EXPECT_EQ(global->robot, kMergedRobot);
+  EXPECT_EQ(global->name, "merge-" + std::to_string(ids->merge_id));
+  EXPECT_EQ(*store_->GetSubmapData(global->id), "MERGED");
+
+  Reopen();
+  auto record = store_->GetMerge(ids->merge_id);
+  ASSERT_TRUE(record.ok()) << record.status().ToString();
+  EXPECT_TRUE(record->accepted);
+  EXPECT_EQ(record->merged_submap_id, ids->merged_submap_id);
+  ASSERT_EQ(record->inputs.size(), 2u);
+  EXPECT_EQ(record->inputs[1].submap_id, b);
+  EXPECT_TRUE(record->inputs[1].aligned);
+  EXPECT_EQ(record->inputs[1].matched_corners, 9);
+  EXPECT_DOUBLE_EQ(record->inputs[1].overlap_score, 0.8);
+  EXPECT_NEAR(record->inputs[1].T_reference_submap.translation.x(), 1.5, 1e-12);
+  EXPECT_NEAR(record->inputs[1].T_reference_submap.rotation.angularDistance(
+                  Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-12);
+
+  // The merged-map robot is not a robot of ListRobots / Counts.
+  const std::vector<RobotSummary> robots = store_->ListRobots().value();
+  for (const RobotSummary& r : robots) EXPECT_NE(r.name, kMergedRobot);
+  EXPECT_EQ(store_->Counts()->robots, 2u);
+
+  // Inputs and result of an accepted merge are pinned.
+  for (int64_t id : {a, b, ids->merged_submap_id}) {
+    const Status s = Write([&](WriteTransaction* t) { return t->DeleteSubmap(id); });
+    EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition) << id;
+    EXPECT_NE(s.message().find("accepted merge"), std::string::npos);
+    EXPECT_TRUE(store_->GetSubmap(id).ok());
+  }
+}
+
+TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  NewMerge m;
+  m.record.accepted = false;
+  m.record.reason = "FAILED_PRECONDITION: no corners in submap 2";
+  m.record.inputs = {Input(a), Input(b)};
+  auto ids = Record(m);
+  ASSERT_TRUE(ids.ok()) << ids.status().ToString();
+  EXPECT_EQ(ids->merged_submap_id, 0);
+  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(store_->ListSubmaps("")->size(), 2u);
+  auto record = store_->GetMerge(ids->merge_id);
+  ASSERT_TRUE(record.ok());
+  EXPECT_FALSE(record->accepted);
+  EXPECT_EQ(record->reason, m.record.reason);
+  ASSERT_EQ(record->inputs.size(), 2u);
+  EXPECT_FALSE(record->inputs[0].aligned);
+  EXPECT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(a); }).ok());
+}
+
+TEST_F(SubmapStoreTest, LatestAcceptedMergeIsTheGlobalMap) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  ASSERT_TRUE(Record(Accepted(a, b, "FIRST")).ok());
+  auto second = Record(Accepted(b, a, "SECOND"));
+  ASSERT_TRUE(second.ok());
+  NewMerge refused;
+  refused.record.reason = "no overlap";
+  refused.record.inputs = {Input(a), Input(b)};
+  ASSERT_TRUE(Record(refused).ok());
+  EXPECT_EQ(store_->LatestGlobalMap()->id, second->merged_submap_id);
+  EXPECT_EQ(store_->ListMerges()->size(), 3u);
+}
+
+TEST_F(SubmapStoreTest, TiedSessionFramePersistsAndIsNeverMoved) {
+  OpenLocalSession("r2", "s1");
+  auto before = store_->FindSession("r2", "s1");
+  ASSERT_TRUE(before.ok());
+  EXPECT_FALSE(before->tied);
+  geometry::Rigid3 T;
+  T.translation = {3, 4, 0};
+  T.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+  ASSERT_TRUE(
+      Write([&](WriteTransaction* t) { return t->TieSession(before->session_id, T); }).ok());
+  EXPECT_TRUE(store_->GetSession(before->session_id)->tied);
+
+  // Moving a tie is refused; an unknown session is NotFound.
+  EXPECT_EQ(
+      Write([&](WriteTransaction* t) { return t->TieSession(before->session_id, {}); }).code(),
+      StatusCode::kFailedPrecondition);
+  EXPECT_EQ(Write([&](WriteTransaction* t) { return t->TieSession(12345, {}); }).code(),
+            StatusCode::kNotFound);
+
+  Reopen();
+  auto after = store_->FindSession("r2", "s1");
+  ASSERT_TRUE(after.ok());
+  EXPECT_TRUE(after->tied);
+  EXPECT_NEAR((after->T_map_frame.translation - T.translation).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(after->T_map_frame.rotation.angularDistance(T.rotation), 0.0, 1e-12);
+  auto robots = store_->ListRobots();
+  ASSERT_EQ(robots->size(), 1u);
+  EXPECT_TRUE((*robots)[0].all_sessions_tied);
+}
+
+TEST_F(SubmapStoreTest, RolledBackTieLeavesTheCacheAlone) {
+  OpenLocalSession("r2", "s1");
+  const int64_t session = store_->FindSession("r2", "s1")->session_id;
+  {
+    auto txn = store_->BeginWrite();
+    ASSERT_TRUE(txn.ok());
+    ASSERT_TRUE((*txn)->TieSession(session, {}).ok());
+    // No commit: rolled back.
+  }
+  EXPECT_FALSE(store_->GetSession(session)->tied);
+  Reopen();
+  EXPECT_FALSE(store_->GetSession(session)->tied);
+}
+
+}  // namespace
+}  // namespace mapd::storage
