@@ -1,11 +1,14 @@
 // mapctl submaps | submap upload | merge | global-map
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 
 #include "client/commands.h"
 #include "client/format.h"
+#include "client/rigid_transform.h"
 #include "client/text_util.h"
 
 namespace mapd::client {
@@ -29,15 +32,21 @@ const char kSubmapHelp[] =
     "  --session     the session frame the submap was built in\n";
 
 const char kMergeHelp[] =
-    "Usage: mapctl merge ID ID... [--wait]\n"
-    "Merges two or more submaps without a prior pose and prints the transforms, matched\n"
-    "corners, residual and overlap of each, and the id of the merged map.\n"
-    "  --wait   print each progress message while the merge runs (the call always lasts\n"
-    "           until the merge ends)\n";
+    "Usage: mapctl merge ID ID... [--wait] [--render OUT.png|OUT.svg]\n"
+    "Merges two or more submaps without a prior pose and prints, per submap, where it sits\n"
+    "in the first submap's frame (xyz in metres, yaw/pitch/roll in degrees, Z-Y-X), the\n"
+    "matched corners, the residual and the overlap score, and the id of the merged map.\n"
+    "A merge refused for weak evidence prints the server's reason and exits 1.\n"
+    "  --wait    show the progress (stage and percent) while the merge runs (the call\n"
+    "            always lasts until the merge ends)\n"
+    "  --render  after an accepted merge, download the input submaps and draw them from\n"
+    "            above, each in its own colour, moved by its transform: walls that line up\n"
+    "            show the merge is right (see 'mapctl render --help')\n";
 
 const char kGlobalMapHelp[] =
-    "Usage: mapctl global-map -o FILE\n"
-    "Downloads the merged global map (OctoMap binary) to FILE.\n";
+    "Usage: mapctl global-map -o FILE [--render OUT.png|OUT.svg]\n"
+    "Downloads the merged global map (OctoMap binary) to FILE.\n"
+    "  --render  also draw it from above (see 'mapctl render --help')\n";
 
 std::string Basename(const std::string& path) {
   const size_t slash = path.find_last_of('/');
@@ -54,6 +63,43 @@ std::string DescribeSubmap(const pb::SubmapInfo& m) {
                 static_cast<unsigned long long>(m.free_voxels()), m.bounds_min().x(), m.bounds_min().y(),
                 m.bounds_min().z(), m.bounds_max().x(), m.bounds_max().y(), m.bounds_max().z(),
                 static_cast<unsigned long long>(m.size_bytes()));
+}
+
+// Reads a DataChunk stream to its end: the file's bytes, and the info of the first message.
+grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data, pb::SubmapInfo* info) {
+  pb::DataChunk chunk;
+  while (reader->Read(&chunk)) {
+    if (chunk.has_info()) *info = chunk.info();
+    data->append(chunk.data());
+  }
+  return reader->Finish();
+}
+
+RigidTransform ToRigidTransform(const pb::Rigid3& T) {
+  return RigidTransform::FromQuaternion(T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z(),
+                                        {T.translation().x(), T.translation().y(), T.translation().z()});
+}
+
+std::string FormatMergeProgress(const pb::MergeProgress& p) {
+  const double percent = std::floor(100 * std::clamp(p.fraction(), 0.0, 1.0));
+  return Printf("merge: %-10s %3.0f%%", p.stage().c_str(), percent);
+}
+
+// Per submap: where it sits in the reference (first) submap's frame and the evidence for it.
+std::string FormatMergeResult(const pb::MergeResult& result) {
+  std::string out = Printf("merge %llu accepted: merged submap %llu\n",
+                           static_cast<unsigned long long>(result.merge_id()),
+                           static_cast<unsigned long long>(result.merged_submap_id()));
+  for (const pb::SubmapAlignment& a : result.alignments()) {
+    const RigidTransform T = ToRigidTransform(a.t_reference_submap());
+    double yaw = 0, pitch = 0, roll = 0;
+    T.YawPitchRollDeg(&yaw, &pitch, &roll);
+    out += Printf("  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
+                  "%u matched corners, residual %.3f m, overlap %.2f\n",
+                  static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
+                  a.matched_corners(), a.residual_m(), a.overlap_score());
+  }
+  return out;
 }
 
 }  // namespace
@@ -131,7 +177,10 @@ int RunSubmap(const Context& ctx, const CommandArgs& args) {
 
 int RunMerge(const Context& ctx, const CommandArgs& args) {
   Args flags;
-  if (int rc = ParseCommandArgs("merge", kMergeHelp, args, {{"--wait"}}, &flags); rc != kContinue) return rc;
+  if (int rc = ParseCommandArgs("merge", kMergeHelp, args, {{"--wait"}, {"--render", true}}, &flags);
+      rc != kContinue) {
+    return rc;
+  }
   pb::MergeSubmapsRequest request;
   for (const std::string& id : flags.positionals()) {
     uint64_t v = 0;
@@ -139,41 +188,84 @@ int RunMerge(const Context& ctx, const CommandArgs& args) {
     request.add_submap_ids(v);
   }
   if (request.submap_ids_size() < 2) return UsageError("merge", "wants two or more submap ids");
+  const std::string render_path = flags.Get("--render");
+  ImageFormat render_format = ImageFormat::kPng;
+  if (!render_path.empty()) {
+    if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue) return rc;
+  }
 
   grpc::ClientContext call;  // no deadline: a merge takes as long as it takes
   std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader = ctx.stub->MergeSubmaps(&call, request);
   pb::MergeProgress progress;
   bool have_result = false;
   pb::MergeResult result;
+  std::string last_line;
   while (reader->Read(&progress)) {
-    if (flags.Has("--wait")) std::printf("merge: %-10s %3.0f%%\n", progress.stage().c_str(), 100 * progress.fraction());
     if (progress.has_result()) {
       result = progress.result();
       have_result = true;
     }
+    if (!flags.Has("--wait")) continue;
+    // One line per change of stage or whole percent, flushed so that a pipe
+    // shows it as it arrives.
+    const std::string line = FormatMergeProgress(progress);
+    if (line != last_line) {
+      std::printf("%s\n", line.c_str());
+      std::fflush(stdout);
+      last_line = line;
+    }
   }
   const grpc::Status status = reader->Finish();
+  if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
+    // The evidence was too weak: the server says why, nothing was written.
+    return ReportRpcError(ctx, "merge refused", status);
+  }
   if (!status.ok()) return ReportRpcError(ctx, "merge", status);
   if (!have_result) {
     PrintError("merge: the server ended the merge without a result");
     return kExitFailed;
   }
-  std::printf("merge %llu: merged submap %llu\n", static_cast<unsigned long long>(result.merge_id()),
-              static_cast<unsigned long long>(result.merged_submap_id()));
-  for (const pb::SubmapAlignment& a : result.alignments()) {
-    const auto& t = a.t_reference_submap().translation();
-    const auto& q = a.t_reference_submap().rotation();
-    std::printf("  submap %llu: t = (%.3f, %.3f, %.3f) m, q = (w %.4f, x %.4f, y %.4f, z %.4f), "
-                "%u corners, residual %.3f m, overlap %.2f\n",
-                static_cast<unsigned long long>(a.submap_id()), t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z(),
-                a.matched_corners(), a.residual_m(), a.overlap_score());
+  std::printf("%s", FormatMergeResult(result).c_str());
+  std::fflush(stdout);
+  if (render_path.empty()) return kExitOk;
+
+  // Each input in its own colour, moved by the transform the merge found:
+  // walls that line up show the merge is right.
+  std::vector<VoxelLayer> layers;
+  for (int i = 0; i < request.submap_ids_size(); ++i) {
+    const uint64_t id = request.submap_ids(i);
+    const pb::SubmapAlignment* alignment = nullptr;
+    for (const pb::SubmapAlignment& a : result.alignments()) {
+      if (a.submap_id() == id) alignment = &a;
+    }
+    RigidTransform T_reference_submap;  // the first input is the reference frame
+    if (alignment != nullptr) {
+      T_reference_submap = ToRigidTransform(alignment->t_reference_submap());
+    } else if (i > 0) {
+      PrintError(Printf("merge: no transform for submap %llu in the result; not drawn",
+                        static_cast<unsigned long long>(id)));
+      continue;
+    }
+    std::string data;
+    pb::SubmapInfo info;
+    grpc::ClientContext get_call;
+    pb::GetSubmapRequest get_request;
+    get_request.set_id(id);
+    const grpc::Status get_status = ReadChunks(ctx.stub->GetSubmap(&get_call, get_request).get(), &data, &info);
+    if (!get_status.ok()) {
+      return ReportRpcError(ctx, Printf("merge: GetSubmap %llu", static_cast<unsigned long long>(id)), get_status);
+    }
+    const std::string what = Printf("submap %llu (robot %s, %s)", static_cast<unsigned long long>(id),
+                                    info.robot_id().c_str(), info.name().c_str());
+    if (int rc = AddRenderLayer("merge", what, data, T_reference_submap, &layers); rc != kContinue) return rc;
   }
-  return kExitOk;
+  return WriteRendering("merge", layers, render_path, render_format);
 }
 
 int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
   Args flags;
-  if (int rc = ParseCommandArgs("global-map", kGlobalMapHelp, args, {{"-o", true}, {"--output", true}}, &flags);
+  if (int rc = ParseCommandArgs("global-map", kGlobalMapHelp, args,
+                                {{"-o", true}, {"--output", true}, {"--render", true}}, &flags);
       rc != kContinue) {
     return rc;
   }
@@ -182,16 +274,16 @@ int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
   if (!flags.positionals().empty()) {
     return UsageError("global-map", "unexpected argument '" + flags.positionals()[0] + "'");
   }
+  const std::string render_path = flags.Get("--render");
+  ImageFormat render_format = ImageFormat::kPng;
+  if (!render_path.empty()) {
+    if (int rc = CheckRenderOutput("global-map", render_path, &render_format); rc != kContinue) return rc;
+  }
   grpc::ClientContext call;
-  std::unique_ptr<grpc::ClientReader<pb::DataChunk>> reader = ctx.stub->GetGlobalMap(&call, pb::GetGlobalMapRequest());
-  pb::DataChunk chunk;
   std::string data;
   pb::SubmapInfo info;
-  while (reader->Read(&chunk)) {
-    if (chunk.has_info()) info = chunk.info();
-    data += chunk.data();
-  }
-  const grpc::Status status = reader->Finish();
+  const grpc::Status status =
+      ReadChunks(ctx.stub->GetGlobalMap(&call, pb::GetGlobalMapRequest()).get(), &data, &info);
   if (!status.ok()) return ReportRpcError(ctx, "global-map", status);
   std::string error;
   if (!WriteOutput(output, data, &error)) {
@@ -199,7 +291,13 @@ int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
     return kExitFailed;
   }
   std::printf("wrote %zu bytes to %s (%s)\n", data.size(), output.c_str(), DescribeSubmap(info).c_str());
-  return kExitOk;
+  std::fflush(stdout);
+  if (render_path.empty()) return kExitOk;
+  std::vector<VoxelLayer> layers;
+  const std::string what =
+      Printf("global map (submap %llu)", static_cast<unsigned long long>(info.id()));
+  if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue) return rc;
+  return WriteRendering("global-map", layers, render_path, render_format);
 }
 
 }  // namespace mapd::client

@@ -32,8 +32,9 @@ const Command kCommands[] = {
     {"simulate", mapd::client::RunSimulate, "stream (or export) simulated robots' laser lines"},
     {"submaps", mapd::client::RunSubmaps, "list stored voxel submaps"},
     {"submap", mapd::client::RunSubmap, "submap upload FILE --robot R: upload an OctoMap file"},
-    {"merge", mapd::client::RunMerge, "merge two or more submaps"},
-    {"global-map", mapd::client::RunGlobalMap, "download the merged global map"},
+    {"merge", mapd::client::RunMerge, "merge two or more submaps (--wait: progress, --render: picture)"},
+    {"global-map", mapd::client::RunGlobalMap, "download the merged global map (-o FILE.bt, --render)"},
+    {"render", mapd::client::RunRender, "draw OctoMap files from above as PNG or SVG (no server needed)"},
 };
 
 void PrintHelp() {

@@ -1,0 +1,258 @@
+// mapctl's voxel-submap commands against the real mapd, as an operator would
+// use them: upload two overlapping maps of a room, merge them with progress
+// and a rendering, download the global map, render files; a corrupt upload is
+// refused with a clear error and the server keeps serving; a merge without
+// evidence is refused with the server's reason.
+#include <signal.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "client/support/png_decode.h"
+#include "client/support/room_octree.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+#include "voxel/octree_reader.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void WriteAll(const std::string& path, const std::string& data) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << data;
+}
+
+size_t Count(const std::string& text, const std::string& needle) {
+  size_t n = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+// The id in "submap 7: robot r1, ..." (mapctl submap upload's answer), or "" if absent.
+std::string UploadedId(const std::string& out) {
+  std::smatch m;
+  return std::regex_search(out, m, std::regex(R"(^submap (\d+): robot)")) ? m[1].str() : "";
+}
+
+struct PrintedAlignment {
+  bool found = false;
+  double x = 0, y = 0, z = 0, yaw = 0, pitch = 0, roll = 0;
+};
+
+// "  submap 8: xyz (2.998, -0.501, 0.000) m, yaw/pitch/roll (20.01, 0.00, 0.00) deg, ..."
+PrintedAlignment ParseAlignment(const std::string& out, const std::string& id) {
+  const std::string num = R"(\s*(-?[0-9.]+))";
+  const std::regex line("submap " + id + ": xyz \\(" + num + "," + num + "," + num +
+                        "\\) m, yaw/pitch/roll \\(" + num + "," + num + "," + num + "\\) deg");
+  std::smatch m;
+  PrintedAlignment a;
+  if (!std::regex_search(out, m, line)) return a;
+  a.found = true;
+  a.x = std::stod(m[1]), a.y = std::stod(m[2]), a.z = std::stod(m[3]);
+  a.yaw = std::stod(m[4]), a.pitch = std::stod(m[5]), a.roll = std::stod(m[6]);
+  return a;
+}
+
+::testing::AssertionResult IsValidPng(const std::string& path) {
+  DecodedPng png;
+  std::string error;
+  if (!DecodePng(ReadAll(path), &png, &error)) return ::testing::AssertionFailure() << path << ": " << error;
+  if (png.width < 20 || png.height < 20) {
+    return ::testing::AssertionFailure() << path << ": only " << png.width << "x" << png.height;
+  }
+  size_t coloured = 0;  // pixels that are neither white nor grey: voxels drawn
+  for (size_t i = 0; i + 2 < png.rgb.size(); i += 3) {
+    if (png.rgb[i] != png.rgb[i + 1] || png.rgb[i + 1] != png.rgb[i + 2]) ++coloured;
+  }
+  if (coloured < 500) return ::testing::AssertionFailure() << path << ": only " << coloured << " coloured pixels";
+  return ::testing::AssertionSuccess();
+}
+
+class MapctlSubmapE2eTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { maps_ = new RoomMaps(MakeRoomMaps()); }
+  static void TearDownTestSuite() {
+    delete maps_;
+    maps_ = nullptr;
+  }
+
+  void SetUp() override {
+    WriteAll(a_bt_, maps_->a_bt);
+    WriteAll(b_bt_, maps_->b_bt);
+    WriteAll(floor_bt_, maps_->floor_bt);
+    mapd_ = StartMapd(dir_.File("map.db"), {}, MAPD_BINARY);
+    ASSERT_GT(mapd_.port, 0) << "mapd did not come up:\n" << mapd_.log();
+  }
+  void TearDown() override {
+    if (mapd_.pid > 0) Stop(mapd_.pid, SIGKILL);
+  }
+
+  CommandResult Mapctl(std::vector<std::string> args) {
+    args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd_.address});
+    return RunCommand(args, "");
+  }
+  // Uploads and returns the new id ("" on failure, reported).
+  std::string Upload(const std::string& path, const std::string& robot) {
+    CommandResult r = Mapctl({"submap", "upload", path, "--robot", robot});
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    const std::string id = UploadedId(r.out);
+    EXPECT_FALSE(id.empty()) << r.out;
+    return id;
+  }
+
+  static RoomMaps* maps_;
+  TempDir dir_;
+  const std::string a_bt_ = dir_.File("room_a.bt"), b_bt_ = dir_.File("room_b.bt"),
+                    floor_bt_ = dir_.File("floor.bt");
+  MapdProcess mapd_;
+};
+
+RoomMaps* MapctlSubmapE2eTest::maps_ = nullptr;
+
+TEST_F(MapctlSubmapE2eTest, GeneratedMapsAreValidOctrees) {
+  // Guards the fixture: the maps parse with the server's own reader.
+  EXPECT_TRUE(voxel::ValidateOctree(maps_->a_bt).ok());
+  EXPECT_TRUE(voxel::ValidateOctree(maps_->b_bt).ok());
+  EXPECT_TRUE(voxel::ValidateOctree(maps_->floor_bt).ok());
+}
+
+TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
+  const std::string id_a = Upload(a_bt_, "r1");
+  const std::string id_b = Upload(b_bt_, "r2");
+  ASSERT_FALSE(id_a.empty());
+  ASSERT_FALSE(id_b.empty());
+
+  CommandResult r = Mapctl({"submaps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("room_a"));
+  EXPECT_THAT(r.out, HasSubstr("room_b"));
+
+  // Merge with progress and a rendering of both inputs in the merged frame.
+  const std::string merge_png = dir_.File("merge.png");
+  r = Mapctl({"merge", id_a, id_b, "--wait", "--render", merge_png});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err << mapd_.log();
+  EXPECT_THAT(r.out, HasSubstr("%"));  // progress lines "merge: <stage> NN%"
+  EXPECT_GE(Count(r.out, "merge: "), 2u) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("accepted"));
+  const PrintedAlignment b = ParseAlignment(r.out, id_b);
+  ASSERT_TRUE(b.found) << r.out;
+  const Eigen::Vector3d t = maps_->T_a_b.translation();
+  const double truth_yaw = std::atan2(maps_->T_a_b.linear()(1, 0), maps_->T_a_b.linear()(0, 0)) * 180 / M_PI;
+  // Within 1.5 voxels and 1.5 degrees of the generated transform.
+  EXPECT_NEAR(b.x, t.x(), 0.15) << r.out;
+  EXPECT_NEAR(b.y, t.y(), 0.15) << r.out;
+  EXPECT_NEAR(b.z, t.z(), 0.15) << r.out;
+  EXPECT_NEAR(b.yaw, truth_yaw, 1.5) << r.out;
+  EXPECT_NEAR(b.pitch, 0.0, 1.5) << r.out;
+  EXPECT_NEAR(b.roll, 0.0, 1.5) << r.out;
+  const PrintedAlignment a = ParseAlignment(r.out, id_a);
+  if (a.found) {  // the reference submap, if listed, is the identity
+    EXPECT_NEAR(a.x, 0.0, 1e-3);
+    EXPECT_NEAR(a.yaw, 0.0, 1e-3);
+  }
+  EXPECT_THAT(r.out, HasSubstr("rendered 2 layers"));
+  EXPECT_TRUE(IsValidPng(merge_png));
+
+  // The global map: a .bt that the server's reader accepts, and its rendering.
+  const std::string global_bt = dir_.File("world.bt"), global_svg = dir_.File("world.svg");
+  r = Mapctl({"global-map", "-o", global_bt, "--render", global_svg});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string world = ReadAll(global_bt);
+  StatusOr<voxel::OctreeSummary> summary = voxel::ValidateOctree(world);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  EXPECT_NEAR(summary->resolution, 0.1, 1e-6);
+  const std::string svg = ReadAll(global_svg);
+  EXPECT_EQ(svg.rfind("<svg ", 0), 0u);
+  EXPECT_THAT(svg, HasSubstr("data:image/png;base64,"));
+  EXPECT_THAT(svg, HasSubstr("global map"));
+
+  // Local files need no server.
+  const std::string both_png = dir_.File("both.png");
+  r = RunCommand({MAPCTL_BINARY, "render", a_bt_, b_bt_, "-o", both_png});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(IsValidPng(both_png));
+}
+
+TEST_F(MapctlSubmapE2eTest, CorruptUploadIsRefusedAndTheServerKeepsServing) {
+  // Half a file: the octree stream ends early.
+  const std::string truncated = dir_.File("truncated.bt");
+  WriteAll(truncated, maps_->a_bt.substr(0, maps_->a_bt.size() / 2));
+  CommandResult r = Mapctl({"submap", "upload", truncated, "--robot", "r1"});
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("truncated.bt"));
+  EXPECT_THAT(r.err, HasSubstr("INVALID_ARGUMENT"));
+  EXPECT_EQ(Count(r.err, "\n"), 1u) << "one line: " << r.err;
+
+  // A header that lies about the resolution.
+  std::string bad = maps_->a_bt;
+  const size_t res = bad.find("\nres ");
+  ASSERT_NE(res, std::string::npos);
+  bad.replace(res, 5, "\nres -");
+  const std::string negative = dir_.File("negative.bt");
+  WriteAll(negative, bad);
+  r = Mapctl({"submap", "upload", negative, "--robot", "r1"});
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("INVALID_ARGUMENT"));
+
+  // Still serving: the listing works and a good upload is stored.
+  r = Mapctl({"submaps"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, Not(HasSubstr("truncated")));
+  EXPECT_FALSE(Upload(a_bt_, "r1").empty());
+
+  // mapctl's own reader refuses the same file: a bad input file is exit 2.
+  r = RunCommand({MAPCTL_BINARY, "render", truncated, "-o", dir_.File("t.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("truncated.bt"));
+  EXPECT_THAT(r.err, HasSubstr("INVALID_ARGUMENT"));
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("t.png")));
+}
+
+TEST_F(MapctlSubmapE2eTest, MergeWithoutEvidenceIsRefusedWithTheReason) {
+  const std::string id_a = Upload(a_bt_, "r1");
+  const std::string id_floor = Upload(floor_bt_, "r3");
+  ASSERT_FALSE(id_a.empty());
+  ASSERT_FALSE(id_floor.empty());
+  const std::string png = dir_.File("refused.png");
+  CommandResult r = Mapctl({"merge", id_a, id_floor, "--wait", "--render", png});
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("merge refused"));
+  EXPECT_THAT(r.err, HasSubstr("FAILED_PRECONDITION"));
+  EXPECT_THAT(r.out, Not(HasSubstr("accepted")));
+  EXPECT_FALSE(std::filesystem::exists(png));
+}
+
+TEST_F(MapctlSubmapE2eTest, RenderUsageErrors) {
+  // Checked before anything is sent or read.
+  CommandResult r = Mapctl({"merge", "1", "2", "--render", dir_.File("out.jpg")});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(".png or .svg"));
+  r = RunCommand({MAPCTL_BINARY, "render", a_bt_});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("-o"));
+  r = RunCommand({MAPCTL_BINARY, "render", dir_.File("missing.bt"), "-o", dir_.File("m.png")});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("missing.bt"));
+}
+
+}  // namespace
+}  // namespace mapd::testing

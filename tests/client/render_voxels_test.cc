@@ -1,0 +1,429 @@
+// The top-down voxel renderer of mapctl: PNG encoding checked by an
+// independent decoder, pixels of tiny known scenes, bounds, pixel size, scale
+// bar, legend, and the transform helpers.
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "client/bitmap_font.h"
+#include "client/png_writer.h"
+#include "client/rgb_image.h"
+#include "client/rigid_transform.h"
+#include "client/voxel_render.h"
+#include "client/support/png_decode.h"
+
+namespace mapd::client {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::DecodedPng;
+using testing::DecodePng;
+
+const Rgb kWhite{255, 255, 255};
+
+Rgb Scaled(Rgb c, double f) {
+  return {static_cast<uint8_t>(std::lround(c.r * f)), static_cast<uint8_t>(std::lround(c.g * f)),
+          static_cast<uint8_t>(std::lround(c.b * f))};
+}
+
+// ---------------------------------------------------------------------------
+// PNG
+
+TEST(PngWriterTest, CrcMatchesKnownValues) {
+  // The CRC of every PNG's IEND chunk (type only, no data) is AE 42 60 82.
+  EXPECT_EQ(PngCrc32("IEND"), 0xAE426082u);
+  EXPECT_EQ(PngCrc32("123456789"), 0xCBF43926u);  // the standard CRC-32 check value
+  EXPECT_EQ(PngCrc32("123456789"), testing::BitwiseCrc32("123456789"));
+}
+
+TEST(PngWriterTest, WritesChunksThatAnIndependentDecoderReads) {
+  RgbImage image(3, 2, kWhite);
+  image.Set(0, 0, {255, 0, 0});
+  image.Set(2, 1, {1, 2, 3});
+  StatusOr<std::string> png = EncodePng(image);
+  ASSERT_TRUE(png.ok()) << png.status().ToString();
+  EXPECT_EQ(png->substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+
+  DecodedPng decoded;
+  std::string error;
+  ASSERT_TRUE(DecodePng(*png, &decoded, &error)) << error;
+  EXPECT_EQ(decoded.width, 3);
+  EXPECT_EQ(decoded.height, 2);
+  EXPECT_EQ(decoded.chunk_types, (std::vector<std::string>{"IHDR", "IDAT", "IEND"}));
+  EXPECT_EQ(decoded.rgb, image.bytes());
+  EXPECT_EQ(decoded.r(0, 0), 255);
+  EXPECT_EQ(decoded.g(0, 0), 0);
+  EXPECT_EQ(decoded.b(2, 1), 3);
+}
+
+TEST(PngWriterTest, DecoderCatchesACorruptedByte) {
+  // Guards the test decoder itself: a flipped pixel byte breaks the IDAT CRC.
+  StatusOr<std::string> png = EncodePng(RgbImage(4, 4, {10, 20, 30}));
+  ASSERT_TRUE(png.ok());
+  std::string bad = *png;
+  bad[bad.size() - 20] ^= 0x40;  // inside IDAT's compressed data
+  DecodedPng decoded;
+  std::string error;
+  EXPECT_FALSE(DecodePng(bad, &decoded, &error));
+  EXPECT_THAT(error, HasSubstr("CRC"));
+}
+
+TEST(PngWriterTest, RefusesAnEmptyImage) {
+  StatusOr<std::string> png = EncodePng(RgbImage(0, 5, kWhite));
+  ASSERT_FALSE(png.ok());
+  EXPECT_EQ(png.status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(PngWriterTest, Base64MatchesRfc4648Vectors) {
+  EXPECT_EQ(Base64(""), "");
+  EXPECT_EQ(Base64("f"), "Zg==");
+  EXPECT_EQ(Base64("fo"), "Zm8=");
+  EXPECT_EQ(Base64("foo"), "Zm9v");
+  EXPECT_EQ(Base64("foob"), "Zm9vYg==");
+  EXPECT_EQ(Base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(Base64(std::string("\xff\xfe", 2)), "//4=");
+}
+
+// ---------------------------------------------------------------------------
+// Text
+
+TEST(BitmapFontTest, DrawsGlyphPixels) {
+  RgbImage image(12, 7, kWhite);
+  const int width = image.DrawText(0, 0, "1-", 1, {0, 0, 0});
+  EXPECT_EQ(width, 11);
+  // '1': top row ..#.., bottom row .###.
+  EXPECT_EQ(image.At(2, 0), (Rgb{0, 0, 0}));
+  EXPECT_EQ(image.At(0, 0), kWhite);
+  EXPECT_EQ(image.At(1, 6), (Rgb{0, 0, 0}));
+  // '-' starts at column 6: its row 3 is solid, row 2 empty.
+  for (int x = 6; x < 11; ++x) EXPECT_EQ(image.At(x, 3), (Rgb{0, 0, 0})) << x;
+  EXPECT_EQ(image.At(6, 2), kWhite);
+  EXPECT_EQ(Glyph('m'), Glyph('M'));
+  EXPECT_EQ(Glyph('\x01'), Glyph('?'));
+}
+
+// ---------------------------------------------------------------------------
+// Transforms
+
+TEST(RigidTransformTest, YawPitchRollRoundTrip) {
+  // q = qz(yaw) * qy(pitch) * qx(roll), the Z-Y-X convention printed by mapctl.
+  const double yaw = 30 * M_PI / 180, pitch = -10 * M_PI / 180, roll = 5 * M_PI / 180;
+  const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2), cp = std::cos(pitch / 2),
+               sp = std::sin(pitch / 2), cr = std::cos(roll / 2), sr = std::sin(roll / 2);
+  const double w = cy * cp * cr + sy * sp * sr, x = cy * cp * sr - sy * sp * cr,
+               y = cy * sp * cr + sy * cp * sr, z = sy * cp * cr - cy * sp * sr;
+  const RigidTransform T = RigidTransform::FromQuaternion(2 * w, 2 * x, 2 * y, 2 * z, {1, 2, 3});  // not unit
+  double out_yaw, out_pitch, out_roll;
+  T.YawPitchRollDeg(&out_yaw, &out_pitch, &out_roll);
+  EXPECT_NEAR(out_yaw, 30, 1e-9);
+  EXPECT_NEAR(out_pitch, -10, 1e-9);
+  EXPECT_NEAR(out_roll, 5, 1e-9);
+}
+
+TEST(RigidTransformTest, AppliesRotationThenTranslation) {
+  // 90 degrees about z: x -> y.
+  const RigidTransform T =
+      RigidTransform::FromQuaternion(std::cos(M_PI / 4), 0, 0, std::sin(M_PI / 4), {10, 0, -1});
+  const Point3 p = T.Apply({1, 0, 2});
+  EXPECT_NEAR(p.x, 10, 1e-12);
+  EXPECT_NEAR(p.y, 1, 1e-12);
+  EXPECT_NEAR(p.z, 1, 1e-12);
+}
+
+// ---------------------------------------------------------------------------
+// Top view
+
+// One pixel per voxel: no magnification of small maps.
+RenderOptions Unmagnified() {
+  RenderOptions options;
+  options.min_map_px = 1;
+  return options;
+}
+
+// Three 1 m voxels: two on the floor (z 0.5) at x 0.5 and 2.5, one high (z 2.5)
+// at (2.5, 1.5). Bounds (faces) x [0, 3], y [0, 2]: a 3 x 2 px map at 1 m/px.
+VoxelLayer TinyLayer(Rgb colour) {
+  VoxelLayer layer;
+  layer.label = "tiny";
+  layer.colour = colour;
+  layer.resolution_m = 1.0;
+  layer.centres_m = {{0.5, 0.5, 0.5}, {2.5, 0.5, 0.5}, {2.5, 1.5, 2.5}};
+  return layer;
+}
+
+TEST(RenderTopViewTest, PixelsOfATinyKnownScene) {
+  const Rgb red{200, 0, 0};
+  StatusOr<TopView> view = RenderTopView({TinyLayer(red)}, Unmagnified());
+  ASSERT_TRUE(view.ok()) << view.status().ToString();
+  EXPECT_EQ(view->pixel_m, 1.0);
+  ASSERT_EQ(view->map.width(), 3);
+  ASSERT_EQ(view->map.height(), 2);
+  EXPECT_DOUBLE_EQ(view->x_min_m, 0.0);
+  EXPECT_DOUBLE_EQ(view->x_max_m, 3.0);
+  EXPECT_DOUBLE_EQ(view->y_min_m, 0.0);
+  EXPECT_DOUBLE_EQ(view->y_max_m, 2.0);
+  EXPECT_DOUBLE_EQ(view->z_min_m, 0.5);
+  EXPECT_DOUBLE_EQ(view->z_max_m, 2.5);
+  EXPECT_EQ(view->voxels, 3u);
+
+  // North up: row 0 is y in [1, 2]. Lowest voxels at 35% brightness, the highest at 100%.
+  EXPECT_EQ(view->map.At(0, 1), Scaled(red, 0.35));  // (0.5, 0.5)
+  EXPECT_EQ(view->map.At(2, 1), Scaled(red, 0.35));  // (2.5, 0.5)
+  EXPECT_EQ(view->map.At(2, 0), red);                // (2.5, 1.5), z 2.5
+  EXPECT_EQ(view->map.At(1, 1), kWhite);             // nothing at (1.5, 0.5)
+  EXPECT_EQ(view->map.At(0, 0), kWhite);
+  EXPECT_EQ(view->map.At(1, 0), kWhite);
+
+  int col = -1, row = -1;
+  view->MetresToPixel(2.5, 1.5, &col, &row);
+  EXPECT_EQ(col, 2);
+  EXPECT_EQ(row, 0);
+}
+
+TEST(RenderTopViewTest, MaxHeightWinsWithinALayer) {
+  VoxelLayer layer = TinyLayer({0, 0, 200});
+  layer.centres_m.push_back({0.5, 0.5, 2.5});  // above the floor voxel at (0.5, 0.5)
+  StatusOr<TopView> view = RenderTopView({layer}, Unmagnified());
+  ASSERT_TRUE(view.ok());
+  EXPECT_EQ(view->map.At(0, 1), (Rgb{0, 0, 200}));
+}
+
+TEST(RenderTopViewTest, TransformedLayersThatCoincideMixTheirColours) {
+  const Rgb red{200, 0, 0}, blue{0, 0, 200};
+  VoxelLayer b;
+  b.label = "moved";
+  b.colour = blue;
+  b.resolution_m = 1.0;
+  b.centres_m = {{0.5, 0.5, 2.5}};
+  // Moved by (2, 1, 0) it lands on the red layer's high voxel at (2.5, 1.5, 2.5).
+  b.T_view_layer = RigidTransform::FromQuaternion(1, 0, 0, 0, {2, 1, 0});
+  StatusOr<TopView> view = RenderTopView({TinyLayer(red), b}, Unmagnified());
+  ASSERT_TRUE(view.ok());
+  ASSERT_EQ(view->map.width(), 3);
+  ASSERT_EQ(view->map.height(), 2);
+  EXPECT_EQ(view->map.At(2, 0), (Rgb{100, 0, 100}));  // the mean of red and blue
+  EXPECT_EQ(view->map.At(0, 1), Scaled(red, 0.35));  // red alone
+}
+
+TEST(RenderTopViewTest, RotatedLayerKeepsAWallClosed) {
+  // A 2 m wall of 0.1 m voxels along x, rotated by 45 degrees: every pixel
+  // along the diagonal must be drawn (no holes from the rotation).
+  VoxelLayer wall;
+  wall.label = "wall";
+  wall.colour = {0, 150, 0};
+  wall.resolution_m = 0.1;
+  for (int i = 0; i < 20; ++i) wall.centres_m.push_back({0.05 + 0.1 * i, 0.05, 0.05});
+  wall.T_view_layer = RigidTransform::FromQuaternion(std::cos(M_PI / 8), 0, 0, std::sin(M_PI / 8), {});
+  StatusOr<TopView> view = RenderTopView({wall}, RenderOptions());
+  ASSERT_TRUE(view.ok());
+  int holes = 0;
+  for (double s = 0.1; s < 1.9; s += 0.05) {  // along the rotated wall's axis
+    const Point3 p = wall.T_view_layer.Apply({s, 0.05, 0});
+    int col, row;
+    view->MetresToPixel(p.x, p.y, &col, &row);
+    if (view->map.At(col, row) == kWhite) ++holes;
+  }
+  EXPECT_EQ(holes, 0);
+}
+
+TEST(RenderTopViewTest, ShadingIgnoresAFewOutlierHeights) {
+  // 200 floor voxels at z 0.5 and 200 wall-top voxels at z 2.5, plus one stray
+  // voxel at z 40: the shading range stays [0.5, 2.5], so wall tops are at full brightness.
+  const Rgb green{0, 200, 0};
+  VoxelLayer layer;
+  layer.label = "outlier";
+  layer.colour = green;
+  layer.resolution_m = 1.0;
+  for (int i = 0; i < 200; ++i) {
+    layer.centres_m.push_back({0.5 + i, 0.5, 0.5});
+    layer.centres_m.push_back({0.5 + i, 1.5, 2.5});
+  }
+  layer.centres_m.push_back({0.5, 2.5, 40.0});
+  StatusOr<TopView> view = RenderTopView({layer}, Unmagnified());
+  ASSERT_TRUE(view.ok());
+  EXPECT_DOUBLE_EQ(view->z_min_m, 0.5);
+  EXPECT_DOUBLE_EQ(view->z_max_m, 2.5);
+  EXPECT_EQ(view->map.At(10, 1), green);                 // a wall top, row 1 = y in [1, 2]
+  EXPECT_EQ(view->map.At(10, 2), Scaled(green, 0.35));  // the floor
+  EXPECT_EQ(view->map.At(0, 0), green);                  // the stray voxel, clamped to the brightest
+}
+
+TEST(RenderTopViewTest, PixelSizeGrowsToTheMaximumImageSize) {
+  // 100 m of 5 cm voxels in a map of at most 100 px: about 1 m per pixel.
+  VoxelLayer line;
+  line.label = "line";
+  line.colour = {0, 0, 0};
+  line.resolution_m = 0.05;
+  for (int i = 0; i < 2000; ++i) line.centres_m.push_back({0.025 + 0.05 * i, 0.025, 0.0});
+  RenderOptions options = Unmagnified();
+  options.max_map_px = 100;
+  StatusOr<TopView> view = RenderTopView({line}, options);
+  ASSERT_TRUE(view.ok());
+  EXPECT_NEAR(view->pixel_m, 1.0, 1e-9);
+  EXPECT_EQ(view->map.width(), 100);
+  EXPECT_EQ(view->map.height(), 1);
+  for (int x = 0; x < 100; ++x) EXPECT_NE(view->map.At(x, 0), kWhite) << x;
+
+  // Without the cap the pixel is the voxel size.
+  options.max_map_px = 4096;
+  view = RenderTopView({line}, options);
+  ASSERT_TRUE(view.ok());
+  EXPECT_DOUBLE_EQ(view->pixel_m, 0.05);
+  EXPECT_EQ(view->map.width(), 2000);
+}
+
+TEST(RenderTopViewTest, SmallMapsAreMagnified) {
+  // 3 m x 2 m of 1 m voxels with min_map_px 30: 0.1 m per pixel, each voxel 10 x 10 px.
+  const Rgb red{200, 0, 0};
+  RenderOptions options;
+  options.min_map_px = 30;
+  StatusOr<TopView> view = RenderTopView({TinyLayer(red)}, options);
+  ASSERT_TRUE(view.ok());
+  EXPECT_NEAR(view->pixel_m, 0.1, 1e-12);
+  ASSERT_EQ(view->map.width(), 30);
+  ASSERT_EQ(view->map.height(), 20);
+  // The high voxel (2.5, 1.5) fills columns 20-29, rows 0-9, and nothing beyond.
+  for (int y = 0; y < 10; ++y) {
+    for (int x = 20; x < 30; ++x) ASSERT_EQ(view->map.At(x, y), red) << x << "," << y;
+    EXPECT_EQ(view->map.At(19, y), kWhite) << y;
+  }
+  EXPECT_EQ(view->map.At(25, 10), Scaled(red, 0.35));  // the floor voxel below it
+  // An explicit pixel size is kept.
+  options.pixel_m = 0.5;
+  view = RenderTopView({TinyLayer(red)}, options);
+  ASSERT_TRUE(view.ok());
+  EXPECT_EQ(view->map.width(), 6);
+}
+
+TEST(RenderTopViewTest, RefusesBadInputNamingIt) {
+  RenderOptions options;
+  options.pixel_m = -1;
+  StatusOr<TopView> view = RenderTopView({TinyLayer({1, 1, 1})}, options);
+  ASSERT_FALSE(view.ok());
+  EXPECT_THAT(view.status().message(), HasSubstr("pixel_m"));
+
+  options = RenderOptions();
+  options.max_map_px = 4;
+  EXPECT_THAT(options.Validate().message(), HasSubstr("max_map_px"));
+  options = RenderOptions();
+  options.min_map_px = 4096;  // above max_map_px
+  EXPECT_THAT(options.Validate().message(), HasSubstr("min_map_px"));
+  options = RenderOptions();
+  options.text_scale = 0;
+  EXPECT_THAT(options.Validate().message(), HasSubstr("text_scale"));
+
+  EXPECT_FALSE(RenderTopView({}, RenderOptions()).ok());
+  VoxelLayer empty = TinyLayer({1, 1, 1});
+  empty.centres_m.clear();
+  view = RenderTopView({empty}, RenderOptions());
+  ASSERT_FALSE(view.ok());
+  EXPECT_THAT(view.status().message(), HasSubstr("no occupied voxel"));
+
+  VoxelLayer bad_res = TinyLayer({1, 1, 1});
+  bad_res.resolution_m = 0;
+  view = RenderTopView({TinyLayer({1, 1, 1}), bad_res}, RenderOptions());
+  ASSERT_FALSE(view.ok());
+  EXPECT_THAT(view.status().message(), HasSubstr("layers[1].resolution_m"));
+
+  VoxelLayer nan = TinyLayer({1, 1, 1});
+  nan.T_view_layer.t.x = std::nan("");
+  view = RenderTopView({nan}, RenderOptions());
+  ASSERT_FALSE(view.ok());
+  EXPECT_THAT(view.status().message(), HasSubstr("not finite"));
+}
+
+TEST(ScaleBarTest, LargestNiceLengthWithinFortyPercent) {
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(10), 2);     // 4 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(100), 20);   // 40 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(13), 5);     // 5.2 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(1.3), 0.5);
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(2.5), 1);    // exactly 40%
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(0), 0);
+}
+
+TEST(ImageFormatTest, FromTheExtension) {
+  ImageFormat f = ImageFormat::kSvg;
+  EXPECT_TRUE(ImageFormatFromPath("a/b.PNG", &f));
+  EXPECT_EQ(f, ImageFormat::kPng);
+  EXPECT_TRUE(ImageFormatFromPath("map.svg", &f));
+  EXPECT_EQ(f, ImageFormat::kSvg);
+  EXPECT_FALSE(ImageFormatFromPath("map.bt", &f));
+  EXPECT_FALSE(ImageFormatFromPath("png", &f));
+}
+
+// ---------------------------------------------------------------------------
+// Whole pictures
+
+// A 10 m x 4 m frame of 0.5 m voxels: the map is 20 x 8 px at 0.5 m/px.
+VoxelLayer Frame() {
+  VoxelLayer layer;
+  layer.label = "frame <1>";
+  layer.colour = LayerColour(0);
+  layer.resolution_m = 0.5;
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      if (i == 0 || j == 0 || i == 19 || j == 7) layer.centres_m.push_back({0.25 + 0.5 * i, 0.25 + 0.5 * j, 1.0});
+    }
+  }
+  return layer;
+}
+
+TEST(RenderVoxelImageTest, PngHoldsTheMapScaleBarAndLegend) {
+  RenderOptions options = Unmagnified();
+  options.margin_px = 10;
+  options.text_scale = 1;
+  const std::vector<VoxelLayer> layers = {Frame()};
+  StatusOr<TopView> view = RenderTopView(layers, options);
+  ASSERT_TRUE(view.ok());
+  ASSERT_EQ(view->map.width(), 20);
+  ASSERT_EQ(view->map.height(), 8);
+
+  StatusOr<std::string> png = RenderVoxelImage(layers, options, ImageFormat::kPng);
+  ASSERT_TRUE(png.ok()) << png.status().ToString();
+  DecodedPng image;
+  std::string error;
+  ASSERT_TRUE(DecodePng(*png, &image, &error)) << error;
+  // The legend line is wider than the map: the picture grows to hold it.
+  EXPECT_GT(image.width, 20 + 2 * 10);
+  EXPECT_GT(image.height, 8 + 2 * 10);
+  // The map sits at (margin, margin), pixel for pixel.
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 20; ++x) {
+      const Rgb want = view->map.At(x, y);
+      ASSERT_EQ(image.r(10 + x, 10 + y), want.r) << x << "," << y;
+      ASSERT_EQ(image.g(10 + x, 10 + y), want.g) << x << "," << y;
+    }
+  }
+  // Scale bar: 10 m wide -> 2 m = 4 px, dark, starting one margin below the map.
+  const int bar_y = 10 + 8 + 10;
+  for (int x = 10; x < 14; ++x) EXPECT_LT(image.r(x, bar_y), 50) << x;
+  EXPECT_EQ(image.r(14, bar_y), 255);
+  // Somewhere below the bar the legend swatch has the layer's colour.
+  bool swatch = false;
+  for (int y = bar_y; y < image.height && !swatch; ++y) {
+    swatch = image.r(10, y) == layers[0].colour.r && image.g(10, y) == layers[0].colour.g &&
+             image.b(10, y) == layers[0].colour.b;
+  }
+  EXPECT_TRUE(swatch);
+}
+
+TEST(RenderVoxelImageTest, SvgEmbedsTheMapAndWritesVectorLegend) {
+  VoxelLayer second = Frame();
+  second.label = "second";
+  second.colour = LayerColour(1);
+  StatusOr<std::string> svg = RenderVoxelImage({Frame(), second}, Unmagnified(), ImageFormat::kSvg);
+  ASSERT_TRUE(svg.ok()) << svg.status().ToString();
+  EXPECT_EQ(svg->rfind("<svg ", 0), 0u);
+  EXPECT_THAT(*svg, HasSubstr("data:image/png;base64,iVBORw0KGgo"));  // the PNG signature in base64
+  EXPECT_THAT(*svg, HasSubstr(">2 m</text>"));
+  EXPECT_THAT(*svg, HasSubstr(">frame &lt;1&gt;</text>"));  // labels are escaped
+  EXPECT_THAT(*svg, HasSubstr(">second</text>"));
+  EXPECT_THAT(*svg, HasSubstr("mixed colour: layers overlap"));
+  EXPECT_THAT(*svg, HasSubstr("</svg>"));
+}
+
+}  // namespace
+}  // namespace mapd::client
