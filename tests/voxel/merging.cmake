@@ -7,3 +7,10 @@ mapd_add_test(voxel_merging_test
           ${CMAKE_CURRENT_LIST_DIR}/support/corner_scene.cc
   LIBS voxel ${OCTOMAP_LIBRARIES})
 target_include_directories(voxel_merging_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
+
+# The crop-and-move generator of the real-map merge benchmark (tests/bench/voxel_crops.h).
+mapd_add_test(voxel_crops_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/voxel_crops_test.cc ${PROJECT_SOURCE_DIR}/tests/bench/voxel_crops.cc
+  LIBS voxel ${OCTOMAP_LIBRARIES})
+target_include_directories(voxel_crops_test PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_include_directories(voxel_crops_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})

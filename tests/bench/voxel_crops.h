@@ -1,0 +1,80 @@
+// Two overlapping crops of a real voxel map, the second moved by a random rigid
+// transform: the trials of the real-map merge benchmark (voxel_merge_bench).
+//
+// Crops are slabs along the map's longest horizontal axis (x or y, by the extent
+// of the occupied voxels): every occupied voxel whose key along that axis lies in
+// the slab's key range, over the map's whole extent in the other two axes.
+// Overlap is defined on occupied voxels: |A n B| / min(|A|, |B|), the share of
+// the smaller crop's occupied voxels that are also in the other crop. Both crops
+// get the same number of occupied voxels n = min(max_occupied_per_crop,
+// N / (2 - overlap)) (N = the map's occupied voxels), so a map larger than two
+// crops is cropped to fit and the pair's window slides along the axis with the
+// seed. Slab edges fall between key layers, so the achieved overlap is within a
+// layer of the requested one: it is measured and reported.
+//
+// Re-voxelisation (both crops, A with the identity, so that they are treated
+// alike): nearest-neighbour resampling. A target voxel takes the state of the
+// source voxel that contains T^-1(target centre), restricted to the crop's slab;
+// candidate target voxels are the 3^3 neighbourhood of every forward-mapped
+// occupied voxel, dilated by free_band_voxels. So occupied surfaces have no
+// holes from the rotation, and free space is kept only in a band of
+// free_band_voxels around the occupied voxels (bounded memory; the rest of the
+// crop's free space becomes unknown, which the fusion rule treats as neutral).
+//
+// Deterministic: the same map, parameters and seed give the same bytes.
+#ifndef MAPD_TESTS_BENCH_VOXEL_CROPS_H_
+#define MAPD_TESTS_BENCH_VOXEL_CROPS_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "common/status.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::bench {
+
+struct CropParams {
+  double overlap = 0.5;                       // requested |A n B| / min(|A|, |B|), in (0, 1)
+  std::size_t max_occupied_per_crop = 150'000;
+  double max_tilt_deg = 10.0;                 // roll and pitch uniform in [-max, max]
+  double max_translation_m = 20.0;            // translation uniform in a ball of this radius
+  int free_band_voxels = 1;                   // free space kept within this many voxels of occupied
+  std::uint64_t seed = 1;
+
+  Status Validate() const;
+};
+
+struct CropPair {
+  std::string a_bt;  // crop A, in the map's frame, as an OctoMap .bt file
+  std::string b_bt;  // crop B, moved: p_B = T_B_map * p_map
+  // Ground truth: maps B's coordinates into A's (= the map's) frame.
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();  // of B's occupied voxels, B frame, metres
+  int axis = 0;                   // 0 = x, 1 = y: the slab axis
+  std::size_t occupied_a = 0;     // source voxels in crop A
+  std::size_t occupied_b = 0;     // source voxels in crop B
+  std::size_t shared = 0;         // source voxels in both
+  double achieved_overlap = 0.0;  // shared / min(occupied_a, occupied_b)
+  std::size_t out_occupied_a = 0, out_occupied_b = 0;  // after re-voxelisation
+  std::size_t out_free_a = 0, out_free_b = 0;
+  double yaw_deg = 0, roll_deg = 0, pitch_deg = 0, translation_m = 0;  // the drawn motion
+};
+
+// InvalidArgument for bad params (the field is named), FailedPrecondition for a
+// map with too few occupied voxels (< 1000) to cut two crops.
+StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& params);
+
+// Errors of an estimate against the truth. The translation error is measured
+// where it matters: the distance between est * c and truth * c for the centroid
+// c of crop B (metres), so a frame origin far from the data does not turn a
+// small rotation error into a large translation error.
+double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth);
+double TranslationErrorAt(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,
+                          const Eigen::Vector3d& point);
+
+}  // namespace mapd::bench
+
+#endif  // MAPD_TESTS_BENCH_VOXEL_CROPS_H_

@@ -1,0 +1,17 @@
+# Real-map merge benchmark (issue 4, item 7): our MergeSubmaps vs PCL FPFH +
+# SampleConsensusPrerejective + ICP on crops of the shared OctoMap maps
+# (writes the table for docs/voxel-merge.md). Not run by ctest.
+add_executable(voxel_merge_bench
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_merge_bench.cc
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc
+  ${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc)
+target_include_directories(voxel_merge_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_include_directories(voxel_merge_bench SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS}
+                           ${PCL_INCLUDE_DIRS})
+target_link_libraries(voxel_merge_bench PRIVATE voxel ${OCTOMAP_LIBRARIES} ${PCL_LIBRARIES})
+target_compile_definitions(voxel_merge_bench PRIVATE ${PCL_DEFINITIONS})
+mapd_set_warnings(voxel_merge_bench)
+# GCC 12 reports a false -Warray-bounds inside Eigen's umeyama<float> (instantiated
+# by PCL's registration headers), not in our code.
+set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc PROPERTIES
+                            COMPILE_OPTIONS -Wno-array-bounds)

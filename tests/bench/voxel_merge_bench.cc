@@ -1,0 +1,544 @@
+// Real-map merge benchmark (issue 4, item 7): for each map in the shared OctoMap
+// directory, cut two overlapping crops, move one by a random rigid transform
+// (voxel_crops.h), and align them with our merge (MergeSubmaps, merge.h) and
+// with the PCL FPFH baseline (fpfh_baseline.h) on the same trials. Prints a
+// Markdown table (and writes it to --out if given). Not a test: run on demand.
+//
+// Each merge runs in a child process (this binary re-executed with --worker),
+// so that the peak RSS reported (getrusage ru_maxrss of the child) is that of
+// one merge of two .bt files, not of the benchmark.
+//
+//   voxel_merge_bench [--dir=DIR] [--maps=geb079.bt,...] [--overlaps=0.3,0.5,0.7]
+//                     [--trials=20] [--trials-other=N] [--methods=ours,fpfh]
+//                     [--seed=1] [--max-voxels=150000] [--threads=1] [--out=FILE]
+//
+// --trials applies to overlap 0.5, --trials-other (default = --trials) to the
+// others. DIR defaults to $MAPD_SHARED_DIR/data/octomap, else
+// /work/shared/data/octomap; missing maps are skipped.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/fpfh_baseline.h"
+#include "bench/voxel_crops.h"
+#include "voxel/octree_reader.h"
+#include "voxel/voxel_grid.h"
+#include "voxel/merge.h"
+
+namespace {
+
+using mapd::Status;
+using mapd::StatusCode;
+using mapd::StatusOr;
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+long PeakRssKb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;  // kilobytes on Linux
+}
+
+// User + system CPU seconds of this process: on a shared machine wall time
+// includes waiting for a core, CPU time does not.
+double CpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+StatusOr<std::string> ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::NotFound("cannot open " + path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, sep)) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Worker side: one merge, one line of results on stdout.
+//   RESULT <code> <accepted> <T 16 numbers, row-major> <n stages> <stage_s>... <total_s> <rss_kb> <cpu_s>
+//   STAGES <name>...
+//   MESSAGE <text>
+struct WorkerOutput {
+  StatusCode code = StatusCode::kOk;
+  bool accepted = false;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  std::vector<std::string> stage_names;
+  std::vector<double> stage_s;
+  double total_s = 0;
+  double cpu_s = 0;  // the whole worker process, reading the files included
+  std::string message;
+};
+
+void PrintWorkerOutput(const WorkerOutput& out) {
+  std::printf("RESULT %d %d", static_cast<int>(out.code), out.accepted ? 1 : 0);
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) std::printf(" %.17g", out.T.matrix()(r, c));
+  }
+  std::printf(" %zu", out.stage_s.size());
+  for (double s : out.stage_s) std::printf(" %.6f", s);
+  std::printf(" %.6f %ld %.3f\nSTAGES", out.total_s, PeakRssKb(), CpuSeconds());
+  for (const std::string& n : out.stage_names) std::printf(" %s", n.c_str());
+  std::string msg = out.message;
+  std::replace(msg.begin(), msg.end(), '\n', ' ');
+  std::printf("\nMESSAGE %s\n", msg.c_str());
+  std::fflush(stdout);
+}
+
+WorkerOutput RunOurs(const std::string& a, const std::string& b) {
+  WorkerOutput out;
+  out.stage_names = {"corners", "matching", "alignment", "fusion", "other"};
+  const auto start = std::chrono::steady_clock::now();
+  mapd::voxel::MergeParams params;
+  // max_seconds is a wall-clock budget: on a shared machine it trips on load,
+  // not on work (two such errors in the first run, at 6 s of CPU). The
+  // benchmark reports time itself, so the budget only guards against hangs.
+  params.max_seconds = 600.0;
+  const StatusOr<mapd::voxel::MergeOutcome> r =
+      mapd::voxel::MergeSubmaps({{1, a}, {2, b}}, params);
+  out.total_s = Since(start);
+  out.code = r.status().code();
+  out.message = r.status().message();
+  if (r.ok()) {
+    const auto& t = r->times;
+    out.stage_s = {t.corners_s, t.matching_s, t.alignment_s, t.fusion_s,
+                   out.total_s - t.corners_s - t.matching_s - t.alignment_s - t.fusion_s};
+    for (const auto& al : r->alignments) {
+      if (al.id == 2) {
+        out.accepted = true;
+        out.T = al.T_reference_submap;
+        out.message = "matched=" + std::to_string(al.matched_corners) +
+                      " residual_m=" + std::to_string(al.residual_m) +
+                      " overlap=" + std::to_string(al.overlap_score);
+      }
+    }
+    if (!out.accepted) {
+      out.code = StatusCode::kInternal;
+      out.message = "no alignment for submap 2 in an OK outcome";
+    }
+  } else {
+    out.stage_s = {0, 0, 0, 0, out.total_s};
+  }
+  return out;
+}
+
+WorkerOutput RunFpfh(const std::string& a, const std::string& b, int threads, unsigned seed) {
+  WorkerOutput out;
+  out.stage_names = {"load", "downsample", "normals", "features", "ransac", "icp"};
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Eigen::Vector3d> pts[2];
+  double resolution = 0;
+  const std::string* bytes[2] = {&a, &b};
+  for (int i = 0; i < 2; ++i) {
+    StatusOr<mapd::voxel::OcTreePtr> tree = mapd::voxel::ReadOctree(*bytes[i]);
+    if (!tree.ok()) {
+      out.code = tree.status().code();
+      out.message = tree.status().message();
+      return out;
+    }
+    StatusOr<mapd::voxel::VoxelGrid> grid = mapd::voxel::VoxelGrid::FromOcTree(**tree);
+    if (!grid.ok()) {
+      out.code = grid.status().code();
+      out.message = grid.status().message();
+      return out;
+    }
+    pts[i] = grid->occupied_centres();
+    resolution = grid->resolution();
+  }
+  const double load_s = Since(start);
+  mapd::bench::FpfhParams params;
+  params.threads = threads;
+  params.seed = seed;
+  StatusOr<mapd::bench::FpfhResult> r = mapd::bench::AlignFpfh(pts[0], pts[1], resolution, params);
+  out.total_s = Since(start);
+  if (!r.ok()) {
+    out.code = r.status().code();
+    out.message = r.status().message();
+    return out;
+  }
+  const auto& t = r->times;
+  out.stage_s = {load_s, t.downsample_s, t.normals_s, t.features_s, t.ransac_s, t.icp_s};
+  out.accepted = r->accepted;
+  out.T = r->T_a_b;
+  // The baseline's refusal: RANSAC found no pose with enough inliers.
+  if (!r->accepted) out.code = StatusCode::kFailedPrecondition;
+  out.message = "points=" + std::to_string(r->points_a) + "/" + std::to_string(r->points_b) +
+                " inliers=" + std::to_string(r->ransac_inlier_fraction) +
+                " icp_fitness_m2=" + std::to_string(r->icp_fitness_m2);
+  return out;
+}
+
+int WorkerMain(const std::string& method, const std::string& path_a, const std::string& path_b,
+               int threads, unsigned seed) {
+  StatusOr<std::string> a = ReadFile(path_a), b = ReadFile(path_b);
+  if (!a.ok() || !b.ok()) {
+    std::fprintf(stderr, "worker: cannot read inputs\n");
+    return 2;
+  }
+  PrintWorkerOutput(method == "ours" ? RunOurs(*a, *b) : RunFpfh(*a, *b, threads, seed));
+  return 0;
+}
+
+// ---------------------------------------------------------------------------
+// Parent side.
+struct Options {
+  std::string dir;
+  std::vector<std::string> maps = {"geb079.bt", "fr_078_tidyup.bt", "new_college.bt"};
+  std::vector<double> overlaps = {0.3, 0.5, 0.7};
+  std::vector<std::string> methods = {"ours", "fpfh"};
+  int trials = 20;
+  int trials_other = -1;
+  unsigned seed = 1;
+  std::size_t max_voxels = 150'000;
+  int threads = 1;
+  std::string out;
+};
+
+// Runs one worker process; FAILED status INTERNAL when it crashed or timed out.
+WorkerOutput RunWorker(const std::string& self, const std::string& method,
+                       const std::string& path_a, const std::string& path_b, int threads,
+                       unsigned seed, long* rss_kb) {
+  WorkerOutput out;
+  out.code = StatusCode::kInternal;
+  *rss_kb = 0;
+  const std::string cmd = "timeout 900 '" + self + "' --worker=" + method + " '" + path_a +
+                          "' '" + path_b + "' --threads=" + std::to_string(threads) +
+                          " --seed=" + std::to_string(seed);
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (pipe == nullptr) {
+    out.message = "popen failed";
+    return out;
+  }
+  std::string text;
+  char buf[4096];
+  while (std::fgets(buf, sizeof(buf), pipe) != nullptr) text += buf;
+  const int rc = pclose(pipe);
+  std::istringstream in(text);
+  std::string line;
+  bool got = false;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string tag;
+    ls >> tag;
+    if (tag == "RESULT") {
+      int code = 0, accepted = 0;
+      std::size_t n = 0;
+      ls >> code >> accepted;
+      for (int r = 0; r < 4; ++r) {
+        for (int c = 0; c < 4; ++c) ls >> out.T.matrix()(r, c);
+      }
+      ls >> n;
+      out.stage_s.resize(n);
+      for (double& s : out.stage_s) ls >> s;
+      ls >> out.total_s >> *rss_kb >> out.cpu_s;
+      out.code = static_cast<StatusCode>(code);
+      out.accepted = accepted != 0;
+      got = static_cast<bool>(ls);
+    } else if (tag == "STAGES") {
+      std::string name;
+      while (ls >> name) out.stage_names.push_back(name);
+    } else if (tag == "MESSAGE") {
+      std::getline(ls, out.message);
+    }
+  }
+  if (!got) {
+    out.code = StatusCode::kInternal;
+    out.accepted = false;
+    out.message = "worker crashed or timed out (wait status " + std::to_string(rc) + ")";
+  }
+  return out;
+}
+
+// FNV-1a: a stable hash of a map's file name (std::hash is not specified).
+std::uint64_t NameHash(const std::string& name) {
+  std::uint64_t h = 14695981039346656037ULL;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Row {
+  std::string map, method;
+  double resolution = 0, overlap = 0;
+  int trials = 0, success = 0, wrong = 0, refused = 0, errors = 0;
+  std::vector<double> rot_deg, trans_vox, total_s, cpu_s, achieved, crop_a, crop_b;
+  std::vector<std::string> stage_names;
+  std::vector<std::vector<double>> stage_s;
+  long peak_rss_kb = 0;
+  std::map<std::string, int> error_messages;
+};
+
+std::string Fmt(const char* fmt, double v) {
+  if (std::isnan(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), fmt, v);
+  return buf;
+}
+
+std::string RowToMarkdown(const Row& row) {
+  std::ostringstream s;
+  std::string stages;
+  for (std::size_t i = 0; i < row.stage_names.size(); ++i) {
+    std::vector<double> v;
+    for (const auto& t : row.stage_s) {
+      if (i < t.size()) v.push_back(t[i]);
+    }
+    if (!stages.empty()) stages += ", ";
+    stages += row.stage_names[i] + " " + Fmt("%.2f", Median(v));
+  }
+  s << "| " << row.map << " | " << row.resolution << " | " << Fmt("%.1f", row.overlap) << " / "
+    << Fmt("%.2f", Median(row.achieved)) << " | " << Fmt("%.0f", Median(row.crop_a)) << " / "
+    << Fmt("%.0f", Median(row.crop_b)) << " | " << row.method << " | " << row.success << "/"
+    << row.trials << " (" << Fmt("%.0f", 100.0 * row.success / std::max(1, row.trials))
+    << " %) | " << row.wrong << " | " << row.refused << " | " << row.errors << " | "
+    << Fmt("%.2f", Median(row.rot_deg)) << " | " << Fmt("%.2f", Median(row.trans_vox)) << " | "
+    << stages << " | " << Fmt("%.2f", Median(row.total_s)) << " | "
+    << Fmt("%.2f", Median(row.cpu_s)) << " | "
+    << Fmt("%.0f", row.peak_rss_kb / 1024.0) << " |\n";
+  return s.str();
+}
+
+// The Markdown table of `rows`, on stdout when final, and (re)written to `out`
+// after every trial so that an interrupted run still leaves its table.
+void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool final) {
+  std::ostringstream table;
+  table << "| map | res (m) | overlap req / achieved | occupied voxels A / B | method | success | "
+           "wrong | refused | errors | median rot err (deg) | median trans err (voxels) | "
+           "median stage times (s) | median total (s) | median CPU (s) | peak RSS (MiB) |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const Row& r : rows) table << RowToMarkdown(r);
+  std::ostringstream notes;
+  for (const Row& r : rows) {
+    for (const auto& [msg, count] : r.error_messages) {
+      notes << "- " << r.map << " " << r.method << " overlap " << r.overlap << ": " << count
+            << " x " << msg << "\n";
+    }
+  }
+  if (final) {
+    std::cout << table.str();
+    if (!notes.str().empty()) std::cout << "\nErrors:\n\n" << notes.str();
+  }
+  if (!out_path.empty()) {
+    std::ofstream out(out_path);
+    out << table.str();
+    if (!notes.str().empty()) out << "\nErrors:\n\n" << notes.str();
+    if (final) std::cerr << "wrote " << out_path << "\n";
+  }
+}
+
+bool ParseOptions(int argc, char** argv, Options* o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto eq = arg.find('=');
+    const std::string key = arg.substr(0, eq);
+    const std::string val = eq == std::string::npos ? "" : arg.substr(eq + 1);
+    if (key == "--dir") {
+      o->dir = val;
+    } else if (key == "--maps") {
+      o->maps = Split(val, ',');
+    } else if (key == "--overlaps") {
+      o->overlaps.clear();
+      for (const std::string& v : Split(val, ',')) o->overlaps.push_back(std::atof(v.c_str()));
+    } else if (key == "--methods") {
+      o->methods = Split(val, ',');
+    } else if (key == "--trials") {
+      o->trials = std::atoi(val.c_str());
+    } else if (key == "--trials-other") {
+      o->trials_other = std::atoi(val.c_str());
+    } else if (key == "--seed") {
+      o->seed = static_cast<unsigned>(std::strtoul(val.c_str(), nullptr, 10));
+    } else if (key == "--max-voxels") {
+      o->max_voxels = std::strtoul(val.c_str(), nullptr, 10);
+    } else if (key == "--threads") {
+      o->threads = std::atoi(val.c_str());
+    } else if (key == "--out") {
+      o->out = val;
+    } else {
+      std::fprintf(stderr, "unknown flag %s (see the header of voxel_merge_bench.cc)\n",
+                   arg.c_str());
+      return false;
+    }
+  }
+  for (const std::string& m : o->methods) {
+    if (m != "ours" && m != "fpfh") {
+      std::fprintf(stderr, "--methods: unknown method %s\n", m.c_str());
+      return false;
+    }
+  }
+  if (o->trials_other < 0) o->trials_other = o->trials;
+  return o->trials >= 0 && o->threads >= 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Worker mode: --worker=METHOD A.bt B.bt [--threads=N] [--seed=S]
+  if (argc >= 4 && std::string(argv[1]).rfind("--worker=", 0) == 0) {
+    int threads = 1;
+    unsigned seed = 1;
+    for (int i = 4; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a.rfind("--threads=", 0) == 0) threads = std::atoi(a.c_str() + 10);
+      if (a.rfind("--seed=", 0) == 0) seed = static_cast<unsigned>(std::atol(a.c_str() + 7));
+    }
+    return WorkerMain(std::string(argv[1]).substr(9), argv[2], argv[3], threads, seed);
+  }
+  Options opt;
+  if (!ParseOptions(argc, argv, &opt)) return 2;
+  if (opt.dir.empty()) {
+    const char* shared = std::getenv("MAPD_SHARED_DIR");
+    opt.dir = std::string(shared != nullptr ? shared : "/work/shared") + "/data/octomap";
+  }
+  char self[4096];
+  const ssize_t len = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (len <= 0) return 1;
+  self[len] = '\0';
+  char tmpl[] = "/tmp/voxel_merge_bench.XXXXXX";
+  const char* tmp = mkdtemp(tmpl);
+  if (tmp == nullptr) return 1;
+  const std::string path_a = std::string(tmp) + "/a.bt", path_b = std::string(tmp) + "/b.bt";
+
+  std::vector<Row> rows;
+  for (std::size_t mi = 0; mi < opt.maps.size(); ++mi) {
+    const std::string path = opt.dir + "/" + opt.maps[mi];
+    StatusOr<mapd::voxel::OcTreePtr> tree = mapd::voxel::ReadOctreeFile(path);
+    if (!tree.ok()) {
+      std::fprintf(stderr, "skipping %s: %s\n", path.c_str(), tree.status().ToString().c_str());
+      continue;
+    }
+    StatusOr<mapd::voxel::VoxelGrid> grid = mapd::voxel::VoxelGrid::FromOcTree(**tree);
+    if (!grid.ok()) {
+      std::fprintf(stderr, "skipping %s: %s\n", path.c_str(), grid.status().ToString().c_str());
+      continue;
+    }
+    tree->reset();  // release the octree: the grid is all we need
+    for (std::size_t oi = 0; oi < opt.overlaps.size(); ++oi) {
+      const double overlap = opt.overlaps[oi];
+      const int trials = std::abs(overlap - 0.5) < 1e-9 ? opt.trials : opt.trials_other;
+      std::vector<Row> method_rows(opt.methods.size());
+      for (std::size_t k = 0; k < opt.methods.size(); ++k) {
+        method_rows[k].map = opt.maps[mi];
+        method_rows[k].method = opt.methods[k];
+        method_rows[k].resolution = grid->resolution();
+        method_rows[k].overlap = overlap;
+      }
+      for (int trial = 0; trial < trials; ++trial) {
+        mapd::bench::CropParams cp;
+        cp.overlap = overlap;
+        cp.max_occupied_per_crop = opt.max_voxels;
+        // The trial's seed depends on the map's name and the overlap, not on
+        // their positions in the flags, so that runs of one method, one map or
+        // one overlap at a time draw the same trials.
+        cp.seed = opt.seed * 1000003ULL + NameHash(opt.maps[mi]) % 1000003ULL * 10007ULL +
+                  static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL + trial;
+        const auto gen_start = std::chrono::steady_clock::now();
+        StatusOr<mapd::bench::CropPair> pair = mapd::bench::MakeCropPair(*grid, cp);
+        const double gen_s = Since(gen_start);
+        if (!pair.ok()) {
+          std::fprintf(stderr, "%s overlap %.1f trial %d: crop failed: %s\n", opt.maps[mi].c_str(),
+                       overlap, trial, pair.status().ToString().c_str());
+          continue;
+        }
+        std::ofstream(path_a, std::ios::binary) << pair->a_bt;
+        std::ofstream(path_b, std::ios::binary) << pair->b_bt;
+        std::fprintf(stderr,
+                     "%s overlap %.1f trial %d: crops %zu/%zu (out %zu/%zu occ, %zu/%zu free), "
+                     "achieved %.3f, yaw %.1f roll %.1f pitch %.1f t %.1f m, gen %.2f s\n",
+                     opt.maps[mi].c_str(), overlap, trial, pair->occupied_a, pair->occupied_b,
+                     pair->out_occupied_a, pair->out_occupied_b, pair->out_free_a,
+                     pair->out_free_b, pair->achieved_overlap, pair->yaw_deg, pair->roll_deg,
+                     pair->pitch_deg, pair->translation_m, gen_s);
+        for (std::size_t k = 0; k < opt.methods.size(); ++k) {
+          Row& row = method_rows[k];
+          long rss_kb = 0;
+          const WorkerOutput w = RunWorker(self, opt.methods[k], path_a, path_b, opt.threads,
+                                           static_cast<unsigned>(cp.seed), &rss_kb);
+          ++row.trials;
+          row.achieved.push_back(pair->achieved_overlap);
+          row.crop_a.push_back(static_cast<double>(pair->out_occupied_a));
+          row.crop_b.push_back(static_cast<double>(pair->out_occupied_b));
+          row.peak_rss_kb = std::max(row.peak_rss_kb, rss_kb);
+          if (row.stage_names.empty()) row.stage_names = w.stage_names;
+          if (w.code != StatusCode::kInternal) {
+            row.stage_s.push_back(w.stage_s);
+            row.total_s.push_back(w.total_s);
+            row.cpu_s.push_back(w.cpu_s);
+          }
+          std::string verdict;
+          if (w.accepted && w.code == StatusCode::kOk) {
+            const double rot = mapd::bench::RotationErrorDeg(w.T, pair->T_a_b);
+            const double trans_m =
+                mapd::bench::TranslationErrorAt(w.T, pair->T_a_b, pair->centroid_b);
+            const double trans_vox = trans_m / grid->resolution();
+            row.rot_deg.push_back(rot);
+            row.trans_vox.push_back(trans_vox);
+            const bool ok = rot < 2.0 && trans_vox < 2.0;
+            ++(ok ? row.success : row.wrong);
+            char buf[128];
+            std::snprintf(buf, sizeof(buf), "%s rot %.3f deg trans %.2f vox", ok ? "OK" : "WRONG",
+                          rot, trans_vox);
+            verdict = buf;
+          } else if (w.code == StatusCode::kFailedPrecondition) {
+            ++row.refused;
+            verdict = "REFUSED";
+          } else {
+            ++row.errors;
+            verdict = std::string("ERROR ") + mapd::StatusCodeName(w.code);
+            ++row.error_messages[verdict + ": " + w.message.substr(0, 120)];
+          }
+          std::fprintf(stderr, "  %-4s %-40s %.2f s (cpu %.2f s), peak %.0f MiB |%s\n",
+                       opt.methods[k].c_str(), verdict.c_str(), w.total_s, w.cpu_s,
+                       rss_kb / 1024.0, w.message.c_str());
+          std::string stage_log;
+          for (std::size_t i = 0; i < w.stage_s.size() && i < w.stage_names.size(); ++i) {
+            stage_log += " " + w.stage_names[i] + "=" + Fmt("%.2f", w.stage_s[i]);
+          }
+          std::fprintf(stderr, "       stages:%s\n", stage_log.c_str());
+        }
+        std::vector<Row> so_far = rows;
+        so_far.insert(so_far.end(), method_rows.begin(), method_rows.end());
+        WriteTable(so_far, opt.out, /*final=*/false);
+      }
+      for (Row& r : method_rows) rows.push_back(std::move(r));
+    }
+  }
+  std::remove(path_a.c_str());
+  std::remove(path_b.c_str());
+  rmdir(tmp);
+
+  WriteTable(rows, opt.out, /*final=*/true);
+  return 0;
+}
