@@ -213,7 +213,15 @@ StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const Corne
       }
     }
   }
-  const std::vector<CornerPair> pairs = SelectCandidatePairs(corners_a, corners_b, params);
+  std::vector<CornerPair> pairs = SelectCandidatePairs(corners_a, corners_b, params);
+  if (!params.excluded_pairs.empty()) {
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const CornerPair& p) {
+                                 return std::find(params.excluded_pairs.begin(), params.excluded_pairs.end(),
+                                                  std::make_pair(p.a, p.b)) != params.excluded_pairs.end();
+                               }),
+                pairs.end());
+  }
 
   PairConsistency normals_agree = nullptr;
   if (params.use_normals) {

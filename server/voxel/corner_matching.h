@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -69,6 +70,9 @@ struct CornerMatchingParams {
   // Search budget; exhausted => proven_optimal false, best found returned.
   int64_t max_search_nodes = 0;     // 0 = unlimited
   double max_search_seconds = 10.0;  // 0 = unlimited
+  // Candidate pairs (index into A, index into B) never to use, e.g. those of a
+  // solution that alignment refused, so the next search finds another one.
+  std::vector<std::pair<int, int>> excluded_pairs;
 
   // InvalidArgument naming the first bad field.
   Status Validate() const;

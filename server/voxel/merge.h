@@ -67,6 +67,12 @@ struct MergeParams {
     return p;
   }();
   double consistency_distance_voxels = 2.0;  // D of the paper's eq. (4)
+  // Corner solutions tried per pair. When alignment refuses the maximum clique
+  // (residual or overlap), its pairs are excluded and the search is run again:
+  // on symmetric buildings the largest clique is sometimes a wrong (about
+  // 180 deg) correspondence while the right one is a little smaller
+  // (docs/voxel-merge.md). Every solution must pass the same gates.
+  int max_match_attempts = 3;
   IcpParams icp;
   // B's voxels scored per candidate transform in the corner search's tie-break
   // (the paper: the transform making the most voxels coincide); 0 = all.

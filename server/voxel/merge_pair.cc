@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "voxel/icp.h"
 #include "voxel/merge_overlap.h"
@@ -21,10 +22,11 @@ std::string Fixed(double value, int digits) {
   return buffer;
 }
 
-}  // namespace
-
-StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
-                               double finest_resolution_m, double seconds_left, StageTimes* times) {
+// One corner solution: the maximum clique (minus `matching.excluded_pairs`),
+// Umeyama, ICP, the acceptance gates. `correspondences` gets the clique used.
+StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const MergeParams& params,
+                                 const CornerMatchingParams& matching, double finest_resolution_m,
+                                 StageTimes* times, std::vector<CornerPair>* correspondences) {
   PairReport report;
   report.id_a = a.id;
   report.id_b = b.id;
@@ -32,23 +34,20 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   // B.4: corners, the maximum clique, Umeyama; ties go to the transform that
   // makes the most occupied voxels coincide (the paper, section IV.C).
   auto start = std::chrono::steady_clock::now();
-  CornerMatchingParams matching = params.matching;
-  matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
-  if (matching.max_search_seconds <= 0 || matching.max_search_seconds > seconds_left) {
-    matching.max_search_seconds = std::max(seconds_left, 1e-3);
-  }
   const TransformScore tie_score = [&](const Eigen::Isometry3d& T_a_b) {
     return static_cast<double>(ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
   };
   auto match = MatchCorners(*a.corners, *b.corners, matching, tie_score);
   times->matching_s += SecondsSince(start);
   if (!match.ok()) return match.status();
+  correspondences->clear();
   report.matched_corners = match->transform_valid ? match->matched_count : 0;
   if (!match->transform_valid || match->matched_count < params.min_matched_corners) {
     report.reason = "only " + std::to_string(match->transform_valid ? match->matched_count : 0) +
                     " matched corners, need " + std::to_string(params.min_matched_corners);
     return report;
   }
+  *correspondences = match->correspondences;
   report.T_a_b = match->T_a_b;
 
   // B.5: ICP on the occupied voxel centres of the overlap, then acceptance.
@@ -81,6 +80,35 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   }
   report.accepted = true;
   return report;
+}
+
+}  // namespace
+
+StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
+                               double finest_resolution_m, double seconds_left, StageTimes* times) {
+  const auto start = std::chrono::steady_clock::now();
+  CornerMatchingParams matching = params.matching;
+  matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
+  StatusOr<PairReport> first = Status::Internal("no attempt");
+  for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
+    const double left = seconds_left - SecondsSince(start);
+    if (attempt > 0 && left <= 0) break;
+    if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
+      matching.max_search_seconds = std::max(left, 1e-3);
+    }
+    std::vector<CornerPair> used;
+    StatusOr<PairReport> report = TrySolution(a, b, params, matching, finest_resolution_m, times, &used);
+    if (!report.ok() || report->accepted) return report;
+    if (attempt == 0) first = report;
+    // Too few corners is final; a solution that alignment refused is excluded.
+    if (used.empty()) break;
+    for (const CornerPair& p : used) matching.excluded_pairs.emplace_back(p.a, p.b);
+  }
+  // Refused: report the maximum clique's figures (the other tries were smaller).
+  if (first.ok() && params.max_match_attempts > 1 && !matching.excluded_pairs.empty()) {
+    first->reason += " (best of the corner solutions tried)";
+  }
+  return first;
 }
 
 }  // namespace mapd::voxel

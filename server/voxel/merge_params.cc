@@ -27,6 +27,9 @@ Status MergeParams::Validate() const {
   if (!(consistency_distance_voxels > 0) || !std::isfinite(consistency_distance_voxels)) {
     return Status::InvalidArgument("consistency_distance_voxels must be finite and > 0");
   }
+  if (max_match_attempts < 1) {
+    return Status::InvalidArgument("max_match_attempts must be >= 1");
+  }
   Status status = corners.Validate();
   if (!status.ok()) return Status::InvalidArgument("corners." + status.message());
   status = matching.Validate();

@@ -121,6 +121,11 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   // not on work (two such errors in the first run, at 6 s of CPU). The
   // benchmark reports time itself, so the budget only guards against hangs.
   params.max_seconds = 600.0;
+  // Threshold studies without a rebuild (the workers inherit the environment).
+  if (const char* v = std::getenv("MAPD_BENCH_MAX_RESIDUAL_VOXELS")) params.max_residual_voxels = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MIN_OVERLAP_SCORE")) params.min_overlap_score = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS")) params.min_matched_corners = std::atoi(v);
+  if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
   const StatusOr<mapd::voxel::MergeOutcome> r =
       mapd::voxel::MergeSubmaps({{1, a}, {2, b}}, params);
   out.total_s = Since(start);

@@ -2,6 +2,7 @@
 // transforms, and TEASER++'s correspondence benchmarks with outliers.
 #include "voxel/corner_matching.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <random>
@@ -150,6 +151,30 @@ TEST(CornerMatchingTest, ExhaustiveBacktrackingEqualsMaxCliqueSize) {
   ASSERT_FALSE(bt.schemes.empty());
   EXPECT_EQ(bt.schemes.front().size(), mc.clique.size());
   EXPECT_TRUE(IsClique(g, bt.schemes.front()));
+}
+
+TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
+  CornerSceneOptions o;
+  o.num_a = 30;
+  o.seed = 5;
+  const CornerScene scene = MakeCornerScene(o);
+  CornerMatchingParams params;
+  const StatusOr<CornerMatchResult> first = MatchCorners(scene.a, scene.b, params);
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  ASSERT_GE(first->matched_count, 4);
+  // Exclude half of the first solution's pairs: the next solution avoids them
+  // and is smaller by at most that many.
+  for (std::size_t i = 0; i < first->correspondences.size(); i += 2) {
+    params.excluded_pairs.emplace_back(first->correspondences[i].a, first->correspondences[i].b);
+  }
+  const StatusOr<CornerMatchResult> second = MatchCorners(scene.a, scene.b, params);
+  ASSERT_TRUE(second.ok()) << second.status().ToString();
+  for (const CornerPair& p : second->correspondences) {
+    EXPECT_EQ(std::count(params.excluded_pairs.begin(), params.excluded_pairs.end(), std::make_pair(p.a, p.b)), 0)
+        << p.a << "," << p.b;
+  }
+  EXPECT_GE(second->matched_count, first->matched_count - static_cast<int>(params.excluded_pairs.size()));
+  EXPECT_LT(second->matched_count, first->matched_count);
 }
 
 TEST(CornerMatchingTest, UnrelatedMapsGiveOnlyChanceMatches) {

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include "voxel/support/hostile_bt.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
@@ -26,19 +27,8 @@ std::string SharedOctomap(const std::string& name) {
 
 bool FileExists(const std::string& path) { return std::ifstream(path).good(); }
 
-std::string BtHeader(const std::string& size, const std::string& res) {
-  return "# Octomap OcTree binary file\n# comment\nid OcTree\nsize " + size + "\nres " + res +
-         "\ndata\n";
-}
-
-// A .bt chain: `records` inner nodes, each with child 0 inner, the deepest one
-// with child 0 an occupied leaf. Leaf depth = records; nodes = records + 1.
-std::string BtChain(int records) {
-  std::string bytes = BtHeader(std::to_string(records + 1), "0.1");
-  for (int i = 0; i + 1 < records; ++i) bytes += std::string("\x03\x00", 2);
-  bytes += std::string("\x02\x00", 2);
-  return bytes;
-}
+using mapd::testing::BtChain;
+using mapd::testing::BtHeader;
 
 // A small real tree written by OctoMap itself: a box surface, some free space.
 octomap::OcTree MakeTree() {

@@ -100,16 +100,4 @@ std::string RoomSubmap(const RoomScene& s, double x_min_m, double x_max_m,
   return out.str();
 }
 
-std::string BtHeader(const std::string& size, const std::string& res) {
-  return "# Octomap OcTree binary file\n# comment\nid OcTree\nsize " + size + "\nres " + res +
-         "\ndata\n";
-}
-
-std::string BtChain(int records) {
-  std::string bytes = BtHeader(std::to_string(records + 1), "0.1");
-  for (int i = 0; i + 1 < records; ++i) bytes += std::string("\x03\x00", 2);
-  bytes += std::string("\x02\x00", 2);
-  return bytes;
-}
-
 }  // namespace mapd::testing

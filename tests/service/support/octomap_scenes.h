@@ -8,6 +8,8 @@
 #include <Eigen/Geometry>
 #include <string>
 
+#include "voxel/support/hostile_bt.h"  // BtHeader, BtChain for the upload tests
+
 namespace mapd::testing {
 
 struct RoomScene {
@@ -30,12 +32,6 @@ std::string RoomSubmap(const RoomScene& scene, double x_min_m, double x_max_m,
 
 // T_map_submap = yaw about z (radians), then translation (metres).
 Eigen::Isometry3d YawTranslation(double yaw_rad, const Eigen::Vector3d& t_m);
-
-// A syntactically valid .bt header with the given size and resolution text.
-std::string BtHeader(const std::string& size, const std::string& res);
-// A .bt chain of `records` inner nodes ending in an occupied leaf: leaf depth
-// = records; 17 or more is deeper than OctoMap's 16 levels.
-std::string BtChain(int records);
 
 }  // namespace mapd::testing
 
