@@ -54,21 +54,6 @@ const char* KindColour(pb::FeatureKind kind) {
   }
 }
 
-// Escapes text for an SVG text node or attribute.
-std::string Xml(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out.push_back(c);
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
@@ -95,7 +80,7 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
       "<title>%s</title>\n"
       "<desc>Map frame, metres; y axis up. %zu features. Grid step %g m.</desc>\n"
       "<rect x=\"%.3f\" y=\"%.3f\" width=\"%.3f\" height=\"%.3f\" fill=\"white\"/>\n",
-      width_px, height_px, vx, vy, vw, vh, Xml(options.title).c_str(), features.size(), step, vx, vy, vw, vh);
+      width_px, height_px, vx, vy, vw, vh, XmlEscape(options.title).c_str(), features.size(), step, vx, vy, vw, vh);
 
   // Grid: one path, a line every step; the map axes darker.
   std::string grid;
@@ -119,7 +104,7 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
         "stroke-width=\"%.4f\"><title>#%llu %s, support %u, %u members, robots %s</title></line>\n",
         KindName(f.kind()).c_str(), f.a().x(), -f.a().y(), f.b().x(), -f.b().y(), KindColour(f.kind()), w,
         static_cast<unsigned long long>(f.id()), KindName(f.kind()).c_str(), f.support(), f.member_count(),
-        Xml(robots).c_str());
+        XmlEscape(robots).c_str());
   }
   out += "</g>\n";
 

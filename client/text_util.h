@@ -23,6 +23,21 @@ inline std::string Printf(const char* format, ...) {
   return out;
 }
 
+// Escapes text for an XML (SVG) text node or attribute value.
+inline std::string XmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
 }  // namespace mapd::client
 
 #endif  // MAPD_CLIENT_TEXT_UTIL_H_

@@ -92,20 +92,6 @@ StatusOr<std::string> RenderPng(const TopView& view, const Layout& l, const Rend
   return EncodePng(image);
 }
 
-std::string XmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 std::string Hex(Rgb c) { return Printf("#%02x%02x%02x", c.r, c.g, c.b); }
 
 std::string RenderSvg(const TopView& view, const std::string& map_png, const Layout& l,

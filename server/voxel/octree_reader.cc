@@ -216,6 +216,20 @@ std::uint64_t PendingRecords(const Stack& stack, int top) {
   return n;
 }
 
+// After the last node: every byte consumed, and as many nodes as the header said.
+Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes, const Header& header) {
+  if (pos != bytes.size()) {
+    return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after the tree (" +
+                                   "tree ends at byte " + Str(pos) + " of " + Str(bytes.size()) +
+                                   ")");
+  }
+  if (nodes != header.size) {
+    return Status::InvalidArgument("header says size " + Str(header.size) + " but the tree has " +
+                                   Str(nodes) + " nodes");
+  }
+  return Status::Ok();
+}
+
 // .bt (OccupancyOcTreeBase::readBinaryNode): each inner node is 2 bytes, two
 // bits per child i (bits 2i, 2i+1 of byte i/4): 00 unknown (no child), 10 free
 // leaf, 01 occupied leaf, 11 inner node whose record follows depth-first in
@@ -261,15 +275,7 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSu
     stack[++top] = Frame{depth, inner};
     if (!NextChild(stack, top, &depth)) break;
   }
-  if (pos != bytes.size()) {
-    return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after the tree (" +
-                                   "tree ends at byte " + Str(pos) + " of " + Str(bytes.size()) +
-                                   ")");
-  }
-  if (nodes != header.size) {
-    return Status::InvalidArgument("header says size " + Str(header.size) + " but the tree has " +
-                                   Str(nodes) + " nodes");
-  }
+  MAPD_RETURN_IF_ERROR(CheckTreeEnd(bytes, pos, nodes, header));
   summary->max_depth = max_depth;
   return Status::Ok();
 }
@@ -311,15 +317,7 @@ Status ValidateFullData(std::string_view bytes, const Header& header, OctreeSumm
     stack[++top] = Frame{depth, mask};
     if (!NextChild(stack, top, &depth)) break;
   }
-  if (pos != bytes.size()) {
-    return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after the tree (" +
-                                   "tree ends at byte " + Str(pos) + " of " + Str(bytes.size()) +
-                                   ")");
-  }
-  if (nodes != header.size) {
-    return Status::InvalidArgument("header says size " + Str(header.size) + " but the tree has " +
-                                   Str(nodes) + " nodes");
-  }
+  MAPD_RETURN_IF_ERROR(CheckTreeEnd(bytes, pos, nodes, header));
   summary->max_depth = max_depth;
   return Status::Ok();
 }
