@@ -125,13 +125,25 @@ std::vector<CornerPair> SelectCandidatePairs(const CornerSet& corners_a, const C
       for_b[j].push_back({score, sd, i});
     }
   }
+  // The largest k <= top_k whose pairs (counted before removing duplicates)
+  // fit max_candidate_pairs; at least 1.
+  int k = params.top_k;
+  if (params.max_candidate_pairs > 0) {
+    auto count = [&](int kk) {
+      std::size_t n = 0;
+      for (const auto& r : for_a) n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
+      for (const auto& r : for_b) n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
+      return n;
+    };
+    while (k > 1 && count(k) > static_cast<std::size_t>(params.max_candidate_pairs)) --k;
+  }
   std::vector<CornerPair> pairs;
   for (int i = 0; i < na; ++i) {
-    KeepTopK(&for_a[i], params.top_k);
+    KeepTopK(&for_a[i], k);
     for (const Ranked& r : for_a[i]) pairs.push_back({i, r.other});
   }
   for (int j = 0; j < nb; ++j) {
-    KeepTopK(&for_b[j], params.top_k);
+    KeepTopK(&for_b[j], k);
     for (const Ranked& r : for_b[j]) pairs.push_back({r.other, j});
   }
   std::sort(pairs.begin(), pairs.end());

@@ -140,6 +140,7 @@ Status CornerMatchingParams::Validate() const {
   if (!(consistency_distance_m > 0.0) || !std::isfinite(consistency_distance_m))
     return bad("consistency_distance_m must be positive and finite");
   if (top_k < 1) return bad("top_k must be >= 1");
+  if (max_candidate_pairs < 0) return bad("max_candidate_pairs must be >= 0");
   if (!(signature_tolerance_rad >= 0.0)) return bad("signature_tolerance_rad must be >= 0");
   if (!(normal_tolerance_rad >= 0.0)) return bad("normal_tolerance_rad must be >= 0");
   if (min_matches < 3) return bad("min_matches must be >= 3 (a rigid transform needs 3)");

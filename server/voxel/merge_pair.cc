@@ -1,6 +1,7 @@
 #include "voxel/merge_pair.h"
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -87,26 +88,37 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times) {
   const auto start = std::chrono::steady_clock::now();
-  CornerMatchingParams matching = params.matching;
-  matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
+  std::vector<MatchTolerances> stages = {{params.matching.signature_tolerance_rad * 180.0 / M_PI,
+                                          params.matching.normal_tolerance_rad * 180.0 / M_PI}};
+  stages.insert(stages.end(), params.looser_tolerances.begin(), params.looser_tolerances.end());
   StatusOr<PairReport> first = Status::Internal("no attempt");
-  for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
-    const double left = seconds_left - SecondsSince(start);
-    if (attempt > 0 && left <= 0) break;
-    if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
-      matching.max_search_seconds = std::max(left, 1e-3);
+  int tried = 0;
+  for (std::size_t stage = 0; stage < stages.size(); ++stage) {
+    CornerMatchingParams matching = params.matching;
+    matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
+    matching.signature_tolerance_rad = stages[stage].signature_deg * M_PI / 180.0;
+    matching.normal_tolerance_rad = stages[stage].normal_deg * M_PI / 180.0;
+    for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
+      const double left = seconds_left - SecondsSince(start);
+      if (tried > 0 && left <= 0) break;
+      if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
+        matching.max_search_seconds = std::max(left, 1e-3);
+      }
+      std::vector<CornerPair> used;
+      StatusOr<PairReport> report =
+          TrySolution(a, b, params, matching, finest_resolution_m, times, &used);
+      ++tried;
+      if (!report.ok() || report->accepted) return report;
+      if (tried == 1) first = report;
+      // Too few corners ends the stage; a solution that alignment refused is
+      // excluded and the search rerun.
+      if (used.empty()) break;
+      for (const CornerPair& p : used) matching.excluded_pairs.emplace_back(p.a, p.b);
     }
-    std::vector<CornerPair> used;
-    StatusOr<PairReport> report = TrySolution(a, b, params, matching, finest_resolution_m, times, &used);
-    if (!report.ok() || report->accepted) return report;
-    if (attempt == 0) first = report;
-    // Too few corners is final; a solution that alignment refused is excluded.
-    if (used.empty()) break;
-    for (const CornerPair& p : used) matching.excluded_pairs.emplace_back(p.a, p.b);
   }
-  // Refused: report the maximum clique's figures (the other tries were smaller).
-  if (first.ok() && params.max_match_attempts > 1 && !matching.excluded_pairs.empty()) {
-    first->reason += " (best of the corner solutions tried)";
+  // Refused: report the strict graph's maximum clique (the first solution).
+  if (first.ok() && tried > 1) {
+    first->reason += " (first of " + std::to_string(tried) + " corner solutions tried, all refused)";
   }
   return first;
 }

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <string>
 
 #include "voxel/merge.h"
 
@@ -29,6 +30,13 @@ Status MergeParams::Validate() const {
   }
   if (max_match_attempts < 1) {
     return Status::InvalidArgument("max_match_attempts must be >= 1");
+  }
+  for (std::size_t i = 0; i < looser_tolerances.size(); ++i) {
+    const MatchTolerances& t = looser_tolerances[i];
+    if (!(t.signature_deg >= 0 && t.signature_deg <= 180) || !(t.normal_deg >= 0 && t.normal_deg <= 180)) {
+      return Status::InvalidArgument("looser_tolerances[" + std::to_string(i) +
+                                     "]: angles must be in [0, 180] degrees");
+    }
   }
   Status status = corners.Validate();
   if (!status.ok()) return Status::InvalidArgument("corners." + status.message());

@@ -15,3 +15,13 @@ mapd_set_warnings(voxel_merge_bench)
 # by PCL's registration headers), not in our code.
 set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc PROPERTIES
                             COMPILE_OPTIONS -Wno-array-bounds)
+
+# Diagnostic: the first corner solutions of each trial with their gate figures
+# and true errors (how MergeParams' acceptance gates were chosen).
+add_executable(voxel_hypotheses_diag
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_hypotheses_diag.cc
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc)
+target_include_directories(voxel_hypotheses_diag PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_include_directories(voxel_hypotheses_diag SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
+target_link_libraries(voxel_hypotheses_diag PRIVATE voxel ${OCTOMAP_LIBRARIES})
+mapd_set_warnings(voxel_hypotheses_diag)

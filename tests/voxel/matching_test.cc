@@ -177,6 +177,58 @@ TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
   EXPECT_LT(second->matched_count, first->matched_count);
 }
 
+TEST(CornerMatchingTest, CandidateCapLowersTopKForEveryCorner) {
+  CornerSceneOptions o;
+  o.num_a = 60;
+  o.seed = 8;
+  const CornerScene scene = MakeCornerScene(o);
+  CornerMatchingParams params;
+  params.top_k = 32;
+  const std::size_t uncapped = SelectCandidatePairs(scene.a, scene.b, params).size();
+  params.max_candidate_pairs = 400;
+  ASSERT_GT(uncapped, 400u);
+  const auto capped = SelectCandidatePairs(scene.a, scene.b, params);
+  EXPECT_LE(capped.size(), 400u);
+  EXPECT_GT(capped.size(), 200u);  // the largest k that fits, not k = 1
+  // The true pairs rank first (context score), so the capped graph still
+  // holds the answer.
+  const StatusOr<CornerMatchResult> r = MatchCorners(scene.a, scene.b, params);
+  ASSERT_TRUE(r.ok() && r->transform_valid);
+  EXPECT_LT(RotationErrorDeg(r->T_a_b, scene.T_a_b), 1.0);
+  // A cap below one pair per corner keeps one pair per corner.
+  params.max_candidate_pairs = 1;
+  const auto one = SelectCandidatePairs(scene.a, scene.b, params);
+  EXPECT_GE(one.size(), 1u);
+  EXPECT_LE(one.size(), scene.a.size() + scene.b.size());
+  params.max_candidate_pairs = -1;
+  EXPECT_EQ(params.Validate().code(), StatusCode::kInvalidArgument);
+}
+
+// Corners whose normals are off by 15 deg (real maps: 5-30 deg, the plane
+// triple seen differs) fail the strict signature test; the looser stage that
+// MergeParams::looser_tolerances tries next keeps the true pairs.
+TEST(CornerMatchingTest, LooseTolerancesKeepCornersWithNoisyNormals) {
+  CornerSceneOptions o;
+  o.num_a = 40;
+  o.seed = 13;
+  o.normal_noise_rad = 15.0 * M_PI / 180.0;
+  const CornerScene scene = MakeCornerScene(o);
+  CornerMatchingParams strict;
+  strict.top_k = 32;
+  CornerMatchingParams loose = strict;
+  loose.signature_tolerance_rad = 40.0 * M_PI / 180.0;
+  loose.normal_tolerance_rad = 30.0 * M_PI / 180.0;
+  const int strict_true = CountTrue(SelectCandidatePairs(scene.a, scene.b, strict), scene.truth);
+  const int loose_true = CountTrue(SelectCandidatePairs(scene.a, scene.b, loose), scene.truth);
+  EXPECT_GT(loose_true, strict_true + static_cast<int>(scene.truth.size()) / 4)
+      << strict_true << " vs " << loose_true << " of " << scene.truth.size();
+  const StatusOr<CornerMatchResult> r = MatchCorners(scene.a, scene.b, loose);
+  ASSERT_TRUE(r.ok() && r->transform_valid);
+  EXPECT_GE(CountTrue(r->correspondences, scene.truth), static_cast<int>(scene.truth.size()) / 2);
+  EXPECT_LT(RotationErrorDeg(r->T_a_b, scene.T_a_b), 1.0);
+  EXPECT_LT(TranslationError(r->T_a_b, scene.T_a_b), 0.05);
+}
+
 TEST(CornerMatchingTest, UnrelatedMapsGiveOnlyChanceMatches) {
   CornerSceneOptions o;
   o.num_a = 60;
