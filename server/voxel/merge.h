@@ -92,7 +92,13 @@ struct MergeParams {
   // Loose tolerances keep them but make the graph denser, so they are tried
   // only after the strict graph's solutions were refused (docs/voxel-merge.md).
   std::vector<MatchTolerances> looser_tolerances = {{25.0, 15.0}, {40.0, 30.0}};
-  IcpParams icp;
+  // ICP must converge to be accepted; from a corner solution tens of degrees
+  // off, point-to-point ICP on new_college took 85 iterations (IcpParams: 50).
+  IcpParams icp = [] {
+    IcpParams p;
+    p.max_iterations = 150;
+    return p;
+  }();
   // B's voxels scored per candidate transform in the corner search's tie-break
   // (the paper: the transform making the most voxels coincide); 0 = all.
   std::size_t tie_break_points = 20'000;

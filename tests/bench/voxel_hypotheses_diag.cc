@@ -10,7 +10,7 @@
 //   voxel_hypotheses_diag MAP.bt OVERLAP TRIALS [SOLUTIONS=4] [FIRST_TRIAL=0]
 //
 // Environment: DIAG_SIG_DEG, DIAG_NORMAL_DEG, DIAG_TOP_K, DIAG_USE_NORMALS
-// override the matching tolerances; DIAG_NORMALS=1 prints every true pair.
+// override the matching tolerances, DIAG_ICP_ITERATIONS the ICP's; DIAG_NORMALS=1 prints every true pair.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   MergeParams params;
   if (const char* v = std::getenv("DIAG_SIG_DEG")) params.matching.signature_tolerance_rad = std::atof(v) * M_PI / 180;
   if (const char* v = std::getenv("DIAG_NORMAL_DEG")) params.matching.normal_tolerance_rad = std::atof(v) * M_PI / 180;
+  if (const char* v = std::getenv("DIAG_ICP_ITERATIONS")) params.icp.max_iterations = std::atoi(v);
   if (const char* v = std::getenv("DIAG_TOP_K")) params.matching.top_k = std::atoi(v);
   if (const char* v = std::getenv("DIAG_USE_NORMALS")) params.matching.use_normals = std::atoi(v) != 0;
   const double res = map.resolution();

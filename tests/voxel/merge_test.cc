@@ -187,6 +187,17 @@ TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(outcome.status().message().find("voxels) above 0.01 voxels"), std::string::npos)
       << outcome.status().message();
+
+  // An ICP still moving when its iterations run out is not accepted, however
+  // small its residual.
+  params = MergeParams{};
+  params.icp.max_iterations = 1;
+  params.max_residual_voxels = 1000;
+  outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("ICP did not converge in 1 iterations"), std::string::npos)
+      << outcome.status().message();
 }
 
 TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
