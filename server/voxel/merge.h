@@ -104,6 +104,13 @@ struct MergeParams {
     p.max_iterations = 150;
     return p;
   }();
+  // Each corner solution is first refined on icp_screen_points source points
+  // (0 = no screen); it goes on to the full ICP only if that ends with a
+  // residual within icp_screen_residual_factor x max_residual_voxels.
+  // Measured on new_college.bt (docs/voxel-merge.md): most of a merge's time
+  // went to full ICPs of solutions that were then refused.
+  std::size_t icp_screen_points = 2'000;
+  double icp_screen_residual_factor = 1.5;
   // B's voxels scored per candidate transform in the corner search's tie-break
   // (the paper: the transform making the most voxels coincide); 0 = all.
   std::size_t tie_break_points = 20'000;

@@ -244,6 +244,9 @@ TEST(MergeTest, ValidateNamesTheBadField) {
   params.looser_tolerances = {{25.0, 15.0}, {-1.0, 30.0}};
   EXPECT_NE(params.Validate().message().find("looser_tolerances[1]"), std::string::npos);
   params = MergeParams{};
+  params.icp_screen_residual_factor = 0.5;
+  EXPECT_NE(params.Validate().message().find("icp_screen_residual_factor"), std::string::npos);
+  params = MergeParams{};
   params.matching.max_candidate_pairs = -5;
   EXPECT_NE(params.Validate().message().find("max_candidate_pairs must be >= 0"), std::string::npos);
   EXPECT_TRUE(MergeParams{}.Validate().ok());
