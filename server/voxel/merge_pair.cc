@@ -23,6 +23,12 @@ std::string Fixed(double value, int digits) {
   return buffer;
 }
 
+// e.g. "residual 0.320 m (1.60 voxels) above 0.75 voxels"
+std::string ResidualReason(double residual_m, double residual_voxels, double max_voxels) {
+  return "residual " + Fixed(residual_m, 3) + " m (" + Fixed(residual_voxels, 2) + " voxels) above " +
+         Fixed(max_voxels, 2) + " voxels";
+}
+
 // One corner solution: the maximum clique (minus `matching.excluded_pairs`),
 // Umeyama, ICP, the acceptance gates. `correspondences` gets the clique used.
 StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const MergeParams& params,
@@ -69,9 +75,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
         report.T_a_b = screen->T_target_source;
         report.residual_m = screen->rms_residual_m;
         report.icp_iterations = screen->iterations;
-        report.reason = "residual " + Fixed(screen->rms_residual_m, 3) + " m (" + Fixed(screen_voxels, 2) +
-                        " voxels) above " + Fixed(params.max_residual_voxels, 2) + " voxels (on " +
-                        std::to_string(screen->source_points) + " points)";
+        report.reason = ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
+                        " (on " + std::to_string(screen->source_points) + " points)";
         return report;
       }
       T_start = screen->T_target_source;
@@ -103,8 +108,7 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
     return report;
   }
   if (residual_voxels > params.max_residual_voxels) {
-    report.reason = "residual " + Fixed(report.residual_m, 3) + " m (" + Fixed(residual_voxels, 2) +
-                    " voxels) above " + Fixed(params.max_residual_voxels, 2) + " voxels";
+    report.reason = ResidualReason(report.residual_m, residual_voxels, params.max_residual_voxels);
     return report;
   }
   if (report.overlap_score < params.min_overlap_score) {

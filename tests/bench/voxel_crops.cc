@@ -196,6 +196,13 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   return pair;
 }
 
+std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap, int trial) {
+  std::uint64_t name_hash = 14695981039346656037ULL;  // FNV-1a: std::hash is not specified
+  for (unsigned char c : map_file_name) name_hash = (name_hash ^ c) * 1099511628211ULL;
+  return base_seed * 1000003ULL + name_hash % 1000003ULL * 10007ULL +
+         static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL + static_cast<std::uint64_t>(trial);
+}
+
 double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {
   const Eigen::AngleAxisd d(est.linear().transpose() * truth.linear());
   return std::abs(d.angle()) * 180.0 / kPi;

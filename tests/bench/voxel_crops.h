@@ -67,6 +67,12 @@ struct CropPair {
 // map with too few occupied voxels (< 1000) to cut two crops.
 StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& params);
 
+// The seed of one benchmark trial: depends on the map's file name (no
+// directory), the overlap and the trial index, not on the order of the maps or
+// overlaps in a run, so that a run of one map or one method, and the
+// diagnostic tool, draw the same trials.
+std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap, int trial);
+
 // Errors of an estimate against the truth. The translation error is measured
 // where it matters: the distance between est * c and truth * c for the centroid
 // c of crop B (metres), so a frame origin far from the data does not turn a

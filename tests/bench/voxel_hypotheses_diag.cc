@@ -79,13 +79,9 @@ int main(int argc, char** argv) {
   for (int t = first; t < first + trials; ++t) {
     bench::CropParams cp;
     cp.overlap = overlap;
-    std::string name = argv[1];
-    name = name.substr(name.find_last_of('/') + 1);
-    std::uint64_t h = 14695981039346656037ULL;
-    for (unsigned char c : name) h = (h ^ c) * 1099511628211ULL;
+    const std::string path = argv[1];
     // The seeds of voxel_merge_bench (--seed=1), so trial t is its trial t.
-    cp.seed = 1ULL * 1000003ULL + h % 1000003ULL * 10007ULL +
-              static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL + t;
+    cp.seed = bench::TrialSeed(1, path.substr(path.find_last_of('/') + 1), overlap, t);
     auto pair = bench::MakeCropPair(map, cp);
     if (!pair.ok()) { std::printf("crop: %s\n", pair.status().message().c_str()); continue; }
     const VoxelGrid a = Load(pair->a_bt), b = Load(pair->b_bt);

@@ -281,13 +281,6 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
   return out;
 }
 
-// FNV-1a: a stable hash of a map's file name (std::hash is not specified).
-std::uint64_t NameHash(const std::string& name) {
-  std::uint64_t h = 14695981039346656037ULL;
-  for (unsigned char c : name) h = (h ^ c) * 1099511628211ULL;
-  return h;
-}
-
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
@@ -464,11 +457,7 @@ int main(int argc, char** argv) {
         mapd::bench::CropParams cp;
         cp.overlap = overlap;
         cp.max_occupied_per_crop = opt.max_voxels;
-        // The trial's seed depends on the map's name and the overlap, not on
-        // their positions in the flags, so that runs of one method, one map or
-        // one overlap at a time draw the same trials.
-        cp.seed = opt.seed * 1000003ULL + NameHash(opt.maps[mi]) % 1000003ULL * 10007ULL +
-                  static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL + trial;
+        cp.seed = mapd::bench::TrialSeed(opt.seed, opt.maps[mi], overlap, trial);
         const auto gen_start = std::chrono::steady_clock::now();
         StatusOr<mapd::bench::CropPair> pair = mapd::bench::MakeCropPair(*grid, cp);
         const double gen_s = Since(gen_start);

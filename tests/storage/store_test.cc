@@ -2,22 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include "common/temp_dir.h"
+#include "storage/support/store_fixture.h"
 
 namespace mapd::storage {
 namespace {
 
-class StoreTest : public ::testing::Test {
+class StoreTest : public testing::StoreFixture {
  protected:
-  void SetUp() override { Reopen(); }
-
-  void Reopen() {
-    store_.reset();
-    auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
-    ASSERT_TRUE(opened.ok()) << opened.status().ToString();
-    store_ = std::move(opened).value();
-  }
-
   NewObservation Batch(const std::string& robot, const std::string& session, uint64_t seq,
                        FrameKind kind = FrameKind::kMap) {
     NewObservation o;
@@ -41,8 +32,6 @@ class StoreTest : public ::testing::Test {
     return r;
   }
 
-  mapd::testing::TempDir dir_;
-  std::unique_ptr<Store> store_;
   geometry::SensorObservation features_ = [] {
     geometry::SensorObservation f;
     f.T_frame_sensor.translation = {1, 2, 0};

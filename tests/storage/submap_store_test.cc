@@ -1,33 +1,14 @@
 // Submaps, merges and session ties in the store (storage/store.h).
 #include <gtest/gtest.h>
 
-#include "common/temp_dir.h"
 #include "storage/store.h"
+#include "storage/support/store_fixture.h"
 
 namespace mapd::storage {
 namespace {
 
-class SubmapStoreTest : public ::testing::Test {
+class SubmapStoreTest : public testing::StoreFixture {
  protected:
-  void SetUp() override { Reopen(); }
-
-  void Reopen() {
-    store_.reset();
-    auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
-    ASSERT_TRUE(opened.ok()) << opened.status().ToString();
-    store_ = std::move(opened).value();
-  }
-
-  // Runs `fn` in one write transaction and commits it when fn succeeds.
-  template <typename Fn>
-  Status Write(Fn fn) {
-    auto txn = store_->BeginWrite();
-    if (!txn.ok()) return txn.status();
-    Status s = fn(txn->get());
-    if (!s.ok()) return s;
-    return (*txn)->Commit();
-  }
-
   NewSubmap Submap(const std::string& robot, const std::string& name, const std::string& data,
                    const std::string& session = "") {
     NewSubmap m;
@@ -107,8 +88,6 @@ class SubmapStoreTest : public ::testing::Test {
     return i;
   }
 
-  mapd::testing::TempDir dir_;
-  std::unique_ptr<Store> store_;
   geometry::SensorObservation features_ = [] {
     geometry::SensorObservation f;
     f.lines.push_back({{0, 0, 0}, {3, 0, 0}});
