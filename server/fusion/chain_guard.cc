@@ -9,13 +9,19 @@ namespace {
 
 using geometry::PointMoments2;
 
+void AddMember(const GuardMember& member, PointMoments2* m) {
+  if (member.folded != nullptr) {
+    m->Merge(*member.folded);
+    return;
+  }
+  m->Add(member.segment.a);
+  m->Add(member.segment.b);
+}
+
 PointMoments2 MomentsOf(const std::vector<GuardMember>& members,
                         const std::vector<uint32_t>& subset) {
   PointMoments2 m;
-  for (uint32_t i : subset) {
-    m.Add(members[i].segment.a);
-    m.Add(members[i].segment.b);
-  }
+  for (uint32_t i : subset) AddMember(members[i], &m);
   return m;
 }
 
@@ -71,14 +77,12 @@ std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& me
     std::vector<double> prefix(n + 1, 0.0), suffix(n + 1, 0.0);
     PointMoments2 running;
     for (size_t k = 0; k < n; ++k) {
-      running.Add(members[keyed[k].second].segment.a);
-      running.Add(members[keyed[k].second].segment.b);
+      AddMember(members[keyed[k].second], &running);
       prefix[k + 1] = OrthogonalSse(running);
     }
     running = PointMoments2();
     for (size_t k = n; k-- > 0;) {
-      running.Add(members[keyed[k].second].segment.a);
-      running.Add(members[keyed[k].second].segment.b);
+      AddMember(members[keyed[k].second], &running);
       suffix[k] = OrthogonalSse(running);
     }
     size_t best_k = 1;

@@ -29,9 +29,14 @@
 
 namespace mapd::fusion {
 
+// A member as the guard sees it. In bounded mode (engine.h) a member is a
+// representative standing for every feature folded into it: `folded` then
+// holds the moments of all their endpoints, which replace the two endpoints of
+// `segment` in every SSE; the order key stays the midpoint of `segment`.
 struct GuardMember {
   FeatureId id = 0;
   geometry::Segment2 segment;  // map frame, metres
+  const geometry::PointMoments2* folded = nullptr;  // null: just the segment's endpoints
 };
 
 // Sum of squared orthogonal distances to the TLS line: the smaller eigenvalue

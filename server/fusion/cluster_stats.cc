@@ -19,12 +19,36 @@ ClusterStats ClusterStats::OfFeature(const GroundFeature& f, ObservationId obser
   s.hull = {f.segment.a, f.segment.b};
   s.z_min_m = f.z_min_m;
   s.z_max_m = f.z_max_m;
-  s.observations.insert(observation);
+  s.observations.Add(observation, SupportCounter::kUnlimited);
   s.robots = {robot};
   return s;
 }
 
-void ClusterStats::Merge(ClusterStats&& other) {
+void ClusterStats::AddFeature(const GroundFeature& f, ObservationId observation, RobotId robot,
+                              uint32_t support_cap) {
+  id = std::min(id, f.id);
+  ++member_count;
+  plane_members += f.origin == FeatureOrigin::kPlane ? 1 : 0;
+  moments.Add(f.segment.a);
+  moments.Add(f.segment.b);
+  z_min_m = std::min(z_min_m, f.z_min_m);
+  z_max_m = std::max(z_max_m, f.z_max_m);
+  // A revisited wall's new member usually lies inside the hull already.
+  if (!geometry::StrictlyInsideHull(hull, f.segment.a) ||
+      !geometry::StrictlyInsideHull(hull, f.segment.b)) {
+    std::vector<geometry::Vec2> points;
+    points.reserve(hull.size() + 2);
+    points.insert(points.end(), hull.begin(), hull.end());
+    points.push_back(f.segment.a);
+    points.push_back(f.segment.b);
+    hull = geometry::ConvexHull(std::move(points));
+  }
+  observations.Add(observation, support_cap);
+  auto it = std::lower_bound(robots.begin(), robots.end(), robot);
+  if (it == robots.end() || *it != robot) robots.insert(it, robot);
+}
+
+void ClusterStats::Merge(ClusterStats&& other, uint32_t support_cap) {
   id = std::min(id, other.id);
   member_count += other.member_count;
   plane_members += other.plane_members;
@@ -39,8 +63,7 @@ void ClusterStats::Merge(ClusterStats&& other) {
   points.insert(points.end(), other.hull.begin(), other.hull.end());
   hull = geometry::ConvexHull(std::move(points));
 
-  if (observations.size() < other.observations.size()) observations.swap(other.observations);
-  observations.insert(other.observations.begin(), other.observations.end());
+  observations.Merge(std::move(other.observations), support_cap);
 
   std::vector<RobotId> robots_union;
   robots_union.reserve(robots.size() + other.robots.size());

@@ -4,10 +4,10 @@
 #define MAPD_FUSION_CLUSTER_STATS_H_
 
 #include <cstdint>
-#include <unordered_set>
 #include <vector>
 
 #include "fusion/engine.h"
+#include "fusion/support_counter.h"
 #include "geometry/line_fit.h"
 
 namespace mapd::fusion {
@@ -20,17 +20,20 @@ struct ClusterStats {
   std::vector<geometry::Vec2> hull;      // convex hull of all member endpoints
   double z_min_m = 0.0;
   double z_max_m = 0.0;
-  std::unordered_set<ObservationId> observations;  // distinct: the support
-  std::vector<RobotId> robots;                     // distinct, ascending
+  SupportCounter observations;         // distinct observations: the support
+  std::vector<RobotId> robots;          // distinct, ascending
 
   static ClusterStats OfFeature(const GroundFeature& f, ObservationId observation, RobotId robot);
 
   // Absorbs `other` (which is left in an unspecified state). Costs
-  // O(min(support)) expected for the observation sets (small into large) and
-  // O(h log h) for the hulls, h = number of hull vertices.
-  void Merge(ClusterStats&& other);
+  // O(support) for the observation ids while exact (support_counter.h; `cap`
+  // bounds them) and O(h log h) for the hulls, h = number of hull vertices.
+  void Merge(ClusterStats&& other, uint32_t support_cap);
+  // Absorbs one more member: Merge(OfFeature(f, observation, robot)), cheaper.
+  void AddFeature(const GroundFeature& f, ObservationId observation, RobotId robot,
+                  uint32_t support_cap);
 
-  uint32_t support() const { return static_cast<uint32_t>(observations.size()); }
+  uint32_t support() const { return observations.count(); }
 
   // The total-least-squares fit of the member endpoints and the segment of its
   // extreme projections (paper section 3.2, Figure 6).

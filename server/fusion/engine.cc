@@ -14,6 +14,7 @@
 #include "fusion/criteria.h"
 #include "fusion/engine_inspector.h"
 #include "fusion/grid_index.h"
+#include "fusion/support_counter.h"
 #include "geometry/convex_hull2.h"
 
 namespace mapd::fusion {
@@ -33,6 +34,21 @@ constexpr double kMinSegmentLengthM = 1e-9;
 constexpr double kFeatureCellM = 2.0;
 // Added to exact search radii so that rounding never hides a candidate.
 constexpr double kSearchSlackM = 1e-6;
+// Bounded mode: a cluster is "established" once this many distinct
+// observations (at least min_support) saw it. Only established clusters fold
+// new features, and their support is exact up to here (support_counter.h).
+// Young clusters keep every member as in exact mode: their links are the
+// fragile ones (docs/fusion-long-running.md: folding into young clusters
+// changed the map of a real log, folding into established ones did not).
+constexpr uint32_t kEstablishedSupport = 32;
+
+// The larger of the two squared endpoint distances between f and g, in the
+// pairing (a-a, b-b or a-b, b-a) that makes it smaller, m^2.
+double EndpointDistanceSq(const Segment2& f, const Segment2& g) {
+  const double same = std::max((f.a - g.a).squaredNorm(), (f.b - g.b).squaredNorm());
+  const double swapped = std::max((f.a - g.b).squaredNorm(), (f.b - g.a).squaredNorm());
+  return std::min(same, swapped);
+}
 
 Status CheckPoint(const Vec2& p, size_t index, const char* name) {
   if (!p.allFinite()) {
@@ -62,6 +78,9 @@ class FusionEngine::Impl {
   explicit Impl(const FusionParams& params)
       : params_(params),
         guard_on_(params.chain_max_rms_m > 0.0),
+        bounded_(params.mode == FusionMode::kBounded),
+        support_cap_(bounded_ ? std::max(kEstablishedSupport, params.min_support)
+                              : SupportCounter::kUnlimited),
         grid_(kFeatureCellM),
         snapper_(params.snap_m, params.corner_mode) {}
 
@@ -72,19 +91,30 @@ class FusionEngine::Impl {
 
   const FusionParams params_;
   const bool guard_on_;  // chain guard (chain_guard.h) enabled
-  std::unordered_set<ObservationId> observations_;
-  std::unordered_map<FeatureId, uint32_t> node_of_;
-  // Union-find over nodes (one per raw feature); stats_ is non-null at roots only.
+  const bool bounded_;   // FusionMode::kBounded: nodes are representatives
+  const uint32_t support_cap_;  // exact support up to this many observations
+  // A node is a raw feature (exact mode) or a representative (bounded mode:
+  // the first feature of it, plus every later one folded into it).
+  std::unordered_set<ObservationId> observations_;  // exact mode only
+  ObservationId last_observation_ = 0;
+  bool has_last_observation_ = false;
+  std::unordered_map<FeatureId, uint32_t> node_of_;  // by the node's own feature id
+  // Union-find over nodes; stats_ is non-null at roots only.
   std::vector<uint32_t> parent_;
   std::vector<uint32_t> size_;
   std::vector<std::unique_ptr<ClusterStats>> stats_;
   size_t cluster_count_ = 0;  // components
-  // Chain guard only, per node: the raw feature and where it came from (the
-  // guard refits subsets), and the next member of its component (a circular
-  // list per component: a union splices two lists in O(1)).
-  std::vector<GroundFeature> features_;
+  uint64_t raw_feature_count_ = 0;  // features added, folded ones included
+  // Per node, kept when the guard is on or in bounded mode: the node's own
+  // feature (the guard refits subsets; snapshots refile the grid from it).
+  std::vector<GroundFeature> anchors_;
+  // Guard on, exact mode: where each node's feature came from.
   std::vector<ObservationId> observation_of_;
   std::vector<RobotId> robot_of_;
+  // Guard on, bounded mode: everything folded into each representative.
+  std::vector<ClusterStats> folded_;
+  // Guard on: the next member of the node's component (a circular list per
+  // component: a union splices two lists in O(1)).
   std::vector<uint32_t> next_member_;
   // Components the guard cut into more than one group, by component id: the
   // ids of their published groups and their group count.
@@ -98,6 +128,7 @@ class FusionEngine::Impl {
   CornerSnapper snapper_;
   std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
 
+  bool keeps_anchors() const { return guard_on_ || bounded_; }
   uint32_t FindConst(uint32_t x) const;  // no path compression, for const readers
   // Whether the guard may cut the component at `root` (else it is one group).
   bool MayCut(uint32_t root) const {
@@ -106,11 +137,17 @@ class FusionEngine::Impl {
   // The guard's groups of the component at `root`, as member nodes and stats.
   std::vector<std::vector<uint32_t>> GroupNodes(uint32_t root) const;
   ClusterStats StatsOf(const std::vector<uint32_t>& nodes) const;
+  // Files node `node`, whose own feature is `segment`, in the centre grid.
+  void FileInGrid(uint32_t node, const Segment2& segment);
 
  private:
   uint32_t Find(uint32_t x);
   // Returns the surviving root; records the ids of both clusters in `merged_ids`.
   uint32_t Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids);
+  uint32_t NewNode(const GroundFeature& f, ObservationId observation, RobotId robot);
+  // Bounded mode: the representative `f` folds into (both endpoints within
+  // cover_m, criteria met; the nearest, ties by node), or false.
+  bool FindCover(const GroundFeature& f, uint32_t* node) const;
   void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
   void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
                ChangeFeed* feed);
@@ -128,7 +165,10 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
   } while (node != root);
   std::vector<GuardMember> members;
   members.reserve(nodes.size());
-  for (uint32_t n : nodes) members.push_back({features_[n].id, features_[n].segment});
+  for (uint32_t n : nodes) {
+    members.push_back({anchors_[n].id, anchors_[n].segment,
+                       bounded_ ? &folded_[n].moments : nullptr});
+  }
   std::vector<std::vector<uint32_t>> groups =
       SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
   for (std::vector<uint32_t>& group : groups) {
@@ -138,11 +178,19 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
 }
 
 ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) const {
-  ClusterStats s = ClusterStats::OfFeature(features_[nodes.front()], observation_of_[nodes.front()],
+  if (bounded_) {
+    ClusterStats s = folded_[nodes.front()];
+    for (size_t i = 1; i < nodes.size(); ++i) {
+      ClusterStats other = folded_[nodes[i]];
+      s.Merge(std::move(other), support_cap_);
+    }
+    return s;
+  }
+  ClusterStats s = ClusterStats::OfFeature(anchors_[nodes.front()], observation_of_[nodes.front()],
                                            robot_of_[nodes.front()]);
   std::vector<Vec2> points = s.hull;
   for (size_t i = 1; i < nodes.size(); ++i) {
-    const GroundFeature& f = features_[nodes[i]];
+    const GroundFeature& f = anchors_[nodes[i]];
     s.id = std::min(s.id, f.id);
     ++s.member_count;
     s.plane_members += f.origin == FeatureOrigin::kPlane ? 1 : 0;
@@ -152,13 +200,18 @@ ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) con
     points.push_back(f.segment.b);
     s.z_min_m = std::min(s.z_min_m, f.z_min_m);
     s.z_max_m = std::max(s.z_max_m, f.z_max_m);
-    s.observations.insert(observation_of_[nodes[i]]);
+    s.observations.Add(observation_of_[nodes[i]], support_cap_);
     s.robots.push_back(robot_of_[nodes[i]]);
   }
   s.hull = geometry::ConvexHull(std::move(points));
   std::sort(s.robots.begin(), s.robots.end());
   s.robots.erase(std::unique(s.robots.begin(), s.robots.end()), s.robots.end());
   return s;
+}
+
+void FusionEngine::Impl::FileInGrid(uint32_t node, const Segment2& segment) {
+  const FeatureCircle c = CircleOf(segment);
+  grid_.Insert(c.centre, {segment, c.centre, c.radius_m, node});
 }
 
 uint32_t FusionEngine::Impl::Find(uint32_t x) {
@@ -184,7 +237,7 @@ uint32_t FusionEngine::Impl::Union(uint32_t a, uint32_t b, std::vector<ClusterId
   parent_[b] = a;
   size_[a] += size_[b];
   if (guard_on_) std::swap(next_member_[a], next_member_[b]);  // splice the member lists
-  stats_[a]->Merge(std::move(*stats_[b]));
+  stats_[a]->Merge(std::move(*stats_[b]), support_cap_);
   stats_[b].reset();
   --cluster_count_;
   return a;
@@ -192,7 +245,10 @@ uint32_t FusionEngine::Impl::Union(uint32_t a, uint32_t b, std::vector<ClusterId
 
 Status FusionEngine::Impl::Validate(ObservationId observation,
                                     const std::vector<GroundFeature>& features) const {
-  if (observations_.count(observation) != 0) {
+  // Bounded mode remembers no observation ids but the last one: the caller
+  // guarantees the rest (engine.h).
+  if (bounded_ ? (has_last_observation_ && observation == last_observation_)
+               : observations_.count(observation) != 0) {
     return Status::InvalidArgument("observation " + std::to_string(observation) +
                                    " was added before");
   }
@@ -210,7 +266,7 @@ Status FusionEngine::Impl::Validate(ObservationId observation,
         f.z_min_m > f.z_max_m) {
       return Status::InvalidArgument(name + " has an invalid z range");
     }
-    if (node_of_.count(f.id) != 0 || !batch_ids.insert(f.id).second) {
+    if ((!bounded_ && node_of_.count(f.id) != 0) || !batch_ids.insert(f.id).second) {
       return Status::InvalidArgument(name + ": feature id " + std::to_string(f.id) +
                                      " is not unique");
     }
@@ -236,39 +292,77 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
   });
 }
 
-void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
-                             const std::vector<GroundFeature>& features, ChangeFeed* changes) {
-  observations_.insert(observation);
-  const uint32_t first_node = static_cast<uint32_t>(parent_.size());
-  for (const GroundFeature& f : features) {
-    const uint32_t node = static_cast<uint32_t>(parent_.size());
-    parent_.push_back(node);
-    size_.push_back(1);
-    stats_.push_back(std::make_unique<ClusterStats>(ClusterStats::OfFeature(f, observation, robot)));
-    node_of_.emplace(f.id, node);
-    if (guard_on_) {
-      features_.push_back(f);
+uint32_t FusionEngine::Impl::NewNode(const GroundFeature& f, ObservationId observation,
+                                     RobotId robot) {
+  const uint32_t node = static_cast<uint32_t>(parent_.size());
+  parent_.push_back(node);
+  size_.push_back(1);
+  stats_.push_back(std::make_unique<ClusterStats>(ClusterStats::OfFeature(f, observation, robot)));
+  node_of_.emplace(f.id, node);
+  if (keeps_anchors()) anchors_.push_back(f);
+  if (guard_on_) {
+    if (bounded_) {
+      folded_.push_back(*stats_.back());
+    } else {
       observation_of_.push_back(observation);
       robot_of_.push_back(robot);
-      next_member_.push_back(node);
     }
-    ++cluster_count_;
+    next_member_.push_back(node);
   }
+  ++cluster_count_;
+  return node;
+}
+
+bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const {
+  // Both endpoints within cover_m puts the centres within cover_m too.
+  const Vec2 centre = f.segment.midpoint();
+  const double cover_sq = params_.cover_m * params_.cover_m;
+  double best_sq = cover_sq;
+  bool found = false;
+  grid_.ForEachNear(centre, params_.cover_m + kSearchSlackM, [&](const IndexedFeature& g) {
+    if ((g.centre - centre).squaredNorm() > cover_sq) return;
+    const double d_sq = EndpointDistanceSq(f.segment, g.segment);
+    if (d_sq > best_sq || (found && d_sq == best_sq && g.node > *node)) return;
+    if (stats_[FindConst(g.node)]->support() < support_cap_) return;  // not established
+    if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
+    best_sq = d_sq;
+    *node = g.node;
+    found = true;
+  });
+  return found;
+}
+
+void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
+                             const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+  if (!bounded_) observations_.insert(observation);
+  last_observation_ = observation;
+  has_last_observation_ = true;
+  raw_feature_count_ += features.size();
   // Features of one observation are never linked directly (the paper compares
-  // time k with k - i only), so the batch is filed only after all its queries.
+  // time k with k - i only), so new nodes are filed only after all queries.
   std::vector<ClusterId> merged_ids;
+  std::vector<uint32_t> nodes(features.size());
+  std::vector<bool> folded(features.size(), false);
   for (size_t i = 0; i < features.size(); ++i) {
-    LinkToEarlier(first_node + static_cast<uint32_t>(i), features[i], &merged_ids);
+    const GroundFeature& f = features[i];
+    if (bounded_ && FindCover(f, &nodes[i])) {
+      // Folded: the cluster's statistics grow, its node set does not. Its id
+      // may change (a smaller member id), so Publish treats it as touched.
+      ClusterStats& cluster = *stats_[Find(nodes[i])];
+      merged_ids.push_back(cluster.id);
+      cluster.AddFeature(f, observation, robot, support_cap_);
+      if (guard_on_) folded_[nodes[i]].AddFeature(f, observation, robot, support_cap_);
+      folded[i] = true;
+      continue;
+    }
+    nodes[i] = NewNode(f, observation, robot);
   }
+  for (size_t i = 0; i < features.size(); ++i) LinkToEarlier(nodes[i], features[i], &merged_ids);
   for (size_t i = 0; i < features.size(); ++i) {
-    const FeatureCircle c = CircleOf(features[i].segment);
-    grid_.Insert(c.centre, {features[i].segment, c.centre, c.radius_m,
-                            first_node + static_cast<uint32_t>(i)});
+    if (!folded[i]) FileInGrid(nodes[i], features[i].segment);
   }
   std::vector<uint32_t> roots;
-  for (size_t i = 0; i < features.size(); ++i) {
-    roots.push_back(Find(first_node + static_cast<uint32_t>(i)));
-  }
+  for (uint32_t node : nodes) roots.push_back(Find(node));
   std::sort(roots.begin(), roots.end());
   roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
   ChangeFeed feed;
@@ -429,7 +523,8 @@ std::vector<FusedFeature> FusionEngine::Published() const {
 }
 
 std::optional<FusedFeature> FusionEngine::Get(ClusterId id) const { return impl_->Get(id); }
-size_t FusionEngine::feature_count() const { return impl_->parent_.size(); }
+size_t FusionEngine::feature_count() const { return impl_->raw_feature_count_; }
+size_t FusionEngine::node_count() const { return impl_->parent_.size(); }
 size_t FusionEngine::cluster_count() const {
   return impl_->cluster_count_ + impl_->extra_groups_;
 }
@@ -450,7 +545,7 @@ std::vector<std::vector<FeatureId>> EngineInspector::Partition(const FusionEngin
     if (impl.MayCut(root)) {  // the guard's groups, not the raw component
       for (const std::vector<uint32_t>& group : impl.GroupNodes(root)) {
         std::vector<FeatureId> ids;
-        for (uint32_t node : group) ids.push_back(impl.features_[node].id);
+        for (uint32_t node : group) ids.push_back(impl.anchors_[node].id);
         std::sort(ids.begin(), ids.end());
         out.push_back(std::move(ids));
       }

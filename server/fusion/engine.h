@@ -7,8 +7,21 @@
 // With the chain guard on (FusionParams::chain_max_rms_m > 0, chain_guard.h) a
 // component that does not fit one line is published as the guard's groups, a
 // function of its member set; "cluster" below then means such a group.
-// The result is exactly what the batch algorithm gives on the same features,
-// whatever the arrival order.
+// In FusionMode::kExact the result is exactly what the batch algorithm gives
+// on the same features, whatever the arrival order; cost and memory grow with
+// every raw feature ever added.
+//
+// In FusionMode::kBounded (the default) a new feature whose endpoints lie
+// within cover_m of an earlier representative of a cluster it meets the
+// criteria with is folded into that representative: the cluster's statistics
+// (moments, hull, support, robots) take it in, but later features are tested
+// against the representatives only. On a revisited building the number of
+// representatives saturates, so the cost of one observation depends on the
+// walls around it, not on how often they were seen. The result depends on the
+// arrival order (deterministically) and may differ from the exact one where a
+// pair is borderline (docs/fusion-long-running.md measures by how much). The
+// engine then does not remember every observation or feature id: the caller
+// must not add an observation twice (mapd's ids come from the database).
 //
 // Thread safety: none. The caller serialises all calls (mapd calls it from its
 // single writer thread).
@@ -78,8 +91,9 @@ class FusionEngine {
   static StatusOr<std::unique_ptr<FusionEngine>> Create(const FusionParams& params);
 
   // Adds all features of one observation. All-or-nothing: a NaN or absurd
-  // (|x| > 1e6 m) coordinate, a zero-length segment, a reused FeatureId or
-  // ObservationId is refused with InvalidArgument and the engine is unchanged.
+  // (|x| > 1e6 m) coordinate, a zero-length segment, a FeatureId used twice
+  // in the batch, or (exact mode) a reused FeatureId or ObservationId is
+  // refused with InvalidArgument and the engine is unchanged.
   // `changes`, if not null, receives what changed in the published map.
   Status Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
              ChangeFeed* changes = nullptr);
@@ -89,7 +103,11 @@ class FusionEngine {
   // One cluster, published or not; nullopt if no such cluster.
   std::optional<FusedFeature> Get(ClusterId id) const;
 
-  size_t feature_count() const;
+  size_t feature_count() const;  // raw features added
+  // Union-find nodes: one per raw feature in exact mode, one per
+  // representative in bounded mode (what memory and the work per feature
+  // grow with).
+  size_t node_count() const;
   size_t cluster_count() const;  // clusters (the guard's groups), published or not
   size_t published_count() const;
   const FusionParams& params() const;

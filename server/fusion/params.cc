@@ -31,12 +31,36 @@ Status FusionParams::Validate() const {
   MAPD_RETURN_IF_ERROR(CheckRange("snap_m", snap_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(CheckRange("max_plane_tilt_rad", max_plane_tilt_rad, 0.0, kHalfPi));
   MAPD_RETURN_IF_ERROR(CheckRange("chain_max_rms_m", chain_max_rms_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckRange("cover_m", cover_m, 0.0, HUGE_VAL));
+  if (mode != FusionMode::kExact && mode != FusionMode::kBounded) {
+    return Status::InvalidArgument("fusion params: mode is not a known mode");
+  }
   MAPD_RETURN_IF_ERROR(CheckRange("chain_max_sse_ratio", chain_max_sse_ratio, 0.0, 1.0));
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }
   if (corner_mode != CornerMode::kMidpoint && corner_mode != CornerMode::kIntersection) {
     return Status::InvalidArgument("fusion params: corner_mode is not a known mode");
+  }
+  return Status::Ok();
+}
+
+const char* FusionModeName(FusionMode mode) {
+  switch (mode) {
+    case FusionMode::kExact: return "exact";
+    case FusionMode::kBounded: return "bounded";
+  }
+  return "unknown";
+}
+
+Status ParseFusionMode(const std::string& name, FusionMode* mode) {
+  if (name == "exact") {
+    *mode = FusionMode::kExact;
+  } else if (name == "bounded") {
+    *mode = FusionMode::kBounded;
+  } else {
+    return Status::InvalidArgument("fusion.mode \"" + name +
+                                   "\" is unknown; expected \"exact\" or \"bounded\"");
   }
   return Status::Ok();
 }

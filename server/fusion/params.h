@@ -15,7 +15,26 @@ enum class CornerMode {
   kIntersection,  // the intersection of the two fused lines (falls back to midpoint)
 };
 
+// How the engine keeps a cluster's members (engine.h).
+enum class FusionMode {
+  // Every raw feature stays a member a new feature is tested against: exactly
+  // the paper's batch result, whatever the arrival order, but the cost of one
+  // observation and the memory grow with how often its walls were seen. The
+  // reference.
+  kExact,
+  // A new feature whose endpoints lie within cover_m of an earlier
+  // representative of its cluster is folded into that representative's
+  // statistics and not kept: the work per observation and the memory depend
+  // on the map, not on the length of history. The default.
+  kBounded,
+};
+
 struct FusionParams {
+  FusionMode mode = FusionMode::kBounded;
+  // Bounded mode: a feature whose two endpoints each lie within cover_m of the
+  // matching endpoints of a representative it meets the criteria with is
+  // folded into it, metres. 0 folds exact duplicates only.
+  double cover_m = 0.02;
   double delta_rad = 5.0 * 3.14159265358979323846 / 180.0;  // criterion 1: max included angle
   // Criterion 2: min feature-circle overlap ratio, in [0, 1]. 0 is allowed (criterion 2
   // off): the engine's candidate search is bounded by criterion 3, not by the circles.
@@ -37,6 +56,10 @@ struct FusionParams {
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).
   Status Validate() const;
 };
+
+// "exact" / "bounded".
+const char* FusionModeName(FusionMode mode);
+Status ParseFusionMode(const std::string& name, FusionMode* mode);
 
 // "midpoint" / "intersection".
 const char* CornerModeName(CornerMode mode);

@@ -36,4 +36,15 @@ std::vector<Vec2> ConvexHull(std::vector<Vec2> points) {
   return hull;
 }
 
+bool StrictlyInsideHull(const std::vector<Vec2>& hull, const Vec2& p) {
+  if (hull.size() < 3) return false;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const Vec2& a = hull[i];
+    const Vec2& b = hull[(i + 1) % hull.size()];
+    const Vec2 e = b - a, q = p - a;
+    if (!(e.x() * q.y() - e.y() * q.x() > 0.0)) return false;  // counter-clockwise: left of every edge
+  }
+  return true;
+}
+
 }  // namespace mapd::geometry

@@ -14,6 +14,10 @@ namespace mapd::geometry {
 // is attained at a hull vertex, so a cluster keeps its hull instead of all points.
 std::vector<Vec2> ConvexHull(std::vector<Vec2> points);
 
+// True if p lies strictly inside `hull` (a ConvexHull() result of at least 3
+// vertices), so that adding p leaves the hull as it is. O(h).
+bool StrictlyInsideHull(const std::vector<Vec2>& hull, const Vec2& p);
+
 }  // namespace mapd::geometry
 
 #endif  // MAPD_GEOMETRY_CONVEX_HULL2_H_

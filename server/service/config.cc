@@ -60,6 +60,12 @@ const std::map<std::string, Setting>& Settings() {
                 "normal (survives a crash of mapd) or full (survives power loss; slower)"}},
       {"busy_timeout_ms", {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->busy_timeout_ms); },
                            "how long a commit waits for a database lock held by another process, ms (5000)"}},
+      {"fusion.mode", {[](auto&, auto& v, auto* c) { return fusion::ParseFusionMode(v, &c->fusion.mode); },
+                       "bounded (work and memory follow the map, not its history) or exact (the "
+                       "paper's batch result; cost grows with every feature ever seen) (bounded)"}},
+      {"fusion.cover_m", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->fusion.cover_m); },
+                          "bounded mode: a feature within this of a representative of an established "
+                          "cluster is folded into it, metres (0.02)"}},
       {"fusion.delta_deg", {[](auto& k, auto& v, auto* c) {
                               double d;
                               MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));

@@ -38,6 +38,25 @@ double BeamAngle(size_t i, size_t n);
 // Beam i as a point in the map frame.
 geometry::Vec2 BeamPoint(const LaserScan& scan, size_t i);
 
+// One scan's valid returns and the lines extracted from them, map frame.
+struct ScanLines {
+  std::vector<geometry::Vec2> points;     // valid returns (0 < range < max range)
+  std::vector<geometry::Segment2> lines;  // split-and-merge (geometry/split_and_merge.h)
+};
+
+// The valid beams in order, cut into runs at invalid ones, each run cut into
+// lines (5 cm split, at least 6 points and 0.3 m, gaps up to 0.5 m).
+ScanLines ExtractLaserLines(const LaserScan& scan, double max_range_m);
+
+// The three logs of shared/data/laser with their "no return" ranges: Intel and
+// Freiburg use 81.83 / 81.91 m (a SICK in 80 m mode), ACES 50 m.
+struct LaserLogSpec {
+  const char* name;     // short name, e.g. "intel"
+  const char* file;     // under the data directory
+  double max_range_m;   // readings at or beyond are "no return"
+};
+const std::vector<LaserLogSpec>& LaserLogs();
+
 }  // namespace mapd::bench
 
 #endif  // MAPD_TESTS_BENCH_CARMEN_H_

@@ -26,7 +26,6 @@
 #include "bench/carmen.h"
 #include "fusion/engine.h"
 #include "fusion/grid_index.h"
-#include "geometry/split_and_merge.h"
 
 namespace mapd::bench {
 namespace {
@@ -37,59 +36,6 @@ using fusion::FusionParams;
 using fusion::GroundFeature;
 using geometry::Segment2;
 using geometry::Vec2;
-
-struct LogSpec {
-  const char* name;      // docs/fusion-laser-<name>.svg
-  const char* file;      // under the data directory
-  double max_range_m;    // readings at or beyond are "no return"
-};
-
-// Max ranges: Intel and Freiburg use 81.83 / 81.91 m as "no return" (a SICK
-// at 80 m mode), ACES 50 m.
-const LogSpec kLogs[] = {
-    {"intel", "intel-corrected.log.gz", 80.0},
-    {"aces", "aces-corrected.log.gz", 50.0},
-    {"freiburg-079", "freiburg-079-corrected.log.gz", 80.0},
-};
-
-geometry::SplitAndMergeParams ExtractionParams() {
-  geometry::SplitAndMergeParams p;
-  p.split_m = 0.05;
-  p.min_points = 6;
-  p.min_length_m = 0.3;
-  p.max_gap_m = 0.5;
-  return p;
-}
-
-struct ScanLines {
-  std::vector<Vec2> points;     // valid returns, map frame
-  std::vector<Segment2> lines;  // extracted, map frame
-};
-
-// Valid beams in order, cut into runs at invalid beams, each run extracted.
-ScanLines Extract(const LaserScan& scan, double max_range_m,
-                  const geometry::SplitAndMergeParams& params) {
-  ScanLines out;
-  std::vector<Vec2> run;
-  const auto flush = [&]() {
-    for (const geometry::ExtractedLine& line : geometry::SplitAndMerge(run, params)) {
-      out.lines.push_back(line.segment);
-    }
-    run.clear();
-  };
-  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-    const double r = scan.ranges_m[i];
-    if (!(r > 0.0 && r < max_range_m)) {
-      flush();
-      continue;
-    }
-    const Vec2 p = BeamPoint(scan, i);
-    out.points.push_back(p);
-    run.push_back(p);
-  }
-  flush();
-  return out;
-}
 
 // Share of points within 5 and 10 cm of a segment (point-to-segment distance).
 struct Coverage {
@@ -279,7 +225,8 @@ int main(int argc, char** argv) {
   std::string data_dir = MAPD_SOURCE_DIR "/../shared/data/laser";
   std::string docs_dir = MAPD_SOURCE_DIR "/docs";
   bool write = true;
-  mapd::fusion::FusionParams on;  // the defaults, guard included
+  mapd::fusion::FusionParams on;  // the defaults, guard included, in the exact (reference) mode
+  on.mode = mapd::fusion::FusionMode::kExact;  // docs/fusion-real-data.md; bounded: fusion_modes_bench
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
       data_dir = argv[++i];
@@ -307,7 +254,7 @@ int main(int argc, char** argv) {
   off.chain_max_rms_m = 0.0;
 
   std::vector<Row> rows;
-  for (const LogSpec& spec : kLogs) {
+  for (const LaserLogSpec& spec : LaserLogs()) {
     Row row;
     row.log = spec.name;
     auto t0 = std::chrono::steady_clock::now();
@@ -318,7 +265,7 @@ int main(int argc, char** argv) {
     }
     auto t1 = std::chrono::steady_clock::now();
     std::vector<ScanLines> lines;
-    for (const LaserScan& scan : *scans) lines.push_back(Extract(scan, spec.max_range_m, ExtractionParams()));
+    for (const LaserScan& scan : *scans) lines.push_back(ExtractLaserLines(scan, spec.max_range_m));
     auto t2 = std::chrono::steady_clock::now();
     row.read_s = std::chrono::duration<double>(t1 - t0).count();
     row.extract_s = std::chrono::duration<double>(t2 - t1).count();

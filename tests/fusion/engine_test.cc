@@ -23,8 +23,10 @@ GroundFeature Wall(FeatureId id, Vec2 a, Vec2 b) {
   return f;
 }
 
+// The exact engine: these tests name members, which bounded mode folds away.
 FusionParams Support(uint32_t min_support) {
   FusionParams p;
+  p.mode = FusionMode::kExact;
   p.min_support = min_support;
   return p;
 }

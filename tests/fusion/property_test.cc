@@ -83,6 +83,7 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard) {
   }
 
   Scene scene;
+  scene.params.mode = FusionMode::kExact;  // the batch reference is what exact mode promises
   scene.params.min_support = 2 + seed % 2;
   scene.params.corner_mode = seed % 3 == 0 ? CornerMode::kMidpoint : CornerMode::kIntersection;
   if (seed % 5 == 4) scene.params.gamma = 0.0;  // criterion 2 off: the search must still be exact

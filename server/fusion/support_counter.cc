@@ -1,0 +1,58 @@
+#include "fusion/support_counter.h"
+
+#include <algorithm>
+#include <iterator>
+#include <utility>
+
+namespace mapd::fusion {
+
+void SupportCounter::Add(ObservationId id, uint32_t cap) {
+  if (!exact()) {
+    if (id != last_) ++count_;
+  } else if (ids_.empty() || id > ids_.back()) {
+    ids_.push_back(id);  // the common case: observations arrive in id order
+  } else if (auto it = std::lower_bound(ids_.begin(), ids_.end(), id); it == ids_.end() || *it != id) {
+    ids_.insert(it, id);
+  }
+  last_ = id;
+  SaturateAbove(cap);
+}
+
+void SupportCounter::Merge(SupportCounter&& other, uint32_t cap) {
+  if (exact() && other.exact()) {
+    if (ids_.size() < other.ids_.size()) ids_.swap(other.ids_);
+    if (other.ids_.empty()) {
+    } else if (other.ids_.front() > ids_.back()) {
+      ids_.insert(ids_.end(), other.ids_.begin(), other.ids_.end());
+    } else {
+      std::vector<ObservationId> both;
+      both.reserve(ids_.size() + other.ids_.size());
+      std::set_union(ids_.begin(), ids_.end(), other.ids_.begin(), other.ids_.end(),
+                     std::back_inserter(both));
+      ids_ = std::move(both);
+    }
+  } else {
+    const uint32_t shared = last_ == other.last_ ? 1 : 0;
+    count_ = count() + other.count() - shared;
+    std::vector<ObservationId>().swap(ids_);
+  }
+  last_ = std::max(last_, other.last_);
+  SaturateAbove(cap);
+}
+
+void SupportCounter::SaturateAbove(uint32_t cap) {
+  if (!exact() || ids_.size() <= cap) return;
+  count_ = static_cast<uint32_t>(ids_.size());
+  std::vector<ObservationId>().swap(ids_);  // gives the memory back
+}
+
+SupportCounter SupportCounter::FromState(std::vector<ObservationId> ids, uint32_t count,
+                                         ObservationId last) {
+  SupportCounter c;
+  c.ids_ = std::move(ids);
+  c.count_ = count;
+  c.last_ = last;
+  return c;
+}
+
+}  // namespace mapd::fusion
