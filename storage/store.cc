@@ -2,6 +2,8 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
+
 #include "storage/observation_codec.h"
 #include "storage/schema.h"
 
@@ -241,6 +243,13 @@ Status WriteTransaction::DeleteFused(uint64_t id) {
   return store_->delete_fused_.Run();
 }
 
+std::vector<int64_t> WriteTransaction::tied_session_ids() const {
+  std::vector<int64_t> ids;
+  for (const auto& [session_id, T] : new_ties_) ids.push_back(session_id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
 Status WriteTransaction::Commit() {
   for (const auto& [robot_id, d] : robot_deltas_) {
     Statement& s = store_->update_robot_;
@@ -404,29 +413,52 @@ Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& 
 // ---------------------------------------------------------------------------
 // Reads
 
-Status Store::ForEachObservation(const std::function<Status(const StoredObservation&)>& fn) {
-  std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(),
-      "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
-      "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.id = o.session_id "
-      "ORDER BY o.id");
-  if (!q.ok()) return q.status();
+namespace {
+
+constexpr const char* kObservationColumns =
+    "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
+    "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.id = o.session_id ";
+
+// Calls fn for every row of a query on kObservationColumns.
+Status ForEachObservationRow(Statement& q, const std::function<Status(const StoredObservation&)>& fn) {
   StoredObservation obs;
   for (;;) {
-    StatusOr<bool> row = q->Step();
+    StatusOr<bool> row = q.Step();
     if (!row.ok()) return row.status();
     if (!*row) return Status::Ok();
-    obs.id = q->ColumnInt(0);
-    obs.robot_id = q->ColumnInt(1);
-    obs.session_id = q->ColumnInt(2);
-    obs.seq = static_cast<uint64_t>(q->ColumnInt(3));
-    obs.stamp_ns = q->ColumnInt(4);
-    obs.features.T_frame_sensor = ColumnPose(*q, 5);
-    Status s = DecodeFeatures(q->ColumnBlob(12), &obs.features);
+    obs.id = q.ColumnInt(0);
+    obs.robot_id = q.ColumnInt(1);
+    obs.session_id = q.ColumnInt(2);
+    obs.seq = static_cast<uint64_t>(q.ColumnInt(3));
+    obs.stamp_ns = q.ColumnInt(4);
+    obs.features.T_frame_sensor = ColumnPose(q, 5);
+    Status s = DecodeFeatures(q.ColumnBlob(12), &obs.features);
     if (!s.ok()) return Status(s.code(), "observation " + std::to_string(obs.id) + ": " + s.message());
     MAPD_RETURN_IF_ERROR(fn(obs));
   }
+}
+
+}  // namespace
+
+Status Store::ForEachObservation(const std::function<Status(const StoredObservation&)>& fn) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), std::string(kObservationColumns) + "ORDER BY o.id");
+  if (!q.ok()) return q.status();
+  return ForEachObservationRow(*q, fn);
+}
+
+Status Store::ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
+                                           const std::function<Status(const StoredObservation&)>& fn) {
+  if (session_ids.empty()) return Status::Ok();
+  std::string in;
+  for (int64_t id : session_ids) in += (in.empty() ? "" : ",") + std::to_string(id);
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), std::string(kObservationColumns) + "WHERE o.session_id IN (" + in +
+                         ") AND o.id <= " + std::to_string(max_id) + " ORDER BY o.id");
+  if (!q.ok()) return q.status();
+  return ForEachObservationRow(*q, fn);
 }
 
 StatusOr<std::vector<SessionFrame>> Store::ListSessions() {

@@ -198,6 +198,8 @@ class WriteTransaction {
   Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame);
   // True once TieSession() succeeded in this transaction.
   bool ties_sessions() const { return !new_ties_.empty(); }
+  // The sessions TieSession() tied in this transaction, ascending.
+  std::vector<int64_t> tied_session_ids() const;
   Status DeleteFused(uint64_t id);
   // Durable once this returns OK (per StoreOptions::synchronous_full).
   Status Commit();
@@ -235,6 +237,9 @@ class Store {
   // --- Any thread.
   // Every stored observation in id (= arrival) order.
   Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
+  // The stored observations of `session_ids` with id <= max_id, in id order.
+  Status ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
+                                      const std::function<Status(const StoredObservation&)>& fn);
   StatusOr<std::vector<SessionFrame>> ListSessions();
   // A committed session by id, or by robot and session name (from the cache).
   StatusOr<SessionFrame> GetSession(int64_t session_id) const;

@@ -31,7 +31,7 @@ constexpr double kMinSegmentLengthM = 1e-9;
 // Cell size of the feature-centre grid. Queries cover R_f + eta, so cells of
 // the order of a typical wall segment keep both the probed cell count and the
 // per-cell candidate count small.
-constexpr double kFeatureCellM = 2.0;
+constexpr double kFeatureCellM = 1.0;
 // Added to exact search radii so that rounding never hides a candidate.
 constexpr double kSearchSlackM = 1e-6;
 // Bounded mode: a cluster is "established" once this many distinct

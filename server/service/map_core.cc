@@ -92,6 +92,7 @@ Status MapCore::Rebuild() {
   // The version counts the observations the map reflects: monotonic across
   // restarts, since stored observations are never removed.
   map_version_ = built->observations;
+  last_observation_id_ = built->last_observation_id;
   Log(LogLevel::kInfo, "map_rebuilt",
       {{"observations", std::to_string(built->observations)},
        {"raw_features", std::to_string(engine_->feature_count())},
@@ -100,34 +101,33 @@ Status MapCore::Rebuild() {
   return Status::Ok();
 }
 
-void MapCore::RebuildForNewFrames() {
+void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
   const auto t0 = Clock::now();
-  // Built without the lock (queries go on against the old map), then swapped.
-  StatusOr<BuiltEngine> built = BuildEngine();
-  if (!built.ok()) {
-    // The ties are committed, so the next start rebuilds with them; until then
-    // the map lacks the newly tied sessions. Never seen unless storage fails.
-    Log(LogLevel::kError, "frame_rebuild_failed", {{"error", built.status().ToString()}});
-    return;
+  std::unordered_map<int64_t, geometry::Rigid3> frames;
+  for (int64_t id : tie.tied_sessions) {
+    StatusOr<storage::SessionFrame> frame = store_->GetSession(id);
+    if (frame.ok() && frame->tied) frames[id] = frame->T_map_frame;
   }
-  FusedDelta delta;
-  {
-    std::unique_lock<std::shared_mutex> lock(engine_mu_);
-    // Every cluster published before or after changes or disappears: rewrite
-    // them all (WriteFusedDelta deletes those the new engine lacks).
-    for (const fusion::FusedFeature& f : engine_->Published()) delta.insert(f.id);
-    engine_ = std::move(built->engine);
-    for (const fusion::FusedFeature& f : engine_->Published()) delta.insert(f.id);
-    map_version_ = std::max<uint64_t>(map_version_.load(), built->observations);
+  uint64_t added = 0;
+  Status s = store_->ForEachObservationOfSessions(
+      tie.tied_sessions, tie.tied_through_id, [&](const storage::StoredObservation& obs) {
+        auto frame = frames.find(obs.session_id);
+        if (frame == frames.end()) return Status::Ok();
+        // Locked per observation, so queries never wait for a whole session.
+        std::unique_lock<std::shared_mutex> lock(engine_mu_);
+        Fuse(obs.features, obs.id, obs.robot_id, frame->second, delta);
+        ++map_version_;
+        ++added;
+        return Status::Ok();
+      });
+  if (!s.ok()) {
+    // The ties are committed, so the next start fuses these sessions; until
+    // then the map lacks what was not read. Never seen unless storage fails.
+    Log(LogLevel::kError, "tied_sessions_fusion_failed", {{"error", s.ToString()}});
   }
-  rebuilt_through_id_ = built->last_observation_id;
-  if (!delta.empty()) {
-    std::lock_guard<std::mutex> lock(queue_mu_);
-    fused_pending_.insert(delta.begin(), delta.end());
-    queue_cv_.notify_one();
-  }
-  Log(LogLevel::kInfo, "map_rebuilt_for_new_frames",
-      {{"observations", std::to_string(built->observations)},
+  Log(LogLevel::kInfo, "tied_sessions_fused",
+      {{"sessions", std::to_string(tie.tied_sessions.size())},
+       {"observations", std::to_string(added)},
        {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
 }
 
@@ -148,18 +148,21 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
   for (const std::shared_ptr<WriteJob>& job : jobs) {
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
     Status s = txn.status();
-    bool frames_changed = false;
+    std::vector<int64_t> tied;
     if (s.ok()) s = job->write(txn->get());
     if (s.ok()) {
-      frames_changed = (*txn)->ties_sessions();
+      tied = (*txn)->tied_session_ids();
       s = (*txn)->Commit();
     }
     txn = Status::Ok();  // ends the transaction (rolls back unless committed)
-    if (s.ok() && frames_changed) {
-      // In commit order with the observations: everything committed before is
-      // queued ahead of the marker, and the rebuild reads all of it.
+    if (s.ok() && !tied.empty()) {
+      // In commit order with the observations: the tied sessions' stored
+      // observations are all <= last_observation_id_ (later ones are queued
+      // as tied observations behind this marker).
       std::lock_guard<std::mutex> lock(fuse_mu_);
-      ToFuse marker{0, 0, geometry::Rigid3(), geometry::SensorObservation(), true};
+      ToFuse marker;
+      marker.tied_sessions = std::move(tied);
+      marker.tied_through_id = last_observation_id_;
       fuse_queue_.push_back(std::move(marker));
       committed_count_ += 1;
       fuse_cv_.notify_all();
@@ -283,6 +286,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   std::vector<std::pair<size_t, storage::InsertResult>> to_fuse;  // (index in group, result)
   Status failure;
   uint64_t features_stored = 0, batches_stored = 0;
+  int64_t newest_id = last_observation_id_;
   StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
   if (!txn.ok()) failure = txn.status();
 
@@ -314,6 +318,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
       continue;
     }
     outcomes[i] = {BatchOutcome::Kind::kStored, Status::Ok()};
+    newest_id = std::max(newest_id, r->observation_id);
     ++batches_stored;
     features_stored += b.features.lines.size() + b.features.planes.size();
     if (r->frame.tied) to_fuse.emplace_back(i, *r);
@@ -335,6 +340,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
     std::lock_guard<std::mutex> lock(queue_mu_);
     fused_pending_.insert(fused.begin(), fused.end());
   } else {
+    last_observation_id_ = newest_id;  // only once committed: a rolled-back id may be reused
     batches_stored_ += batches_stored;
     features_stored_ += features_stored;
     commits_ += 1;
@@ -344,8 +350,12 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
       // an ack waits for that batch to be fused (read-your-writes).
       std::lock_guard<std::mutex> lock(fuse_mu_);
       for (auto& [index, result] : to_fuse) {
-        fuse_queue_.push_back({result.observation_id, result.frame.robot_id, result.frame.T_map_frame,
-                               std::move(group[index].batch.features), false});
+        ToFuse t;
+        t.observation_id = result.observation_id;
+        t.robot_id = result.frame.robot_id;
+        t.T_map_frame = result.frame.T_map_frame;
+        t.features = std::move(group[index].batch.features);
+        fuse_queue_.push_back(std::move(t));
       }
       committed_count_ += to_fuse.size();
       fuse_cv_.notify_all();
@@ -365,19 +375,10 @@ void MapCore::FuserLoop() {
     }
     FusedDelta delta;
     for (const ToFuse& t : work) {
-      if (t.rebuild) {
-        // The delta so far is about clusters of the old engine; the rebuild
-        // rewrites every published cluster of both anyway.
-        if (!delta.empty()) {
-          std::lock_guard<std::mutex> lock(queue_mu_);
-          fused_pending_.insert(delta.begin(), delta.end());
-          delta.clear();
-        }
-        RebuildForNewFrames();
+      if (!t.tied_sessions.empty()) {
+        FuseTiedSessions(t, &delta);
         continue;
       }
-      // Already in the rebuilt engine (and counted in map_version_).
-      if (t.observation_id <= rebuilt_through_id_) continue;
       // Locked per observation, so queries never wait for a whole backlog.
       std::unique_lock<std::shared_mutex> lock(engine_mu_);
       Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);

@@ -15,9 +15,10 @@
 //
 // Other writes (submaps, merges, session ties) run on the writer thread too,
 // each in a transaction of its own (ExecuteWrite). When a write ties session
-// frames to the map frame, the fuser rebuilds the engine from the stored
-// observations with the new frames (DESIGN.md, Frames): the engine has no
-// removal, and a rebuild keeps the served map equal to a batch recomputation.
+// frames to the map frame, the fuser adds the newly tied sessions' stored
+// observations to the engine, in id order, at that point of the commit order
+// (a tie never moves, and sessions tied before are in the engine already, so
+// nothing has to be removed or refused).
 //
 // Thread safety: every public method may be called from any thread.
 #ifndef MAPD_SERVICE_MAP_CORE_H_
@@ -108,8 +109,8 @@ class MapCore {
   // Runs `write` on the writer thread in a transaction of its own and commits
   // it if `write` succeeds (else rolls back); returns once that is done, with
   // write's error or the commit's. When the transaction tied session frames
-  // (WriteTransaction::TieSession), the fuser then re-projects every stored
-  // observation with the new frames; a query sent after this returns waits
+  // (WriteTransaction::TieSession), the fuser then fuses the stored
+  // observations of those sessions; a query sent after this returns waits
   // for that (like for any committed batch). After Stop(): Unavailable,
   // nothing runs.
   Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write);
@@ -141,7 +142,9 @@ class MapCore {
   };
   StatusOr<BuiltEngine> BuildEngine();
   Status Rebuild();                     // engine_ from the stored observations
-  void RebuildForNewFrames();           // fuser thread: BuildEngine, swap, publish the delta
+  struct ToFuse;
+  // Fuser thread: the stored observations of newly tied sessions into engine_.
+  void FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
   void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);
   Status SyncFusedTable();              // fused_features := engine_'s published map
   void WriterLoop();
@@ -184,11 +187,15 @@ class MapCore {
 
   // Committed observations on their way to the fuser, in commit order.
   struct ToFuse {
-    int64_t observation_id;
-    int64_t robot_id;
+    int64_t observation_id = 0;
+    int64_t robot_id = 0;
     geometry::Rigid3 T_map_frame;
     geometry::SensorObservation features;
-    bool rebuild;  // a marker, not an observation: session frames changed, rebuild the engine
+    // A tie, not an observation: these sessions were tied to the map frame
+    // after observation tied_through_id was committed; fuse their stored
+    // observations up to it (later ones are queued as observations).
+    std::vector<int64_t> tied_sessions;
+    int64_t tied_through_id = 0;
   };
   mutable std::mutex fuse_mu_;
   mutable std::condition_variable fuse_cv_;  // the fuser waits for work; queries wait for the fuser
@@ -196,9 +203,7 @@ class MapCore {
   uint64_t committed_count_ = 0;   // GUARDED_BY(fuse_mu_), observations handed to the fuser
   uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
   bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
-  // Fuser thread only: observations up to this id are in the engine from a
-  // rebuild, so queued copies of them are skipped.
-  int64_t rebuilt_through_id_ = 0;
+  int64_t last_observation_id_ = 0;  // writer thread: the newest stored observation
   std::thread fuser_;
 
   std::atomic<uint64_t> batches_stored_{0};
