@@ -91,6 +91,27 @@ const std::vector<const char*>& Migrations() {
         PRIMARY KEY (merge_id, submap_id)
       );
       )sql",
+      // 1 -> 2: restarts from a snapshot of the fusion state (docs/operations.md).
+      // A tie records where in the commit order it happened, so that a replay
+      // fuses in the order the live server did: tied_through_observation = the
+      // newest observation id committed before the tie, tie_seq = 1, 2, ...
+      // per tying transaction (0: tied from the start, frame kind MAP).
+      R"sql(
+      ALTER TABLE sessions ADD COLUMN tied_through_observation INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE sessions ADD COLUMN tie_seq INTEGER NOT NULL DEFAULT 0;
+      -- The fusion engine's state (derived: recomputable from observations while
+      -- they are kept). It reflects every tied observation with id <=
+      -- through_observation and every tie with tie_seq <= through_tie_seq.
+      CREATE TABLE fusion_snapshots (
+        id                  INTEGER PRIMARY KEY,
+        created_ns          INTEGER NOT NULL,
+        map_version         INTEGER NOT NULL,
+        through_observation INTEGER NOT NULL,
+        through_tie_seq     INTEGER NOT NULL,
+        params              TEXT NOT NULL,   -- the fusion parameters it was built with
+        state               BLOB NOT NULL
+      );
+      )sql",
   };
   return kMigrations;
 }

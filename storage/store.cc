@@ -116,7 +116,8 @@ Status Store::Prepare() {
     robot_names_[robots->ColumnInt(0)] = robots->ColumnText(1);
   }
   StatusOr<Statement> sessions = Statement::Prepare(
-      w, "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz FROM sessions");
+      w, "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz, "
+         "tied_through_observation, tie_seq FROM sessions");
   if (!sessions.ok()) return sessions.status();
   for (;;) {
     StatusOr<bool> row = sessions->Step();
@@ -128,6 +129,9 @@ Status Store::Prepare() {
     f.kind = static_cast<FrameKind>(sessions->ColumnInt(3));
     f.tied = sessions->ColumnInt(4) != 0;
     if (f.tied) f.T_map_frame = ColumnPose(*sessions, 5);
+    f.tied_through_observation = sessions->ColumnInt(12);
+    f.tie_seq = sessions->ColumnInt(13);
+    max_tie_seq_ = std::max(max_tie_seq_, f.tie_seq);
     sessions_[SessionKey(f.robot_id, sessions->ColumnText(2))] = f;
   }
   return Status::Ok();
@@ -270,9 +274,30 @@ Status WriteTransaction::Commit() {
       if (frame.session_id != session_id) continue;
       frame.tied = true;
       frame.T_map_frame = T;
+      frame.tied_through_observation = tie_point_;
+      frame.tie_seq = tie_seq_;
     }
   }
+  store_->max_tie_seq_ = std::max(store_->max_tie_seq_, tie_seq_);
   return Status::Ok();
+}
+
+Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep) {
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> q = Statement::Prepare(
+      w, "INSERT INTO fusion_snapshots (created_ns, map_version, through_observation, "
+         "through_tie_seq, params, state) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, snapshot.created_ns).Bind(2, static_cast<int64_t>(snapshot.map_version));
+  q->Bind(3, snapshot.through_observation).Bind(4, snapshot.through_tie_seq);
+  q->Bind(5, std::string_view(snapshot.params)).BindBlob(6, snapshot.state.data(), snapshot.state.size());
+  MAPD_RETURN_IF_ERROR(q->Run());
+  StatusOr<Statement> prune = Statement::Prepare(
+      w, "DELETE FROM fusion_snapshots WHERE id NOT IN "
+         "(SELECT id FROM fusion_snapshots ORDER BY id DESC LIMIT ?1)");
+  if (!prune.ok()) return prune.status();
+  prune->Bind(1, static_cast<int64_t>(keep));
+  return prune->Run();
 }
 
 // ---------------------------------------------------------------------------
@@ -400,11 +425,16 @@ Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& 
   }
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),
-      "UPDATE sessions SET tied = 1, qw = ?2, qx = ?3, qy = ?4, qz = ?5, tx = ?6, ty = ?7, tz = ?8 "
-      "WHERE id = ?1");
+      "UPDATE sessions SET tied = 1, qw = ?2, qx = ?3, qy = ?4, qz = ?5, tx = ?6, ty = ?7, tz = ?8, "
+      "tied_through_observation = ?9, tie_seq = ?10 WHERE id = ?1");
   if (!q.ok()) return q.status();
+  if (tie_seq_ == 0) {
+    std::lock_guard<std::mutex> lock(store_->cache_mu_);
+    tie_seq_ = store_->max_tie_seq_ + 1;  // one sequence number per tying transaction
+  }
   q->Bind(1, session_id);
   BindPose(*q, 2, T_map_frame);
+  q->Bind(9, tie_point_).Bind(10, tie_seq_);
   MAPD_RETURN_IF_ERROR(q->Run());
   new_ties_[session_id] = T_map_frame;
   return Status::Ok();
@@ -446,6 +476,36 @@ Status Store::ForEachObservation(const std::function<Status(const StoredObservat
       Statement::Prepare(reader_.get(), std::string(kObservationColumns) + "ORDER BY o.id");
   if (!q.ok()) return q.status();
   return ForEachObservationRow(*q, fn);
+}
+
+Status Store::ForEachObservationAfter(int64_t after_id,
+                                      const std::function<Status(const StoredObservation&)>& fn) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), std::string(kObservationColumns) + "WHERE o.id > ?1 ORDER BY o.id");
+  if (!q.ok()) return q.status();
+  q->Bind(1, after_id);
+  return ForEachObservationRow(*q, fn);
+}
+
+StatusOr<FusionSnapshot> Store::LatestSnapshot() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
+                     "params, state FROM fusion_snapshots ORDER BY id DESC LIMIT 1");
+  if (!q.ok()) return q.status();
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  if (!*row) return Status::NotFound("no fusion snapshot");
+  FusionSnapshot snap;
+  snap.id = q->ColumnInt(0);
+  snap.created_ns = q->ColumnInt(1);
+  snap.map_version = static_cast<uint64_t>(q->ColumnInt(2));
+  snap.through_observation = q->ColumnInt(3);
+  snap.through_tie_seq = q->ColumnInt(4);
+  snap.params = q->ColumnText(5);
+  snap.state = std::string(q->ColumnBlob(6));
+  return snap;
 }
 
 Status Store::ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,

@@ -51,6 +51,24 @@ struct SessionFrame {
   FrameKind kind = FrameKind::kMap;
   bool tied = false;               // T_map_frame is known
   geometry::Rigid3 T_map_frame;    // valid when tied
+  // Where the tie happened in the commit order (0, 0: tied from the start):
+  // the newest observation id committed before it, and the tying
+  // transaction's sequence number (1, 2, ...).
+  int64_t tied_through_observation = 0;
+  int64_t tie_seq = 0;
+};
+
+// A stored snapshot of the fusion state (MapCore): it reflects every tied
+// observation with id <= through_observation and every tie with tie_seq <=
+// through_tie_seq.
+struct FusionSnapshot {
+  int64_t id = 0;
+  int64_t created_ns = 0;
+  uint64_t map_version = 0;
+  int64_t through_observation = 0;
+  int64_t through_tie_seq = 0;
+  std::string params;  // the fusion parameters it was built with
+  std::string state;   // FusionEngine::SaveState()
 };
 
 // One batch to store.
@@ -195,7 +213,13 @@ class WriteTransaction {
   StatusOr<MergeIds> RecordMerge(const NewMerge& merge);
   // Ties a session frame to the map frame (T_map_frame). FailedPrecondition
   // if it is tied already: a tie is never moved, so the map stays consistent.
+  // The tie is recorded at set_tie_point()'s position in the commit order.
   Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame);
+  // The newest observation id committed before this transaction (MapCore sets
+  // it before running a write that may tie sessions).
+  void set_tie_point(int64_t newest_observation_id) { tie_point_ = newest_observation_id; }
+  // Stores a snapshot and deletes all but the `keep` newest.
+  Status InsertSnapshot(const FusionSnapshot& snapshot, int keep);
   // True once TieSession() succeeded in this transaction.
   bool ties_sessions() const { return !new_ties_.empty(); }
   // The sessions TieSession() tied in this transaction, ascending.
@@ -221,6 +245,8 @@ class WriteTransaction {
   std::unordered_map<std::string, SessionFrame> new_sessions_;  // key: robot_id/name
   std::unordered_map<int64_t, RobotDelta> robot_deltas_;
   std::unordered_map<int64_t, geometry::Rigid3> new_ties_;  // session id -> T_map_frame
+  int64_t tie_point_ = 0;
+  int64_t tie_seq_ = 0;  // of this transaction's ties, once one is made
   std::string payload_;  // scratch
 };
 
@@ -237,6 +263,11 @@ class Store {
   // --- Any thread.
   // Every stored observation in id (= arrival) order.
   Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
+  // The stored observations with id > after_id, in id order.
+  Status ForEachObservationAfter(int64_t after_id,
+                                 const std::function<Status(const StoredObservation&)>& fn);
+  // The newest snapshot; NotFound if there is none.
+  StatusOr<FusionSnapshot> LatestSnapshot();
   // The stored observations of `session_ids` with id <= max_id, in id order.
   Status ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
                                       const std::function<Status(const StoredObservation&)>& fn);
@@ -285,6 +316,7 @@ class Store {
   std::unordered_map<std::string, int64_t> robot_ids_;
   std::unordered_map<int64_t, std::string> robot_names_;
   std::unordered_map<std::string, SessionFrame> sessions_;
+  int64_t max_tie_seq_ = 0;  // GUARDED_BY(cache_mu_)
 };
 
 }  // namespace mapd::storage

@@ -44,6 +44,14 @@ void CornerSnapper::Upsert(ClusterId id, const Segment2& fitted, const Line2& li
   grid_.Insert(fitted.b, {id, 1, fitted.b});
 }
 
+bool CornerSnapper::Lookup(ClusterId id, Segment2* fitted, Line2* line) const {
+  auto it = entries_.find(id);
+  if (it == entries_.end()) return false;
+  *fitted = it->second.fitted;
+  *line = it->second.line;
+  return true;
+}
+
 void CornerSnapper::Erase(ClusterId id) {
   auto it = entries_.find(id);
   if (it == entries_.end()) return;

@@ -49,6 +49,9 @@ class CornerSnapper {
   // Appends the ids of published features with an endpoint within radius_m of p.
   void CollectNear(const geometry::Vec2& p, double radius_m, std::vector<ClusterId>* ids) const;
 
+  // The fitted segment and line of published feature `id`; false if absent.
+  bool Lookup(ClusterId id, geometry::Segment2* fitted, geometry::Line2* line) const;
+
   // The corner-optimised segment of published feature `id`. REQUIRES: id is present.
   geometry::Segment2 Snapped(ClusterId id) const;
 

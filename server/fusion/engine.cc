@@ -1,4 +1,5 @@
 #include "fusion/engine.h"
+#include "fusion/engine_impl.h"
 
 #include <algorithm>
 #include <cmath>
@@ -28,19 +29,8 @@ namespace {
 constexpr double kMaxAbsCoordinateM = 1e6;
 // Shorter segments are refused as zero-length: they have no direction.
 constexpr double kMinSegmentLengthM = 1e-9;
-// Cell size of the feature-centre grid. Queries cover R_f + eta, so cells of
-// the order of a typical wall segment keep both the probed cell count and the
-// per-cell candidate count small.
-constexpr double kFeatureCellM = 1.0;
 // Added to exact search radii so that rounding never hides a candidate.
 constexpr double kSearchSlackM = 1e-6;
-// Bounded mode: a cluster is "established" once this many distinct
-// observations (at least min_support) saw it. Only established clusters fold
-// new features, and their support is exact up to here (support_counter.h).
-// Young clusters keep every member as in exact mode: their links are the
-// fragile ones (docs/fusion-long-running.md: folding into young clusters
-// changed the map of a real log, folding into established ones did not).
-constexpr uint32_t kEstablishedSupport = 32;
 
 // The larger of the two squared endpoint distances between f and g, in the
 // pairing (a-a, b-b or a-b, b-a) that makes it smaller, m^2.
@@ -62,98 +52,9 @@ Status CheckPoint(const Vec2& p, size_t index, const char* name) {
   return Status::Ok();
 }
 
-// A raw feature as filed in the centre grid: what the criteria need, inline,
-// so that a candidate scan touches one cache line per candidate.
-struct IndexedFeature {
-  Segment2 segment;
-  Vec2 centre;
-  double radius_m;
-  uint32_t node;
-};
 
 }  // namespace
 
-class FusionEngine::Impl {
- public:
-  explicit Impl(const FusionParams& params)
-      : params_(params),
-        guard_on_(params.chain_max_rms_m > 0.0),
-        bounded_(params.mode == FusionMode::kBounded),
-        support_cap_(bounded_ ? std::max(kEstablishedSupport, params.min_support)
-                              : SupportCounter::kUnlimited),
-        grid_(kFeatureCellM),
-        snapper_(params.snap_m, params.corner_mode) {}
-
-  Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
-  void Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
-           ChangeFeed* changes);
-  std::optional<FusedFeature> Get(ClusterId id) const;
-
-  const FusionParams params_;
-  const bool guard_on_;  // chain guard (chain_guard.h) enabled
-  const bool bounded_;   // FusionMode::kBounded: nodes are representatives
-  const uint32_t support_cap_;  // exact support up to this many observations
-  // A node is a raw feature (exact mode) or a representative (bounded mode:
-  // the first feature of it, plus every later one folded into it).
-  std::unordered_set<ObservationId> observations_;  // exact mode only
-  ObservationId last_observation_ = 0;
-  bool has_last_observation_ = false;
-  std::unordered_map<FeatureId, uint32_t> node_of_;  // by the node's own feature id
-  // Union-find over nodes; stats_ is non-null at roots only.
-  std::vector<uint32_t> parent_;
-  std::vector<uint32_t> size_;
-  std::vector<std::unique_ptr<ClusterStats>> stats_;
-  size_t cluster_count_ = 0;  // components
-  uint64_t raw_feature_count_ = 0;  // features added, folded ones included
-  // Per node, kept when the guard is on or in bounded mode: the node's own
-  // feature (the guard refits subsets; snapshots refile the grid from it).
-  std::vector<GroundFeature> anchors_;
-  // Guard on, exact mode: where each node's feature came from.
-  std::vector<ObservationId> observation_of_;
-  std::vector<RobotId> robot_of_;
-  // Guard on, bounded mode: everything folded into each representative.
-  std::vector<ClusterStats> folded_;
-  // Guard on: the next member of the node's component (a circular list per
-  // component: a union splices two lists in O(1)).
-  std::vector<uint32_t> next_member_;
-  // Components the guard cut into more than one group, by component id: the
-  // ids of their published groups and their group count.
-  struct SplitRecord {
-    std::vector<ClusterId> published;
-    uint32_t group_count = 0;
-  };
-  std::unordered_map<ClusterId, SplitRecord> split_;
-  size_t extra_groups_ = 0;  // sum over split_ of (group_count - 1)
-  UniformGrid<IndexedFeature> grid_;
-  CornerSnapper snapper_;
-  std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
-
-  bool keeps_anchors() const { return guard_on_ || bounded_; }
-  uint32_t FindConst(uint32_t x) const;  // no path compression, for const readers
-  // Whether the guard may cut the component at `root` (else it is one group).
-  bool MayCut(uint32_t root) const {
-    return guard_on_ && ChainMayNeedSplit(stats_[root]->moments, params_.chain_max_rms_m);
-  }
-  // The guard's groups of the component at `root`, as member nodes and stats.
-  std::vector<std::vector<uint32_t>> GroupNodes(uint32_t root) const;
-  ClusterStats StatsOf(const std::vector<uint32_t>& nodes) const;
-  // Files node `node`, whose own feature is `segment`, in the centre grid.
-  void FileInGrid(uint32_t node, const Segment2& segment);
-
- private:
-  uint32_t Find(uint32_t x);
-  // Returns the surviving root; records the ids of both clusters in `merged_ids`.
-  uint32_t Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids);
-  uint32_t NewNode(const GroundFeature& f, ObservationId observation, RobotId robot);
-  // Bounded mode: the representative `f` folds into (both endpoints within
-  // cover_m, criteria met; the nearest, ties by node), or false.
-  bool FindCover(const GroundFeature& f, uint32_t* node) const;
-  void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
-  void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
-               ChangeFeed* feed);
-  // Publishes one group (support >= min_support) unless it is unchanged.
-  void PublishGroup(const ClusterStats& stats, ChangeFeed* feed, std::vector<Vec2>* moved_points);
-};
 
 std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root) const {
   std::vector<uint32_t> nodes;

@@ -31,6 +31,8 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/status.h"
@@ -97,6 +99,15 @@ class FusionEngine {
   // `changes`, if not null, receives what changed in the published map.
   Status Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
              ChangeFeed* changes = nullptr);
+
+  // Snapshots (bounded mode; Unimplemented in exact mode, whose restarts
+  // replay): the whole state as bytes, and an engine restored from them that
+  // gives the same results, bit for bit, for the same later input. LoadState
+  // refuses bytes that are corrupt (checksum, bounds, structure) or were saved
+  // with other parameters (FusionParamsKey) with a message saying which.
+  Status SaveState(std::string* out) const;
+  static StatusOr<std::unique_ptr<FusionEngine>> LoadState(const FusionParams& params,
+                                                           std::string_view state);
 
   // Published fused features (support >= min_support), ascending by id.
   std::vector<FusedFeature> Published() const;

@@ -1,6 +1,7 @@
 #include "fusion/params.h"
 
 #include <cmath>
+#include <cstdio>
 
 namespace mapd::fusion {
 namespace {
@@ -43,6 +44,18 @@ Status FusionParams::Validate() const {
     return Status::InvalidArgument("fusion params: corner_mode is not a known mode");
   }
   return Status::Ok();
+}
+
+std::string FusionParamsKey(const FusionParams& p) {
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "mode=%s cover_m=%.17g delta_rad=%.17g gamma=%.17g eta_m=%.17g min_support=%u "
+                "snap_m=%.17g corner_mode=%s max_plane_tilt_rad=%.17g chain_max_rms_m=%.17g "
+                "chain_max_sse_ratio=%.17g",
+                FusionModeName(p.mode), p.cover_m, p.delta_rad, p.gamma, p.eta_m, p.min_support,
+                p.snap_m, CornerModeName(p.corner_mode), p.max_plane_tilt_rad, p.chain_max_rms_m,
+                p.chain_max_sse_ratio);
+  return text;
 }
 
 const char* FusionModeName(FusionMode mode) {

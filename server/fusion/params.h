@@ -57,6 +57,11 @@ struct FusionParams {
   Status Validate() const;
 };
 
+// Every parameter that changes the fused map, as text ("mode=bounded
+// cover_m=0.02 ..."), doubles to 17 digits: equal texts, equal results. Kept
+// with snapshots of the engine, which are only loaded with the same text.
+std::string FusionParamsKey(const FusionParams& params);
+
 // "exact" / "bounded".
 const char* FusionModeName(FusionMode mode);
 Status ParseFusionMode(const std::string& name, FusionMode* mode);

@@ -1,7 +1,9 @@
 // FusionMode::kBounded against kExact: a revisited wall keeps a bounded number
 // of nodes and publishes what the exact engine publishes.
 #include <cmath>
+#include <memory>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -83,6 +85,110 @@ TEST(BoundedEngineTest, YoungClustersFoldNothing) {
   std::mt19937_64 rng(3);
   for (ObservationId o = 1; o <= 20; ++o) ASSERT_TRUE(bounded.Add(o, 0, View(o, &rng)).ok());
   EXPECT_EQ(bounded.node_count(), 60u);
+}
+
+// The revisited site plus a curved wall (the chain guard cuts it), so that
+// folding, cuts and corners all carry state across a snapshot.
+std::vector<GroundFeature> SiteView(ObservationId observation, std::mt19937_64* rng) {
+  std::vector<GroundFeature> out = View(observation, rng);
+  // A wall curving through 0.6 rad on a 20 m radius, seen as 1 m chords that
+  // start at a random phase: chords of different views overlap and chain
+  // along the arc, which the guard then cuts into straight pieces.
+  std::uniform_real_distribution<double> phase(0.0, 0.05);
+  const double start = phase(*rng);
+  for (int k = 0; k < 11; ++k) {
+    const double t0 = start + 0.05 * k, t1 = t0 + 0.05;
+    GroundFeature f;
+    f.id = (observation << 4) | static_cast<FeatureId>(4 + k);
+    f.segment = {Vec2(30 + 20 * std::sin(t0), 20 * std::cos(t0)),
+                 Vec2(30 + 20 * std::sin(t1), 20 * std::cos(t1))};
+    f.z_max_m = 2.0;
+    out.push_back(f);
+  }
+  return out;
+}
+
+std::string State(const FusionEngine& engine) {
+  std::string bytes;
+  EXPECT_TRUE(engine.SaveState(&bytes).ok());
+  return bytes;
+}
+
+void ExpectSameMap(const FusionEngine& a, const FusionEngine& b) {
+  const std::vector<FusedFeature> fa = a.Published(), fb = b.Published();
+  ASSERT_EQ(fa.size(), fb.size());
+  for (size_t i = 0; i < fa.size(); ++i) {
+    EXPECT_EQ(fa[i].id, fb[i].id);
+    EXPECT_EQ(fa[i].segment.a, fb[i].segment.a);  // bit for bit
+    EXPECT_EQ(fa[i].segment.b, fb[i].segment.b);
+    EXPECT_EQ(fa[i].fitted.a, fb[i].fitted.a);
+    EXPECT_EQ(fa[i].support, fb[i].support);
+    EXPECT_EQ(fa[i].member_count, fb[i].member_count);
+    EXPECT_EQ(fa[i].robots, fb[i].robots);
+  }
+  EXPECT_EQ(a.node_count(), b.node_count());
+  EXPECT_EQ(a.cluster_count(), b.cluster_count());
+  EXPECT_EQ(a.feature_count(), b.feature_count());
+}
+
+class SnapshotTest : public ::testing::TestWithParam<uint32_t> {};
+
+TEST_P(SnapshotTest, SnapshotPlusReplayEqualsFullReplay) {
+  const uint32_t seed = GetParam();
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<GroundFeature>> views;
+  constexpr ObservationId kObservations = 150;
+  for (ObservationId o = 1; o <= kObservations; ++o) views.push_back(SiteView(o, &rng));
+  const FusionParams params = Mode(FusionMode::kBounded);
+  const ObservationId cut = 1 + rng() % (kObservations - 1);
+
+  FusionEngine full(params);
+  std::unique_ptr<FusionEngine> restored;
+  for (ObservationId o = 1; o <= kObservations; ++o) {
+    ASSERT_TRUE(full.Add(o, o % 3, views[o - 1]).ok());
+    if (o == cut) {
+      StatusOr<std::unique_ptr<FusionEngine>> loaded = FusionEngine::LoadState(params, State(full));
+      ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
+      restored = std::move(loaded).value();
+      ExpectSameMap(full, *restored);
+    } else if (o > cut) {
+      ASSERT_TRUE(restored->Add(o, o % 3, views[o - 1]).ok());
+    }
+  }
+  ASSERT_GT(full.feature_count(), full.node_count()) << "nothing was folded: the test tests little";
+  ASSERT_GE(full.Published().size(), 6u) << "the guard did not cut the arc: the test tests little";
+  ExpectSameMap(full, *restored);
+  EXPECT_EQ(State(full), State(*restored));  // the whole state, not just the map
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, SnapshotTest, ::testing::Range(1u, 9u));
+
+TEST(SnapshotStateTest, RefusesCorruptOrForeignState) {
+  std::mt19937_64 rng(1);
+  FusionEngine engine(Mode(FusionMode::kBounded));
+  for (ObservationId o = 1; o <= 50; ++o) ASSERT_TRUE(engine.Add(o, 0, SiteView(o, &rng)).ok());
+  const std::string good = State(engine);
+  const FusionParams params = Mode(FusionMode::kBounded);
+  ASSERT_TRUE(FusionEngine::LoadState(params, good).ok());
+
+  EXPECT_EQ(FusionEngine::LoadState(params, "").status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(FusionEngine::LoadState(params, good.substr(0, good.size() / 2)).status().code(),
+            StatusCode::kInvalidArgument);
+  std::string flipped = good;
+  flipped[flipped.size() / 2] ^= 0x40;
+  const Status corrupt = FusionEngine::LoadState(params, flipped).status();
+  EXPECT_EQ(corrupt.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(corrupt.message().find("checksum"), std::string::npos) << corrupt.message();
+
+  FusionParams other = params;
+  other.eta_m = 0.4;
+  const Status foreign = FusionEngine::LoadState(other, good).status();
+  EXPECT_EQ(foreign.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(foreign.message().find("other fusion parameters"), std::string::npos);
+
+  std::string unused;
+  FusionEngine exact(Mode(FusionMode::kExact));
+  EXPECT_EQ(exact.SaveState(&unused).code(), StatusCode::kUnimplemented);
 }
 
 TEST(BoundedEngineTest, RefusesTheSameObservationTwiceInARow) {

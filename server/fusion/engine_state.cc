@@ -1,0 +1,331 @@
+// FusionEngine snapshots (engine.h: SaveState / LoadState).
+//
+// Layout, little-endian, doubles as their IEEE bits so that a restored engine
+// continues bit for bit:
+//   "MAPDFUS1" | u32 version | params key (string) | body | u64 FNV-1a of all before
+//   body: nodes (parent, size, anchor, next member, folded stats, root stats),
+//         counters, split records, published features, the snapper's lines.
+// The grid and the snapper's index are refiled from the nodes, in node order
+// (the order the live engine filed them), so candidate scans visit the same
+// items in the same order.
+#include <cstring>
+#include <string>
+
+#include "fusion/engine_impl.h"
+
+namespace mapd::fusion {
+namespace {
+
+constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'F', 'U', 'S', '1'};
+constexpr uint32_t kVersion = 1;
+// Union by size keeps trees at most log2(nodes) deep; deeper means corrupt.
+constexpr int kMaxTreeDepth = 64;
+
+uint64_t Fnv1a(std::string_view bytes) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+class Writer {
+ public:
+  explicit Writer(std::string* out) : out_(out) {}
+  template <typename T>
+  void Raw(const T& v) {
+    out_->append(reinterpret_cast<const char*>(&v), sizeof(T));
+  }
+  void U8(uint8_t v) { Raw(v); }
+  void U32(uint32_t v) { Raw(v); }
+  void U64(uint64_t v) { Raw(v); }
+  void F64(double v) { Raw(v); }
+  void V2(const Vec2& v) {
+    F64(v.x());
+    F64(v.y());
+  }
+  void Seg(const Segment2& s) {
+    V2(s.a);
+    V2(s.b);
+  }
+  void Str(std::string_view s) {
+    U64(s.size());
+    out_->append(s);
+  }
+  void Ids(const std::vector<uint64_t>& ids) {
+    U64(ids.size());
+    for (uint64_t id : ids) U64(id);
+  }
+  void Feature(const GroundFeature& f) {
+    U64(f.id);
+    Seg(f.segment);
+    F64(f.z_min_m);
+    F64(f.z_max_m);
+    U8(f.origin == FeatureOrigin::kPlane ? 1 : 0);
+  }
+  void Stats(const ClusterStats& s) {
+    U64(s.id);
+    U32(s.member_count);
+    U32(s.plane_members);
+    U64(s.moments.count);
+    V2(s.moments.mean);
+    for (int i = 0; i < 4; ++i) F64(s.moments.scatter(i));
+    U64(s.hull.size());
+    for (const Vec2& p : s.hull) V2(p);
+    F64(s.z_min_m);
+    F64(s.z_max_m);
+    Ids(s.observations.ids());
+    U32(s.observations.saturated_count());
+    U64(s.observations.last());
+    Ids(s.robots);
+  }
+
+ private:
+  std::string* out_;
+};
+
+class Reader {
+ public:
+  explicit Reader(std::string_view in) : in_(in) {}
+  bool ok() const { return ok_; }
+  bool at_end() const { return pos_ == in_.size(); }
+  template <typename T>
+  T Raw() {
+    T v{};
+    if (!ok_ || in_.size() - pos_ < sizeof(T)) {
+      ok_ = false;
+      return v;
+    }
+    std::memcpy(&v, in_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  uint8_t U8() { return Raw<uint8_t>(); }
+  uint32_t U32() { return Raw<uint32_t>(); }
+  uint64_t U64() { return Raw<uint64_t>(); }
+  double F64() { return Raw<double>(); }
+  Vec2 V2() {
+    const double x = F64();
+    return Vec2(x, F64());
+  }
+  Segment2 Seg() {
+    const Vec2 a = V2();
+    return {a, V2()};
+  }
+  // A count of items of at least `item_bytes` each that the rest can hold.
+  uint64_t Count(size_t item_bytes) {
+    const uint64_t n = U64();
+    if (!ok_ || n > (in_.size() - pos_) / item_bytes) ok_ = false;
+    return ok_ ? n : 0;
+  }
+  std::string Str() {
+    const uint64_t n = Count(1);
+    if (!ok_) return {};
+    std::string s(in_.substr(pos_, n));
+    pos_ += n;
+    return s;
+  }
+  std::vector<uint64_t> Ids() {
+    std::vector<uint64_t> ids(Count(8));
+    for (uint64_t& id : ids) id = U64();
+    return ids;
+  }
+  GroundFeature Feature() {
+    GroundFeature f;
+    f.id = U64();
+    f.segment = Seg();
+    f.z_min_m = F64();
+    f.z_max_m = F64();
+    f.origin = U8() != 0 ? FeatureOrigin::kPlane : FeatureOrigin::kLine;
+    return f;
+  }
+  ClusterStats Stats() {
+    ClusterStats s;
+    s.id = U64();
+    s.member_count = U32();
+    s.plane_members = U32();
+    s.moments.count = U64();
+    s.moments.mean = V2();
+    for (int i = 0; i < 4; ++i) s.moments.scatter(i) = F64();
+    s.hull.resize(Count(16));
+    for (Vec2& p : s.hull) p = V2();
+    s.z_min_m = F64();
+    s.z_max_m = F64();
+    std::vector<uint64_t> ids = Ids();
+    const uint32_t saturated = U32();
+    const uint64_t last = U64();
+    s.observations = SupportCounter::FromState(std::move(ids), saturated, last);
+    s.robots = Ids();
+    return s;
+  }
+
+ private:
+  std::string_view in_;
+  size_t pos_ = 0;
+  bool ok_ = true;
+};
+
+Status Corrupt(const std::string& what) {
+  return Status::InvalidArgument("fusion snapshot is corrupt: " + what);
+}
+
+}  // namespace
+
+Status FusionEngine::SaveState(std::string* out) const {
+  const Impl& e = *impl_;
+  if (!e.bounded_) return Status::Unimplemented("snapshots are for fusion.mode = bounded");
+  out->clear();
+  Writer w(out);
+  out->append(kMagic, sizeof(kMagic));
+  w.U32(kVersion);
+  w.Str(FusionParamsKey(e.params_));
+  const size_t n = e.parent_.size();
+  w.U64(n);
+  for (size_t i = 0; i < n; ++i) {
+    w.U32(e.parent_[i]);
+    w.U32(e.size_[i]);
+    w.Feature(e.anchors_[i]);
+    if (e.guard_on_) {
+      w.U32(e.next_member_[i]);
+      w.Stats(e.folded_[i]);
+    }
+    w.U8(e.stats_[i] ? 1 : 0);
+    if (e.stats_[i]) w.Stats(*e.stats_[i]);
+  }
+  w.U64(e.cluster_count_);
+  w.U64(e.raw_feature_count_);
+  w.U64(e.last_observation_);
+  w.U8(e.has_last_observation_ ? 1 : 0);
+  w.U64(e.split_.size());
+  for (const auto& [id, record] : e.split_) {
+    w.U64(id);
+    w.U32(record.group_count);
+    w.Ids(record.published);
+  }
+  w.U64(e.extra_groups_);
+  w.U64(e.published_.size());
+  for (const auto& [id, f] : e.published_) {
+    w.U64(f.id);
+    w.Seg(f.segment);
+    w.Seg(f.fitted);
+    w.F64(f.z_min_m);
+    w.F64(f.z_max_m);
+    w.U32(f.support);
+    w.U32(f.member_count);
+    w.U32(f.plane_members);
+    w.Ids(f.robots);
+    Segment2 fitted;
+    geometry::Line2 line;
+    e.snapper_.Lookup(id, &fitted, &line);
+    w.Seg(fitted);
+    w.V2(line.point);
+    w.V2(line.direction);
+  }
+  w.U64(Fnv1a(*out));
+  return Status::Ok();
+}
+
+StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionParams& params,
+                                                                std::string_view state) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (params.mode != FusionMode::kBounded) {
+    return Status::Unimplemented("snapshots are for fusion.mode = bounded");
+  }
+  if (state.size() < sizeof(kMagic) + 12 || std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
+    return Corrupt("not a fusion snapshot");
+  }
+  const std::string_view body = state.substr(0, state.size() - 8);
+  uint64_t stored_hash;
+  std::memcpy(&stored_hash, state.data() + body.size(), 8);
+  if (Fnv1a(body) != stored_hash) return Corrupt("checksum mismatch");
+  Reader r(body.substr(sizeof(kMagic)));
+  if (r.U32() != kVersion) return Corrupt("unknown format version");
+  const std::string key = r.Str();
+  if (key != FusionParamsKey(params)) {
+    return Status::FailedPrecondition("fusion snapshot was taken with other fusion parameters (" +
+                                      key + ")");
+  }
+  auto engine = std::make_unique<FusionEngine>(params);
+  Impl& e = *engine->impl_;
+  const uint64_t n = r.Count(4 + 4 + 49 + 1);
+  e.parent_.resize(n);
+  e.size_.resize(n);
+  e.anchors_.resize(n);
+  e.stats_.resize(n);
+  if (e.guard_on_) {
+    e.next_member_.resize(n);
+    e.folded_.resize(n);
+  }
+  for (uint64_t i = 0; i < n && r.ok(); ++i) {
+    e.parent_[i] = r.U32();
+    e.size_[i] = r.U32();
+    e.anchors_[i] = r.Feature();
+    if (e.guard_on_) {
+      e.next_member_[i] = r.U32();
+      e.folded_[i] = r.Stats();
+    }
+    if (r.U8() != 0) e.stats_[i] = std::make_unique<ClusterStats>(r.Stats());
+  }
+  e.cluster_count_ = r.U64();
+  e.raw_feature_count_ = r.U64();
+  e.last_observation_ = r.U64();
+  e.has_last_observation_ = r.U8() != 0;
+  const uint64_t splits = r.Count(20);
+  for (uint64_t i = 0; i < splits && r.ok(); ++i) {
+    const ClusterId id = r.U64();
+    Impl::SplitRecord record;
+    record.group_count = r.U32();
+    record.published = r.Ids();
+    e.split_[id] = std::move(record);
+  }
+  e.extra_groups_ = r.U64();
+  const uint64_t published = r.Count(8);
+  std::vector<std::pair<ClusterId, std::pair<Segment2, geometry::Line2>>> lines;
+  for (uint64_t i = 0; i < published && r.ok(); ++i) {
+    FusedFeature f;
+    f.id = r.U64();
+    f.segment = r.Seg();
+    f.fitted = r.Seg();
+    f.z_min_m = r.F64();
+    f.z_max_m = r.F64();
+    f.support = r.U32();
+    f.member_count = r.U32();
+    f.plane_members = r.U32();
+    f.robots = r.Ids();
+    Segment2 fitted = r.Seg();
+    geometry::Line2 line;
+    line.point = r.V2();
+    line.direction = r.V2();
+    lines.push_back({f.id, {fitted, line}});
+    e.published_[f.id] = std::move(f);
+  }
+  if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
+
+  // Structure: indices in range, stats exactly at roots, shallow trees.
+  size_t roots = 0;
+  for (uint64_t i = 0; i < n; ++i) {
+    if (e.parent_[i] >= n || (e.guard_on_ && e.next_member_[i] >= n)) {
+      return Corrupt("node " + std::to_string(i) + " points outside the snapshot");
+    }
+    const bool root = e.parent_[i] == i;
+    if (root != (e.stats_[i] != nullptr)) return Corrupt("cluster statistics off the roots");
+    roots += root;
+    uint32_t x = static_cast<uint32_t>(i);
+    for (int depth = 0; e.parent_[x] != x; ++depth) {
+      if (depth > kMaxTreeDepth) return Corrupt("a cycle in the cluster forest");
+      x = e.parent_[x];
+    }
+  }
+  if (roots != e.cluster_count_) return Corrupt("cluster count disagrees with the forest");
+
+  // Refile the indexes, in node order (as the live engine filed them).
+  for (uint32_t i = 0; i < n; ++i) {
+    e.node_of_.emplace(e.anchors_[i].id, i);
+    e.FileInGrid(i, e.anchors_[i].segment);
+  }
+  for (const auto& [id, fl] : lines) e.snapper_.Upsert(id, fl.first, fl.second);
+  return engine;
+}
+
+}  // namespace mapd::fusion
