@@ -172,7 +172,10 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   };
   auto num = [](uint64_t v) { return std::to_string(v); };
   row("uptime", HumanDuration(s.uptime_s()));
-  row("database", s.db_path() + " (" + HumanBytes(s.db_size_bytes()) + ")");
+  row("database", s.db_path() + " (" + HumanBytes(s.db_size_bytes()) +
+                      (s.raw_features() > 0 ? Printf(", %.0f bytes per raw feature", s.bytes_per_raw_feature())
+                                            : std::string()) + ")");
+  if (s.recovering()) row("state", "RECOVERING the fused map (health NOT_SERVING)");
   row("robots", num(s.robots()));
   row("sessions", num(s.sessions()));
   row("batches", num(s.batches()));
@@ -181,6 +184,11 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
   row("submaps", num(s.submaps()));
   row("map version", num(s.map_version()));
+  row("snapshot", s.snapshot_age_s() > 0
+                      ? Printf("%s old, %llu observations to replay on restart", HumanDuration(s.snapshot_age_s()).c_str(),
+                               static_cast<unsigned long long>(s.replay_length()))
+                      : Printf("none yet, %llu observations to replay on restart",
+                               static_cast<unsigned long long>(s.replay_length())));
   row("ingest rate", Printf("%.1f batches/s, %.1f features/s (last 10 s)", s.ingest_batches_per_s(),
                             s.ingest_features_per_s()));
   return out;

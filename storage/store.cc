@@ -478,14 +478,23 @@ Status Store::ForEachObservation(const std::function<Status(const StoredObservat
   return ForEachObservationRow(*q, fn);
 }
 
-Status Store::ForEachObservationAfter(int64_t after_id,
-                                      const std::function<Status(const StoredObservation&)>& fn) {
+Status Store::ForEachObservationBetween(int64_t after_id, int64_t through_id,
+                                        const std::function<Status(const StoredObservation&)>& fn) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), std::string(kObservationColumns) + "WHERE o.id > ?1 ORDER BY o.id");
+      reader_.get(), std::string(kObservationColumns) + "WHERE o.id > ?1 AND o.id <= ?2 ORDER BY o.id");
   if (!q.ok()) return q.status();
-  q->Bind(1, after_id);
+  q->Bind(1, after_id).Bind(2, through_id);
   return ForEachObservationRow(*q, fn);
+}
+
+StatusOr<int64_t> Store::NewestObservationId() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(reader_.get(), "SELECT coalesce(max(id), 0) FROM observations");
+  if (!q.ok()) return q.status();
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  return q->ColumnInt(0);
 }
 
 StatusOr<FusionSnapshot> Store::LatestSnapshot() {

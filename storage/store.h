@@ -222,6 +222,8 @@ class WriteTransaction {
   Status InsertSnapshot(const FusionSnapshot& snapshot, int keep);
   // True once TieSession() succeeded in this transaction.
   bool ties_sessions() const { return !new_ties_.empty(); }
+  // The sequence number of this transaction's ties (0 if it tied none).
+  int64_t tie_seq() const { return tie_seq_; }
   // The sessions TieSession() tied in this transaction, ascending.
   std::vector<int64_t> tied_session_ids() const;
   Status DeleteFused(uint64_t id);
@@ -263,9 +265,11 @@ class Store {
   // --- Any thread.
   // Every stored observation in id (= arrival) order.
   Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
-  // The stored observations with id > after_id, in id order.
-  Status ForEachObservationAfter(int64_t after_id,
-                                 const std::function<Status(const StoredObservation&)>& fn);
+  // The stored observations with after_id < id <= through_id, in id order.
+  Status ForEachObservationBetween(int64_t after_id, int64_t through_id,
+                                   const std::function<Status(const StoredObservation&)>& fn);
+  // The newest stored observation id (0 if none).
+  StatusOr<int64_t> NewestObservationId();
   // The newest snapshot; NotFound if there is none.
   StatusOr<FusionSnapshot> LatestSnapshot();
   // The stored observations of `session_ids` with id <= max_id, in id order.

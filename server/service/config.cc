@@ -66,6 +66,12 @@ const std::map<std::string, Setting>& Settings() {
       {"fusion.cover_m", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->fusion.cover_m); },
                           "bounded mode: a feature within this of a representative of an established "
                           "cluster is folded into it, metres (0.02)"}},
+      {"snapshot.every_observations",
+       {[](auto& k, auto& v, auto* c) { return ParseUnsigned(k, v, &c->snapshot_every_observations); },
+        "snapshot the fusion state after this many fused observations; a restart replays only "
+        "what came after the newest snapshot; 0 = never (20000)"}},
+      {"snapshot.max_age_s", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->snapshot_max_age_s); },
+                              "... or once the newest snapshot is this old and the map changed, seconds (60)"}},
       {"fusion.delta_deg", {[](auto& k, auto& v, auto* c) {
                               double d;
                               MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));
@@ -207,6 +213,9 @@ Status ServerConfig::Validate() const {
   if (!l.ok()) return Status::InvalidArgument("limits: " + l.message());
   if (ingest.max_in_flight == 0) return Status::InvalidArgument("limits.max_in_flight must be >= 1");
   if (max_group_batches == 0) return Status::InvalidArgument("limits.max_group_batches must be >= 1");
+  if (!(snapshot_max_age_s > 0) || !std::isfinite(snapshot_max_age_s)) {
+    return Status::InvalidArgument("snapshot.max_age_s must be finite and > 0");
+  }
   if (max_message_bytes < 1024) return Status::InvalidArgument("limits.max_message_bytes must be >= 1024");
   if (listen.empty() || listen.find(':') == std::string::npos) {
     return Status::InvalidArgument("listen: '" + listen + "' is not host:port");

@@ -42,6 +42,8 @@ struct ServerConfig {
   SubmapOptions submaps;
   size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted
   size_t max_group_batches = 4096;         // batches per group commit at most
+  uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)
+  double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
   double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish
   std::string tls_cert;                    // PEM files; required off loopback
   std::string tls_key;

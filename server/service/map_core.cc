@@ -23,17 +23,12 @@ void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::Clust
   delta->insert(feed.removed.begin(), feed.removed.end());
 }
 
-bool SameRow(const storage::FusedRow& a, const storage::FusedRow& b) {
-  return a.id == b.id && a.kind == b.kind && a.segment.a == b.segment.a &&
-         a.segment.b == b.segment.b && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
-         a.support == b.support && a.member_count == b.member_count && a.robots == b.robots;
-}
 
 }  // namespace
 
 struct MapCore::WriteJob {
   std::function<Status(storage::WriteTransaction*)> write;
-  std::promise<Status> done;
+  std::function<void(const Status&)> done;
 };
 
 MapCore::MapCore(const MapCoreOptions& options) : options_(options) {}
@@ -48,100 +43,73 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
                                              "': " + store.status().message());
   }
   core->store_ = std::move(store).value();
-  MAPD_RETURN_IF_ERROR(core->Rebuild());
-  MAPD_RETURN_IF_ERROR(core->SyncFusedTable());
+  StatusOr<std::vector<storage::RobotSummary>> robots = core->store_->ListRobots();
+  if (!robots.ok()) return robots.status();
+  for (const auto& r : *robots) core->robot_names_[r.id] = r.name;
+  StatusOr<int64_t> newest = core->store_->NewestObservationId();
+  if (!newest.ok()) return newest.status();
+  core->last_observation_id_ = *newest;
+  core->engine_ = std::make_unique<fusion::FusionEngine>(options.fusion);
   core->writer_ = std::thread([c = core.get()] { c->WriterLoop(); });
-  core->fuser_ = std::thread([c = core.get()] { c->FuserLoop(); });
+  core->fuser_ = std::thread([c = core.get()] {
+    c->Recover();
+    c->FuserLoop();
+  });
   return core;
 }
 
 MapCore::~MapCore() { Stop(); }
 
-StatusOr<MapCore::BuiltEngine> MapCore::BuildEngine() {
-  BuiltEngine built;
-  built.engine = std::make_unique<fusion::FusionEngine>(options_.fusion);
-  StatusOr<std::vector<storage::SessionFrame>> sessions = store_->ListSessions();
-  if (!sessions.ok()) return sessions.status();
-  std::unordered_map<int64_t, storage::SessionFrame> frames;
-  for (const auto& s : *sessions) frames[s.session_id] = s;
-  Status s = store_->ForEachObservation([&](const storage::StoredObservation& obs) {
-    ++built.observations;
-    built.last_observation_id = std::max(built.last_observation_id, obs.id);
-    const storage::SessionFrame& frame = frames[obs.session_id];
-    if (frame.tied) {
-      FuseInto(built.engine.get(), obs.features, obs.id, obs.robot_id, frame.T_map_frame, nullptr);
-    }
-    return Status::Ok();
-  });
-  if (!s.ok()) return s;
-  return built;
+Status MapCore::CheckReady() const {
+  if (ready_.load()) {
+    std::lock_guard<std::mutex> lock(ready_mu_);
+    return recovery_status_;
+  }
+  return Status::Unavailable("mapd is recovering its fused map (" +
+                             std::to_string(recovery_replayed_.load()) +
+                             " observations replayed, up to id " +
+                             std::to_string(recovery_target_id_.load()) + "); retry in a moment");
 }
 
-Status MapCore::Rebuild() {
-  const auto t0 = Clock::now();
+bool MapCore::WaitUntilReady(std::chrono::duration<double> timeout) const {
+  std::unique_lock<std::mutex> lock(ready_mu_);
+  return ready_cv_.wait_for(lock, timeout, [this] { return ready_.load(); });
+}
+
+void MapCore::OnReady(std::function<void()> fn) {
   {
-    std::lock_guard<std::mutex> lock(names_mu_);
-    StatusOr<std::vector<storage::RobotSummary>> robots = store_->ListRobots();
-    if (!robots.ok()) return robots.status();
-    for (const auto& r : *robots) robot_names_[r.id] = r.name;
+    std::lock_guard<std::mutex> lock(ready_mu_);
+    if (!ready_.load()) {
+      on_ready_.push_back(std::move(fn));
+      return;
+    }
   }
-  StatusOr<BuiltEngine> built = BuildEngine();
-  if (!built.ok()) return built.status();
-  std::unique_lock<std::shared_mutex> lock(engine_mu_);
-  engine_ = std::move(built->engine);
-  // The version counts the observations the map reflects: monotonic across
-  // restarts, since stored observations are never removed.
-  map_version_ = built->observations;
-  last_observation_id_ = built->last_observation_id;
-  Log(LogLevel::kInfo, "map_rebuilt",
-      {{"observations", std::to_string(built->observations)},
-       {"raw_features", std::to_string(engine_->feature_count())},
-       {"fused", std::to_string(engine_->published_count())},
-       {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
-  return Status::Ok();
-}
-
-void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
-  const auto t0 = Clock::now();
-  std::unordered_map<int64_t, geometry::Rigid3> frames;
-  for (int64_t id : tie.tied_sessions) {
-    StatusOr<storage::SessionFrame> frame = store_->GetSession(id);
-    if (frame.ok() && frame->tied) frames[id] = frame->T_map_frame;
-  }
-  uint64_t added = 0;
-  Status s = store_->ForEachObservationOfSessions(
-      tie.tied_sessions, tie.tied_through_id, [&](const storage::StoredObservation& obs) {
-        auto frame = frames.find(obs.session_id);
-        if (frame == frames.end()) return Status::Ok();
-        // Locked per observation, so queries never wait for a whole session.
-        std::unique_lock<std::shared_mutex> lock(engine_mu_);
-        Fuse(obs.features, obs.id, obs.robot_id, frame->second, delta);
-        ++map_version_;
-        ++added;
-        return Status::Ok();
-      });
-  if (!s.ok()) {
-    // The ties are committed, so the next start fuses these sessions; until
-    // then the map lacks what was not read. Never seen unless storage fails.
-    Log(LogLevel::kError, "tied_sessions_fusion_failed", {{"error", s.ToString()}});
-  }
-  Log(LogLevel::kInfo, "tied_sessions_fused",
-      {{"sessions", std::to_string(tie.tied_sessions.size())},
-       {"observations", std::to_string(added)},
-       {"ms", std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count())}});
+  fn();
 }
 
 Status MapCore::ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write) {
-  auto job = std::make_shared<WriteJob>();
-  job->write = std::move(write);
-  std::future<Status> done = job->done.get_future();
+  MAPD_RETURN_IF_ERROR(CheckReady());
+  auto done = std::make_shared<std::promise<Status>>();
+  std::future<Status> result = done->get_future();
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     if (stopping_) return Status::Unavailable("mapd is shutting down; nothing was written");
-    write_jobs_.push_back(std::move(job));
+    write_jobs_.push_back(std::make_shared<WriteJob>(
+        WriteJob{std::move(write), [done](const Status& s) { done->set_value(s); }}));
     queue_cv_.notify_one();
   }
-  return done.get();
+  return result.get();
+}
+
+void MapCore::SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
+                          std::function<void(const Status&)> done) {
+  std::lock_guard<std::mutex> lock(queue_mu_);
+  if (stopping_) {
+    done(Status::Unavailable("mapd is shutting down"));
+    return;
+  }
+  write_jobs_.push_back(std::make_shared<WriteJob>(WriteJob{std::move(write), std::move(done)}));
+  queue_cv_.notify_one();
 }
 
 void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
@@ -149,9 +117,14 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
     Status s = txn.status();
     std::vector<int64_t> tied;
-    if (s.ok()) s = job->write(txn->get());
+    int64_t tie_seq = 0;
+    if (s.ok()) {
+      (*txn)->set_tie_point(last_observation_id_);
+      s = job->write(txn->get());
+    }
     if (s.ok()) {
       tied = (*txn)->tied_session_ids();
+      tie_seq = (*txn)->tie_seq();
       s = (*txn)->Commit();
     }
     txn = Status::Ok();  // ends the transaction (rolls back unless committed)
@@ -163,45 +136,21 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
       ToFuse marker;
       marker.tied_sessions = std::move(tied);
       marker.tied_through_id = last_observation_id_;
+      marker.tie_seq = tie_seq;
       fuse_queue_.push_back(std::move(marker));
       committed_count_ += 1;
       fuse_cv_.notify_all();
     }
-    job->done.set_value(s);
+    job->done(s);
   }
   jobs.clear();
 }
 
-Status MapCore::SyncFusedTable() {
-  StatusOr<std::vector<storage::FusedRow>> stored = store_->LoadFused();
-  if (!stored.ok()) return stored.status();
-  std::unordered_map<uint64_t, storage::FusedRow> old_rows;
-  for (auto& r : *stored) old_rows.emplace(r.id, std::move(r));
-  StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
-  if (!txn.ok()) return txn.status();
-  size_t written = 0, deleted = 0;
-  for (const fusion::FusedFeature& f : engine_->Published()) {
-    storage::FusedRow row = ToRow(f);
-    auto it = old_rows.find(row.id);
-    if (it == old_rows.end() || !SameRow(it->second, row)) {
-      MAPD_RETURN_IF_ERROR((*txn)->UpsertFused(row));
-      ++written;
-    }
-    if (it != old_rows.end()) old_rows.erase(it);
-  }
-  for (const auto& [id, row] : old_rows) {
-    MAPD_RETURN_IF_ERROR((*txn)->DeleteFused(id));
-    ++deleted;
-  }
-  MAPD_RETURN_IF_ERROR((*txn)->Commit());
-  if (written + deleted > 0) {
-    Log(LogLevel::kInfo, "fused_table_synced",
-        {{"written", std::to_string(written)}, {"deleted", std::to_string(deleted)}});
-  }
-  return Status::Ok();
-}
-
 void MapCore::Submit(IngestBatch batch, DoneCallback done) {
+  if (Status ready = CheckReady(); !ready.ok()) {
+    done({BatchOutcome::Kind::kRejected, ready});
+    return;
+  }
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     if (!stopping_) {
@@ -215,6 +164,7 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
 }
 
 void MapCore::Stop() {
+  cancel_recovery_ = true;
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     stopping_ = true;
@@ -240,6 +190,8 @@ void MapCore::Stop() {
     if (s.ok()) s = (*txn)->Commit();
     if (!s.ok()) Log(LogLevel::kWarn, "fused_table_write_failed", {{"error", s.ToString()}});
   }
+  // A snapshot of the final state makes the next start replay nothing.
+  if (store_ && ready_.load() && CheckReady().ok()) MaybeSnapshot(/*force=*/true);
   if (store_) {
     Status s = store_->Checkpoint();
     if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
@@ -377,12 +329,16 @@ void MapCore::FuserLoop() {
     for (const ToFuse& t : work) {
       if (!t.tied_sessions.empty()) {
         FuseTiedSessions(t, &delta);
+        fused_tie_seq_ = std::max(fused_tie_seq_, t.tie_seq);
+        fused_through_id_ = std::max(fused_through_id_, t.tied_through_id);
         continue;
       }
       // Locked per observation, so queries never wait for a whole backlog.
       std::unique_lock<std::shared_mutex> lock(engine_mu_);
       Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
       ++map_version_;
+      fused_through_id_ = std::max(fused_through_id_, t.observation_id);
+      ++fused_since_snapshot_;
     }
     if (!delta.empty()) {
       std::lock_guard<std::mutex> lock(queue_mu_);
@@ -395,6 +351,7 @@ void MapCore::FuserLoop() {
     }
     fuse_cv_.notify_all();
     work.clear();
+    MaybeSnapshot(false);
   }
 }
 
@@ -533,6 +490,11 @@ CoreStats MapCore::Stats() const {
   {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     s.fusion_backlog = committed_count_ - fused_count_;
+  }
+  s.recovering = !ready_.load();
+  s.replay_length = fused_since_snapshot_.load();
+  if (const int64_t created = snapshot_created_ns_.load(); created > 0) {
+    s.snapshot_age_s = static_cast<double>(NowNs() - created) * 1e-9;
   }
   std::shared_lock<std::shared_mutex> lock(engine_mu_);
   s.fused_features = engine_->published_count();

@@ -57,6 +57,11 @@ struct MapCoreOptions {
   size_t max_group_batches = 4096;     // batches in one commit at most
   size_t max_fusion_backlog = 50000;   // committed, not yet fused observations at most
   double max_query_wait_s = 5.0;       // a query waits this long for the fuser at most
+  // Snapshots of the fusion state (bounded mode): after this many fused
+  // observations, or once the newest is this old and anything changed. A
+  // restart loads the newest and replays only what came after it. 0 = never.
+  uint64_t snapshot_every_observations = 20000;
+  double snapshot_max_age_s = 60.0;
 };
 
 struct BatchOutcome {
@@ -92,13 +97,28 @@ struct CoreStats {
   uint64_t fusion_backlog = 0;    // committed observations not fused yet
   uint64_t commits = 0;           // group commits by this process
   double uptime_s = 0;
+  bool recovering = false;        // the fused map is being rebuilt at start
+  double snapshot_age_s = 0;      // newest snapshot of the fusion state (0: none)
+  uint64_t replay_length = 0;     // observations fused since that snapshot
 };
 
 class MapCore {
  public:
-  // Opens (or creates) the database and rebuilds the fused map from the stored
-  // observations, so a restarted server serves the map it served before.
+  // Opens (or creates) the database and returns at once; the fuser thread
+  // then recovers the fused map: the newest usable snapshot, then the stored
+  // observations after it, in the order the live server fused them (so the
+  // map equals the one served before, bit for bit in bounded mode). Until
+  // that is done, ready() is false: batches and writes are refused with
+  // Unavailable (retryable; nothing is stored) and queries should not be made.
   static StatusOr<std::unique_ptr<MapCore>> Open(const MapCoreOptions& options);
+
+  bool ready() const { return ready_.load(); }
+  // Ok once recovered; else Unavailable saying how far recovery is.
+  Status CheckReady() const;
+  // Runs `fn` once recovery succeeded (at once if it has), on any thread.
+  void OnReady(std::function<void()> fn);
+  // Waits until recovery ended (successfully or not); false on timeout.
+  bool WaitUntilReady(std::chrono::duration<double> timeout) const;
   ~MapCore();  // Stop()
 
   // Queues a validated batch. `done` runs on the writer thread once the batch
@@ -134,19 +154,23 @@ class MapCore {
 
   explicit MapCore(const MapCoreOptions& options);
   struct WriteJob;
-  // A fresh engine fused from every stored observation of a tied session.
-  struct BuiltEngine {
-    std::unique_ptr<fusion::FusionEngine> engine;
-    int64_t last_observation_id = 0;  // the newest observation it read
-    uint64_t observations = 0;        // stored observations, tied or not
-  };
-  StatusOr<BuiltEngine> BuildEngine();
-  Status Rebuild();                     // engine_ from the stored observations
   struct ToFuse;
+  // Fuser thread, at start (map_core_recovery.cc): engine_ from the newest
+  // snapshot and the observations after it; then the fused table is synced.
+  void Recover();
+  // Fuses, in the live order, every stored tied observation and tie after
+  // (fused_through_id_, fused_tie_seq_).
+  Status Replay();
+  // Queues the fused-table rows that differ from engine_'s published map.
+  Status QueueFusedTableSync();
+  // Fuser thread: a snapshot when one is due (MapCoreOptions).
+  void MaybeSnapshot(bool force);
+  // An asynchronous write job (nobody waits for it).
+  void SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
+                   std::function<void(const Status&)> done);
   // Fuser thread: the stored observations of newly tied sessions into engine_.
   void FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
   void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);
-  Status SyncFusedTable();              // fused_features := engine_'s published map
   void WriterLoop();
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
   void FuserLoop();
@@ -196,6 +220,7 @@ class MapCore {
     // observations up to it (later ones are queued as observations).
     std::vector<int64_t> tied_sessions;
     int64_t tied_through_id = 0;
+    int64_t tie_seq = 0;
   };
   mutable std::mutex fuse_mu_;
   mutable std::condition_variable fuse_cv_;  // the fuser waits for work; queries wait for the fuser
@@ -204,6 +229,25 @@ class MapCore {
   uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
   bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
   int64_t last_observation_id_ = 0;  // writer thread: the newest stored observation
+  // Fuser thread: where the engine stands in the commit order (what a
+  // snapshot of it reflects): every tied observation up to this id, every tie
+  // up to this sequence number.
+  int64_t fused_through_id_ = 0;
+  int64_t fused_tie_seq_ = 0;
+  std::chrono::steady_clock::time_point last_snapshot_ = std::chrono::steady_clock::now();
+  std::atomic<uint64_t> fused_since_snapshot_{0};
+  std::atomic<int64_t> snapshot_created_ns_{0};  // 0: none yet
+  std::atomic<bool> snapshot_in_flight_{false};
+
+  // Recovery (Open, Recover).
+  std::atomic<bool> ready_{false};
+  std::atomic<bool> cancel_recovery_{false};
+  std::atomic<uint64_t> recovery_replayed_{0};
+  std::atomic<int64_t> recovery_target_id_{0};
+  mutable std::mutex ready_mu_;
+  mutable std::condition_variable ready_cv_;
+  std::vector<std::function<void()>> on_ready_;  // GUARDED_BY(ready_mu_)
+  Status recovery_status_;                       // GUARDED_BY(ready_mu_)
   std::thread fuser_;
 
   std::atomic<uint64_t> batches_stored_{0};

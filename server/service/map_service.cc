@@ -8,6 +8,16 @@
 namespace mapd::service {
 namespace {
 
+// An Ingest stream refused at once (the map is still being recovered): the
+// robot reconnects and resends, as after any UNAVAILABLE.
+class RefusedIngest : public grpc::ServerBidiReactor<mapserver::v1::ObservationBatch,
+                                                     mapserver::v1::IngestAck> {
+ public:
+  explicit RefusedIngest(const Status& why) { Finish(ToGrpcStatus(why)); }
+  void OnDone() override { delete this; }
+};
+
+
 namespace pb = mapserver::v1;
 
 constexpr int kFeaturesPerPage = 4096;
@@ -56,6 +66,7 @@ MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, cons
 
 grpc::ServerBidiReactor<pb::ObservationBatch, pb::IngestAck>* MapServiceImpl::Ingest(
     grpc::CallbackServerContext* context) {
+  if (Status ready = core_->CheckReady(); !ready.ok()) return new RefusedIngest(ready);
   return new IngestReactor(context, core_, &ingest_options_, &draining_);
 }
 
@@ -65,6 +76,7 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   FeatureQuery query;
   Status s = FromProto(*request, &query);
   if (!s.ok()) return ToGrpcStatus(s);
+  if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   uint64_t version = 0;
   std::vector<FusedView> features = core_->QueryFeatures(query, &version);
   pb::FeatureMapPage page;
@@ -120,6 +132,13 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   response->set_version(kVersion);
   response->set_fusion_backlog(s.fusion_backlog);
   response->set_commits(s.commits);
+  response->set_recovering(s.recovering);
+  response->set_snapshot_age_s(s.snapshot_age_s);
+  response->set_replay_length(s.replay_length);
+  if (counts->raw_features > 0) {
+    response->set_bytes_per_raw_feature(static_cast<double>(core_->store().SizeBytes()) /
+                                        static_cast<double>(counts->raw_features));
+  }
   return grpc::Status::OK;
 }
 

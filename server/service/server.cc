@@ -39,6 +39,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.store.busy_timeout_ms = config.busy_timeout_ms;
   core_options.fusion = config.fusion;
   core_options.max_group_batches = config.max_group_batches;
+  core_options.snapshot_every_observations = config.snapshot_every_observations;
+  core_options.snapshot_max_age_s = config.snapshot_max_age_s;
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();
@@ -70,11 +72,25 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     return Status::Unavailable("cannot listen on '" + config.listen +
                                "' (address in use, or not an address of this host?)");
   }
-  server->server_->GetHealthCheckService()->SetServingStatus(true);
-  Log(LogLevel::kInfo, "serving",
-      {{"address", server->address()}, {"db", db}, {"sync", config.sync_full ? "full" : "normal"},
-       {"corner_mode", fusion::CornerModeName(config.fusion.corner_mode)}});
+  server->server_->GetHealthCheckService()->SetServingStatus(false);
+  Log(LogLevel::kInfo, "listening",
+      {{"address", server->address()}, {"db", db}, {"health", "NOT_SERVING"},
+       {"reason", "recovering the fused map"}});
+  MapServer* s = server.get();
+  server->core_->OnReady([s, db, sync = config.sync_full, fusion = config.fusion] {
+    std::lock_guard<std::mutex> lock(s->health_mu_);
+    if (s->shut_down_) return;
+    s->server_->GetHealthCheckService()->SetServingStatus(true);
+    Log(LogLevel::kInfo, "serving",
+        {{"address", s->address()}, {"db", db}, {"sync", sync ? "full" : "normal"},
+         {"fusion_mode", fusion::FusionModeName(fusion.mode)},
+         {"corner_mode", fusion::CornerModeName(fusion.corner_mode)}});
+  });
   return server;
+}
+
+bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {
+  return core_->WaitUntilReady(timeout) && core_->CheckReady().ok();
 }
 
 std::string MapServer::address() const {
@@ -83,8 +99,11 @@ std::string MapServer::address() const {
 }
 
 void MapServer::Shutdown() {
-  if (shut_down_ || !server_) return;  // never started: nothing to drain
-  shut_down_ = true;
+  {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    if (shut_down_ || !server_) return;  // never started: nothing to drain
+    shut_down_ = true;
+  }
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
   server_->GetHealthCheckService()->SetServingStatus(false);
   service_->StartDraining();

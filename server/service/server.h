@@ -2,7 +2,9 @@
 #ifndef MAPD_SERVICE_SERVER_H_
 #define MAPD_SERVICE_SERVER_H_
 
+#include <chrono>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include <grpcpp/grpcpp.h>
@@ -16,8 +18,13 @@ namespace mapd::service {
 
 class MapServer {
  public:
-  // Opens the database, rebuilds the map, and starts serving.
+  // Opens the database and starts listening at once. The fused map is
+  // recovered in the background (MapCore::Open): until then the health
+  // service says NOT_SERVING and map RPCs answer UNAVAILABLE; then SERVING
+  // and an `event=serving` log line.
   static StatusOr<std::unique_ptr<MapServer>> Start(const ServerConfig& config);
+  // Waits until the map is recovered; false on timeout or failed recovery.
+  bool WaitUntilServing(std::chrono::duration<double> timeout) const;
   ~MapServer();
 
   // The port actually bound (useful with port 0).
@@ -38,7 +45,8 @@ class MapServer {
   std::unique_ptr<MapServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
-  bool shut_down_ = false;
+  std::mutex health_mu_;    // shut_down_ and the health status
+  bool shut_down_ = false;  // GUARDED_BY(health_mu_)
 };
 
 }  // namespace mapd::service

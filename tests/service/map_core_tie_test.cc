@@ -32,6 +32,7 @@ class MapCoreTieTest : public ::testing::Test {
     StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(options_);
     ASSERT_TRUE(core.ok()) << core.status().ToString();
     core_ = std::move(core).value();
+    ASSERT_TRUE(core_->WaitUntilReady(std::chrono::seconds(30)));
   }
 
   // Streams `count` room batches of `robot` from (5, 4) in the map frame;

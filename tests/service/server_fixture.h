@@ -33,6 +33,7 @@ class ServerFixture : public ::testing::Test {
     auto server = service::MapServer::Start(config_);
     ASSERT_TRUE(server.ok()) << server.status().ToString();
     server_ = std::move(server).value();
+    ASSERT_TRUE(server_->WaitUntilServing(std::chrono::seconds(30))) << "the map was not recovered";
     channel_ = grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials());
     stub_ = pb::MapService::NewStub(channel_);
   }

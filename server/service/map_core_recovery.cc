@@ -1,0 +1,276 @@
+// MapCore's fusion state across restarts: recovery at start (newest snapshot,
+// then a replay of what came after it, in the live order), ties of session
+// frames, and periodic snapshots. See map_core.h.
+//
+// The live order. The fuser takes committed observations in commit (= id)
+// order; an observation of a session that is not tied yet is stored but not
+// fused. A transaction that ties sessions is recorded at its place in that
+// order (sessions.tied_through_observation T = the newest observation id
+// committed before it, sessions.tie_seq = 1, 2, ... per transaction); the
+// fuser then fuses the tied sessions' stored observations up to T, in id
+// order. So the engine's history is a function of the database alone, and a
+// replay from any snapshot (which records the position it reflects) redoes it
+// exactly: the bounded engine is deterministic, not order independent.
+#include <algorithm>
+#include <map>
+
+#include "service/log.h"
+#include "service/map_core.h"
+
+namespace mapd::service {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int64_t NowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+int64_t MsSince(Clock::time_point t0) {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
+}
+
+bool SameFusedRow(const storage::FusedRow& a, const storage::FusedRow& b) {
+  return a.id == b.id && a.kind == b.kind && a.segment.a == b.segment.a &&
+         a.segment.b == b.segment.b && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
+         a.support == b.support && a.member_count == b.member_count && a.robots == b.robots;
+}
+
+// Snapshots kept in the database: the newest, and one before it in case the
+// newest cannot be used.
+constexpr int kSnapshotsKept = 2;
+constexpr auto kProgressEvery = std::chrono::seconds(2);
+
+}  // namespace
+
+void MapCore::Recover() {
+  const auto t0 = Clock::now();
+  std::string from = "scratch";
+  if (options_.fusion.mode == fusion::FusionMode::kBounded) {
+    StatusOr<storage::FusionSnapshot> snap = store_->LatestSnapshot();
+    if (snap.ok()) {
+      StatusOr<std::unique_ptr<fusion::FusionEngine>> loaded =
+          fusion::FusionEngine::LoadState(options_.fusion, snap->state);
+      if (loaded.ok()) {
+        std::unique_lock<std::shared_mutex> lock(engine_mu_);
+        engine_ = std::move(loaded).value();
+        map_version_ = snap->map_version;
+        fused_through_id_ = snap->through_observation;
+        fused_tie_seq_ = snap->through_tie_seq;
+        snapshot_created_ns_ = snap->created_ns;
+        from = "snapshot";
+      } else {
+        Log(LogLevel::kWarn, "snapshot_unusable",
+            {{"snapshot", std::to_string(snap->id)}, {"error", loaded.status().ToString()},
+             {"action", "replaying every stored observation"}});
+      }
+    } else if (snap.status().code() != StatusCode::kNotFound) {
+      Log(LogLevel::kWarn, "snapshot_unreadable", {{"error", snap.status().ToString()}});
+    }
+  }
+  Status s = Replay();
+  if (s.ok()) s = QueueFusedTableSync();
+  last_snapshot_ = Clock::now();
+  if (s.ok()) {
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    Log(LogLevel::kInfo, "map_recovered",
+        {{"from", from}, {"replayed", std::to_string(recovery_replayed_.load())},
+         {"raw_features", std::to_string(engine_->feature_count())},
+         {"nodes", std::to_string(engine_->node_count())},
+         {"fused", std::to_string(engine_->published_count())},
+         {"map_version", std::to_string(map_version_.load())}, {"ms", std::to_string(MsSince(t0))}});
+  } else if (!cancel_recovery_.load()) {
+    Log(LogLevel::kError, "map_recovery_failed", {{"error", s.ToString()}});
+  }
+  std::vector<std::function<void()>> callbacks;
+  {
+    std::lock_guard<std::mutex> lock(ready_mu_);
+    recovery_status_ = s.ok() ? Status::Ok()
+                              : Status::Internal("mapd could not recover its fused map: " + s.message());
+    ready_ = true;
+    callbacks.swap(on_ready_);
+  }
+  ready_cv_.notify_all();
+  if (s.ok()) {
+    for (auto& fn : callbacks) fn();
+  }
+}
+
+Status MapCore::Replay() {
+  StatusOr<std::vector<storage::SessionFrame>> sessions = store_->ListSessions();
+  if (!sessions.ok()) return sessions.status();
+  StatusOr<int64_t> newest = store_->NewestObservationId();
+  if (!newest.ok()) return newest.status();
+  recovery_target_id_ = *newest;
+  // Sessions fused as their observations come (tied at or before the engine's
+  // position), and the ties still to replay, in the live order.
+  std::unordered_map<int64_t, geometry::Rigid3> streaming;
+  std::map<std::pair<int64_t, int64_t>, std::vector<int64_t>> ties;  // (T, seq) -> sessions
+  for (const storage::SessionFrame& f : *sessions) {
+    if (!f.tied) continue;
+    if (f.tie_seq <= fused_tie_seq_) {
+      streaming[f.session_id] = f.T_map_frame;
+    } else {
+      ties[{f.tied_through_observation, f.tie_seq}].push_back(f.session_id);
+    }
+  }
+  auto last_log = Clock::now();
+  const auto t0 = last_log;
+  const auto fuse = [&](const storage::StoredObservation& obs, const geometry::Rigid3& T) {
+    if (cancel_recovery_.load()) return Status::Unavailable("recovery cancelled: mapd is stopping");
+    {
+      std::unique_lock<std::shared_mutex> lock(engine_mu_);
+      Fuse(obs.features, obs.id, obs.robot_id, T, nullptr);
+    }
+    ++map_version_;
+    ++fused_since_snapshot_;
+    const uint64_t done = ++recovery_replayed_;
+    if (Clock::now() - last_log >= kProgressEvery) {
+      last_log = Clock::now();
+      const double s = std::chrono::duration<double>(last_log - t0).count();
+      Log(LogLevel::kInfo, "recovering",
+          {{"replayed", std::to_string(done)}, {"at_id", std::to_string(obs.id)},
+           {"newest_id", std::to_string(*newest)},
+           {"per_s", std::to_string(static_cast<int64_t>(static_cast<double>(done) / s))}});
+    }
+    return Status::Ok();
+  };
+  const auto stream_until = [&](int64_t through_id) {
+    if (through_id <= fused_through_id_) return Status::Ok();
+    Status s = store_->ForEachObservationBetween(
+        fused_through_id_, through_id, [&](const storage::StoredObservation& obs) {
+          auto frame = streaming.find(obs.session_id);
+          return frame == streaming.end() ? Status::Ok() : fuse(obs, frame->second);
+        });
+    if (s.ok()) fused_through_id_ = through_id;
+    return s;
+  };
+  for (const auto& [at, tied] : ties) {
+    MAPD_RETURN_IF_ERROR(stream_until(at.first));
+    std::unordered_map<int64_t, geometry::Rigid3> frames;
+    for (const storage::SessionFrame& f : *sessions) {
+      if (std::find(tied.begin(), tied.end(), f.session_id) != tied.end()) frames[f.session_id] = f.T_map_frame;
+    }
+    MAPD_RETURN_IF_ERROR(store_->ForEachObservationOfSessions(
+        tied, at.first, [&](const storage::StoredObservation& obs) {
+          return fuse(obs, frames[obs.session_id]);
+        }));
+    streaming.insert(frames.begin(), frames.end());
+    fused_tie_seq_ = at.second;
+  }
+  return stream_until(*newest);
+}
+
+Status MapCore::QueueFusedTableSync() {
+  StatusOr<std::vector<storage::FusedRow>> stored = store_->LoadFused();
+  if (!stored.ok()) return stored.status();
+  std::unordered_map<uint64_t, storage::FusedRow> old_rows;
+  for (auto& r : *stored) old_rows.emplace(r.id, std::move(r));
+  FusedDelta delta;
+  {
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    for (const fusion::FusedFeature& f : engine_->Published()) {
+      const storage::FusedRow row = ToRow(f);
+      auto it = old_rows.find(row.id);
+      if (it == old_rows.end() || !SameFusedRow(it->second, row)) delta.insert(f.id);
+      if (it != old_rows.end()) old_rows.erase(it);
+    }
+  }
+  for (const auto& [id, row] : old_rows) delta.insert(id);  // gone: WriteFusedDelta deletes it
+  if (!delta.empty()) {
+    Log(LogLevel::kInfo, "fused_table_sync", {{"rows", std::to_string(delta.size())}});
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    fused_pending_.insert(delta.begin(), delta.end());
+    queue_cv_.notify_one();
+  }
+  return Status::Ok();
+}
+
+void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
+  const auto t0 = Clock::now();
+  std::unordered_map<int64_t, geometry::Rigid3> frames;
+  for (int64_t id : tie.tied_sessions) {
+    StatusOr<storage::SessionFrame> frame = store_->GetSession(id);
+    if (frame.ok() && frame->tied) frames[id] = frame->T_map_frame;
+  }
+  uint64_t added = 0;
+  Status s = store_->ForEachObservationOfSessions(
+      tie.tied_sessions, tie.tied_through_id, [&](const storage::StoredObservation& obs) {
+        auto frame = frames.find(obs.session_id);
+        if (frame == frames.end()) return Status::Ok();
+        // Locked per observation, so queries never wait for a whole session.
+        std::unique_lock<std::shared_mutex> lock(engine_mu_);
+        Fuse(obs.features, obs.id, obs.robot_id, frame->second, delta);
+        ++map_version_;
+        ++added;
+        return Status::Ok();
+      });
+  fused_since_snapshot_ += added;
+  if (!s.ok()) {
+    // The ties are committed, so the next start fuses these sessions; until
+    // then the map lacks what was not read. Never seen unless storage fails.
+    Log(LogLevel::kError, "tied_sessions_fusion_failed", {{"error", s.ToString()}});
+  }
+  Log(LogLevel::kInfo, "tied_sessions_fused",
+      {{"sessions", std::to_string(tie.tied_sessions.size())},
+       {"observations", std::to_string(added)}, {"ms", std::to_string(MsSince(t0))}});
+}
+
+void MapCore::MaybeSnapshot(bool force) {
+  if (options_.fusion.mode != fusion::FusionMode::kBounded) return;
+  if (options_.snapshot_every_observations == 0 || fused_since_snapshot_.load() == 0) return;
+  const bool due = fused_since_snapshot_.load() >= options_.snapshot_every_observations ||
+                   Clock::now() - last_snapshot_ >=
+                       std::chrono::duration<double>(options_.snapshot_max_age_s);
+  if (!force && (!due || snapshot_in_flight_.load())) return;
+  const auto t0 = Clock::now();
+  storage::FusionSnapshot snap;
+  snap.created_ns = NowNs();
+  snap.map_version = map_version_.load();
+  snap.through_observation = fused_through_id_;
+  snap.through_tie_seq = fused_tie_seq_;
+  snap.params = fusion::FusionParamsKey(options_.fusion);
+  {
+    // This thread is the engine's only writer: a shared lock is enough.
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    Status saved = engine_->SaveState(&snap.state);
+    if (!saved.ok()) {
+      Log(LogLevel::kError, "snapshot_failed", {{"error", saved.ToString()}});
+      return;
+    }
+  }
+  const int64_t encode_ms = MsSince(t0);
+  fused_since_snapshot_ = 0;
+  last_snapshot_ = Clock::now();
+  const size_t bytes = snap.state.size();
+  const int64_t created_ns = snap.created_ns;
+  auto shared = std::make_shared<const storage::FusionSnapshot>(std::move(snap));
+  const auto write = [shared](storage::WriteTransaction* txn) {
+    return txn->InsertSnapshot(*shared, kSnapshotsKept);
+  };
+  const auto done = [this, bytes, created_ns, encode_ms, t0](const Status& s) {
+    snapshot_in_flight_ = false;
+    if (!s.ok()) {
+      // The next one is due at once: nothing is lost but restart time.
+      Log(LogLevel::kWarn, "snapshot_write_failed", {{"error", s.ToString()}});
+      return;
+    }
+    snapshot_created_ns_ = created_ns;
+    Log(LogLevel::kInfo, "snapshot_written",
+        {{"bytes", std::to_string(bytes)}, {"encode_ms", std::to_string(encode_ms)},
+         {"ms", std::to_string(MsSince(t0))}});
+  };
+  if (force) {  // Stop(): the writer is gone, this thread writes
+    StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+    Status s = txn.ok() ? write(txn->get()) : txn.status();
+    if (s.ok()) s = (*txn)->Commit();
+    done(s);
+    return;
+  }
+  snapshot_in_flight_ = true;
+  SubmitWrite(write, done);
+}
+
+}  // namespace mapd::service
