@@ -242,7 +242,7 @@ void MapCore::MaybeSnapshot(bool force) {
     }
   }
   const int64_t encode_ms = MsSince(t0);
-  fused_since_snapshot_ = 0;
+  const uint64_t covered = fused_since_snapshot_.exchange(0);
   last_snapshot_ = Clock::now();
   const size_t bytes = snap.state.size();
   const int64_t created_ns = snap.created_ns;
@@ -250,10 +250,11 @@ void MapCore::MaybeSnapshot(bool force) {
   const auto write = [shared](storage::WriteTransaction* txn) {
     return txn->InsertSnapshot(*shared, kSnapshotsKept);
   };
-  const auto done = [this, bytes, created_ns, encode_ms, t0](const Status& s) {
+  const auto done = [this, bytes, created_ns, encode_ms, covered, t0](const Status& s) {
     snapshot_in_flight_ = false;
     if (!s.ok()) {
-      // The next one is due at once: nothing is lost but restart time.
+      // Still to replay after a restart; the next snapshot is due at once.
+      fused_since_snapshot_ += covered;
       Log(LogLevel::kWarn, "snapshot_write_failed", {{"error", s.ToString()}});
       return;
     }

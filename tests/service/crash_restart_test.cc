@@ -98,7 +98,10 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   for (int r = 0; r < kRobots; ++r) batches.push_back(RobotBatches(r));
 
   // 1. Stream from all robots; SIGKILL the server once a third is acknowledged.
-  MapdProcess mapd = StartMapd(db);
+  //    A fusion snapshot every 5 observations: the kill likely lands in or
+  //    between snapshot writes, and the restart must still be exact.
+  const std::vector<std::string> args = {"--snapshot.every_observations", "5"};
+  MapdProcess mapd = StartMapd(db, args);
   ASSERT_GT(mapd.port, 0) << mapd.log();
   std::atomic<int> acked{0};
   std::vector<StreamResult> first(kRobots);
@@ -114,8 +117,9 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   ASSERT_LT(acked_stored, static_cast<size_t>(kRobots * kBatchesPerRobot)) << "the kill came too late";
 
   // 2. Restart on the same database and resend everything, as robots do.
-  mapd = StartMapd(db);
+  mapd = StartMapd(db, args);
   ASSERT_GT(mapd.port, 0) << mapd.log();
+  EXPECT_NE(mapd.log().find("event=map_recovered from=snapshot"), std::string::npos) << mapd.log();
   for (int r = 0; r < kRobots; ++r) {
     const StreamResult again = Stream(mapd.address, batches[static_cast<size_t>(r)]);
     EXPECT_EQ(again.rejected, 0);
