@@ -50,6 +50,9 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
   if (!writer.ok()) return writer.status();
   store->writer_ = std::move(writer).value();
   sqlite3* w = store->writer_.get();
+  // A new database gives freed pages back to the file system (raw retention,
+  // WriteTransaction::DropRawObservations); on an existing one this is a no-op.
+  MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA auto_vacuum=INCREMENTAL"));
   StatusOr<Statement> mode = Statement::Prepare(w, "PRAGMA journal_mode=WAL");
   if (!mode.ok()) return mode.status();
   StatusOr<bool> mode_row = mode->Step();
@@ -143,6 +146,8 @@ StatusOr<std::unique_ptr<WriteTransaction>> Store::BeginWrite() {
 }
 
 Status Store::Checkpoint() {
+  // Freed pages (old snapshots, retention) leave the file first.
+  MAPD_RETURN_IF_ERROR(Exec(writer_.get(), "PRAGMA incremental_vacuum"));
   return Exec(writer_.get(), "PRAGMA wal_checkpoint(TRUNCATE)");
 }
 
@@ -280,6 +285,27 @@ Status WriteTransaction::Commit() {
   }
   store_->max_tie_seq_ = std::max(store_->max_tie_seq_, tie_seq_);
   return Status::Ok();
+}
+
+StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before_ns, int limit) {
+  sqlite3* w = store_->writer_.get();
+  // Only what every kept snapshot already reflects (so either can be
+  // replayed from), only of sessions whose tie those snapshots reflect, and
+  // never the newest row (ids must keep growing: SQLite reuses max(id) + 1).
+  StatusOr<Statement> q = Statement::Prepare(
+      w, "DELETE FROM observations WHERE id IN ("
+         " SELECT o.id FROM observations o JOIN sessions s ON s.id = o.session_id,"
+         "  (SELECT min(through_observation) AS through, min(through_tie_seq) AS tie_seq,"
+         "          count(*) AS n FROM fusion_snapshots) AS snap"
+         " WHERE snap.n > 0 AND o.id <= snap.through AND s.tied = 1 AND s.tie_seq <= snap.tie_seq"
+         "  AND o.received_ns < ?1 AND o.id < (SELECT max(id) FROM observations)"
+         " ORDER BY o.id LIMIT ?2)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, received_before_ns).Bind(2, static_cast<int64_t>(limit));
+  MAPD_RETURN_IF_ERROR(q->Run());
+  const uint64_t dropped = static_cast<uint64_t>(sqlite3_changes(w));
+  if (dropped > 0) MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA incremental_vacuum"));
+  return dropped;
 }
 
 Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep) {
@@ -497,12 +523,13 @@ StatusOr<int64_t> Store::NewestObservationId() {
   return q->ColumnInt(0);
 }
 
-StatusOr<FusionSnapshot> Store::LatestSnapshot() {
+StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(), "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
-                     "params, state FROM fusion_snapshots ORDER BY id DESC LIMIT 1");
+                     "params, state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
   if (!q.ok()) return q.status();
+  q->Bind(1, static_cast<int64_t>(skip));
   StatusOr<bool> row = q->Step();
   if (!row.ok()) return row.status();
   if (!*row) return Status::NotFound("no fusion snapshot");

@@ -218,6 +218,12 @@ class WriteTransaction {
   // The newest observation id committed before this transaction (MapCore sets
   // it before running a write that may tie sessions).
   void set_tie_point(int64_t newest_observation_id) { tie_point_ = newest_observation_id; }
+  // Raw retention: deletes up to `limit` of the oldest observations received
+  // before `received_before_ns` that every stored snapshot reflects (never
+  // one of a session not tied, or tied after a snapshot, and never the newest
+  // observation), then returns the freed pages to the file system (new
+  // databases; see Store::Open). Returns how many were deleted.
+  StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit);
   // Stores a snapshot and deletes all but the `keep` newest.
   Status InsertSnapshot(const FusionSnapshot& snapshot, int keep);
   // True once TieSession() succeeded in this transaction.
@@ -270,8 +276,8 @@ class Store {
                                    const std::function<Status(const StoredObservation&)>& fn);
   // The newest stored observation id (0 if none).
   StatusOr<int64_t> NewestObservationId();
-  // The newest snapshot; NotFound if there is none.
-  StatusOr<FusionSnapshot> LatestSnapshot();
+  // The newest snapshot (skip = 1: the one before it); NotFound if none.
+  StatusOr<FusionSnapshot> LatestSnapshot(int skip = 0);
   // The stored observations of `session_ids` with id <= max_id, in id order.
   Status ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
                                       const std::function<Status(const StoredObservation&)>& fn);

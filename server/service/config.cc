@@ -72,6 +72,11 @@ const std::map<std::string, Setting>& Settings() {
         "what came after the newest snapshot; 0 = never (20000)"}},
       {"snapshot.max_age_s", {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->snapshot_max_age_s); },
                               "... or once the newest snapshot is this old and the map changed, seconds (60)"}},
+      {"storage.raw_retention_days",
+       {[](auto& k, auto& v, auto* c) { return ParseDouble(k, v, &c->raw_retention_days); },
+        "drop raw observations older than this once every kept snapshot reflects them (never "
+        "those of a session not yet tied); the map and restarts are unchanged, but a change of "
+        "fusion parameters can only replay what is left; days, 0 = keep forever (0)"}},
       {"fusion.delta_deg", {[](auto& k, auto& v, auto* c) {
                               double d;
                               MAPD_RETURN_IF_ERROR(ParseDouble(k, v, &d));
@@ -213,6 +218,9 @@ Status ServerConfig::Validate() const {
   if (!l.ok()) return Status::InvalidArgument("limits: " + l.message());
   if (ingest.max_in_flight == 0) return Status::InvalidArgument("limits.max_in_flight must be >= 1");
   if (max_group_batches == 0) return Status::InvalidArgument("limits.max_group_batches must be >= 1");
+  if (!(raw_retention_days >= 0) || !std::isfinite(raw_retention_days)) {
+    return Status::InvalidArgument("storage.raw_retention_days must be finite and >= 0");
+  }
   if (!(snapshot_max_age_s > 0) || !std::isfinite(snapshot_max_age_s)) {
     return Status::InvalidArgument("snapshot.max_age_s must be finite and > 0");
   }

@@ -44,6 +44,7 @@ struct ServerConfig {
   size_t max_group_batches = 4096;         // batches per group commit at most
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)
   double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
+  double raw_retention_days = 0.0;               // 0: keep raw observations forever
   double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish
   std::string tls_cert;                    // PEM files; required off loopback
   std::string tls_key;

@@ -62,6 +62,10 @@ struct MapCoreOptions {
   // restart loads the newest and replays only what came after it. 0 = never.
   uint64_t snapshot_every_observations = 20000;
   double snapshot_max_age_s = 60.0;
+  // Raw retention: observations received longer ago than this are deleted
+  // once every kept snapshot reflects them (never those of a session not yet
+  // tied to the map frame). 0 = keep them forever. Days.
+  double raw_retention_days = 0.0;
 };
 
 struct BatchOutcome {
@@ -165,6 +169,8 @@ class MapCore {
   Status QueueFusedTableSync();
   // Fuser thread: a snapshot when one is due (MapCoreOptions).
   void MaybeSnapshot(bool force);
+  // Writer thread, after a snapshot is stored: raw retention, in rounds.
+  void DropExpiredObservations();
   // An asynchronous write job (nobody waits for it).
   void SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
                    std::function<void(const Status&)> done);

@@ -48,8 +48,12 @@ constexpr auto kProgressEvery = std::chrono::seconds(2);
 void MapCore::Recover() {
   const auto t0 = Clock::now();
   std::string from = "scratch";
-  if (options_.fusion.mode == fusion::FusionMode::kBounded) {
-    StatusOr<storage::FusionSnapshot> snap = store_->LatestSnapshot();
+  // The newest snapshot, else the one before it (raw retention keeps what
+  // either needs), else a replay of every stored observation.
+  for (int skip = 0; skip < kSnapshotsKept && from == "scratch" &&
+                     options_.fusion.mode == fusion::FusionMode::kBounded;
+       ++skip) {
+    StatusOr<storage::FusionSnapshot> snap = store_->LatestSnapshot(skip);
     if (snap.ok()) {
       StatusOr<std::unique_ptr<fusion::FusionEngine>> loaded =
           fusion::FusionEngine::LoadState(options_.fusion, snap->state);
@@ -64,11 +68,20 @@ void MapCore::Recover() {
       } else {
         Log(LogLevel::kWarn, "snapshot_unusable",
             {{"snapshot", std::to_string(snap->id)}, {"error", loaded.status().ToString()},
-             {"action", "replaying every stored observation"}});
+             {"action", skip + 1 < kSnapshotsKept ? "trying the one before"
+                                                  : "replaying every stored observation"}});
       }
-    } else if (snap.status().code() != StatusCode::kNotFound) {
-      Log(LogLevel::kWarn, "snapshot_unreadable", {{"error", snap.status().ToString()}});
+    } else {
+      if (snap.status().code() != StatusCode::kNotFound) {
+        Log(LogLevel::kWarn, "snapshot_unreadable", {{"error", snap.status().ToString()}});
+      }
+      break;
     }
+  }
+  if (from == "scratch" && options_.raw_retention_days > 0) {
+    Log(LogLevel::kWarn, "replaying_retained_observations_only",
+        {{"raw_retention_days", std::to_string(options_.raw_retention_days)},
+         {"consequence", "walls seen only by dropped observations are missing from the map"}});
   }
   Status s = Replay();
   if (s.ok()) s = QueueFusedTableSync();
@@ -255,13 +268,17 @@ void MapCore::MaybeSnapshot(bool force) {
     if (!s.ok()) {
       // Still to replay after a restart; the next snapshot is due at once.
       fused_since_snapshot_ += covered;
-      Log(LogLevel::kWarn, "snapshot_write_failed", {{"error", s.ToString()}});
+      // Unavailable: mapd is stopping, and Stop() writes a snapshot itself.
+      if (s.code() != StatusCode::kUnavailable) {
+        Log(LogLevel::kWarn, "snapshot_write_failed", {{"error", s.ToString()}});
+      }
       return;
     }
     snapshot_created_ns_ = created_ns;
     Log(LogLevel::kInfo, "snapshot_written",
         {{"bytes", std::to_string(bytes)}, {"encode_ms", std::to_string(encode_ms)},
          {"ms", std::to_string(MsSince(t0))}});
+    if (options_.raw_retention_days > 0) DropExpiredObservations();
   };
   if (force) {  // Stop(): the writer is gone, this thread writes
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
@@ -272,6 +289,32 @@ void MapCore::MaybeSnapshot(bool force) {
   }
   snapshot_in_flight_ = true;
   SubmitWrite(write, done);
+}
+
+void MapCore::DropExpiredObservations() {
+  constexpr int kPerRound = 50000;  // rows per transaction: keeps commits short
+  const int64_t cutoff_ns =
+      NowNs() - static_cast<int64_t>(options_.raw_retention_days * 86400.0 * 1e9);
+  auto dropped = std::make_shared<uint64_t>(0);
+  SubmitWrite(
+      [cutoff_ns, dropped](storage::WriteTransaction* txn) {
+        StatusOr<uint64_t> n = txn->DropRawObservations(cutoff_ns, kPerRound);
+        if (!n.ok()) return n.status();
+        *dropped = *n;
+        return Status::Ok();
+      },
+      [this, dropped](const Status& s) {
+        if (!s.ok()) {
+          // Unavailable: mapd is stopping; the next snapshot retries.
+          if (s.code() != StatusCode::kUnavailable) {
+            Log(LogLevel::kWarn, "raw_retention_failed", {{"error", s.ToString()}});
+          }
+          return;
+        }
+        if (*dropped == 0) return;
+        Log(LogLevel::kInfo, "raw_retention", {{"dropped_observations", std::to_string(*dropped)}});
+        if (*dropped == kPerRound) DropExpiredObservations();  // more to do
+      });
 }
 
 }  // namespace mapd::service

@@ -3,6 +3,7 @@
 // before; so does a replay from scratch; batches are refused while recovering.
 #include <future>
 #include <random>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -31,7 +32,9 @@ class MapCoreRecoveryTest : public ::testing::Test {
     StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(options_);
     ASSERT_TRUE(core.ok()) << core.status().ToString();
     core_ = std::move(core).value();
-    if (wait) ASSERT_TRUE(core_->WaitUntilReady(std::chrono::seconds(60)));
+    if (wait) {
+      ASSERT_TRUE(core_->WaitUntilReady(std::chrono::seconds(60)));
+    }
   }
 
   void Close() {
@@ -90,6 +93,20 @@ class MapCoreRecoveryTest : public ::testing::Test {
       EXPECT_EQ(a[i].feature.member_count, b[i].feature.member_count);
       EXPECT_EQ(a[i].robots, b[i].robots);
     }
+  }
+
+  int64_t Query(const std::string& sql) {
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open(options_.db_path.c_str(), &db), SQLITE_OK);
+    int64_t value = -1;
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) == SQLITE_OK &&
+        sqlite3_step(stmt) == SQLITE_ROW) {
+      value = sqlite3_column_int64(stmt, 0);
+    }
+    sqlite3_finalize(stmt);
+    sqlite3_close(db);
+    return value;
   }
 
   void DeleteSnapshots() {
@@ -156,6 +173,37 @@ TEST_F(MapCoreRecoveryTest, ATieAfterTheSnapshotIsReplayedInPlace) {
 
   Open();  // the old snapshot, then r1's 5, the tie (r2's first 20), r2's 5, r1's 5
   ExpectIdentical(Map(), before);
+}
+
+TEST_F(MapCoreRecoveryTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
+  options_.snapshot_every_observations = 10;
+  options_.raw_retention_days = 1e-9;  // everything is old at once
+  Open();
+  Stream("r3", true, -1.0, 1, 10, 5);  // never tied: always kept
+  Stream("r1", false, 0.0, 1, 60, 1);
+  Stream("r2", true, 2.0, 1, 20, 2);
+  Tie("r2", 2.0);
+  Stream("r1", false, 0.0, 61, 40, 3);
+  Stream("r2", true, 2.0, 21, 20, 4);
+  const std::vector<FusedView> before = Map();
+  const std::string r1_rows =
+      "SELECT count(*) FROM observations o JOIN sessions s ON s.id = o.session_id "
+      "JOIN robots r ON r.id = s.robot_id WHERE r.name = ";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (Query(r1_rows + "'r1'") > 20 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_LE(Query(r1_rows + "'r1'"), 20);  // at most what came after the older kept snapshot
+  EXPECT_EQ(Query(r1_rows + "'r3'"), 10);
+  ExpectIdentical(Map(), before);  // the engine never needed them
+  Close();
+  EXPECT_EQ(Query("PRAGMA auto_vacuum"), 2);  // incremental: freed pages leave the file
+  EXPECT_EQ(Query("PRAGMA freelist_count"), 0);
+
+  Open();  // from the snapshot; what it needs was kept
+  ExpectIdentical(Map(), before);
+  Stream("r1", false, 0.0, 101, 5, 6);  // ids keep growing after deletions
+  EXPECT_EQ(Query("SELECT max(id) FROM observations"), 10 + 100 + 40 + 5);
 }
 
 TEST_F(MapCoreRecoveryTest, BatchesAreRefusedWhileRecovering) {
