@@ -178,16 +178,19 @@ Status FusionEngine::Impl::Validate(ObservationId observation,
 void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
                                        std::vector<ClusterId>* merged_ids) {
   const FeatureCircle circle = CircleOf(f.segment);
-  // Criterion 3 bounds the centre distance: dist(O_g, segment f) >= D - R_f,
-  // so d_max <= eta implies D <= min(R_f, R_g) + eta. This holds for every
-  // gamma (gamma = 0 included), so the centre grid finds every candidate.
-  const double reach_m = circle.radius_m + params_.eta_m + kSearchSlackM;
+  // Criterion 3 (eq. 12) needs dist(O_g, segment f) <= eta: only centres in
+  // the band of half width eta around f can link. It also bounds the centre
+  // distance: dist(O_g, segment f) >= D - R_f, so d_max <= eta implies
+  // D <= min(R_f, R_g) + eta. Both hold for every gamma (gamma = 0 included),
+  // so this search finds every candidate.
+  const double band_m = params_.eta_m + kSearchSlackM;
   uint32_t root = Find(node);
-  grid_.ForEachNear(circle.centre, reach_m, [&](const IndexedFeature& g) {
+  grid_.ForEachNearSegment(f.segment, band_m, [&](const IndexedFeature& g) {
     const double bound_m = std::min(circle.radius_m, g.radius_m) + params_.eta_m + kSearchSlackM;
     if ((g.centre - circle.centre).squaredNorm() > bound_m * bound_m) return;
     const uint32_t other_root = Find(g.node);
     if (other_root == root) return;  // an edge inside a component changes nothing
+    if (geometry::PointSegmentDistance(g.centre, f.segment) > band_m) return;
     if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
     root = Union(root, other_root, merged_ids);
   });
@@ -258,7 +261,14 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
     }
     nodes[i] = NewNode(f, observation, robot);
   }
-  for (size_t i = 0; i < features.size(); ++i) LinkToEarlier(nodes[i], features[i], &merged_ids);
+  // A folded feature stands in for its representative both ways: later
+  // features are tested against the representative, and it links through the
+  // representative's links (made when the representative was added). So only
+  // new representatives search for links: on a revisited site that is rare,
+  // and the work per observation falls as the map fills in.
+  for (size_t i = 0; i < features.size(); ++i) {
+    if (!folded[i]) LinkToEarlier(nodes[i], features[i], &merged_ids);
+  }
   for (size_t i = 0; i < features.size(); ++i) {
     if (!folded[i]) FileInGrid(nodes[i], features[i].segment);
   }

@@ -84,7 +84,41 @@ class UniformGrid {
     }
   }
 
+  // Calls fn(item) for every item in the cells that come within radius_m of
+  // segment s (a superset of the items within radius_m of s: callers filter).
+  // For a long segment this probes a thin band of cells, not the square
+  // around its whole length that ForEachNear would.
+  template <typename Fn>
+  void ForEachNearSegment(const geometry::Segment2& s, double radius_m, Fn&& fn) const {
+    const geometry::Vec2 r(radius_m, radius_m);
+    const CellKey lo = KeyOf(s.a.cwiseMin(s.b) - r);
+    const CellKey hi = KeyOf(s.a.cwiseMax(s.b) + r);
+    const double box_cells = static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
+    // A cell meets the band if its centre is within radius + half its diagonal.
+    const double reach_m = radius_m + 0.7072 * cell_m_;
+    if (box_cells > static_cast<double>(cells_.size())) {
+      for (const auto& [key, items] : cells_) {
+        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
+        if (geometry::PointSegmentDistance(CentreOf(key), s) > reach_m) continue;
+        for (const T& item : items) fn(item);
+      }
+      return;
+    }
+    for (int64_t x = lo.x; x <= hi.x; ++x) {
+      for (int64_t y = lo.y; y <= hi.y; ++y) {
+        if (geometry::PointSegmentDistance(CentreOf({x, y}), s) > reach_m) continue;
+        auto it = cells_.find({x, y});
+        if (it == cells_.end()) continue;
+        for (const T& item : it->second) fn(item);
+      }
+    }
+  }
+
  private:
+  geometry::Vec2 CentreOf(const CellKey& k) const {
+    return {(static_cast<double>(k.x) + 0.5) * cell_m_, (static_cast<double>(k.y) + 0.5) * cell_m_};
+  }
+
   double cell_m_;
   std::unordered_map<CellKey, std::vector<T>, CellKeyHash> cells_;
 };

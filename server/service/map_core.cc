@@ -1,5 +1,7 @@
 #include "service/map_core.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 
 #include "fusion/projection.h"
@@ -50,8 +52,12 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (!newest.ok()) return newest.status();
   core->last_observation_id_ = *newest;
   core->engine_ = std::make_unique<fusion::FusionEngine>(options.fusion);
-  core->writer_ = std::thread([c = core.get()] { c->WriterLoop(); });
+  core->writer_ = std::thread([c = core.get()] {
+    pthread_setname_np(pthread_self(), "mapd-writer");  // for top -H and benchmarks
+    c->WriterLoop();
+  });
   core->fuser_ = std::thread([c = core.get()] {
+    pthread_setname_np(pthread_self(), "mapd-fuser");
     c->Recover();
     c->FuserLoop();
   });
@@ -498,6 +504,7 @@ CoreStats MapCore::Stats() const {
   }
   std::shared_lock<std::shared_mutex> lock(engine_mu_);
   s.fused_features = engine_->published_count();
+  s.fused_raw_features = engine_->feature_count();
   s.clusters = engine_->cluster_count();
   s.map_version = map_version_.load();
   return s;

@@ -104,6 +104,7 @@ struct CoreStats {
   bool recovering = false;        // the fused map is being rebuilt at start
   double snapshot_age_s = 0;      // newest snapshot of the fusion state (0: none)
   uint64_t replay_length = 0;     // observations fused since that snapshot
+  uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
 };
 
 class MapCore {

@@ -86,19 +86,26 @@ Comparison Compare(const std::vector<FusedFeature>& exact, const std::vector<Fus
   c.exact = exact.size();
   c.bounded = bounded.size();
   for (const FusedFeature& e : exact) {
+    // The bounded feature of the same id, else the nearest (two features can
+    // share a segment after corner snapping, so nearest alone can mislead).
     double best = 1e300;
-    const FusedFeature* nearest = nullptr;
+    const FusedFeature* match = nullptr;
     for (const FusedFeature& b : bounded) {
       const double gap = SegmentGap(e.segment, b.segment);
+      if (b.id == e.id) {
+        ++c.same_id;
+        best = gap;
+        match = &b;
+        break;
+      }
       if (gap < best) {
         best = gap;
-        nearest = &b;
+        match = &b;
       }
-      if (b.id == e.id) ++c.same_id;
     }
     c.within_1cm += best <= 0.01;
     c.worst_m = std::max(c.worst_m, best);
-    if (nearest != nullptr && nearest->support != e.support) {
+    if (match != nullptr && match->support != e.support) {
       ++(e.support <= 32 ? c.support_differs : c.support_differs_high);
     }
   }

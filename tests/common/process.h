@@ -79,11 +79,13 @@ struct MapdProcess {
 
 // Starts `binary --db db_path --listen 127.0.0.1:0 extra_args...` with stderr
 // in `db_path + ".log"` and waits (up to `timeout`) for its
-// `event=serving address=HOST:PORT` line. On failure port is 0 and the child,
-// if still running, is killed.
+// `event=<ready_event> address=HOST:PORT` line: "serving" (the map is
+// recovered, the default) or "listening" (the port is open). On failure port
+// is 0 and the child, if still running, is killed.
 inline MapdProcess StartMapd(const std::string& db_path, const std::vector<std::string>& extra_args = {},
                              const std::string& binary = kDefaultMapdBinary,
-                             std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+                             std::chrono::milliseconds timeout = std::chrono::seconds(20),
+                             const std::string& ready_event = "serving") {
   MapdProcess p;
   p.log_path = db_path + ".log";
   std::vector<std::string> argv = {binary, "--db", db_path, "--listen", "127.0.0.1:0"};
@@ -95,7 +97,7 @@ inline MapdProcess StartMapd(const std::string& db_path, const std::vector<std::
   if (p.pid < 0) return p;
 
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  const std::string marker = "event=serving address=";
+  const std::string marker = "event=" + ready_event + " address=";
   while (std::chrono::steady_clock::now() < deadline) {
     const std::string log = internal::ReadFile(p.log_path);
     const size_t at = log.find(marker);
