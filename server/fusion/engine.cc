@@ -68,7 +68,7 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
   members.reserve(nodes.size());
   for (uint32_t n : nodes) {
     members.push_back({anchors_[n].id, anchors_[n].segment,
-                       bounded_ ? &folded_[n].moments : nullptr});
+                       bounded_ && folded_[n] ? &folded_[n]->moments : nullptr});
   }
   std::vector<std::vector<uint32_t>> groups =
       SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
@@ -80,11 +80,8 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
 
 ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) const {
   if (bounded_) {
-    ClusterStats s = folded_[nodes.front()];
-    for (size_t i = 1; i < nodes.size(); ++i) {
-      ClusterStats other = folded_[nodes[i]];
-      s.Merge(std::move(other), support_cap_);
-    }
+    ClusterStats s = NodeStats(nodes.front());
+    for (size_t i = 1; i < nodes.size(); ++i) s.Merge(NodeStats(nodes[i]), support_cap_);
     return s;
   }
   ClusterStats s = ClusterStats::OfFeature(anchors_[nodes.front()], observation_of_[nodes.front()],
@@ -205,12 +202,9 @@ uint32_t FusionEngine::Impl::NewNode(const GroundFeature& f, ObservationId obser
   node_of_.emplace(f.id, node);
   if (keeps_anchors()) anchors_.push_back(f);
   if (guard_on_) {
-    if (bounded_) {
-      folded_.push_back(*stats_.back());
-    } else {
-      observation_of_.push_back(observation);
-      robot_of_.push_back(robot);
-    }
+    observation_of_.push_back(observation);
+    robot_of_.push_back(robot);
+    if (bounded_) folded_.push_back(nullptr);
     next_member_.push_back(node);
   }
   ++cluster_count_;
@@ -255,7 +249,11 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
       ClusterStats& cluster = *stats_[Find(nodes[i])];
       merged_ids.push_back(cluster.id);
       cluster.AddFeature(f, observation, robot, support_cap_);
-      if (guard_on_) folded_[nodes[i]].AddFeature(f, observation, robot, support_cap_);
+      if (guard_on_) {
+        std::unique_ptr<ClusterStats>& rep = folded_[nodes[i]];
+        if (!rep) rep = std::make_unique<ClusterStats>(NodeStats(nodes[i]));
+        rep->AddFeature(f, observation, robot, support_cap_);
+      }
       folded[i] = true;
       continue;
     }

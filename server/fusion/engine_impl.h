@@ -80,11 +80,13 @@ class FusionEngine::Impl {
   // Per node, kept when the guard is on or in bounded mode: the node's own
   // feature (the guard refits subsets; snapshots refile the grid from it).
   std::vector<GroundFeature> anchors_;
-  // Guard on, exact mode: where each node's feature came from.
+  // Guard on: where each node's own feature came from.
   std::vector<ObservationId> observation_of_;
   std::vector<RobotId> robot_of_;
-  // Guard on, bounded mode: everything folded into each representative.
-  std::vector<ClusterStats> folded_;
+  // Guard on, bounded mode: the statistics of a representative that has
+  // folded features in (its own feature included); null while it has none,
+  // so that a map seen once costs no more than in exact mode.
+  std::vector<std::unique_ptr<ClusterStats>> folded_;
   // Guard on: the next member of the node's component (a circular list per
   // component: a union splices two lists in O(1)).
   std::vector<uint32_t> next_member_;
@@ -109,6 +111,12 @@ class FusionEngine::Impl {
   // The guard's groups of the component at `root`, as member nodes and stats.
   std::vector<std::vector<uint32_t>> GroupNodes(uint32_t root) const;
   ClusterStats StatsOf(const std::vector<uint32_t>& nodes) const;
+  // Guard on: everything node `n` stands for (its feature, and in bounded
+  // mode what was folded into it).
+  ClusterStats NodeStats(uint32_t n) const {
+    if (bounded_ && folded_[n]) return *folded_[n];
+    return ClusterStats::OfFeature(anchors_[n], observation_of_[n], robot_of_[n]);
+  }
   // Files node `node`, whose own feature is `segment`, in the centre grid.
   void FileInGrid(uint32_t node, const Segment2& segment);
 

@@ -188,7 +188,10 @@ Status FusionEngine::SaveState(std::string* out) const {
     w.Feature(e.anchors_[i]);
     if (e.guard_on_) {
       w.U32(e.next_member_[i]);
-      w.Stats(e.folded_[i]);
+      w.U64(e.observation_of_[i]);
+      w.U64(e.robot_of_[i]);
+      w.U8(e.folded_[i] ? 1 : 0);
+      if (e.folded_[i]) w.Stats(*e.folded_[i]);
     }
     w.U8(e.stats_[i] ? 1 : 0);
     if (e.stats_[i]) w.Stats(*e.stats_[i]);
@@ -255,6 +258,8 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   e.stats_.resize(n);
   if (e.guard_on_) {
     e.next_member_.resize(n);
+    e.observation_of_.resize(n);
+    e.robot_of_.resize(n);
     e.folded_.resize(n);
   }
   for (uint64_t i = 0; i < n && r.ok(); ++i) {
@@ -263,7 +268,9 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     e.anchors_[i] = r.Feature();
     if (e.guard_on_) {
       e.next_member_[i] = r.U32();
-      e.folded_[i] = r.Stats();
+      e.observation_of_[i] = r.U64();
+      e.robot_of_[i] = r.U64();
+      if (r.U8() != 0) e.folded_[i] = std::make_unique<ClusterStats>(r.Stats());
     }
     if (r.U8() != 0) e.stats_[i] = std::make_unique<ClusterStats>(r.Stats());
   }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "common/clock.h"
 #include "fusion/projection.h"
 #include "service/log.h"
 
@@ -12,11 +13,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // Records one change feed into the set of clusters to rewrite.
 void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
@@ -255,7 +251,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
     row.session = b.session;
     row.seq = b.seq;
     row.stamp_ns = b.stamp_ns;
-    row.received_ns = NowNs();
+    row.received_ns = UnixNowNs();
     row.frame_kind = b.frame_kind;
     row.features = &b.features;
     StatusOr<storage::InsertResult> r = (*txn)->InsertObservation(row);
@@ -500,7 +496,7 @@ CoreStats MapCore::Stats() const {
   s.recovering = !ready_.load();
   s.replay_length = fused_since_snapshot_.load();
   if (const int64_t created = snapshot_created_ns_.load(); created > 0) {
-    s.snapshot_age_s = static_cast<double>(NowNs() - created) * 1e-9;
+    s.snapshot_age_s = static_cast<double>(UnixNowNs() - created) * 1e-9;
   }
   std::shared_lock<std::shared_mutex> lock(engine_mu_);
   s.fused_features = engine_->published_count();

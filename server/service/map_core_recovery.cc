@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <map>
 
+#include "common/clock.h"
 #include "service/log.h"
 #include "service/map_core.h"
 
@@ -22,11 +23,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 int64_t MsSince(Clock::time_point t0) {
   return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
@@ -240,7 +236,7 @@ void MapCore::MaybeSnapshot(bool force) {
   if (!force && (!due || snapshot_in_flight_.load())) return;
   const auto t0 = Clock::now();
   storage::FusionSnapshot snap;
-  snap.created_ns = NowNs();
+  snap.created_ns = UnixNowNs();
   snap.map_version = map_version_.load();
   snap.through_observation = fused_through_id_;
   snap.through_tie_seq = fused_tie_seq_;
@@ -294,7 +290,7 @@ void MapCore::MaybeSnapshot(bool force) {
 void MapCore::DropExpiredObservations() {
   constexpr int kPerRound = 50000;  // rows per transaction: keeps commits short
   const int64_t cutoff_ns =
-      NowNs() - static_cast<int64_t>(options_.raw_retention_days * 86400.0 * 1e9);
+      UnixNowNs() - static_cast<int64_t>(options_.raw_retention_days * 86400.0 * 1e9);
   auto dropped = std::make_shared<uint64_t>(0);
   SubmitWrite(
       [cutoff_ns, dropped](storage::WriteTransaction* txn) {

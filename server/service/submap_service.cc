@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/clock.h"
 #include "service/log.h"
 #include "service/status_mapping.h"
 
@@ -63,11 +64,6 @@ grpc::Status ShuttingDown() {
 
 #if MAPD_WITH_VOXEL
 
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 bool ValidId(const std::string& id) {
   if (id.empty() || id.size() > kMaxIdLength) return false;
@@ -362,7 +358,7 @@ grpc::Status SubmapService::Upload(grpc::ServerContext*,
   m.free_voxels = summary->free_voxels;
   m.bounds_min = summary->bounds_min;
   m.bounds_max = summary->bounds_max;
-  m.created_ns = NowNs();
+  m.created_ns = UnixNowNs();
   submap.session = header.session_id();
   submap.data = bytes;
   int64_t id = 0;
@@ -451,7 +447,7 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   storage::NewMerge merge;
-  merge.record.created_ns = NowNs();
+  merge.record.created_ns = UnixNowNs();
   if (!outcome.ok()) {
     const Status& why = outcome.status();
     if (why.code() == StatusCode::kUnavailable)

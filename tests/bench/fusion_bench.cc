@@ -4,7 +4,7 @@
 // (item 8). A benchmark, not a test: run it by hand, figures go to docs/.
 //
 //   fusion_bench [--repeats N] [--seed S] [--svg-dir DIR]   the comparison
-//   fusion_bench --million [--blocks-x X --blocks-y Y]      1M-feature world, streaming
+//   fusion_bench --million [--blocks-x X --blocks-y Y] [--bounded]   1M-feature world, streaming
 #include <sys/resource.h>
 #include <time.h>
 
@@ -210,13 +210,15 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
 
 // Item 8: a world of at least 1,000,000 raw features, simulated scan by scan and
 // fused as it goes (the features of a scan are dropped after Add). Only Add is timed.
-int Million(int blocks_x, int blocks_y) {
+int Million(int blocks_x, int blocks_y, mapd::fusion::FusionMode mode) {
   sc::ScenarioParams params;
   params.blocks_x = blocks_x;
   params.blocks_y = blocks_y;
   const sc::World world = sc::GenerateWorld(params);
   const sc::ScanSimulator sim(params, world);
-  mapd::fusion::FusionEngine engine{mapd::fusion::FusionParams()};
+  mapd::fusion::FusionParams fusion;
+  fusion.mode = mode;
+  mapd::fusion::FusionEngine engine{fusion};
   double fuse_s = 0.0, fuse_cpu_s = 0.0;
   size_t raw = 0;
   const auto start = std::chrono::steady_clock::now();
@@ -233,8 +235,8 @@ int Million(int blocks_x, int blocks_y) {
       return 1;
     }
   }
-  std::printf("world %dx%d blocks: %zu buildings, %zu walls; %zu scans, %zu raw features\n",
-              blocks_x, blocks_y, world.buildings.size(), world.wall_count, sim.size(), raw);
+  std::printf("mode %s, world %dx%d blocks: %zu buildings, %zu walls; %zu scans, %zu raw features\n",
+              mapd::fusion::FusionModeName(mode), blocks_x, blocks_y, world.buildings.size(), world.wall_count, sim.size(), raw);
   std::printf("fusion (Add only): %.2f s CPU (%.0f raw features per CPU s), %.2f s wall "
               "(%.0f/s); %zu clusters, %zu published\n",
               fuse_cpu_s, raw / fuse_cpu_s, fuse_s, raw / fuse_s, engine.cluster_count(),
@@ -249,6 +251,7 @@ int main(int argc, char** argv) {
   int repeats = 5, blocks_x = 30, blocks_y = 25;
   uint64_t seed = 1;
   bool million = false;
+  mapd::fusion::FusionMode mode = mapd::fusion::FusionMode::kExact;  // the paper's method
   std::string svg_dir;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -257,14 +260,15 @@ int main(int argc, char** argv) {
     else if (a == "--seed" && has_value) seed = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--svg-dir" && has_value) svg_dir = argv[++i];
     else if (a == "--million") million = true;
+    else if (a == "--bounded") mode = mapd::fusion::FusionMode::kBounded;
     else if (a == "--blocks-x" && has_value) blocks_x = std::atoi(argv[++i]);
     else if (a == "--blocks-y" && has_value) blocks_y = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr, "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] | --million "
-                           "[--blocks-x X --blocks-y Y]\n", argv[0]);
+                           "[--blocks-x X --blocks-y Y] [--bounded]\n", argv[0]);
       return 2;
     }
   }
-  if (million) return Million(blocks_x, blocks_y);
+  if (million) return Million(blocks_x, blocks_y, mode);
   return Compare(std::max(1, repeats), seed, svg_dir);
 }

@@ -1,6 +1,8 @@
-// MapCore restarts: the newest fusion snapshot plus a replay of what came
-// after it, in the live order (ties included), serves exactly the map served
-// before; so does a replay from scratch; batches are refused while recovering.
+// MapCore's fusion state over time: frame ties add the tied sessions' stored
+// observations to the running engine; a restart (the newest fusion snapshot
+// plus a replay of what came after it, in the live order, ties included)
+// serves exactly the map served before, and so does a replay from scratch;
+// raw retention keeps the map; batches are refused while recovering.
 #include <future>
 #include <random>
 #include <thread>
@@ -20,7 +22,7 @@ namespace pb = mapserver::v1;
 using mapd::testing::RoomBatch;
 using mapd::testing::TempDir;
 
-class MapCoreRecoveryTest : public ::testing::Test {
+class MapCoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
     options_.db_path = dir_.File("map.db");
@@ -122,7 +124,35 @@ class MapCoreRecoveryTest : public ::testing::Test {
   uint64_t version_ = 0;
 };
 
-TEST_F(MapCoreRecoveryTest, RestartServesTheSameMapFromASnapshotAndFromScratch) {
+TEST_F(MapCoreTest, TieAddsTheSessionAndEqualsAFullRebuild) {
+  options_.fusion.mode = fusion::FusionMode::kExact;  // order independent: a rebuild must agree
+  Open();
+  Stream("r1", false, 0.0, 1, 8, 1);
+  Stream("r2", true, 2.0, 1, 8, 2);  // r2's frame is the map frame shifted by 2 m
+  const std::vector<FusedView> before = Map();
+  ASSERT_EQ(before.size(), 4u);
+  for (const FusedView& f : before) EXPECT_EQ(f.robots, std::vector<std::string>{"r1"});
+  Tie("r2", 2.0);
+  const std::vector<FusedView> tied = Map();
+  ASSERT_EQ(tied.size(), 4u);
+  for (const FusedView& f : tied) {
+    EXPECT_EQ(f.robots, (std::vector<std::string>{"r1", "r2"}));
+    EXPECT_EQ(f.feature.support, 16u);
+  }
+  Close();
+  Open();  // exact mode takes no snapshots: this rebuilds from scratch
+  const std::vector<FusedView> rebuilt = Map();
+  ASSERT_EQ(rebuilt.size(), tied.size());
+  for (size_t i = 0; i < tied.size(); ++i) {
+    EXPECT_EQ(rebuilt[i].feature.id, tied[i].feature.id);
+    EXPECT_EQ(rebuilt[i].feature.support, tied[i].feature.support);
+    EXPECT_EQ(rebuilt[i].feature.member_count, tied[i].feature.member_count);
+    EXPECT_LE((rebuilt[i].feature.segment.a - tied[i].feature.segment.a).norm(), 1e-9);
+    EXPECT_LE((rebuilt[i].feature.segment.b - tied[i].feature.segment.b).norm(), 1e-9);
+  }
+}
+
+TEST_F(MapCoreTest, RestartServesTheSameMapFromASnapshotAndFromScratch) {
   Open();
   // Enough revisits that clusters are established and fold (bounded mode).
   Stream("r1", false, 0.0, 1, 60, 1);
@@ -155,7 +185,7 @@ TEST_F(MapCoreRecoveryTest, RestartServesTheSameMapFromASnapshotAndFromScratch) 
   Close();
 }
 
-TEST_F(MapCoreRecoveryTest, ATieAfterTheSnapshotIsReplayedInPlace) {
+TEST_F(MapCoreTest, ATieAfterTheSnapshotIsReplayedInPlace) {
   options_.snapshot_every_observations = 1000000;  // none but the one at shutdown
   Open();
   Stream("r1", false, 0.0, 1, 50, 1);
@@ -175,7 +205,7 @@ TEST_F(MapCoreRecoveryTest, ATieAfterTheSnapshotIsReplayedInPlace) {
   ExpectIdentical(Map(), before);
 }
 
-TEST_F(MapCoreRecoveryTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
+TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   options_.snapshot_every_observations = 10;
   options_.raw_retention_days = 1e-9;  // everything is old at once
   Open();
@@ -206,7 +236,7 @@ TEST_F(MapCoreRecoveryTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   EXPECT_EQ(Query("SELECT max(id) FROM observations"), 10 + 100 + 40 + 5);
 }
 
-TEST_F(MapCoreRecoveryTest, BatchesAreRefusedWhileRecovering) {
+TEST_F(MapCoreTest, BatchesAreRefusedWhileRecovering) {
   options_.snapshot_every_observations = 0;
   options_.max_group_batches = 4096;
   Open();
