@@ -182,6 +182,8 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("raw features", num(s.raw_features()));
   row("fused features", num(s.fused_features()) + " published, " + num(s.clusters()) + " clusters");
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
+  row("fusion nodes", num(s.fusion_nodes()) + " (representatives kept for " + num(s.fused_raw_features()) +
+                          " fused raw features)");
   row("submaps", num(s.submaps()));
   row("map version", num(s.map_version()));
   row("snapshot", s.snapshot_age_s() > 0

@@ -25,7 +25,7 @@ ClusterStats ClusterStats::OfFeature(const GroundFeature& f, ObservationId obser
 }
 
 void ClusterStats::AddFeature(const GroundFeature& f, ObservationId observation, RobotId robot,
-                              uint32_t support_cap) {
+                              uint32_t support_cap, bool inside_hull) {
   id = std::min(id, f.id);
   ++member_count;
   plane_members += f.origin == FeatureOrigin::kPlane ? 1 : 0;
@@ -34,8 +34,8 @@ void ClusterStats::AddFeature(const GroundFeature& f, ObservationId observation,
   z_min_m = std::min(z_min_m, f.z_min_m);
   z_max_m = std::max(z_max_m, f.z_max_m);
   // A revisited wall's new member usually lies inside the hull already.
-  if (!geometry::StrictlyInsideHull(hull, f.segment.a) ||
-      !geometry::StrictlyInsideHull(hull, f.segment.b)) {
+  if (!inside_hull && (!geometry::StrictlyInsideHull(hull, f.segment.a) ||
+                       !geometry::StrictlyInsideHull(hull, f.segment.b))) {
     std::vector<geometry::Vec2> points;
     points.reserve(hull.size() + 2);
     points.insert(points.end(), hull.begin(), hull.end());

@@ -30,8 +30,10 @@ struct ClusterStats {
   // bounds them) and O(h log h) for the hulls, h = number of hull vertices.
   void Merge(ClusterStats&& other, uint32_t support_cap);
   // Absorbs one more member: Merge(OfFeature(f, observation, robot)), cheaper.
+  // `inside_hull`: the caller knows both endpoints lie strictly inside the
+  // hull (the hull is then left as it is without a test).
   void AddFeature(const GroundFeature& f, ObservationId observation, RobotId robot,
-                  uint32_t support_cap);
+                  uint32_t support_cap, bool inside_hull = false);
 
   uint32_t support() const { return observations.count(); }
 

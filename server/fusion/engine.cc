@@ -110,6 +110,7 @@ ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) con
 void FusionEngine::Impl::FileInGrid(uint32_t node, const Segment2& segment) {
   const FeatureCircle c = CircleOf(segment);
   grid_.Insert(c.centre, {segment, c.centre, c.radius_m, node});
+  if (bounded_) cover_grid_.Insert(c.centre, {c.centre, node});
 }
 
 uint32_t FusionEngine::Impl::Find(uint32_t x) {
@@ -217,12 +218,13 @@ bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const
   const double cover_sq = params_.cover_m * params_.cover_m;
   double best_sq = cover_sq;
   bool found = false;
-  grid_.ForEachNear(centre, params_.cover_m + kSearchSlackM, [&](const IndexedFeature& g) {
+  cover_grid_.ForEachNear(centre, params_.cover_m + kSearchSlackM, [&](const CoverItem& g) {
     if ((g.centre - centre).squaredNorm() > cover_sq) return;
-    const double d_sq = EndpointDistanceSq(f.segment, g.segment);
+    const Segment2& segment = anchors_[g.node].segment;
+    const double d_sq = EndpointDistanceSq(f.segment, segment);
     if (d_sq > best_sq || (found && d_sq == best_sq && g.node > *node)) return;
     if (stats_[FindConst(g.node)]->support() < support_cap_) return;  // not established
-    if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
+    if (!MeetsAllCriteria(f.segment, segment, params_)) return;
     best_sq = d_sq;
     *node = g.node;
     found = true;
@@ -248,12 +250,17 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
       // may change (a smaller member id), so Publish treats it as touched.
       ClusterStats& cluster = *stats_[Find(nodes[i])];
       merged_ids.push_back(cluster.id);
-      cluster.AddFeature(f, observation, robot, support_cap_);
+      // A point strictly inside the representative's hull is strictly inside
+      // the cluster's, which contains it: one small test spares the large one.
+      bool inside_rep_hull = false;
       if (guard_on_) {
         std::unique_ptr<ClusterStats>& rep = folded_[nodes[i]];
         if (!rep) rep = std::make_unique<ClusterStats>(NodeStats(nodes[i]));
-        rep->AddFeature(f, observation, robot, support_cap_);
+        inside_rep_hull = geometry::StrictlyInsideHull(rep->hull, f.segment.a) &&
+                          geometry::StrictlyInsideHull(rep->hull, f.segment.b);
+        rep->AddFeature(f, observation, robot, support_cap_, inside_rep_hull);
       }
+      cluster.AddFeature(f, observation, robot, support_cap_, inside_rep_hull);
       folded[i] = true;
       continue;
     }

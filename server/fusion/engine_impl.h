@@ -35,6 +35,18 @@ constexpr double kFeatureCellM = 1.0;
 // changed the map of a real log, folding into established ones did not).
 constexpr uint32_t kEstablishedSupport = 32;
 
+// Bounded mode: cell size of the representatives' centre grid that cover
+// lookups probe (radius cover_m, a few centimetres): fine cells keep the
+// candidates to the near-duplicates, where the 1 m cells of the link grid
+// would hold every representative of a metre of wall.
+constexpr double kCoverCellM = 0.1;
+
+// A representative as filed in the cover grid.
+struct CoverItem {
+  Vec2 centre;
+  uint32_t node;
+};
+
 // A raw feature as filed in the centre grid: what the criteria need, inline,
 // so that a candidate scan touches one cache line per candidate.
 struct IndexedFeature {
@@ -54,6 +66,7 @@ class FusionEngine::Impl {
         support_cap_(bounded_ ? std::max(kEstablishedSupport, params.min_support)
                               : SupportCounter::kUnlimited),
         grid_(kFeatureCellM),
+        cover_grid_(kCoverCellM),
         snapper_(params.snap_m, params.corner_mode) {}
 
   Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
@@ -99,6 +112,7 @@ class FusionEngine::Impl {
   std::unordered_map<ClusterId, SplitRecord> split_;
   size_t extra_groups_ = 0;  // sum over split_ of (group_count - 1)
   UniformGrid<IndexedFeature> grid_;
+  UniformGrid<CoverItem> cover_grid_;  // bounded mode: representatives by centre
   CornerSnapper snapper_;
   std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
 

@@ -501,6 +501,7 @@ CoreStats MapCore::Stats() const {
   std::shared_lock<std::shared_mutex> lock(engine_mu_);
   s.fused_features = engine_->published_count();
   s.fused_raw_features = engine_->feature_count();
+  s.fusion_nodes = engine_->node_count();
   s.clusters = engine_->cluster_count();
   s.map_version = map_version_.load();
   return s;

@@ -105,6 +105,7 @@ struct CoreStats {
   double snapshot_age_s = 0;      // newest snapshot of the fusion state (0: none)
   uint64_t replay_length = 0;     // observations fused since that snapshot
   uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
+  uint64_t fusion_nodes = 0;        // the engine's nodes (representatives in bounded mode)
 };
 
 class MapCore {

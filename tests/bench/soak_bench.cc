@@ -378,8 +378,8 @@ int main(int argc, char** argv) {
   std::printf("world %s, %d robots + 1 in its own frame (streams a quarter as often), mapd %s\n\n",
               opt.world.c_str(), opt.robots, mapd.address.c_str());
   std::printf("| raw features | ingest batches/s | fused features/s (wall) | fused features/CPU-s "
-              "(fuser) | backlog | p99 ack ms | mapd RSS MiB | db MiB | db bytes/feature |\n"
-              "|---|---|---|---|---|---|---|---|---|\n");
+              "(fuser) | fusion nodes | backlog | p99 ack ms | mapd RSS MiB | db MiB | db bytes/feature |\n"
+              "|---|---|---|---|---|---|---|---|---|---|\n");
 
   Shared shared;
   shared.robots = opt.robots;
@@ -414,11 +414,12 @@ int main(int argc, char** argv) {
         std::lock_guard<std::mutex> lock(shared.mu);
         latencies.swap(shared.latencies_ms);
       }
-      std::printf("| %.2fM | %.0f | %.0f | %.0f | %llu | %.1f | %.0f | %.0f | %.0f |\n", raw / 1e6,
+      std::printf("| %.2fM | %.0f | %.0f | %.0f | %llu | %llu | %.1f | %.0f | %.0f | %.0f |\n", raw / 1e6,
                   static_cast<double>(batches - window_batches) / dt,
                   static_cast<double>(stats.fused_raw_features() - window_fused) / dt,
                   static_cast<double>(stats.fused_raw_features() - window_fused) /
                       std::max(1e-9, cpu - window_cpu),
+                  static_cast<unsigned long long>(stats.fusion_nodes()),
                   static_cast<unsigned long long>(stats.fusion_backlog()), P99(latencies),
                   RssMiB(mapd.pid), stats.db_size_bytes() / 1048576.0, stats.bytes_per_raw_feature());
       std::fflush(stdout);

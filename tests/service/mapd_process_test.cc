@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "common/batches.h"
+#include "common/health.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -96,6 +97,64 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   pb::Stats stats;
   ASSERT_TRUE(stub2->GetStats(&ctx2, {}, &stats).ok());
   EXPECT_GE(stats.batches(), static_cast<uint64_t>(stored.load()));
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0);
+}
+
+// A restart with a long replay: mapd listens at once, says NOT_SERVING and
+// refuses ingest (UNAVAILABLE, nothing stored) while it recovers, then SERVING.
+TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
+  TempDir dir;
+  const std::string db = dir.File("map.db");
+  // No snapshots: the restart replays every stored observation.
+  const std::vector<std::string> args = {"--snapshot.every_observations", "0"};
+  MapdProcess mapd = StartMapd(db, args);
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  EXPECT_EQ(CheckHealth(mapd.address), Health::kServing);
+  {
+    auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+    grpc::ClientContext ctx;
+    auto stream = stub->Ingest(&ctx);
+    std::thread reader([&] {
+      pb::IngestAck ack;
+      while (stream->Read(&ack)) {
+      }
+    });
+    std::mt19937_64 rng(5);
+    for (uint64_t seq = 1; seq <= 20000; ++seq) {
+      ASSERT_TRUE(stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.001 * static_cast<double>(seq), &rng)));
+    }
+    stream->WritesDone();
+    reader.join();
+    ASSERT_TRUE(stream->Finish().ok());
+  }
+  ASSERT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
+
+  mapd = StartMapd(db, args, kDefaultMapdBinary, std::chrono::seconds(20), "listening");
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  const Health early = CheckHealth(mapd.address);
+  if (mapd.log().find("event=serving") != std::string::npos) {
+    GTEST_SKIP() << "recovery finished before the test could look";
+  }
+  EXPECT_EQ(early, Health::kNotServing);
+  {
+    auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+    grpc::ClientContext ctx;
+    auto stream = stub->Ingest(&ctx);
+    pb::IngestAck ack;
+    EXPECT_FALSE(stream->Read(&ack));
+    const grpc::Status s = stream->Finish();
+    if (mapd.log().find("event=serving") == std::string::npos) {
+      EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE);
+      EXPECT_THAT(s.error_message(), HasSubstr("recovering"));
+    }
+  }
+  Health now = Health::kNotServing;
+  for (int i = 0; i < 3000 && now != Health::kServing; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    now = CheckHealth(mapd.address);
+  }
+  EXPECT_EQ(now, Health::kServing) << mapd.log();
+  EXPECT_THAT(mapd.log(), HasSubstr("event=map_recovered from=scratch replayed=20000"));
   EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0);
 }
 
