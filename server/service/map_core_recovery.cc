@@ -11,6 +11,8 @@
 // order. So the engine's history is a function of the database alone, and a
 // replay from any snapshot (which records the position it reflects) redoes it
 // exactly: the bounded engine is deterministic, not order independent.
+#include <malloc.h>
+
 #include <algorithm>
 #include <map>
 
@@ -252,6 +254,11 @@ void MapCore::MaybeSnapshot(bool force) {
   }
   const int64_t encode_ms = MsSince(t0);
   const uint64_t covered = fused_since_snapshot_.exchange(0);
+#ifdef __GLIBC__
+  // The fuse queue and gRPC buffers of a burst are freed by now; glibc keeps
+  // freed memory in its arenas unless asked, and RSS should follow the map.
+  malloc_trim(0);
+#endif
   last_snapshot_ = Clock::now();
   const size_t bytes = snap.state.size();
   const int64_t created_ns = snap.created_ns;

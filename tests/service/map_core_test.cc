@@ -219,11 +219,16 @@ TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   const std::string r1_rows =
       "SELECT count(*) FROM observations o JOIN sessions s ON s.id = o.session_id "
       "JOIN robots r ON r.id = s.robot_id WHERE r.name = ";
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (Query(r1_rows + "'r1'") > 20 && std::chrono::steady_clock::now() < deadline) {
+  // Retention runs after each snapshot and drops what both kept snapshots
+  // reflect: wait until none of r1's rows up to the older one is left.
+  const std::string droppable = r1_rows + "'r1' AND o.id <= (SELECT min(through_observation) FROM fusion_snapshots)";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Query(droppable) != 0 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  EXPECT_LE(Query(r1_rows + "'r1'"), 20);  // at most what came after the older kept snapshot
+  EXPECT_EQ(Query(droppable), 0);
+  EXPECT_GT(Query("SELECT min(through_observation) FROM fusion_snapshots"), 10);
+  EXPECT_LT(Query(r1_rows + "'r1'"), 100);  // of r1's 100
   EXPECT_EQ(Query(r1_rows + "'r3'"), 10);
   ExpectIdentical(Map(), before);  // the engine never needed them
   Close();
