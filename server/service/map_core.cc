@@ -323,7 +323,14 @@ void MapCore::FuserLoop() {
   for (;;) {
     {
       std::unique_lock<std::mutex> lock(fuse_mu_);
-      fuse_cv_.wait(lock, [this] { return !fuse_queue_.empty() || fuser_stopping_; });
+      // Wakes at least once a second when idle, so that snapshot.max_age_s
+      // holds when ingest stops.
+      if (!fuse_cv_.wait_for(lock, std::chrono::seconds(1),
+                             [this] { return !fuse_queue_.empty() || fuser_stopping_; })) {
+        lock.unlock();
+        MaybeSnapshot(false);
+        continue;
+      }
       if (fuse_queue_.empty()) break;
       work.swap(fuse_queue_);
     }

@@ -5,7 +5,7 @@
 // site) and the real CARMEN laser logs (shared/data/laser; skipped when absent).
 // A markdown table on stdout, for docs/fusion-long-running.md.
 //
-//   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor N [--exact]]
+//   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N] [--floor N [--exact]]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -202,10 +202,11 @@ void LaserCases(const std::string& data_dir, const FusionParams& params) {
   }
 }
 
-// The demo floor revisited: `robots` simulated robots loop the floor
-// (client/sim_robot.h) until `total` raw features, fused by one engine; prints
-// per chunk of `report` features the fusion rate and the node count.
-void FloorRevisit(const FusionParams& params, int robots, uint64_t total, uint64_t report) {
+// The demo floor revisited: `robots` simulated robots (client/sim_robot.h)
+// loop the floor; fn(observation id, ground features) per scan until `total`
+// raw features.
+template <typename Fn>
+void FloorScans(const FusionParams& params, int robots, uint64_t total, Fn&& fn) {
   std::vector<client::SimRobot> sims;
   for (int r = 0; r < robots; ++r) {
     client::SimRobotParams p;
@@ -214,13 +215,7 @@ void FloorRevisit(const FusionParams& params, int robots, uint64_t total, uint64
     p.start_fraction = static_cast<double>(r) / robots;
     sims.emplace_back(client::DefaultWorld(), p);
   }
-  FusionEngine engine(params);
-  std::printf("\nDemo floor, %d robots, mode %s, cover_m %.3f:\n\n", robots,
-              fusion::FusionModeName(params.mode), params.cover_m);
-  std::printf("| raw features | nodes | fused | features/CPU-s (chunk) |\n|---|---|---|---|\n");
-  uint64_t fed = 0, next_report = report, observation = 0;
-  double chunk_cpu = 0;
-  uint64_t chunk_features = 0;
+  uint64_t fed = 0, observation = 0;
   service::IngestLimits limits;
   while (fed < total) {
     for (client::SimRobot& sim : sims) {
@@ -230,22 +225,46 @@ void FloorRevisit(const FusionParams& params, int robots, uint64_t total, uint64
       StatusOr<fusion::ProjectedObservation> projected = fusion::ProjectToGround(
           batch->features, geometry::Rigid3::Identity(), observation << 12, params);
       if (!projected.ok()) std::exit(1);
-      const double t0 = CpuNow();
-      if (!engine.Add(observation, 0, projected->ground).ok()) std::exit(1);
-      chunk_cpu += CpuNow() - t0;
-      chunk_features += projected->ground.size();
       fed += projected->ground.size();
-    }
-    if (fed >= next_report) {
-      std::printf("| %llu | %zu | %zu | %.0f |\n", static_cast<unsigned long long>(fed),
-                  engine.node_count(), engine.published_count(),
-                  static_cast<double>(chunk_features) / std::max(chunk_cpu, 1e-9));
-      std::fflush(stdout);
-      chunk_cpu = 0;
-      chunk_features = 0;
-      next_report += report;
+      fn(observation, projected->ground);
     }
   }
+}
+
+// The floor as a comparison case: exact against bounded on the same scans.
+void FloorCase(const FusionParams& params, uint64_t total) {
+  std::vector<Observation> observations;
+  FloorScans(params, 8, total, [&](uint64_t id, const std::vector<GroundFeature>& ground) {
+    observations.push_back({id, 0, ground});
+  });
+  const ModeRun exact = Run(observations, params, FusionMode::kExact);
+  const ModeRun bounded = Run(observations, params, FusionMode::kBounded);
+  PrintRow("demo floor, 8 robots looping", observations, exact, bounded, "n/a");
+}
+
+// The floor fused by one engine until `total` raw features; prints per chunk
+// of `report` features the fusion rate and the node count.
+void FloorRevisit(const FusionParams& params, int robots, uint64_t total, uint64_t report) {
+  FusionEngine engine(params);
+  std::printf("\nDemo floor, %d robots, mode %s, cover_m %.3f:\n\n", robots,
+              fusion::FusionModeName(params.mode), params.cover_m);
+  std::printf("| raw features | nodes | fused | features/CPU-s (chunk) |\n|---|---|---|---|\n");
+  uint64_t fed = 0, next_report = report, chunk_features = 0;
+  double chunk_cpu = 0;
+  FloorScans(params, robots, total, [&](uint64_t id, const std::vector<GroundFeature>& ground) {
+    const double t0 = CpuNow();
+    if (!engine.Add(id, 0, ground).ok()) std::exit(1);
+    chunk_cpu += CpuNow() - t0;
+    chunk_features += ground.size();
+    fed += ground.size();
+    if (fed < next_report) return;
+    std::printf("| %llu | %zu | %zu | %.0f |\n", static_cast<unsigned long long>(fed), engine.node_count(),
+                engine.published_count(), static_cast<double>(chunk_features) / std::max(chunk_cpu, 1e-9));
+    std::fflush(stdout);
+    chunk_cpu = 0;
+    chunk_features = 0;
+    next_report += report;
+  });
 }
 
 }  // namespace
@@ -256,6 +275,7 @@ int main(int argc, char** argv) {
   std::string data_dir = std::string(MAPD_SOURCE_DIR) + "/../shared/data/laser";
   mapd::fusion::FusionParams params;
   uint64_t floor_total = 0;
+  uint64_t floor_case = 200000;  // raw features of the floor comparison case
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
@@ -267,12 +287,14 @@ int main(int argc, char** argv) {
       params.cover_m = std::atof(argv[++i]);
     } else if (a == "--floor" && has_value) {
       floor_total = std::strtoull(argv[++i], nullptr, 10);
+    } else if (a == "--floor-case" && has_value) {
+      floor_case = std::strtoull(argv[++i], nullptr, 10);
     } else if (a == "--exact") {
       params.mode = mapd::fusion::FusionMode::kExact;
     } else if (a == "--guard-rms" && has_value) {
       params.chain_max_rms_m = std::atof(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor N [--exact]]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N] [--floor N [--exact]]\n", argv[0]);
       return 2;
     }
   }
@@ -289,5 +311,6 @@ int main(int argc, char** argv) {
   mapd::bench::PrintHeader();
   if (seeds > 0) mapd::bench::CityCases(seeds, params);
   mapd::bench::LaserCases(data_dir, params);
+  mapd::bench::FloorCase(params, floor_case);
   return 0;
 }
