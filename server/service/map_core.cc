@@ -168,6 +168,12 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
 void MapCore::Stop() {
   cancel_recovery_ = true;
   {
+    // Lifts the writer's backpressure: what is queued gets committed now.
+    std::lock_guard<std::mutex> lock(fuse_mu_);
+    stop_requested_ = true;
+    fuse_cv_.notify_all();
+  }
+  {
     std::lock_guard<std::mutex> lock(queue_mu_);
     stopping_ = true;
     queue_cv_.notify_all();
@@ -176,9 +182,22 @@ void MapCore::Stop() {
   {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     fuser_stopping_ = true;
+    fuser_abandon_ = true;
     fuse_cv_.notify_all();
   }
-  if (fuser_.joinable()) fuser_.join();  // every committed observation is fused
+  // The fuser stops at its next observation: what it has not fused is
+  // committed, and the next start replays it after the snapshot taken below.
+  // So a stop does not wait for the fusion backlog.
+  const bool first_stop = fuser_.joinable();
+  if (first_stop) fuser_.join();
+  if (first_stop) {
+    std::lock_guard<std::mutex> lock(fuse_mu_);
+    if (committed_count_ > fused_count_) {
+      Log(LogLevel::kInfo, "fusion_backlog_left",
+          {{"observations", std::to_string(committed_count_ - fused_count_)},
+           {"action", "replayed at the next start"}});
+    }
+  }
   // The writer is gone, so this thread is now the one writer: persist the last
   // fused changes and checkpoint.
   FusedDelta last;
@@ -210,7 +229,7 @@ void MapCore::WriterLoop() {
       // robots see slower acks instead of the server growing without bound.
       std::unique_lock<std::mutex> lock(fuse_mu_);
       fuse_cv_.wait(lock, [this] {
-        return committed_count_ - fused_count_ <= options_.max_fusion_backlog || fuser_stopping_;
+        return committed_count_ - fused_count_ <= options_.max_fusion_backlog || stop_requested_;
       });
     }
     {
@@ -331,11 +350,14 @@ void MapCore::FuserLoop() {
         MaybeSnapshot(false);
         continue;
       }
-      if (fuse_queue_.empty()) break;
+      if (fuser_stopping_) break;  // unfused work stays committed (Stop)
       work.swap(fuse_queue_);
     }
     FusedDelta delta;
+    size_t done = 0;
     for (const ToFuse& t : work) {
+      if (fuser_abandon_.load()) break;  // Stop(): the rest is replayed at the next start
+      ++done;
       if (!t.tied_sessions.empty()) {
         FuseTiedSessions(t, &delta);
         fused_tie_seq_ = std::max(fused_tie_seq_, t.tie_seq);
@@ -356,7 +378,7 @@ void MapCore::FuserLoop() {
     }
     {
       std::lock_guard<std::mutex> lock(fuse_mu_);
-      fused_count_ += work.size();
+      fused_count_ += done;
     }
     fuse_cv_.notify_all();
     work.clear();

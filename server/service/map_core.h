@@ -141,7 +141,10 @@ class MapCore {
   // nothing runs.
   Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write);
 
-  // Stops taking batches, commits everything queued, checkpoints. Idempotent.
+  // Stops taking batches, commits (and acknowledges) everything queued, stops
+  // the fuser where it is (what it has not fused is committed and replayed at
+  // the next start: a stop never waits for the fusion backlog), snapshots the
+  // fusion state, checkpoints. Idempotent.
   void Stop();
 
   std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const;
@@ -236,6 +239,8 @@ class MapCore {
   uint64_t committed_count_ = 0;   // GUARDED_BY(fuse_mu_), observations handed to the fuser
   uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
   bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
+  bool stop_requested_ = false;    // GUARDED_BY(fuse_mu_): Stop() began; no more backpressure
+  std::atomic<bool> fuser_abandon_{false};  // Stop(): the fuser leaves the rest of its work
   int64_t last_observation_id_ = 0;  // writer thread: the newest stored observation
   // Fuser thread: where the engine stands in the commit order (what a
   // snapshot of it reflects): every tied observation up to this id, every tie

@@ -3,6 +3,7 @@
 // plus a replay of what came after it, in the live order, ties included)
 // serves exactly the map served before, and so does a replay from scratch;
 // raw retention keeps the map; batches are refused while recovering.
+#include <atomic>
 #include <future>
 #include <random>
 #include <thread>
@@ -239,6 +240,25 @@ TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   ExpectIdentical(Map(), before);
   Stream("r1", false, 0.0, 101, 5, 6);  // ids keep growing after deletions
   EXPECT_EQ(Query("SELECT max(id) FROM observations"), 10 + 100 + 40 + 5);
+}
+
+TEST_F(MapCoreTest, StopDoesNotWaitForTheFusionBacklog) {
+  options_.fusion.mode = fusion::FusionMode::kExact;  // a slow fuser on a revisited room
+  Open();
+  std::mt19937_64 rng(4);
+  std::atomic<int> stored{0};
+  constexpr int kBatches = 8000;
+  for (int k = 1; k <= kBatches; ++k) {
+    StatusOr<IngestBatch> batch = ValidateBatch(
+        RoomBatch("r1", "s", static_cast<uint64_t>(k), 5, 4, 0.01 * k, &rng), IngestLimits());
+    ASSERT_TRUE(batch.ok());
+    core_->Submit(*batch, [&](const BatchOutcome& o) { stored += o.kind == BatchOutcome::Kind::kStored; });
+  }
+  if (core_->Stats().fusion_backlog == 0) GTEST_SKIP() << "the fuser kept up: nothing to leave";
+  core_->Stop();  // returns without fusing the backlog
+  EXPECT_EQ(stored.load(), kBatches);  // every batch committed and acknowledged
+  EXPECT_GT(core_->Stats().fusion_backlog, 0u);
+  EXPECT_EQ(Query("SELECT count(*) FROM observations"), kBatches);
 }
 
 TEST_F(MapCoreTest, BatchesAreRefusedWhileRecovering) {
