@@ -46,6 +46,7 @@ constexpr auto kProgressEvery = std::chrono::seconds(2);
 void MapCore::Recover() {
   const auto t0 = Clock::now();
   std::string from = "scratch";
+  bool had_snapshot = false;
   // The newest snapshot, else the one before it (raw retention keeps what
   // either needs), else a replay of every stored observation.
   for (int skip = 0; skip < kSnapshotsKept && from == "scratch" &&
@@ -53,6 +54,7 @@ void MapCore::Recover() {
        ++skip) {
     StatusOr<storage::FusionSnapshot> snap = store_->LatestSnapshot(skip);
     if (snap.ok()) {
+      had_snapshot = true;
       StatusOr<std::unique_ptr<fusion::FusionEngine>> loaded =
           fusion::FusionEngine::LoadState(options_.fusion, snap->state);
       if (loaded.ok()) {
@@ -76,7 +78,8 @@ void MapCore::Recover() {
       break;
     }
   }
-  if (from == "scratch" && options_.raw_retention_days > 0) {
+  // Retention may have dropped what only the unusable snapshots reflected.
+  if (from == "scratch" && had_snapshot && options_.raw_retention_days > 0) {
     Log(LogLevel::kWarn, "replaying_retained_observations_only",
         {{"raw_retention_days", std::to_string(options_.raw_retention_days)},
          {"consequence", "walls seen only by dropped observations are missing from the map"}});
