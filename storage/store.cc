@@ -506,12 +506,27 @@ Status Store::ForEachObservation(const std::function<Status(const StoredObservat
 
 Status Store::ForEachObservationBetween(int64_t after_id, int64_t through_id,
                                         const std::function<Status(const StoredObservation&)>& fn) {
-  std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), std::string(kObservationColumns) + "WHERE o.id > ?1 AND o.id <= ?2 ORDER BY o.id");
-  if (!q.ok()) return q.status();
-  q->Bind(1, after_id).Bind(2, through_id);
-  return ForEachObservationRow(*q, fn);
+  return ForEachObservationWhere("", after_id, through_id, fn);
+}
+
+Status Store::ForEachObservationWhere(const std::string& condition, int64_t after_id,
+                                      int64_t through_id,
+                                      const std::function<Status(const StoredObservation&)>& fn) {
+  // Chunks of ids, the reader lock taken per chunk: a long replay (recovery,
+  // a tie of a large session) does not hold up other readers (GetStats, ...).
+  constexpr int64_t kChunkIds = 4096;
+  const std::string sql = std::string(kObservationColumns) + "WHERE " + condition +
+                          (condition.empty() ? "" : " AND ") + "o.id > ?1 AND o.id <= ?2 ORDER BY o.id";
+  for (int64_t from = after_id; from < through_id;) {
+    const int64_t to = through_id - from > kChunkIds ? from + kChunkIds : through_id;
+    std::lock_guard<std::mutex> lock(reader_mu_);
+    StatusOr<Statement> q = Statement::Prepare(reader_.get(), sql);
+    if (!q.ok()) return q.status();
+    q->Bind(1, from).Bind(2, to);
+    MAPD_RETURN_IF_ERROR(ForEachObservationRow(*q, fn));
+    from = to;
+  }
+  return Status::Ok();
 }
 
 StatusOr<int64_t> Store::NewestObservationId() {
@@ -549,12 +564,7 @@ Status Store::ForEachObservationOfSessions(const std::vector<int64_t>& session_i
   if (session_ids.empty()) return Status::Ok();
   std::string in;
   for (int64_t id : session_ids) in += (in.empty() ? "" : ",") + std::to_string(id);
-  std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), std::string(kObservationColumns) + "WHERE o.session_id IN (" + in +
-                         ") AND o.id <= " + std::to_string(max_id) + " ORDER BY o.id");
-  if (!q.ok()) return q.status();
-  return ForEachObservationRow(*q, fn);
+  return ForEachObservationWhere("o.session_id IN (" + in + ")", 0, max_id, fn);
 }
 
 StatusOr<std::vector<SessionFrame>> Store::ListSessions() {
