@@ -117,9 +117,14 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   ASSERT_LT(acked_stored, static_cast<size_t>(kRobots * kBatchesPerRobot)) << "the kill came too late";
 
   // 2. Restart on the same database and resend everything, as robots do.
+  //    A snapshot written before the kill is used (a slow build may not have
+  //    written one yet: then the restart replays everything).
+  const bool snapshot_written = mapd.log().find("event=snapshot_written") != std::string::npos;
   mapd = StartMapd(db, args);
   ASSERT_GT(mapd.port, 0) << mapd.log();
-  EXPECT_NE(mapd.log().find("event=map_recovered from=snapshot"), std::string::npos) << mapd.log();
+  if (snapshot_written) {
+    EXPECT_NE(mapd.log().find("event=map_recovered from=snapshot"), std::string::npos) << mapd.log();
+  }
   for (int r = 0; r < kRobots; ++r) {
     const StreamResult again = Stream(mapd.address, batches[static_cast<size_t>(r)]);
     EXPECT_EQ(again.rejected, 0);
