@@ -512,21 +512,28 @@ Status Store::ForEachObservationBetween(int64_t after_id, int64_t through_id,
 Status Store::ForEachObservationWhere(const std::string& condition, int64_t after_id,
                                       int64_t through_id,
                                       const std::function<Status(const StoredObservation&)>& fn) {
-  // Chunks of ids, the reader lock taken per chunk: a long replay (recovery,
-  // a tie of a large session) does not hold up other readers (GetStats, ...).
-  constexpr int64_t kChunkIds = 4096;
+  // Pages of rows (keyset: the next page starts after the last id seen), the
+  // reader lock taken per page: a long replay (recovery, a tie of a large
+  // session) does not hold up other readers (GetStats, ...).
+  constexpr int64_t kPageRows = 4096;
   const std::string sql = std::string(kObservationColumns) + "WHERE " + condition +
-                          (condition.empty() ? "" : " AND ") + "o.id > ?1 AND o.id <= ?2 ORDER BY o.id";
-  for (int64_t from = after_id; from < through_id;) {
-    const int64_t to = through_id - from > kChunkIds ? from + kChunkIds : through_id;
-    std::lock_guard<std::mutex> lock(reader_mu_);
-    StatusOr<Statement> q = Statement::Prepare(reader_.get(), sql);
-    if (!q.ok()) return q.status();
-    q->Bind(1, from).Bind(2, to);
-    MAPD_RETURN_IF_ERROR(ForEachObservationRow(*q, fn));
-    from = to;
+                          (condition.empty() ? "" : " AND ") +
+                          "o.id > ?1 AND o.id <= ?2 ORDER BY o.id LIMIT ?3";
+  for (int64_t last = after_id;;) {
+    int64_t rows = 0;
+    {
+      std::lock_guard<std::mutex> lock(reader_mu_);
+      StatusOr<Statement> q = Statement::Prepare(reader_.get(), sql);
+      if (!q.ok()) return q.status();
+      q->Bind(1, last).Bind(2, through_id).Bind(3, kPageRows);
+      MAPD_RETURN_IF_ERROR(ForEachObservationRow(*q, [&](const StoredObservation& obs) {
+        last = obs.id;
+        ++rows;
+        return fn(obs);
+      }));
+    }
+    if (rows < kPageRows) return Status::Ok();
   }
-  return Status::Ok();
 }
 
 StatusOr<int64_t> Store::NewestObservationId() {

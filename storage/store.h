@@ -309,7 +309,7 @@ class Store {
   Status Prepare();
   // The observations with after_id < id <= through_id meeting the SQL
   // `condition` on o (observations) and s (sessions), in id order, read in
-  // chunks (see store.cc).
+  // pages (see store.cc).
   Status ForEachObservationWhere(const std::string& condition, int64_t after_id, int64_t through_id,
                                  const std::function<Status(const StoredObservation&)>& fn);
   static std::string SessionKey(int64_t robot_id, const std::string& name) {
