@@ -94,5 +94,35 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   }
 }
 
+TEST(ConfigTest, LongRunningSettingsParseAndAreValidated) {
+  ServerConfig c;
+  ASSERT_TRUE(Parse({"--fusion.mode=exact", "--fusion.cover_m=0.05", "--snapshot.every_observations=0",
+                     "--snapshot.max_age_s=5", "--storage.raw_retention_days=30"},
+                    &c)
+                  .ok());
+  EXPECT_EQ(c.fusion.mode, fusion::FusionMode::kExact);
+  EXPECT_EQ(c.fusion.cover_m, 0.05);
+  EXPECT_EQ(c.snapshot_every_observations, 0u);
+  EXPECT_EQ(c.snapshot_max_age_s, 5.0);
+  EXPECT_EQ(c.raw_retention_days, 30.0);
+
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--fusion.mode=fast", "fusion.mode"},
+      {"--fusion.cover_m=-0.01", "cover_m"},
+      {"--fusion.cover_m=nan", "cover_m"},
+      {"--snapshot.every_observations=-5", "snapshot.every_observations"},
+      {"--snapshot.max_age_s=0", "snapshot.max_age_s"},
+      {"--snapshot.max_age_s=inf", "snapshot.max_age_s"},
+      {"--storage.raw_retention_days=-1", "storage.raw_retention_days"},
+      {"--storage.raw_retention_days=nan", "storage.raw_retention_days"},
+  };
+  for (const auto& [flag, name] : bad) {
+    ServerConfig d;
+    const Status s = Parse({flag}, &d);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << flag;
+    EXPECT_THAT(s.message(), HasSubstr(name)) << flag << ": " << s.message();
+  }
+}
+
 }  // namespace
 }  // namespace mapd::service
