@@ -411,18 +411,17 @@ void MapCore::WaitForFuser(std::chrono::duration<double> timeout) const {
   fuse_cv_.wait_for(lock, timeout, [&] { return fused_count_ >= target || fuser_stopping_; });
 }
 
-void MapCore::FuseInto(fusion::FusionEngine* engine, const geometry::SensorObservation& features,
-                       int64_t observation_id, int64_t robot_id, const geometry::Rigid3& T_map_frame,
-                       FusedDelta* delta) const {
+void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observation_id,
+                   int64_t robot_id, const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
   const fusion::FeatureId first_id = static_cast<fusion::FeatureId>(observation_id) << kFeatureIdBits;
   StatusOr<fusion::ProjectedObservation> projected =
       fusion::ProjectToGround(features, T_map_frame, first_id, options_.fusion);
   Status s = projected.status();
   fusion::ChangeFeed feed;
   if (s.ok() && !projected->ground.empty()) {
-    s = engine->Add(static_cast<fusion::ObservationId>(observation_id),
-                     static_cast<fusion::RobotId>(robot_id), projected->ground,
-                     delta ? &feed : nullptr);
+    s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
+                      static_cast<fusion::RobotId>(robot_id), projected->ground,
+                      delta ? &feed : nullptr);
   }
   if (!s.ok()) {
     // Stored raw but not fused: the data stays, and a rebuild with other

@@ -189,14 +189,11 @@ class MapCore {
   Status WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn);
   // Waits until every observation committed so far is fused (or the timeout).
   void WaitForFuser(std::chrono::duration<double> timeout) const;
+  // Projects one observation into the map frame and adds it to engine_;
+  // `delta`, if not null, receives the clusters it changed.
   // REQUIRES: engine_mu_ held exclusively.
   void Fuse(const geometry::SensorObservation& features, int64_t observation_id, int64_t robot_id,
-            const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
-    FuseInto(engine_.get(), features, observation_id, robot_id, T_map_frame, delta);
-  }
-  void FuseInto(fusion::FusionEngine* engine, const geometry::SensorObservation& features,
-                int64_t observation_id, int64_t robot_id, const geometry::Rigid3& T_map_frame,
-                FusedDelta* delta) const;
+            const geometry::Rigid3& T_map_frame, FusedDelta* delta);
   storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
   std::vector<std::string> RobotNames(const std::vector<fusion::RobotId>& ids) const;
   void RecordRate();
