@@ -24,15 +24,23 @@ mapd::service::LogLevel ParseLevel(const std::string& s) {
 int main(int argc, char** argv) {
   using namespace mapd::service;
   ServerConfig config;
-  bool help = false;
-  mapd::Status s = ParseFlags(std::vector<std::string>(argv + 1, argv + argc), &config, &help);
-  if (help) {
+  FlagAction action = FlagAction::kServe;
+  mapd::Status s = ParseFlags(std::vector<std::string>(argv + 1, argv + argc), &config, &action);
+  if (action == FlagAction::kHelp) {
     std::fputs(FlagsHelp().c_str(), stdout);
+    return 0;
+  }
+  if (action == FlagAction::kVersion) {
+    std::printf("mapd %s\n", MAPD_VERSION);
     return 0;
   }
   if (!s.ok()) {
     std::fprintf(stderr, "mapd: %s\n", s.message().c_str());
     return 2;
+  }
+  if (action == FlagAction::kPrintConfig) {
+    std::fputs(ConfigFileText(config).c_str(), stdout);
+    return 0;
   }
   SetLogLevel(ParseLevel(config.log_level));
 

@@ -1,6 +1,9 @@
 // mapd's configuration: one struct, filled from defaults, then a config file,
 // then command-line flags. The file holds `key = value` lines (# comments);
 // every key is also a flag: `--fusion.gamma=0.4` or `--fusion.gamma 0.4`.
+// The defaults are the member initialisers below and nowhere else: the
+// settings table (config_settings.cc) reads them for --help and the example
+// file.
 #ifndef MAPD_SERVICE_CONFIG_H_
 #define MAPD_SERVICE_CONFIG_H_
 
@@ -28,8 +31,6 @@ struct SubmapOptions {
   double max_merge_seconds = 60.0;      // budget of one merge, seconds
   bool resample_resolutions = false;    // false: different resolutions are refused
   bool log_odds_fusion = false;         // false: the paper's overlap rule
-
-  Status Validate() const;
 };
 
 struct ServerConfig {
@@ -51,6 +52,8 @@ struct ServerConfig {
   bool allow_insecure_remote = false;      // serve plaintext off loopback anyway
   std::string log_level = "info";          // debug, info, warn, error
 
+  // Every setting's range (the table), the libraries' own checks, and the
+  // rules between settings (TLS off loopback).
   Status Validate() const;
 };
 
@@ -60,9 +63,20 @@ std::string DefaultDbPath();
 // Sets one key (see the table in config.cc); InvalidArgument names the key.
 Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config);
 Status LoadConfigFile(const std::string& path, ServerConfig* config);
-// Parses argv (without argv[0]). Sets *help when --help was given.
-Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, bool* help);
+
+// What the command line asks of mapd besides its settings.
+enum class FlagAction { kServe, kHelp, kVersion, kPrintConfig };
+
+// Parses argv (without argv[0]) and validates the result; --help and
+// --version stop parsing.
+Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, FlagAction* action);
 std::string FlagsHelp();
+// `config` as a config file: every setting with its help line, in table order.
+// ConfigFileText(ServerConfig()) is deploy/mapd.conf.example.
+std::string ConfigFileText(const ServerConfig& config);
+// True when every address `listen`'s host resolves to is a loopback address
+// (127.0.0.0/8, ::1) or it is a unix: socket.
+bool ListenIsLoopback(const std::string& listen);
 
 }  // namespace mapd::service
 

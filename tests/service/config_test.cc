@@ -1,6 +1,8 @@
 #include "service/config.h"
 
+#include <cmath>
 #include <fstream>
+#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -13,8 +15,15 @@ namespace {
 using ::testing::HasSubstr;
 
 Status Parse(std::vector<std::string> args, ServerConfig* c) {
-  bool help = false;
-  return ParseFlags(args, c, &help);
+  FlagAction action;
+  return ParseFlags(args, c, &action);
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 TEST(ConfigTest, DefaultsAreValidAndLoopback) {
@@ -122,6 +131,82 @@ TEST(ConfigTest, LongRunningSettingsParseAndAreValidated) {
     EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << flag;
     EXPECT_THAT(s.message(), HasSubstr(name)) << flag << ": " << s.message();
   }
+}
+
+// One source of truth: the example file is what --print-config writes for the
+// defaults (regenerate it with `mapd --print-config > deploy/mapd.conf.example`),
+// and reading it back changes nothing.
+TEST(ConfigTest, TheExampleFileIsTheDefaults) {
+  EXPECT_EQ(ReadAll(MAPD_EXAMPLE_CONFIG), ConfigFileText(ServerConfig()));
+  ServerConfig loaded;
+  ASSERT_TRUE(LoadConfigFile(MAPD_EXAMPLE_CONFIG, &loaded).ok());
+  EXPECT_EQ(ConfigFileText(loaded), ConfigFileText(ServerConfig()));
+}
+
+TEST(ConfigTest, HelpShowsTheRealDefaults) {
+  const std::string help = FlagsHelp();
+  // These two once showed 2 and 0.3 while the code used 0.75 and 0.9.
+  EXPECT_THAT(help, HasSubstr("--merge.max_residual_voxels <number>  (default 0.75)"));
+  EXPECT_THAT(help, HasSubstr("--merge.min_overlap_score <number>  (default 0.9)"));
+  EXPECT_THAT(help, HasSubstr("--fusion.delta_deg <number>  (default 5)"));
+  EXPECT_THAT(help, HasSubstr("--sync <normal|full>  (default normal)"));
+}
+
+TEST(ConfigTest, PrintedConfigReadsBackToTheSameSettings) {
+  ServerConfig c;
+  ASSERT_TRUE(Parse({"--fusion.delta_deg=7.5", "--sync=full", "--merge.fusion_rule=log_odds",
+                     "--limits.max_in_flight=9", "--fusion.mode=exact"},
+                    &c)
+                  .ok());
+  mapd::testing::TempDir dir;
+  std::ofstream(dir.File("printed.conf")) << ConfigFileText(c);
+  ServerConfig back;
+  ASSERT_TRUE(LoadConfigFile(dir.File("printed.conf"), &back).ok());
+  EXPECT_EQ(ConfigFileText(back), ConfigFileText(c));
+  EXPECT_NEAR(back.fusion.delta_rad, c.fusion.delta_rad, 1e-15);
+}
+
+TEST(ConfigTest, RangesAreCheckedForParsedAndBuiltConfigs) {
+  ServerConfig c;
+  EXPECT_THAT(Parse({"--limits.max_in_flight=0"}, &c).message(),
+              HasSubstr("limits.max_in_flight = 0 is outside [1, 1000000]"));
+  ServerConfig d;
+  EXPECT_THAT(Parse({"--busy_timeout_ms=-1"}, &d).message(), HasSubstr("busy_timeout_ms"));
+  ServerConfig e;
+  EXPECT_THAT(Parse({"--limits.max_message_bytes=99999999999999999999999"}, &e).message(),
+              HasSubstr("limits.max_message_bytes"));
+  ServerConfig built;
+  built.busy_timeout_ms = -5;
+  EXPECT_THAT(built.Validate().message(), HasSubstr("busy_timeout_ms = -5 is negative"));
+  ServerConfig nan;
+  nan.submaps.min_overlap_score = std::nan("");
+  EXPECT_THAT(nan.Validate().message(), HasSubstr("merge.min_overlap_score"));
+}
+
+TEST(ConfigTest, VersionAndPrintConfigAreActions) {
+  ServerConfig c;
+  FlagAction action;
+  ASSERT_TRUE(ParseFlags({"--version"}, &c, &action).ok());
+  EXPECT_EQ(action, FlagAction::kVersion);
+  ASSERT_TRUE(ParseFlags({"--fusion.gamma=0.4", "--print-config"}, &c, &action).ok());
+  EXPECT_EQ(action, FlagAction::kPrintConfig);
+  EXPECT_THAT(ConfigFileText(c), HasSubstr("fusion.gamma = 0.4\n"));
+}
+
+// The addresses a listen host stands for decide, not its text.
+TEST(ConfigTest, LoopbackIsDecidedByTheResolvedAddresses) {
+  EXPECT_TRUE(ListenIsLoopback("127.0.0.1:50051"));
+  EXPECT_TRUE(ListenIsLoopback("[::1]:50051"));
+  EXPECT_TRUE(ListenIsLoopback("localhost:50051"));
+  EXPECT_TRUE(ListenIsLoopback("unix:/tmp/mapd.sock"));
+  EXPECT_FALSE(ListenIsLoopback("0.0.0.0:50051"));
+  EXPECT_FALSE(ListenIsLoopback("0:50051"));  // resolves to 0.0.0.0
+  EXPECT_FALSE(ListenIsLoopback("[::]:50051"));
+  EXPECT_FALSE(ListenIsLoopback(":50051"));
+  // Starts like a loopback address but is a (here unresolvable) host name.
+  EXPECT_FALSE(ListenIsLoopback("127.0.0.1.example.invalid:50051"));
+  ServerConfig c;
+  EXPECT_THAT(Parse({"--listen", "0:50051"}, &c).message(), HasSubstr("tls_cert"));
 }
 
 }  // namespace

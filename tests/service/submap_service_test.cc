@@ -11,6 +11,7 @@
 
 #include "server_fixture.h"
 #include "storage/sqlite.h"
+#include "voxel/merge.h"
 #include "support/octomap_scenes.h"
 
 namespace mapd::testing {
@@ -518,3 +519,19 @@ TEST_F(SubmapServiceTest, ShutdownDoesNotWaitForAMergeInFlight) {
 
 }  // namespace
 }  // namespace mapd::testing
+
+namespace mapd::service {
+namespace {
+
+// The merge thresholds are plain values in the config (it builds without the
+// voxel library); their defaults must be the library's.
+TEST(SubmapOptionsTest, MergeDefaultsAreTheVoxelLibrarys) {
+  const SubmapOptions options;
+  const voxel::MergeParams params;
+  EXPECT_EQ(options.min_matched_corners, params.min_matched_corners);
+  EXPECT_EQ(options.max_residual_voxels, params.max_residual_voxels);
+  EXPECT_EQ(options.min_overlap_score, params.min_overlap_score);
+}
+
+}  // namespace
+}  // namespace mapd::service

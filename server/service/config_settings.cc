@@ -1,0 +1,244 @@
+#include "service/config_settings.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+namespace mapd::service {
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+template <typename T>
+using Ref = T& (*)(ServerConfig&);
+
+template <typename F>
+const auto& Read(F ref, const ServerConfig& c) {
+  return ref(const_cast<ServerConfig&>(c));  // ref only selects a member
+}
+
+// 15 significant digits: 0.3 reads "0.3", degrees converted to radians and
+// back read as they were written.
+std::string Number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.15g", v);
+  return buf;
+}
+
+struct Range {
+  double lo;
+  double hi;
+  bool lo_open = false;  // lo itself is excluded
+};
+
+std::string RangeText(const Range& r) {
+  return std::string(r.lo_open ? "(" : "[") + Number(r.lo) + ", " + (r.hi == kInf ? "inf)" : Number(r.hi) + "]");
+}
+
+Status CheckRange(const std::string& key, double v, const Range& r) {
+  const bool below = r.lo_open ? !(v > r.lo) : !(v >= r.lo);
+  if (std::isnan(v) || below || v > r.hi || (r.hi == kInf && std::isinf(v))) {
+    return Status::InvalidArgument(key + " = " + Number(v) + " is outside " + RangeText(r));
+  }
+  return Status::Ok();
+}
+
+// A real number; `scale` converts the written unit to the stored one
+// (degrees written, radians stored).
+Setting Real(std::string key, std::string help, Ref<double> ref, Range range, double scale = 1.0) {
+  help += ", " + RangeText(range);
+  return {key, "number", help,
+          [key, ref, range, scale](const std::string& v, ServerConfig* c) {
+            char* end = nullptr;
+            const double d = std::strtod(v.c_str(), &end);
+            if (v.empty() || *end != '\0' || !std::isfinite(d)) {
+              return Status::InvalidArgument(key + ": '" + v + "' is not a finite number");
+            }
+            MAPD_RETURN_IF_ERROR(CheckRange(key, d, range));
+            ref(*c) = d * scale;
+            return Status::Ok();
+          },
+          [key, ref, range, scale](const ServerConfig& c) { return CheckRange(key, Read(ref, c) / scale, range); },
+          [ref, scale](const ServerConfig& c) { return Number(Read(ref, c) / scale); }};
+}
+
+template <typename F>
+Setting Count(std::string key, std::string help, F ref, uint64_t lo, uint64_t hi) {
+  using T = std::remove_reference_t<decltype(ref(std::declval<ServerConfig&>()))>;
+  help += ", [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  auto check = [key, lo, hi](uint64_t u) {
+    if (u < lo || u > hi) {
+      return Status::InvalidArgument(key + " = " + std::to_string(u) + " is outside [" + std::to_string(lo) +
+                                     ", " + std::to_string(hi) + "]");
+    }
+    return Status::Ok();
+  };
+  return {key, "integer", help,
+          [key, ref, check](const std::string& v, ServerConfig* c) {
+            char* end = nullptr;
+            errno = 0;
+            const unsigned long long u = std::strtoull(v.c_str(), &end, 10);
+            if (v.empty() || *end != '\0' || v[0] == '-' || v[0] == '+' || errno == ERANGE) {
+              return Status::InvalidArgument(key + ": '" + v + "' is not a non-negative integer");
+            }
+            MAPD_RETURN_IF_ERROR(check(u));
+            ref(*c) = static_cast<T>(u);
+            return Status::Ok();
+          },
+          [key, ref, check](const ServerConfig& c) {
+            const T v = Read(ref, c);
+            if constexpr (std::is_signed_v<T>) {
+              if (v < 0) return Status::InvalidArgument(key + " = " + std::to_string(v) + " is negative");
+            }
+            return check(static_cast<uint64_t>(v));
+          },
+          [ref](const ServerConfig& c) { return std::to_string(Read(ref, c)); }};
+}
+
+Setting Flag(std::string key, std::string help, Ref<bool> ref) {
+  return {key, "bool", help,
+          [key, ref](const std::string& v, ServerConfig* c) {
+            if (v == "true" || v == "1" || v == "yes") return ref(*c) = true, Status::Ok();
+            if (v == "false" || v == "0" || v == "no") return ref(*c) = false, Status::Ok();
+            return Status::InvalidArgument(key + ": '" + v + "' is not true or false");
+          },
+          [](const ServerConfig&) { return Status::Ok(); },
+          [ref](const ServerConfig& c) { return std::string(Read(ref, c) ? "true" : "false"); }};
+}
+
+Setting Text(std::string key, std::string help, Ref<std::string> ref) {
+  return {key, "text", help,
+          [ref](const std::string& v, ServerConfig* c) {
+            ref(*c) = v;
+            return Status::Ok();
+          },
+          [](const ServerConfig&) { return Status::Ok(); },
+          [ref](const ServerConfig& c) { return Read(ref, c); }};
+}
+
+// One of a few names, stored as a bool: `names` = {false name, true name}.
+Setting Choice(std::string key, std::string help, Ref<bool> ref, std::string when_false, std::string when_true) {
+  return {key, when_false + "|" + when_true, help,
+          [key, ref, when_false, when_true](const std::string& v, ServerConfig* c) {
+            if (v != when_false && v != when_true) {
+              return Status::InvalidArgument(key + ": '" + v + "' is neither " + when_false + " nor " + when_true);
+            }
+            ref(*c) = v == when_true;
+            return Status::Ok();
+          },
+          [](const ServerConfig&) { return Status::Ok(); },
+          [ref, when_false, when_true](const ServerConfig& c) { return Read(ref, c) ? when_true : when_false; }};
+}
+
+}  // namespace
+
+const std::vector<Setting>& Settings() {
+  using C = ServerConfig;
+  // clang-format off
+  static const std::vector<Setting> kSettings = {
+      Text("listen", "host:port to serve on; port 0 = any free port. Off loopback, TLS is required",
+           [](C& c) -> auto& { return c.listen; }),
+      Text("db", "SQLite database file; empty = $MAPD_DATA_DIR/map.db, else $XDG_DATA_HOME/mapd/map.db, "
+                 "else ~/.local/share/mapd/map.db",
+           [](C& c) -> auto& { return c.db_path; }),
+      Choice("sync", "normal: an acknowledged batch survives a crash of mapd; full: it survives power loss too "
+                     "(slower commits)",
+             [](C& c) -> auto& { return c.sync_full; }, "normal", "full"),
+      Count("busy_timeout_ms", "how long a commit waits for a database lock held by another process, ms",
+            [](C& c) -> auto& { return c.busy_timeout_ms; }, 0, 600000),
+      Real("shutdown_grace_s", "on SIGTERM, time open streams get to finish, seconds",
+           [](C& c) -> auto& { return c.shutdown_grace_s; }, {0, 3600}),
+      {"log_level", "debug|info|warn|error", "least severe log line written",
+       [](const std::string& v, C* c) {
+         if (v != "debug" && v != "info" && v != "warn" && v != "error") {
+           return Status::InvalidArgument("log_level: '" + v + "' is not debug, info, warn or error");
+         }
+         c->log_level = v;
+         return Status::Ok();
+       },
+       [](const C&) { return Status::Ok(); }, [](const C& c) { return c.log_level; }},
+      Text("tls_cert", "PEM certificate chain of the server; with tls_key, serves TLS",
+           [](C& c) -> auto& { return c.tls_cert; }),
+      Text("tls_key", "PEM private key of tls_cert", [](C& c) -> auto& { return c.tls_key; }),
+      Flag("allow_insecure_remote", "serve plaintext on a non-loopback address anyway (a trusted network only)",
+           [](C& c) -> auto& { return c.allow_insecure_remote; }),
+
+      Count("snapshot.every_observations", "snapshot the fusion state after this many fused observations; "
+            "a restart replays only what came after the newest snapshot; 0 = never",
+            [](C& c) -> auto& { return c.snapshot_every_observations; }, 0, uint64_t{1} << 40),
+      Real("snapshot.max_age_s", "... or once the newest snapshot is this old and the map changed, seconds",
+           [](C& c) -> auto& { return c.snapshot_max_age_s; }, {0, 1e7, true}),
+      Real("storage.raw_retention_days", "drop raw observations older than this once every kept snapshot "
+           "reflects them (never those of a session not yet tied); a change of fusion parameters can then only "
+           "replay what is left; days, 0 = keep forever",
+           [](C& c) -> auto& { return c.raw_retention_days; }, {0, 1e5}),
+
+      {"fusion.mode", "bounded|exact",
+       "bounded: work and memory follow the map, not its history; exact: the paper's batch result, cost grows "
+       "with every feature ever seen",
+       [](const std::string& v, C* c) { return fusion::ParseFusionMode(v, &c->fusion.mode); },
+       [](const C&) { return Status::Ok(); },
+       [](const C& c) { return std::string(fusion::FusionModeName(c.fusion.mode)); }},
+      Real("fusion.cover_m", "bounded mode: a feature within this of a representative of an established "
+           "cluster is folded into it, metres",
+           [](C& c) -> auto& { return c.fusion.cover_m; }, {0, 1}),
+      Real("fusion.delta_deg", "criterion 1: max included angle, degrees",
+           [](C& c) -> auto& { return c.fusion.delta_rad; }, {0, 90, true}, kDegToRad),
+      Real("fusion.gamma", "criterion 2: min feature-circle overlap ratio",
+           [](C& c) -> auto& { return c.fusion.gamma; }, {0, 1}),
+      Real("fusion.eta_m", "criterion 3: max centre-to-segment distance, metres",
+           [](C& c) -> auto& { return c.fusion.eta_m; }, {0, 100, true}),
+      Count("fusion.min_support", "observations a fused feature needs to be published",
+            [](C& c) -> auto& { return c.fusion.min_support; }, 1, 1000000),
+      Real("fusion.snap_m", "corner optimisation: endpoints closer than this meet, metres",
+           [](C& c) -> auto& { return c.fusion.snap_m; }, {0, 100}),
+      {"fusion.corner_mode", "intersection|midpoint",
+       "where snapped endpoints meet: the intersection of the two fused lines, or their midpoint (the paper)",
+       [](const std::string& v, C* c) { return fusion::ParseCornerMode(v, &c->fusion.corner_mode); },
+       [](const C&) { return Status::Ok(); },
+       [](const C& c) { return std::string(fusion::CornerModeName(c.fusion.corner_mode)); }},
+      Real("fusion.max_plane_tilt_deg", "planes tilted less than this from vertical become walls, degrees",
+           [](C& c) -> auto& { return c.fusion.max_plane_tilt_rad; }, {0, 90}, kDegToRad),
+
+      Count("limits.max_features_per_batch", "lines + planes in one batch",
+            [](C& c) -> auto& { return c.ingest.limits.max_features_per_batch; }, 1, kMaxFeaturesPerBatchHard),
+      Count("limits.max_boundary_points", "boundary points of one plane",
+            [](C& c) -> auto& { return c.ingest.limits.max_boundary_points; }, 3, 1000000),
+      Count("limits.max_in_flight", "unacknowledged batches per stream before reading pauses",
+            [](C& c) -> auto& { return c.ingest.max_in_flight; }, 1, 1000000),
+      Count("limits.max_message_bytes", "largest gRPC message accepted, bytes",
+            [](C& c) -> auto& { return c.max_message_bytes; }, 1024, 1u << 30),
+      Count("limits.max_group_batches", "batches committed in one transaction at most",
+            [](C& c) -> auto& { return c.max_group_batches; }, 1, 1000000),
+      Count("limits.max_submap_bytes", "largest submap file UploadSubmap accepts, bytes",
+            [](C& c) -> auto& { return c.submaps.max_submap_bytes; }, 64, uint64_t{1} << 34),
+      Count("limits.max_concurrent_merges", "submap merges computed at once",
+            [](C& c) -> auto& { return c.submaps.max_concurrent_merges; }, 1, 64),
+      Count("limits.max_queued_merges", "merges waiting for a slot; beyond it MergeSubmaps answers "
+            "RESOURCE_EXHAUSTED",
+            [](C& c) -> auto& { return c.submaps.max_queued_merges; }, 0, 1024),
+
+      Count("merge.min_matched_corners", "matched corners a pairwise merge needs to be accepted (a rigid "
+            "transform needs 3)",
+            [](C& c) -> auto& { return c.submaps.min_matched_corners; }, 3, 100000),
+      Real("merge.max_residual_voxels", "largest accepted RMS residual after ICP, voxels of the finer map",
+           [](C& c) -> auto& { return c.submaps.max_residual_voxels; }, {0, 100, true}),
+      Real("merge.min_overlap_score", "smallest accepted overlap score (0.7 let a 90-degree-wrong merge through)",
+           [](C& c) -> auto& { return c.submaps.min_overlap_score; }, {0, 1}),
+      Real("merge.max_seconds", "time budget of one merge, seconds",
+           [](C& c) -> auto& { return c.submaps.max_merge_seconds; }, {0, 86400, true}),
+      Choice("merge.resolution_policy", "submaps of different resolutions: refuse, or resample to the finest",
+             [](C& c) -> auto& { return c.submaps.resample_resolutions; }, "refuse", "resample"),
+      Choice("merge.fusion_rule", "occupancy fusion: overlap (the paper's rule) or log_odds",
+             [](C& c) -> auto& { return c.submaps.log_odds_fusion; }, "overlap", "log_odds"),
+  };
+  // clang-format on
+  return kSettings;
+}
+
+}  // namespace mapd::service
