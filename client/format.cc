@@ -176,6 +176,7 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
                       (s.raw_features() > 0 ? Printf(", %.0f bytes per raw feature", s.bytes_per_raw_feature())
                                             : std::string()) + ")");
   if (s.recovering()) row("state", "RECOVERING the fused map (health NOT_SERVING)");
+  if (!s.write_failure().empty()) row("state", "NOT WRITABLE (health NOT_SERVING): " + s.write_failure());
   row("robots", num(s.robots()));
   row("sessions", num(s.sessions()));
   row("batches", num(s.batches()));

@@ -1,5 +1,7 @@
 #include "storage/schema.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -112,6 +114,10 @@ const std::vector<const char*>& Migrations() {
         state               BLOB NOT NULL
       );
       )sql",
+      // 2 -> 3: a scratch table for Store::ProbeWrite (empty between probes).
+      R"sql(
+      CREATE TABLE write_probe (data BLOB NOT NULL);
+      )sql",
   };
   return kMigrations;
 }
@@ -128,6 +134,70 @@ StatusOr<int> ReadVersion(sqlite3* db) {
 }  // namespace
 
 int CurrentSchemaVersion() { return static_cast<int>(Migrations().size()); }
+
+Status ClaimDatabase(sqlite3* db, const std::string& path) {
+  // SQLite opens a file it cannot write read-only without a word.
+  if (sqlite3_db_readonly(db, "main") == 1) {
+    return Status::FailedPrecondition("database '" + path +
+                                      "' is read-only (file or directory permissions, or a read-only mount); "
+                                      "mapd must be able to write it");
+  }
+  StatusOr<Statement> id_query = Statement::Prepare(db, "PRAGMA application_id");
+  if (!id_query.ok()) return id_query.status();
+  StatusOr<bool> id_row = id_query->Step();
+  if (!id_row.ok()) {
+    return Status::FailedPrecondition("cannot read '" + path + "' as an SQLite database: " +
+                                      id_row.status().message());
+  }
+  const int32_t id = *id_row ? static_cast<int32_t>(id_query->ColumnInt(0)) : 0;
+  id_query = Status::Ok();  // finalize
+  if (id != 0 && id != kApplicationId) {
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%08x", static_cast<uint32_t>(id));
+    return Status::FailedPrecondition("'" + path + "' is not a mapd database (its application_id is " + hex +
+                                      ", another application's); give mapd a --db of its own");
+  }
+  if (id == 0) {
+    StatusOr<Statement> tables = Statement::Prepare(
+        db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' ORDER BY name");
+    if (!tables.ok()) return tables.status();
+    std::vector<std::string> names;
+    bool mapd_tables = false;
+    for (;;) {
+      StatusOr<bool> row = tables->Step();
+      if (!row.ok()) return row.status();
+      if (!*row) break;
+      names.push_back(tables->ColumnText(0));
+      mapd_tables |= names.back() == "observations";
+    }
+    const bool earlier_mapd =
+        mapd_tables && std::find(names.begin(), names.end(), "schema_version") != names.end();
+    if (!names.empty() && !earlier_mapd) {
+      std::string list;
+      for (size_t i = 0; i < names.size() && i < 5; ++i) list += (i ? ", " : "") + names[i];
+      if (names.size() > 5) list += ", ...";
+      return Status::FailedPrecondition("'" + path + "' holds tables of another application (" + list +
+                                        ") and is not a mapd database; give mapd a --db of its own");
+    }
+  }
+  // A new database gives freed pages back to the file system (raw retention,
+  // WriteTransaction::DropRawObservations); on an existing one this is a
+  // no-op. Before the first write below, or it is too late.
+  MAPD_RETURN_IF_ERROR(Exec(db, "PRAGMA auto_vacuum=INCREMENTAL"));
+  // Written every start: the first write, so a database mapd cannot write is
+  // refused now rather than answered SERVING while every commit fails.
+  Status stamp = Exec(db, "PRAGMA application_id = " + std::to_string(kApplicationId));
+  if (!stamp.ok()) {
+    const int code = sqlite3_extended_errcode(db) & 0xff;
+    if (code == SQLITE_READONLY || code == SQLITE_CANTOPEN || code == SQLITE_PERM) {
+      return Status::FailedPrecondition("database '" + path +
+                                        "' is read-only (file or directory permissions, or a read-only "
+                                        "mount); mapd must be able to write it: " + stamp.message());
+    }
+    return Status(stamp.code(), "cannot write database '" + path + "': " + stamp.message());
+  }
+  return Status::Ok();
+}
 
 Status Migrate(sqlite3* db) {
   StatusOr<int> version = ReadVersion(db);

@@ -50,9 +50,10 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
   if (!writer.ok()) return writer.status();
   store->writer_ = std::move(writer).value();
   sqlite3* w = store->writer_.get();
-  // A new database gives freed pages back to the file system (raw retention,
-  // WriteTransaction::DropRawObservations); on an existing one this is a no-op.
-  MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA auto_vacuum=INCREMENTAL"));
+  sqlite3_busy_timeout(w, options.busy_timeout_ms);
+  // Before anything changes the file (WAL mode does): never another
+  // application's database.
+  MAPD_RETURN_IF_ERROR(ClaimDatabase(w, path));
   StatusOr<Statement> mode = Statement::Prepare(w, "PRAGMA journal_mode=WAL");
   if (!mode.ok()) return mode.status();
   StatusOr<bool> mode_row = mode->Step();
@@ -67,7 +68,16 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
   // 16 MiB of page cache: inserts touch the tails of the tables and one
   // index leaf per session, and RSS should not grow with the database file.
   MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA cache_size=-16384; PRAGMA temp_store=MEMORY"));
-  sqlite3_busy_timeout(w, options.busy_timeout_ms);
+  if (options.max_db_bytes > 0) {
+    // SQLite then answers SQLITE_FULL as on a full disk: one path for both.
+    StatusOr<Statement> page = Statement::Prepare(w, "PRAGMA page_size");
+    if (!page.ok()) return page.status();
+    StatusOr<bool> page_row = page->Step();
+    if (!page_row.ok()) return page_row.status();
+    const uint64_t pages = std::max<uint64_t>(1, options.max_db_bytes / static_cast<uint64_t>(page->ColumnInt(0)));
+    page = Status::Ok();
+    MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA max_page_count = " + std::to_string(pages)));
+  }
   MAPD_RETURN_IF_ERROR(Migrate(w));
 
   StatusOr<DbHandle> reader = OpenDatabase(path, /*read_only=*/true);
@@ -151,6 +161,18 @@ Status Store::Checkpoint() {
   // Freed pages (old snapshots, retention) leave the file first.
   MAPD_RETURN_IF_ERROR(Exec(writer_.get(), "PRAGMA incremental_vacuum"));
   return Exec(writer_.get(), "PRAGMA wal_checkpoint(TRUNCATE)");
+}
+
+Status Store::ProbeWrite() {
+  sqlite3* w = writer_.get();
+  MAPD_RETURN_IF_ERROR(Exec(w, "BEGIN IMMEDIATE"));
+  Status s = Exec(w, "INSERT INTO write_probe (data) VALUES (zeroblob(65536))");
+  if (s.ok()) s = Exec(w, "COMMIT");
+  if (!s.ok()) {
+    (void)Exec(w, "ROLLBACK");
+    return s;
+  }
+  return Exec(w, "DELETE FROM write_probe");
 }
 
 // ---------------------------------------------------------------------------

@@ -37,6 +37,9 @@ struct StoreOptions {
   // How long a write waits for a lock held by another process (e.g. a backup
   // or an operator's sqlite3 shell) before it fails, milliseconds.
   int busy_timeout_ms = 5000;
+  // The database file grows to this at most (PRAGMA max_page_count); beyond
+  // it writes fail as on a full disk (ResourceExhausted). 0 = no limit, bytes.
+  uint64_t max_db_bytes = 0;
 };
 
 enum class FrameKind : int {
@@ -267,6 +270,9 @@ class Store {
   StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite();
   // Copies the WAL into the database file and truncates it (shutdown, idle).
   Status Checkpoint();
+  // Commits 64 KiB (about what a group of batches needs) and deletes it again:
+  // whether the database takes writes now, after a write failed.
+  Status ProbeWrite();
 
   // --- Any thread.
   // Every stored observation in id (= arrival) order.

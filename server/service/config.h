@@ -47,6 +47,8 @@ struct ServerConfig {
   double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
   double raw_retention_days = 0.0;               // 0: keep raw observations forever
   double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish
+  double shutdown_flush_s = 5.0;           // ... then to commit what is queued if the disk fails
+  uint64_t max_db_bytes = 0;               // database size cap (as a full disk beyond), 0: none
   std::string tls_cert;                    // PEM files; required off loopback
   std::string tls_key;
   bool allow_insecure_remote = false;      // serve plaintext off loopback anyway

@@ -153,6 +153,9 @@ const std::vector<Setting>& Settings() {
             [](C& c) -> auto& { return c.busy_timeout_ms; }, 0, 600000),
       Real("shutdown_grace_s", "on SIGTERM, time open streams get to finish, seconds",
            [](C& c) -> auto& { return c.shutdown_grace_s; }, {0, 3600}),
+      Real("shutdown_flush_s", "on SIGTERM, after the grace: time to commit what is queued while the database "
+           "refuses writes (disk full) before mapd exits without it (never acknowledged, nothing lost), seconds",
+           [](C& c) -> auto& { return c.shutdown_flush_s; }, {0, 3600}),
       {"log_level", "debug|info|warn|error", "least severe log line written",
        [](const std::string& v, C* c) {
          if (v != "debug" && v != "info" && v != "warn" && v != "error") {
@@ -177,6 +180,9 @@ const std::vector<Setting>& Settings() {
            "reflects them (never those of a session not yet tied); a change of fusion parameters can then only "
            "replay what is left; days, 0 = keep forever",
            [](C& c) -> auto& { return c.raw_retention_days; }, {0, 1e5}),
+      Count("storage.max_db_bytes", "the database file grows to this at most; beyond it writes fail as on a full "
+            "disk (health NOT_SERVING, batches refused, nothing acknowledged lost); bytes, 0 = no limit",
+            [](C& c) -> auto& { return c.max_db_bytes; }, 0, uint64_t{1} << 50),
 
       {"fusion.mode", "bounded|exact",
        "bounded: work and memory follow the map, not its history; exact: the paper's batch result, cost grows "

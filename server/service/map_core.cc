@@ -91,6 +91,7 @@ void MapCore::OnReady(std::function<void()> fn) {
 
 Status MapCore::ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write) {
   MAPD_RETURN_IF_ERROR(CheckReady());
+  MAPD_RETURN_IF_ERROR(write_health_.status());  // refused now, not queued behind a failing disk
   auto done = std::make_shared<std::promise<Status>>();
   std::future<Status> result = done->get_future();
   {
@@ -130,6 +131,7 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
       s = (*txn)->Commit();
     }
     txn = Status::Ok();  // ends the transaction (rolls back unless committed)
+    write_health_.Record(s);
     if (s.ok() && !tied.empty()) {
       // In commit order with the observations: the tied sessions' stored
       // observations are all <= last_observation_id_ (later ones are queued
@@ -151,6 +153,12 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
 void MapCore::Submit(IngestBatch batch, DoneCallback done) {
   if (Status ready = CheckReady(); !ready.ok()) {
     done({BatchOutcome::Kind::kRejected, ready});
+    return;
+  }
+  // While the database refuses writes, batches are refused at once (robots
+  // resend them) rather than piling up in memory; the writer probes.
+  if (Status writable = write_health_.status(); !writable.ok()) {
+    done({BatchOutcome::Kind::kRejected, writable});
     return;
   }
   {
@@ -176,9 +184,13 @@ void MapCore::Stop() {
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     stopping_ = true;
+    stop_flush_deadline_ = std::chrono::steady_clock::now() +
+                           std::chrono::milliseconds(static_cast<int64_t>(options_.stop_flush_s * 1000));
     queue_cv_.notify_all();
   }
-  if (writer_.joinable()) writer_.join();  // every queued batch is committed and acknowledged
+  // Every queued batch is committed and acknowledged, or, if the database
+  // still refuses writes after stop_flush_s, refused (never acknowledged).
+  if (writer_.joinable()) writer_.join();
   {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     fuser_stopping_ = true;
@@ -205,14 +217,14 @@ void MapCore::Stop() {
     std::lock_guard<std::mutex> lock(queue_mu_);
     last.swap(fused_pending_);
   }
-  if (!last.empty() && store_) {
+  if (!last.empty() && store_ && write_health_.ok()) {
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
     Status s = txn.ok() ? WriteFusedDelta(last, txn->get()) : txn.status();
     if (s.ok()) s = (*txn)->Commit();
     if (!s.ok()) Log(LogLevel::kWarn, "fused_table_write_failed", {{"error", s.ToString()}});
   }
   // A snapshot of the final state makes the next start replay nothing.
-  if (store_ && ready_.load() && CheckReady().ok()) MaybeSnapshot(/*force=*/true);
+  if (store_ && ready_.load() && CheckReady().ok() && write_health_.ok()) MaybeSnapshot(/*force=*/true);
   if (store_) {
     Status s = store_->Checkpoint();
     if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
@@ -232,26 +244,67 @@ void MapCore::WriterLoop() {
         return committed_count_ - fused_count_ <= options_.max_fusion_backlog || stop_requested_;
       });
     }
+    bool probe = false;
     {
       std::unique_lock<std::mutex> lock(queue_mu_);
-      queue_cv_.wait(lock, [this] {
-        return !queue_.empty() || !fused_pending_.empty() || !write_jobs_.empty() || stopping_;
-      });
-      if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty()) break;  // stopping, nothing left
-      jobs.swap(write_jobs_);
-      const size_t n = std::min(queue_.size(), options_.max_group_batches);
-      group.reserve(n);
-      for (size_t i = 0; i < n; ++i) {
-        group.push_back(std::move(queue_.front()));
-        queue_.pop_front();
+      const auto has_work = [this] { return !queue_.empty() || !fused_pending_.empty() || !write_jobs_.empty(); };
+      if (!write_health_.ok()) {
+        // A failing database is retried after a pause, not in a tight loop;
+        // Stop() cuts a long pause short.
+        const bool was_stopping = stopping_;
+        const auto pause = was_stopping ? std::chrono::milliseconds(100) : write_health_.Backoff();
+        queue_cv_.wait_for(lock, pause, [&] { return stopping_ != was_stopping; });
+        if (stopping_ && !write_health_.ok() && std::chrono::steady_clock::now() >= stop_flush_deadline_) {
+          AbandonQueuedWrites(lock);
+          break;
+        }
+        probe = !has_work();  // nothing to retry: probe whether writes work again
+        if (probe && stopping_) break;
+      } else {
+        queue_cv_.wait(lock, [&] { return has_work() || stopping_; });
+        if (!has_work()) break;  // stopping, nothing left
       }
-      fused.swap(fused_pending_);
+      if (!probe) {
+        jobs.swap(write_jobs_);
+        const size_t n = std::min(queue_.size(), options_.max_group_batches);
+        group.reserve(n);
+        for (size_t i = 0; i < n; ++i) {
+          group.push_back(std::move(queue_.front()));
+          queue_.pop_front();
+        }
+        fused.swap(fused_pending_);
+      }
+    }
+    if (probe) {
+      write_health_.Record(store_->ProbeWrite());
+      continue;
     }
     if (!group.empty() || !fused.empty()) CommitGroup(group, fused);
     group.clear();
     fused.clear();
     RunWriteJobs(jobs);
   }
+}
+
+void MapCore::AbandonQueuedWrites(std::unique_lock<std::mutex>& lock) {
+  std::deque<Pending> batches;
+  std::deque<std::shared_ptr<WriteJob>> jobs;
+  batches.swap(queue_);
+  jobs.swap(write_jobs_);
+  const size_t fused_rows = fused_pending_.size();
+  fused_pending_.clear();
+  const Status why = write_health_.status();
+  lock.unlock();
+  Log(LogLevel::kWarn, "stop_without_flush",
+      {{"batches_refused", std::to_string(batches.size())},
+       {"writes_refused", std::to_string(jobs.size())},
+       {"fused_rows_dropped", std::to_string(fused_rows)},
+       {"reason", why.message()},
+       {"action", "nothing acknowledged is lost; fused rows are recomputed at the next start"}});
+  const Status refused = Status::Unavailable("mapd stopped while the database refused writes; resend");
+  for (Pending& p : batches) p.done({BatchOutcome::Kind::kRejected, refused});
+  for (const std::shared_ptr<WriteJob>& job : jobs) job->done(refused);
+  lock.lock();
 }
 
 void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
@@ -299,6 +352,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   if (failure.ok() && !fused.empty()) failure = WriteFusedDelta(fused, txn->get());
   if (failure.ok()) failure = (*txn)->Commit();
   txn = Status::Ok();  // ends the transaction (rolls back if Commit did not happen)
+  write_health_.Record(failure);
 
   if (!failure.ok()) {
     Log(LogLevel::kError, "group_commit_failed",
@@ -522,6 +576,7 @@ CoreStats MapCore::Stats() const {
     s.fusion_backlog = committed_count_ - fused_count_;
   }
   s.recovering = !ready_.load();
+  if (Status w = write_health_.status(); !w.ok()) s.write_failure = w.message();
   s.replay_length = fused_since_snapshot_.load();
   if (const int64_t created = snapshot_created_ns_.load(); created > 0) {
     s.snapshot_age_s = static_cast<double>(UnixNowNs() - created) * 1e-9;

@@ -46,6 +46,7 @@
 #include "fusion/params.h"
 #include "geometry/box2.h"
 #include "service/ingest_batch.h"
+#include "service/write_health.h"
 #include "storage/store.h"
 
 namespace mapd::service {
@@ -66,6 +67,10 @@ struct MapCoreOptions {
   // once every kept snapshot reflects them (never those of a session not yet
   // tied to the map frame). 0 = keep them forever. Days.
   double raw_retention_days = 0.0;
+  // Stop(): while the database refuses writes, how long the writer keeps
+  // retrying what is queued before it gives up (those batches were never
+  // acknowledged; the fused rows are recomputed at the next start), seconds.
+  double stop_flush_s = 5.0;
 };
 
 struct BatchOutcome {
@@ -106,6 +111,7 @@ struct CoreStats {
   uint64_t replay_length = 0;     // observations fused since that snapshot
   uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
   uint64_t fusion_nodes = 0;        // the engine's nodes (representatives in bounded mode)
+  std::string write_failure;        // why the database refuses writes now; empty: it takes them
 };
 
 class MapCore {
@@ -149,6 +155,9 @@ class MapCore {
 
   std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const;
   CoreStats Stats() const;
+  // Whether the database takes writes (write_health.h); the server's health
+  // listens to it.
+  WriteHealth& write_health() { return write_health_; }
   storage::Store& store() { return *store_; }
   const MapCoreOptions& options() const { return options_; }
 
@@ -183,6 +192,9 @@ class MapCore {
   void FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
   void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);
   void WriterLoop();
+  // Writer thread, at Stop() while the database refuses writes: refuses what
+  // is queued (never acknowledged) and drops the fused rows (derived).
+  void AbandonQueuedWrites(std::unique_lock<std::mutex>& lock);
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
   void FuserLoop();
   // Writes the fused rows of `delta` (read from the engine) into `txn`.
@@ -215,6 +227,8 @@ class MapCore {
   std::deque<std::shared_ptr<WriteJob>> write_jobs_;  // GUARDED_BY(queue_mu_)
   bool stopping_ = false;      // GUARDED_BY(queue_mu_)
   FusedDelta fused_pending_;   // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
+  std::chrono::steady_clock::time_point stop_flush_deadline_;  // GUARDED_BY(queue_mu_), set by Stop()
+  WriteHealth write_health_;
   std::thread writer_;
 
   // Committed observations on their way to the fuser, in commit order.

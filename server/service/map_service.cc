@@ -137,6 +137,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   response->set_replay_length(s.replay_length);
   response->set_fused_raw_features(s.fused_raw_features);
   response->set_fusion_nodes(s.fusion_nodes);
+  response->set_write_failure(s.write_failure);
   if (counts->raw_features > 0) {
     response->set_bytes_per_raw_feature(static_cast<double>(core_->store().SizeBytes()) /
                                         static_cast<double>(counts->raw_features));

@@ -37,6 +37,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.db_path = db;
   core_options.store.synchronous_full = config.sync_full;
   core_options.store.busy_timeout_ms = config.busy_timeout_ms;
+  core_options.store.max_db_bytes = config.max_db_bytes;
+  core_options.stop_flush_s = config.shutdown_flush_s;
   core_options.fusion = config.fusion;
   core_options.max_group_batches = config.max_group_batches;
   core_options.snapshot_every_observations = config.snapshot_every_observations;
@@ -78,16 +80,32 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
       {{"address", server->address()}, {"db", db}, {"health", "NOT_SERVING"},
        {"reason", "recovering the fused map"}});
   MapServer* s = server.get();
+  server->core_->write_health().SetListener([s](const Status& failure) {
+    std::lock_guard<std::mutex> lock(s->health_mu_);
+    if (failure.ok()) {
+      Log(LogLevel::kInfo, "writable_again", {{"health", "SERVING"}});
+    } else {
+      Log(LogLevel::kError, "not_writable",
+          {{"health", "NOT_SERVING"}, {"reason", failure.message()},
+           {"action", "batches and uploads are refused (robots resend); free disk space or fix the database "
+                      "file; mapd probes every second and serves again by itself"}});
+    }
+    s->UpdateHealthLocked();
+  });
   server->core_->OnReady([s, db, sync = config.sync_full, fusion = config.fusion] {
     std::lock_guard<std::mutex> lock(s->health_mu_);
     if (s->shut_down_) return;
-    s->server_->GetHealthCheckService()->SetServingStatus(true);
+    s->UpdateHealthLocked();
     Log(LogLevel::kInfo, "serving",
         {{"address", s->address()}, {"db", db}, {"sync", sync ? "full" : "normal"},
          {"fusion_mode", fusion::FusionModeName(fusion.mode)},
          {"corner_mode", fusion::CornerModeName(fusion.corner_mode)}});
   });
   return server;
+}
+
+void MapServer::UpdateHealthLocked() {
+  server_->GetHealthCheckService()->SetServingStatus(!shut_down_ && core_->ready() && core_->write_health().ok());
 }
 
 bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {

@@ -39,6 +39,9 @@ class MapServer {
 
  private:
   MapServer() = default;
+  // SERVING once the map is recovered, while the database takes writes and
+  // until Shutdown(). REQUIRES: health_mu_ held.
+  void UpdateHealthLocked();
 
   ServerConfig config_;
   std::unique_ptr<MapCore> core_;

@@ -78,16 +78,16 @@ struct MapdProcess {
 };
 
 // Starts `binary --db db_path --listen 127.0.0.1:0 extra_args...` with stderr
-// in `db_path + ".log"` and waits (up to `timeout`) for its
+// in `log_path` (default `db_path + ".log"`) and waits (up to `timeout`) for its
 // `event=<ready_event> address=HOST:PORT` line: "serving" (the map is
 // recovered, the default) or "listening" (the port is open). On failure port
 // is 0 and the child, if still running, is killed.
 inline MapdProcess StartMapd(const std::string& db_path, const std::vector<std::string>& extra_args = {},
                              const std::string& binary = kDefaultMapdBinary,
                              std::chrono::milliseconds timeout = std::chrono::seconds(20),
-                             const std::string& ready_event = "serving") {
+                             const std::string& ready_event = "serving", const std::string& log_path = "") {
   MapdProcess p;
-  p.log_path = db_path + ".log";
+  p.log_path = log_path.empty() ? db_path + ".log" : log_path;
   std::vector<std::string> argv = {binary, "--db", db_path, "--listen", "127.0.0.1:0"};
   argv.insert(argv.end(), extra_args.begin(), extra_args.end());
   const int log_fd = open(p.log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

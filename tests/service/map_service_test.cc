@@ -214,8 +214,17 @@ TEST_F(ServerFixture, ALockedDatabaseRefusesBatchesRetryablyAndLosesNothing) {
     EXPECT_EQ(a.code(), static_cast<int>(grpc::StatusCode::UNAVAILABLE));
     EXPECT_THAT(a.message(), HasSubstr("resend"));
   }
+  // Meanwhile the server says why it does not take writes (and health says
+  // NOT_SERVING), and refuses batches at once rather than queueing them.
+  EXPECT_THAT(Stats().write_failure(), HasSubstr("database is locked"));
   sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
   sqlite3_close(other);
+  // Its probe (at most a second apart) finds the lock gone.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!Stats().write_failure().empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(Stats().write_failure(), "");
   // The server is still up, the earlier map intact, and the resend is stored.
   EXPECT_EQ(Count(Stream(Walk("r1", 3, 6)), pb::IngestAck::STORED), 3);
   EXPECT_EQ(Stats().batches(), 8u);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "storage/schema.h"
 #include "storage/support/store_fixture.h"
 
 namespace mapd::storage {
@@ -138,6 +139,104 @@ TEST_F(StoreTest, RefusesAFileThatIsNotADatabase) {
   fclose(f);
   auto opened = Store::Open(dir_.File("junk.db"), StoreOptions{});
   EXPECT_FALSE(opened.ok());
+}
+
+}  // namespace
+}  // namespace mapd::storage
+
+namespace mapd::storage {
+namespace {
+
+class StoreIdentityTest : public ::testing::Test {
+ protected:
+  // An SQLite file written by `sql`, as another application would.
+  std::string ForeignDatabase(const std::string& name, const std::string& sql) {
+    const std::string path = dir_.File(name);
+    auto db = OpenDatabase(path, false);
+    EXPECT_TRUE(db.ok());
+    EXPECT_TRUE(Exec(db->get(), sql).ok());
+    return path;
+  }
+  mapd::testing::TempDir dir_;
+};
+
+TEST_F(StoreIdentityTest, RefusesAnotherApplicationsDatabaseAndLeavesItAlone) {
+  const std::string path = ForeignDatabase("crm.db", "CREATE TABLE customers (id INTEGER); INSERT INTO customers VALUES (7)");
+  auto opened = Store::Open(path, StoreOptions{});
+  ASSERT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(opened.status().message().find("tables of another application (customers)"), std::string::npos)
+      << opened.status().message();
+  auto db = OpenDatabase(path, true);
+  ASSERT_TRUE(db.ok());
+  StatusOr<Statement> q = Statement::Prepare(db->get(), "SELECT count(*) FROM sqlite_master WHERE type = 'table'");
+  ASSERT_TRUE(q.ok());
+  ASSERT_TRUE(*q->Step());
+  EXPECT_EQ(q->ColumnInt(0), 1) << "mapd added tables to a database it refused";
+}
+
+TEST_F(StoreIdentityTest, RefusesAForeignApplicationIdEvenWithoutTables) {
+  const std::string path = ForeignDatabase("other.db", "PRAGMA application_id = 1234");
+  auto opened = Store::Open(path, StoreOptions{});
+  ASSERT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(opened.status().message().find("application_id is 0x000004d2"), std::string::npos)
+      << opened.status().message();
+}
+
+TEST_F(StoreIdentityTest, StampsNewDatabasesAndAdoptsOnesFromBeforeTheStamp) {
+  {
+    auto store = Store::Open(dir_.File("map.db"), StoreOptions{});
+    ASSERT_TRUE(store.ok()) << store.status().message();
+  }
+  auto db = OpenDatabase(dir_.File("map.db"), false);
+  ASSERT_TRUE(db.ok());
+  auto id = [&] {
+    StatusOr<Statement> q = Statement::Prepare(db->get(), "PRAGMA application_id");
+    EXPECT_TRUE(q.ok() && *q->Step());
+    return static_cast<int32_t>(q->ColumnInt(0));
+  };
+  EXPECT_EQ(id(), kApplicationId);
+  // A database of an earlier mapd carries no stamp: adopted and stamped.
+  ASSERT_TRUE(Exec(db->get(), "PRAGMA application_id = 0").ok());
+  EXPECT_EQ(id(), 0);
+  ASSERT_TRUE(Store::Open(dir_.File("map.db"), StoreOptions{}).ok());
+  EXPECT_EQ(id(), kApplicationId);
+}
+
+TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted) {
+  StoreOptions options;
+  options.max_db_bytes = 256 * 1024;
+  auto store = Store::Open(dir_.File("map.db"), options);
+  ASSERT_TRUE(store.ok()) << store.status().message();
+  EXPECT_TRUE((*store)->ProbeWrite().ok());
+  geometry::SensorObservation features;
+  for (int i = 0; i < 200; ++i) features.lines.push_back({{0, 0, 0}, {1.0 * i, 1, 0}});
+  Status failure;
+  uint64_t committed = 0;
+  for (uint64_t seq = 1; seq < 10000 && failure.ok(); ++seq) {
+    auto txn = (*store)->BeginWrite();
+    ASSERT_TRUE(txn.ok());
+    NewObservation o;
+    o.robot = "r1";
+    o.session = "s1";
+    o.seq = seq;
+    o.features = &features;
+    StatusOr<InsertResult> r = (*txn)->InsertObservation(o);
+    failure = r.ok() ? (*txn)->Commit() : r.status();
+    if (failure.ok()) committed = seq;
+  }
+  EXPECT_EQ(failure.code(), StatusCode::kResourceExhausted) << failure.message();
+  EXPECT_GT(committed, 0u);
+  EXPECT_EQ((*store)->ProbeWrite().code(), StatusCode::kResourceExhausted);
+  store->reset();
+  auto reopened = Store::Open(dir_.File("map.db"), StoreOptions{});
+  ASSERT_TRUE(reopened.ok());
+  uint64_t kept = 0;
+  ASSERT_TRUE((*reopened)->ForEachObservation([&](const StoredObservation&) {
+                ++kept;
+                return Status::Ok();
+              }).ok());
+  EXPECT_EQ(kept, committed);
+  EXPECT_TRUE((*reopened)->ProbeWrite().ok());
 }
 
 }  // namespace
