@@ -13,6 +13,7 @@
 #include "common/status.h"
 #include "fusion/params.h"
 #include "service/ingest_reactor.h"
+#include "service/stream_limiter.h"
 
 namespace mapd::service {
 
@@ -31,7 +32,16 @@ struct SubmapOptions {
   double max_merge_seconds = 60.0;      // budget of one merge, seconds
   bool resample_resolutions = false;    // false: different resolutions are refused
   bool log_odds_fusion = false;         // false: the paper's overlap rule
+  // Occupied voxels one uploaded submap may expand to at the finest
+  // resolution (counted from the tree structure before anything is built).
+  uint64_t max_submap_voxels = 8'000'000;
+  // Uploads being received or stored at once; one more is refused with
+  // RESOURCE_EXHAUSTED at once. Upload memory <= about 2 x this x
+  // max_submap_bytes.
+  size_t max_concurrent_uploads = 2;
+  double upload_idle_timeout_s = 30.0;  // an upload that sends nothing this long is ended
 };
+
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
@@ -41,6 +51,7 @@ struct ServerConfig {
   fusion::FusionParams fusion;
   IngestOptions ingest;
   SubmapOptions submaps;
+  StreamLimits streams;
   size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted
   size_t max_group_batches = 4096;         // batches per group commit at most
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)

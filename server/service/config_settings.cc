@@ -228,6 +228,49 @@ const std::vector<Setting>& Settings() {
       Count("limits.max_queued_merges", "merges waiting for a slot; beyond it MergeSubmaps answers "
             "RESOURCE_EXHAUSTED",
             [](C& c) -> auto& { return c.submaps.max_queued_merges; }, 0, 1024),
+      Count("limits.max_submap_voxels", "occupied voxels one uploaded submap may expand to at the finest "
+            "resolution, counted from the tree before anything is built (a merge holds ~100 bytes per voxel "
+            "of its inputs)",
+            [](C& c) -> auto& { return c.submaps.max_submap_voxels; }, 1, uint64_t{1} << 40),
+      Count("limits.max_concurrent_uploads", "submap uploads received or stored at once; one more gets "
+            "RESOURCE_EXHAUSTED at once; upload memory <= ~2 x this x limits.max_submap_bytes",
+            [](C& c) -> auto& { return c.submaps.max_concurrent_uploads; }, 1, 1024),
+      Real("limits.upload_idle_timeout_s", "an upload that sends nothing for this long is ended "
+           "(DEADLINE_EXCEEDED), seconds",
+           [](C& c) -> auto& { return c.submaps.upload_idle_timeout_s; }, {0, 86400, true}),
+      Count("limits.max_streams", "Ingest and UploadSubmap streams open at once, server-wide; one more gets "
+            "RESOURCE_EXHAUSTED at once",
+            [](C& c) -> auto& { return c.streams.max_streams; }, 1, 10000000),
+      Count("limits.max_streams_per_connection", "concurrent streams of one HTTP/2 connection "
+            "(SETTINGS_MAX_CONCURRENT_STREAMS)",
+            [](C& c) -> auto& { return c.streams.max_streams_per_connection; }, 1, 1000000),
+      Real("limits.stream_opens_per_s", "streams a client address may open per second (token bucket; "
+           "beyond it RESOURCE_EXHAUSTED), 1/s",
+           [](C& c) -> auto& { return c.streams.stream_opens_per_s; }, {0, 1e9, true}),
+      Real("limits.stream_open_burst", "streams a client address may open at once above that rate",
+           [](C& c) -> auto& { return c.streams.stream_open_burst; }, {1, 1e9}),
+      Real("limits.keepalive_time_s", "ping a connection after this long without traffic, seconds",
+           [](C& c) -> auto& { return c.streams.keepalive_time_s; }, {1, 86400}),
+      Real("limits.keepalive_timeout_s", "drop a connection whose ping is not answered within this, seconds",
+           [](C& c) -> auto& { return c.streams.keepalive_timeout_s; }, {1, 3600}),
+      Real("limits.min_client_ping_interval_s", "a client pinging more often than this is dropped, seconds",
+           [](C& c) -> auto& { return c.streams.min_client_ping_interval_s; }, {0, 3600}),
+      Real("limits.max_connection_idle_s", "close a connection that has had no stream for this long, "
+           "seconds; 0 = never",
+           [](C& c) -> auto& { return c.streams.max_connection_idle_s; }, {0, 1e7}),
+      Real("limits.max_connection_age_s", "close any connection gracefully after this long (clients "
+           "reconnect), seconds; 0 = never",
+           [](C& c) -> auto& { return c.streams.max_connection_age_s; }, {0, 1e7}),
+      Real("limits.read_wait_s", "GetFeatureMap waits at most this long for the fuser to reflect every "
+           "acknowledged batch (unless the request asks for longer), then answers with the map as it is, "
+           "seconds",
+           [](C& c) -> auto& { return c.streams.read_wait_s; }, {0, 3600}),
+      Real("limits.max_read_wait_s", "the longest wait a GetFeatureMap request may ask for (max_wait_ms), "
+           "seconds",
+           [](C& c) -> auto& { return c.streams.max_read_wait_s; }, {0, 3600}),
+      Count("limits.log_lines_per_s", "log lines per event and second; the rest is counted in one "
+            "event=log_suppressed line",
+            [](C& c) -> auto& { return c.streams.log_lines_per_s; }, 1, 1000000),
 
       Count("merge.min_matched_corners", "matched corners a pairwise merge needs to be accepted (a rigid "
             "transform needs 3)",

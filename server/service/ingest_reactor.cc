@@ -1,5 +1,9 @@
 #include "service/ingest_reactor.h"
 
+#include <grpcpp/support/proto_buffer_reader.h>
+#include <grpcpp/support/proto_buffer_writer.h>
+#include <grpcpp/impl/codegen/proto_utils.h>
+
 #include "service/log.h"
 #include "service/status_mapping.h"
 
@@ -8,11 +12,11 @@ namespace mapd::service {
 namespace pb = mapserver::v1;
 
 IngestReactor::IngestReactor(grpc::CallbackServerContext* context, MapCore* core,
-                             const IngestOptions* options, const std::atomic<bool>* draining)
-    : core_(core), options_(options), draining_(draining), peer_(context->peer()) {
+                             const IngestOptions* options, const std::atomic<bool>* draining, StreamSlot slot)
+    : core_(core), options_(options), draining_(draining), peer_(context->peer()), slot_(std::move(slot)) {
   std::lock_guard<std::mutex> lock(mu_);
   reading_ = true;
-  StartRead(&request_);
+  StartRead(&read_buffer_);
 }
 
 void IngestReactor::OnReadDone(bool ok) {
@@ -25,8 +29,27 @@ void IngestReactor::OnReadDone(bool ok) {
   }
   {
     std::lock_guard<std::mutex> lock(mu_);
+    const uint64_t index = messages_read_++;
+    request_.Clear();
+    grpc::Status parsed =
+        grpc::SerializationTraits<pb::ObservationBatch>::Deserialize(&read_buffer_, &request_);
+    if (!parsed.ok()) {
+      // Stop reading; what was read before is acknowledged, then the stream ends.
+      reading_ = false;
+      read_closed_ = true;
+      end_status_ = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                 "message " + std::to_string(index) +
+                                     " of the stream (0-based) is not a valid ObservationBatch (" +
+                                     parsed.error_message() + "); the stream ends, the batches before it are "
+                                     "acknowledged, nothing after it was read");
+      Log(LogLevel::kWarn, "ingest_malformed",
+          {{"robot", robot_}, {"peer", peer_}, {"message", std::to_string(index)},
+           {"error", parsed.error_message()}});
+      MaybeFinishLocked();
+      return;
+    }
     ++in_flight_;
-    if (robot_.empty()) robot_ = request_.robot_id();
+    if (robot_.empty()) robot_ = request_.robot_id().substr(0, 128);
   }
   // reading_ stays true while request_ is being processed, so that no one
   // starts another read into it.
@@ -84,13 +107,20 @@ void IngestReactor::Complete(pb::IngestAck ack) {
 
 void IngestReactor::StartNextWriteLocked() {
   if (acks_.empty() || broken_) return;
-  writing_ack_ = std::move(acks_.front());
+  bool own_buffer = false;
+  write_buffer_.Clear();
+  grpc::Status s = grpc::SerializationTraits<pb::IngestAck>::Serialize(acks_.front(), &write_buffer_, &own_buffer);
   acks_.pop_front();
+  if (!s.ok()) {  // an ack always serialises; if not, the client cannot be told
+    broken_ = true;
+    acks_.clear();
+    return;
+  }
   writing_ = true;
   // While more acks are queued, let gRPC coalesce them into fewer frames.
   grpc::WriteOptions options;
   if (!acks_.empty()) options.set_buffer_hint();
-  StartWrite(&writing_ack_, options);
+  StartWrite(&write_buffer_, options);
 }
 
 void IngestReactor::OnWriteDone(bool ok) {
@@ -107,7 +137,7 @@ void IngestReactor::OnWriteDone(bool ok) {
 void IngestReactor::MaybeReadLocked() {
   if (reading_ || read_closed_ || finished_ || in_flight_ >= options_->max_in_flight) return;
   reading_ = true;
-  StartRead(&request_);
+  StartRead(&read_buffer_);
 }
 
 void IngestReactor::OnCancel() {
@@ -124,7 +154,7 @@ void IngestReactor::MaybeFinishLocked() {
       {{"robot", robot_}, {"peer", peer_}, {"stored", std::to_string(stored_)},
        {"duplicate", std::to_string(duplicates_)}, {"rejected", std::to_string(rejected_)},
        {"client_gone", broken_ ? "true" : "false"}});
-  Finish(grpc::Status::OK);
+  Finish(end_status_);
 }
 
 void IngestReactor::OnDone() { delete this; }

@@ -5,6 +5,13 @@
 // `max_in_flight` batches in flight on one stream (reading pauses above that:
 // flow control rather than unbounded memory). A refused batch gets a REJECTED
 // ack and the stream goes on.
+//
+// The method is registered raw (ByteBuffer in and out) and the reactor parses
+// each message itself: with the typed callback API a message that does not
+// parse looks exactly like a half-close (OnReadDone(false)) and the stream
+// would end OK with the rest silently unacknowledged. Here a malformed message
+// ends the stream with INVALID_ARGUMENT naming its index (after the batches
+// before it are acknowledged), and a log line.
 #ifndef MAPD_SERVICE_INGEST_REACTOR_H_
 #define MAPD_SERVICE_INGEST_REACTOR_H_
 
@@ -18,6 +25,7 @@
 #include "mapserver/v1/map_service.pb.h"
 #include "service/ingest_batch.h"
 #include "service/map_core.h"
+#include "service/stream_limiter.h"
 
 namespace mapd::service {
 
@@ -27,11 +35,10 @@ struct IngestOptions {
 };
 
 // Owned by gRPC; deletes itself in OnDone().
-class IngestReactor
-    : public grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck> {
+class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, MapCore* core, const IngestOptions* options,
-                const std::atomic<bool>* draining);
+                const std::atomic<bool>* draining, StreamSlot slot);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -49,9 +56,14 @@ class IngestReactor
   const std::atomic<bool>* const draining_;
   const std::string peer_;
 
+  StreamSlot slot_;  // our place under limits.max_streams
+
   std::mutex mu_;
-  mapserver::v1::ObservationBatch request_;  // the buffer of the outstanding read
-  mapserver::v1::IngestAck writing_ack_;     // the buffer of the outstanding write
+  grpc::ByteBuffer read_buffer_;             // the buffer of the outstanding read
+  mapserver::v1::ObservationBatch request_;  // read_buffer_ parsed
+  grpc::ByteBuffer write_buffer_;            // the buffer of the outstanding write
+  uint64_t messages_read_ = 0;  // GUARDED_BY(mu_), index of the next message
+  grpc::Status end_status_;     // GUARDED_BY(mu_), what Finish reports (a malformed message)
   std::deque<mapserver::v1::IngestAck> acks_;  // GUARDED_BY(mu_), waiting to be written
   uint32_t in_flight_ = 0;   // GUARDED_BY(mu_), batches handed out, outcome pending
   bool reading_ = false;     // GUARDED_BY(mu_), a read is outstanding or being processed

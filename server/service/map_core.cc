@@ -236,18 +236,22 @@ void MapCore::WriterLoop() {
   FusedDelta fused;
   std::deque<std::shared_ptr<WriteJob>> jobs;
   for (;;) {
+    // Backpressure: while the fuser is far behind, commit no new batches, so
+    // robots see slower acks instead of the server growing without bound.
+    // Other writes (submaps, merges, deletes, fused features) go on: an
+    // upload must not wait behind the fusion backlog.
+    bool backlogged = false;
     {
-      // Backpressure: while the fuser is far behind, commit nothing new, so
-      // robots see slower acks instead of the server growing without bound.
-      std::unique_lock<std::mutex> lock(fuse_mu_);
-      fuse_cv_.wait(lock, [this] {
-        return committed_count_ - fused_count_ <= options_.max_fusion_backlog || stop_requested_;
-      });
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      backlogged = committed_count_ - fused_count_ > options_.max_fusion_backlog && !stop_requested_;
     }
     bool probe = false;
     {
       std::unique_lock<std::mutex> lock(queue_mu_);
-      const auto has_work = [this] { return !queue_.empty() || !fused_pending_.empty() || !write_jobs_.empty(); };
+      // While backlogged, queued batches are not work (see above).
+      const auto has_work = [&] {
+        return (!backlogged && !queue_.empty()) || !fused_pending_.empty() || !write_jobs_.empty();
+      };
       if (!write_health_.ok()) {
         // A failing database is retried after a pause, not in a tight loop;
         // Stop() cuts a long pause short.
@@ -258,15 +262,22 @@ void MapCore::WriterLoop() {
           AbandonQueuedWrites(lock);
           break;
         }
-        probe = !has_work();  // nothing to retry: probe whether writes work again
+        // Nothing to retry: probe whether writes work again.
+        probe = queue_.empty() && fused_pending_.empty() && write_jobs_.empty();
         if (probe && stopping_) break;
       } else {
-        queue_cv_.wait(lock, [&] { return has_work() || stopping_; });
-        if (!has_work()) break;  // stopping, nothing left
+        if (backlogged) {
+          // The fuser's progress is signalled on fuse_cv_, not here: look again soon.
+          queue_cv_.wait_for(lock, std::chrono::milliseconds(20), [&] { return has_work() || stopping_; });
+        } else {
+          queue_cv_.wait(lock, [&] { return has_work() || stopping_; });
+        }
+        if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty() && stopping_) break;  // nothing left
+        if (!has_work()) continue;
       }
       if (!probe) {
         jobs.swap(write_jobs_);
-        const size_t n = std::min(queue_.size(), options_.max_group_batches);
+        const size_t n = backlogged ? 0 : std::min(queue_.size(), options_.max_group_batches);
         group.reserve(n);
         for (size_t i = 0; i < n; ++i) {
           group.push_back(std::move(queue_.front()));
@@ -515,8 +526,13 @@ std::vector<std::string> MapCore::RobotNames(const std::vector<fusion::RobotId>&
   return names;
 }
 
+uint64_t MapCore::FusionBacklog() const {
+  std::lock_guard<std::mutex> lock(fuse_mu_);
+  return committed_count_ - fused_count_;
+}
+
 std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const {
-  WaitForFuser(std::chrono::duration<double>(options_.max_query_wait_s));
+  WaitForFuser(std::chrono::duration<double>(query.max_wait_s >= 0 ? query.max_wait_s : options_.max_query_wait_s));
   const uint32_t min_support = std::max(query.min_support, options_.fusion.min_support);
   std::vector<fusion::FusedFeature> published;
   {
@@ -542,7 +558,13 @@ std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_
 void MapCore::RecordRate() {
   const auto now = Clock::now();
   std::lock_guard<std::mutex> lock(rate_mu_);
-  if (!rate_samples_.empty() && now - rate_samples_.back().t < std::chrono::milliseconds(250)) return;
+  if (!rate_samples_.empty() && now - rate_samples_.back().t < std::chrono::milliseconds(250)) {
+    // Keep the newest counts (else commits after the last sample would show
+    // as a rate forever once ingest stops).
+    rate_samples_.back().batches = batches_stored_.load();
+    rate_samples_.back().features = features_stored_.load();
+    return;
+  }
   rate_samples_.push_back({now, batches_stored_.load(), features_stored_.load()});
   while (rate_samples_.size() > 2 && now - rate_samples_[1].t > std::chrono::seconds(10)) {
     rate_samples_.pop_front();
@@ -558,16 +580,18 @@ CoreStats MapCore::Stats() const {
   s.uptime_s = std::chrono::duration<double>(now - started_).count();
   {
     std::lock_guard<std::mutex> lock(rate_mu_);
-    // Rate over the window back to the oldest sample within 10 s (or the start).
-    auto base_t = started_;
+    // Rate over the last 10 s (or since the start): what was stored since the
+    // newest sample at least 10 s old. Samples are taken only on commits, so
+    // with none in the window the base is the newest sample and the rate
+    // decays to 0 within 10 s of the last commit (it used to divide by a
+    // window that kept growing from an old sample).
     uint64_t base_b = 0, base_f = 0;
     for (const RateSample& r : rate_samples_) {
-      if (now - r.t <= std::chrono::seconds(10)) break;
-      base_t = r.t;
+      if (now - r.t < std::chrono::seconds(10)) break;
       base_b = r.batches;
       base_f = r.features;
     }
-    const double window = std::max(1e-3, std::chrono::duration<double>(now - base_t).count());
+    const double window = std::max(1e-3, std::min(10.0, std::chrono::duration<double>(now - started_).count()));
     s.batches_per_s = static_cast<double>(s.batches_stored - base_b) / window;
     s.features_per_s = static_cast<double>(s.features_stored - base_f) / window;
   }

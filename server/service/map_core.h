@@ -86,6 +86,9 @@ struct FeatureQuery {
   std::optional<geometry::Box2> bbox;  // only features whose segment meets the box
   uint32_t min_support = 0;            // raised to the fusion min_support
   KindFilter kind = KindFilter::kAny;
+  // How long to wait for the fuser to reflect every acknowledged batch;
+  // < 0: MapCoreOptions::max_query_wait_s.
+  double max_wait_s = -1;
 };
 
 // A published fused feature, ready for the API.
@@ -154,6 +157,8 @@ class MapCore {
   void Stop();
 
   std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const;
+  // Committed (acknowledged) observations the fuser has not reflected yet.
+  uint64_t FusionBacklog() const;
   CoreStats Stats() const;
   // Whether the database takes writes (write_health.h); the server's health
   // listens to it.

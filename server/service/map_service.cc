@@ -1,21 +1,19 @@
 #include "service/map_service.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "service/log.h"
+#include "service/refused_stream.h"
 #include "service/status_mapping.h"
 
 namespace mapd::service {
 namespace {
 
-// An Ingest stream refused at once (the map is still being recovered): the
-// robot reconnects and resends, as after any UNAVAILABLE.
-class RefusedIngest : public grpc::ServerBidiReactor<mapserver::v1::ObservationBatch,
-                                                     mapserver::v1::IngestAck> {
- public:
-  explicit RefusedIngest(const Status& why) { Finish(ToGrpcStatus(why)); }
-  void OnDone() override { delete this; }
-};
+// An Ingest stream refused at once (the map is still being recovered, or a
+// stream limit): the robot reconnects and resends, as after any UNAVAILABLE.
+using RefusedIngest = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;
 
 
 namespace pb = mapserver::v1;
@@ -61,13 +59,23 @@ Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
 
 }  // namespace
 
-MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options)
-    : core_(core), ingest_options_(ingest_options), submaps_(core, submap_options) {}
+MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options,
+                               const StreamLimits& stream_limits)
+    : core_(core),
+      ingest_options_(ingest_options),
+      stream_limits_(stream_limits),
+      limiter_(stream_limits),
+      submaps_(core, submap_options) {}
 
-grpc::ServerBidiReactor<pb::ObservationBatch, pb::IngestAck>* MapServiceImpl::Ingest(
+grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ingest(
     grpc::CallbackServerContext* context) {
-  if (Status ready = core_->CheckReady(); !ready.ok()) return new RefusedIngest(ready);
-  return new IngestReactor(context, core_, &ingest_options_, &draining_);
+  if (Status ready = core_->CheckReady(); !ready.ok()) return new RefusedIngest(ToGrpcStatus(ready));
+  StreamSlot slot;
+  if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
+    Log(LogLevel::kWarn, "stream_refused", {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
+    return new RefusedIngest(ToGrpcStatus(admitted));
+  }
+  return new IngestReactor(context, core_, &ingest_options_, &draining_, std::move(slot));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
@@ -77,11 +85,19 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   Status s = FromProto(*request, &query);
   if (!s.ok()) return ToGrpcStatus(s);
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
+  // Bounded wait for the fuser (see FeatureMapRequest.max_wait_ms): never
+  // past the server's cap or the call's deadline (less a margin to answer).
+  double wait_s = request->max_wait_ms() == 0 ? stream_limits_.read_wait_s
+                                              : std::min(request->max_wait_ms() * 1e-3, stream_limits_.max_read_wait_s);
+  const double to_deadline =
+      std::chrono::duration<double>(context->deadline() - std::chrono::system_clock::now()).count() - 0.05;
+  query.max_wait_s = std::max(0.0, std::min(wait_s, to_deadline));
   uint64_t version = 0;
   std::vector<FusedView> features = core_->QueryFeatures(query, &version);
   pb::FeatureMapPage page;
   page.set_total(features.size());
   page.set_map_version(version);
+  page.set_fusion_pending(core_->FusionBacklog());
   for (size_t i = 0; i < features.size(); ++i) {
     if (request->without_corner_optimisation()) features[i].feature.segment = features[i].feature.fitted;
     ToProto(features[i], page.add_features());
@@ -145,11 +161,17 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::UploadSubmap(grpc::ServerContext* context,
-                                          grpc::ServerReader<pb::UploadSubmapRequest>* reader,
-                                          pb::SubmapInfo* response) {
-  if (draining_) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down");
-  return submaps_.Upload(context, reader, response);
+grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(grpc::CallbackServerContext* context,
+                                                                               pb::SubmapInfo* response) {
+  using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
+  if (draining_) return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
+  StreamSlot slot;
+  if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
+    Log(LogLevel::kWarn, "stream_refused",
+        {{"rpc", "UploadSubmap"}, {"peer", context->peer()}, {"why", admitted.message()}});
+    return new Refused(ToGrpcStatus(admitted));
+  }
+  return submaps_.Upload(context, response, std::move(slot));
 }
 grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext*, const pb::ListSubmapsRequest* request,
                                          pb::ListSubmapsResponse* response) {

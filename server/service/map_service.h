@@ -1,6 +1,7 @@
-// The mapserver.v1.MapService implementation. Ingest runs on gRPC's callback
-// API (one reactor per robot stream, see ingest_reactor.h); the other RPCs are
-// short and use the synchronous API. Handlers translate between protobuf and
+// The mapserver.v1.MapService implementation. Ingest (raw: the reactor parses,
+// see ingest_reactor.h) and UploadSubmap (upload_reactor.h) run on gRPC's
+// callback API, admitted by a StreamLimiter (stream_limiter.h); the other
+// RPCs are short and use the synchronous API. Handlers translate between protobuf and
 // library types and reach the state through MapCore.
 #ifndef MAPD_SERVICE_MAP_SERVICE_H_
 #define MAPD_SERVICE_MAP_SERVICE_H_
@@ -11,14 +12,21 @@
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/ingest_reactor.h"
 #include "service/map_core.h"
+#include "service/stream_limiter.h"
 #include "service/submap_service.h"
 
 namespace mapd::service {
 
 class MapServiceImpl final
-    : public mapserver::v1::MapService::WithCallbackMethod_Ingest<mapserver::v1::MapService::Service> {
+    : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
+          mapserver::v1::MapService::WithRawCallbackMethod_Ingest<mapserver::v1::MapService::Service>> {
  public:
-  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {});
+  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
+                 const StreamLimits& stream_limits = {});
+
+  // Housekeeping, every second: ends idle uploads.
+  void Tick() { submaps_.ExpireIdleUploads(); }
+  const StreamLimiter& limiter() const { return limiter_; }
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
   // and merges in flight are abandoned (shutdown).
@@ -27,7 +35,7 @@ class MapServiceImpl final
     submaps_.StartDraining();
   }
 
-  grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>* Ingest(
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Ingest(
       grpc::CallbackServerContext* context) override;
 
   grpc::Status GetFeatureMap(grpc::ServerContext* context,
@@ -39,9 +47,8 @@ class MapServiceImpl final
                         mapserver::v1::Stats* response) override;
 
   // Voxel submaps: delegated to SubmapService (submap_service.h).
-  grpc::Status UploadSubmap(grpc::ServerContext* context,
-                            grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
-                            mapserver::v1::SubmapInfo* response) override;
+  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(
+      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response) override;
   grpc::Status ListSubmaps(grpc::ServerContext* context, const mapserver::v1::ListSubmapsRequest* request,
                            mapserver::v1::ListSubmapsResponse* response) override;
   grpc::Status GetSubmap(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest* request,
@@ -59,7 +66,9 @@ class MapServiceImpl final
  private:
   MapCore* const core_;
   const IngestOptions ingest_options_;
+  const StreamLimits stream_limits_;
   std::atomic<bool> draining_{false};
+  StreamLimiter limiter_;
   SubmapService submaps_;
 };
 

@@ -1,5 +1,8 @@
 #include "service/server.h"
 
+#include <malloc.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -47,7 +50,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();
-  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps);
+  server->service_ =
+      std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps, config.streams);
+  SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
   if (!config.tls_cert.empty()) {
@@ -70,6 +75,25 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   // gRPC sets SO_REUSEPORT by default: a second mapd on the same port would
   // silently share it. One server per port.
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+  // Connection and stream limits (config.h, StreamLimits): the HTTP/2 stream
+  // cap per connection, keepalive (dead peers are dropped), ping-flood
+  // protection, idle and maximal connection age.
+  const StreamLimits& limits = config.streams;
+  auto ms = [](double s) { return static_cast<int>(std::min(s * 1000.0, 2.0e9)); };
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, static_cast<int>(limits.max_streams_per_connection));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ms(limits.keepalive_time_s));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ms(limits.keepalive_timeout_s));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                             ms(limits.min_client_ping_interval_s));
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
+  if (limits.max_connection_idle_s > 0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS, ms(limits.max_connection_idle_s));
+  }
+  if (limits.max_connection_age_s > 0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, ms(limits.max_connection_age_s));
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS, ms(config.shutdown_grace_s));
+  }
   server->server_ = builder.BuildAndStart();
   if (!server->server_ || server->port_ == 0) {
     return Status::Unavailable("cannot listen on '" + config.listen +
@@ -101,11 +125,37 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
          {"fusion_mode", fusion::FusionModeName(fusion.mode)},
          {"corner_mode", fusion::CornerModeName(fusion.corner_mode)}});
   });
+  server->housekeeping_ = std::thread([s] { s->Housekeeping(); });
   return server;
 }
 
 void MapServer::UpdateHealthLocked() {
   server_->GetHealthCheckService()->SetServingStatus(!shut_down_ && core_->ready() && core_->write_health().ok());
+}
+
+void MapServer::Housekeeping() {
+  uint64_t last_events = 0, since_trim = 0;
+  int seconds_since_trim = 0;
+  std::unique_lock<std::mutex> lock(housekeeping_mu_);
+  while (!housekeeping_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return housekeeping_stop_; })) {
+    lock.unlock();
+    service_->Tick();
+    FlushSuppressedLogs();
+    // Give memory back after a burst: a flood of streams leaves gRPC's and
+    // malloc's freed memory in the heap (1.5 GiB, never returned, before).
+    // Trim once the burst is over (under 100 stream opens in the last
+    // second), and every 30 s anyway.
+    const uint64_t events = service_->limiter().admitted() + service_->limiter().refused();
+    const uint64_t last_second = events - last_events;
+    last_events = events;
+    since_trim += last_second;
+    if ((since_trim > 1000 && last_second < 100) || ++seconds_since_trim >= 30) {
+      malloc_trim(0);
+      since_trim = 0;
+      seconds_since_trim = 0;
+    }
+    lock.lock();
+  }
 }
 
 bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {
@@ -129,6 +179,7 @@ void MapServer::Shutdown() {
   const auto deadline = std::chrono::system_clock::now() +
                         std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
   server_->Shutdown(deadline);  // returns once every RPC has ended
+  StopHousekeeping();
   core_->Stop();                // commits what is queued, checkpoints
   Log(LogLevel::kInfo, "stopped");
 }
@@ -137,6 +188,18 @@ void MapServer::Wait() {
   if (server_) server_->Wait();
 }
 
-MapServer::~MapServer() { Shutdown(); }
+void MapServer::StopHousekeeping() {
+  {
+    std::lock_guard<std::mutex> lock(housekeeping_mu_);
+    housekeeping_stop_ = true;
+  }
+  housekeeping_cv_.notify_all();
+  if (housekeeping_.joinable()) housekeeping_.join();
+}
+
+MapServer::~MapServer() {
+  Shutdown();
+  StopHousekeeping();
+}
 
 }  // namespace mapd::service

@@ -3,6 +3,8 @@
 #define MAPD_SERVICE_SERVER_H_
 
 #include <chrono>
+#include <condition_variable>
+#include <thread>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -42,6 +44,8 @@ class MapServer {
   // SERVING once the map is recovered, while the database takes writes and
   // until Shutdown(). REQUIRES: health_mu_ held.
   void UpdateHealthLocked();
+  void Housekeeping();  // every second: idle uploads, log summaries, memory trim
+  void StopHousekeeping();
 
   ServerConfig config_;
   std::unique_ptr<MapCore> core_;
@@ -50,6 +54,10 @@ class MapServer {
   int port_ = 0;
   std::mutex health_mu_;    // shut_down_ and the health status
   bool shut_down_ = false;  // GUARDED_BY(health_mu_)
+  std::thread housekeeping_;
+  std::mutex housekeeping_mu_;
+  std::condition_variable housekeeping_cv_;
+  bool housekeeping_stop_ = false;  // GUARDED_BY(housekeeping_mu_)
 };
 
 }  // namespace mapd::service

@@ -4,13 +4,16 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <thread>
 #include <unordered_set>
 #include <utility>
 #include <vector>
 
 #include "common/clock.h"
 #include "service/log.h"
+#include "service/refused_stream.h"
 #include "service/status_mapping.h"
+#include "service/upload_reactor.h"
 
 #if MAPD_WITH_VOXEL
 #include "service/merge_runner.h"
@@ -208,7 +211,12 @@ SubmapService::SubmapService(MapCore* core, const SubmapOptions& options)
 #endif
 }
 
-SubmapService::~SubmapService() = default;
+SubmapService::~SubmapService() {
+  // The gRPC server has shut down (every upload is done); store threads may
+  // still be returning from Finish.
+  std::unique_lock<std::mutex> lock(uploads_mu_);
+  uploads_cv_.wait(lock, [this] { return storing_ == 0 && uploads_.empty(); });
+}
 
 void SubmapService::StartDraining() {
   draining_ = true;
@@ -270,13 +278,49 @@ grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request) {
   return ToGrpcStatus(s);
 }
 
+void SubmapService::EndUpload(UploadReactor* reactor) {
+  std::lock_guard<std::mutex> lock(uploads_mu_);
+  uploads_.erase(reactor);
+  uploads_cv_.notify_all();
+}
+
+void SubmapService::ExpireIdleUploads() {
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard<std::mutex> lock(uploads_mu_);
+  for (UploadReactor* r : uploads_) r->ExpireIfIdle(now, options_.upload_idle_timeout_s);
+}
+
+void SubmapService::RunStore(std::function<void()> store) {
+  {
+    std::lock_guard<std::mutex> lock(uploads_mu_);
+    ++storing_;
+  }
+  std::thread([this, store = std::move(store)] {
+    store();
+    std::lock_guard<std::mutex> lock(uploads_mu_);
+    --storing_;
+    uploads_cv_.notify_all();
+  }).detach();
+}
+
 #if !MAPD_WITH_VOXEL
 
-grpc::Status SubmapService::Upload(grpc::ServerContext*,
-                                   grpc::ServerReader<pb::UploadSubmapRequest>*, pb::SubmapInfo*) {
-  return grpc::Status(
+grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::CallbackServerContext*,
+                                                                       pb::SubmapInfo*, StreamSlot) {
+  return new RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>(grpc::Status(
       grpc::StatusCode::UNIMPLEMENTED,
-      "UploadSubmap: this mapd was built without voxel support (MAPD_WITH_VOXEL=OFF)");
+      "UploadSubmap: this mapd was built without voxel support (MAPD_WITH_VOXEL=OFF)"));
+}
+
+grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest&, pb::SubmapHeader*) {
+  return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "built without voxel support");
+}
+grpc::Status SubmapService::AppendUploadChunk(const pb::SubmapHeader&, size_t, pb::UploadSubmapRequest*,
+                                              std::string*) {
+  return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "built without voxel support");
+}
+grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader&, std::string, pb::SubmapInfo*) {
+  return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "built without voxel support");
 }
 
 grpc::Status SubmapService::Merge(grpc::ServerContext*, const pb::MergeSubmapsRequest&,
@@ -288,36 +332,52 @@ grpc::Status SubmapService::Merge(grpc::ServerContext*, const pb::MergeSubmapsRe
 
 #else  // MAPD_WITH_VOXEL
 
-grpc::Status SubmapService::Upload(grpc::ServerContext*,
-                                   grpc::ServerReader<pb::UploadSubmapRequest>* reader,
-                                   pb::SubmapInfo* response) {
-  if (draining_) return ShuttingDown();
-  pb::UploadSubmapRequest message;
-  if (!reader->Read(&message))
-    return Invalid("empty upload: the first message must be a SubmapHeader");
-  if (!message.has_header())
-    return Invalid("the first message must be the header (SubmapHeader), not a chunk");
-  const pb::SubmapHeader header = message.header();
-  if (grpc::Status s = CheckHeader(header); !s.ok()) return s;
-
-  std::string bytes;
-  for (size_t index = 0; reader->Read(&message); ++index) {
-    if (message.has_header())
-      return Invalid("a second header arrived after the first (message " +
-                     std::to_string(index + 1) + ")");
-    const std::string& chunk = message.chunk();
-    if (chunk.size() > kChunkBytes) {
-      return Invalid("chunk " + std::to_string(index) + " has " + std::to_string(chunk.size()) +
-                     " bytes; chunks are at most 1 MiB (1048576 bytes)");
-    }
-    if (bytes.size() + chunk.size() > options_.max_submap_bytes) {
-      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                          "submap '" + header.name() +
-                              "' is larger than limits.max_submap_bytes = " +
-                              std::to_string(options_.max_submap_bytes) + " bytes");
-    }
-    bytes += chunk;
+grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::CallbackServerContext* context,
+                                                                       pb::SubmapInfo* response,
+                                                                       StreamSlot slot) {
+  using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
+  if (draining_) return new Refused(ShuttingDown());
+  std::lock_guard<std::mutex> lock(uploads_mu_);
+  if (uploads_.size() >= options_.max_concurrent_uploads) {
+    Log(LogLevel::kWarn, "upload_refused", {{"peer", context->peer()}, {"why", "max_concurrent_uploads"}});
+    return new Refused(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                    std::to_string(uploads_.size()) +
+                                        " uploads are in progress (limits.max_concurrent_uploads); retry later"));
   }
+  auto* reactor = new UploadReactor(this, context, response, std::move(slot));
+  uploads_.insert(reactor);
+  return reactor;
+}
+
+grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest& first, pb::SubmapHeader* header) {
+  if (!first.has_header())
+    return Invalid("the first message must be the header (SubmapHeader), not a chunk");
+  *header = first.header();
+  return CheckHeader(*header);
+}
+
+grpc::Status SubmapService::AppendUploadChunk(const pb::SubmapHeader& header, size_t index,
+                                              pb::UploadSubmapRequest* message, std::string* bytes) {
+  if (message->has_header())
+    return Invalid("a second header arrived after the first (message " + std::to_string(index + 1) + ")");
+  const std::string& chunk = message->chunk();
+  if (chunk.size() > kChunkBytes) {
+    return Invalid("chunk " + std::to_string(index) + " has " + std::to_string(chunk.size()) +
+                   " bytes; chunks are at most 1 MiB (1048576 bytes)");
+  }
+  if (bytes->size() + chunk.size() > options_.max_submap_bytes) {
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        "submap '" + header.name() + "' is larger than limits.max_submap_bytes = " +
+                            std::to_string(options_.max_submap_bytes) + " bytes");
+  }
+  if (bytes->empty() && chunk.size() > 0) bytes->reserve(std::min(options_.max_submap_bytes, 2 * chunk.size()));
+  *bytes += chunk;
+  message->clear_chunk();
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::string bytes,
+                                        pb::SubmapInfo* response) {
   if (bytes.empty()) return Invalid("the upload has a header but no data");
 
   // The magic line first: a clear message when the header names the other format.
@@ -328,17 +388,26 @@ grpc::Status SubmapService::Upload(grpc::ServerContext*,
                    " but the file is " +
                    FormatName(is_bt ? pb::SUBMAP_FORMAT_OCTOMAP_BT : pb::SUBMAP_FORMAT_OCTOMAP_OT));
   }
-  // Untrusted bytes: our own iterative, depth- and size-limited parser.
-  StatusOr<voxel::SubmapSummary> summary = voxel::InspectSubmap(bytes);
+  // Untrusted bytes: our own iterative, depth- and size-limited parser, which
+  // also counts the voxels the tree expands to (limits.max_submap_voxels)
+  // without building it.
+  voxel::OctreeReadLimits limits;
+  limits.max_bytes = std::max<size_t>(limits.max_bytes, options_.max_submap_bytes);
+  limits.max_occupied_voxels = options_.max_submap_voxels;
+  StatusOr<voxel::SubmapSummary> summary = voxel::InspectSubmap(bytes, limits);
   if (!summary.ok()) {
     Log(LogLevel::kInfo, "submap_refused",
         {{"robot", header.robot_id()},
          {"name", header.name()},
          {"error", summary.status().ToString()}});
-    return ToGrpcStatus(
-        Status(summary.status().code(), "the submap file is not a valid OctoMap " +
-                                            std::string(FormatName(header.format())) + ": " +
-                                            summary.status().message()));
+    std::string message = summary.status().message();
+    if (summary.status().code() == StatusCode::kResourceExhausted &&
+        message.find("occupied voxels") != std::string::npos) {
+      message += " (limits.max_submap_voxels = " + std::to_string(options_.max_submap_voxels) + ")";
+    }
+    return ToGrpcStatus(Status(summary.status().code(), "the submap file is not a valid OctoMap " +
+                                                            std::string(FormatName(header.format())) +
+                                                            " within the limits: " + message));
   }
   if (!is_bt && !is_ot)
     return Invalid("the file lacks the OctoMap magic line");  // parser accepted it: a bug
@@ -347,6 +416,7 @@ grpc::Status SubmapService::Upload(grpc::ServerContext*,
     return Invalid("header.resolution " + std::to_string(header.resolution()) +
                    " m does not match the file's " + std::to_string(summary->resolution) + " m");
   }
+  const size_t size_bytes = bytes.size();
 
   storage::NewSubmap submap;
   storage::SubmapMeta& m = submap.meta;
@@ -360,7 +430,7 @@ grpc::Status SubmapService::Upload(grpc::ServerContext*,
   m.bounds_max = summary->bounds_max;
   m.created_ns = UnixNowNs();
   submap.session = header.session_id();
-  submap.data = bytes;
+  submap.data = std::move(bytes);
   int64_t id = 0;
   Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
     StatusOr<int64_t> r = txn->InsertSubmap(submap);
@@ -376,7 +446,7 @@ grpc::Status SubmapService::Upload(grpc::ServerContext*,
       {{"id", std::to_string(id)},
        {"robot", m.robot},
        {"name", m.name},
-       {"bytes", std::to_string(bytes.size())},
+       {"bytes", std::to_string(size_bytes)},
        {"occupied", std::to_string(m.occupied_voxels)}});
   return grpc::Status::OK;
 }

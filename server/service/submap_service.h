@@ -4,8 +4,12 @@
 // storage libraries and writes through MapCore (one writer thread).
 //
 // Rules it implements (see also storage/store.h):
-// - Upload: header first (robot_id, name, format required), then chunks of at
-//   most 1 MiB, at most SubmapOptions::max_submap_bytes in all. The bytes are
+// - Upload (callback API, upload_reactor.h): at most max_concurrent_uploads
+//   at once (one more: RESOURCE_EXHAUSTED at once), each ended after
+//   upload_idle_timeout_s without data. Header first (robot_id, name, format
+//   required), then chunks of at most 1 MiB, at most
+//   SubmapOptions::max_submap_bytes in all; the tree may expand to at most
+//   max_submap_voxels occupied voxels (counted before anything is built). The bytes are
 //   validated by our own depth-limited parser (voxel::InspectSubmap), never by
 //   OctoMap's reader directly; the header's format must match the file's magic
 //   line and a non-zero header resolution the file's. Only then is it stored.
@@ -41,15 +45,22 @@
 #define MAPD_SERVICE_SUBMAP_SERVICE_H_
 
 #include <atomic>
+#include <condition_variable>
+#include <functional>
 #include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_set>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/config.h"
 #include "service/map_core.h"
+#include "service/stream_limiter.h"
 
 namespace mapd::service {
 
 class MergeRunner;
+class UploadReactor;
 
 class SubmapService {
  public:
@@ -60,9 +71,24 @@ class SubmapService {
   // flight are abandoned (their handlers return at once).
   void StartDraining();
 
-  grpc::Status Upload(grpc::ServerContext* context,
-                      grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
-                      mapserver::v1::SubmapInfo* response);
+  // A reactor for one upload (or a refusal: shutdown, too many uploads).
+  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* Upload(grpc::CallbackServerContext* context,
+                                                                     mapserver::v1::SubmapInfo* response,
+                                                                     StreamSlot slot);
+  // Ends uploads idle for longer than upload_idle_timeout_s (called every second).
+  void ExpireIdleUploads();
+
+  // For UploadReactor: the first message, each chunk (appended to `bytes`),
+  // and the whole file (validated and stored; fills `response`).
+  grpc::Status CheckUploadHeader(const mapserver::v1::UploadSubmapRequest& first,
+                                 mapserver::v1::SubmapHeader* header);
+  grpc::Status AppendUploadChunk(const mapserver::v1::SubmapHeader& header, size_t index,
+                                 mapserver::v1::UploadSubmapRequest* message, std::string* bytes);
+  grpc::Status StoreUpload(const mapserver::v1::SubmapHeader& header, std::string bytes,
+                           mapserver::v1::SubmapInfo* response);
+  // Runs `store` on a thread of its own (the destructor waits for it).
+  void RunStore(std::function<void()> store);
+  void EndUpload(UploadReactor* reactor);  // from its OnDone
   grpc::Status List(const mapserver::v1::ListSubmapsRequest& request,
                     mapserver::v1::ListSubmapsResponse* response);
   grpc::Status Get(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest& request,
@@ -83,6 +109,11 @@ class SubmapService {
   const SubmapOptions options_;
   std::atomic<bool> draining_{false};
   std::unique_ptr<MergeRunner> merges_;  // null without voxel support
+
+  std::mutex uploads_mu_;
+  std::condition_variable uploads_cv_;
+  std::unordered_set<UploadReactor*> uploads_;  // GUARDED_BY(uploads_mu_), admitted, not done
+  int storing_ = 0;                             // GUARDED_BY(uploads_mu_), RunStore threads alive
 };
 
 }  // namespace mapd::service

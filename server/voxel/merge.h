@@ -27,6 +27,7 @@
 #include "voxel/corner_extraction.h"
 #include "voxel/corner_matching.h"
 #include "voxel/icp.h"
+#include "voxel/octree_reader.h"
 #include "voxel/occupancy_fusion.h"  // FusionRule, ResolutionPolicy (exact rules there)
 
 namespace mapd::voxel {
@@ -194,8 +195,10 @@ struct SubmapSummary {
   Eigen::Vector3d bounds_min = Eigen::Vector3d::Zero();  // of the occupied voxels, metres
   Eigen::Vector3d bounds_max = Eigen::Vector3d::Zero();
 };
-// Validates the bytes (ReadOctree) and summarises them; InvalidArgument names the problem.
-StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes);
+// Validates the bytes (ValidateOctree: no tree is built, memory does not grow
+// with the voxels) and summarises them; InvalidArgument names the problem,
+// ResourceExhausted a file beyond `limits` (its expanded occupied voxels too).
+StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes, const OctreeReadLimits& limits = {});
 
 }  // namespace mapd::voxel
 

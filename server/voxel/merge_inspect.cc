@@ -1,27 +1,21 @@
-#include <octomap/OcTree.h>
-
 #include "voxel/merge.h"
-#include "voxel/octree_reader.h"
-#include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
 
-StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes) {
-  auto tree = ReadOctree(bytes);
+// Everything comes from the validating walk: no OctoMap tree and no voxel
+// grid are built, so an upload's memory is its bytes, whatever they expand to.
+StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes, const OctreeReadLimits& limits) {
+  StatusOr<OctreeSummary> tree = ValidateOctree(bytes, limits);
   if (!tree.ok()) return tree.status();
-  auto grid = VoxelGrid::FromOcTree(**tree);
-  if (!grid.ok()) return grid.status();
   SubmapSummary summary;
-  summary.resolution = grid->resolution();
-  summary.occupied_voxels = grid->num_occupied();
-  const int depth = static_cast<int>((*tree)->getTreeDepth());
-  for (auto it = (*tree)->begin_leafs(), end = (*tree)->end_leafs(); it != end; ++it) {
-    if ((*tree)->isNodeOccupied(*it)) continue;
-    summary.free_voxels += uint64_t{1} << (3 * (depth - static_cast<int>(it.getDepth())));
-  }
-  if (!grid->empty()) {
-    summary.bounds_min = grid->min_corner();
-    summary.bounds_max = grid->max_corner();
+  summary.resolution = tree->resolution;
+  summary.occupied_voxels = tree->occupied_voxels;
+  summary.free_voxels = tree->free_voxels;
+  if (tree->occupied_voxels > 0) {
+    for (int a = 0; a < 3; ++a) {
+      summary.bounds_min[a] = tree->occupied_min_key[a] * tree->resolution;
+      summary.bounds_max[a] = (tree->occupied_max_key[a] + 1.0) * tree->resolution;
+    }
   }
   return summary;
 }

@@ -191,17 +191,55 @@ Status TooManyNodes(std::uint64_t size, std::size_t offset) {
 struct Frame {
   int depth = 0;
   unsigned pending = 0;
+  std::uint32_t key[3] = {0, 0, 0};  // the node's cube's smallest OctoMap key per axis
 };
 using Stack = std::array<Frame, kOctreeMaxDepth + 1>;
 
 // Takes the next pending child of the deepest open node, popping finished
 // nodes; returns false when the walk is complete.
-bool NextChild(Stack& stack, int& top, int* child_depth) {
+// The smallest key of child `i` of a node at `depth` whose smallest key is
+// `key`: bit 0/1/2 of i selects the upper half in x/y/z (OctoMap's
+// computeChildKey).
+void ChildKey(const std::uint32_t key[3], int depth, int i, std::uint32_t out[3]) {
+  const std::uint32_t half = std::uint32_t{1} << (kOctreeMaxDepth - depth - 1);
+  for (int a = 0; a < 3; ++a) out[a] = key[a] + ((i >> a) & 1 ? half : 0);
+}
+
+// Counts a leaf at `depth` with smallest key `key` into the summary; false when
+// the occupied voxels exceed `max_occupied` (0 = no limit).
+bool AddLeaf(bool occupied, int depth, const std::uint32_t key[3], std::uint64_t max_occupied,
+             OctreeSummary* s) {
+  const int level = kOctreeMaxDepth - depth;
+  const std::uint64_t voxels = std::uint64_t{1} << (3 * level);
+  if (!occupied) {
+    s->free_voxels = s->free_voxels + voxels < s->free_voxels ? ~std::uint64_t{0} : s->free_voxels + voxels;
+    return true;
+  }
+  const bool first = s->occupied_voxels == 0;
+  s->occupied_voxels += voxels;  // <= 2^62 + 2^48 before the check: no overflow
+  for (int a = 0; a < 3; ++a) {
+    const std::int32_t lo = static_cast<std::int32_t>(key[a]) - 32768;
+    const std::int32_t hi = lo + (std::int32_t{1} << level) - 1;
+    s->occupied_min_key[a] = first ? lo : std::min(s->occupied_min_key[a], lo);
+    s->occupied_max_key[a] = first ? hi : std::max(s->occupied_max_key[a], hi);
+  }
+  return max_occupied == 0 || s->occupied_voxels <= max_occupied;
+}
+
+Status TooManyVoxels(std::uint64_t max_occupied, std::size_t offset) {
+  return Status::ResourceExhausted("the tree expands to more than " + Str(max_occupied) +
+                                   " occupied voxels at the finest resolution (at byte " +
+                                   Str(offset) + ")");
+}
+
+bool NextChild(Stack& stack, int& top, int* child_depth, std::uint32_t child_key[3]) {
   while (top >= 0) {
     Frame& frame = stack[top];
     if (frame.pending != 0) {
+      const int i = __builtin_ctz(frame.pending);
       frame.pending &= frame.pending - 1;  // children are read in order 0..7
       *child_depth = frame.depth + 1;
+      ChildKey(frame.key, frame.depth, i, child_key);
       return true;
     }
     --top;
@@ -234,7 +272,8 @@ Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes
 // bits per child i (bits 2i, 2i+1 of byte i/4): 00 unknown (no child), 10 free
 // leaf, 01 occupied leaf, 11 inner node whose record follows depth-first in
 // child order. Every non-00 code creates a node; the root is one more.
-Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSummary* summary) {
+Status ValidateBinaryData(std::string_view bytes, const Header& header, std::uint64_t max_occupied,
+                          OctreeSummary* summary) {
   std::size_t pos = header.data_offset;
   if (header.size == 0) {
     if (pos != bytes.size()) {
@@ -247,6 +286,7 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSu
   int top = -1;
   std::uint64_t nodes = 1;  // the root
   int depth = 0;            // depth of the node whose record comes next
+  std::uint32_t key[3] = {0, 0, 0};  // its smallest key
   int max_depth = 0;
   while (true) {
     if (depth >= kOctreeMaxDepth) return DeeperThanMax(pos);
@@ -262,6 +302,18 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSu
       const unsigned code = (codes >> (2 * i)) & 3u;
       if (code != 0) ++created;
       if (code == 3) inner |= 1u << i;
+      if (code == 1 || code == 2) {  // 1: free leaf, 2: occupied leaf
+        std::uint32_t child[3];
+        ChildKey(key, depth, i, child);
+        if (depth + 1 <= kOctreeMaxDepth && !AddLeaf(code == 2, depth + 1, child, max_occupied, summary)) {
+          return TooManyVoxels(max_occupied, pos);
+        }
+      }
+    }
+    // A root without children is one occupied leaf (OctoMap sets inner nodes
+    // to occupied before reading their children).
+    if (created == 0 && depth == 0 && !AddLeaf(true, 0, key, max_occupied, summary)) {
+      return TooManyVoxels(max_occupied, pos);
     }
     if (created == 0 && depth > 0) {
       return Status::InvalidArgument("inner node at byte " + Str(pos) +
@@ -272,8 +324,8 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSu
     nodes += static_cast<std::uint64_t>(created);
     if (nodes > header.size) return TooManyNodes(header.size, pos);
     if (created > 0) max_depth = std::max(max_depth, depth + 1);
-    stack[++top] = Frame{depth, inner};
-    if (!NextChild(stack, top, &depth)) break;
+    stack[++top] = Frame{depth, inner, {key[0], key[1], key[2]}};
+    if (!NextChild(stack, top, &depth, key)) break;
   }
   MAPD_RETURN_IF_ERROR(CheckTreeEnd(bytes, pos, nodes, header));
   summary->max_depth = max_depth;
@@ -283,7 +335,8 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, OctreeSu
 // .ot (OcTreeBaseImpl::readNodesRecurs + OcTreeDataNode<float>::readData):
 // each node is its float log-odds value (host byte order) and a byte whose bit i
 // says child i follows, depth-first in child order. Exactly 5 bytes per node.
-Status ValidateFullData(std::string_view bytes, const Header& header, OctreeSummary* summary) {
+Status ValidateFullData(std::string_view bytes, const Header& header, std::uint64_t max_occupied,
+                        OctreeSummary* summary) {
   std::size_t pos = header.data_offset;
   const std::uint64_t expected = pos + header.size * kFullNodeBytes;
   if (bytes.size() < expected) return Truncated(bytes.size(), expected);
@@ -298,6 +351,7 @@ Status ValidateFullData(std::string_view bytes, const Header& header, OctreeSumm
   int top = -1;
   std::uint64_t nodes = 0;
   int depth = 0;
+  std::uint32_t key[3] = {0, 0, 0};
   int max_depth = 0;
   while (true) {
     if (bytes.size() - pos < kFullNodeBytes) {
@@ -313,22 +367,20 @@ Status ValidateFullData(std::string_view bytes, const Header& header, OctreeSumm
     const auto mask = static_cast<unsigned char>(bytes[pos + sizeof(float)]);
     if (mask != 0 && depth >= kOctreeMaxDepth) return DeeperThanMax(pos);
     max_depth = std::max(max_depth, depth);
+    // A leaf: occupied as OcTree::isNodeOccupied says with the default
+    // threshold (probability 0.5, log-odds 0).
+    if (mask == 0 && !AddLeaf(log_odds >= 0.0f, depth, key, max_occupied, summary)) {
+      return TooManyVoxels(max_occupied, pos);
+    }
     pos += kFullNodeBytes;
-    stack[++top] = Frame{depth, mask};
-    if (!NextChild(stack, top, &depth)) break;
+    stack[++top] = Frame{depth, mask, {key[0], key[1], key[2]}};
+    if (!NextChild(stack, top, &depth, key)) break;
   }
   MAPD_RETURN_IF_ERROR(CheckTreeEnd(bytes, pos, nodes, header));
   summary->max_depth = max_depth;
   return Status::Ok();
 }
 
-std::string FormatDouble(double v) {
-  std::ostringstream out;
-  out.imbue(std::locale::classic());
-  out.precision(17);
-  out << v;
-  return out.str();
-}
 
 }  // namespace
 
@@ -351,9 +403,9 @@ StatusOr<OctreeSummary> ValidateOctree(std::string_view bytes, const OctreeReadL
   summary.num_nodes = header->size;
   summary.data_offset = header->data_offset;
   if (header->format == OctreeFormat::kBinary) {
-    MAPD_RETURN_IF_ERROR(ValidateBinaryData(bytes, *header, &summary));
+    MAPD_RETURN_IF_ERROR(ValidateBinaryData(bytes, *header, limits.max_occupied_voxels, &summary));
   } else {
-    MAPD_RETURN_IF_ERROR(ValidateFullData(bytes, *header, &summary));
+    MAPD_RETURN_IF_ERROR(ValidateFullData(bytes, *header, limits.max_occupied_voxels, &summary));
   }
   return summary;
 }
@@ -366,31 +418,21 @@ StatusOr<OcTreePtr> ReadOctree(std::string_view bytes, const OctreeReadLimits& l
   if (summary->num_nodes == 0) {
     return OcTreePtr(new octomap::OcTree(summary->resolution));
   }
-  // A canonical header written by us, so that OctoMap's lenient header parser
-  // sees exactly the values we validated; then the validated tree bytes.
+  // Only the validated tree bytes go to OctoMap, through its data readers
+  // (readBinaryData, readData): its header parsers (readBinary,
+  // AbstractOcTree::read) are lenient and print "Reading octree type ..." on
+  // stdout/stderr, which would land in mapd's logfmt log. The header values
+  // are the ones we validated.
   const bool binary = summary->format == OctreeFormat::kBinary;
-  std::string canonical(binary ? kBinaryMagic : kFullMagic);
-  canonical += "\nid OcTree\nsize " + Str(summary->num_nodes) + "\nres " +
-               FormatDouble(summary->resolution) + "\ndata\n";
-  const std::size_t header_size = canonical.size();
-  canonical.append(bytes.substr(summary->data_offset));
-  std::istringstream in(std::move(canonical), std::ios_base::in | std::ios_base::binary);
-
-  OcTreePtr tree;
+  const std::string_view data = bytes.substr(summary->data_offset);
+  std::istringstream in(std::string(data), std::ios_base::in | std::ios_base::binary);
+  OcTreePtr tree(new octomap::OcTree(summary->resolution));
   if (binary) {
-    tree.reset(new octomap::OcTree(summary->resolution));
-    if (!tree->readBinary(in)) {
-      return Status::Internal("OctoMap refused a validated .bt tree");
-    }
+    tree->readBinaryData(in);
   } else {
-    std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
-    auto* octree = dynamic_cast<octomap::OcTree*>(any.get());
-    if (octree == nullptr) return Status::Internal("OctoMap refused a validated .ot tree");
-    any.release();
-    tree.reset(octree);
+    tree->readData(in);
   }
-  const std::size_t expected_end = header_size + (bytes.size() - summary->data_offset);
-  if (in.fail() || static_cast<std::size_t>(in.tellg()) != expected_end ||
+  if (in.fail() || static_cast<std::size_t>(in.tellg()) != data.size() ||
       tree->size() != summary->num_nodes || tree->getResolution() != summary->resolution) {
     return Status::Internal("OctoMap read a validated tree differently (" + Str(tree->size()) +
                             " of " + Str(summary->num_nodes) + " nodes)");

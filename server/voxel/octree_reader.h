@@ -32,6 +32,13 @@ struct OctreeReadLimits {
   // max_bytes / kOctreeBytesPerNode. The default admits ~5.6 M nodes; the
   // largest shared map (new_college.bt) has 2.6 M.
   std::size_t max_bytes = std::size_t{256} << 20;
+  // Occupied voxels at the finest resolution after expansion (an occupied
+  // leaf at depth d stands for 8^(16-d) of them): counted during the walk,
+  // before OctoMap or VoxelGrid allocate anything, so that a small file that
+  // expands to a huge grid is refused (a 599 KB .bt can expand to 16.8 M
+  // voxels). 0 = no limit (the default: building a VoxelGrid has its own
+  // limit; mapd sets limits.max_submap_voxels here for uploads).
+  std::uint64_t max_occupied_voxels = 0;
 };
 
 // Estimated heap bytes per OctoMap node (16-byte node plus malloc overhead plus
@@ -52,12 +59,20 @@ struct OctreeSummary {
   std::uint64_t num_nodes = 0;     // equals the header's `size`
   int max_depth = 0;               // deepest node, root = 0, <= kOctreeMaxDepth
   std::size_t data_offset = 0;     // first byte after the `data` line
+  // Leaves expanded to the finest resolution, as VoxelGrid::FromOcTree and
+  // OcTree::isNodeOccupied see them (.ot: log-odds >= 0 is occupied).
+  std::uint64_t occupied_voxels = 0;
+  std::uint64_t free_voxels = 0;   // saturates at 2^64 - 1
+  // Inclusive key bounds of the occupied voxels (OctoMap keys minus 32768, as
+  // VoxelGrid's); meaningful only when occupied_voxels > 0.
+  std::int32_t occupied_min_key[3] = {0, 0, 0};
+  std::int32_t occupied_max_key[3] = {0, 0, 0};
 };
 
 // Parses and checks `bytes` without building a tree: header grammar (magic
 // line, `id OcTree`, `size`, `res`, `data`), resolution finite and in
 // (0, 1000] m, depth <= 16, node count within the limit and equal to `size`,
-// every byte consumed exactly. Iterative: stack use does not depend on input.
+// every byte consumed exactly, occupied voxels within the limit. Iterative: stack use does not depend on input.
 // Errors: InvalidArgument for malformed input, ResourceExhausted for input
 // beyond `limits`.
 StatusOr<OctreeSummary> ValidateOctree(std::string_view bytes, const OctreeReadLimits& limits = {});

@@ -240,3 +240,62 @@ TEST(OctreeReaderTest, MissingFileIsNotFound) {
 
 }  // namespace
 }  // namespace mapd::voxel
+
+namespace mapd::voxel {
+namespace {
+
+// The walk's voxel counts and bounds (what an upload is summarised and capped
+// by, without building a tree) equal what OctoMap and VoxelGrid build.
+void ExpectWalkMatchesTree(const std::string& bytes, const std::string& what) {
+  StatusOr<OctreeSummary> walk = ValidateOctree(bytes);
+  ASSERT_TRUE(walk.ok()) << what << ": " << walk.status().ToString();
+  StatusOr<OcTreePtr> tree = ReadOctree(bytes);
+  ASSERT_TRUE(tree.ok()) << what;
+  StatusOr<VoxelGrid> grid = VoxelGrid::FromOcTree(**tree);
+  ASSERT_TRUE(grid.ok()) << what;
+  EXPECT_EQ(walk->occupied_voxels, grid->num_occupied()) << what;
+  uint64_t free_voxels = 0;
+  for (auto it = (*tree)->begin_leafs(); it != (*tree)->end_leafs(); ++it) {
+    if (!(*tree)->isNodeOccupied(*it)) free_voxels += uint64_t{1} << (3 * (16 - static_cast<int>(it.getDepth())));
+  }
+  EXPECT_EQ(walk->free_voxels, free_voxels) << what;
+  if (!grid->empty()) {
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(walk->occupied_min_key[a], grid->min_key()[a]) << what << " axis " << a;
+      EXPECT_EQ(walk->occupied_max_key[a], grid->max_key()[a]) << what << " axis " << a;
+    }
+  }
+}
+
+TEST(OctreeReaderTest, WalkCountsVoxelsLikeTheBuiltGrid) {
+  octomap::OcTree tree = MakeTree();
+  tree.prune();  // coarse leaves: one leaf stands for many voxels
+  ExpectWalkMatchesTree(WriteBt(tree), "generated .bt");
+  ExpectWalkMatchesTree(WriteOt(tree), "generated .ot");
+  for (const char* name : {"geb079.bt", "fr_078_tidyup.bt"}) {
+    const std::string path = SharedOctomap(name);
+    if (!FileExists(path)) continue;
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    ExpectWalkMatchesTree(s.str(), name);
+  }
+}
+
+TEST(OctreeReaderTest, RefusesATinyFileThatExpandsBeyondTheVoxelCap) {
+  // Root plus one occupied leaf at depth 1: 8^15 voxels from 61 bytes.
+  std::string bt = "# Octomap OcTree binary file\nid OcTree\nsize 2\nres 0.1\ndata\n";
+  bt += std::string("\x02\x00", 2);
+  OctreeReadLimits limits;
+  limits.max_occupied_voxels = 1000;
+  const Status s = ValidateOctree(bt, limits).status();
+  EXPECT_EQ(s.code(), StatusCode::kResourceExhausted) << s.ToString();
+  EXPECT_THAT(s.message(), ::testing::HasSubstr("occupied voxels"));
+  limits.max_occupied_voxels = 0;  // no limit: valid, and counted exactly
+  StatusOr<OctreeSummary> summary = ValidateOctree(bt, limits);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  EXPECT_EQ(summary->occupied_voxels, uint64_t{1} << 45);
+}
+
+}  // namespace
+}  // namespace mapd::voxel

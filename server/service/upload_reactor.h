@@ -1,0 +1,60 @@
+// The UploadSubmap RPC on gRPC's callback API: no thread is held while a
+// client sends (or idles), unlike the synchronous API, where 3,000 idle
+// uploads held 3,000 server threads. SubmapService admits at most
+// limits.max_concurrent_uploads of them (the rest get RESOURCE_EXHAUSTED at
+// once) and ends those idle for limits.upload_idle_timeout_s. Once the client
+// half-closes, the bytes are validated and stored on a thread of their own
+// (SubmapService::StoreUpload: no tree is built, the writer commits), never on
+// a gRPC thread.
+#ifndef MAPD_SERVICE_UPLOAD_REACTOR_H_
+#define MAPD_SERVICE_UPLOAD_REACTOR_H_
+
+#include <chrono>
+#include <mutex>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "mapserver/v1/map_service.pb.h"
+#include "service/stream_limiter.h"
+
+namespace mapd::service {
+
+class SubmapService;
+
+// Owned by gRPC; deletes itself in OnDone().
+class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest> {
+ public:
+  // Starts reading. `service` outlives every reactor (it waits for them).
+  UploadReactor(SubmapService* service, grpc::CallbackServerContext* context,
+                mapserver::v1::SubmapInfo* response, StreamSlot slot);
+
+  void OnReadDone(bool ok) override;
+  void OnCancel() override;
+  void OnDone() override;
+
+  // Ends the upload with DEADLINE_EXCEEDED if nothing arrived for `idle_s`
+  // (called by the service's housekeeping, under its registry lock).
+  void ExpireIfIdle(std::chrono::steady_clock::time_point now, double idle_s);
+
+ private:
+  void FinishOnce(const grpc::Status& status);
+
+  SubmapService* const service_;
+  grpc::CallbackServerContext* const context_;
+  mapserver::v1::SubmapInfo* const response_;
+  StreamSlot slot_;
+
+  std::mutex mu_;
+  mapserver::v1::UploadSubmapRequest message_;  // the buffer of the outstanding read
+  bool finished_ = false;   // GUARDED_BY(mu_)
+  bool storing_ = false;    // GUARDED_BY(mu_), every byte is in: validating and storing
+  std::chrono::steady_clock::time_point last_activity_;  // GUARDED_BY(mu_)
+  size_t messages_ = 0;     // read so far
+  mapserver::v1::SubmapHeader header_;
+  std::string bytes_;
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_UPLOAD_REACTOR_H_

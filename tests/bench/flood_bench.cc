@@ -1,0 +1,231 @@
+// Stream flood against a real mapd process: client threads open and cancel
+// Ingest streams as fast as they can (target --streams in --seconds, the
+// HTTP/2 rapid open/cancel pattern) while a health checker and a normal robot
+// measure their latency, and mapd's RSS is sampled (peak, and --settle
+// seconds after the flood).
+//
+//   flood_bench [--streams 300000] [--seconds 10] [--threads 4] [--settle 10]
+//               [--mapd PATH] [mapd flags after --]
+//
+// Targets (issue "Safe on a real network"): health p99 < 100 ms, robot ack
+// p99 < 100 ms, RSS < 512 MiB, RSS after the flood within 2x of baseline.
+// Not a test: run it on demand (see docs/reliability.md).
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+
+#include "common/batches.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+#include "mapserver/v1/map_service.grpc.pb.h"
+
+namespace {
+
+namespace pb = mapserver::v1;
+using Clock = std::chrono::steady_clock;
+
+double RssMiB(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0;
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+// One grpc.health.v1.Health/Check; latency in ms, or -1 on failure.
+double HealthCheck(grpc::GenericStub& generic) {
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  grpc::CompletionQueue cq;
+  grpc::Slice empty;
+  grpc::ByteBuffer request(&empty, 1), response;
+  const auto t0 = Clock::now();
+  auto call = generic.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", request, &cq);
+  call->StartCall();
+  grpc::Status status;
+  call->Finish(&response, &status, reinterpret_cast<void*>(1));
+  void* tag = nullptr;
+  bool ok = false;
+  cq.Next(&tag, &ok);
+  if (!status.ok()) return -1;
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long streams = 300000;
+  double seconds = 10, settle = 10;
+  int threads = 4;
+  std::string mapd_binary = mapd::testing::kDefaultMapdBinary;
+  std::vector<std::string> mapd_args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    if (k == "--") {
+      for (++i; i < argc; ++i) mapd_args.push_back(argv[i]);
+      break;
+    }
+    if (i + 1 >= argc) return std::fprintf(stderr, "flood_bench: %s needs a value\n", k.c_str()), 2;
+    const std::string v = argv[++i];
+    if (k == "--streams") streams = std::stol(v);
+    else if (k == "--seconds") seconds = std::stod(v);
+    else if (k == "--threads") threads = std::stoi(v);
+    else if (k == "--settle") settle = std::stod(v);
+    else if (k == "--mapd") mapd_binary = v;
+    else return std::fprintf(stderr, "flood_bench: unknown flag %s\n", k.c_str()), 2;
+  }
+  mapd::testing::TempDir dir;
+  const mapd::testing::MapdProcess mapd = mapd::testing::StartMapd(dir.File("map.db"), mapd_args, mapd_binary);
+  if (mapd.port == 0) {
+    std::fprintf(stderr, "flood_bench: mapd did not start:\n%s\n", mapd.log().c_str());
+    return 1;
+  }
+  auto channel = grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials());
+  auto stub = pb::MapService::NewStub(channel);
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const double rss_baseline = RssMiB(mapd.pid);
+
+  std::atomic<bool> flooding{true}, done{false};
+  std::atomic<double> rss_peak{rss_baseline};
+  std::mutex mu;
+  std::vector<double> health_ms, ack_ms;
+  int health_failures = 0;
+  long acks_stored = 0, acks_other = 0;
+
+  // RSS sampler.
+  std::thread sampler([&] {
+    while (!done) {
+      const double r = RssMiB(mapd.pid);
+      if (r > rss_peak) rss_peak = r;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  // Health checker: every 20 ms on a connection of its own.
+  std::thread health([&] {
+    grpc::ChannelArguments a;
+    a.SetInt("mapd.bench.health", 1);
+    auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
+    grpc::GenericStub generic(ch);
+    while (flooding) {
+      const double ms = HealthCheck(generic);
+      std::lock_guard<std::mutex> lock(mu);
+      if (ms < 0) ++health_failures; else health_ms.push_back(ms);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  // A normal robot: one stream, a batch every 10 ms, ack latency per batch.
+  std::thread robot([&] {
+    grpc::ChannelArguments a;
+    a.SetInt("mapd.bench.robot", 1);
+    auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
+    auto robot_stub = pb::MapService::NewStub(ch);
+    grpc::ClientContext ctx;
+    auto stream = robot_stub->Ingest(&ctx);
+    std::mt19937_64 rng(7);
+    std::vector<Clock::time_point> sent;
+    std::thread reader([&] {
+      pb::IngestAck ack;
+      while (stream->Read(&ack)) {
+        const auto now = Clock::now();
+        std::lock_guard<std::mutex> lock(mu);
+        if (ack.seq() >= 1 && ack.seq() <= sent.size()) {
+          ack_ms.push_back(std::chrono::duration<double, std::milli>(now - sent[ack.seq() - 1]).count());
+        }
+        (ack.result() == pb::IngestAck::STORED ? acks_stored : acks_other)++;
+      }
+    });
+    for (uint64_t seq = 1; flooding; ++seq) {
+      const pb::ObservationBatch b = mapd::testing::RoomBatch("robot", "s1", seq, 2.0 + 0.01 * seq, 4.0, 0.0, &rng);
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        sent.push_back(Clock::now());
+      }
+      if (!stream->Write(b)) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    stream->WritesDone();
+    reader.join();
+    stream->Finish();
+  });
+
+  // The flood: each thread on its own connection(s), paced to the target rate.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  std::atomic<long> opened{0}, refused{0};
+  const auto t0 = Clock::now();
+  std::vector<std::thread> flood;
+  for (int t = 0; t < threads; ++t) {
+    flood.emplace_back([&, t] {
+      grpc::ChannelArguments a;
+      a.SetInt("mapd.bench.flood", t);
+      auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
+      auto s = pb::MapService::NewStub(ch);
+      const long mine = streams / threads;
+      for (long i = 0; i < mine; ++i) {
+        // Pace: stream i of this thread not before its share of the window.
+        const auto due = t0 + std::chrono::duration<double>(seconds * static_cast<double>(i) / mine);
+        if (Clock::now() < due) std::this_thread::sleep_until(due);
+        grpc::ClientContext ctx;
+        ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+        auto stream = s->Ingest(&ctx);
+        ctx.TryCancel();
+        const grpc::Status st = stream->Finish();
+        ++opened;
+        if (st.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) ++refused;
+      }
+    });
+  }
+  for (auto& t : flood) t.join();
+  const double flood_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  flooding = false;
+  health.join();
+  robot.join();
+  const double rss_flood_peak = rss_peak;
+  std::this_thread::sleep_for(std::chrono::duration<double>(settle));
+  const double rss_after = RssMiB(mapd.pid);
+  done = true;
+  sampler.join();
+  const double health_after = [&] {
+    grpc::GenericStub generic(channel);
+    return HealthCheck(generic);
+  }();
+  mapd::testing::Stop(mapd.pid, SIGTERM);
+
+  long log_lines = 0;
+  {
+    std::ifstream log(mapd.log_path);
+    std::string line;
+    while (std::getline(log, line)) ++log_lines;
+  }
+  std::printf("flood: %ld streams opened+cancelled in %.2f s (%.0f/s) from %d threads; %ld refused "
+              "RESOURCE_EXHAUSTED by the server\n",
+              opened.load(), flood_s, opened.load() / flood_s, threads, refused.load());
+  std::printf("health: %zu checks, p50 %.1f ms, p99 %.1f ms, max %.1f ms, %d failed; after the flood %.1f ms\n",
+              health_ms.size(), Percentile(health_ms, 0.5), Percentile(health_ms, 0.99),
+              Percentile(health_ms, 1.0), health_failures, health_after);
+  std::printf("robot: %zu acks (%ld stored, %ld other), ack p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+              ack_ms.size(), acks_stored, acks_other, Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99),
+              Percentile(ack_ms, 1.0));
+  std::printf("mapd RSS: baseline %.0f MiB, peak %.0f MiB, %.0f s after the flood %.0f MiB (%.2fx baseline)\n",
+              rss_baseline, rss_flood_peak, settle, rss_after, rss_after / rss_baseline);
+  std::printf("mapd log: %ld lines\n", log_lines);
+  return 0;
+}

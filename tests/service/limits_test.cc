@@ -1,0 +1,236 @@
+// Limits that hold under floods (config.h StreamLimits, SubmapOptions): a
+// flood of stream opens/cancels and idle uploads leaves health and a normal
+// robot answering with nothing lost; the server-wide stream cap, idle upload
+// expiry, and a malformed Ingest message (INVALID_ARGUMENT naming its index).
+// No timing thresholds: only generous deadlines.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <grpcpp/generic/generic_stub.h>
+
+#include "server_fixture.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::chrono::system_clock::time_point In(double seconds) {
+  return std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
+}
+
+// grpc.health.v1.Health/Check: true when SERVING (reply bytes 08 01).
+bool HealthServing(const std::shared_ptr<grpc::Channel>& channel) {
+  grpc::GenericStub generic(channel);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(In(30));
+  grpc::CompletionQueue cq;
+  grpc::Slice empty;
+  grpc::ByteBuffer request(&empty, 1), response;
+  auto call = generic.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", request, &cq);
+  call->StartCall();
+  grpc::Status status;
+  call->Finish(&response, &status, reinterpret_cast<void*>(1));
+  void* tag = nullptr;
+  bool ok = false;
+  if (!cq.Next(&tag, &ok) || !status.ok()) return false;
+  std::vector<grpc::Slice> slices;
+  if (!response.Dump(&slices).ok()) return false;
+  std::string bytes;
+  for (const auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+  return bytes == std::string("\x08\x01", 2);
+}
+
+grpc::ByteBuffer Serialized(const std::string& bytes) {
+  grpc::Slice slice(bytes);
+  return grpc::ByteBuffer(&slice, 1);
+}
+
+class LimitsTest : public ServerFixture {
+ protected:
+  void SetUp() override {
+    config_.streams.max_streams = 64;
+    config_.submaps.max_concurrent_uploads = 2;
+    config_.submaps.upload_idle_timeout_s = 1.0;
+    ServerFixture::SetUp();
+  }
+};
+
+TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
+  // The normal robot opens its stream before the flood and keeps it.
+  grpc::ClientContext robot_ctx;
+  robot_ctx.set_deadline(In(120));
+  auto robot = stub_->Ingest(&robot_ctx);
+  const std::vector<pb::ObservationBatch> batches = Walk("robot", 60);
+
+  // The flood: 20,000 Ingest streams opened and cancelled at once from 4
+  // threads on 4 connections, and idle UploadSubmap streams.
+  std::atomic<int> opened{0};
+  std::vector<std::thread> flood;
+  for (int t = 0; t < 4; ++t) {
+    flood.emplace_back([&, t] {
+      grpc::ChannelArguments args;
+      args.SetInt("mapd.test.connection", t);  // a connection of its own
+      auto channel = grpc::CreateCustomChannel(server_->address(), grpc::InsecureChannelCredentials(), args);
+      auto stub = pb::MapService::NewStub(channel);
+      for (int i = 0; i < 5000; ++i) {
+        grpc::ClientContext ctx;
+        ctx.set_deadline(In(30));
+        auto stream = stub->Ingest(&ctx);
+        ctx.TryCancel();
+        stream->Finish();
+        ++opened;
+      }
+    });
+  }
+  std::vector<std::unique_ptr<grpc::ClientContext>> upload_ctx;
+  std::vector<pb::SubmapInfo> upload_info(20);
+  std::vector<std::unique_ptr<grpc::ClientWriter<pb::UploadSubmapRequest>>> uploads;
+  for (int i = 0; i < 20; ++i) {
+    upload_ctx.push_back(std::make_unique<grpc::ClientContext>());
+    upload_ctx.back()->set_deadline(In(60));
+    uploads.push_back(stub_->UploadSubmap(upload_ctx.back().get(), &upload_info[i]));
+  }
+
+  // Meanwhile the robot streams and health is asked.
+  for (const auto& b : batches) ASSERT_TRUE(robot->Write(b));
+  EXPECT_TRUE(HealthServing(channel_));
+  for (auto& t : flood) t.join();
+  EXPECT_EQ(opened.load(), 20000);
+  robot->WritesDone();
+  std::vector<pb::IngestAck> acks;
+  pb::IngestAck ack;
+  while (robot->Read(&ack)) acks.push_back(ack);
+  const grpc::Status robot_status = robot->Finish();
+  ASSERT_TRUE(robot_status.ok()) << robot_status.error_message();
+  ASSERT_EQ(acks.size(), batches.size());
+  for (const auto& a : acks) EXPECT_EQ(a.result(), pb::IngestAck::STORED) << a.message();
+
+  // Idle uploads: at most max_concurrent_uploads were admitted; every one
+  // ends (refused at once, or ended by the idle timeout), none is stored.
+  int refused = 0;
+  for (auto& u : uploads) {
+    const grpc::Status s = u->Finish();
+    EXPECT_FALSE(s.ok());
+    refused += s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED ||
+               s.error_code() == grpc::StatusCode::UNIMPLEMENTED;
+  }
+  EXPECT_GE(refused, 18);
+
+  // Afterwards: health, reads and a new robot stream all work; nothing lost.
+  EXPECT_TRUE(HealthServing(channel_));
+  EXPECT_EQ(Stats().batches(), batches.size());
+  const std::vector<pb::IngestAck> more = Stream(Walk("robot2", 5));
+  ASSERT_EQ(more.size(), 5u);
+  for (const auto& a : more) EXPECT_EQ(a.result(), pb::IngestAck::STORED);
+  Features();
+  EXPECT_TRUE(last_status_.ok()) << last_status_.error_message();
+}
+
+TEST_F(LimitsTest, StreamsBeyondTheServerWideCapAreRefusedAtOnce) {
+  std::vector<std::unique_ptr<grpc::ClientContext>> ctx;
+  std::vector<std::unique_ptr<grpc::ClientReaderWriter<pb::ObservationBatch, pb::IngestAck>>> streams;
+  // Opening is asynchronous: a Write completes once the stream is admitted.
+  for (size_t i = 0; i < config_.streams.max_streams; ++i) {
+    ctx.push_back(std::make_unique<grpc::ClientContext>());
+    ctx.back()->set_deadline(In(60));
+    streams.push_back(stub_->Ingest(ctx.back().get()));
+    ASSERT_TRUE(streams.back()->Write(Walk("r" + std::to_string(i), 1)[0]));
+    pb::IngestAck ack;
+    ASSERT_TRUE(streams.back()->Read(&ack));
+  }
+  grpc::ClientContext extra_ctx;
+  extra_ctx.set_deadline(In(30));
+  auto extra = stub_->Ingest(&extra_ctx);
+  pb::IngestAck ack;
+  EXPECT_FALSE(extra->Read(&ack));
+  const grpc::Status s = extra->Finish();
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(s.error_message(), HasSubstr("limits.max_streams"));
+  for (auto& st : streams) {
+    st->WritesDone();
+    while (st->Read(&ack)) {
+    }
+    EXPECT_TRUE(st->Finish().ok());
+  }
+  // The places are given back.
+  EXPECT_EQ(Stream(Walk("after", 2)).size(), 2u);
+}
+
+TEST_F(LimitsTest, IdleUploadIsEnded) {
+  grpc::ClientContext ctx;
+  ctx.set_deadline(In(60));
+  pb::SubmapInfo info;
+  auto upload = stub_->UploadSubmap(&ctx, &info);
+  pb::UploadSubmapRequest header;
+  header.mutable_header()->set_robot_id("r1");
+  header.mutable_header()->set_name("idle");
+  header.mutable_header()->set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
+  upload->Write(header);
+  // ... and nothing more: ended after limits.upload_idle_timeout_s.
+  const grpc::Status s = upload->Finish();
+#if MAPD_TEST_WITH_VOXEL
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << s.error_message();
+  EXPECT_THAT(s.error_message(), HasSubstr("limits.upload_idle_timeout_s"));
+#else
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED);
+#endif
+}
+
+TEST_F(LimitsTest, MalformedIngestMessageEndsTheStreamWithInvalidArgument) {
+  // A raw stream: a valid batch, then bytes that are no ObservationBatch.
+  grpc::GenericStub generic(channel_);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(In(60));
+  grpc::CompletionQueue cq;
+  auto call = generic.PrepareCall(&ctx, "/mapserver.v1.MapService/Ingest", &cq);
+  auto wait = [&cq](intptr_t want) {
+    void* tag = nullptr;
+    bool ok = false;
+    EXPECT_TRUE(cq.Next(&tag, &ok));
+    EXPECT_EQ(reinterpret_cast<intptr_t>(tag), want);
+    return ok;
+  };
+  call->StartCall(reinterpret_cast<void*>(1));
+  ASSERT_TRUE(wait(1));
+  const pb::ObservationBatch good = Walk("r1", 1)[0];
+  call->Write(Serialized(good.SerializeAsString()), reinterpret_cast<void*>(2));
+  ASSERT_TRUE(wait(2));
+  // Field 1 (robot_id) claims 5 bytes, 2 follow: truncated.
+  call->Write(Serialized(std::string("\x0a\x05" "ab", 4)), reinterpret_cast<void*>(3));
+  wait(3);
+  call->WritesDone(reinterpret_cast<void*>(4));
+  wait(4);
+  std::vector<pb::IngestAck> acks;
+  for (;;) {
+    grpc::ByteBuffer buffer;
+    call->Read(&buffer, reinterpret_cast<void*>(5));
+    if (!wait(5)) break;
+    pb::IngestAck ack;
+    std::vector<grpc::Slice> slices;
+    ASSERT_TRUE(buffer.Dump(&slices).ok());
+    std::string bytes;
+    for (const auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+    ASSERT_TRUE(ack.ParseFromString(bytes));
+    acks.push_back(ack);
+  }
+  grpc::Status status;
+  call->Finish(&status, reinterpret_cast<void*>(6));
+  wait(6);
+  ASSERT_EQ(acks.size(), 1u);  // the good batch before it is acknowledged
+  EXPECT_EQ(acks[0].result(), pb::IngestAck::STORED);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("message 1 "));
+  EXPECT_THAT(status.error_message(), HasSubstr("not a valid ObservationBatch"));
+  // The server goes on.
+  EXPECT_EQ(Stream(Walk("r2", 2)).size(), 2u);
+}
+
+}  // namespace
+}  // namespace mapd::testing
