@@ -154,6 +154,7 @@ void IngestReactor::MaybeFinishLocked() {
       {{"robot", robot_}, {"peer", peer_}, {"stored", std::to_string(stored_)},
        {"duplicate", std::to_string(duplicates_)}, {"rejected", std::to_string(rejected_)},
        {"client_gone", broken_ ? "true" : "false"}});
+  slot_.Release();  // before the client sees the status (its next stream must find the place)
   Finish(end_status_);
 }
 

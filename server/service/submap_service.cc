@@ -284,6 +284,8 @@ void SubmapService::EndUpload(UploadReactor* reactor) {
   uploads_cv_.notify_all();
 }
 
+void SubmapService::ReleaseUploadSlot() { active_uploads_.fetch_sub(1); }
+
 void SubmapService::ExpireIdleUploads() {
   const auto now = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(uploads_mu_);
@@ -338,12 +340,13 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::Ca
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   if (draining_) return new Refused(ShuttingDown());
   std::lock_guard<std::mutex> lock(uploads_mu_);
-  if (uploads_.size() >= options_.max_concurrent_uploads) {
+  if (active_uploads_ >= options_.max_concurrent_uploads) {
     Log(LogLevel::kWarn, "upload_refused", {{"peer", context->peer()}, {"why", "max_concurrent_uploads"}});
     return new Refused(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                    std::to_string(uploads_.size()) +
+                                    std::to_string(active_uploads_.load()) +
                                         " uploads are in progress (limits.max_concurrent_uploads); retry later"));
   }
+  ++active_uploads_;
   auto* reactor = new UploadReactor(this, context, response, std::move(slot));
   uploads_.insert(reactor);
   return reactor;

@@ -89,6 +89,7 @@ class SubmapService {
   // Runs `store` on a thread of its own (the destructor waits for it).
   void RunStore(std::function<void()> store);
   void EndUpload(UploadReactor* reactor);  // from its OnDone
+  void ReleaseUploadSlot();                // when it finishes (once)
   grpc::Status List(const mapserver::v1::ListSubmapsRequest& request,
                     mapserver::v1::ListSubmapsResponse* response);
   grpc::Status Get(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest& request,
@@ -114,6 +115,9 @@ class SubmapService {
   std::condition_variable uploads_cv_;
   std::unordered_set<UploadReactor*> uploads_;  // GUARDED_BY(uploads_mu_), admitted, not done
   int storing_ = 0;                             // GUARDED_BY(uploads_mu_), RunStore threads alive
+  // Admitted, not finished; incremented under uploads_mu_, decremented
+  // without it (from FinishOnce, which ExpireIdleUploads calls under it).
+  std::atomic<size_t> active_uploads_{0};
 };
 
 }  // namespace mapd::service

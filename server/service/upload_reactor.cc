@@ -77,6 +77,10 @@ void UploadReactor::FinishOnce(const grpc::Status& status) {
     if (finished_) return;
     finished_ = true;
   }
+  // The places are given back before the client sees the status, so that a
+  // client's next upload is not refused by this one's tail.
+  slot_.Release();
+  service_->ReleaseUploadSlot();
   Finish(status);
 }
 
