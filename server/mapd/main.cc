@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
   mapd::Status s = ParseFlags(std::vector<std::string>(argv + 1, argv + argc), &config, &action);
   if (action == FlagAction::kHelp) {
     std::fputs(FlagsHelp().c_str(), stdout);
+    std::fputs("\nmapd token create|list|revoke --db FILE ...: manage tokens offline (mapd token --help;\n"
+               "docs/security.md)\n", stdout);
     return 0;
   }
   if (action == FlagAction::kVersion) {

@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "client/robot_client.h"
 #include "common/health.h"
 #include "service/support/auth_fixture.h"
 
@@ -278,6 +279,22 @@ TEST_F(AuthTest, SecretsNeverReachTheDatabaseFile) {
     EXPECT_NE(db.find(service::Sha256(secret)), std::string::npos) << "its hash should be";
   }
   StartServer();
+}
+
+TEST_F(AuthTest, RobotClientStreamsWithItsTokenAndGivesUpAtOnceWithoutOne) {
+  MakeTokens();
+  client::RobotClientOptions options;
+  options.token = robot_;
+  client::RobotClient ok(channel_, options);
+  for (const pb::ObservationBatch& b : Walk("r1", 4)) ok.Send(b);
+  EXPECT_TRUE(ok.Finish(std::chrono::seconds(30)).ok());
+  EXPECT_EQ(ok.counts().stored, 4u);
+
+  options.token = "mapd_1_wrong";
+  options.give_up_after = std::chrono::hours(1);  // a refusal must not be retried until then
+  client::RobotClient refused(channel_, options);
+  refused.Send(Walk("r1", 1, 10)[0]);
+  EXPECT_EQ(refused.Finish(std::chrono::hours(1)).error_code(), grpc::StatusCode::UNAUTHENTICATED);
 }
 
 }  // namespace
