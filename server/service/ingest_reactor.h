@@ -4,7 +4,9 @@
 // written as the writer commits them, so a robot can keep up to
 // `max_in_flight` batches in flight on one stream (reading pauses above that:
 // flow control rather than unbounded memory). A refused batch gets a REJECTED
-// ack and the stream goes on.
+// ack and the stream goes on; so is a batch for a robot id the caller may not
+// write (PERMISSION_DENIED; the first such batch of a stream is audited, and
+// its ack waits for that audit row to be committed).
 #ifndef MAPD_SERVICE_INGEST_REACTOR_H_
 #define MAPD_SERVICE_INGEST_REACTOR_H_
 
@@ -16,6 +18,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.pb.h"
+#include "service/access_control.h"
 #include "service/ingest_batch.h"
 #include "service/map_core.h"
 
@@ -31,7 +34,7 @@ class IngestReactor
     : public grpc::ServerBidiReactor<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, MapCore* core, const IngestOptions* options,
-                const std::atomic<bool>* draining);
+                const std::atomic<bool>* draining, AccessControl* access, Principal caller);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -48,6 +51,8 @@ class IngestReactor
   const IngestOptions* const options_;
   const std::atomic<bool>* const draining_;
   const std::string peer_;
+  AccessControl* const access_;
+  const Principal caller_;
 
   std::mutex mu_;
   mapserver::v1::ObservationBatch request_;  // the buffer of the outstanding read
@@ -61,6 +66,7 @@ class IngestReactor
   bool finished_ = false;    // GUARDED_BY(mu_)
   std::string robot_;        // for logs, from the first batch
   uint64_t stored_ = 0, duplicates_ = 0, rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
+  uint64_t denied_ = 0;  // batches refused PERMISSION_DENIED; reader thread only
 };
 
 }  // namespace mapd::service

@@ -1,7 +1,8 @@
 // The mapserver.v1.MapService implementation. Ingest runs on gRPC's callback
 // API (one reactor per robot stream, see ingest_reactor.h); the other RPCs are
 // short and use the synchronous API. Handlers translate between protobuf and
-// library types and reach the state through MapCore.
+// library types and reach the state through MapCore. Every handler first asks
+// AccessControl who calls and whether they may (auth.h has the role table).
 #ifndef MAPD_SERVICE_MAP_SERVICE_H_
 #define MAPD_SERVICE_MAP_SERVICE_H_
 
@@ -9,6 +10,8 @@
 #include <memory>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/access_control.h"
+#include "service/auth_service.h"
 #include "service/ingest_reactor.h"
 #include "service/map_core.h"
 #include "service/submap_service.h"
@@ -18,7 +21,8 @@ namespace mapd::service {
 class MapServiceImpl final
     : public mapserver::v1::MapService::WithCallbackMethod_Ingest<mapserver::v1::MapService::Service> {
  public:
-  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {});
+  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
+                 AuthOptions auth_options = {});
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
   // and merges in flight are abandoned (shutdown).
@@ -56,11 +60,25 @@ class MapServiceImpl final
                             const mapserver::v1::GetGlobalMapRequest* request,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
 
+  // Identities and the audit log: delegated to AuthService (auth_service.h).
+  grpc::Status CreateToken(grpc::ServerContext* context, const mapserver::v1::CreateTokenRequest* request,
+                           mapserver::v1::CreateTokenResponse* response) override;
+  grpc::Status ListTokens(grpc::ServerContext* context, const mapserver::v1::ListTokensRequest* request,
+                          mapserver::v1::ListTokensResponse* response) override;
+  grpc::Status RevokeToken(grpc::ServerContext* context, const mapserver::v1::RevokeTokenRequest* request,
+                           mapserver::v1::RevokeTokenResponse* response) override;
+  grpc::Status ListAudit(grpc::ServerContext* context, const mapserver::v1::ListAuditRequest* request,
+                         mapserver::v1::ListAuditResponse* response) override;
+  grpc::Status WhoAmI(grpc::ServerContext* context, const mapserver::v1::WhoAmIRequest* request,
+                      mapserver::v1::WhoAmIResponse* response) override;
+
  private:
   MapCore* const core_;
   const IngestOptions ingest_options_;
   std::atomic<bool> draining_{false};
+  AccessControl access_;
   SubmapService submaps_;
+  AuthService auth_;
 };
 
 }  // namespace mapd::service

@@ -36,6 +36,11 @@
 // UNIMPLEMENTED ("built without voxel support"); listing, fetching and
 // deleting stored submaps still work.
 //
+// - Who (access_control.h): an upload's header robot id and a deleted
+//   submap's robot are checked against the caller (a robot token touches
+//   only its own robot's submaps); uploads, deletes and merges (accepted or
+//   refused) are audited in the transaction that stores them.
+//
 // Thread safety: the handlers may run concurrently on any threads.
 #ifndef MAPD_SERVICE_SUBMAP_SERVICE_H_
 #define MAPD_SERVICE_SUBMAP_SERVICE_H_
@@ -44,6 +49,7 @@
 #include <memory>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/access_control.h"
 #include "service/config.h"
 #include "service/map_core.h"
 
@@ -53,7 +59,7 @@ class MergeRunner;
 
 class SubmapService {
  public:
-  SubmapService(MapCore* core, const SubmapOptions& options);
+  SubmapService(MapCore* core, const SubmapOptions& options, AccessControl* access);
   ~SubmapService();
 
   // Shutdown: new uploads and merges are refused with UNAVAILABLE, merges in
@@ -62,15 +68,15 @@ class SubmapService {
 
   grpc::Status Upload(grpc::ServerContext* context,
                       grpc::ServerReader<mapserver::v1::UploadSubmapRequest>* reader,
-                      mapserver::v1::SubmapInfo* response);
+                      mapserver::v1::SubmapInfo* response, const Principal& caller);
   grpc::Status List(const mapserver::v1::ListSubmapsRequest& request,
                     mapserver::v1::ListSubmapsResponse* response);
   grpc::Status Get(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest& request,
                    grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
-  grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request);
+  grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request, const Principal& caller);
   grpc::Status Merge(grpc::ServerContext* context,
                      const mapserver::v1::MergeSubmapsRequest& request,
-                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer);
+                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer, const Principal& caller);
   grpc::Status GetGlobalMap(grpc::ServerContext* context,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
@@ -81,6 +87,7 @@ class SubmapService {
 
   MapCore* const core_;
   const SubmapOptions options_;
+  AccessControl* const access_;
   std::atomic<bool> draining_{false};
   std::unique_ptr<MergeRunner> merges_;  // null without voxel support
 };
