@@ -12,8 +12,14 @@ namespace mapd::client {
 namespace pb = mapserver::v1;
 
 std::unique_ptr<grpc::ClientContext> Context::NewCallContext() const {
-  auto context = std::make_unique<grpc::ClientContext>();
+  auto context = NewStreamContext();
   context->set_deadline(std::chrono::system_clock::now() + timeout());
+  return context;
+}
+
+std::unique_ptr<grpc::ClientContext> Context::NewStreamContext() const {
+  auto context = std::make_unique<grpc::ClientContext>();
+  if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
   return context;
 }
 

@@ -28,11 +28,14 @@ enum ExitCode : int {
 struct Context {
   std::string server;      // host:port
   double timeout_s = 10;   // RPC deadline; for ingest/simulate the wait for the last acks
+  std::string token;       // bearer token (--token / $MAPD_TOKEN); empty: none
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<mapserver::v1::MapService::Stub> stub;
 
-  // A context whose deadline is now + timeout_s.
+  // A context whose deadline is now + timeout_s, carrying the token.
   std::unique_ptr<grpc::ClientContext> NewCallContext() const;
+  // The same without a deadline (uploads, merges, downloads take their time).
+  std::unique_ptr<grpc::ClientContext> NewStreamContext() const;
   std::chrono::milliseconds timeout() const;
 };
 

@@ -30,6 +30,11 @@ int RunSubmap(const Context& ctx, const CommandArgs& args);  // "submap upload .
 int RunMerge(const Context& ctx, const CommandArgs& args);
 int RunGlobalMap(const Context& ctx, const CommandArgs& args);
 
+// commands_auth.cc: tokens, the audit log, whoami
+int RunToken(const Context& ctx, const CommandArgs& args);  // "token create|list|revoke ..."
+int RunAudit(const Context& ctx, const CommandArgs& args);
+int RunWhoAmI(const Context& ctx, const CommandArgs& args);
+
 // commands_render.cc: top-down renderings of OctoMap files
 int RunRender(const Context& ctx, const CommandArgs& args);
 

@@ -36,6 +36,8 @@ const char kSimulateHelp[] =
     "(180 beams, 10 m, 1 cm noise), extract wall segments and stream them, one Ingest\n"
     "stream per robot, concurrently. Deterministic for a seed.\n"
     "  --robots N        number of robots (default 2), named sim-robot-1..N\n"
+    "  --robot-id ID     name the robots ID (one robot) or ID-1..N; a robot token\n"
+    "                    (--token) may write only its own robot id\n"
     "  --scans N         scans per robot (default 100), 0.2 m apart\n"
     "  --seed S          random seed (default 1)\n"
     "  --session NAME    session id (default sim-<UTC time>, so re-runs add data)\n"
@@ -97,6 +99,7 @@ int RunIngest(const Context& ctx, const CommandArgs& args) {
 
   RobotClientOptions options;
   options.give_up_after = ctx.timeout();
+  options.token = ctx.token;
   RobotClient client(ctx.channel, options);
   std::map<std::pair<std::string, uint64_t>, size_t> line_of;  // (session, seq) -> line number
   std::string line, parse_error;
@@ -138,7 +141,8 @@ int RunIngest(const Context& ctx, const CommandArgs& args) {
 int RunSimulate(const Context& ctx, const CommandArgs& args) {
   Args flags;
   const std::vector<FlagSpec> specs = {
-      {"--robots", true}, {"--scans", true}, {"--seed", true}, {"--session", true}, {"--export", true}};
+      {"--robots", true}, {"--scans", true}, {"--seed", true}, {"--session", true}, {"--export", true},
+      {"--robot-id", true}};
   if (int rc = ParseCommandArgs("simulate", kSimulateHelp, args, specs, &flags); rc != kContinue) return rc;
   if (!flags.positionals().empty()) {
     return UsageError("simulate", "unexpected argument '" + flags.positionals()[0] + "'");
@@ -158,7 +162,10 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
   const int64_t start_ns = NowNs();
   std::vector<SimRobotParams> params(robots);
   for (size_t i = 0; i < robots; ++i) {
-    params[i].robot_id = "sim-robot-" + std::to_string(i + 1);
+    const std::string base = flags.Get("--robot-id");
+    params[i].robot_id = base.empty() ? "sim-robot-" + std::to_string(i + 1)
+                         : robots == 1 ? base
+                                       : base + "-" + std::to_string(i + 1);
     params[i].session_id = session;
     params[i].seed = seed * 1000003 + i;
     params[i].start_fraction = static_cast<double>(i) / static_cast<double>(robots);
@@ -198,6 +205,7 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
       SimRobot sim(DefaultWorld(), params[i]);
       RobotClientOptions options;
       options.give_up_after = ctx.timeout();
+      options.token = ctx.token;
       RobotClient client(ctx.channel, options);
       for (uint64_t s = 0; s < scans; ++s) client.Send(sim.NextBatch());
       tallies[i].status = client.Finish(ctx.timeout());

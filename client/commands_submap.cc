@@ -154,9 +154,9 @@ int RunSubmap(const Context& ctx, const CommandArgs& args) {
     return kExitFailed;
   }
 
-  grpc::ClientContext call;  // no deadline: large uploads take their time
+  auto call = ctx.NewStreamContext();  // no deadline: large uploads take their time
   pb::SubmapInfo info;
-  std::unique_ptr<grpc::ClientWriter<pb::UploadSubmapRequest>> writer = ctx.stub->UploadSubmap(&call, &info);
+  std::unique_ptr<grpc::ClientWriter<pb::UploadSubmapRequest>> writer = ctx.stub->UploadSubmap(call.get(), &info);
   pb::UploadSubmapRequest message;
   *message.mutable_header() = header;
   bool open = writer->Write(message);
@@ -194,8 +194,8 @@ int RunMerge(const Context& ctx, const CommandArgs& args) {
     if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue) return rc;
   }
 
-  grpc::ClientContext call;  // no deadline: a merge takes as long as it takes
-  std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader = ctx.stub->MergeSubmaps(&call, request);
+  auto call = ctx.NewStreamContext();  // no deadline: a merge takes as long as it takes
+  std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader = ctx.stub->MergeSubmaps(call.get(), request);
   pb::MergeProgress progress;
   bool have_result = false;
   pb::MergeResult result;
@@ -248,10 +248,10 @@ int RunMerge(const Context& ctx, const CommandArgs& args) {
     }
     std::string data;
     pb::SubmapInfo info;
-    grpc::ClientContext get_call;
+    auto get_call = ctx.NewStreamContext();
     pb::GetSubmapRequest get_request;
     get_request.set_id(id);
-    const grpc::Status get_status = ReadChunks(ctx.stub->GetSubmap(&get_call, get_request).get(), &data, &info);
+    const grpc::Status get_status = ReadChunks(ctx.stub->GetSubmap(get_call.get(), get_request).get(), &data, &info);
     if (!get_status.ok()) {
       return ReportRpcError(ctx, Printf("merge: GetSubmap %llu", static_cast<unsigned long long>(id)), get_status);
     }
@@ -279,11 +279,11 @@ int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
   if (!render_path.empty()) {
     if (int rc = CheckRenderOutput("global-map", render_path, &render_format); rc != kContinue) return rc;
   }
-  grpc::ClientContext call;
+  auto call = ctx.NewStreamContext();
   std::string data;
   pb::SubmapInfo info;
   const grpc::Status status =
-      ReadChunks(ctx.stub->GetGlobalMap(&call, pb::GetGlobalMapRequest()).get(), &data, &info);
+      ReadChunks(ctx.stub->GetGlobalMap(call.get(), pb::GetGlobalMapRequest()).get(), &data, &info);
   if (!status.ok()) return ReportRpcError(ctx, "global-map", status);
   std::string error;
   if (!WriteOutput(output, data, &error)) {

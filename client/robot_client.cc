@@ -108,6 +108,7 @@ void RobotClient::CancelLocked() {
 
 void RobotClient::OpenStreamLocked() {
   context_ = std::make_unique<grpc::ClientContext>();
+  if (!options_.token.empty()) context_->AddMetadata("authorization", "Bearer " + options_.token);
   stream_ = stub_->Ingest(context_.get());
   half_closed_ = false;
   std::vector<pb::ObservationBatch> resend;
@@ -179,7 +180,9 @@ void RobotClient::ReaderLoop() {
                                                  " batches unacknowledged")
                               : status;
     const Clock::time_point give_up_at = *failing_since + options_.give_up_after;
-    if (now >= give_up_at) {
+    const bool refused = status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
+                         status.error_code() == grpc::StatusCode::PERMISSION_DENIED;
+    if (now >= give_up_at || refused) {
       gave_up_ = true;
       break;
     }

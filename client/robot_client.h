@@ -12,7 +12,8 @@
 //
 // Threading: Send(), WaitForAcks(), Finish() and the accessors may be called
 // from any thread. One internal reader thread collects the acks and owns
-// reconnection.
+// reconnection. A stream refused UNAUTHENTICATED or PERMISSION_DENIED is
+// final: the client gives up at once (retrying cannot help).
 #ifndef MAPD_CLIENT_ROBOT_CLIENT_H_
 #define MAPD_CLIENT_ROBOT_CLIENT_H_
 
@@ -43,6 +44,9 @@ struct RobotClientOptions {
   std::chrono::milliseconds max_backoff{2000};
   // Send() blocks while this many batches are unacknowledged (back-pressure).
   size_t max_unacknowledged = 1000;
+  // Sent as `authorization: Bearer <token>` on every stream (docs/security.md);
+  // empty: none (the open mode, or a client certificate on the channel).
+  std::string token;
 };
 
 // What the server answered, over the client's lifetime.

@@ -114,7 +114,32 @@ const std::vector<const char*>& Migrations() {
         state               BLOB NOT NULL
       );
       )sql",
-      // 2 -> 3: a scratch table for Store::ProbeWrite (empty between probes).
+      // 2 -> 3: identities and the audit log (docs/security.md). A token's
+      // secret is never stored: only SHA-256 of it. Rows are never deleted
+      // (a revoked token keeps its row), so "a token was ever created" is a
+      // fact that cannot be undone by a revocation.
+      R"sql(
+      CREATE TABLE tokens (
+        id            INTEGER PRIMARY KEY,
+        name          TEXT NOT NULL UNIQUE,
+        role          TEXT NOT NULL,              -- reader / robot / operator / admin
+        robot_id      TEXT NOT NULL DEFAULT '',   -- the robot a robot token writes for
+        secret_sha256 BLOB NOT NULL,
+        created_ns    INTEGER NOT NULL,
+        created_by    TEXT NOT NULL,
+        revoked_ns    INTEGER                     -- NULL while valid
+      );
+      CREATE TABLE audit_log (
+        id      INTEGER PRIMARY KEY,
+        time_ns INTEGER NOT NULL,
+        who     TEXT NOT NULL,   -- token name or certificate CN
+        role    TEXT NOT NULL,
+        action  TEXT NOT NULL,   -- e.g. UploadSubmap, MergeSubmaps, CreateToken
+        target  TEXT NOT NULL,
+        result  TEXT NOT NULL    -- ok, denied: ..., or the error
+      );
+      )sql",
+      // 3 -> 4: a scratch table for Store::ProbeWrite (empty between probes).
       R"sql(
       CREATE TABLE write_probe (data BLOB NOT NULL);
       )sql",

@@ -187,6 +187,30 @@ struct StoreCounts {
   uint64_t robots = 0, sessions = 0, observations = 0, raw_features = 0, fused = 0, submaps = 0;
 };
 
+// --- Identities and the audit log (storage/auth_store.cc).
+
+// A token as stored: never its secret, only the secret's SHA-256.
+struct TokenRecord {
+  int64_t id = 0;
+  std::string name;           // unique, chosen by whoever created it
+  std::string role;           // reader / robot / operator / admin (server/service/auth.h)
+  std::string robot_id;       // robot tokens: the robot they write for
+  std::string secret_sha256;  // 32 bytes
+  int64_t created_ns = 0;
+  std::string created_by;     // the creator's name ("mapd token create" offline)
+  int64_t revoked_ns = 0;     // 0 while valid
+};
+
+struct AuditEntry {
+  int64_t id = 0;
+  int64_t time_ns = 0;
+  std::string who;     // token name or certificate CN
+  std::string role;
+  std::string action;  // the RPC, e.g. "UploadSubmap"
+  std::string target;  // what it acted on, e.g. "robot r1 submap 'room'"
+  std::string result;  // "ok", "denied: ...", or the error
+};
+
 class Store;
 
 // A group of writes committed together. Rolls back unless Commit() succeeds.
@@ -236,6 +260,12 @@ class WriteTransaction {
   // The sessions TieSession() tied in this transaction, ascending.
   std::vector<int64_t> tied_session_ids() const;
   Status DeleteFused(uint64_t id);
+  // Stores a new token (id filled in by the store); AlreadyExists for a taken name.
+  StatusOr<int64_t> InsertToken(const TokenRecord& token);
+  // Marks a token revoked; NotFound if there is none, FailedPrecondition if
+  // it is revoked already.
+  Status RevokeToken(int64_t id, int64_t now_ns);
+  Status AppendAudit(const AuditEntry& entry);
   // Durable once this returns OK (per StoreOptions::synchronous_full).
   Status Commit();
 
@@ -303,6 +333,12 @@ class Store {
   StatusOr<std::vector<FusedRow>> LoadFused();
   StatusOr<std::vector<RobotSummary>> ListRobots();
   StatusOr<StoreCounts> Counts();
+  // Tokens: by id (NotFound), all of them by id, and whether any was ever made.
+  StatusOr<TokenRecord> GetToken(int64_t id);
+  StatusOr<std::vector<TokenRecord>> ListTokens();
+  StatusOr<bool> AnyTokenEver();
+  // The newest `limit` audit entries, newest first.
+  StatusOr<std::vector<AuditEntry>> ListAudit(int limit);
   // Robot name by id, from the cache (empty if unknown).
   std::string RobotName(int64_t robot_id) const;
   // Database file plus WAL, bytes.

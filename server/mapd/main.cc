@@ -8,6 +8,7 @@
 #include "service/config.h"
 #include "service/log.h"
 #include "service/server.h"
+#include "token_command.h"
 
 namespace {
 
@@ -23,11 +24,17 @@ mapd::service::LogLevel ParseLevel(const std::string& s) {
 
 int main(int argc, char** argv) {
   using namespace mapd::service;
+  // `mapd token ...`: offline token management (token_command.h).
+  if (argc > 1 && std::string(argv[1]) == "token") {
+    return mapd::RunTokenCommand(std::vector<std::string>(argv + 2, argv + argc));
+  }
   ServerConfig config;
   FlagAction action = FlagAction::kServe;
   mapd::Status s = ParseFlags(std::vector<std::string>(argv + 1, argv + argc), &config, &action);
   if (action == FlagAction::kHelp) {
     std::fputs(FlagsHelp().c_str(), stdout);
+    std::fputs("\nmapd token create|list|revoke --db FILE ...: manage tokens offline (mapd token --help;\n"
+               "docs/security.md)\n", stdout);
     return 0;
   }
   if (action == FlagAction::kVersion) {

@@ -91,6 +91,14 @@ Status ServerConfig::Validate() const {
                                    "' is not (or does not resolve only to) a loopback address; give tls_cert "
                                    "and tls_key, or allow_insecure_remote=true on a trusted network");
   }
+  if (!tls_client_ca.empty() && tls_cert.empty()) {
+    return Status::InvalidArgument("tls_client_ca needs tls_cert and tls_key (client certificates need TLS)");
+  }
+  if (!auth_required && tls_client_ca.empty() && !ListenIsLoopback(listen)) {
+    return Status::InvalidArgument("listen: '" + listen +
+                                   "' is not loopback; set auth.required = true (create tokens with "
+                                   "`mapd token create`) or tls_client_ca");
+  }
   return Status::Ok();
 }
 

@@ -63,6 +63,10 @@ struct ServerConfig {
   std::string tls_cert;                    // PEM files; required off loopback
   std::string tls_key;
   bool allow_insecure_remote = false;      // serve plaintext off loopback anyway
+  // Identities (docs/security.md): every call needs a credential even with no
+  // token in the database yet. Required off loopback (or tls_client_ca).
+  bool auth_required = false;
+  std::string tls_client_ca;               // PEM CA: clients must present a certificate it signed
   std::string log_level = "info";          // debug, info, warn, error
 
   // Every setting's range (the table), the libraries' own checks, and the

@@ -170,6 +170,11 @@ const std::vector<Setting>& Settings() {
       Text("tls_key", "PEM private key of tls_cert", [](C& c) -> auto& { return c.tls_key; }),
       Flag("allow_insecure_remote", "serve plaintext on a non-loopback address anyway (a trusted network only)",
            [](C& c) -> auto& { return c.allow_insecure_remote; }),
+      Flag("auth.required", "every call needs a token (or a client certificate), even before the first token "
+           "exists; required off loopback (false: loopback without tokens is open)",
+           [](C& c) -> auto& { return c.auth_required; }),
+      Text("tls_client_ca", "PEM CA file: clients must present a certificate it signed; its CN is the robot id "
+           "(needs tls_cert)", [](C& c) -> auto& { return c.tls_client_ca; }),
 
       Count("snapshot.every_observations", "snapshot the fusion state after this many fused observations; "
             "a restart replays only what came after the newest snapshot; 0 = never",

@@ -12,8 +12,15 @@ namespace mapd::service {
 namespace pb = mapserver::v1;
 
 IngestReactor::IngestReactor(grpc::CallbackServerContext* context, MapCore* core,
-                             const IngestOptions* options, const std::atomic<bool>* draining, StreamSlot slot)
-    : core_(core), options_(options), draining_(draining), peer_(context->peer()), slot_(std::move(slot)) {
+                             const IngestOptions* options, const std::atomic<bool>* draining,
+                             AccessControl* access, Principal caller, StreamSlot slot)
+    : core_(core),
+      options_(options),
+      draining_(draining),
+      peer_(context->peer()),
+      access_(access),
+      caller_(std::move(caller)),
+      slot_(std::move(slot)) {
   std::lock_guard<std::mutex> lock(mu_);
   reading_ = true;
   StartRead(&read_buffer_);
@@ -61,6 +68,20 @@ void IngestReactor::OnReadDone(bool ok) {
     ack.set_code(grpc::StatusCode::UNAVAILABLE);
     ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
     Complete(std::move(ack));
+  } else if (Status may = Authorize(caller_, Permission::kWrite, "Ingest", request_.robot_id()); !may.ok()) {
+    ack.set_result(pb::IngestAck::REJECTED);
+    ack.set_code(ToGrpcCode(may.code()));
+    ack.set_message(may.message());
+    if (denied_++ == 0) {
+      Log(LogLevel::kWarn, "permission_denied",
+          {{"who", caller_.name}, {"action", "Ingest"}, {"robot", request_.robot_id().substr(0, 64)}, {"peer", peer_}});
+      access_->AuditAsync(AccessControl::Entry(caller_, "Ingest", "robot " + request_.robot_id().substr(0, 128) +
+                                                   " session " + request_.session_id().substr(0, 128),
+                                               "denied: " + may.message()),
+                          [this, ack]() mutable { Complete(std::move(ack)); });
+    } else {
+      Complete(std::move(ack));
+    }
   } else {
     StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits);
     if (!batch.ok()) {

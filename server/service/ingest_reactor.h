@@ -4,7 +4,10 @@
 // written as the writer commits them, so a robot can keep up to
 // `max_in_flight` batches in flight on one stream (reading pauses above that:
 // flow control rather than unbounded memory). A refused batch gets a REJECTED
-// ack and the stream goes on.
+// ack and the stream goes on; so is a batch for a robot id the caller may not
+// write (PERMISSION_DENIED; the first such batch of a stream is audited, and
+// its ack waits for that audit row to be committed). The caller's role was
+// checked before the stream was opened (MapServiceImpl::Ingest).
 //
 // The method is registered raw (ByteBuffer in and out) and the reactor parses
 // each message itself: with the typed callback API a message that does not
@@ -23,6 +26,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.pb.h"
+#include "service/access_control.h"
 #include "service/ingest_batch.h"
 #include "service/map_core.h"
 #include "service/stream_limiter.h"
@@ -38,7 +42,7 @@ struct IngestOptions {
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, MapCore* core, const IngestOptions* options,
-                const std::atomic<bool>* draining, StreamSlot slot);
+                const std::atomic<bool>* draining, AccessControl* access, Principal caller, StreamSlot slot);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -55,6 +59,8 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   const IngestOptions* const options_;
   const std::atomic<bool>* const draining_;
   const std::string peer_;
+  AccessControl* const access_;
+  const Principal caller_;
 
   StreamSlot slot_;  // our place under limits.max_streams
 
@@ -73,6 +79,7 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   bool finished_ = false;    // GUARDED_BY(mu_)
   std::string robot_;        // for logs, from the first batch
   uint64_t stored_ = 0, duplicates_ = 0, rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
+  uint64_t denied_ = 0;  // batches refused PERMISSION_DENIED; reader thread only
 };
 
 }  // namespace mapd::service

@@ -149,6 +149,10 @@ class MapCore {
   // for that (like for any committed batch). After Stop(): Unavailable,
   // nothing runs.
   Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write);
+  // An asynchronous write job: `done` runs on the writer thread with its
+  // outcome (at once with Unavailable after Stop()). Nobody waits for it.
+  void SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
+                   std::function<void(const Status&)> done);
 
   // Stops taking batches, commits (and acknowledges) everything queued, stops
   // the fuser where it is (what it has not fused is committed and replayed at
@@ -190,9 +194,6 @@ class MapCore {
   void MaybeSnapshot(bool force);
   // Writer thread, after a snapshot is stored: raw retention, in rounds.
   void DropExpiredObservations();
-  // An asynchronous write job (nobody waits for it).
-  void SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
-                   std::function<void(const Status&)> done);
   // Fuser thread: the stored observations of newly tied sessions into engine_.
   void FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
   void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);

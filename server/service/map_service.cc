@@ -60,27 +60,41 @@ Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
 }  // namespace
 
 MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options,
-                               const StreamLimits& stream_limits)
+                               const StreamLimits& stream_limits, AuthOptions auth_options)
     : core_(core),
       ingest_options_(ingest_options),
       stream_limits_(stream_limits),
       limiter_(stream_limits),
-      submaps_(core, submap_options) {}
+      access_(core, auth_options),
+      submaps_(core, submap_options, &access_),
+      auth_(core, &access_) {}
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ingest(
     grpc::CallbackServerContext* context) {
+  // Recovery first (no database read while the map is rebuilt), then the
+  // stream limits: a flood of opens costs one refusal each, before any token
+  // lookup or audit row (the per-client bucket also bounds the refused writes
+  // audited below).
   if (Status ready = core_->CheckReady(); !ready.ok()) return new RefusedIngest(ToGrpcStatus(ready));
   StreamSlot slot;
   if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
     Log(LogLevel::kWarn, "stream_refused", {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new RefusedIngest(ToGrpcStatus(admitted));
   }
-  return new IngestReactor(context, core_, &ingest_options_, &draining_, std::move(slot));
+  StatusOr<Principal> who = access_.Authenticate(*context);
+  if (!who.ok()) return new RefusedIngest(ToGrpcStatus(who.status()));
+  // The role first (a reader never writes); each batch's robot id is then
+  // checked by the reactor.
+  if (Status may = access_.Check(*who, Permission::kWrite, "Ingest", who->robot_id, "stream"); !may.ok()) {
+    return new RefusedIngest(ToGrpcStatus(may));
+  }
+  return new IngestReactor(context, core_, &ingest_options_, &draining_, &access_, *std::move(who), std::move(slot));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
                                            const pb::FeatureMapRequest* request,
                                            grpc::ServerWriter<pb::FeatureMapPage>* writer) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok()) return ToGrpcStatus(p.status());
   FeatureQuery query;
   Status s = FromProto(*request, &query);
   if (!s.ok()) return ToGrpcStatus(s);
@@ -110,8 +124,9 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext*, const pb::ListRobotsRequest*,
+grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,
                                         pb::ListRobotsResponse* response) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok()) return ToGrpcStatus(p.status());
   StatusOr<std::vector<storage::RobotSummary>> robots = core_->store().ListRobots();
   if (!robots.ok()) return ToGrpcStatus(robots.status());
   for (const auto& r : *robots) {
@@ -127,8 +142,9 @@ grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext*, const pb::ListRobo
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRequest*,
+grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::GetStatsRequest*,
                                       pb::Stats* response) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetStats"); !p.ok()) return ToGrpcStatus(p.status());
   StatusOr<storage::StoreCounts> counts = core_->store().Counts();
   if (!counts.ok()) return ToGrpcStatus(counts.status());
   const CoreStats s = core_->Stats();
@@ -164,34 +180,83 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext*, const pb::GetStatsRe
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(grpc::CallbackServerContext* context,
                                                                                pb::SubmapInfo* response) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
-  if (draining_) return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
   StreamSlot slot;
   if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
     Log(LogLevel::kWarn, "stream_refused",
         {{"rpc", "UploadSubmap"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new Refused(ToGrpcStatus(admitted));
   }
-  return submaps_.Upload(context, response, std::move(slot));
+  StatusOr<Principal> p = access_.Authenticate(*context);
+  if (!p.ok()) return new Refused(ToGrpcStatus(p.status()));
+  // The role here; the header's robot id once it is read (UploadReactor).
+  if (Status may = access_.Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload"); !may.ok()) {
+    return new Refused(ToGrpcStatus(may));
+  }
+  if (draining_) return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
+  return submaps_.Upload(context, response, std::move(slot), *std::move(p));
 }
-grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext*, const pb::ListSubmapsRequest* request,
+grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context, const pb::ListSubmapsRequest* request,
                                          pb::ListSubmapsResponse* response) {
-  return submaps_.List(*request, response);
+  StatusOr<Principal> p = access_.Authenticate(*context);
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  pb::ListSubmapsRequest scoped = *request;
+  // A robot lists its own submaps unless it names another robot (refused).
+  if (p->role == Role::kRobot && !p->anonymous && scoped.robot_id().empty()) scoped.set_robot_id(p->robot_id);
+  if (Status may = Authorize(*p, Permission::kReadSubmaps, "ListSubmaps", scoped.robot_id()); !may.ok()) {
+    return ToGrpcStatus(may);
+  }
+  return submaps_.List(scoped, response);
 }
 grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context, const pb::GetSubmapRequest* request,
                                        grpc::ServerWriter<pb::DataChunk>* writer) {
+  StatusOr<Principal> p = access_.Authenticate(*context);
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  if (p->role == Role::kRobot && !p->anonymous) {
+    StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(static_cast<int64_t>(request->id()));
+    if (!meta.ok()) return ToGrpcStatus(meta.status());
+    if (Status may = Authorize(*p, Permission::kReadSubmaps, "GetSubmap", meta->robot); !may.ok()) {
+      return ToGrpcStatus(may);
+    }
+  }
   return submaps_.Get(context, *request, writer);
 }
-grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext*, const pb::DeleteSubmapRequest* request,
+grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context, const pb::DeleteSubmapRequest* request,
                                           pb::DeleteSubmapResponse*) {
-  return submaps_.Delete(*request);
+  StatusOr<Principal> p = access_.Authenticate(*context);
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  return submaps_.Delete(*request, *p);
 }
 grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context, const pb::MergeSubmapsRequest* request,
                                           grpc::ServerWriter<pb::MergeProgress>* writer) {
-  return submaps_.Merge(context, *request, writer);
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "MergeSubmaps");
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  return submaps_.Merge(context, *request, writer, *p);
 }
 grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context, const pb::GetGlobalMapRequest*,
                                           grpc::ServerWriter<pb::DataChunk>* writer) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok()) return ToGrpcStatus(p.status());
   return submaps_.GetGlobalMap(context, writer);
+}
+
+grpc::Status MapServiceImpl::CreateToken(grpc::ServerContext* context, const pb::CreateTokenRequest* request,
+                                         pb::CreateTokenResponse* response) {
+  return auth_.CreateToken(*context, *request, response);
+}
+grpc::Status MapServiceImpl::ListTokens(grpc::ServerContext* context, const pb::ListTokensRequest*,
+                                        pb::ListTokensResponse* response) {
+  return auth_.ListTokens(*context, response);
+}
+grpc::Status MapServiceImpl::RevokeToken(grpc::ServerContext* context, const pb::RevokeTokenRequest* request,
+                                         pb::RevokeTokenResponse* response) {
+  return auth_.RevokeToken(*context, *request, response);
+}
+grpc::Status MapServiceImpl::ListAudit(grpc::ServerContext* context, const pb::ListAuditRequest* request,
+                                       pb::ListAuditResponse* response) {
+  return auth_.ListAudit(*context, *request, response);
+}
+grpc::Status MapServiceImpl::WhoAmI(grpc::ServerContext* context, const pb::WhoAmIRequest*,
+                                    pb::WhoAmIResponse* response) {
+  return auth_.WhoAmI(*context, response);
 }
 
 }  // namespace mapd::service

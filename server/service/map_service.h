@@ -2,7 +2,9 @@
 // see ingest_reactor.h) and UploadSubmap (upload_reactor.h) run on gRPC's
 // callback API, admitted by a StreamLimiter (stream_limiter.h); the other
 // RPCs are short and use the synchronous API. Handlers translate between protobuf and
-// library types and reach the state through MapCore.
+// library types and reach the state through MapCore. Every handler first asks
+// AccessControl who calls and whether they may (auth.h has the role table);
+// the streams ask before they take a place under the stream limits.
 #ifndef MAPD_SERVICE_MAP_SERVICE_H_
 #define MAPD_SERVICE_MAP_SERVICE_H_
 
@@ -10,6 +12,8 @@
 #include <memory>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/access_control.h"
+#include "service/auth_service.h"
 #include "service/ingest_reactor.h"
 #include "service/map_core.h"
 #include "service/stream_limiter.h"
@@ -22,7 +26,7 @@ class MapServiceImpl final
           mapserver::v1::MapService::WithRawCallbackMethod_Ingest<mapserver::v1::MapService::Service>> {
  public:
   MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
-                 const StreamLimits& stream_limits = {});
+                 const StreamLimits& stream_limits = {}, AuthOptions auth_options = {});
 
   // Housekeeping, every second: ends idle uploads.
   void Tick() { submaps_.ExpireIdleUploads(); }
@@ -63,13 +67,27 @@ class MapServiceImpl final
                             const mapserver::v1::GetGlobalMapRequest* request,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
 
+  // Identities and the audit log: delegated to AuthService (auth_service.h).
+  grpc::Status CreateToken(grpc::ServerContext* context, const mapserver::v1::CreateTokenRequest* request,
+                           mapserver::v1::CreateTokenResponse* response) override;
+  grpc::Status ListTokens(grpc::ServerContext* context, const mapserver::v1::ListTokensRequest* request,
+                          mapserver::v1::ListTokensResponse* response) override;
+  grpc::Status RevokeToken(grpc::ServerContext* context, const mapserver::v1::RevokeTokenRequest* request,
+                           mapserver::v1::RevokeTokenResponse* response) override;
+  grpc::Status ListAudit(grpc::ServerContext* context, const mapserver::v1::ListAuditRequest* request,
+                         mapserver::v1::ListAuditResponse* response) override;
+  grpc::Status WhoAmI(grpc::ServerContext* context, const mapserver::v1::WhoAmIRequest* request,
+                      mapserver::v1::WhoAmIResponse* response) override;
+
  private:
   MapCore* const core_;
   const IngestOptions ingest_options_;
   const StreamLimits stream_limits_;
   std::atomic<bool> draining_{false};
   StreamLimiter limiter_;
+  AccessControl access_;
   SubmapService submaps_;
+  AuthService auth_;
 };
 
 }  // namespace mapd::service

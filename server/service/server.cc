@@ -50,8 +50,11 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();
-  server->service_ =
-      std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps, config.streams);
+  AuthOptions auth;  // docs/security.md
+  auth.required = config.auth_required;
+  auth.client_certs = !config.tls_client_ca.empty();
+  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps,
+                                                      config.streams, auth);
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -62,6 +65,12 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     if (!key.ok()) return Status::InvalidArgument("tls_key: " + key.status().message());
     grpc::SslServerCredentialsOptions ssl;
     ssl.pem_key_cert_pairs.push_back({*key, *cert});
+    if (!config.tls_client_ca.empty()) {  // mTLS: a client certificate's CN is a robot id
+      StatusOr<std::string> ca = ReadFile(config.tls_client_ca);
+      if (!ca.ok()) return Status::InvalidArgument("tls_client_ca: " + ca.status().message());
+      ssl.pem_root_certs = *ca;
+      ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+    }
     credentials = grpc::SslServerCredentials(ssl);
   }
 

@@ -60,6 +60,11 @@ void ToProto(const storage::SubmapMeta& m, pb::SubmapInfo* out) {
   out->set_created_ns(m.created_ns);
 }
 
+#define MAPD_RETURN_IF_ERROR_GRPC(expr)              \
+  do {                                               \
+    if (Status _s = (expr); !_s.ok()) return ToGrpcStatus(_s); \
+  } while (0)
+
 grpc::Status ShuttingDown() {
   return grpc::Status(grpc::StatusCode::UNAVAILABLE,
                       "mapd is shutting down; retry after it restarts");
@@ -122,6 +127,12 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
                                                : voxel::ResolutionPolicy::kRefuse;
   p.fusion_rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;
   return p;
+}
+
+std::string MergeTarget(int64_t merge_id, const std::vector<uint64_t>& ids) {
+  std::string s = "merge " + std::to_string(merge_id) + " of submaps";
+  for (uint64_t id : ids) s += " " + std::to_string(id);
+  return s;
 }
 
 geometry::Rigid3 ToRigid(const Eigen::Isometry3d& iso) {
@@ -204,8 +215,8 @@ StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
 
 }  // namespace
 
-SubmapService::SubmapService(MapCore* core, const SubmapOptions& options)
-    : core_(core), options_(options) {
+SubmapService::SubmapService(MapCore* core, const SubmapOptions& options, AccessControl* access)
+    : core_(core), options_(options), access_(access) {
 #if MAPD_WITH_VOXEL
   merges_ = std::make_unique<MergeRunner>(options.max_concurrent_merges, options.max_queued_merges);
 #endif
@@ -268,13 +279,19 @@ grpc::Status SubmapService::StreamSubmap(grpc::ServerContext* context, int64_t i
   return grpc::Status::OK;
 }
 
-grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request) {
+grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request, const Principal& caller) {
   if (request.id() == 0) return Invalid("id is required");
   if (draining_) return ShuttingDown();
   const int64_t id = static_cast<int64_t>(request.id());
-  Status s =
-      core_->ExecuteWrite([id](storage::WriteTransaction* txn) { return txn->DeleteSubmap(id); });
-  if (s.ok()) Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}});
+  StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(id);
+  if (!meta.ok()) return ToGrpcStatus(meta.status());
+  const std::string target = "robot " + meta->robot + " submap " + std::to_string(id) + " '" + meta->name + "'";
+  MAPD_RETURN_IF_ERROR_GRPC(access_->Check(caller, Permission::kDelete, "DeleteSubmap", meta->robot, target));
+  Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
+    MAPD_RETURN_IF_ERROR(txn->DeleteSubmap(id));
+    return txn->AppendAudit(AccessControl::Entry(caller, "DeleteSubmap", target, "ok"));
+  });
+  if (s.ok()) Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}, {"by", caller.name}});
   return ToGrpcStatus(s);
 }
 
@@ -305,10 +322,14 @@ void SubmapService::RunStore(std::function<void()> store) {
   }).detach();
 }
 
+std::string SubmapService::UploadTarget(const pb::SubmapHeader& header) {
+  return "robot " + header.robot_id() + " submap '" + header.name() + "'";
+}
+
 #if !MAPD_WITH_VOXEL
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::CallbackServerContext*,
-                                                                       pb::SubmapInfo*, StreamSlot) {
+                                                                       pb::SubmapInfo*, StreamSlot, Principal) {
   return new RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>(grpc::Status(
       grpc::StatusCode::UNIMPLEMENTED,
       "UploadSubmap: this mapd was built without voxel support (MAPD_WITH_VOXEL=OFF)"));
@@ -321,12 +342,12 @@ grpc::Status SubmapService::AppendUploadChunk(const pb::SubmapHeader&, size_t, p
                                               std::string*) {
   return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "built without voxel support");
 }
-grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader&, std::string, pb::SubmapInfo*) {
+grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader&, std::string, pb::SubmapInfo*, const Principal&) {
   return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "built without voxel support");
 }
 
 grpc::Status SubmapService::Merge(grpc::ServerContext*, const pb::MergeSubmapsRequest&,
-                                  grpc::ServerWriter<pb::MergeProgress>*) {
+                                  grpc::ServerWriter<pb::MergeProgress>*, const Principal&) {
   return grpc::Status(
       grpc::StatusCode::UNIMPLEMENTED,
       "MergeSubmaps: this mapd was built without voxel support (MAPD_WITH_VOXEL=OFF)");
@@ -336,7 +357,7 @@ grpc::Status SubmapService::Merge(grpc::ServerContext*, const pb::MergeSubmapsRe
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::CallbackServerContext* context,
                                                                        pb::SubmapInfo* response,
-                                                                       StreamSlot slot) {
+                                                                       StreamSlot slot, Principal caller) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   if (draining_) return new Refused(ShuttingDown());
   std::lock_guard<std::mutex> lock(uploads_mu_);
@@ -347,7 +368,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::Ca
                                         " uploads are in progress (limits.max_concurrent_uploads); retry later"));
   }
   ++active_uploads_;
-  auto* reactor = new UploadReactor(this, context, response, std::move(slot));
+  auto* reactor = new UploadReactor(this, context, response, std::move(slot), std::move(caller));
   uploads_.insert(reactor);
   return reactor;
 }
@@ -380,7 +401,7 @@ grpc::Status SubmapService::AppendUploadChunk(const pb::SubmapHeader& header, si
 }
 
 grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::string bytes,
-                                        pb::SubmapInfo* response) {
+                                        pb::SubmapInfo* response, const Principal& caller) {
   if (bytes.empty()) return Invalid("the upload has a header but no data");
 
   // The magic line first: a clear message when the header names the other format.
@@ -439,7 +460,8 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
     StatusOr<int64_t> r = txn->InsertSubmap(submap);
     if (!r.ok()) return r.status();
     id = *r;
-    return Status::Ok();
+    return txn->AppendAudit(
+        AccessControl::Entry(caller, "UploadSubmap", UploadTarget(header) + " id " + std::to_string(id), "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);
   StatusOr<storage::SubmapMeta> stored = core_->store().GetSubmap(id);
@@ -456,7 +478,7 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
 
 grpc::Status SubmapService::Merge(grpc::ServerContext* context,
                                   const pb::MergeSubmapsRequest& request,
-                                  grpc::ServerWriter<pb::MergeProgress>* writer) {
+                                  grpc::ServerWriter<pb::MergeProgress>* writer, const Principal& caller) {
   if (request.submap_ids_size() < 2) return Invalid("submap_ids: give two or more submap ids");
   std::unordered_set<uint64_t> distinct;
   for (uint64_t id : request.submap_ids()) {
@@ -537,7 +559,8 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
       StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
       if (!r.ok()) return r.status();
       merge_id = r->merge_id;
-      return Status::Ok();
+      return txn->AppendAudit(AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, ids),
+                                                   "refused: " + why.ToString()));
     });
     Log(LogLevel::kInfo, "merge_refused",
         {{"merge", std::to_string(merge_id)},
@@ -604,6 +627,8 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
     StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
     if (!r.ok()) return r.status();
     stored = *r;
+    MAPD_RETURN_IF_ERROR(txn->AppendAudit(
+        AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, ids), "ok")));
     for (const auto& [session_id, T_map_frame] : *ties)
       MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
     tied = ties->size();

@@ -40,6 +40,11 @@
 // UNIMPLEMENTED ("built without voxel support"); listing, fetching and
 // deleting stored submaps still work.
 //
+// - Who (access_control.h): an upload's header robot id and a deleted
+//   submap's robot are checked against the caller (a robot token touches
+//   only its own robot's submaps); uploads, deletes and merges (accepted or
+//   refused) are audited in the transaction that stores them.
+//
 // Thread safety: the handlers may run concurrently on any threads.
 #ifndef MAPD_SERVICE_SUBMAP_SERVICE_H_
 #define MAPD_SERVICE_SUBMAP_SERVICE_H_
@@ -53,6 +58,7 @@
 #include <unordered_set>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/access_control.h"
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/stream_limiter.h"
@@ -64,7 +70,7 @@ class UploadReactor;
 
 class SubmapService {
  public:
-  SubmapService(MapCore* core, const SubmapOptions& options);
+  SubmapService(MapCore* core, const SubmapOptions& options, AccessControl* access);
   ~SubmapService();
 
   // Shutdown: new uploads and merges are refused with UNAVAILABLE, merges in
@@ -72,9 +78,11 @@ class SubmapService {
   void StartDraining();
 
   // A reactor for one upload (or a refusal: shutdown, too many uploads).
+  // `caller` may write (its role was checked); the reactor checks the
+  // header's robot id against it before accepting any chunk.
   grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* Upload(grpc::CallbackServerContext* context,
                                                                      mapserver::v1::SubmapInfo* response,
-                                                                     StreamSlot slot);
+                                                                     StreamSlot slot, Principal caller);
   // Ends uploads idle for longer than upload_idle_timeout_s (called every second).
   void ExpireIdleUploads();
 
@@ -84,8 +92,12 @@ class SubmapService {
                                  mapserver::v1::SubmapHeader* header);
   grpc::Status AppendUploadChunk(const mapserver::v1::SubmapHeader& header, size_t index,
                                  mapserver::v1::UploadSubmapRequest* message, std::string* bytes);
+  // The audit row of a stored upload is committed with it.
   grpc::Status StoreUpload(const mapserver::v1::SubmapHeader& header, std::string bytes,
-                           mapserver::v1::SubmapInfo* response);
+                           mapserver::v1::SubmapInfo* response, const Principal& caller);
+  // What the audit log names for an upload: "robot R submap 'N'".
+  static std::string UploadTarget(const mapserver::v1::SubmapHeader& header);
+  AccessControl* access() const { return access_; }
   // Runs `store` on a thread of its own (the destructor waits for it).
   void RunStore(std::function<void()> store);
   void EndUpload(UploadReactor* reactor);  // from its OnDone
@@ -94,10 +106,10 @@ class SubmapService {
                     mapserver::v1::ListSubmapsResponse* response);
   grpc::Status Get(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest& request,
                    grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
-  grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request);
+  grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request, const Principal& caller);
   grpc::Status Merge(grpc::ServerContext* context,
                      const mapserver::v1::MergeSubmapsRequest& request,
-                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer);
+                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer, const Principal& caller);
   grpc::Status GetGlobalMap(grpc::ServerContext* context,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
@@ -108,6 +120,7 @@ class SubmapService {
 
   MapCore* const core_;
   const SubmapOptions options_;
+  AccessControl* const access_;
   std::atomic<bool> draining_{false};
   std::unique_ptr<MergeRunner> merges_;  // null without voxel support
 

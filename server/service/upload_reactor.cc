@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "service/status_mapping.h"
 #include "service/submap_service.h"
 
 namespace mapd::service {
@@ -9,8 +10,12 @@ namespace mapd::service {
 namespace pb = mapserver::v1;
 
 UploadReactor::UploadReactor(SubmapService* service, grpc::CallbackServerContext* context,
-                             pb::SubmapInfo* response, StreamSlot slot)
-    : service_(service), context_(context), response_(response), slot_(std::move(slot)) {
+                             pb::SubmapInfo* response, StreamSlot slot, Principal caller)
+    : service_(service),
+      context_(context),
+      response_(response),
+      slot_(std::move(slot)),
+      caller_(std::move(caller)) {
   std::lock_guard<std::mutex> lock(mu_);
   last_activity_ = std::chrono::steady_clock::now();
   StartRead(&message_);
@@ -36,7 +41,7 @@ void UploadReactor::OnReadDone(bool ok) {
     storing_ = true;
     lock.unlock();
     service_->RunStore([this] {
-      grpc::Status s = service_->StoreUpload(header_, std::move(bytes_), response_);
+      grpc::Status s = service_->StoreUpload(header_, std::move(bytes_), response_, caller_);
       FinishOnce(s);
     });
     return;
@@ -49,8 +54,26 @@ void UploadReactor::OnReadDone(bool ok) {
     FinishOnce(s);
     return;
   }
+  if (index == 0 && !CallerMayUpload()) return;
   lock.lock();
   if (!finished_) StartRead(&message_);
+}
+
+bool UploadReactor::CallerMayUpload() {
+  if (Authorize(caller_, Permission::kWrite, "UploadSubmap", header_.robot_id()).ok()) return true;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (finished_) return false;  // cancelled or expired meanwhile: nothing to answer
+    storing_ = true;              // the audit's completion ends the call
+  }
+  service_->access()->CheckAsync(caller_, Permission::kWrite, "UploadSubmap", header_.robot_id(),
+                                 SubmapService::UploadTarget(header_), [this](const Status& may) {
+                                   // Authorize is a pure function: CheckAsync refuses too.
+                                   FinishOnce(may.ok() ? grpc::Status(grpc::StatusCode::INTERNAL,
+                                                                      "authorization changed during the upload")
+                                                       : ToGrpcStatus(may));
+                                 });
+  return false;
 }
 
 void UploadReactor::ExpireIfIdle(std::chrono::steady_clock::time_point now, double idle_s) {

@@ -6,6 +6,13 @@
 // half-closes, the bytes are validated and stored on a thread of their own
 // (SubmapService::StoreUpload: no tree is built, the writer commits), never on
 // a gRPC thread.
+//
+// Who: the caller was authenticated, and its role checked, when the stream
+// was opened (MapServiceImpl::UploadSubmap). Once the header arrives, its
+// robot id is checked against the caller (a robot uploads, and squats names,
+// only for itself) before any chunk is accepted: a refusal is audited and
+// ends the call with PERMISSION_DENIED once the audit row is committed
+// (AccessControl::CheckAsync; no gRPC thread waits for that commit).
 #ifndef MAPD_SERVICE_UPLOAD_REACTOR_H_
 #define MAPD_SERVICE_UPLOAD_REACTOR_H_
 
@@ -16,6 +23,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.pb.h"
+#include "service/access_control.h"
 #include "service/stream_limiter.h"
 
 namespace mapd::service {
@@ -27,7 +35,7 @@ class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmap
  public:
   // Starts reading. `service` outlives every reactor (it waits for them).
   UploadReactor(SubmapService* service, grpc::CallbackServerContext* context,
-                mapserver::v1::SubmapInfo* response, StreamSlot slot);
+                mapserver::v1::SubmapInfo* response, StreamSlot slot, Principal caller);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
@@ -39,16 +47,22 @@ class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmap
 
  private:
   void FinishOnce(const grpc::Status& status);
+  // After the header: true when the caller may upload for its robot id;
+  // otherwise the refusal finishes the call (asynchronously, once audited).
+  bool CallerMayUpload();
 
   SubmapService* const service_;
   grpc::CallbackServerContext* const context_;
   mapserver::v1::SubmapInfo* const response_;
   StreamSlot slot_;
+  const Principal caller_;
 
   std::mutex mu_;
   mapserver::v1::UploadSubmapRequest message_;  // the buffer of the outstanding read
   bool finished_ = false;   // GUARDED_BY(mu_)
-  bool storing_ = false;    // GUARDED_BY(mu_), every byte is in: validating and storing
+  // GUARDED_BY(mu_): every byte is in (validating and storing), or a refusal
+  // is being audited; either way that work finishes the call, not a cancel.
+  bool storing_ = false;
   std::chrono::steady_clock::time_point last_activity_;  // GUARDED_BY(mu_)
   size_t messages_ = 0;     // read so far
   mapserver::v1::SubmapHeader header_;

@@ -154,3 +154,54 @@ TEST_F(MapctlE2eTest, ServerExitsCleanlyOnSigterm) {
 
 }  // namespace
 }  // namespace mapd::testing
+
+namespace mapd::testing {
+namespace {
+
+// Bootstrap as docs/security.md describes it: the first admin token from the
+// database file, then everything else through mapctl with tokens.
+TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
+  CommandResult r = RunCommand({MAPD_BINARY, "token", "create", "--db", dir_.File("map.db"), "--role", "admin",
+                                "--name", "root"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string admin = r.out.substr(0, r.out.find('\n'));
+  ASSERT_EQ(admin.rfind("mapd_", 0), 0u) << r.out;
+
+  r = Mapctl({"status"});  // a token exists now: no anonymous calls
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("UNAUTHENTICATED"));
+
+  r = Mapctl({"--token", admin, "token", "create", "--name", "r1-key", "--role", "robot", "--robot", "r1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string robot = r.out.substr(0, r.out.find('\n'));
+  r = Mapctl({"--token", robot, "whoami"});
+  EXPECT_THAT(r.out, HasSubstr("r1-key (role robot, robot r1)"));
+
+  // The robot streams as itself; as anyone else it is refused (exit 1).
+  r = Mapctl({"--token", robot, "simulate", "--robots", "1", "--robot-id", "r1", "--scans", "20"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("20 stored"));
+  r = Mapctl({"--token", robot, "simulate", "--robots", "1", "--scans", "5"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("PERMISSION_DENIED"));
+  r = Mapctl({"--token", robot, "audit"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("read_audit"));
+
+  r = Mapctl({"--token", admin, "token", "list"});
+  EXPECT_THAT(r.out, HasSubstr("r1-key"));
+  r = Mapctl({"--token", admin, "token", "revoke", "2"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl({"--token", robot, "status"});
+  EXPECT_THAT(r.err, HasSubstr("revoked"));
+
+  r = Mapctl({"--token", admin, "audit", "--limit", "10"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("RevokeToken"));
+  EXPECT_THAT(r.out, HasSubstr("r1-key"));
+  EXPECT_THAT(r.out, HasSubstr("denied"));
+  EXPECT_THAT(r.out, HasSubstr("mapd token (offline)"));
+}
+
+}  // namespace
+}  // namespace mapd::testing

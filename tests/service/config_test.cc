@@ -64,7 +64,21 @@ TEST(ConfigTest, RemoteListenNeedsTlsOrAnExplicitOptOut) {
   ServerConfig c;
   EXPECT_THAT(Parse({"--listen", "0.0.0.0:50051"}, &c).message(), HasSubstr("tls_cert"));
   ServerConfig d;
-  EXPECT_TRUE(Parse({"--listen", "0.0.0.0:50051", "--allow_insecure_remote", "true"}, &d).ok());
+  EXPECT_TRUE(
+      Parse({"--listen", "0.0.0.0:50051", "--allow_insecure_remote", "true", "--auth.required", "true"}, &d).ok());
+}
+
+TEST(ConfigTest, RemoteListenNeedsAuth) {
+  ServerConfig c;
+  const Status s = Parse({"--listen", "0.0.0.0:50051", "--tls_cert", "c.pem", "--tls_key", "k.pem"}, &c);
+  EXPECT_THAT(s.message(), HasSubstr("auth.required"));
+  ServerConfig d;
+  EXPECT_TRUE(Parse({"--listen", "0.0.0.0:50051", "--tls_cert", "c.pem", "--tls_key", "k.pem",
+                     "--tls_client_ca", "ca.pem"}, &d).ok());
+  ServerConfig e;
+  EXPECT_THAT(Parse({"--tls_client_ca", "ca.pem"}, &e).message(), HasSubstr("tls_client_ca needs tls_cert"));
+  ServerConfig f;
+  EXPECT_THAT(Parse({"--auth.required", "maybe"}, &f).message(), HasSubstr("auth.required"));
 }
 
 TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {

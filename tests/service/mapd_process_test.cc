@@ -147,6 +147,9 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   {
     auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
+    // If recovery ends before the stream opens, the stream is accepted and no
+    // ack would ever come: the deadline ends it (the checks below then skip).
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
     auto stream = stub->Ingest(&ctx);
     pb::IngestAck ack;
     EXPECT_FALSE(stream->Read(&ack));

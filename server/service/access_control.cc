@@ -1,0 +1,153 @@
+#include "service/access_control.h"
+
+#include "common/clock.h"
+#include "service/log.h"
+#include "service/token.h"
+
+namespace mapd::service {
+namespace {
+
+constexpr char kBearer[] = "Bearer ";
+
+bool IsWrite(Permission p) {
+  return p == Permission::kWrite || p == Permission::kDelete || p == Permission::kMerge ||
+         p == Permission::kManageTokens;
+}
+
+std::string_view View(const grpc::string_ref& s) { return std::string_view(s.data(), s.size()); }
+
+}  // namespace
+
+bool AccessControl::Required() {
+  if (options_.required || options_.client_certs || tokens_exist_.load()) return true;
+  StatusOr<bool> any = core_->store().AnyTokenEver();
+  // A database that cannot be read fails closed.
+  if (!any.ok() || *any) {
+    if (any.ok()) tokens_exist_ = true;
+    return true;
+  }
+  return false;
+}
+
+StatusOr<Principal> AccessControl::FromToken(std::string_view bearer) {
+  int64_t id = 0;
+  std::string secret;
+  Status parsed = ParseToken(bearer, &id, &secret);
+  if (!parsed.ok()) return Status::Unauthenticated("the bearer token is malformed: " + parsed.message());
+  StatusOr<storage::TokenRecord> record = core_->store().GetToken(id);
+  const Status unknown = Status::Unauthenticated("unknown token (wrong secret or no such token)");
+  if (!record.ok()) return record.status().code() == StatusCode::kNotFound ? unknown : record.status();
+  if (!ConstantTimeEqual(Sha256(secret), record->secret_sha256)) return unknown;
+  if (record->revoked_ns != 0) {
+    return Status::Unauthenticated("token '" + record->name + "' was revoked; ask an admin for a new one");
+  }
+  Principal p;
+  p.name = record->name;
+  p.robot_id = record->robot_id;
+  if (!ParseRole(record->role, &p.role)) return Status::Internal("token '" + record->name + "' has unknown role");
+  tokens_exist_ = true;
+  return p;
+}
+
+StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& context) {
+  const auto& metadata = context.client_metadata();
+  if (auto it = metadata.find("authorization"); it != metadata.end()) {
+    const std::string_view value = View(it->second);
+    if (value.substr(0, sizeof(kBearer) - 1) != kBearer) {
+      return Status::Unauthenticated("the authorization metadata must be 'Bearer <token>'");
+    }
+    StatusOr<Principal> p = FromToken(value.substr(sizeof(kBearer) - 1));
+    if (!p.ok()) Log(LogLevel::kWarn, "auth_refused", {{"peer", context.peer()}, {"error", p.status().ToString()}});
+    return p;
+  }
+  if (options_.client_certs) {
+    // The TLS layer has verified the chain against tls_client_ca already.
+    std::shared_ptr<const grpc::AuthContext> auth = context.auth_context();
+    if (auth && auth->IsPeerAuthenticated()) {
+      for (const grpc::string_ref& cn : auth->FindPropertyValues("x509_common_name")) {
+        Principal p;
+        p.name = std::string(View(cn));
+        p.role = Role::kRobot;
+        p.robot_id = p.name;
+        if (ValidTokenName(p.robot_id)) return p;
+        return Status::Unauthenticated("the client certificate's CN '" + p.name.substr(0, 64) +
+                                       "' is not a robot id ([A-Za-z0-9_.-], 1-128 characters)");
+      }
+    }
+  }
+  if (!Required()) {
+    Principal p;
+    p.name = "anonymous";
+    p.role = Role::kOperator;
+    p.anonymous = true;
+    return p;
+  }
+  return Status::Unauthenticated(
+      "authentication required: send 'authorization: Bearer <token>' metadata (mapctl --token or "
+      "$MAPD_TOKEN)" +
+      std::string(options_.client_certs ? " or a client certificate signed by tls_client_ca" : ""));
+}
+
+StatusOr<Principal> AccessControl::Admit(const grpc::ServerContextBase& context, Permission permission,
+                                         const std::string& action, const std::string& robot) {
+  StatusOr<Principal> p = Authenticate(context);
+  if (!p.ok()) return p.status();
+  MAPD_RETURN_IF_ERROR(Check(*p, permission, action, robot, robot.empty() ? "" : "robot " + robot));
+  return p;
+}
+
+Status AccessControl::Check(const Principal& principal, Permission permission, const std::string& action,
+                            const std::string& robot, const std::string& target) {
+  Status s = Authorize(principal, permission, action, robot);
+  if (!s.ok() && IsWrite(permission)) AuditDenied(principal, action, target, s);
+  return s;
+}
+
+void AccessControl::CheckAsync(const Principal& principal, Permission permission, const std::string& action,
+                               const std::string& robot, const std::string& target,
+                               std::function<void(const Status&)> done) {
+  Status s = Authorize(principal, permission, action, robot);
+  if (s.ok() || !IsWrite(permission)) {
+    done(s);
+    return;
+  }
+  LogDenied(principal, action, target);
+  AuditAsync(Entry(principal, action, target, "denied: " + s.message()),
+             [done = std::move(done), s] { done(s); });
+}
+
+void AccessControl::LogDenied(const Principal& principal, const std::string& action, const std::string& target) {
+  Log(LogLevel::kWarn, "permission_denied",
+      {{"who", principal.name}, {"role", RoleName(principal.role)}, {"action", action}, {"target", target}});
+}
+
+void AccessControl::AuditDenied(const Principal& principal, const std::string& action,
+                                const std::string& target, const Status& why) {
+  LogDenied(principal, action, target);
+  storage::AuditEntry e = Entry(principal, action, target, "denied: " + why.message());
+  Status s = core_->ExecuteWrite([&e](storage::WriteTransaction* txn) { return txn->AppendAudit(e); });
+  if (!s.ok()) Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
+}
+
+storage::AuditEntry AccessControl::Entry(const Principal& principal, const std::string& action,
+                                         const std::string& target, const std::string& result) {
+  storage::AuditEntry e;
+  e.time_ns = UnixNowNs();
+  e.who = principal.name;
+  e.role = principal.anonymous ? "anonymous" : RoleName(principal.role);
+  e.action = action;
+  e.target = target;
+  e.result = result;
+  return e;
+}
+
+void AccessControl::AuditAsync(storage::AuditEntry entry, std::function<void()> done) {
+  std::string action = entry.action;
+  core_->SubmitWrite([entry = std::move(entry)](storage::WriteTransaction* txn) { return txn->AppendAudit(entry); },
+                     [done = std::move(done), action = std::move(action)](const Status& s) {
+                       if (!s.ok()) Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
+                       done();
+                     });
+}
+
+}  // namespace mapd::service

@@ -1,0 +1,52 @@
+// Who may do what (docs/security.md). Pure policy: no gRPC, no SQL.
+//
+// A caller is a Principal: a token's holder or a client certificate's CN
+// (server/service/access_control.h finds out which). Each RPC needs one
+// Permission; a role grants a set of them. Robot-scoped permissions (write,
+// delete, read_submaps for a robot) are limited to the principal's own robot
+// id when the role is `robot`.
+#ifndef MAPD_SERVICE_AUTH_H_
+#define MAPD_SERVICE_AUTH_H_
+
+#include <string>
+
+#include "common/status.h"
+
+namespace mapd::service {
+
+enum class Role { kReader, kRobot, kOperator, kAdmin };
+
+enum class Permission {
+  kReadMap,       // GetFeatureMap, GetGlobalMap, ListRobots, GetStats
+  kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
+  kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
+  kDelete,        // DeleteSubmap (a robot: its own submaps only)
+  kMerge,         // MergeSubmaps
+  kReadAudit,     // ListAudit
+  kManageTokens,  // CreateToken, ListTokens, RevokeToken
+};
+
+struct Principal {
+  std::string name;      // token name, certificate CN, or "anonymous"
+  Role role = Role::kReader;
+  std::string robot_id;  // role kRobot: the robot it acts for
+  // No credential, auth not required (loopback, no tokens ever made): the
+  // open mode. Acts as an operator, but never manages tokens.
+  bool anonymous = false;
+};
+
+const char* RoleName(Role role);            // "reader", "robot", "operator", "admin"
+bool ParseRole(const std::string& name, Role* role);
+const char* PermissionName(Permission p);   // "read_map", "write", ...
+// The roles granting `p` (on any robot), e.g. "operator, admin".
+std::string RolesGranting(Permission p);
+
+// OK, or PermissionDenied naming the principal, its role, the action and the
+// permission needed. `robot` is the robot whose data is touched (empty: none
+// in particular); it matters only for robot-scoped permissions.
+Status Authorize(const Principal& principal, Permission permission, const std::string& action,
+                 const std::string& robot = "");
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_AUTH_H_
