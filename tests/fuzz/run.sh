@@ -27,7 +27,7 @@ for t in "${targets[@]}"; do
     tail -60 "$out/log.txt"
     status=1
   fi
-  grep -E "^#[0-9]+.*(DONE|pulse)" "$out/log.txt" | tail -1 || true
-  grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$out/log.txt" || true
+  grep -aE "^#[0-9]+.*(DONE|pulse)" "$out/log.txt" | tail -1 || true
+  grep -aE "stat::number_of_executed_units|stat::peak_rss_mb" "$out/log.txt" || true
 done
 exit $status
