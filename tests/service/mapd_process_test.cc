@@ -167,7 +167,11 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   {
     auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
+    // Recovery may finish between the health check and this call; the stream
+    // is then accepted, and without WritesDone the Read below would wait forever.
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
     auto stream = stub->Ingest(&ctx);
+    stream->WritesDone();
     pb::IngestAck ack;
     EXPECT_FALSE(stream->Read(&ack));
     const grpc::Status s = stream->Finish();
