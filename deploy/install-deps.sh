@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mapd needs to build and test. Idempotent:
-# runs apt-get only when something is missing.
+# runs apt-get only when something is missing. --ci adds what .ci/run needs
+# beyond that: clang and its libFuzzer runtime (fuzz job), systemd
+# (systemd-analyze verify of deploy/mapd.service).
 set -euo pipefail
 
 PACKAGES=(
@@ -9,6 +11,9 @@ PACKAGES=(
   libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
   libgtest-dev libgmock-dev
 )
+if [ "${1:-}" = "--ci" ]; then
+  PACKAGES+=(clang-14 libclang-rt-14-dev systemd)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

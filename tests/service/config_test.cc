@@ -3,6 +3,9 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -51,6 +54,28 @@ TEST(ConfigTest, BadValuesAreNamed) {
   EXPECT_THAT(Parse({"--no-such-thing=1"}, &e).message(), HasSubstr("unknown setting 'no-such-thing'"));
   ServerConfig f;
   EXPECT_THAT(Parse({"--db"}, &f).message(), HasSubstr("needs a value"));
+}
+
+// Found while writing tests/fuzz/config_fuzz.cc: the parser before the
+// settings table wrapped integers into their field (4294967300 became 4 for
+// merge.min_matched_corners) and took " -1" as 2^32 - 1.
+TEST(ConfigTest, IntegersThatDoNotFitOrAreNotPlainDigitsAreRefused) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"merge.min_matched_corners", "4294967300"},         // int
+           {"limits.max_features_per_batch", "4294967297"},     // uint32
+           {"limits.max_in_flight", "99999999999999999999999"},  // beyond 64 bits
+           {"busy_timeout_ms", "2147483648"},
+           {"limits.max_in_flight", " -1"},
+           {"fusion.min_support", "+3"},
+           {"limits.max_group_batches", "12abc"}}) {
+    ServerConfig c;
+    const ServerConfig before;
+    const Status s = ApplySetting(key, value, &c);
+    EXPECT_FALSE(s.ok()) << key << " = '" << value << "'";
+    EXPECT_THAT(s.message(), HasSubstr(key));
+    EXPECT_EQ(c.ingest.max_in_flight, before.ingest.max_in_flight);
+    EXPECT_EQ(c.submaps.min_matched_corners, before.submaps.min_matched_corners);
+  }
 }
 
 TEST(ConfigTest, ConfigFileErrorsNameTheLine) {

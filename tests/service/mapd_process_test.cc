@@ -34,6 +34,26 @@ TEST(MapdProcessTest, HelpListsTheSettings) {
   EXPECT_THAT(r.out, HasSubstr("--sync"));
 }
 
+TEST(MapdProcessTest, VersionPrintsTheProjectVersion) {
+  const CommandResult r = RunCommand({MAPD_BINARY, "--version"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out, std::string("mapd ") + MAPD_PROJECT_VERSION + "\n");
+}
+
+// The container HEALTHCHECK's probe: 0 while mapd serves, 3 once it is gone.
+TEST(MapdProcessTest, HealthProbeSaysServingThenUnreachable) {
+  TempDir dir;
+  MapdProcess mapd = StartMapd(dir.File("map.db"));
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  CommandResult r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("SERVING"));
+  ASSERT_EQ(Stop(mapd.pid, SIGTERM), 0);
+  r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address, "--timeout", "2"});
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_EQ(RunCommand({MAPD_HEALTH_BINARY, "--bogus", "x"}).exit_code, 2);
+}
+
 TEST(MapdProcessTest, AFileThatIsNotADatabaseIsRefusedAndLeftAlone) {
   TempDir dir;
   const std::string junk(4096, 'j');
@@ -147,10 +167,11 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   {
     auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
-    // If recovery ends before the stream opens, the stream is accepted and no
-    // ack would ever come: the deadline ends it (the checks below then skip).
-    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    // Recovery may finish between the health check and this call; the stream
+    // is then accepted, and without WritesDone the Read below would wait forever.
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
     auto stream = stub->Ingest(&ctx);
+    stream->WritesDone();
     pb::IngestAck ack;
     EXPECT_FALSE(stream->Read(&ack));
     const grpc::Status s = stream->Finish();
