@@ -1,6 +1,7 @@
 #include "storage/store.h"
 
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
 
@@ -164,9 +165,22 @@ Status Store::Checkpoint() {
 }
 
 Status Store::ProbeWrite() {
+  // A nearly full file system can take a probe (in WAL space a checkpoint
+  // freed, or on its last blocks) and fail the next batch again: writes are
+  // declared possible only with real room left.
+  struct statvfs fs {};
+  const std::string dir = path_.find('/') == std::string::npos ? "." : path_.substr(0, path_.rfind('/') + 1);
+  if (statvfs(dir.c_str(), &fs) == 0) {
+    const uint64_t free_bytes = static_cast<uint64_t>(fs.f_bavail) * fs.f_frsize;
+    if (free_bytes < kProbeFreeBytes) {
+      return Status::ResourceExhausted("the file system of the database has " + std::to_string(free_bytes >> 10) +
+                                       " KiB free (disk full; " + std::to_string(kProbeFreeBytes >> 20) +
+                                       " MiB needed to resume)");
+    }
+  }
   sqlite3* w = writer_.get();
   MAPD_RETURN_IF_ERROR(Exec(w, "BEGIN IMMEDIATE"));
-  Status s = Exec(w, "INSERT INTO write_probe (data) VALUES (zeroblob(65536))");
+  Status s = Exec(w, "INSERT INTO write_probe (data) VALUES (zeroblob(1048576))");
   if (s.ok()) s = Exec(w, "COMMIT");
   if (!s.ok()) {
     (void)Exec(w, "ROLLBACK");

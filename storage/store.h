@@ -300,9 +300,11 @@ class Store {
   StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite();
   // Copies the WAL into the database file and truncates it (shutdown, idle).
   Status Checkpoint();
-  // Commits 64 KiB (about what a group of batches needs) and deletes it again:
-  // whether the database takes writes now, after a write failed.
+  // Whether the database takes writes now, after a write failed: its file
+  // system has kProbeFreeBytes free, and 1 MiB commits (then is deleted).
+  // So a full disk is not declared writable again on its last blocks.
   Status ProbeWrite();
+  static constexpr uint64_t kProbeFreeBytes = uint64_t{8} << 20;
 
   // --- Any thread.
   // Every stored observation in id (= arrival) order.

@@ -23,10 +23,10 @@
 #include <thread>
 #include <vector>
 
-#include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
 #include "common/batches.h"
+#include "common/health.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -36,15 +36,6 @@ namespace {
 namespace pb = mapserver::v1;
 using Clock = std::chrono::steady_clock;
 
-double RssMiB(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return 0;
-}
-
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
@@ -52,21 +43,9 @@ double Percentile(std::vector<double> v, double q) {
 }
 
 // One grpc.health.v1.Health/Check; latency in ms, or -1 on failure.
-double HealthCheck(grpc::GenericStub& generic) {
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-  grpc::CompletionQueue cq;
-  grpc::Slice empty;
-  grpc::ByteBuffer request(&empty, 1), response;
+double HealthCheck(const std::shared_ptr<grpc::Channel>& channel) {
   const auto t0 = Clock::now();
-  auto call = generic.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", request, &cq);
-  call->StartCall();
-  grpc::Status status;
-  call->Finish(&response, &status, reinterpret_cast<void*>(1));
-  void* tag = nullptr;
-  bool ok = false;
-  cq.Next(&tag, &ok);
-  if (!status.ok()) return -1;
+  if (mapd::testing::CheckHealth(channel, std::chrono::seconds(30)) == mapd::testing::Health::kError) return -1;
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
@@ -102,7 +81,7 @@ int main(int argc, char** argv) {
   auto channel = grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials());
   auto stub = pb::MapService::NewStub(channel);
   std::this_thread::sleep_for(std::chrono::seconds(1));
-  const double rss_baseline = RssMiB(mapd.pid);
+  const double rss_baseline = mapd::testing::ResidentMiB(mapd.pid);
 
   std::atomic<bool> flooding{true}, done{false};
   std::atomic<double> rss_peak{rss_baseline};
@@ -114,7 +93,7 @@ int main(int argc, char** argv) {
   // RSS sampler.
   std::thread sampler([&] {
     while (!done) {
-      const double r = RssMiB(mapd.pid);
+      const double r = mapd::testing::ResidentMiB(mapd.pid);
       if (r > rss_peak) rss_peak = r;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
@@ -124,9 +103,8 @@ int main(int argc, char** argv) {
     grpc::ChannelArguments a;
     a.SetInt("mapd.bench.health", 1);
     auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
-    grpc::GenericStub generic(ch);
     while (flooding) {
-      const double ms = HealthCheck(generic);
+      const double ms = HealthCheck(ch);
       std::lock_guard<std::mutex> lock(mu);
       if (ms < 0) ++health_failures; else health_ms.push_back(ms);
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -200,13 +178,10 @@ int main(int argc, char** argv) {
   robot.join();
   const double rss_flood_peak = rss_peak;
   std::this_thread::sleep_for(std::chrono::duration<double>(settle));
-  const double rss_after = RssMiB(mapd.pid);
+  const double rss_after = mapd::testing::ResidentMiB(mapd.pid);
   done = true;
   sampler.join();
-  const double health_after = [&] {
-    grpc::GenericStub generic(channel);
-    return HealthCheck(generic);
-  }();
+  const double health_after = HealthCheck(channel);
   mapd::testing::Stop(mapd.pid, SIGTERM);
 
   long log_lines = 0;

@@ -223,15 +223,6 @@ MapSnapshot GetMap(pb::MapService::Stub* stub) {
   return m;
 }
 
-double RssMiB(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return 0;
-}
-
 // CPU seconds of mapd's thread named `name` (MapCore names its threads).
 double ThreadCpuSeconds(pid_t pid, const std::string& name) {
   const std::string dir = "/proc/" + std::to_string(pid) + "/task";
@@ -421,7 +412,7 @@ int main(int argc, char** argv) {
                       std::max(1e-9, cpu - window_cpu),
                   static_cast<unsigned long long>(stats.fusion_nodes()),
                   static_cast<unsigned long long>(stats.fusion_backlog()), P99(latencies),
-                  RssMiB(mapd.pid), stats.db_size_bytes() / 1048576.0, stats.bytes_per_raw_feature());
+                  mapd::testing::ResidentMiB(mapd.pid), stats.db_size_bytes() / 1048576.0, stats.bytes_per_raw_feature());
       std::fflush(stdout);
       window_t = Clock::now();
       window_batches = batches;

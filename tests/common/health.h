@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <future>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,11 +16,13 @@ namespace mapd::testing {
 
 enum class Health { kError = -1, kUnknown = 0, kServing = 1, kNotServing = 2 };
 
-// The server's overall status (service ""), or kError if the call failed.
-inline Health CheckHealth(const std::string& address) {
-  grpc::GenericStub stub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+// The server's overall status (service "") over `channel`, or kError if the
+// call failed (within `deadline`).
+inline Health CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
+                          std::chrono::milliseconds deadline = std::chrono::seconds(5)) {
+  grpc::GenericStub stub(channel);
   grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  ctx.set_deadline(std::chrono::system_clock::now() + deadline);
   grpc::Slice empty(std::string{});  // HealthCheckRequest{service: ""} encodes to no bytes
   const grpc::ByteBuffer request(&empty, 1);
   grpc::ByteBuffer response;
@@ -35,6 +38,11 @@ inline Health CheckHealth(const std::string& address) {
   if (bytes.empty()) return Health::kUnknown;
   if (bytes.size() == 2 && bytes[0] == 0x08) return static_cast<Health>(bytes[1]);
   return Health::kError;
+}
+
+// The same on a channel of its own to `address` (plaintext).
+inline Health CheckHealth(const std::string& address) {
+  return CheckHealth(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
 }
 
 }  // namespace mapd::testing

@@ -202,6 +202,16 @@ inline CommandResult RunCommand(const std::vector<std::string>& argv, const std:
 // Sends `signal` to `pid` and waits for it to exit (SIGKILL after `timeout`).
 // Returns its exit status as DecodeWaitStatus (e.g. 0 for a clean exit, 137
 // if it had to be killed), or -1 if `pid` is not our child.
+// Resident memory of a running process (VmRSS), MiB; 0 if it is gone.
+inline double ResidentMiB(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0;
+}
+
 inline int Stop(pid_t pid, int signal = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
   if (pid <= 0) return -1;
   kill(pid, signal);

@@ -14,6 +14,7 @@
 
 #include <grpcpp/generic/generic_stub.h>
 
+#include "common/health.h"
 #include "server_fixture.h"
 
 namespace mapd::testing {
@@ -23,28 +24,6 @@ using ::testing::HasSubstr;
 
 std::chrono::system_clock::time_point In(double seconds) {
   return std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
-}
-
-// grpc.health.v1.Health/Check: true when SERVING (reply bytes 08 01).
-bool HealthServing(const std::shared_ptr<grpc::Channel>& channel) {
-  grpc::GenericStub generic(channel);
-  grpc::ClientContext ctx;
-  ctx.set_deadline(In(30));
-  grpc::CompletionQueue cq;
-  grpc::Slice empty;
-  grpc::ByteBuffer request(&empty, 1), response;
-  auto call = generic.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", request, &cq);
-  call->StartCall();
-  grpc::Status status;
-  call->Finish(&response, &status, reinterpret_cast<void*>(1));
-  void* tag = nullptr;
-  bool ok = false;
-  if (!cq.Next(&tag, &ok) || !status.ok()) return false;
-  std::vector<grpc::Slice> slices;
-  if (!response.Dump(&slices).ok()) return false;
-  std::string bytes;
-  for (const auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
-  return bytes == std::string("\x08\x01", 2);
 }
 
 grpc::ByteBuffer Serialized(const std::string& bytes) {
@@ -100,7 +79,7 @@ TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
 
   // Meanwhile the robot streams and health is asked.
   for (const auto& b : batches) ASSERT_TRUE(robot->Write(b));
-  EXPECT_TRUE(HealthServing(channel_));
+  EXPECT_TRUE(CheckHealth(channel_, std::chrono::seconds(30)) == Health::kServing);
   for (auto& t : flood) t.join();
   EXPECT_EQ(opened.load(), 20000);
   robot->WritesDone();
@@ -124,7 +103,7 @@ TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
   EXPECT_GE(refused, 18);
 
   // Afterwards: health, reads and a new robot stream all work; nothing lost.
-  EXPECT_TRUE(HealthServing(channel_));
+  EXPECT_TRUE(CheckHealth(channel_, std::chrono::seconds(30)) == Health::kServing);
   EXPECT_EQ(Stats().batches(), batches.size());
   // A new robot stream is admitted once the flood's streams are wound down
   // (gRPC may still be working through them: retried, generous deadline).

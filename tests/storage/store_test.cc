@@ -204,7 +204,7 @@ TEST_F(StoreIdentityTest, StampsNewDatabasesAndAdoptsOnesFromBeforeTheStamp) {
 
 TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted) {
   StoreOptions options;
-  options.max_db_bytes = 256 * 1024;
+  options.max_db_bytes = 4 << 20;  // room for the 1 MiB probe at first
   auto store = Store::Open(dir_.File("map.db"), options);
   ASSERT_TRUE(store.ok()) << store.status().message();
   EXPECT_TRUE((*store)->ProbeWrite().ok());
