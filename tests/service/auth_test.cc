@@ -1,12 +1,12 @@
 // Identities, roles and the audit log through the real server (docs/security.md).
 #include <fstream>
-#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "client/robot_client.h"
 #include "common/health.h"
+#include "common/temp_dir.h"
 #include "service/support/auth_fixture.h"
 
 namespace mapd::testing {
@@ -14,13 +14,6 @@ namespace {
 
 using ::testing::HasSubstr;
 using service::Role;
-
-std::string FileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class AuthTest : public AuthFixture {
  protected:
@@ -274,7 +267,7 @@ TEST_F(AuthTest, RevokedTokenIsRefusedAndTheRevocationIsAudited) {
 TEST_F(AuthTest, SecretsNeverReachTheDatabaseFile) {
   MakeTokens();
   server_.reset();  // checkpoints: everything is in the main file (and any WAL left)
-  const std::string db = FileBytes(config_.db_path) + FileBytes(config_.db_path + "-wal");
+  const std::string db = ReadFileBytes(config_.db_path) + ReadFileBytes(config_.db_path + "-wal");
   ASSERT_FALSE(db.empty());
   for (const std::string* t : {&admin_, &reader_, &robot_, &operator_}) {
     const std::string secret = t->substr(t->find('_', 5) + 1);  // mapd_<id>_<secret>

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,13 +19,6 @@ using ::testing::HasSubstr;
 Status Parse(std::vector<std::string> args, ServerConfig* c) {
   FlagAction action;
   return ParseFlags(args, c, &action);
-}
-
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 TEST(ConfigTest, DefaultsAreValidAndLoopback) {
@@ -176,7 +168,7 @@ TEST(ConfigTest, LongRunningSettingsParseAndAreValidated) {
 // defaults (regenerate it with `mapd --print-config > deploy/mapd.conf.example`),
 // and reading it back changes nothing.
 TEST(ConfigTest, TheExampleFileIsTheDefaults) {
-  EXPECT_EQ(ReadAll(MAPD_EXAMPLE_CONFIG), ConfigFileText(ServerConfig()));
+  EXPECT_EQ(mapd::testing::ReadFileBytes(MAPD_EXAMPLE_CONFIG), ConfigFileText(ServerConfig()));
   ServerConfig loaded;
   ASSERT_TRUE(LoadConfigFile(MAPD_EXAMPLE_CONFIG, &loaded).ok());
   EXPECT_EQ(ConfigFileText(loaded), ConfigFileText(ServerConfig()));

@@ -3,12 +3,12 @@
 // unknown CA is refused, and tokens work over TLS.
 #include <unistd.h>
 
-#include <fstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "common/process.h"
+#include "common/temp_dir.h"
 #include "service/support/auth_fixture.h"
 
 namespace mapd::testing {
@@ -21,13 +21,6 @@ std::string OpensslBinary() {
     if (access(p, X_OK) == 0) return p;
   }
   return "";
-}
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 class TlsAuthTest : public AuthFixture {
@@ -75,10 +68,10 @@ class TlsAuthTest : public AuthFixture {
   // A stub over TLS trusting ca.pem, presenting `client` (a name above) if given.
   std::unique_ptr<pb::MapService::Stub> TlsStub(const std::string& client = "") {
     grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = Slurp(dir_.File("ca.pem"));
+    ssl.pem_root_certs = ReadFileBytes(dir_.File("ca.pem"));
     if (!client.empty()) {
-      ssl.pem_cert_chain = Slurp(dir_.File(client + ".pem"));
-      ssl.pem_private_key = Slurp(dir_.File(client + ".key"));
+      ssl.pem_cert_chain = ReadFileBytes(dir_.File(client + ".pem"));
+      ssl.pem_private_key = ReadFileBytes(dir_.File(client + ".key"));
     }
     return pb::MapService::NewStub(grpc::CreateChannel(server_->address(), grpc::SslCredentials(ssl)));
   }
