@@ -44,7 +44,8 @@ bool ChainMayNeedSplit(const PointMoments2& endpoint_moments, double max_rms_m) 
 }
 
 std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& members,
-                                              double max_rms_m, double max_sse_ratio) {
+                                              double max_rms_m, double max_sse_ratio,
+                                              const Publishable& publishable) {
   std::vector<uint32_t> all(members.size());
   for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
   std::vector<std::vector<uint32_t>> groups;
@@ -85,12 +86,29 @@ std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& me
       AddMember(members[keyed[k].second], &running);
       suffix[k] = OrthogonalSse(running);
     }
-    size_t best_k = 1;
-    for (size_t k = 2; k < n; ++k) {
-      if (prefix[k] + suffix[k] < prefix[best_k] + suffix[best_k]) best_k = k;
+    // Step 4: the cut of least cost among those that explain most of the
+    // misfit and leave both sides publishable (ties: the smaller k).
+    std::vector<size_t> candidates;
+    for (size_t k = 1; k < n; ++k) {
+      if (prefix[k] + suffix[k] < max_sse_ratio * sse_m2) candidates.push_back(k);
     }
-    // Step 4: cut only where a cut explains most of the misfit.
-    if (!(prefix[best_k] + suffix[best_k] < max_sse_ratio * sse_m2)) {
+    std::stable_sort(candidates.begin(), candidates.end(), [&](size_t x, size_t y) {
+      return prefix[x] + suffix[x] < prefix[y] + suffix[y];
+    });
+    size_t best_k = 0;
+    for (size_t k : candidates) {
+      if (!publishable) {
+        best_k = k;
+        break;
+      }
+      std::vector<uint32_t> head, tail;
+      for (size_t i = 0; i < n; ++i) (i < k ? head : tail).push_back(keyed[i].second);
+      if (publishable(head) && publishable(tail)) {
+        best_k = k;
+        break;
+      }
+    }
+    if (best_k == 0) {
       std::sort(subset.begin(), subset.end());
       groups.push_back(std::move(subset));
       continue;

@@ -11,9 +11,13 @@
 //      direction (canonical sign, geometry::CanonicalDirection), ties by
 //      ascending FeatureId. For k = 1 .. |S|-1, cost(k) = SSE(first k) +
 //      SSE(the rest); k* = the smallest k of least cost.
-//   4. If cost(k*) >= max_sse_ratio * SSE(S): {S} (the misfit is noise spread
-//      along the line, not a bend: no cut helps). Else Groups(first k*) and
-//      Groups(the rest).
+//   4. The cuts k with cost(k) < max_sse_ratio * SSE(S), in ascending cost
+//      (ties: smaller k); k* = the first whose two sides are both publishable
+//      (support >= min_support, when the caller says so). None: {S} (the
+//      misfit is noise spread along the line, not a bend, or a cut would
+//      leave a piece that could not be published: it stays with the piece it
+//      came from, so the guard never removes what the paper would publish).
+//      Else Groups(first k*) and Groups(the rest).
 // A curved wall chained into one component is thus cut into pieces that each
 // fit a line within max_rms_m, while a straight wall with noise stays whole.
 // Each group is named by its smallest FeatureId. Order independent: it depends
@@ -22,6 +26,7 @@
 #define MAPD_FUSION_CHAIN_GUARD_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "fusion/engine.h"
@@ -47,10 +52,15 @@ double OrthogonalSse(const geometry::PointMoments2& m);
 // guard is on and RMS > max_rms_m, i.e. the member set must be examined.
 bool ChainMayNeedSplit(const geometry::PointMoments2& endpoint_moments, double max_rms_m);
 
+// Whether a subset of the members (indices) would be published on its own.
+using Publishable = std::function<bool(const std::vector<uint32_t>& subset)>;
+
 // Groups(members) as lists of indices into `members`, each ascending; the
-// groups in order along the fitted direction. REQUIRES: members non-empty.
+// groups in order along the fitted direction. An empty `publishable` counts
+// every subset publishable. REQUIRES: members non-empty.
 std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& members,
-                                              double max_rms_m, double max_sse_ratio);
+                                              double max_rms_m, double max_sse_ratio,
+                                              const Publishable& publishable = nullptr);
 
 }  // namespace mapd::fusion
 

@@ -70,8 +70,15 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
     members.push_back({anchors_[n].id, anchors_[n].segment,
                        bounded_ && folded_[n] ? &folded_[n]->moments : nullptr});
   }
+  // A cut never leaves a piece below min_support (chain_guard.h, step 4).
+  const auto publishable = [&](const std::vector<uint32_t>& subset) {
+    std::vector<uint32_t> subset_nodes;
+    subset_nodes.reserve(subset.size());
+    for (uint32_t i : subset) subset_nodes.push_back(nodes[i]);
+    return StatsOf(subset_nodes).support() >= params_.min_support;
+  };
   std::vector<std::vector<uint32_t>> groups =
-      SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
+      SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio, publishable);
   for (std::vector<uint32_t>& group : groups) {
     for (uint32_t& index : group) index = nodes[index];
   }
@@ -300,7 +307,7 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
                         split->second.published.end());
       extra_groups_ -= split->second.group_count - 1;
       split_.erase(split);
-    } else if (published_.count(id) != 0) {
+    } else if (consolidator_.HasPiece(id)) {
       old_groups.push_back(id);
     }
   }
@@ -310,14 +317,14 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
     const ClusterStats& whole = *stats_[root];
     if (!MayCut(root)) {  // one group: the component itself
       if (whole.support() < params_.min_support) continue;
-      PublishGroup(whole, feed, &moved_points);
+      PublishGroup(whole);
       new_groups.push_back(whole.id);
       continue;
     }
     const std::vector<std::vector<uint32_t>> groups = GroupNodes(root);
     if (groups.size() == 1) {
       if (whole.support() < params_.min_support) continue;
-      PublishGroup(whole, feed, &moved_points);
+      PublishGroup(whole);
       new_groups.push_back(whole.id);
       continue;
     }
@@ -327,24 +334,32 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
     for (const std::vector<uint32_t>& group : groups) {
       const ClusterStats stats = StatsOf(group);
       if (stats.support() < params_.min_support) continue;
-      PublishGroup(stats, feed, &moved_points);
+      PublishGroup(stats);
       new_groups.push_back(stats.id);
       record.published.push_back(stats.id);
     }
   }
-  // Groups published before and gone now: removed.
+  // Groups published before and gone now leave the consolidator.
   std::sort(new_groups.begin(), new_groups.end());
   std::sort(old_groups.begin(), old_groups.end());
   old_groups.erase(std::unique(old_groups.begin(), old_groups.end()), old_groups.end());
   for (ClusterId id : old_groups) {
-    if (std::binary_search(new_groups.begin(), new_groups.end(), id)) continue;
+    if (!std::binary_search(new_groups.begin(), new_groups.end(), id)) consolidator_.Erase(id);
+  }
+  // The walls those changes touched: publish them, drop the ones gone.
+  std::vector<ClusterId> removed_walls;
+  std::vector<WallConsolidator::Wall> walls;
+  consolidator_.Resolve(&removed_walls, &walls);
+  for (ClusterId id : removed_walls) {
     auto it = published_.find(id);
+    if (it == published_.end()) continue;
     moved_points.push_back(it->second.fitted.a);
     moved_points.push_back(it->second.fitted.b);
     snapper_.Erase(id);
     published_.erase(it);
     feed->removed.push_back(id);
   }
+  for (const WallConsolidator::Wall& wall : walls) PublishWall(wall, feed, &moved_points);
   // The corner pass, local to the moved endpoints.
   std::vector<ClusterId> dirty = feed->added;
   dirty.insert(dirty.end(), feed->updated.begin(), feed->updated.end());
@@ -372,9 +387,10 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   std::sort(feed->removed.begin(), feed->removed.end());
 }
 
-void FusionEngine::Impl::PublishGroup(const ClusterStats& stats, ChangeFeed* feed,
-                                      std::vector<Vec2>* moved_points) {
-  const ClusterStats::Fit fit = stats.Refit();
+void FusionEngine::Impl::PublishWall(const WallConsolidator::Wall& wall, ChangeFeed* feed,
+                                     std::vector<Vec2>* moved_points) {
+  const ClusterStats& stats = wall.stats;
+  const ClusterStats::Fit& fit = wall.fit;
   auto it = published_.find(stats.id);
   if (it == published_.end()) {
     feed->added.push_back(stats.id);
@@ -382,7 +398,7 @@ void FusionEngine::Impl::PublishGroup(const ClusterStats& stats, ChangeFeed* fee
     const FusedFeature& old = it->second;
     if (old.member_count == stats.member_count && old.support == stats.support() &&
         old.fitted.a == fit.segment.a && old.fitted.b == fit.segment.b) {
-      return;  // a group of a cut component that this Add did not change
+      return;  // a wall next to this Add's changes that they did not change
     }
     feed->updated.push_back(stats.id);
     moved_points->push_back(old.fitted.a);
@@ -396,6 +412,8 @@ void FusionEngine::Impl::PublishGroup(const ClusterStats& stats, ChangeFeed* fee
 
 std::optional<FusedFeature> FusionEngine::Impl::Get(ClusterId id) const {
   if (auto it = published_.find(id); it != published_.end()) return it->second;
+  // A published cluster that consolidation folded into a wall of a smaller id.
+  if (consolidator_.HasPiece(id)) return std::nullopt;
   auto node = node_of_.find(id);
   if (node == node_of_.end()) return std::nullopt;
   const uint32_t root = FindConst(node->second);

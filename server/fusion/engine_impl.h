@@ -16,6 +16,7 @@
 #include "fusion/engine.h"
 #include "fusion/grid_index.h"
 #include "fusion/support_counter.h"
+#include "fusion/wall_consolidation.h"
 
 namespace mapd::fusion {
 
@@ -67,7 +68,8 @@ class FusionEngine::Impl {
                               : SupportCounter::kUnlimited),
         grid_(kFeatureCellM),
         cover_grid_(kCoverCellM),
-        snapper_(params.snap_m, params.corner_mode) {}
+        snapper_(params.snap_m, params.corner_mode),
+        consolidator_(params, support_cap_) {}
 
   Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
   void Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
@@ -114,7 +116,10 @@ class FusionEngine::Impl {
   UniformGrid<IndexedFeature> grid_;
   UniformGrid<CoverItem> cover_grid_;  // bounded mode: representatives by centre
   CornerSnapper snapper_;
-  std::map<ClusterId, FusedFeature> published_;  // ascending id: Published() is a copy
+  // The published clusters (the guard's groups at min_support) are the
+  // consolidator's pieces; what is published is its walls.
+  WallConsolidator consolidator_;
+  std::map<ClusterId, FusedFeature> published_;  // walls, ascending id: Published() is a copy
 
   bool keeps_anchors() const { return guard_on_ || bounded_; }
   uint32_t FindConst(uint32_t x) const;  // no path compression, for const readers
@@ -145,8 +150,11 @@ class FusionEngine::Impl {
   void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
   void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
                ChangeFeed* feed);
-  // Publishes one group (support >= min_support) unless it is unchanged.
-  void PublishGroup(const ClusterStats& stats, ChangeFeed* feed, std::vector<Vec2>* moved_points);
+  // Hands one group (support >= min_support) to the consolidator.
+  void PublishGroup(const ClusterStats& stats) { consolidator_.Upsert(stats, stats.Refit()); }
+  // Publishes one wall unless it is unchanged.
+  void PublishWall(const WallConsolidator::Wall& wall, ChangeFeed* feed,
+                   std::vector<Vec2>* moved_points);
 };
 
 }  // namespace mapd::fusion

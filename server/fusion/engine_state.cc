@@ -17,7 +17,7 @@ namespace mapd::fusion {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'F', 'U', 'S', '1'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: the consolidator's pieces
 // Union by size keeps trees at most log2(nodes) deep; deeper means corrupt.
 constexpr int kMaxTreeDepth = 64;
 
@@ -225,6 +225,9 @@ Status FusionEngine::SaveState(std::string* out) const {
     w.V2(line.point);
     w.V2(line.direction);
   }
+  // The consolidator's pieces; its walls are a function of them (Resolve).
+  w.U64(e.consolidator_.pieces().size());
+  for (const auto& [id, stats] : e.consolidator_.pieces()) w.Stats(stats);
   w.U64(Fnv1a(*out));
   return Status::Ok();
 }
@@ -307,6 +310,13 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     lines.push_back({f.id, {fitted, line}});
     e.published_[f.id] = std::move(f);
   }
+  const uint64_t pieces = r.Count(8);
+  for (uint64_t i = 0; i < pieces && r.ok(); ++i) {
+    const ClusterStats stats = r.Stats();
+    if (!r.ok()) break;
+    if (stats.hull.empty() || stats.moments.count == 0) return Corrupt("an empty published cluster");
+    e.consolidator_.Upsert(stats, stats.Refit());
+  }
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
 
   // Structure: indices in range, stats exactly at roots, shallow trees.
@@ -332,6 +342,17 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     e.FileInGrid(i, e.anchors_[i].segment);
   }
   for (const auto& [id, fl] : lines) e.snapper_.Upsert(id, fl.first, fl.second);
+  std::vector<ClusterId> removed_walls;
+  std::vector<WallConsolidator::Wall> walls;
+  e.consolidator_.Resolve(&removed_walls, &walls);
+  if (walls.size() != e.published_.size()) {
+    return Corrupt("published features disagree with the published clusters");
+  }
+  for (const WallConsolidator::Wall& wall : walls) {
+    if (e.published_.count(wall.stats.id) == 0) {
+      return Corrupt("published features disagree with the published clusters");
+    }
+  }
   return engine;
 }
 

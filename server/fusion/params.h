@@ -51,6 +51,12 @@ struct FusionParams {
   // chain_max_sse_ratio of the squared residual. 0 = off (the paper's method).
   double chain_max_rms_m = 0.05;
   double chain_max_sse_ratio = 0.5;  // in [0, 1]; 0 never cuts
+  // Wall consolidation (wall_consolidation.h; docs/algorithms.md A.9), beyond
+  // the paper: published clusters on one wall (within delta_rad and eta_m,
+  // overlapping or separated by at most wall_gap_m along it) are published as
+  // one feature. false = the paper's output, one feature per cluster.
+  bool consolidate = true;
+  double wall_gap_m = 0.3;  // metres
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

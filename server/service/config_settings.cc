@@ -215,11 +215,28 @@ const std::vector<Setting>& Settings() {
        [](const C& c) { return std::string(fusion::CornerModeName(c.fusion.corner_mode)); }},
       Real("fusion.max_plane_tilt_deg", "planes tilted less than this from vertical become walls, degrees",
            [](C& c) -> auto& { return c.fusion.max_plane_tilt_rad; }, {0, 90}, kDegToRad),
+      Real("fusion.chain_max_rms_m", "chain guard: a cluster whose member endpoints lie farther than this "
+           "(RMS) from its fitted line is published as pieces that each fit a line, never cutting off a piece "
+           "below min_support; metres, 0 = off (the paper's method)",
+           [](C& c) -> auto& { return c.fusion.chain_max_rms_m; }, {0, 100}),
+      Real("fusion.chain_max_sse_ratio", "chain guard: cut only where the pieces keep less than this share of "
+           "the squared residual; 0 never cuts",
+           [](C& c) -> auto& { return c.fusion.chain_max_sse_ratio; }, {0, 1}),
+      Flag("fusion.consolidate", "wall consolidation: published features on one wall (within delta and eta, "
+           "overlapping or within wall_gap_m) are published as one; false = one feature per cluster (the paper)",
+           [](C& c) -> auto& { return c.fusion.consolidate; }),
+      Real("fusion.wall_gap_m", "wall consolidation: pieces of one wall this far apart along it still join, metres",
+           [](C& c) -> auto& { return c.fusion.wall_gap_m; }, {0, 1000}),
 
       Count("limits.max_features_per_batch", "lines + planes in one batch",
             [](C& c) -> auto& { return c.ingest.limits.max_features_per_batch; }, 1, kMaxFeaturesPerBatchHard),
       Count("limits.max_boundary_points", "boundary points of one plane",
             [](C& c) -> auto& { return c.ingest.limits.max_boundary_points; }, 3, 1000000),
+      Real("limits.max_abs_coordinate_m", "a coordinate farther than this from the origin is refused as a unit "
+           "or frame error, metres",
+           [](C& c) -> auto& { return c.ingest.limits.max_abs_coordinate_m; }, {0, 1e6, true}),
+      Real("limits.quaternion_tolerance", "accepted | |q| - 1 | of a pose quaternion or a plane normal",
+           [](C& c) -> auto& { return c.ingest.limits.quaternion_tolerance; }, {0, 0.49, true}),
       Count("limits.max_in_flight", "unacknowledged batches per stream before reading pauses",
             [](C& c) -> auto& { return c.ingest.max_in_flight; }, 1, 1000000),
       Count("limits.max_message_bytes", "largest gRPC message accepted, bytes",

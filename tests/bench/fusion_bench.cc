@@ -63,17 +63,24 @@ struct Method {
   FuserOptions options;
 };
 
+// --wall-gap M: the consolidation gap of the proposed method's rows (< 0: the default).
+double g_wall_gap_m = -1.0;
+
 std::vector<Method> Methods() {
   FuserOptions base;  // defaults; baselines post-process like the proposed method
+  if (g_wall_gap_m >= 0.0) base.three_criteria.wall_gap_m = g_wall_gap_m;
   base.mean_shift.post.snap_m = base.three_criteria.snap_m;
   base.mean_shift.post.corner_mode = base.three_criteria.corner_mode;
   base.density.post.snap_m = base.three_criteria.snap_m;
   base.density.post.corner_mode = base.three_criteria.corner_mode;
   Method midpoint{"three_criteria (midpoint corners)", "three_criteria", base};
   midpoint.options.three_criteria.corner_mode = CornerMode::kMidpoint;
+  Method paper{"three_criteria (no consolidation: the paper's output)", "three_criteria", base};
+  paper.options.three_criteria.consolidate = false;
   return {{"mean_shift (competing 1)", "mean_shift", base},
           {"density (competing 2)", "density", base},
           {"three_criteria (proposed, intersection)", "three_criteria", base},
+          paper,
           midpoint};
 }
 
@@ -259,12 +266,13 @@ int main(int argc, char** argv) {
     if (a == "--repeats" && has_value) repeats = std::atoi(argv[++i]);
     else if (a == "--seed" && has_value) seed = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--svg-dir" && has_value) svg_dir = argv[++i];
+    else if (a == "--wall-gap" && has_value) g_wall_gap_m = std::atof(argv[++i]);
     else if (a == "--million") million = true;
     else if (a == "--bounded") mode = mapd::fusion::FusionMode::kBounded;
     else if (a == "--blocks-x" && has_value) blocks_x = std::atoi(argv[++i]);
     else if (a == "--blocks-y" && has_value) blocks_y = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] | --million "
+      std::fprintf(stderr, "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] | --million "
                            "[--blocks-x X --blocks-y Y] [--bounded]\n", argv[0]);
       return 2;
     }

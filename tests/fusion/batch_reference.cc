@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "fusion/criteria.h"
+#include "fusion/wall_consolidation.h"
 
 namespace mapd::fusion::testing {
 namespace {
@@ -62,20 +63,37 @@ double Sse(const std::vector<Vec2>& points) {
   return eig.eigenvalues()(0);  // ascending
 }
 
-std::vector<Vec2> EndpointsOf(const std::vector<Flat>& all, const std::vector<size_t>& members) {
+// What the guard cuts: a raw feature, or (consolidation) a published cluster
+// standing for all its members' endpoints, ordered by its own midpoint.
+struct Unit {
+  uint64_t id;
+  Vec2 key_point;
   std::vector<Vec2> points;
+  std::vector<ObservationId> observations;  // empty: publishable in any subset
+};
+
+bool Publishable(const std::vector<Unit>& units, const std::vector<size_t>& members,
+                 const FusionParams& params) {
+  std::set<ObservationId> seen;
+  bool any = false;
   for (size_t i : members) {
-    points.push_back(all[i].feature.segment.a);
-    points.push_back(all[i].feature.segment.b);
+    any |= !units[i].observations.empty();
+    seen.insert(units[i].observations.begin(), units[i].observations.end());
   }
+  return !any || seen.size() >= params.min_support;
+}
+
+std::vector<Vec2> PointsOf(const std::vector<Unit>& units, const std::vector<size_t>& members) {
+  std::vector<Vec2> points;
+  for (size_t i : members) points.insert(points.end(), units[i].points.begin(), units[i].points.end());
   return points;
 }
 
 // The chain guard's rule (fusion/chain_guard.h), literally and recursively:
-// appends the groups of `members` (indices into `all`) to `groups`.
-void GuardGroups(const std::vector<Flat>& all, const std::vector<size_t>& members,
+// appends the groups of `members` (indices into `units`) to `groups`.
+void GuardGroups(const std::vector<Unit>& units, const std::vector<size_t>& members,
                  const FusionParams& params, std::vector<std::vector<size_t>>* groups) {
-  const std::vector<Vec2> points = EndpointsOf(all, members);
+  const std::vector<Vec2> points = PointsOf(units, members);
   const double sse = Sse(points);
   const double rms = std::sqrt(std::max(0.0, sse) / static_cast<double>(points.size()));
   if (params.chain_max_rms_m == 0.0 || members.size() < 2 || rms <= params.chain_max_rms_m) {
@@ -83,60 +101,55 @@ void GuardGroups(const std::vector<Flat>& all, const std::vector<size_t>& member
     return;
   }
   // Order along the fitted direction, its sign fixed by the reference
-  // direction at 0.3 rad; ties by feature id.
+  // direction at 0.3 rad; ties by id.
   Fit fit = FitEndpoints(points);
   if (fit.direction.dot(Vec2(std::cos(0.3), std::sin(0.3))) < 0.0) fit.direction = -fit.direction;
   std::vector<size_t> order = members;
-  const auto key = [&](size_t i) {
-    return (all[i].feature.segment.midpoint() - fit.point).dot(fit.direction);
-  };
+  const auto key = [&](size_t i) { return (units[i].key_point - fit.point).dot(fit.direction); };
   std::sort(order.begin(), order.end(), [&](size_t x, size_t y) {
     if (key(x) != key(y)) return key(x) < key(y);
-    return all[x].feature.id < all[y].feature.id;
+    return units[x].id < units[y].id;
   });
+  // The cheapest cut below the ratio whose both sides are publishable.
   size_t best_k = 0;
   double best_cost = 0.0;
   for (size_t k = 1; k < order.size(); ++k) {
     const std::vector<size_t> head(order.begin(), order.begin() + static_cast<long>(k));
     const std::vector<size_t> tail(order.begin() + static_cast<long>(k), order.end());
-    const double cost = std::max(0.0, Sse(EndpointsOf(all, head))) +
-                        std::max(0.0, Sse(EndpointsOf(all, tail)));
+    const double cost = std::max(0.0, Sse(PointsOf(units, head))) +
+                        std::max(0.0, Sse(PointsOf(units, tail)));
+    if (!(cost < params.chain_max_sse_ratio * sse)) continue;
+    if (!Publishable(units, head, params) || !Publishable(units, tail, params)) continue;
     if (best_k == 0 || cost < best_cost) {
       best_k = k;
       best_cost = cost;
     }
   }
-  if (!(best_cost < params.chain_max_sse_ratio * sse)) {
+  if (best_k == 0) {
     groups->push_back(members);
     return;
   }
-  GuardGroups(all, std::vector<size_t>(order.begin(), order.begin() + static_cast<long>(best_k)),
+  GuardGroups(units, std::vector<size_t>(order.begin(), order.begin() + static_cast<long>(best_k)),
               params, groups);
-  GuardGroups(all, std::vector<size_t>(order.begin() + static_cast<long>(best_k), order.end()),
+  GuardGroups(units, std::vector<size_t>(order.begin() + static_cast<long>(best_k), order.end()),
               params, groups);
 }
 
-}  // namespace
-
-std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observations,
-                                    const FusionParams& params) {
-  std::vector<Flat> all;
-  for (const BatchObservation& o : observations) {
-    for (const GroundFeature& f : o.features) all.push_back({f, o.id});
+// The fitted segment of `endpoints`: their TLS line, cut at the extreme projections.
+Segment2 FittedSegment(const std::vector<Vec2>& endpoints, Fit* fit) {
+  *fit = FitEndpoints(endpoints);
+  double t_min = 1e300, t_max = -1e300;
+  for (const Vec2& p : endpoints) {
+    t_min = std::min(t_min, (p - fit->point).dot(fit->direction));
+    t_max = std::max(t_max, (p - fit->point).dot(fit->direction));
   }
-  const size_t n = all.size();
-  std::vector<std::vector<size_t>> adjacent(n);
-  for (size_t i = 0; i < n; ++i) {
-    for (size_t j = i + 1; j < n; ++j) {
-      if (all[i].observation == all[j].observation) continue;
-      if (!MeetsAllCriteria(all[i].feature.segment, all[j].feature.segment, params)) continue;
-      adjacent[i].push_back(j);
-      adjacent[j].push_back(i);
-    }
-  }
+  return {fit->point + t_min * fit->direction, fit->point + t_max * fit->direction};
+}
 
-  std::vector<BatchCluster> clusters;
-  std::vector<Fit> fits;
+// Connected components of the symmetric relation `linked` over 0 .. n-1, by BFS.
+template <typename Linked>
+std::vector<std::vector<size_t>> Components(size_t n, Linked linked) {
+  std::vector<std::vector<size_t>> out;
   std::vector<bool> seen(n, false);
   for (size_t start = 0; start < n; ++start) {
     if (seen[start]) continue;
@@ -148,58 +161,135 @@ std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observa
       const size_t i = queue.front();
       queue.pop();
       component.push_back(i);
-      for (size_t j : adjacent[i]) {
-        if (!seen[j]) {
+      for (size_t j = 0; j < n; ++j) {
+        if (!seen[j] && linked(i, j)) {
           seen[j] = true;
           queue.push(j);
         }
       }
     }
+    std::sort(component.begin(), component.end());
+    out.push_back(std::move(component));
+  }
+  return out;
+}
+
+}  // namespace
+
+BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
+                      const FusionParams& params) {
+  std::vector<Flat> all;
+  for (const BatchObservation& o : observations) {
+    for (const GroundFeature& f : o.features) all.push_back({f, o.id});
+  }
+  std::vector<Unit> features;
+  for (const Flat& f : all) {
+    features.push_back({f.feature.id, f.feature.segment.midpoint(),
+                        {f.feature.segment.a, f.feature.segment.b}, {f.observation}});
+  }
+  const std::vector<std::vector<size_t>> components =
+      Components(all.size(), [&](size_t i, size_t j) {
+        return i != j && all[i].observation != all[j].observation &&
+               MeetsAllCriteria(all[i].feature.segment, all[j].feature.segment, params);
+      });
+
+  // The guard's groups of every component: the clusters.
+  BatchResult result;
+  std::vector<std::vector<size_t>> members_of;  // per cluster, indices into `all`
+  for (const std::vector<size_t>& component : components) {
     std::vector<std::vector<size_t>> groups;
-    GuardGroups(all, component, params, &groups);
+    GuardGroups(features, component, params, &groups);
+    for (std::vector<size_t>& group : groups) {
+      std::sort(group.begin(), group.end());
+      members_of.push_back(group);
+    }
+  }
+  const auto make = [&](const std::vector<size_t>& members) {
+    BatchCluster c;
+    std::vector<Vec2> endpoints;
+    std::set<ObservationId> support;
+    for (size_t i : members) {
+      c.members.push_back(all[i].feature.id);
+      endpoints.push_back(all[i].feature.segment.a);
+      endpoints.push_back(all[i].feature.segment.b);
+      support.insert(all[i].observation);
+    }
+    std::sort(c.members.begin(), c.members.end());
+    c.id = c.members.front();
+    c.support = static_cast<uint32_t>(support.size());
+    c.published = c.support >= params.min_support;
+    Fit fit;
+    c.fitted = FittedSegment(endpoints, &fit);
+    c.segment = c.fitted;
+    return c;
+  };
+  std::vector<size_t> published;  // indices into result.clusters
+  for (const std::vector<size_t>& members : members_of) {
+    result.clusters.push_back(make(members));
+    if (result.clusters.back().published) published.push_back(result.clusters.size() - 1);
+  }
+
+  // Consolidation (fusion/wall_consolidation.h): components of OnOneWall
+  // over the published clusters, through the guard with clusters as units.
+  const std::vector<std::vector<size_t>> walls_of =
+      Components(published.size(), [&](size_t i, size_t j) {
+        const BatchCluster& p = result.clusters[published[i]];
+        const BatchCluster& q = result.clusters[published[j]];
+        return i != j && params.consolidate && OnOneWall(p.fitted, p.id, q.fitted, q.id, params);
+      });
+  std::vector<Fit> fits;
+  for (const std::vector<size_t>& component : walls_of) {
+    std::vector<Unit> units;
+    std::vector<size_t> index(component.size());
+    for (size_t k = 0; k < component.size(); ++k) {
+      const size_t c = published[component[k]];
+      Unit u{result.clusters[c].id, result.clusters[c].fitted.midpoint(), {}, {}};
+      for (size_t i : members_of[c]) {
+        u.points.push_back(all[i].feature.segment.a);
+        u.points.push_back(all[i].feature.segment.b);
+      }
+      units.push_back(std::move(u));
+      index[k] = k;
+    }
+    std::vector<std::vector<size_t>> groups;
+    if (component.size() > 1) {
+      GuardGroups(units, index, params, &groups);
+    } else {
+      groups.push_back(index);
+    }
     for (const std::vector<size_t>& group : groups) {
-      BatchCluster c;
+      std::vector<size_t> members;
+      for (size_t k : group) {
+        const std::vector<size_t>& m = members_of[published[component[k]]];
+        members.insert(members.end(), m.begin(), m.end());
+      }
+      result.walls.push_back(make(members));
       std::vector<Vec2> endpoints;
-      std::set<ObservationId> support;
-      for (size_t i : group) {
-        c.members.push_back(all[i].feature.id);
+      for (size_t i : members) {
         endpoints.push_back(all[i].feature.segment.a);
         endpoints.push_back(all[i].feature.segment.b);
-        support.insert(all[i].observation);
       }
-      std::sort(c.members.begin(), c.members.end());
-      c.id = c.members.front();
-      c.support = static_cast<uint32_t>(support.size());
-      c.published = c.support >= params.min_support;
-      const Fit fit = FitEndpoints(endpoints);
-      double t_min = 1e300, t_max = -1e300;
-      for (const Vec2& p : endpoints) {
-        t_min = std::min(t_min, (p - fit.point).dot(fit.direction));
-        t_max = std::max(t_max, (p - fit.point).dot(fit.direction));
-      }
-      c.fitted = {fit.point + t_min * fit.direction, fit.point + t_max * fit.direction};
-      c.segment = c.fitted;
-      clusters.push_back(c);
+      Fit fit;
+      FittedSegment(endpoints, &fit);
       fits.push_back(fit);
     }
   }
 
-  // Corner rule: mutual nearest endpoints of different published features.
+  // Corner rule: mutual nearest endpoints of different walls.
   struct End {
-    size_t cluster;
+    size_t wall;
     int end;
     Vec2 p;
   };
   std::vector<End> ends;
-  for (size_t k = 0; k < clusters.size(); ++k) {
-    if (!clusters[k].published) continue;
-    ends.push_back({k, 0, clusters[k].fitted.a});
-    ends.push_back({k, 1, clusters[k].fitted.b});
+  for (size_t k = 0; k < result.walls.size(); ++k) {
+    ends.push_back({k, 0, result.walls[k].fitted.a});
+    ends.push_back({k, 1, result.walls[k].fitted.b});
   }
   const auto nearest = [&](size_t e) {
     long best = -1;
     for (size_t o = 0; o < ends.size(); ++o) {
-      if (ends[o].cluster == ends[e].cluster) continue;
+      if (ends[o].wall == ends[e].wall) continue;
       const double d = (ends[o].p - ends[e].p).norm();
       if (!(d < params.snap_m)) continue;
       if (best < 0 || d < (ends[best].p - ends[e].p).norm()) best = static_cast<long>(o);
@@ -212,15 +302,16 @@ std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observa
     const long o = nearest(e);
     if (o < 0 || nearest(static_cast<size_t>(o)) != static_cast<long>(e)) continue;
     const End& other = ends[static_cast<size_t>(o)];
-    moved[e] = Joint(ends[e].p, fits[ends[e].cluster], other.p, fits[other.cluster], params);
+    moved[e] = Joint(ends[e].p, fits[ends[e].wall], other.p, fits[other.wall], params);
   }
   for (size_t e = 0; e < ends.size(); ++e) {
-    Segment2& s = clusters[ends[e].cluster].segment;
+    Segment2& s = result.walls[ends[e].wall].segment;
     (ends[e].end == 0 ? s.a : s.b) = moved[e];
   }
-  std::sort(clusters.begin(), clusters.end(),
-            [](const BatchCluster& x, const BatchCluster& y) { return x.id < y.id; });
-  return clusters;
+  const auto by_id = [](const BatchCluster& x, const BatchCluster& y) { return x.id < y.id; };
+  std::sort(result.clusters.begin(), result.clusters.end(), by_id);
+  std::sort(result.walls.begin(), result.walls.end(), by_id);
+  return result;
 }
 
 }  // namespace mapd::fusion::testing

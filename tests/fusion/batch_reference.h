@@ -23,14 +23,20 @@ struct BatchCluster {
   std::vector<FeatureId> members;  // ascending
   ClusterId id = 0;                // members.front()
   geometry::Segment2 fitted;
-  geometry::Segment2 segment;      // corner-optimised if published, else == fitted
+  geometry::Segment2 segment;      // walls: corner-optimised; clusters: == fitted
   uint32_t support = 0;
-  bool published = false;
+  bool published = false;          // clusters: support >= min_support
 };
 
-// All clusters, ascending by id.
-std::vector<BatchCluster> BatchFuse(const std::vector<BatchObservation>& observations,
-                                    const FusionParams& params);
+struct BatchResult {
+  std::vector<BatchCluster> clusters;  // the guard's groups, ascending id
+  // What is published: the published clusters consolidated into walls
+  // (one each with consolidation off), ascending id.
+  std::vector<BatchCluster> walls;
+};
+
+BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
+                      const FusionParams& params);
 
 }  // namespace mapd::fusion::testing
 

@@ -232,6 +232,38 @@ TEST(FusionEngineTest, ChainGuardCutsACurvedWallIntoPieces) {
   EXPECT_EQ(pieces.front().id, 1u);
 }
 
+// Four observations, one 1.5 m chord each, 0.6 m apart along a wall curved
+// with radius 8 m: they chain into one cluster of support 4 that bends too
+// much for one line.
+void AddFourChords(FusionEngine* engine) {
+  constexpr double kRadiusM = 8.0;
+  for (int s = 0; s < 4; ++s) {
+    const double a0 = 0.6 * s / kRadiusM, a1 = a0 + 1.5 / kRadiusM;
+    const GroundFeature f = Wall(s + 1, kRadiusM * Vec2(std::cos(a0), std::sin(a0)),
+                                 kRadiusM * Vec2(std::cos(a1), std::sin(a1)));
+    ASSERT_TRUE(engine->Add(100 + s, 0, {f}).ok());
+  }
+}
+
+TEST(FusionEngineTest, ChainGuardNeverCutsOffAPieceBelowMinSupport) {
+  // With min_support 2 the guard cuts the chain (so it is a chain).
+  FusionEngine low(Support(2));
+  AddFourChords(&low);
+  ASSERT_GE(low.published_count(), 2u);
+  // With min_support 3 every cut leaves a piece of support < 3: the cluster
+  // stays whole and is published, as without the guard.
+  FusionEngine guarded(Support(3));
+  AddFourChords(&guarded);
+  FusionParams off = Support(3);
+  off.chain_max_rms_m = 0.0;
+  FusionEngine plain(off);
+  AddFourChords(&plain);
+  ASSERT_EQ(plain.published_count(), 1u);
+  ASSERT_EQ(guarded.published_count(), 1u);
+  EXPECT_EQ(guarded.Published()[0].support, 4u);
+  EXPECT_EQ(guarded.Published()[0].fitted.a, plain.Published()[0].fitted.a);
+}
+
 TEST(FusionEngineTest, ChainGuardKeepsAStraightWallWhole) {
   FusionParams off = Support(2);
   off.chain_max_rms_m = 0.0;

@@ -23,6 +23,7 @@ using geometry::Segment2;
 using geometry::Vec2;
 using testing::BatchCluster;
 using testing::BatchFuse;
+using testing::BatchResult;
 using testing::BatchObservation;
 
 constexpr double kToleranceM = 1e-9;
@@ -192,24 +193,22 @@ class PropertyTest : public ::testing::TestWithParam<std::tuple<uint32_t, bool, 
 TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
   const auto [seed, curved, guard] = GetParam();
   const Scene scene = MakeScene(seed, curved, guard);
-  const std::vector<BatchCluster> reference = BatchFuse(scene.observations, scene.params);
+  const BatchResult reference = BatchFuse(scene.observations, scene.params);
   if (curved && guard) {
     // The guard must have something to do: it cuts at least one component.
     FusionParams off = scene.params;
     off.chain_max_rms_m = 0.0;
-    ASSERT_GT(reference.size(), BatchFuse(scene.observations, off).size());
+    ASSERT_GT(reference.clusters.size(), BatchFuse(scene.observations, off).clusters.size());
   }
   std::vector<std::vector<FeatureId>> reference_partition;
-  std::vector<ClusterId> reference_published;
-  for (const BatchCluster& c : reference) {
-    reference_partition.push_back(c.members);
-    if (c.published) reference_published.push_back(c.id);
-  }
+  for (const BatchCluster& c : reference.clusters) reference_partition.push_back(c.members);
   std::sort(reference_partition.begin(), reference_partition.end());
+  std::vector<ClusterId> reference_published;
+  for (const BatchCluster& w : reference.walls) reference_published.push_back(w.id);
   ASSERT_GT(reference_published.size(), 3u) << "a scene without structure tests little";
   size_t snapped_ends = 0;
-  for (const BatchCluster& c : reference) {
-    snapped_ends += (c.segment.a != c.fitted.a) + (c.segment.b != c.fitted.b);
+  for (const BatchCluster& w : reference.walls) {
+    snapped_ends += (w.segment.a != w.fitted.a) + (w.segment.b != w.fitted.b);
   }
   ASSERT_GT(snapped_ends, 0u) << "a scene without corners tests little";
 
@@ -230,20 +229,41 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
     }
 
     EXPECT_EQ(EngineInspector::Partition(engine), reference_partition);
-    EXPECT_EQ(engine.cluster_count(), reference.size());
+    EXPECT_EQ(engine.cluster_count(), reference.clusters.size());
     std::vector<ClusterId> published_ids;
     for (const FusedFeature& f : engine.Published()) published_ids.push_back(f.id);
     EXPECT_EQ(published_ids, reference_published);
 
-    for (const BatchCluster& c : reference) {
+    const auto expect_same = [&](const BatchCluster& c) {
       const std::optional<FusedFeature> fused = engine.Get(c.id);
       ASSERT_TRUE(fused.has_value()) << c.id;
       EXPECT_EQ(fused->support, c.support);
       EXPECT_EQ(fused->member_count, c.members.size());
       EXPECT_LE(SegmentDistance(fused->fitted, c.fitted), kToleranceM) << c.id;
       EXPECT_LE(SegmentDistance(fused->segment, c.segment), kToleranceM) << c.id;
+    };
+    for (const BatchCluster& w : reference.walls) expect_same(w);
+    for (const BatchCluster& c : reference.clusters) {
+      if (!c.published) {
+        expect_same(c);
+      } else if (!std::binary_search(reference_published.begin(), reference_published.end(), c.id)) {
+        EXPECT_FALSE(engine.Get(c.id).has_value()) << c.id << " is part of a wall";
+      }
     }
   }
+}
+
+// The scenes exercise consolidation: in some, walls hold several published clusters.
+TEST(PropertyScenes, ConsolidationJoinsClustersInSomeScenes) {
+  size_t joined = 0;
+  for (uint32_t seed = 1; seed < 25; ++seed) {
+    const BatchResult r = BatchFuse(MakeScene(seed, false, true).observations, MakeScene(seed, false, true).params);
+    size_t published = 0;
+    for (const BatchCluster& c : r.clusters) published += c.published;
+    joined += published - r.walls.size();
+  }
+  std::printf("published clusters joined into walls over 24 scenes: %zu\n", joined);
+  EXPECT_GT(joined, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, PropertyTest,

@@ -1,0 +1,217 @@
+#include "fusion/wall_consolidation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "fusion/chain_guard.h"
+
+namespace mapd::fusion {
+
+using geometry::Segment2;
+using geometry::Vec2;
+
+namespace {
+
+// Pieces are filed in the index at points at most this far apart along their
+// fitted segment (and the grid's cells are this wide): every point of a piece
+// is then within half of it from a filed point.
+constexpr double kPieceStepM = 2.0;
+constexpr double kSlackM = 1e-6;
+
+double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
+
+std::vector<Vec2> FiledPoints(const Segment2& s) {
+  const double length = s.length();
+  const int steps = std::max(1, static_cast<int>(std::ceil(length / kPieceStepM)));
+  std::vector<Vec2> points;
+  points.reserve(steps + 1);
+  for (int i = 0; i <= steps; ++i) {
+    points.push_back(s.a + (static_cast<double>(i) / steps) * (s.b - s.a));
+  }
+  return points;
+}
+
+}  // namespace
+
+bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
+               const FusionParams& params) {
+  const double eta2 = params.eta_m * params.eta_m;
+  // b. Near-identical: endpoints pair up within eta (either pairing).
+  const bool same = (p.a - q.a).squaredNorm() <= eta2 && (p.b - q.b).squaredNorm() <= eta2;
+  const bool swapped = (p.a - q.b).squaredNorm() <= eta2 && (p.b - q.a).squaredNorm() <= eta2;
+  if (same || swapped) return true;
+  // a. Collinear within delta and eta, overlapping or within the gap.
+  const double lp = p.length(), lq = q.length();
+  const bool p_longer = lp > lq || (lp == lq && p_id < q_id);
+  const Segment2& l = p_longer ? p : q;
+  const Segment2& s = p_longer ? q : p;
+  const double l_length = p_longer ? lp : lq;
+  const double s_length = p_longer ? lq : lp;
+  if (!(l_length > 0.0) || !(s_length > 0.0)) return false;
+  const Vec2 u = l.direction() / l_length;
+  const Vec2 v = s.direction() / s_length;
+  // Included angle in [0, pi/2]: |sin| <= sin(delta) with |cos| >= cos(delta).
+  if (std::abs(Cross(u, v)) > std::sin(params.delta_rad) + kSlackM) return false;
+  if (std::abs(Cross(u, s.a - l.a)) > params.eta_m || std::abs(Cross(u, s.b - l.a)) > params.eta_m) {
+    return false;
+  }
+  const double ta = u.dot(s.a - l.a), tb = u.dot(s.b - l.a);
+  const double gap = std::max({0.0, std::min(ta, tb) - l_length, -std::max(ta, tb)});
+  return gap <= params.wall_gap_m;
+}
+
+WallConsolidator::WallConsolidator(const FusionParams& params, uint32_t support_cap)
+    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {}
+
+void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
+  for (const Vec2& p : FiledPoints(s)) {
+    if (insert) {
+      index_.Insert(p, id);
+    } else {
+      index_.EraseIf(p, [id](ClusterId x) { return x == id; });
+    }
+  }
+}
+
+bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit) {
+  auto it = pieces_.find(stats.id);
+  if (it != pieces_.end()) {
+    const ClusterStats& old = piece_stats_.at(stats.id);
+    if (old.member_count == stats.member_count && old.support() == stats.support() &&
+        it->second.fit.segment.a == fit.segment.a && it->second.fit.segment.b == fit.segment.b) {
+      return false;
+    }
+    Index(stats.id, it->second.fit.segment, false);
+    if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
+    it->second.fit = fit;
+  } else {
+    pieces_[stats.id].fit = fit;
+  }
+  piece_stats_[stats.id] = stats;
+  Index(stats.id, fit.segment, true);
+  touched_pieces_.push_back(stats.id);
+  return true;
+}
+
+void WallConsolidator::Erase(ClusterId piece) {
+  auto it = pieces_.find(piece);
+  if (it == pieces_.end()) return;
+  Index(piece, it->second.fit.segment, false);
+  if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
+  pieces_.erase(it);
+  piece_stats_.erase(piece);
+}
+
+std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) const {
+  std::vector<ClusterId> out;
+  if (!params_.consolidate) return out;
+  const Segment2& s = pieces_.at(id).fit.segment;
+  const double radius = params_.eta_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
+  index_.ForEachNearSegment(s, radius, [&](ClusterId other) {
+    if (other != id) out.push_back(other);
+  });
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  out.erase(std::remove_if(out.begin(), out.end(),
+                           [&](ClusterId other) {
+                             return !OnOneWall(s, id, pieces_.at(other).fit.segment, other, params_);
+                           }),
+            out.end());
+  return out;
+}
+
+void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
+                               std::vector<Wall>* walls) const {
+  std::vector<std::vector<uint32_t>> groups;
+  if (component.size() > 1 && params_.chain_max_rms_m > 0.0) {
+    // The guard, with each piece standing for all its members' endpoints.
+    std::vector<GuardMember> members;
+    members.reserve(component.size());
+    for (ClusterId id : component) {
+      members.push_back({id, pieces_.at(id).fit.segment, &piece_stats_.at(id).moments});
+    }
+    groups = SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
+  } else {
+    groups.emplace_back(component.size());
+    for (uint32_t i = 0; i < component.size(); ++i) groups.back()[i] = i;
+  }
+  for (const std::vector<uint32_t>& group : groups) {  // each ascending, as `component`
+    Wall wall;
+    for (uint32_t i : group) wall.pieces.push_back(component[i]);
+    wall.stats = piece_stats_.at(component[group.front()]);
+    for (size_t i = 1; i < group.size(); ++i) {
+      ClusterStats copy = piece_stats_.at(component[group[i]]);
+      wall.stats.Merge(std::move(copy), support_cap_);
+    }
+    wall.fit = group.size() == 1 ? pieces_.at(component[group.front()]).fit : wall.stats.Refit();
+    walls->push_back(std::move(wall));
+  }
+}
+
+void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall>* walls) {
+  removed->clear();
+  walls->clear();
+  std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
+  std::vector<ClusterId> work;
+  for (ClusterId id : touched_pieces_) {
+    if (pieces_.count(id) != 0) work.push_back(id);
+  }
+  for (ClusterId wall : touched_walls_) {
+    auto it = walls_.find(wall);
+    if (it == walls_.end()) continue;
+    for (ClusterId id : it->second) {
+      if (pieces_.count(id) != 0) work.push_back(id);
+    }
+  }
+  touched_pieces_.clear();
+  touched_walls_.clear();
+
+  // Connected components of OnOneWall from the touched pieces. A piece
+  // reached that belonged to another wall drags that wall's pieces in too.
+  std::unordered_set<ClusterId> visited;
+  std::vector<std::vector<ClusterId>> components;
+  for (size_t next = 0; next < work.size(); ++next) {
+    if (!visited.insert(work[next]).second) continue;
+    std::vector<ClusterId> component;
+    std::vector<ClusterId> stack{work[next]};
+    while (!stack.empty()) {
+      const ClusterId id = stack.back();
+      stack.pop_back();
+      component.push_back(id);
+      const Piece& piece = pieces_.at(id);
+      if (piece.has_wall && affected.insert(piece.wall).second) {
+        auto it = walls_.find(piece.wall);
+        if (it != walls_.end()) work.insert(work.end(), it->second.begin(), it->second.end());
+      }
+      for (ClusterId other : Neighbours(id)) {
+        if (visited.insert(other).second) stack.push_back(other);
+      }
+    }
+    std::sort(component.begin(), component.end());
+    components.push_back(std::move(component));
+  }
+
+  for (ClusterId wall : affected) walls_.erase(wall);
+  std::unordered_set<ClusterId> now;
+  for (const std::vector<ClusterId>& component : components) {
+    const size_t first = walls->size();
+    WallsOf(component, walls);
+    for (size_t w = first; w < walls->size(); ++w) now.insert((*walls)[w].stats.id);
+  }
+  // Record membership: every piece of a component belongs to one of its walls.
+  for (const Wall& wall : *walls) {
+    walls_[wall.stats.id] = wall.pieces;
+    for (ClusterId id : wall.pieces) {
+      Piece& piece = pieces_.at(id);
+      piece.wall = wall.stats.id;
+      piece.has_wall = true;
+    }
+  }
+  for (ClusterId wall : affected) {
+    if (now.count(wall) == 0) removed->push_back(wall);
+  }
+  std::sort(removed->begin(), removed->end());
+}
+
+}  // namespace mapd::fusion

@@ -1,0 +1,94 @@
+// Wall consolidation, beyond the paper (docs/algorithms.md, section A.9).
+//
+// The three criteria link two features only when each one's centre lies within
+// eta of the other AND their feature circles overlap: two pieces of one wall
+// seen from its two ends (a long wall is rarely seen whole from one pose) can
+// fail criterion 3 although they lie on the same line, so the paper publishes
+// one wall as several overlapping features. The consolidator takes the
+// engine's published clusters ("pieces") and publishes as one feature
+// ("wall") every set of pieces connected by OnOneWall:
+//
+//   L = the longer of p, q (ties: the smaller id), S = the other;
+//   OnOneWall(p, q) iff
+//     a. the included angle of their fitted directions is <= delta_rad, and
+//        both endpoints of S lie within eta_m of L's fitted line, and S's
+//        extent along L overlaps L's or leaves a gap of <= wall_gap_m; or
+//     b. each endpoint of one lies within eta_m of an endpoint of the other
+//        (near-identical features: corner snapping would make them one
+//        segment, whatever their directions).
+//
+// A wall is a connected component of that relation over the pieces, passed
+// through the chain guard (chain_guard.h) with the pieces as its members when
+// the guard is on, so consolidation never rebuilds a chain the guard cut. Its
+// statistics are the pieces' merged in ascending id order; its id is the
+// smallest piece id. Walls are thus a function of the piece set alone:
+// deterministic and independent of arrival order, like the pieces themselves.
+// Off (FusionParams::consolidate false), every piece is its own wall.
+//
+// Incremental: the engine reports pieces that appeared, changed or vanished;
+// Resolve() recomputes only the walls those pieces belonged to or now reach.
+#ifndef MAPD_FUSION_WALL_CONSOLIDATION_H_
+#define MAPD_FUSION_WALL_CONSOLIDATION_H_
+
+#include <map>
+#include <unordered_map>
+#include <vector>
+
+#include "fusion/cluster_stats.h"
+#include "fusion/grid_index.h"
+#include "fusion/params.h"
+
+namespace mapd::fusion {
+
+// The relation above on two fitted segments named by their cluster ids.
+bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segment2& q,
+               ClusterId q_id, const FusionParams& params);
+
+class WallConsolidator {
+ public:
+  // support_cap: as ClusterStats::Merge (the engine's).
+  WallConsolidator(const FusionParams& params, uint32_t support_cap);
+
+  // Piece stats.id appeared or changed. Returns false (and records nothing)
+  // if it is unchanged: same member count, support and fitted segment.
+  bool Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit);
+  void Erase(ClusterId piece);
+  bool HasPiece(ClusterId piece) const { return pieces_.count(piece) != 0; }
+  // All pieces, ascending id (snapshots).
+  const std::map<ClusterId, ClusterStats>& pieces() const { return piece_stats_; }
+
+  struct Wall {
+    ClusterStats stats;  // stats.id names the wall
+    ClusterStats::Fit fit;
+    std::vector<ClusterId> pieces;  // ascending; pieces.front() == stats.id
+  };
+  // Recomputes the walls touched since the last call. `removed`: walls that
+  // existed and exist no more; `walls`: every wall that contains a touched
+  // piece, changed or not (the caller compares).
+  void Resolve(std::vector<ClusterId>* removed, std::vector<Wall>* walls);
+
+ private:
+  struct Piece {
+    ClusterStats::Fit fit;
+    ClusterId wall = 0;
+    bool has_wall = false;
+  };
+  void Index(ClusterId id, const geometry::Segment2& s, bool insert);
+  // Pieces on one wall with `id`, ascending.
+  std::vector<ClusterId> Neighbours(ClusterId id) const;
+  // The walls of one connected component of pieces (ascending ids).
+  void WallsOf(const std::vector<ClusterId>& component, std::vector<Wall>* walls) const;
+
+  const FusionParams params_;
+  const uint32_t support_cap_;
+  std::map<ClusterId, ClusterStats> piece_stats_;
+  std::unordered_map<ClusterId, Piece> pieces_;
+  std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending
+  std::vector<ClusterId> touched_pieces_;
+  std::vector<ClusterId> touched_walls_;  // walls of pieces that changed or vanished
+  UniformGrid<ClusterId> index_;  // pieces filed at points along their fitted segment
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_WALL_CONSOLIDATION_H_
