@@ -1,5 +1,5 @@
-// The chain guard (ALGORITHMS.md section A, "A known weakness: chaining along
-// curved walls"). Clusters stay the connected components of the criteria graph;
+// The chain guard (docs/algorithms.md A.9, "The chain guard (curved
+// walls)"). Clusters stay the connected components of the criteria graph;
 // what is PUBLISHED is a deterministic function of each component's member set:
 //
 //   Groups(S), S a set of member features, P the 2|S| endpoints of S:

@@ -1,5 +1,5 @@
 // What the engine keeps per cluster: enough to refit the fused feature of
-// ALGORITHMS.md section A after a merge without revisiting the members.
+// docs/algorithms.md A.7 after a merge without revisiting the members.
 #ifndef MAPD_FUSION_CLUSTER_STATS_H_
 #define MAPD_FUSION_CLUSTER_STATS_H_
 

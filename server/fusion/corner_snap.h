@@ -1,5 +1,5 @@
 // Corner optimisation of the published fused features (paper section 3.2,
-// Figure 7; ALGORITHMS.md section A, "Corner optimisation").
+// Figure 7; docs/algorithms.md A.8, "Corner optimisation").
 //
 // The rule, chosen to be a function of the published set alone (so independent
 // of arrival order) and local (so the engine recomputes only near a change):

@@ -1,5 +1,6 @@
-// The three fusion criteria of feature-fusion-paper.txt section 3.1, as pure
-// functions (ALGORITHMS.md section A, "The three criteria").
+// The three fusion criteria of the feature-fusion paper (Li et al. 2023)
+// section 3.1, as pure functions (docs/algorithms.md A.2, "The three
+// criteria"; its Eq. 5-13 are the paper's eqs. (5)-(13) cited below).
 //
 // Every function is symmetric in its two features, bit for bit: the engine
 // evaluates (new, old) pairs while a batch evaluates (i, j) with i < j, and both

@@ -1,4 +1,4 @@
-// The incremental three-criteria fusion engine (ALGORITHMS.md section A).
+// The incremental three-criteria fusion engine (docs/algorithms.md A.3-A.5).
 //
 // Features arrive observation by observation, already in the map frame and
 // projected onto the ground plane (see projection.h). Each new feature is
@@ -19,7 +19,7 @@
 // representatives saturates, so the cost of one observation depends on the
 // walls around it, not on how often they were seen. The result depends on the
 // arrival order (deterministically) and may differ from the exact one where a
-// pair is borderline (docs/fusion-long-running.md measures by how much). The
+// pair is borderline (docs/long-running.md measures by how much). The
 // engine then does not remember every observation or feature id: the caller
 // must not add an observation twice (mapd's ids come from the database).
 //

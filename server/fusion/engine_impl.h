@@ -32,7 +32,7 @@ constexpr double kFeatureCellM = 1.0;
 // observations (at least min_support) saw it. Only established clusters fold
 // new features, and their support is exact up to here (support_counter.h).
 // Young clusters keep every member as in exact mode: their links are the
-// fragile ones (docs/fusion-long-running.md: folding into young clusters
+// fragile ones (docs/long-running.md: folding into young clusters
 // changed the map of a real log, folding into established ones did not).
 constexpr uint32_t kEstablishedSupport = 32;
 

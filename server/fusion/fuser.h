@@ -1,4 +1,4 @@
-// A common interface for feature-fusion strategies (ALGORITHMS.md section A,
+// A common interface for feature-fusion strategies (docs/algorithms.md A.13,
 // "Baselines"): the proposed three-criteria engine and the two competing
 // methods of the paper, so that the benchmark and the tests can run them side
 // by side. Strategies are chosen by name through fuser_registry.h.

@@ -1,4 +1,4 @@
-// Fusion strategies by name (ALGORITHMS.md section A, "Baselines"):
+// Fusion strategies by name (docs/algorithms.md A.13, "Baselines"):
 //   "three_criteria"  the proposed method (FusionEngine, fusion/engine.h)
 //   "mean_shift"      competing algorithm 1 (fusion/baselines/mean_shift_fuser.h)
 //   "density"         competing algorithm 2 (fusion/baselines/density_fuser.h)

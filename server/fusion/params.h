@@ -1,5 +1,5 @@
-// Parameters of the three-criteria feature fusion (ALGORITHMS.md section A,
-// feature-fusion-paper.txt section 3). One validated struct; units in names.
+// Parameters of the three-criteria feature fusion (docs/algorithms.md part A;
+// the feature-fusion paper, Li et al. 2023, section 3). One validated struct; units in names.
 #ifndef MAPD_FUSION_PARAMS_H_
 #define MAPD_FUSION_PARAMS_H_
 
@@ -44,7 +44,7 @@ struct FusionParams {
   double snap_m = 0.5;         // corner optimisation: endpoints closer than this meet
   CornerMode corner_mode = CornerMode::kIntersection;
   double max_plane_tilt_rad = 10.0 * 3.14159265358979323846 / 180.0;  // vertical-plane test
-  // Chain guard (chain_guard.h; ALGORITHMS.md section A, "A known weakness"):
+  // Chain guard (chain_guard.h; docs/algorithms.md A.9):
   // a cluster whose member endpoints lie farther than chain_max_rms_m (RMS
   // orthogonal distance to its fitted line, metres) is published as pieces cut
   // along its length, each cut kept only if it leaves less than

@@ -1,5 +1,5 @@
 // From a robot's observation (sensor frame) to ground-plane features in the
-// map frame (ALGORITHMS.md section A, "Inputs").
+// map frame (docs/algorithms.md A.1, Eq. 1-4).
 #ifndef MAPD_FUSION_PROJECTION_H_
 #define MAPD_FUSION_PROJECTION_H_
 

@@ -1,6 +1,6 @@
 // The support of a cluster: how many distinct observations its members came
-// from (feature-fusion-paper.txt section 3.2: a cluster is published once it
-// was seen often enough).
+// from (feature-fusion paper, Li et al. 2023, section 3.2: a cluster is
+// published once it was seen often enough; docs/algorithms.md A.6).
 #ifndef MAPD_FUSION_SUPPORT_COUNTER_H_
 #define MAPD_FUSION_SUPPORT_COUNTER_H_
 

@@ -1,5 +1,5 @@
 // Total-least-squares line fit from mergeable sufficient statistics
-// (ALGORITHMS.md section A, "The fused feature of a cluster").
+// (docs/algorithms.md A.7, "The fused line", Eq. 16-18).
 //
 // The statistics are kept centred (count, mean, scatter about the mean) rather
 // than as raw sums: the raw form sum(p p^T) - sum(p) sum(p)^T / n cancels

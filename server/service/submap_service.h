@@ -25,7 +25,7 @@
 //   record, and the session ties below, in ONE transaction, and streams the
 //   result last. A cancelled call or a server shutdown abandons the merge:
 //   nothing is stored.
-// - Frames (DESIGN.md, Frames): the first input is the reference R. Its
+// - Frames (docs/algorithms.md A.10, Eq. 21): the first input is the reference R. Its
 //   session frame's pose in the map, T_map_R, is: R's own if R's session is
 //   tied; else T_map_k * T_R_k^-1 from the first input k whose session is
 //   tied; else the identity (the reference's frame becomes the map frame: the

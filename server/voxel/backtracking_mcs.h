@@ -1,6 +1,6 @@
-// The paper's maximum common subgraph search (grid-map-fusion-paper.txt
-// section IV.C, Algorithm 1, after McGregor 1982), on the consistency graph
-// of corner_matching.h.
+// The paper's maximum common subgraph search (grid-map-fusion paper, Qiu et
+// al., section IV.C, Algorithm 1, after McGregor 1982; docs/algorithms.md
+// B.4), on the consistency graph of corner_matching.h.
 //
 // Rows are the corners of A that have candidate pairs. Row by row the search
 // either matches the corner to one of its candidate partners that is

@@ -1,5 +1,6 @@
 // A 3D corner of a voxel submap: where three planar faces meet
-// (grid-map-fusion-paper.txt sections III-IV, ALGORITHMS.md section B).
+// (grid-map-fusion paper, Qiu et al., sections III-IV; docs/algorithms.md
+// part B).
 // Produced by corner extraction, consumed by corner matching.
 #ifndef MAPD_VOXEL_CORNER_H_
 #define MAPD_VOXEL_CORNER_H_

@@ -1,5 +1,5 @@
-// Corner extraction from a voxel map (grid-map-fusion-paper.txt section III,
-// ALGORITHMS.md B.1-B.3):
+// Corner extraction from a voxel map (grid-map-fusion paper, Qiu et al.,
+// section III; docs/algorithms.md B.1-B.3):
 //   1. candidates: sliding-window occupied counts, O(1) per window from a 3D
 //      summed-volume table; a voxel is a candidate when shifting the window by
 //      one voxel in each of the 26 directions changes its count by at least

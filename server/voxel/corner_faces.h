@@ -1,4 +1,4 @@
-// Internal to corner extraction (ALGORITHMS.md B.2-B.3): do three planes
+// Internal to corner extraction (docs/algorithms.md B.2-B.3): do three planes
 // really meet at their intersection point? The paper accepts a candidate that
 // lies within epsilon of three planes; three infinite planes can cross where
 // none of them has a voxel (a wall, the floor and a far shelf side). Here each

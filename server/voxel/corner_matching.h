@@ -1,5 +1,5 @@
-// Corner matching between two voxel submaps (ALGORITHMS.md B.4, B.5;
-// grid-map-fusion-paper.txt section IV).
+// Corner matching between two voxel submaps (docs/algorithms.md B.4, B.5;
+// grid-map-fusion paper, Qiu et al., section IV).
 //
 // Correspondences M = {(a_i, b_i)} must satisfy the paper's eq. (4):
 //   | |a_i - a_j| - |b_i - b_j| | < D  for every two of them,

@@ -1,5 +1,5 @@
 # Part 1 of the voxel library: safe octree parsing, the voxel grid view and
-# corner extraction (ALGORITHMS.md B.1-B.3). Included by CMakeLists.txt.
+# corner extraction (docs/algorithms.md B.1-B.3). Included by CMakeLists.txt.
 list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/octree_reader.cc
   ${CMAKE_CURRENT_LIST_DIR}/voxel_grid.cc

@@ -1,5 +1,6 @@
-// Point-to-point ICP on occupied voxel centres (ALGORITHMS.md B.5: "we also
-// refine with ICP on the occupied voxel centres of the overlap").
+// Point-to-point ICP on occupied voxel centres (docs/algorithms.md B.5: the
+// refinement of the corner transform on the occupied voxel centres of the
+// overlap).
 //
 // Besl & McKay 1992 with two robustifications: correspondences farther than
 // max_correspondence_voxels are ignored, and of the rest only the closest

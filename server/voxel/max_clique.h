@@ -1,5 +1,5 @@
 // Exact maximum clique by branch and bound on adjacency bitsets
-// (ALGORITHMS.md B.4). The search is Tomita's MCQ/MCS scheme in the bitset
+// (docs/algorithms.md B.4). The search is Tomita's MCQ/MCS scheme in the bitset
 // form of San Segundo's BBMC: vertices renumbered in a degeneracy (smallest
 // last) order, a greedy colouring of the candidate set at every node gives
 // the bound |C| + colours(P) <= best => prune, and the vertices of the highest

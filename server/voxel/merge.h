@@ -1,4 +1,4 @@
-// Merging voxel submaps without an initial pose (ALGORITHMS.md section B):
+// Merging voxel submaps without an initial pose (docs/algorithms.md part B):
 // corners -> matching -> alignment (Umeyama, then ICP on the overlap) ->
 // occupancy fusion; for more than two submaps, pairwise merges and a spanning
 // tree of the best accepted edges. This is the one entry point the service uses.

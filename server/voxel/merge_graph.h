@@ -1,5 +1,5 @@
 // Placing several submaps in one frame from accepted pairwise merges
-// (ALGORITHMS.md B.7; the paper fuses maps c + d + e this way): the accepted
+// (docs/algorithms.md B.7; the paper fuses maps c + d + e this way): the accepted
 // pairs are weighted edges, a maximum spanning tree keeps the best evidence
 // (Kruskal), and each submap's pose in the root's frame is the product of the
 // pairwise transforms along its tree path. Pure Eigen; thread compatible.

@@ -1,5 +1,5 @@
-// The overlap score of a candidate alignment (ALGORITHMS.md B.4 tie-break and
-// B.5 acceptance), on plain voxel grids.
+// The overlap score of a candidate alignment (docs/algorithms.md B.4 tie-break
+// and B.5 acceptance, Eq. 31), on plain voxel grids.
 //
 // Definition: every occupied voxel b of B is mapped into A (centre through
 // T_a_b, then A's voxel k containing it). b is OBSERVED when A knows k (free

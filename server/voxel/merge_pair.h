@@ -1,4 +1,4 @@
-// One pairwise merge attempt of the pipeline (ALGORITHMS.md B.4, B.5): corner
+// One pairwise merge attempt of the pipeline (docs/algorithms.md B.4, B.5): corner
 // matching with the overlap tie-break, ICP refinement, and the acceptance
 // test of MergeParams. Internal to merge*.cc.
 #ifndef MAPD_VOXEL_MERGE_PAIR_H_

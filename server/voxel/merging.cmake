@@ -1,5 +1,5 @@
 # Part 3 of the voxel library: ICP, overlap score, occupancy fusion and the
-# merge pipeline (ALGORITHMS.md B.5-B.7). Included by CMakeLists.txt.
+# merge pipeline (docs/algorithms.md B.5-B.7). Included by CMakeLists.txt.
 list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/icp.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_overlap.cc

@@ -1,11 +1,11 @@
-// Occupancy fusion of aligned submaps (ALGORITHMS.md B.6, grid-map-fusion-
-// paper.txt section IV.D) on OctoMap trees.
+// Occupancy fusion of aligned submaps (docs/algorithms.md B.6; grid-map-fusion
+// paper, Qiu et al., section IV.D) on OctoMap trees.
 //
 // kOverlapRule, the paper's words: "in the overlapping area of map A and map
 // B, if the cube is occupied in map A or map B, the cube is still occupied
 // after fusion. If the cube is free in both map A and map B, the cube is free
 // after fusion, otherwise the merged cube is unknown." Outside the overlap
-// each map keeps its own cells (ALGORITHMS.md B.6).
+// each map keeps its own cells (docs/algorithms.md B.6).
 // The OVERLAP is a region, not a per-voxel test (with "observed in both" the
 // "otherwise unknown" clause could never apply): the voxels whose centre lies
 // inside A's observed bounds (the axis-aligned box of all of A's leaves, free

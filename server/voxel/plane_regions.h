@@ -1,4 +1,4 @@
-// Internal to corner extraction (ALGORITHMS.md B.2): planar regions of the
+// Internal to corner extraction (docs/algorithms.md B.2): planar regions of the
 // occupied voxels by region growing on the voxel grid, one least-squares
 // plane per region.
 //

@@ -1,4 +1,4 @@
-// Least-squares rigid transform between matched points (ALGORITHMS.md B.5):
+// Least-squares rigid transform between matched points (docs/algorithms.md B.5, Eq. 30):
 // Umeyama's closed form without scaling (Kabsch), via Eigen::umeyama.
 // "Least-squares estimation of transformation parameters between two point
 // patterns", Umeyama 1991, eq. (39)-(42) with c = 1.

@@ -1,7 +1,7 @@
 // A read-only view of an occupancy octree at its finest resolution, as plain
 // data (no OctoMap types): the occupied voxels expanded to unit keys, and the
 // free leaves kept as cubes so that free and unknown space stay distinct for
-// fusion (ALGORITHMS.md B.6).
+// fusion (docs/algorithms.md B.6).
 //
 // Keys: integer voxel indices; voxel `key` spans
 // [key * resolution, (key + 1) * resolution) per axis, centre (key + 0.5) * res.

@@ -1,4 +1,5 @@
-// The paper's comparison (feature-fusion-paper.txt section 4, Tables 1-3) on the
+// The paper's comparison (feature-fusion paper, Li et al. 2023, section 4,
+// Tables 1-3) on the
 // synthetic urban scenario (fusion/scenario), for the three strategies side by
 // side, with and without pose noise; and the speed targets of the fusion issue
 // (item 8). A benchmark, not a test: run it by hand, figures go to docs/.

@@ -3,7 +3,7 @@
 // compared feature by feature. Cases: the synthetic city (several seeds, clean
 // and with pose noise; also driven three times round, as a fleet revisits a
 // site) and the real CARMEN laser logs (shared/data/laser; skipped when absent).
-// A markdown table on stdout, for docs/fusion-long-running.md.
+// A markdown table on stdout, for docs/long-running.md.
 //
 //   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N] [--floor N [--exact]]
 #include <algorithm>

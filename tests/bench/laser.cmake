@@ -8,7 +8,7 @@ target_compile_definitions(laser_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE
 mapd_set_warnings(laser_bench)
 
 # Bounded against exact fusion on the synthetic city and the laser logs:
-# ./fusion_modes_bench (figures in docs/fusion-long-running.md). On demand.
+# ./fusion_modes_bench (figures in docs/long-running.md). On demand.
 add_executable(fusion_modes_bench fusion_modes_bench.cc carmen.cc)
 target_include_directories(fusion_modes_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_link_libraries(fusion_modes_bench PRIVATE fusion fusion_scenario service mapclient ZLIB::ZLIB)

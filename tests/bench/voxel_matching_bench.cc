@@ -1,5 +1,5 @@
 // Corner matching: the exact maximum clique vs the paper's backtracking search
-// (ALGORITHMS.md B.4) on generated corner sets with a known transform.
+// (docs/algorithms.md B.4) on generated corner sets with a known transform.
 // Writes a markdown table to docs/voxel-matching.md (or argv[1]).
 //
 //   voxel_matching_bench [out.md] [seeds]

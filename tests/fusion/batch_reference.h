@@ -1,4 +1,4 @@
-// A plain batch implementation of ALGORITHMS.md section A, written for
+// A plain batch implementation of docs/algorithms.md part A, written for
 // obviousness, not speed: all pairs, BFS components, the scatter matrix built
 // from the member endpoints, every endpoint projected, the corner rule of
 // fusion/corner_snap.h evaluated by brute force. The criteria themselves are the

@@ -24,7 +24,7 @@ TEST(OverlapRatioTest, DisjointCirclesDoNotOverlap) {
 }
 
 TEST(OverlapRatioTest, ExternallyTangentCirclesDoNotOverlap) {
-  // D = R_f + R_g exactly: eps = 0 (ALGORITHMS.md, "0 if D >= R_f + R_g").
+  // D = R_f + R_g exactly: eps = 0 (docs/algorithms.md Eq. 9).
   EXPECT_EQ(OverlapRatio(CircleOf({{0, 0}, {2, 0}}), CircleOf({{2, 0}, {4, 0}})), 0.0);
 }
 

@@ -1,6 +1,6 @@
 // The incremental engine against the plain batch reference (batch_reference.h)
-// on seeded random scenes, in shuffled arrival orders (ALGORITHMS.md section A,
-// "Incremental, exact"), with the chain guard off and on, on scenes of rooms and
+// on seeded random scenes, in shuffled arrival orders (docs/algorithms.md A.4,
+// "The incremental engine"), with the chain guard off and on, on scenes of rooms and
 // on scenes that add curved walls seen as arcs of short chords.
 #include <algorithm>
 #include <cmath>

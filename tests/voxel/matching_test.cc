@@ -1,4 +1,4 @@
-// Corner matching (ALGORITHMS.md B.4): generated corner sets with known
+// Corner matching (docs/algorithms.md B.4): generated corner sets with known
 // transforms, and TEASER++'s correspondence benchmarks with outliers.
 #include "voxel/corner_matching.h"
 

@@ -87,7 +87,7 @@ INSTANTIATE_TEST_SUITE_P(Poses, MergeKnownTransformTest,
 // The room is nearly symmetric under a half turn, and for some poses the
 // largest consistent corner set is a wrong one (the room flipped, walls on
 // walls). Whatever the matcher returns, a merge must be either right or
-// refused: a wrong merge is worse than none (ALGORITHMS.md B.5).
+// refused: a wrong merge is worse than none (docs/algorithms.md B.5).
 TEST(MergeTest, NeverAcceptsAWrongTransform) {
   int right = 0, refused = 0;
   for (const Eigen::Isometry3d& T_a_b :

@@ -44,7 +44,7 @@ struct Row {
   void B(int x, S s) { Set(&b, x - 5, s); }  // x in A's frame
 };
 
-// The hand-made cases of ALGORITHMS.md B.6 along one row.
+// The hand-made cases of docs/algorithms.md B.6 (Eq. 33) along one row.
 Row MakeRow() {
   Row row;
   row.A(0, S::kOccupied);  // A's box starts here

@@ -1,10 +1,10 @@
-// The shared frame of the two competing methods (ALGORITHMS.md section A,
+// The shared frame of the two competing methods (docs/algorithms.md A.13,
 // "Baselines"): both are OFFLINE algorithms, so Add() only files the features
 // and the map is computed from all of them when it is asked for. What differs
 // between them is the clustering and the merge of a cluster into one segment.
 //
-// The same post-processing as the proposed method (feature-fusion-paper.txt
-// section 4.2: "the same post processing has been employed for all three
+// The same post-processing as the proposed method (feature-fusion paper,
+// Li et al. 2023, section 4.2: "the same post processing has been employed for all three
 // algorithms") is applied to the merged segments: the corner optimisation of
 // corner_snap.h with FusionParams::snap_m and corner_mode.
 #ifndef MAPD_FUSION_BASELINES_BATCH_FUSER_H_

@@ -1,6 +1,6 @@
-// Competing algorithm 2 of feature-fusion-paper.txt (section 2.2): line-segment
-// merging by density clustering (Sarkar, Pal & Sarkar, RAS 2014), as
-// ALGORITHMS.md section A "Baselines" restates it:
+// Competing algorithm 2 of the feature-fusion paper (Li et al. 2023, section
+// 2.2): line-segment merging by density clustering (Sarkar, Pal & Sarkar, RAS
+// 2014), as docs/algorithms.md A.13 "Baselines" restates it:
 //  1. mean shift on the segments' orientations (axial, period pi);
 //  2. within each orientation mode, density-based clustering (DBSCAN) where two
 //     segments are neighbours when they are close in

@@ -1,6 +1,6 @@
 // Mean-shift clustering (Comaniciu & Meer 2002) as the two competing methods of
-// the paper use it (feature-fusion-paper.txt section 2): on line orientations,
-// an axial quantity with period pi, and on 2D feature centres.
+// the paper use it (feature-fusion paper, Li et al. 2023, section 2): on line
+// orientations, an axial quantity with period pi, and on 2D feature centres.
 #ifndef MAPD_FUSION_BASELINES_MEAN_SHIFT_H_
 #define MAPD_FUSION_BASELINES_MEAN_SHIFT_H_
 

@@ -1,6 +1,6 @@
-// Competing algorithm 1 of feature-fusion-paper.txt (section 2.1): line-segment
-// merging by mean-shift clustering (Lakaemper, IROS 2009), as ALGORITHMS.md
-// section A "Baselines" restates it:
+// Competing algorithm 1 of the feature-fusion paper (Li et al. 2023, section
+// 2.1): line-segment merging by mean-shift clustering (Lakaemper, IROS 2009),
+// as docs/algorithms.md A.13 "Baselines" restates it:
 //  1. mean shift on the segments' orientations (axial, period pi);
 //  2. within each orientation mode, mean shift on the segments' centres;
 //  3. each cluster is merged by projecting its segments onto a representative

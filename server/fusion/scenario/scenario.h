@@ -1,5 +1,5 @@
 // A synthetic urban world for the fusion benchmark (issue item 6; the paper's
-// PreScan world, feature-fusion-paper.txt section 4.2, Figure 12): a grid of
+// PreScan world, feature-fusion paper (Li et al. 2023) section 4.2, Figure 12): a grid of
 // city blocks separated by roads, one rectangular building per block or a pair
 // of buildings 1-2 m apart, short trivial structures (fences, poles) between the
 // road and the buildings, and a vehicle that drives every road with a 2D LiDAR

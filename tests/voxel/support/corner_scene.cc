@@ -22,7 +22,7 @@ Eigen::Vector3d RandomUnit(Rng& rng) {
 }
 
 // Three plane normals: an orthogonal frame, or three directions pairwise at
-// least 30 deg apart as lines (ALGORITHMS.md B.2), randomly rotated.
+// least 30 deg apart as lines (docs/algorithms.md B.2), randomly rotated.
 std::array<Eigen::Vector3d, 3> RandomNormals(Rng& rng, bool manhattan) {
   if (manhattan) {
     const Eigen::Matrix3d R = RandomRotation(rng).toRotationMatrix();
