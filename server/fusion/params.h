@@ -44,14 +44,14 @@ struct FusionParams {
   double snap_m = 0.5;         // corner optimisation: endpoints closer than this meet
   CornerMode corner_mode = CornerMode::kIntersection;
   double max_plane_tilt_rad = 10.0 * 3.14159265358979323846 / 180.0;  // vertical-plane test
-  // Chain guard (chain_guard.h; docs/algorithms.md A.9):
+  // Chain guard (chain_guard.h; docs/algorithms.md A.11):
   // a cluster whose member endpoints lie farther than chain_max_rms_m (RMS
   // orthogonal distance to its fitted line, metres) is published as pieces cut
   // along its length, each cut kept only if it leaves less than
   // chain_max_sse_ratio of the squared residual. 0 = off (the paper's method).
   double chain_max_rms_m = 0.05;
   double chain_max_sse_ratio = 0.5;  // in [0, 1]; 0 never cuts
-  // Wall consolidation (wall_consolidation.h; docs/algorithms.md A.9), beyond
+  // Wall consolidation (wall_consolidation.h; docs/algorithms.md A.11), beyond
   // the paper: published clusters on one wall (within delta_rad and eta_m,
   // overlapping or separated by at most wall_gap_m along it) are published as
   // one feature. false = the paper's output, one feature per cluster.

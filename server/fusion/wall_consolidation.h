@@ -1,4 +1,4 @@
-// Wall consolidation, beyond the paper (docs/algorithms.md, section A.9).
+// Wall consolidation, beyond the paper (docs/algorithms.md, section A.11).
 //
 // The three criteria link two features only when each one's centre lies within
 // eta of the other AND their feature circles overlap: two pieces of one wall
