@@ -143,6 +143,26 @@ const std::vector<const char*>& Migrations() {
       R"sql(
       CREATE TABLE write_probe (data BLOB NOT NULL);
       )sql",
+      // 4 -> 5: fused non-vertical planes (floors, ceilings, ramps;
+      // server/fusion/plane_engine.h), derived like fused_features. The plane
+      // engine's snapshot rides with the line engine's: a snapshot without
+      // plane_state (taken before this version) is not used, and the first
+      // start after the upgrade replays the stored observations once.
+      R"sql(
+      CREATE TABLE fused_planes (
+        id           INTEGER PRIMARY KEY,   -- smallest member feature id
+        nx REAL NOT NULL, ny REAL NOT NULL, nz REAL NOT NULL,  -- unit normal, map frame
+        offset       REAL NOT NULL,         -- n.x + offset = 0, metres
+        boundary     BLOB NOT NULL,         -- x, y, z doubles (little-endian), counter-clockwise about n
+        area         REAL NOT NULL,         -- m^2
+        z_min REAL NOT NULL, z_max REAL NOT NULL,
+        support      INTEGER NOT NULL,
+        member_count INTEGER NOT NULL,
+        robots       TEXT NOT NULL,
+        updated_ns   INTEGER NOT NULL
+      );
+      ALTER TABLE fusion_snapshots ADD COLUMN plane_state BLOB;
+      )sql",
   };
   return kMigrations;
 }

@@ -350,11 +350,12 @@ Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
       w, "INSERT INTO fusion_snapshots (created_ns, map_version, through_observation, "
-         "through_tie_seq, params, state) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+         "through_tie_seq, params, state, plane_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   if (!q.ok()) return q.status();
   q->Bind(1, snapshot.created_ns).Bind(2, static_cast<int64_t>(snapshot.map_version));
   q->Bind(3, snapshot.through_observation).Bind(4, snapshot.through_tie_seq);
   q->Bind(5, std::string_view(snapshot.params)).BindBlob(6, snapshot.state.data(), snapshot.state.size());
+  if (snapshot.has_plane_state) q->BindBlob(7, snapshot.plane_state.data(), snapshot.plane_state.size());
   MAPD_RETURN_IF_ERROR(q->Run());
   StatusOr<Statement> prune = Statement::Prepare(
       w, "DELETE FROM fusion_snapshots WHERE id NOT IN "
@@ -587,7 +588,7 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(), "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
-                     "params, state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
+                     "params, state, plane_state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(skip));
   StatusOr<bool> row = q->Step();
@@ -601,6 +602,8 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   snap.through_tie_seq = q->ColumnInt(4);
   snap.params = q->ColumnText(5);
   snap.state = std::string(q->ColumnBlob(6));
+  snap.has_plane_state = !q->ColumnIsNull(7);
+  if (snap.has_plane_state) snap.plane_state = std::string(q->ColumnBlob(7));
   return snap;
 }
 

@@ -72,6 +72,10 @@ struct FusionSnapshot {
   int64_t through_tie_seq = 0;
   std::string params;  // the fusion parameters it was built with
   std::string state;   // FusionEngine::SaveState()
+  // PlaneFusionEngine::SaveState(); has_plane_state is false for snapshots
+  // taken before plane fusion (schema version 5), which are then not used.
+  std::string plane_state;
+  bool has_plane_state = false;
 };
 
 // One batch to store.
@@ -106,6 +110,19 @@ struct FusedRow {
   uint64_t id = 0;
   int kind = 1;  // 1 = line, 2 = plane (mapserver.v1.FeatureKind)
   geometry::Segment2 segment;
+  double z_min_m = 0, z_max_m = 0;
+  uint32_t support = 0;
+  uint32_t member_count = 0;
+  std::string robots;  // comma-separated robot names
+};
+
+// A row of the published fused non-vertical planes (fusion/plane_engine.h).
+struct FusedPlaneRow {
+  uint64_t id = 0;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, map frame
+  double offset_m = 0;
+  std::vector<Eigen::Vector3d> boundary;  // map frame, counter-clockwise about normal
+  double area_m2 = 0;
   double z_min_m = 0, z_max_m = 0;
   uint32_t support = 0;
   uint32_t member_count = 0;
@@ -260,6 +277,9 @@ class WriteTransaction {
   // The sessions TieSession() tied in this transaction, ascending.
   std::vector<int64_t> tied_session_ids() const;
   Status DeleteFused(uint64_t id);
+  // Fused planes (storage/plane_store.cc).
+  Status UpsertFusedPlane(const FusedPlaneRow& row);
+  Status DeleteFusedPlane(uint64_t id);
   // Stores a new token (id filled in by the store); AlreadyExists for a taken name.
   StatusOr<int64_t> InsertToken(const TokenRecord& token);
   // Marks a token revoked; NotFound if there is none, FailedPrecondition if
@@ -333,6 +353,7 @@ class Store {
   StatusOr<MergeRecord> GetMerge(int64_t id);          // NotFound
   StatusOr<std::vector<MergeRecord>> ListMerges();     // by id
   StatusOr<std::vector<FusedRow>> LoadFused();
+  StatusOr<std::vector<FusedPlaneRow>> LoadFusedPlanes();  // by id
   StatusOr<std::vector<RobotSummary>> ListRobots();
   StatusOr<StoreCounts> Counts();
   // Tokens: by id (NotFound), all of them by id, and whether any was ever made.
