@@ -78,6 +78,8 @@ Status ServerConfig::Validate() const {
   // without mapd); their messages name the field.
   Status f = fusion.Validate();
   if (!f.ok()) return Status::InvalidArgument("fusion: " + f.message());
+  Status pl = planes.Validate();
+  if (!pl.ok()) return Status::InvalidArgument("planes: " + pl.message());
   Status l = ingest.limits.Validate();
   if (!l.ok()) return Status::InvalidArgument("limits: " + l.message());
   if (listen.empty() || listen.find(':') == std::string::npos) {

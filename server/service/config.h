@@ -12,6 +12,7 @@
 
 #include "common/status.h"
 #include "fusion/params.h"
+#include "fusion/plane_engine.h"
 #include "service/ingest_reactor.h"
 #include "service/stream_limiter.h"
 
@@ -49,6 +50,7 @@ struct ServerConfig {
   bool sync_full = false;                  // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;              // wait for a database lock held by another process
   fusion::FusionParams fusion;
+  fusion::PlaneFusionParams planes;        // non-vertical planes (floors, ramps)
   IngestOptions ingest;
   SubmapOptions submaps;
   StreamLimits streams;

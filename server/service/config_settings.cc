@@ -228,6 +228,23 @@ const std::vector<Setting>& Settings() {
       Real("fusion.wall_gap_m", "wall consolidation: pieces of one wall this far apart along it still join, metres",
            [](C& c) -> auto& { return c.fusion.wall_gap_m; }, {0, 1000}),
 
+      // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
+      Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",
+           [](C& c) -> auto& { return c.planes.max_normal_angle_rad; }, {0, 90, true}, kDegToRad),
+      Real("planes.max_offset_m", "plane criterion 2: max distance of each boundary centroid to the other "
+           "plane, metres",
+           [](C& c) -> auto& { return c.planes.max_offset_m; }, {0, 100}),
+      Real("planes.min_overlap", "plane criterion 3: min overlap of the projected boundaries as a share of "
+           "the smaller one's area; 0 = touching or within planes.max_gap_m is enough",
+           [](C& c) -> auto& { return c.planes.min_overlap; }, {0, 1}),
+      Real("planes.max_gap_m", "plane criterion 3: max gap between the projected boundaries, metres",
+           [](C& c) -> auto& { return c.planes.max_gap_m; }, {0, 100}),
+      Count("planes.min_support", "observations a fused plane needs to be published",
+            [](C& c) -> auto& { return c.planes.min_support; }, 1, 1000000),
+      Real("planes.cover_m", "a plane within this of the boundary of a cluster seen by 32+ observations is "
+           "folded into it, metres",
+           [](C& c) -> auto& { return c.planes.cover_m; }, {0, 100}),
+
       Count("limits.max_features_per_batch", "lines + planes in one batch",
             [](C& c) -> auto& { return c.ingest.limits.max_features_per_batch; }, 1, kMaxFeaturesPerBatchHard),
       Count("limits.max_boundary_points", "boundary points of one plane",

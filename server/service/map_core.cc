@@ -14,11 +14,35 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 
-// Records one change feed into the set of clusters to rewrite.
-void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
-  delta->insert(feed.added.begin(), feed.added.end());
-  delta->insert(feed.updated.begin(), feed.updated.end());
-  delta->insert(feed.removed.begin(), feed.removed.end());
+// Records one change feed into the set of clusters to rewrite; `tag` marks
+// plane clusters (MapCore::kPlaneDeltaTag).
+void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta,
+                fusion::ClusterId tag = 0) {
+  for (const auto* ids : {&feed.added, &feed.updated, &feed.removed}) {
+    for (fusion::ClusterId id : *ids) delta->insert(id | tag);
+  }
+}
+
+// Whether the closed polygon (ground projection of a plane's boundary) meets
+// the box: an edge crosses it, or the box lies inside the polygon.
+bool PolygonMeetsBox(const std::vector<Eigen::Vector3d>& boundary, const geometry::Box2& box) {
+  const size_t n = boundary.size();
+  if (n == 0) return false;
+  for (size_t i = 0; i < n; ++i) {
+    const geometry::Segment2 edge{boundary[i].head<2>(), boundary[(i + 1) % n].head<2>()};
+    if (geometry::Intersects(edge, box)) return true;
+  }
+  // No edge meets the box: either the box is inside the polygon or apart.
+  const geometry::Vec2 p = box.min;
+  bool inside = false;  // even-odd rule, either orientation
+  for (size_t i = 0, j = n - 1; i < n; j = i++) {
+    const geometry::Vec2 a = boundary[i].head<2>(), b = boundary[j].head<2>();
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      inside = !inside;
+    }
+  }
+  return inside;
 }
 
 
@@ -34,6 +58,8 @@ MapCore::MapCore(const MapCoreOptions& options) : options_(options) {}
 StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) {
   Status params = options.fusion.Validate();
   if (!params.ok()) return Status::InvalidArgument("fusion parameters: " + params.message());
+  params = options.planes.Validate();
+  if (!params.ok()) return Status::InvalidArgument("plane fusion parameters: " + params.message());
   std::unique_ptr<MapCore> core(new MapCore(options));
   StatusOr<std::unique_ptr<storage::Store>> store = storage::Store::Open(options.db_path, options.store);
   if (!store.ok()) {
@@ -48,6 +74,7 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (!newest.ok()) return newest.status();
   core->last_observation_id_ = *newest;
   core->engine_ = std::make_unique<fusion::FusionEngine>(options.fusion);
+  core->plane_engine_ = std::make_unique<fusion::PlaneFusionEngine>(options.planes);
   core->writer_ = std::thread([c = core.get()] {
     pthread_setname_np(pthread_self(), "mapd-writer");  // for top -H and benchmarks
     c->WriterLoop();
@@ -454,9 +481,21 @@ void MapCore::FuserLoop() {
 Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn) {
   std::vector<storage::FusedRow> upserts;
   std::vector<fusion::ClusterId> deletes;
+  std::vector<storage::FusedPlaneRow> plane_upserts;
+  std::vector<fusion::ClusterId> plane_deletes;
   {
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
     for (fusion::ClusterId id : delta) {
+      if (id & kPlaneDeltaTag) {
+        const fusion::ClusterId plane_id = id & ~kPlaneDeltaTag;
+        std::optional<fusion::FusedPlane> p = plane_engine_->Get(plane_id);
+        if (p && p->id == plane_id && p->support >= options_.planes.min_support) {
+          plane_upserts.push_back(ToPlaneRow(*p));
+        } else {
+          plane_deletes.push_back(plane_id);
+        }
+        continue;
+      }
       std::optional<fusion::FusedFeature> f = engine_->Get(id);
       if (f && f->support >= options_.fusion.min_support) {
         upserts.push_back(ToRow(*f));
@@ -467,6 +506,8 @@ Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransacti
   }
   for (const storage::FusedRow& row : upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFused(row));
   for (fusion::ClusterId id : deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFused(id));
+  for (const storage::FusedPlaneRow& row : plane_upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFusedPlane(row));
+  for (fusion::ClusterId id : plane_deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFusedPlane(id));
   return Status::Ok();
 }
 
@@ -483,10 +524,25 @@ void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observat
       fusion::ProjectToGround(features, T_map_frame, first_id, options_.fusion);
   Status s = projected.status();
   fusion::ChangeFeed feed;
+  fusion::PlaneChangeFeed plane_feed;
   if (s.ok() && !projected->ground.empty()) {
     s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
                       static_cast<fusion::RobotId>(robot_id), projected->ground,
                       delta ? &feed : nullptr);
+  }
+  // Lines and planes are separate engines: a refused plane set leaves the
+  // lines fused (and the other way round); both are logged.
+  Status planes = Status::Ok();
+  if (projected.ok() && !projected->other_planes.empty()) {
+    planes = plane_engine_->Add(static_cast<fusion::ObservationId>(observation_id),
+                                static_cast<fusion::RobotId>(robot_id), projected->other_planes,
+                                delta ? &plane_feed : nullptr);
+    if (!planes.ok()) {
+      Log(LogLevel::kWarn, "plane_fusion_refused",
+          {{"observation", std::to_string(observation_id)}, {"error", planes.ToString()}});
+    } else if (delta) {
+      Accumulate(plane_feed, delta, kPlaneDeltaTag);
+    }
   }
   if (!s.ok()) {
     // Stored raw but not fused: the data stays, and a rebuild with other
@@ -503,6 +559,24 @@ storage::FusedRow MapCore::ToRow(const fusion::FusedFeature& f) const {
   row.id = f.id;
   row.kind = f.plane_members > 0 ? 2 : 1;
   row.segment = f.segment;
+  row.z_min_m = f.z_min_m;
+  row.z_max_m = f.z_max_m;
+  row.support = f.support;
+  row.member_count = f.member_count;
+  for (const std::string& name : RobotNames(f.robots)) {
+    if (!row.robots.empty()) row.robots += ',';
+    row.robots += name;
+  }
+  return row;
+}
+
+storage::FusedPlaneRow MapCore::ToPlaneRow(const fusion::FusedPlane& f) const {
+  storage::FusedPlaneRow row;
+  row.id = f.id;
+  row.normal = f.normal;
+  row.offset_m = f.offset_m;
+  row.boundary = f.boundary;
+  row.area_m2 = f.area_m2;
   row.z_min_m = f.z_min_m;
   row.z_max_m = f.z_max_m;
   row.support = f.support;
@@ -531,14 +605,29 @@ uint64_t MapCore::FusionBacklog() const {
   return committed_count_ - fused_count_;
 }
 
-std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const {
+std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version,
+                                              std::vector<PlaneView>* planes) const {
   WaitForFuser(std::chrono::duration<double>(query.max_wait_s >= 0 ? query.max_wait_s : options_.max_query_wait_s));
   const uint32_t min_support = std::max(query.min_support, options_.fusion.min_support);
   std::vector<fusion::FusedFeature> published;
+  std::vector<fusion::FusedPlane> published_planes;
   {
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
     published = engine_->Published();
+    if (planes && query.kind != KindFilter::kLine) published_planes = plane_engine_->Published();
     if (map_version) *map_version = map_version_.load();
+  }
+  if (planes) {
+    planes->clear();
+    const uint32_t min_plane_support = std::max(query.min_support, options_.planes.min_support);
+    for (fusion::FusedPlane& p : published_planes) {
+      if (p.support < min_plane_support) continue;
+      if (query.bbox && !PolygonMeetsBox(p.boundary, *query.bbox)) continue;
+      PlaneView v;
+      v.robots = RobotNames(p.robots);
+      v.plane = std::move(p);
+      planes->push_back(std::move(v));
+    }
   }
   std::vector<FusedView> out;
   for (fusion::FusedFeature& f : published) {
@@ -610,6 +699,8 @@ CoreStats MapCore::Stats() const {
   s.fused_raw_features = engine_->feature_count();
   s.fusion_nodes = engine_->node_count();
   s.clusters = engine_->cluster_count();
+  s.fused_planes = plane_engine_->published_count();
+  s.plane_nodes = plane_engine_->node_count();
   s.map_version = map_version_.load();
   return s;
 }

@@ -44,6 +44,7 @@
 #include "common/status.h"
 #include "fusion/engine.h"
 #include "fusion/params.h"
+#include "fusion/plane_engine.h"
 #include "geometry/box2.h"
 #include "service/ingest_batch.h"
 #include "service/write_health.h"
@@ -55,6 +56,7 @@ struct MapCoreOptions {
   std::string db_path;
   storage::StoreOptions store;
   fusion::FusionParams fusion;
+  fusion::PlaneFusionParams planes;    // non-vertical planes (fusion/plane_engine.h)
   size_t max_group_batches = 4096;     // batches in one commit at most
   size_t max_fusion_backlog = 50000;   // committed, not yet fused observations at most
   double max_query_wait_s = 5.0;       // a query waits this long for the fuser at most
@@ -98,6 +100,12 @@ struct FusedView {
   std::vector<std::string> robots;      // names, sorted
 };
 
+// A published fused non-vertical plane, ready for the API.
+struct PlaneView {
+  fusion::FusedPlane plane;
+  std::vector<std::string> robots;  // names, sorted
+};
+
 struct CoreStats {
   uint64_t batches_stored = 0;    // by this process since it started
   uint64_t features_stored = 0;
@@ -114,6 +122,8 @@ struct CoreStats {
   uint64_t replay_length = 0;     // observations fused since that snapshot
   uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
   uint64_t fusion_nodes = 0;        // the engine's nodes (representatives in bounded mode)
+  uint64_t fused_planes = 0;        // published non-vertical planes
+  uint64_t plane_nodes = 0;         // the plane engine's nodes
   std::string write_failure;        // why the database refuses writes now; empty: it takes them
 };
 
@@ -160,7 +170,11 @@ class MapCore {
   // fusion state, checkpoints. Idempotent.
   void Stop();
 
-  std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version) const;
+  // The published lines and, if `planes` is not null, the published
+  // non-vertical planes (same snapshot of the map; kind kLine leaves them
+  // out; bbox: the boundary's ground projection meets the box).
+  std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version,
+                                       std::vector<PlaneView>* planes = nullptr) const;
   // Committed (acknowledged) observations the fuser has not reflected yet.
   uint64_t FusionBacklog() const;
   CoreStats Stats() const;
@@ -177,7 +191,10 @@ class MapCore {
   };
   // Clusters whose published state changed (added, updated or removed); the
   // writer reads their current state from the engine when it writes them.
+  // Plane clusters (plane_engine_) carry kPlaneDeltaTag: feature ids stay far
+  // below 2^63 (observation id << kFeatureIdBits), so the tag never collides.
   using FusedDelta = std::unordered_set<fusion::ClusterId>;
+  static constexpr fusion::ClusterId kPlaneDeltaTag = fusion::ClusterId{1} << 63;
 
   explicit MapCore(const MapCoreOptions& options);
   struct WriteJob;
@@ -213,6 +230,7 @@ class MapCore {
   void Fuse(const geometry::SensorObservation& features, int64_t observation_id, int64_t robot_id,
             const geometry::Rigid3& T_map_frame, FusedDelta* delta);
   storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
+  storage::FusedPlaneRow ToPlaneRow(const fusion::FusedPlane& f) const;
   std::vector<std::string> RobotNames(const std::vector<fusion::RobotId>& ids) const;
   void RecordRate();
 
@@ -222,6 +240,7 @@ class MapCore {
 
   mutable std::shared_mutex engine_mu_;  // writer: exclusive while fusing; queries: shared
   std::unique_ptr<fusion::FusionEngine> engine_;
+  std::unique_ptr<fusion::PlaneFusionEngine> plane_engine_;  // same lock and thread as engine_
   std::atomic<uint64_t> map_version_{0};  // observations reflected in the map
 
   mutable std::mutex names_mu_;

@@ -30,6 +30,12 @@ int64_t MsSince(Clock::time_point t0) {
   return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
 }
 
+bool SamePlaneRow(const storage::FusedPlaneRow& a, const storage::FusedPlaneRow& b) {
+  return a.id == b.id && a.normal == b.normal && a.offset_m == b.offset_m && a.boundary == b.boundary &&
+         a.area_m2 == b.area_m2 && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
+         a.support == b.support && a.member_count == b.member_count && a.robots == b.robots;
+}
+
 bool SameFusedRow(const storage::FusedRow& a, const storage::FusedRow& b) {
   return a.id == b.id && a.kind == b.kind && a.segment.a == b.segment.a &&
          a.segment.b == b.segment.b && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
@@ -57,9 +63,18 @@ void MapCore::Recover() {
       had_snapshot = true;
       StatusOr<std::unique_ptr<fusion::FusionEngine>> loaded =
           fusion::FusionEngine::LoadState(options_.fusion, snap->state);
+      // Both engines come from the same snapshot, or neither does: a snapshot
+      // from before plane fusion (schema 5) is replayed past once.
+      StatusOr<std::unique_ptr<fusion::PlaneFusionEngine>> loaded_planes =
+          snap->has_plane_state
+              ? fusion::PlaneFusionEngine::LoadState(options_.planes, snap->plane_state)
+              : StatusOr<std::unique_ptr<fusion::PlaneFusionEngine>>(
+                    Status::FailedPrecondition("the snapshot predates plane fusion"));
+      if (loaded.ok() && !loaded_planes.ok()) loaded = loaded_planes.status();
       if (loaded.ok()) {
         std::unique_lock<std::shared_mutex> lock(engine_mu_);
         engine_ = std::move(loaded).value();
+        plane_engine_ = std::move(loaded_planes).value();
         map_version_ = snap->map_version;
         fused_through_id_ = snap->through_observation;
         fused_tie_seq_ = snap->through_tie_seq;
@@ -94,6 +109,7 @@ void MapCore::Recover() {
          {"raw_features", std::to_string(engine_->feature_count())},
          {"nodes", std::to_string(engine_->node_count())},
          {"fused", std::to_string(engine_->published_count())},
+         {"fused_planes", std::to_string(plane_engine_->published_count())},
          {"map_version", std::to_string(map_version_.load())}, {"ms", std::to_string(MsSince(t0))}});
   } else if (!cancel_recovery_.load()) {
     Log(LogLevel::kError, "map_recovery_failed", {{"error", s.ToString()}});
@@ -193,6 +209,20 @@ Status MapCore::QueueFusedTableSync() {
     }
   }
   for (const auto& [id, row] : old_rows) delta.insert(id);  // gone: WriteFusedDelta deletes it
+  StatusOr<std::vector<storage::FusedPlaneRow>> stored_planes = store_->LoadFusedPlanes();
+  if (!stored_planes.ok()) return stored_planes.status();
+  std::unordered_map<uint64_t, storage::FusedPlaneRow> old_planes;
+  for (auto& r : *stored_planes) old_planes.emplace(r.id, std::move(r));
+  {
+    std::shared_lock<std::shared_mutex> lock(engine_mu_);
+    for (const fusion::FusedPlane& p : plane_engine_->Published()) {
+      const storage::FusedPlaneRow row = ToPlaneRow(p);
+      auto it = old_planes.find(row.id);
+      if (it == old_planes.end() || !SamePlaneRow(it->second, row)) delta.insert(p.id | kPlaneDeltaTag);
+      if (it != old_planes.end()) old_planes.erase(it);
+    }
+  }
+  for (const auto& [id, row] : old_planes) delta.insert(id | kPlaneDeltaTag);
   if (!delta.empty()) {
     Log(LogLevel::kInfo, "fused_table_sync", {{"rows", std::to_string(delta.size())}});
     std::lock_guard<std::mutex> lock(queue_mu_);
@@ -250,6 +280,8 @@ void MapCore::MaybeSnapshot(bool force) {
     // This thread is the engine's only writer: a shared lock is enough.
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
     Status saved = engine_->SaveState(&snap.state);
+    if (saved.ok()) saved = plane_engine_->SaveState(&snap.plane_state);
+    snap.has_plane_state = saved.ok();
     if (!saved.ok()) {
       Log(LogLevel::kError, "snapshot_failed", {{"error", saved.ToString()}});
       return;

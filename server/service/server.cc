@@ -43,6 +43,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.store.max_db_bytes = config.max_db_bytes;
   core_options.stop_flush_s = config.shutdown_flush_s;
   core_options.fusion = config.fusion;
+  core_options.planes = config.planes;
   core_options.max_group_batches = config.max_group_batches;
   core_options.snapshot_every_observations = config.snapshot_every_observations;
   core_options.snapshot_max_age_s = config.snapshot_max_age_s;
