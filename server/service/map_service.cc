@@ -36,6 +36,25 @@ void ToProto(const FusedView& v, pb::FusedFeature* out) {
   for (const std::string& r : v.robots) out->add_robots(r);
 }
 
+void ToProto(const PlaneView& v, pb::FusedPlane* out) {
+  const fusion::FusedPlane& p = v.plane;
+  const auto vec3 = [](const Eigen::Vector3d& x, pb::Vec3* o) {
+    o->set_x(x.x());
+    o->set_y(x.y());
+    o->set_z(x.z());
+  };
+  out->set_id(p.id);
+  vec3(p.normal, out->mutable_normal());
+  out->set_offset(p.offset_m);
+  for (const Eigen::Vector3d& x : p.boundary) vec3(x, out->add_boundary());
+  out->set_area(p.area_m2);
+  out->set_z_min(p.z_min_m);
+  out->set_z_max(p.z_max_m);
+  out->set_support(p.support);
+  out->set_member_count(p.member_count);
+  for (const std::string& r : v.robots) out->add_robots(r);
+}
+
 Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
   if (in.has_bbox()) {
     const auto& b = in.bbox();
@@ -107,8 +126,10 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
       std::chrono::duration<double>(context->deadline() - std::chrono::system_clock::now()).count() - 0.05;
   query.max_wait_s = std::max(0.0, std::min(wait_s, to_deadline));
   uint64_t version = 0;
-  std::vector<FusedView> features = core_->QueryFeatures(query, &version);
+  std::vector<PlaneView> planes;
+  std::vector<FusedView> features = core_->QueryFeatures(query, &version, &planes);
   pb::FeatureMapPage page;
+  for (const PlaneView& p : planes) ToProto(p, page.add_planes());
   page.set_total(features.size());
   page.set_map_version(version);
   page.set_fusion_pending(core_->FusionBacklog());
@@ -118,6 +139,7 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
     if (page.features_size() == kFeaturesPerPage) {
       if (!writer->Write(page)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
       page.clear_features();
+      page.clear_planes();
     }
   }
   if (page.features_size() > 0 || features.empty()) writer->Write(page);
@@ -169,6 +191,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   response->set_replay_length(s.replay_length);
   response->set_fused_raw_features(s.fused_raw_features);
   response->set_fusion_nodes(s.fusion_nodes);
+  response->set_fused_planes(s.fused_planes);
   response->set_write_failure(s.write_failure);
   if (counts->raw_features > 0) {
     response->set_bytes_per_raw_feature(static_cast<double>(core_->store().SizeBytes()) /
