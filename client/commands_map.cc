@@ -24,11 +24,13 @@ const char kRobotsHelp[] =
 
 const char kFeaturesHelp[] =
     "Usage: mapctl features [options]\n"
-    "The fused feature map (map frame, metres).\n"
-    "  --bbox XMIN,YMIN,XMAX,YMAX  only features whose segment meets this box\n"
+    "The fused feature map (map frame, metres): walls as segments, then floors,\n"
+    "ceilings and ramps as planes (id, normal, offset, area, support, robots).\n"
+    "  --bbox XMIN,YMIN,XMAX,YMAX  only features whose segment meets this box, and planes\n"
+    "                              whose boundary's ground projection meets it\n"
     "  --min-support N             only features seen in at least N observations\n"
     "                              (values below the server's threshold are raised to it)\n"
-    "  --kind line|plane|any       only this kind (default any)\n"
+    "  --kind line|plane|any       only this kind (default any; line leaves out the planes)\n"
     "  --raw-fit                   the raw least-squares fit, not the corner-optimised segment\n"
     "  --format table|json|geojson|svg\n"
     "                              default: from the -o extension (.json, .geojson, .svg), else table\n"
@@ -127,6 +129,7 @@ int RunFeatures(const Context& ctx, const CommandArgs& args) {
   }
 
   FeatureList features;
+  PlaneList planes;
   uint64_t map_version = 0;
   auto call = ctx.NewCallContext();
   std::unique_ptr<grpc::ClientReader<pb::FeatureMapPage>> reader = ctx.stub->GetFeatureMap(call.get(), request);
@@ -134,23 +137,24 @@ int RunFeatures(const Context& ctx, const CommandArgs& args) {
   while (reader->Read(&page)) {
     map_version = page.map_version();
     for (pb::FusedFeature& f : *page.mutable_features()) features.push_back(std::move(f));
+    for (pb::FusedPlane& p : *page.mutable_planes()) planes.push_back(std::move(p));
   }
   const grpc::Status status = reader->Finish();
   if (!status.ok()) return ReportRpcError(ctx, "features", status);
 
   std::string text;
   switch (format) {
-    case OutputFormat::kTable: text = FormatFeatureTable(features); break;
-    case OutputFormat::kJson: text = FormatFeatureJson(features, map_version); break;
-    case OutputFormat::kGeoJson: text = FormatGeoJson(features); break;
-    case OutputFormat::kSvg: text = FormatSvg(features); break;
+    case OutputFormat::kTable: text = FormatFeatureTable(features, planes); break;
+    case OutputFormat::kJson: text = FormatFeatureJson(features, map_version, planes); break;
+    case OutputFormat::kGeoJson: text = FormatGeoJson(features, planes); break;
+    case OutputFormat::kSvg: text = FormatSvg(features, planes); break;
   }
   if (!WriteOutput(output, text, &error)) {
     PrintError("features: " + error);
     return kExitFailed;
   }
   if (output != "-") {
-    std::printf("wrote %zu features (map version %llu) to %s\n", features.size(),
+    std::printf("wrote %zu features and %zu planes (map version %llu) to %s\n", features.size(), planes.size(),
                 static_cast<unsigned long long>(map_version), output.c_str());
   }
   return kExitOk;

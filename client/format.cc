@@ -118,7 +118,7 @@ std::string MessageToJson(const google::protobuf::Message& message) {
   return out;
 }
 
-std::string FormatFeatureTable(const FeatureList& features) {
+std::string FormatFeatureTable(const FeatureList& features, const PlaneList& planes) {
   std::string out = Printf("%-8s %-5s %21s %21s %7s %15s %7s %7s  %s\n", "ID", "KIND", "A (x, y) m",
                            "B (x, y) m", "LEN m", "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
   for (const pb::FusedFeature& f : features) {
@@ -130,18 +130,29 @@ std::string FormatFeatureTable(const FeatureList& features) {
                   Join(f.robots(), ",").c_str());
   }
   out += Printf("%zu feature%s\n", features.size(), features.size() == 1 ? "" : "s");
+  if (planes.empty()) return out;
+  out += Printf("\n%-8s %-24s %9s %9s %15s %7s %7s  %s\n", "PLANE", "NORMAL (x, y, z)", "OFFSET m", "AREA m2",
+                "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
+  for (const pb::FusedPlane& p : planes) {
+    out += Printf("%-8llu %-24s %9.3f %9.2f %15s %7u %7u  %s\n", static_cast<unsigned long long>(p.id()),
+                  Printf("(%.3f, %.3f, %.3f)", p.normal().x(), p.normal().y(), p.normal().z()).c_str(), p.offset(),
+                  p.area(), Printf("%.2f..%.2f", p.z_min(), p.z_max()).c_str(), p.support(), p.member_count(),
+                  Join(p.robots(), ",").c_str());
+  }
+  out += Printf("%zu plane%s\n", planes.size(), planes.size() == 1 ? "" : "s");
   return out;
 }
 
-std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version) {
+std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version, const PlaneList& planes) {
   pb::FeatureMapPage page;
   for (const pb::FusedFeature& f : features) *page.add_features() = f;
+  for (const pb::FusedPlane& p : planes) *page.add_planes() = p;
   page.set_total(features.size());
   page.set_map_version(map_version);
   return MessageToJson(page);
 }
 
-std::string FormatGeoJson(const FeatureList& features) {
+std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes) {
   std::string out =
       "{\n  \"type\": \"FeatureCollection\",\n"
       "  \"properties\": {\"frame\": \"map\", \"units\": \"m\", \"note\": \"coordinates are map-frame "
@@ -161,7 +172,27 @@ std::string FormatGeoJson(const FeatureList& features) {
            JsonNumber(f.z_min()) + ", \"z_max\": " + JsonNumber(f.z_max()) + ", \"robots\": [" + robots +
            "]}}";
   }
-  out += features.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  for (size_t i = 0; i < planes.size(); ++i) {
+    const pb::FusedPlane& p = planes[i];
+    std::string robots;
+    for (const std::string& r : p.robots()) robots += (robots.empty() ? "" : ", ") + JsonQuote(r);
+    // A closed ring: the first point again at the end.
+    std::string ring;
+    for (int k = 0; k <= p.boundary_size() && p.boundary_size() > 0; ++k) {
+      const pb::Vec3& v = p.boundary(k % p.boundary_size());
+      ring += (k == 0 ? "[" : ", [") + JsonNumber(v.x()) + ", " + JsonNumber(v.y()) + "]";
+    }
+    out += features.empty() && i == 0 ? "\n" : ",\n";
+    out += "    {\"type\": \"Feature\", \"id\": " + std::to_string(p.id()) +
+           ", \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[" + ring + "]]}" +
+           ", \"properties\": {\"id\": " + std::to_string(p.id()) + ", \"kind\": \"plane\", \"normal\": [" +
+           JsonNumber(p.normal().x()) + ", " + JsonNumber(p.normal().y()) + ", " + JsonNumber(p.normal().z()) +
+           "], \"offset_m\": " + JsonNumber(p.offset()) + ", \"area_m2\": " + JsonNumber(p.area()) +
+           ", \"z_min\": " + JsonNumber(p.z_min()) + ", \"z_max\": " + JsonNumber(p.z_max()) +
+           ", \"support\": " + std::to_string(p.support()) + ", \"member_count\": " +
+           std::to_string(p.member_count()) + ", \"robots\": [" + robots + "]}}";
+  }
+  out += features.empty() && planes.empty() ? "]\n}\n" : "\n  ]\n}\n";
   return out;
 }
 
@@ -183,6 +214,7 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("raw features", num(s.raw_features()));
   row("fused features", num(s.fused_features()) + " published, " + num(s.clusters()) + " clusters");
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
+  row("fused planes", num(s.fused_planes()) + " published (floors, ceilings, ramps)");
   row("fusion nodes", num(s.fusion_nodes()) + " (representatives kept for " + num(s.fused_raw_features()) +
                           " fused raw features)");
   row("submaps", num(s.submaps()));

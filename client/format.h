@@ -16,6 +16,8 @@
 namespace mapd::client {
 
 using FeatureList = std::vector<mapserver::v1::FusedFeature>;
+// Fused non-vertical planes (floors, ceilings, ramps): FeatureMapPage.planes.
+using PlaneList = std::vector<mapserver::v1::FusedPlane>;
 
 enum class OutputFormat { kTable, kJson, kGeoJson, kSvg };
 
@@ -29,13 +31,19 @@ OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback);
 // the mapping writes 64-bit integers as strings ("batches": "120").
 std::string MessageToJson(const google::protobuf::Message& message);
 
-// One line per feature with a header, then a count.
-std::string FormatFeatureTable(const FeatureList& features);
-// A FeatureMapPage holding every feature, as protobuf JSON.
-std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version);
-// A GeoJSON FeatureCollection: one LineString per feature; properties id, kind,
-// support, member_count, z_min, z_max, robots.
-std::string FormatGeoJson(const FeatureList& features);
+// One line per feature with a header, then a count; then, if there are
+// planes, one line per plane (id, normal, offset, area, z range, support,
+// robots) and their count.
+std::string FormatFeatureTable(const FeatureList& features, const PlaneList& planes = {});
+// A FeatureMapPage holding every feature and plane, as protobuf JSON.
+std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
+                              const PlaneList& planes = {});
+// A GeoJSON FeatureCollection: one LineString per feature (properties id,
+// kind, support, member_count, z_min, z_max, robots), then one Polygon per
+// plane: the ground projection (x, y) of its boundary, counter-clockwise for
+// an upward normal; properties id, kind "plane", normal [x, y, z], offset_m,
+// area_m2, z_min, z_max, support, member_count, robots.
+std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes = {});
 
 struct SvgOptions {
   double pixels_per_metre = 40;  // the pixel size is clamped to [400, 1600] wide
@@ -45,6 +53,9 @@ struct SvgOptions {
 // class="feature ..."> per feature coloured by kind with a width growing with
 // support, a scale bar and a legend.
 std::string FormatSvg(const FeatureList& features, const SvgOptions& options = {});
+// The same with the planes drawn first, as translucent polygons (the ground
+// projection of each boundary) under the lines; the drawing fits both.
+std::string FormatSvg(const FeatureList& features, const PlaneList& planes, const SvgOptions& options = {});
 
 // `mapctl status` for people.
 std::string FormatStats(const mapserver::v1::Stats& stats, const std::string& server);

@@ -17,18 +17,22 @@ struct Box {
   double xmin, ymin, xmax, ymax;
 };
 
-Box Bounds(const FeatureList& features) {
-  if (features.empty()) return {0, 0, 10, 10};
+Box Bounds(const FeatureList& features, const PlaneList& planes) {
+  if (features.empty() && planes.empty()) return {0, 0, 10, 10};
   constexpr double kInf = std::numeric_limits<double>::infinity();
   Box b{kInf, kInf, -kInf, -kInf};
+  const auto take = [&b](double x, double y) {
+    if (!std::isfinite(x) || !std::isfinite(y)) return;
+    b.xmin = std::min(b.xmin, x);
+    b.ymin = std::min(b.ymin, y);
+    b.xmax = std::max(b.xmax, x);
+    b.ymax = std::max(b.ymax, y);
+  };
   for (const pb::FusedFeature& f : features) {
-    for (const pb::Vec2& p : {f.a(), f.b()}) {
-      if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;
-      b.xmin = std::min(b.xmin, p.x());
-      b.ymin = std::min(b.ymin, p.y());
-      b.xmax = std::max(b.xmax, p.x());
-      b.ymax = std::max(b.ymax, p.y());
-    }
+    for (const pb::Vec2& p : {f.a(), f.b()}) take(p.x(), p.y());
+  }
+  for (const pb::FusedPlane& p : planes) {
+    for (const pb::Vec3& v : p.boundary()) take(v.x(), v.y());
   }
   if (!(b.xmin <= b.xmax)) return {0, 0, 10, 10};  // no finite endpoint at all
   // A map of one straight wall still needs some area.
@@ -54,10 +58,16 @@ const char* KindColour(pb::FeatureKind kind) {
   }
 }
 
+constexpr char kPlaneColour[] = "#2ca02c";
+
 }  // namespace
 
 std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
-  const Box data = Bounds(features);
+  return FormatSvg(features, {}, options);
+}
+
+std::string FormatSvg(const FeatureList& features, const PlaneList& planes, const SvgOptions& options) {
+  const Box data = Bounds(features, planes);
   const double extent = std::max(data.xmax - data.xmin, data.ymax - data.ymin);
   const double margin = std::max(0.5, 0.05 * extent);
   const double font = std::max(0.15, 0.025 * extent);
@@ -93,6 +103,24 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
                   gx0, gx1, -gy1, -gy0, base_width * 0.7);
   }
 
+  // Planes under the lines: translucent, so overlapping floor and ceiling both show.
+  if (!planes.empty()) {
+    out += "<g class=\"planes\">\n";
+    for (const pb::FusedPlane& p : planes) {
+      std::string points;
+      for (const pb::Vec3& v : p.boundary()) points += Printf("%s%.3f,%.3f", points.empty() ? "" : " ", v.x(), -v.y());
+      std::string robots;
+      for (const std::string& r : p.robots()) robots += (robots.empty() ? "" : ",") + r;
+      out += Printf(
+          "<polygon class=\"plane\" points=\"%s\" fill=\"%s\" fill-opacity=\"0.15\" stroke=\"%s\" "
+          "stroke-opacity=\"0.5\" stroke-width=\"%.4f\"><title>plane #%llu, z %.2f..%.2f m, %.1f m2, support %u, "
+          "robots %s</title></polygon>\n",
+          points.c_str(), kPlaneColour, kPlaneColour, base_width * 0.5, static_cast<unsigned long long>(p.id()),
+          p.z_min(), p.z_max(), p.area(), p.support(), XmlEscape(robots).c_str());
+    }
+    out += "</g>\n";
+  }
+
   // Features: width grows with log2(support), capped at 4x.
   out += "<g class=\"features\" stroke-linecap=\"round\">\n";
   for (const pb::FusedFeature& f : features) {
@@ -124,6 +152,12 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
                   lx, by, 1.5 * font, KindColour(kind), base_width * 2, lx + 2 * font, by + 0.35 * font, font,
                   KindName(kind).c_str());
     lx += 6 * font;
+  }
+  if (!planes.empty()) {
+    out += Printf("<rect x=\"%.3f\" y=\"%.3f\" width=\"%.3f\" height=\"%.3f\" fill=\"%s\" fill-opacity=\"0.3\"/>"
+                  "<text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\">floor/ceiling</text>\n",
+                  lx, by - 0.4 * font, 1.5 * font, 0.8 * font, kPlaneColour, lx + 2 * font, by + 0.35 * font, font);
+    lx += 9 * font;
   }
   out += Printf("<text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\">width ~ support; %zu features</text>\n", lx,
                 by + 0.35 * font, font, features.size());
