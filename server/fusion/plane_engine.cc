@@ -143,6 +143,10 @@ void PlaneFusionEngine::Impl::FileInGrid(uint32_t i) {
   const double m = Margin(n);
   const geometry::Vec2 lo = n.ground_min.array() - m, hi = n.ground_max.array() + m;
   const CellKey a = grid_.KeyOf(lo), b = grid_.KeyOf(hi);
+  if ((b.x - a.x + 1) * (b.y - a.y + 1) > kMaxCellsPerPlane) {
+    large_nodes_.push_back(i);
+    return;
+  }
   for (int64_t x = a.x; x <= b.x; ++x) {
     for (int64_t y = a.y; y <= b.y; ++y) {
       grid_.Insert({(static_cast<double>(x) + 0.5) * kPlaneCellM, (static_cast<double>(y) + 0.5) * kPlaneCellM}, i);
@@ -196,7 +200,7 @@ void PlaneFusionEngine::Impl::Add(ObservationId observation, RobotId robot,
     const double half = 0.5 * (p.ground_max - p.ground_min).maxCoeff() + reach;
     ++stamp_;
     std::vector<uint32_t> links;
-    grid_.ForEachNear(centre, half, [&](uint32_t c) {
+    const auto consider = [&](uint32_t c) {
       if (visited_[c] == stamp_) return;
       visited_[c] = stamp_;
       const PlaneNode& q = nodes_[c];
@@ -208,7 +212,9 @@ void PlaneFusionEngine::Impl::Add(ObservationId observation, RobotId robot,
         return;
       }
       if (Linked(p, q)) links.push_back(c);
-    });
+    };
+    grid_.ForEachNear(centre, half, consider);
+    for (uint32_t c : large_nodes_) consider(c);
     std::sort(links.begin(), links.end());  // grid order is not node order
     std::set<uint32_t> roots;
     for (uint32_t c : links) roots.insert(Find(c));

@@ -20,6 +20,10 @@ namespace mapd::fusion {
 // Cell size of the ground grid planes are filed in. Floors are metres to tens
 // of metres across: 2 m cells keep a room's floor in tens of cells.
 constexpr double kPlaneCellM = 2.0;
+// A plane whose ground projection (plus margin) covers more cells than this
+// (a 128 m x 128 m floor) is not filed in the grid but kept on a list every
+// query scans: a huge or absurd plane must not cost memory by its area.
+constexpr int64_t kMaxCellsPerPlane = 4096;
 
 // A raw plane kept as a node: what the criteria need.
 struct PlaneNode {
@@ -90,6 +94,7 @@ class PlaneFusionEngine::Impl {
   size_t cluster_count_ = 0;
   uint64_t plane_count_ = 0;
   UniformGrid<uint32_t> grid_;  // node indices, under every cell they cover
+  std::vector<uint32_t> large_nodes_;  // nodes too large for the grid, ascending
   std::vector<uint64_t> visited_;  // per node: the query stamp that saw it last
   uint64_t stamp_ = 0;
   std::map<ClusterId, FusedPlane> published_;

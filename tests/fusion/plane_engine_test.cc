@@ -234,6 +234,21 @@ TEST(PlaneFusionEngineTest, RevisitedFloorKeepsBoundedNodes) {
   EXPECT_NEAR(f.area_m2, 60.0, 2.0);
 }
 
+TEST(PlaneFusionEngineTest, AHugePlaneCostsNoMemoryByItsAreaAndStillLinks) {
+  PlaneFusionEngine engine({});
+  // 100 km across: filed apart from the grid, scanned by every query.
+  ASSERT_TRUE(engine.Add(1, 1, {Rect(1 << 8, -5e4, -5e4, 5e4, 5e4, 0.0)}).ok());
+  ASSERT_TRUE(engine.Add(2, 1, {Rect(2 << 8, 0, 0, 4, 4, 0.01)}).ok());
+  ASSERT_TRUE(engine.Add(3, 1, {Rect(3 << 8, 100, 100, 104, 104, 0.02)}).ok());
+  ASSERT_TRUE(engine.Add(4, 1, {Rect(4 << 8, 0, 0, 4, 4, 3.0)}).ok());  // a ceiling: apart
+  EXPECT_EQ(engine.cluster_count(), 2u);
+  ASSERT_EQ(engine.published_count(), 1u);
+  EXPECT_EQ(engine.Published()[0].support, 3u);
+  std::string state;
+  ASSERT_TRUE(engine.SaveState(&state).ok());
+  EXPECT_TRUE(PlaneFusionEngine::LoadState({}, state).ok());
+}
+
 TEST(PlaneFusionEngineTest, SnapshotRoundTripContinuesBitForBit) {
   PlaneFusionEngine live({});
   std::mt19937_64 rng(5);
