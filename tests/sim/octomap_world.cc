@@ -19,6 +19,26 @@ bool KnownFree(const octomap::OcTree& tree, const octomap::point3d& p) {
 
 }  // namespace
 
+double EstimateFloorZ(const octomap::OcTree& tree) {
+  double x0, y0, z0, x1, y1, z1;
+  tree.getMetricMin(x0, y0, z0);
+  tree.getMetricMax(x1, y1, z1);
+  const double res = tree.getResolution();
+  std::vector<size_t> layers(static_cast<size_t>((z1 - z0) / res) + 1, 0);
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it) || it.getZ() > 0.5 * (z0 + z1)) continue;
+    // A pruned leaf spans several layers: count it in each, by its footprint.
+    const double size = it.getSize();
+    const double weight = (size / res) * (size / res);
+    for (double z = it.getZ() - 0.5 * size + 0.5 * res; z < it.getZ() + 0.5 * size; z += res) {
+      const size_t layer = std::min(layers.size() - 1, static_cast<size_t>(std::max(0.0, (z - z0) / res)));
+      layers[layer] += static_cast<size_t>(weight);
+    }
+  }
+  const size_t best = static_cast<size_t>(std::max_element(layers.begin(), layers.end()) - layers.begin());
+  return z0 + (static_cast<double>(best) + 0.5) * res;
+}
+
 RayHit OctoMapWorld::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                           double max_range_m) const {
   const octomap::point3d o = ToOcto(origin);
@@ -38,6 +58,7 @@ std::vector<geometry::Rigid3> SampleFreePoses(const octomap::OcTree& tree,
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     if (!tree.isNodeOccupied(*it)) free.push_back(it.getCoordinate());
   }
+  const double floor_z = EstimateFloorZ(tree);
   std::mt19937_64 rng(params.seed);
   std::shuffle(free.begin(), free.end(), rng);
   std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
@@ -51,11 +72,22 @@ std::vector<geometry::Rigid3> SampleFreePoses(const octomap::OcTree& tree,
     for (const auto& off : offsets) clear = clear && KnownFree(tree, p + off);
     if (!clear) continue;
     octomap::point3d floor;
-    if (!tree.castRay(p, {0, 0, -1}, floor, /*ignoreUnknownCells=*/false, params.max_height_m + 0.5)) {
+    if (!tree.castRay(p, {0, 0, -1}, floor, /*ignoreUnknownCells=*/false, params.max_height_m + 1.0)) {
       continue;  // unknown below, or no floor within reach
     }
-    const double height = p.z() - floor.z();
-    if (height < params.min_height_m || height > params.max_height_m) continue;
+    const double height = p.z() - floor_z;
+    if (std::abs(floor.z() - floor_z) > params.floor_tolerance_m ||
+        height < params.min_height_m || height > params.max_height_m) {
+      continue;
+    }
+    int enclosing = 0;
+    for (int k = 0; k < 8; ++k) {
+      const double a = k * M_PI / 4.0;
+      octomap::point3d end;
+      enclosing += tree.castRay(p, octomap::point3d(static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 0.0f),
+                                end, /*ignoreUnknownCells=*/true, 20.0);
+    }
+    if (enclosing < params.min_enclosing_rays) continue;
     bool spaced = true;
     for (const auto& q : accepted) spaced = spaced && (q - p).norm() >= params.min_spacing_m;
     if (spaced) accepted.push_back(p);

@@ -28,12 +28,22 @@ class OctoMapWorld : public LidarWorld {
 
 struct PoseSamplingParams {
   size_t count = 40;
-  double min_height_m = 0.9;     // above the first occupied voxel straight below
+  // Height above the floor: the first occupied voxel straight below must lie
+  // within floor_tolerance_m of the floor level (EstimateFloorZ), so poses
+  // stand on the floor, not on furniture or over a roofless room's walls.
+  double min_height_m = 0.9;
   double max_height_m = 1.6;
+  double floor_tolerance_m = 0.2;
+  // Inside the building: of 8 horizontal rays at least this many hit within 20 m.
+  int min_enclosing_rays = 6;
   double clearance_m = 0.4;      // no occupied or unknown voxel this close (6 directions)
   double min_spacing_m = 1.5;    // between accepted poses
   uint64_t seed = 1;
 };
+
+// The floor level: the most occupied horizontal layer (one voxel thick) of the
+// lower half of the map.
+double EstimateFloorZ(const octomap::OcTree& tree);
 
 // Up to params.count poses at known-free voxel centres with a floor below
 // them, random yaw, ordered into a route by nearest-neighbour from the first

@@ -60,7 +60,7 @@ std::vector<std::vector<int>> Components(const LidarScan& scan, const std::vecto
 
 // Least-squares plane and hull of one component; false if it fails a gate.
 bool MakePlane(const LidarScan& scan, const std::vector<int>& comp,
-               const PlaneExtractionParams& params, ExtractedPlane* out) {
+               const PlaneExtractionParams& params, ExtractedPlane* out, ExtractionStats* stats) {
   if (comp.size() < params.min_inliers) return false;
   std::vector<char> beams(scan.beams, 0);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -68,7 +68,10 @@ bool MakePlane(const LidarScan& scan, const std::vector<int>& comp,
     mean += scan.points[i].cast<double>();
     beams[i / scan.columns] = 1;
   }
-  if (std::count(beams.begin(), beams.end(), 1) < params.min_beams) return false;
+  if (std::count(beams.begin(), beams.end(), 1) < params.min_beams) {
+    ++stats->rejected_beams;
+    return false;
+  }
   mean /= static_cast<double>(comp.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (int i : comp) {
@@ -78,7 +81,10 @@ bool MakePlane(const LidarScan& scan, const std::vector<int>& comp,
   cov /= static_cast<double>(comp.size());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);  // ascending eigenvalues
   const double rms = std::sqrt(std::max(0.0, eig.eigenvalues()(0)));
-  if (rms > params.max_rms_m) return false;
+  if (rms > params.max_rms_m) {
+    ++stats->rejected_rough;
+    return false;
+  }
   Eigen::Vector3d n = eig.eigenvectors().col(0);
   if (n.dot(mean) > 0) n = -n;  // towards the sensor at the origin
   const Eigen::Vector3d u = eig.eigenvectors().col(2);  // longest in-plane direction
@@ -99,6 +105,7 @@ bool MakePlane(const LidarScan& scan, const std::vector<int>& comp,
   const geometry::Vec2 size = hi - lo;
   if (std::max(size.x(), size.y()) < params.min_extent_m ||
       std::min(size.x(), size.y()) < params.min_width_m) {
+    ++stats->rejected_small;
     return false;
   }
   out->feature.normal = n;
@@ -171,11 +178,7 @@ StatusOr<std::vector<ExtractedPlane>> ExtractPlanes(const LidarScan& scan,
     for (int k : inliers.indices) mask[pool[k]] = 1;
     for (const auto& comp : Components(scan, mask, params)) {
       ExtractedPlane plane;
-      if (MakePlane(scan, comp, params, &plane)) {
-        planes.push_back(std::move(plane));
-      } else if (comp.size() >= params.min_inliers) {
-        ++stats->rejected_components;
-      }
+      if (MakePlane(scan, comp, params, &plane, stats)) planes.push_back(std::move(plane));
     }
     pool.erase(std::remove_if(pool.begin(), pool.end(), [&](int i) { return mask[i] != 0; }),
                pool.end());

@@ -27,7 +27,7 @@ struct PlaneExtractionParams {
   double min_width_m = 0.3;       // shortest in-plane side (a single scan line has none)
   int min_beams = 3;              // distinct beams (rows) in a component
   double max_rms_m = 0.05;        // least-squares residual of the refit
-  int max_planes = 16;            // RANSAC rounds per scan
+  int max_planes = 24;            // RANSAC rounds per scan
   // Neighbours on one beam are connected if closer than base + factor * range.
   double jump_base_m = 0.3;
   double jump_factor = 0.03;
@@ -43,7 +43,10 @@ struct ExtractedPlane {
 
 struct ExtractionStats {
   size_t ransac_rounds = 0;
-  size_t rejected_components = 0;  // too small, thin, few rows or rough
+  // Components of min_inliers points or more that failed a gate, by gate.
+  size_t rejected_beams = 0;   // fewer than min_beams rows
+  size_t rejected_rough = 0;   // refit RMS above max_rms_m
+  size_t rejected_small = 0;   // extent or width below the minimum
 };
 
 // REQUIRES: params.Validate().ok(); InvalidArgument for a malformed scan.
