@@ -10,7 +10,7 @@
 //
 //   plane_bench [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]
 // --data: the folder holding geb079.bt and fr_078_tidyup.bt (the shared data
-// folder's data/octomap); --scans: poses per real map (default 40);
+// folder's data/octomap); --scans: poses per real map (default 80);
 // --city-step: route metres between city scans (default 2).
 #include <algorithm>
 #include <chrono>
@@ -363,7 +363,7 @@ int main(int argc, char** argv) {
   std::string data_dir = MAPD_SOURCE_DIR "/../shared/data/octomap";
   std::string docs_dir = MAPD_SOURCE_DIR "/docs";
   bool write = true;
-  size_t scans = 40;
+  size_t scans = 80;
   double step_m = 2.0;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {

@@ -12,9 +12,8 @@
 
 #include "common/status.h"
 #include "fusion/projection.h"
-#if __has_include("fusion/plane_engine.h")
+#ifdef MAPD_BENCH_HAVE_PLANE_ENGINE  // set by plane.cmake when the engine is in the tree
 #include "fusion/plane_engine.h"
-#define MAPD_BENCH_HAVE_PLANE_ENGINE 1
 #endif
 
 namespace mapd::bench {

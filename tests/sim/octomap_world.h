@@ -27,7 +27,7 @@ class OctoMapWorld : public LidarWorld {
 };
 
 struct PoseSamplingParams {
-  size_t count = 40;
+  size_t count = 80;
   // Height above the floor: the first occupied voxel straight below must lie
   // within floor_tolerance_m of the floor level (EstimateFloorZ), so poses
   // stand on the floor, not on furniture or over a roofless room's walls.
@@ -37,7 +37,7 @@ struct PoseSamplingParams {
   // Inside the building: of 8 horizontal rays at least this many hit within 20 m.
   int min_enclosing_rays = 6;
   double clearance_m = 0.4;      // no occupied or unknown voxel this close (6 directions)
-  double min_spacing_m = 1.5;    // between accepted poses
+  double min_spacing_m = 1.0;    // between accepted poses
   uint64_t seed = 1;
 };
 
