@@ -217,7 +217,8 @@ std::string Colour(uint64_t id) {
   return kPalette[(id * 2654435761u) % 7];
 }
 
-// Top view: occupied voxels grey (by 0.2 m column), fused planes as light
+// Top view: occupied voxels 0.3-1.8 m above the floor grey (by 0.2 m column,
+// so the floor and the ceiling do not hide the walls), fused planes as light
 // polygons, fused walls as coloured lines, sensor poses as black dots.
 Status WriteTopView(const std::string& path, const std::string& title, const octomap::OcTree& tree,
                     const Run& r) {
@@ -233,8 +234,9 @@ Status WriteTopView(const std::string& path, const std::string& title, const oct
       << (y1 - y0) * s + 2 * m + 20 << "'>\n<rect width='100%' height='100%' fill='white'/>\n"
       << "<text x='" << m << "' y='16' font-family='sans-serif' font-size='13'>" << title << "</text>\n";
   std::set<std::pair<int64_t, int64_t>> columns;
+  const double floor_z = sim::EstimateFloorZ(tree);
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (tree.isNodeOccupied(*it)) columns.insert({std::llround(std::floor(it.getX() / 0.2)), std::llround(std::floor(it.getY() / 0.2))});
+    if (tree.isNodeOccupied(*it) && it.getZ() > floor_z + 0.3 && it.getZ() < floor_z + 1.8) columns.insert({std::llround(std::floor(it.getX() / 0.2)), std::llround(std::floor(it.getY() / 0.2))});
   }
   out << "<g fill='#bbbbbb'>\n";
   for (const auto& [cx, cy] : columns) {
@@ -335,6 +337,8 @@ int City(const std::string& docs_dir, bool write, double step_m) {
               q.completeness, 100.0 * q.lateral_rms_m, q.corners_met, q.corners_evaluated,
               100.0 * q.vertex_error_mean_m, 100.0 * q.vertex_error_median_m);
   if (run.planes.available) {
+    std::printf("\nPlane fusion: %zu raw non-vertical planes, %zu kept as nodes at the end.\n",
+                run.planes.raw, run.planes.nodes);
     std::printf("\nFused non-vertical planes (the ground is z = 0):\n\n"
                 "| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
     for (const auto& f : run.planes.fused) {

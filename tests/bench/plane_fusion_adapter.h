@@ -31,6 +31,7 @@ struct PlaneFusionResult {
   bool available = false;
   size_t raw = 0;
   double seconds = 0.0;  // in Add()
+  size_t nodes = 0;      // planes the engine keeps as nodes (not folded), at the end
   std::vector<FusedPlaneView> fused;
 };
 
@@ -48,6 +49,7 @@ class PlaneFuser {
   PlaneFusionResult Result() const {
     PlaneFusionResult r = result_;
     r.available = true;
+    r.nodes = engine_.node_count();
     for (const fusion::FusedPlane& f : engine_.Published()) {
       r.fused.push_back({f.id, f.normal, f.offset_m, f.boundary, f.area_m2, f.support});
     }
