@@ -110,6 +110,22 @@ TEST(LidarSimTest, CityWallAndGround) {
   }
 }
 
+TEST(PlaneExtractionTest, NothingFromNothingAndMalformedScansRefused) {
+  const fusion::scenario::World empty;
+  const CityWorld world(empty, CityHeights{});
+  // Looking up from below the ground plane: no returns at all.
+  const LidarScan scan = LidarSimulator(LidarParams{}).Scan(world, At(0.0, 0.0, -1.0), 0);
+  EXPECT_EQ(scan.valid_count(), 0u);
+  const auto planes = ExtractPlanes(scan, PlaneExtractionParams{});
+  ASSERT_TRUE(planes.ok());
+  EXPECT_TRUE(planes.value().empty());
+  LidarScan bad = scan;
+  bad.points.pop_back();
+  const auto refused = ExtractPlanes(bad, PlaneExtractionParams{});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("beams x columns"), std::string::npos);
+}
+
 // The real maps (the shared data folder, via MAPD_SHARED_DIR); skipped without them.
 TEST(LidarSimTest, RealMapScanHasPlanes) {
   const char* shared = std::getenv("MAPD_SHARED_DIR");
