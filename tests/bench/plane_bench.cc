@@ -311,7 +311,15 @@ int City(const std::string& docs_dir, bool write, double step_m) {
   params.blocks_y = 3;
   params.scan_spacing_m = step_m;
   const sc::World world = sc::GenerateWorld(params);
-  const sim::CityWorld city(world, sim::CityHeights{});
+  // One ramp beside the road 20-30 m ahead of an early route pose, rising 1 m
+  // over 10 m (5.7 deg: a MapPlane, not a wall), 1-5 m left of the road centre.
+  const sc::Pose2& at = world.route[world.route.size() / 8];
+  const Vec2 ahead(std::cos(at.yaw_rad), std::sin(at.yaw_rad));
+  const Vec2 left(-ahead.y(), ahead.x());
+  sim::Ramp ramp;
+  ramp.start = at.t + 20.0 * ahead + 3.0 * left;
+  ramp.end = ramp.start + 10.0 * ahead;
+  const sim::CityWorld city(world, sim::CityHeights{}, {ramp});
   std::vector<Rigid3> poses;
   for (const sc::Pose2& p : world.route) {
     Rigid3 pose;
@@ -339,8 +347,11 @@ int City(const std::string& docs_dir, bool write, double step_m) {
   if (run.planes.available) {
     std::printf("\nPlane fusion: %zu raw non-vertical planes, %zu kept as nodes at the end.\n",
                 run.planes.raw, run.planes.nodes);
-    std::printf("\nFused non-vertical planes (the ground is z = 0):\n\n"
-                "| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
+    const Eigen::Vector3d rn = ramp.normal();
+    std::printf("\nFused non-vertical planes (truth: the ground, normal (0, 0, 1), offset 0; "
+                "the ramp, normal (%.3f, %.3f, %.3f), offset %.3f, 40 m^2):\n\n",
+                rn.x(), rn.y(), rn.z(), ramp.offset());
+    std::printf("| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
     for (const auto& f : run.planes.fused) {
       std::printf("| %llu | (%.3f, %.3f, %.3f) | %.3f | %.0f | %u |\n",
                   static_cast<unsigned long long>(f.id), f.normal.x(), f.normal.y(), f.normal.z(),

@@ -1,11 +1,23 @@
 #include "sim/city_world.h"
 
+#include <cmath>
 #include <random>
+#include <utility>
 
 namespace mapd::sim {
 
-CityWorld::CityWorld(const fusion::scenario::World& world, const CityHeights& heights)
-    : world_(world) {
+Eigen::Vector3d Ramp::normal() const {
+  const Eigen::Vector2d along = end - start;
+  const double slope = rise_m / along.norm();
+  const Eigen::Vector2d a = along.normalized();
+  return Eigen::Vector3d(-slope * a.x(), -slope * a.y(), 1.0).normalized();
+}
+
+double Ramp::offset() const { return -normal().dot(Eigen::Vector3d(start.x(), start.y(), 0.0)); }
+
+CityWorld::CityWorld(const fusion::scenario::World& world, const CityHeights& heights,
+                     std::vector<Ramp> ramps)
+    : world_(world), ramps_(std::move(ramps)) {
   std::mt19937_64 rng(heights.seed);
   std::uniform_real_distribution<double> wall(heights.wall_min_m, heights.wall_max_m);
   std::vector<double> building(world.buildings.size());
@@ -25,6 +37,20 @@ RayHit CityWorld::Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
   if (direction.z() < -1e-9) {
     const double t = -origin.z() / direction.z();
     if (t > 0 && t <= best.range_m) best = {t, -1};
+  }
+  for (size_t k = 0; k < ramps_.size(); ++k) {
+    const Ramp& r = ramps_[k];
+    const Eigen::Vector3d n = r.normal();
+    const double along_dir = n.dot(direction);
+    if (std::abs(along_dir) < 1e-12) continue;
+    const double t = -(n.dot(origin) + r.offset()) / along_dir;
+    if (t <= 1e-9 || t >= best.range_m) continue;
+    const Eigen::Vector2d q = (origin + t * direction).head<2>() - r.start;
+    const Eigen::Vector2d a = (r.end - r.start).normalized();
+    const double u = q.dot(a);
+    const double v = q.x() * a.y() - q.y() * a.x();
+    if (u < 0.0 || u > (r.end - r.start).norm() || std::abs(v) > 0.5 * r.width_m) continue;
+    best = {t, -10 - static_cast<int>(k)};
   }
   // Brute force over the structures (a few hundred): a scan costs milliseconds.
   const Eigen::Vector2d o = origin.head<2>();

@@ -84,7 +84,7 @@ TEST(LidarSimTest, BoxRoomGivesItsFourWalls) {
   }
 }
 
-TEST(LidarSimTest, CityWallAndGround) {
+TEST(LidarSimTest, CityWallGroundAndRamp) {
   fusion::scenario::World city;
   fusion::scenario::Structure wall;
   wall.segment = {{10.0, -20.0}, {10.0, 20.0}};
@@ -92,16 +92,23 @@ TEST(LidarSimTest, CityWallAndGround) {
   city.structures.push_back(wall);
   city.wall_count = 1;
   city.buildings.push_back({{10, -20}, {30, -20}, {30, 20}, {10, 20}});
-  const CityWorld world(city, CityHeights{});
+  // Behind the sensor, a ramp rising 1 m over 10 m (5.7 deg) away from it.
+  Ramp ramp;
+  ramp.start = {-6.0, -2.0};
+  ramp.end = {-16.0, -2.0};
+  const CityWorld world(city, CityHeights{}, {ramp});
   const LidarSimulator lidar(LidarParams{});
   const LidarScan scan = lidar.Scan(world, At(0.0, 0.0, 1.8), 3);
   const auto planes = ExtractPlanes(scan, PlaneExtractionParams{});
   ASSERT_TRUE(planes.ok());
-  ASSERT_EQ(planes->size(), 2u);
+  ASSERT_EQ(planes->size(), 3u);
   for (const auto& p : planes.value()) {
     if (p.label == -1) {  // ground z = 0 seen from 1.8 m: n = +z, offset 1.8
       EXPECT_GT(p.feature.normal.z(), 0.999);
       EXPECT_NEAR(p.feature.offset, 1.8, 0.02);
+    } else if (p.label == -10) {  // the sensor sits at the map origin, 1.8 m up
+      EXPECT_GT(p.feature.normal.dot(ramp.normal()), std::cos(1.0 * M_PI / 180.0));
+      EXPECT_NEAR(p.feature.offset, ramp.offset() + 1.8 * ramp.normal().z(), 0.03);
     } else {
       EXPECT_EQ(p.label, 0);
       EXPECT_LT(p.feature.normal.x(), -0.999);
