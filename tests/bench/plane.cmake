@@ -6,7 +6,3 @@ target_include_directories(plane_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_link_libraries(plane_bench PRIVATE lidar_sim fusion_scenario)
 target_compile_definitions(plane_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 mapd_set_warnings(plane_bench)
-# A define, not __has_include: ccache's direct mode would not notice the header appear.
-if(EXISTS ${PROJECT_SOURCE_DIR}/server/fusion/plane_engine.h)
-  target_compile_definitions(plane_bench PRIVATE MAPD_BENCH_HAVE_PLANE_ENGINE=1)
-endif()

@@ -4,8 +4,8 @@
 // geb079 and fr_078_tidyup (rays cast with OcTree::castRay from poses sampled
 // in known-free space). Each scan's planes (RANSAC, tests/sim/plane_extraction.h)
 // go through fusion::ProjectToGround: near-vertical planes become ground
-// segments for fusion::FusionEngine, the others MapPlanes for the plane fusion
-// (FusePlanes below). Prints markdown tables for docs/planes-3d.md and writes
+// segments for fusion::FusionEngine, the others MapPlanes for
+// fusion::PlaneFusionEngine (plane_fusion_adapter.h). Prints markdown tables for docs/planes-3d.md and writes
 // docs/planes-3d-<world>.svg.
 //
 //   plane_bench [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]
@@ -125,16 +125,10 @@ void PrintRunHeader() {
 
 void PrintRun(const std::string& name, const Run& r) {
   const double n = std::max<size_t>(r.scans, 1);
-  char planes[64] = "not available";
-  char plane_ms[64] = "-";
-  if (r.planes.available) {
-    std::snprintf(planes, sizeof planes, "%zu", r.planes.fused.size());
-    std::snprintf(plane_ms, sizeof plane_ms, "%.2f", 1e3 * r.planes.seconds / n);
-  }
-  std::printf("| %s | %zu | %.0f | %zu (%zu / %zu) | %zu | %s | %.1f | %.1f | %.2f | %s |\n",
+  std::printf("| %s | %zu | %.0f | %zu (%zu / %zu) | %zu | %zu | %.1f | %.1f | %.2f | %.2f |\n",
               name.c_str(), r.scans, r.points / n, r.raw_planes, r.raw_vertical, r.raw_other,
-              r.walls.size(), planes, 1e3 * r.sim_s / n, 1e3 * r.extract_s / n,
-              1e3 * r.wall_fusion_s / n, plane_ms);
+              r.walls.size(), r.planes.fused.size(), 1e3 * r.sim_s / n, 1e3 * r.extract_s / n,
+              1e3 * r.wall_fusion_s / n, 1e3 * r.planes.seconds / n);
 }
 
 // Distance from p to a fused wall's vertical strip (segment x [z_min, z_max]).
@@ -359,19 +353,17 @@ int City(const std::string& docs_dir, bool write, double step_m) {
               q.fused, q.walls_seen, q.walls_matched, q.redundancy, q.on_trivial, q.spurious,
               q.completeness, 100.0 * q.lateral_rms_m, q.corners_met, q.corners_evaluated,
               100.0 * q.vertex_error_mean_m, 100.0 * q.vertex_error_median_m);
-  if (run.planes.available) {
-    std::printf("\nPlane fusion: %zu raw non-vertical planes, %zu kept as nodes at the end.\n",
-                run.planes.raw, run.planes.nodes);
-    const Eigen::Vector3d rn = ramp.normal();
-    std::printf("\nFused non-vertical planes (truth: the ground, normal (0, 0, 1), offset 0; "
-                "the ramp, normal (%.3f, %.3f, %.3f), offset %.3f, 40 m^2):\n\n",
-                rn.x(), rn.y(), rn.z(), ramp.offset());
-    std::printf("| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
-    for (const auto& f : run.planes.fused) {
-      std::printf("| %llu | (%.3f, %.3f, %.3f) | %.3f | %.0f | %u |\n",
-                  static_cast<unsigned long long>(f.id), f.normal.x(), f.normal.y(), f.normal.z(),
-                  f.offset_m, f.area_m2, f.support);
-    }
+  std::printf("\nPlane fusion: %zu raw non-vertical planes, %zu kept as nodes at the end.\n",
+              run.planes.raw, run.planes.nodes);
+  const Eigen::Vector3d rn = ramp.normal();
+  std::printf("\nFused non-vertical planes (truth: the ground, normal (0, 0, 1), offset 0; "
+              "the ramp, normal (%.3f, %.3f, %.3f), offset %.3f, 40 m^2):\n\n",
+              rn.x(), rn.y(), rn.z(), ramp.offset());
+  std::printf("| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
+  for (const auto& f : run.planes.fused) {
+    std::printf("| %llu | (%.3f, %.3f, %.3f) | %.3f | %.0f | %u |\n",
+                static_cast<unsigned long long>(f.id), f.normal.x(), f.normal.y(), f.normal.z(),
+                f.offset_m, f.area_m2, f.support);
   }
   if (write) {
     sc::SvgPanel panel;

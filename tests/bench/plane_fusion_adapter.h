@@ -1,6 +1,6 @@
 // The one place plane_bench meets the fusion of non-vertical planes
-// (fusion::PlaneFusionEngine, default PlaneFusionParams). In a tree without
-// that engine PlaneFuser only counts its input and reports available = false.
+// (fusion::PlaneFusionEngine, default PlaneFusionParams): timing and a view
+// of the published planes for the coverage figures and the pictures.
 #ifndef MAPD_TESTS_BENCH_PLANE_FUSION_ADAPTER_H_
 #define MAPD_TESTS_BENCH_PLANE_FUSION_ADAPTER_H_
 
@@ -11,10 +11,8 @@
 #include <Eigen/Core>
 
 #include "common/status.h"
-#include "fusion/projection.h"
-#ifdef MAPD_BENCH_HAVE_PLANE_ENGINE  // set by plane.cmake when the engine is in the tree
 #include "fusion/plane_engine.h"
-#endif
+#include "fusion/projection.h"
 
 namespace mapd::bench {
 
@@ -28,14 +26,12 @@ struct FusedPlaneView {
 };
 
 struct PlaneFusionResult {
-  bool available = false;
   size_t raw = 0;
   double seconds = 0.0;  // in Add()
   size_t nodes = 0;      // planes the engine keeps as nodes (not folded), at the end
   std::vector<FusedPlaneView> fused;
 };
 
-#ifdef MAPD_BENCH_HAVE_PLANE_ENGINE
 class PlaneFuser {
  public:
   PlaneFuser() : engine_(fusion::PlaneFusionParams{}) {}
@@ -48,7 +44,6 @@ class PlaneFuser {
   }
   PlaneFusionResult Result() const {
     PlaneFusionResult r = result_;
-    r.available = true;
     r.nodes = engine_.node_count();
     for (const fusion::FusedPlane& f : engine_.Published()) {
       r.fused.push_back({f.id, f.normal, f.offset_m, f.boundary, f.area_m2, f.support});
@@ -60,21 +55,6 @@ class PlaneFuser {
   fusion::PlaneFusionEngine engine_;
   PlaneFusionResult result_;
 };
-#else
-class PlaneFuser {
- public:
-  Status Add(uint64_t observation, uint64_t robot, const std::vector<fusion::MapPlane>& planes) {
-    (void)observation;
-    (void)robot;
-    result_.raw += planes.size();
-    return Status::Ok();
-  }
-  PlaneFusionResult Result() const { return result_; }
-
- private:
-  PlaneFusionResult result_;
-};
-#endif
 
 }  // namespace mapd::bench
 
