@@ -10,7 +10,7 @@
 //
 //   plane_bench [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]
 // --data: the folder holding geb079.bt and fr_078_tidyup.bt (the shared data
-// folder's data/octomap); --scans: poses per real map (default 80);
+// folder's data/octomap; default $MAPD_SHARED_DIR/data/octomap); --scans: poses per real map (default 80);
 // --city-step: route metres between city scans (default 2).
 #include <algorithm>
 #include <chrono>
@@ -382,7 +382,8 @@ int City(const std::string& docs_dir, bool write, double step_m) {
 }  // namespace mapd::bench
 
 int main(int argc, char** argv) {
-  std::string data_dir = MAPD_SOURCE_DIR "/../shared/data/octomap";
+  const char* shared = std::getenv("MAPD_SHARED_DIR");
+  std::string data_dir = shared != nullptr ? std::string(shared) + "/data/octomap" : "";
   std::string docs_dir = MAPD_SOURCE_DIR "/docs";
   bool write = true;
   size_t scans = 80;
@@ -406,6 +407,11 @@ int main(int argc, char** argv) {
   }
   if (scans < 1 || !(step_m >= 0.2)) {
     std::fprintf(stderr, "--scans must be >= 1 and --city-step >= 0.2 m\n");
+    return 2;
+  }
+  if (data_dir.empty()) {
+    std::fprintf(stderr, "pass --data DIR (the folder of geb079.bt and fr_078_tidyup.bt) "
+                         "or set MAPD_SHARED_DIR\n");
     return 2;
   }
   if (int rc = mapd::bench::City(docs_dir, write, step_m); rc != 0) return rc;

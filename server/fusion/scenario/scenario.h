@@ -8,9 +8,8 @@
 // noise. Everything is a function of ScenarioParams, seed included: the same
 // parameters give the same world and the same scans, bit for bit.
 //
-// Not modelled (cut for time): a multi-beam LiDAR and plane features. A
-// vertical wall seen by a multi-beam LiDAR projects to the same ground segment,
-// so the 2D lines exercise the same fusion path.
+// A multi-beam LiDAR with plane features in this world is test support in
+// tests/sim (city_world.h; docs/planes-3d.md).
 #ifndef MAPD_FUSION_SCENARIO_SCENARIO_H_
 #define MAPD_FUSION_SCENARIO_SCENARIO_H_
 
