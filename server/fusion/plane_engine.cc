@@ -200,18 +200,27 @@ void PlaneFusionEngine::Impl::Add(ObservationId observation, RobotId robot,
     const double half = 0.5 * (p.ground_max - p.ground_min).maxCoeff() + reach;
     ++stamp_;
     std::vector<uint32_t> links;
+    // Clusters p is already linked to: a node of one of them needs no test,
+    // since only the set of linked clusters matters (a big floor is one
+    // cluster of many nodes, and the polygon test is the costly part).
+    std::vector<uint32_t> linked_roots;
     const auto consider = [&](uint32_t c) {
       if (visited_[c] == stamp_) return;
       visited_[c] = stamp_;
       const PlaneNode& q = nodes_[c];
       if (q.observation == observation) return;
+      const uint32_t root = Find(c);
+      if (std::find(linked_roots.begin(), linked_roots.end(), root) != linked_roots.end()) return;
       if (q.ground_max.x() < p.ground_min.x() - reach - Margin(q) ||
           q.ground_min.x() > p.ground_max.x() + reach + Margin(q) ||
           q.ground_max.y() < p.ground_min.y() - reach - Margin(q) ||
           q.ground_min.y() > p.ground_max.y() + reach + Margin(q)) {
         return;
       }
-      if (Linked(p, q)) links.push_back(c);
+      if (Linked(p, q)) {
+        links.push_back(c);
+        linked_roots.push_back(root);
+      }
     };
     grid_.ForEachNear(centre, half, consider);
     for (uint32_t c : large_nodes_) consider(c);
