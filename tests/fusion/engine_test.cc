@@ -112,6 +112,26 @@ TEST(FusionEngineTest, RefusedInputLeavesTheEngineUnchanged) {
   EXPECT_EQ(engine.feature_count(), 2u);
 }
 
+// Support counts distinct observations, not members: one scan that sees a wall
+// as several segments counts once (proto FusedFeature.support).
+TEST(FusionEngineTest, SupportCountsDistinctObservations) {
+  FusionEngine once(Support(2));
+  ASSERT_TRUE(once.Add(1, 0, {Wall(1, {0, 0}, {6, 0}), Wall(2, {4, 0}, {10, 0}),
+                              Wall(3, {2, 0}, {8, 0})}).ok());
+  EXPECT_EQ(once.published_count(), 0u) << "three segments of one scan are support 1";
+
+  FusionEngine engine(Support(3));
+  ASSERT_TRUE(engine.Add(1, 0, {Wall(1, {0, 0}, {6, 0}), Wall(2, {4, 0}, {10, 0})}).ok());
+  ASSERT_TRUE(engine.Add(2, 0, {Wall(3, {0, 0.01}, {10, 0.01})}).ok());
+  EXPECT_EQ(engine.published_count(), 0u);
+  ASSERT_TRUE(engine.Add(3, 7, {Wall(4, {0, -0.01}, {10, -0.01})}).ok());
+  ASSERT_EQ(engine.published_count(), 1u);
+  const FusedFeature f = engine.Published()[0];
+  EXPECT_EQ(f.support, 3u);
+  EXPECT_EQ(f.member_count, 4u);
+  EXPECT_THAT(f.robots, ElementsAre(0u, 7u));
+}
+
 TEST(FusionEngineTest, ChangeFeedReportsAddedUpdatedRemoved) {
   FusionEngine engine(Support(1));
   ChangeFeed feed;
