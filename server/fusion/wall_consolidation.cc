@@ -51,12 +51,15 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   if (!(l_length > 0.0) || !(s_length > 0.0)) return false;
   const Vec2 u = l.direction() / l_length;
   const Vec2 v = s.direction() / s_length;
-  // Included angle in [0, pi/2]: |sin| <= sin(delta) with |cos| >= cos(delta).
-  if (std::abs(Cross(u, v)) > std::sin(params.delta_rad) + kSlackM) return false;
   if (std::abs(Cross(u, s.a - l.a)) > params.eta_m || std::abs(Cross(u, s.b - l.a)) > params.eta_m) {
     return false;
   }
   const double ta = u.dot(s.a - l.a), tb = u.dot(s.b - l.a);
+  // c. S lies wholly in the eta band along L: a short piece whose direction
+  // is poorly determined (a corner fragment) repeats the wall whatever its angle.
+  if (std::min(ta, tb) >= 0.0 && std::max(ta, tb) <= l_length) return true;
+  // Included angle in [0, pi/2]: |sin| <= sin(delta) with |cos| >= cos(delta).
+  if (std::abs(Cross(u, v)) > std::sin(params.delta_rad) + kSlackM) return false;
   const double gap = std::max({0.0, std::min(ta, tb) - l_length, -std::max(ta, tb)});
   return gap <= params.wall_gap_m;
 }

@@ -15,7 +15,10 @@
 //        extent along L overlaps L's or leaves a gap of <= wall_gap_m; or
 //     b. each endpoint of one lies within eta_m of an endpoint of the other
 //        (near-identical features: corner snapping would make them one
-//        segment, whatever their directions).
+//        segment, whatever their directions); or
+//     c. both endpoints of S lie within eta_m of L's line and S's extent
+//        lies within L's (a short piece wholly inside L's band, e.g. a
+//        fragment at a corner, whose direction is poorly determined).
 //
 // A wall is a connected component of that relation over the pieces, passed
 // through the chain guard (chain_guard.h) with the pieces as its members when

@@ -96,6 +96,10 @@ TEST(OnOneWallTest, StatesTheRelation) {
   EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(9, 0), Vec2(12, 0.5)}, 2, p));      // 9.5 deg
   // Symmetric, whichever is passed first.
   EXPECT_TRUE(OnOneWall({Vec2(9, 0.1), Vec2(14, 0.1)}, 2, long_wall, 1, p));
+  // A short piece wholly inside the eta band along L is one with it, whatever
+  // its direction (a corner fragment: 0.78 m, 6 deg off the wall).
+  EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(0.04, 0.04), Vec2(0.81, -0.04)}, 2, p));
+  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(-0.5, 0.04), Vec2(0.3, -0.04)}, 2, p));  // sticks out, 6 deg
   // Near-identical short features are one, whatever their directions.
   EXPECT_TRUE(OnOneWall({Vec2(0, 0), Vec2(0.4, 0)}, 1, {Vec2(0.1, 0.1), Vec2(0.3, -0.1)}, 2, p));
 }
