@@ -233,6 +233,17 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
     std::vector<ClusterId> published_ids;
     for (const FusedFeature& f : engine.Published()) published_ids.push_back(f.id);
     EXPECT_EQ(published_ids, reference_published);
+    // Never two features with the same segment (wall consolidation, rule b).
+    const std::vector<FusedFeature> published = engine.Published();
+    for (size_t i = 0; i < published.size(); ++i) {
+      for (size_t j = i + 1; j < published.size(); ++j) {
+        const bool same = (published[i].segment.a == published[j].segment.a &&
+                           published[i].segment.b == published[j].segment.b) ||
+                          (published[i].segment.a == published[j].segment.b &&
+                           published[i].segment.b == published[j].segment.a);
+        EXPECT_FALSE(same) << published[i].id << " and " << published[j].id;
+      }
+    }
 
     const auto expect_same = [&](const BatchCluster& c) {
       const std::optional<FusedFeature> fused = engine.Get(c.id);
