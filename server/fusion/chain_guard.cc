@@ -45,7 +45,7 @@ bool ChainMayNeedSplit(const PointMoments2& endpoint_moments, double max_rms_m) 
 
 std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& members,
                                               double max_rms_m, double max_sse_ratio,
-                                              const Publishable& publishable) {
+                                              const CutAllowed& cut_allowed) {
   std::vector<uint32_t> all(members.size());
   for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
   std::vector<std::vector<uint32_t>> groups;
@@ -87,7 +87,7 @@ std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& me
       suffix[k] = OrthogonalSse(running);
     }
     // Step 4: the cut of least cost among those that explain most of the
-    // misfit and leave both sides publishable (ties: the smaller k).
+    // misfit and that the caller allows (ties: the smaller k).
     std::vector<size_t> candidates;
     for (size_t k = 1; k < n; ++k) {
       if (prefix[k] + suffix[k] < max_sse_ratio * sse_m2) candidates.push_back(k);
@@ -97,13 +97,13 @@ std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& me
     });
     size_t best_k = 0;
     for (size_t k : candidates) {
-      if (!publishable) {
+      if (!cut_allowed) {
         best_k = k;
         break;
       }
       std::vector<uint32_t> head, tail;
       for (size_t i = 0; i < n; ++i) (i < k ? head : tail).push_back(keyed[i].second);
-      if (publishable(head) && publishable(tail)) {
+      if (cut_allowed(head, tail)) {
         best_k = k;
         break;
       }

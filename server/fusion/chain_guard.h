@@ -12,8 +12,8 @@
 //      ascending FeatureId. For k = 1 .. |S|-1, cost(k) = SSE(first k) +
 //      SSE(the rest); k* = the smallest k of least cost.
 //   4. The cuts k with cost(k) < max_sse_ratio * SSE(S), in ascending cost
-//      (ties: smaller k); k* = the first whose two sides are both publishable
-//      (support >= min_support, when the caller says so). None: {S} (the
+//      (ties: smaller k); k* = the first the caller allows (the engine: both
+//      sides reach min_support). None: {S} (the
 //      misfit is noise spread along the line, not a bend, or a cut would
 //      leave a piece that could not be published: it stays with the piece it
 //      came from, so the guard never removes what the paper would publish).
@@ -52,15 +52,18 @@ double OrthogonalSse(const geometry::PointMoments2& m);
 // guard is on and RMS > max_rms_m, i.e. the member set must be examined.
 bool ChainMayNeedSplit(const geometry::PointMoments2& endpoint_moments, double max_rms_m);
 
-// Whether a subset of the members (indices) would be published on its own.
-using Publishable = std::function<bool(const std::vector<uint32_t>& subset)>;
+// Whether the caller allows cutting a subset into `head` and `tail` (indices
+// into the members): the engine asks that both be publishable, wall
+// consolidation that they be pieces along a line, not side by side.
+using CutAllowed =
+    std::function<bool(const std::vector<uint32_t>& head, const std::vector<uint32_t>& tail)>;
 
 // Groups(members) as lists of indices into `members`, each ascending; the
-// groups in order along the fitted direction. An empty `publishable` counts
-// every subset publishable. REQUIRES: members non-empty.
+// groups in order along the fitted direction. An empty `cut_allowed` allows
+// every cut. REQUIRES: members non-empty.
 std::vector<std::vector<uint32_t>> SplitChain(const std::vector<GuardMember>& members,
                                               double max_rms_m, double max_sse_ratio,
-                                              const Publishable& publishable = nullptr);
+                                              const CutAllowed& cut_allowed = nullptr);
 
 }  // namespace mapd::fusion
 

@@ -77,8 +77,11 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
     for (uint32_t i : subset) subset_nodes.push_back(nodes[i]);
     return StatsOf(subset_nodes).support() >= params_.min_support;
   };
-  std::vector<std::vector<uint32_t>> groups =
-      SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio, publishable);
+  std::vector<std::vector<uint32_t>> groups = SplitChain(
+      members, params_.chain_max_rms_m, params_.chain_max_sse_ratio,
+      [&](const std::vector<uint32_t>& head, const std::vector<uint32_t>& tail) {
+        return publishable(head) && publishable(tail);
+      });
   for (std::vector<uint32_t>& group : groups) {
     for (uint32_t& index : group) index = nodes[index];
   }

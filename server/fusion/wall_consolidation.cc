@@ -34,13 +34,16 @@ std::vector<Vec2> FiledPoints(const Segment2& s) {
 
 }  // namespace
 
-bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
-               const FusionParams& params) {
-  const double eta2 = params.eta_m * params.eta_m;
-  // b. Near-identical: endpoints pair up within eta (either pairing).
+bool NearIdentical(const Segment2& p, const Segment2& q, double eta_m) {
+  const double eta2 = eta_m * eta_m;
   const bool same = (p.a - q.a).squaredNorm() <= eta2 && (p.b - q.b).squaredNorm() <= eta2;
   const bool swapped = (p.a - q.b).squaredNorm() <= eta2 && (p.b - q.a).squaredNorm() <= eta2;
-  if (same || swapped) return true;
+  return same || swapped;
+}
+
+bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
+               const FusionParams& params) {
+  if (NearIdentical(p, q, params.eta_m)) return true;  // b.
   // a. Collinear within delta and eta, overlapping or within the gap.
   const double lp = p.length(), lq = q.length();
   const bool p_longer = lp > lq || (lp == lq && p_id < q_id);
@@ -124,6 +127,20 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) const {
   return out;
 }
 
+bool WallConsolidator::Twins(const std::vector<ClusterId>& component,
+                             const std::vector<uint32_t>& head,
+                             const std::vector<uint32_t>& tail) const {
+  for (uint32_t i : head) {
+    for (uint32_t j : tail) {
+      if (NearIdentical(pieces_.at(component[i]).fit.segment, pieces_.at(component[j]).fit.segment,
+                        params_.eta_m)) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
                                std::vector<Wall>* walls) const {
   std::vector<std::vector<uint32_t>> groups;
@@ -134,7 +151,10 @@ void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
     for (ClusterId id : component) {
       members.push_back({id, pieces_.at(id).fit.segment, &piece_stats_.at(id).moments});
     }
-    groups = SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio);
+    groups = SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio,
+                        [&](const std::vector<uint32_t>& head, const std::vector<uint32_t>& tail) {
+                          return !Twins(component, head, tail);
+                        });
   } else {
     groups.emplace_back(component.size());
     for (uint32_t i = 0; i < component.size(); ++i) groups.back()[i] = i;

@@ -43,6 +43,9 @@
 
 namespace mapd::fusion {
 
+// Rule b: each endpoint of one lies within eta_m of an endpoint of the other.
+bool NearIdentical(const geometry::Segment2& p, const geometry::Segment2& q, double eta_m);
+
 // The relation above on two fitted segments named by their cluster ids.
 bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segment2& q,
                ClusterId q_id, const FusionParams& params);
@@ -79,6 +82,10 @@ class WallConsolidator {
   void Index(ClusterId id, const geometry::Segment2& s, bool insert);
   // Pieces on one wall with `id`, ascending.
   std::vector<ClusterId> Neighbours(ClusterId id) const;
+  // Whether the guard's cut of a component into head | tail (indices into
+  // it) would separate two near-identical pieces (rule b).
+  bool Twins(const std::vector<ClusterId>& component, const std::vector<uint32_t>& head,
+             const std::vector<uint32_t>& tail) const;
   // The walls of one connected component of pieces (ascending ids).
   void WallsOf(const std::vector<ClusterId>& component, std::vector<Wall>* walls) const;
 

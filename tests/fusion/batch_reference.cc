@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <queue>
 #include <set>
 
@@ -91,8 +92,12 @@ std::vector<Vec2> PointsOf(const std::vector<Unit>& units, const std::vector<siz
 
 // The chain guard's rule (fusion/chain_guard.h), literally and recursively:
 // appends the groups of `members` (indices into `units`) to `groups`.
+using CutAllowed =
+    std::function<bool(const std::vector<size_t>& head, const std::vector<size_t>& tail)>;
+
 void GuardGroups(const std::vector<Unit>& units, const std::vector<size_t>& members,
-                 const FusionParams& params, std::vector<std::vector<size_t>>* groups) {
+                 const FusionParams& params, const CutAllowed& cut_allowed,
+                 std::vector<std::vector<size_t>>* groups) {
   const std::vector<Vec2> points = PointsOf(units, members);
   const double sse = Sse(points);
   const double rms = std::sqrt(std::max(0.0, sse) / static_cast<double>(points.size()));
@@ -119,7 +124,7 @@ void GuardGroups(const std::vector<Unit>& units, const std::vector<size_t>& memb
     const double cost = std::max(0.0, Sse(PointsOf(units, head))) +
                         std::max(0.0, Sse(PointsOf(units, tail)));
     if (!(cost < params.chain_max_sse_ratio * sse)) continue;
-    if (!Publishable(units, head, params) || !Publishable(units, tail, params)) continue;
+    if (!cut_allowed(head, tail)) continue;
     if (best_k == 0 || cost < best_cost) {
       best_k = k;
       best_cost = cost;
@@ -130,9 +135,9 @@ void GuardGroups(const std::vector<Unit>& units, const std::vector<size_t>& memb
     return;
   }
   GuardGroups(units, std::vector<size_t>(order.begin(), order.begin() + static_cast<long>(best_k)),
-              params, groups);
+              params, cut_allowed, groups);
   GuardGroups(units, std::vector<size_t>(order.begin() + static_cast<long>(best_k), order.end()),
-              params, groups);
+              params, cut_allowed, groups);
 }
 
 // The fitted segment of `endpoints`: their TLS line, cut at the extreme projections.
@@ -198,7 +203,11 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
   std::vector<std::vector<size_t>> members_of;  // per cluster, indices into `all`
   for (const std::vector<size_t>& component : components) {
     std::vector<std::vector<size_t>> groups;
-    GuardGroups(features, component, params, &groups);
+    GuardGroups(features, component, params,
+                [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
+                  return Publishable(features, head, params) && Publishable(features, tail, params);
+                },
+                &groups);
     for (std::vector<size_t>& group : groups) {
       std::sort(group.begin(), group.end());
       members_of.push_back(group);
@@ -251,9 +260,26 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
       units.push_back(std::move(u));
       index[k] = k;
     }
+    // Consolidation's guard may not cut between near-identical pieces
+    // (fusion/wall_consolidation.h, rule b).
+    const auto twins = [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
+      for (size_t i : head) {
+        for (size_t j : tail) {
+          if (NearIdentical(result.clusters[published[component[i]]].fitted,
+                            result.clusters[published[component[j]]].fitted, params.eta_m)) {
+            return true;
+          }
+        }
+      }
+      return false;
+    };
     std::vector<std::vector<size_t>> groups;
     if (component.size() > 1) {
-      GuardGroups(units, index, params, &groups);
+      GuardGroups(units, index, params,
+                  [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
+                    return !twins(head, tail);
+                  },
+                  &groups);
     } else {
       groups.push_back(index);
     }

@@ -309,6 +309,7 @@ TEST(FusionEngineTest, ChainGuardFeedFollowsTheNamesOfPieces) {
   // 5 is removed and 1 added, while the untouched piece 3 is not reported.
   FusionParams params = Support(1);
   params.eta_m = 0.5;
+  params.consolidate = false;  // with eta 0.5, consolidation would publish them as one wall
   FusionEngine engine(params);
   ASSERT_TRUE(engine.Add(1, 0, {Wall(5, {0, 0}, {4, 0})}).ok());
   ChangeFeed feed;
