@@ -14,12 +14,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 
-// Records one change feed into the set of clusters to rewrite; `tag` marks
-// plane clusters (MapCore::kPlaneDeltaTag).
-void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta,
-                fusion::ClusterId tag = 0) {
+// Records one change feed into a set of clusters to rewrite.
+void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
   for (const auto* ids : {&feed.added, &feed.updated, &feed.removed}) {
-    for (fusion::ClusterId id : *ids) delta->insert(id | tag);
+    delta->insert(ids->begin(), ids->end());
   }
 }
 
@@ -242,7 +240,7 @@ void MapCore::Stop() {
   FusedDelta last;
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
-    last.swap(fused_pending_);
+    std::swap(last, fused_pending_);
   }
   if (!last.empty() && store_ && write_health_.ok()) {
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
@@ -310,7 +308,7 @@ void MapCore::WriterLoop() {
           group.push_back(std::move(queue_.front()));
           queue_.pop_front();
         }
-        fused.swap(fused_pending_);
+        std::swap(fused, fused_pending_);
       }
     }
     if (probe) {
@@ -403,7 +401,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
     }
     // The fused rows were not written either: keep them for the next commit.
     std::lock_guard<std::mutex> lock(queue_mu_);
-    fused_pending_.insert(fused.begin(), fused.end());
+    fused_pending_.Absorb(fused);
   } else {
     last_observation_id_ = newest_id;  // only once committed: a rolled-back id may be reused
     batches_stored_ += batches_stored;
@@ -465,7 +463,7 @@ void MapCore::FuserLoop() {
     }
     if (!delta.empty()) {
       std::lock_guard<std::mutex> lock(queue_mu_);
-      fused_pending_.insert(delta.begin(), delta.end());
+      fused_pending_.Absorb(delta);
       queue_cv_.notify_one();
     }
     {
@@ -485,22 +483,20 @@ Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransacti
   std::vector<fusion::ClusterId> plane_deletes;
   {
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
-    for (fusion::ClusterId id : delta) {
-      if (id & kPlaneDeltaTag) {
-        const fusion::ClusterId plane_id = id & ~kPlaneDeltaTag;
-        std::optional<fusion::FusedPlane> p = plane_engine_->Get(plane_id);
-        if (p && p->id == plane_id && p->support >= options_.planes.min_support) {
-          plane_upserts.push_back(ToPlaneRow(*p));
-        } else {
-          plane_deletes.push_back(plane_id);
-        }
-        continue;
-      }
+    for (fusion::ClusterId id : delta.lines) {
       std::optional<fusion::FusedFeature> f = engine_->Get(id);
       if (f && f->support >= options_.fusion.min_support) {
         upserts.push_back(ToRow(*f));
       } else {
         deletes.push_back(id);
+      }
+    }
+    for (fusion::ClusterId id : delta.planes) {
+      std::optional<fusion::FusedPlane> p = plane_engine_->Get(id);
+      if (p && p->id == id && p->support >= options_.planes.min_support) {
+        plane_upserts.push_back(ToPlaneRow(*p));
+      } else {
+        plane_deletes.push_back(id);
       }
     }
   }
@@ -541,7 +537,7 @@ void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observat
       Log(LogLevel::kWarn, "plane_fusion_refused",
           {{"observation", std::to_string(observation_id)}, {"error", planes.ToString()}});
     } else if (delta) {
-      Accumulate(plane_feed, delta, kPlaneDeltaTag);
+      Accumulate(plane_feed, &delta->planes);
     }
   }
   if (!s.ok()) {
@@ -551,7 +547,7 @@ void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observat
         {{"observation", std::to_string(observation_id)}, {"error", s.ToString()}});
     return;
   }
-  if (delta) Accumulate(feed, delta);
+  if (delta) Accumulate(feed, &delta->lines);
 }
 
 storage::FusedRow MapCore::ToRow(const fusion::FusedFeature& f) const {

@@ -190,11 +190,21 @@ class MapCore {
     DoneCallback done;
   };
   // Clusters whose published state changed (added, updated or removed); the
-  // writer reads their current state from the engine when it writes them.
-  // Plane clusters (plane_engine_) carry kPlaneDeltaTag: feature ids stay far
-  // below 2^63 (observation id << kFeatureIdBits), so the tag never collides.
-  using FusedDelta = std::unordered_set<fusion::ClusterId>;
-  static constexpr fusion::ClusterId kPlaneDeltaTag = fusion::ClusterId{1} << 63;
+  // writer reads their current state from the engines when it writes them.
+  struct FusedDelta {
+    std::unordered_set<fusion::ClusterId> lines;   // engine_'s features
+    std::unordered_set<fusion::ClusterId> planes;  // plane_engine_'s planes
+    bool empty() const { return lines.empty() && planes.empty(); }
+    size_t size() const { return lines.size() + planes.size(); }
+    void clear() {
+      lines.clear();
+      planes.clear();
+    }
+    void Absorb(const FusedDelta& other) {
+      lines.insert(other.lines.begin(), other.lines.end());
+      planes.insert(other.planes.begin(), other.planes.end());
+    }
+  };
 
   explicit MapCore(const MapCoreOptions& options);
   struct WriteJob;

@@ -204,11 +204,11 @@ Status MapCore::QueueFusedTableSync() {
     for (const fusion::FusedFeature& f : engine_->Published()) {
       const storage::FusedRow row = ToRow(f);
       auto it = old_rows.find(row.id);
-      if (it == old_rows.end() || !SameFusedRow(it->second, row)) delta.insert(f.id);
+      if (it == old_rows.end() || !SameFusedRow(it->second, row)) delta.lines.insert(f.id);
       if (it != old_rows.end()) old_rows.erase(it);
     }
   }
-  for (const auto& [id, row] : old_rows) delta.insert(id);  // gone: WriteFusedDelta deletes it
+  for (const auto& [id, row] : old_rows) delta.lines.insert(id);  // gone: WriteFusedDelta deletes it
   StatusOr<std::vector<storage::FusedPlaneRow>> stored_planes = store_->LoadFusedPlanes();
   if (!stored_planes.ok()) return stored_planes.status();
   std::unordered_map<uint64_t, storage::FusedPlaneRow> old_planes;
@@ -218,15 +218,15 @@ Status MapCore::QueueFusedTableSync() {
     for (const fusion::FusedPlane& p : plane_engine_->Published()) {
       const storage::FusedPlaneRow row = ToPlaneRow(p);
       auto it = old_planes.find(row.id);
-      if (it == old_planes.end() || !SamePlaneRow(it->second, row)) delta.insert(p.id | kPlaneDeltaTag);
+      if (it == old_planes.end() || !SamePlaneRow(it->second, row)) delta.planes.insert(p.id);
       if (it != old_planes.end()) old_planes.erase(it);
     }
   }
-  for (const auto& [id, row] : old_planes) delta.insert(id | kPlaneDeltaTag);
+  for (const auto& [id, row] : old_planes) delta.planes.insert(id);
   if (!delta.empty()) {
     Log(LogLevel::kInfo, "fused_table_sync", {{"rows", std::to_string(delta.size())}});
     std::lock_guard<std::mutex> lock(queue_mu_);
-    fused_pending_.insert(delta.begin(), delta.end());
+    fused_pending_.Absorb(delta);
     queue_cv_.notify_one();
   }
   return Status::Ok();
