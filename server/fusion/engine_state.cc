@@ -12,6 +12,7 @@
 #include <string>
 
 #include "fusion/engine_impl.h"
+#include "fusion/state_codec.h"
 
 namespace mapd::fusion {
 namespace {
@@ -21,26 +22,9 @@ constexpr uint32_t kVersion = 2;  // 2: the consolidator's pieces
 // Union by size keeps trees at most log2(nodes) deep; deeper means corrupt.
 constexpr int kMaxTreeDepth = 64;
 
-uint64_t Fnv1a(std::string_view bytes) {
-  uint64_t h = 1469598103934665603ULL;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
-class Writer {
+class Writer : public StateWriter {
  public:
-  explicit Writer(std::string* out) : out_(out) {}
-  template <typename T>
-  void Raw(const T& v) {
-    out_->append(reinterpret_cast<const char*>(&v), sizeof(T));
-  }
-  void U8(uint8_t v) { Raw(v); }
-  void U32(uint32_t v) { Raw(v); }
-  void U64(uint64_t v) { Raw(v); }
-  void F64(double v) { Raw(v); }
+  using StateWriter::StateWriter;
   void V2(const Vec2& v) {
     F64(v.x());
     F64(v.y());
@@ -48,14 +32,6 @@ class Writer {
   void Seg(const Segment2& s) {
     V2(s.a);
     V2(s.b);
-  }
-  void Str(std::string_view s) {
-    U64(s.size());
-    out_->append(s);
-  }
-  void Ids(const std::vector<uint64_t>& ids) {
-    U64(ids.size());
-    for (uint64_t id : ids) U64(id);
   }
   void Feature(const GroundFeature& f) {
     U64(f.id);
@@ -80,31 +56,11 @@ class Writer {
     U64(s.observations.last());
     Ids(s.robots);
   }
-
- private:
-  std::string* out_;
 };
 
-class Reader {
+class Reader : public StateReader {
  public:
-  explicit Reader(std::string_view in) : in_(in) {}
-  bool ok() const { return ok_; }
-  bool at_end() const { return pos_ == in_.size(); }
-  template <typename T>
-  T Raw() {
-    T v{};
-    if (!ok_ || in_.size() - pos_ < sizeof(T)) {
-      ok_ = false;
-      return v;
-    }
-    std::memcpy(&v, in_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return v;
-  }
-  uint8_t U8() { return Raw<uint8_t>(); }
-  uint32_t U32() { return Raw<uint32_t>(); }
-  uint64_t U64() { return Raw<uint64_t>(); }
-  double F64() { return Raw<double>(); }
+  using StateReader::StateReader;
   Vec2 V2() {
     const double x = F64();
     return Vec2(x, F64());
@@ -112,24 +68,6 @@ class Reader {
   Segment2 Seg() {
     const Vec2 a = V2();
     return {a, V2()};
-  }
-  // A count of items of at least `item_bytes` each that the rest can hold.
-  uint64_t Count(size_t item_bytes) {
-    const uint64_t n = U64();
-    if (!ok_ || n > (in_.size() - pos_) / item_bytes) ok_ = false;
-    return ok_ ? n : 0;
-  }
-  std::string Str() {
-    const uint64_t n = Count(1);
-    if (!ok_) return {};
-    std::string s(in_.substr(pos_, n));
-    pos_ += n;
-    return s;
-  }
-  std::vector<uint64_t> Ids() {
-    std::vector<uint64_t> ids(Count(8));
-    for (uint64_t& id : ids) id = U64();
-    return ids;
   }
   GroundFeature Feature() {
     GroundFeature f;
@@ -159,11 +97,6 @@ class Reader {
     s.robots = Ids();
     return s;
   }
-
- private:
-  std::string_view in_;
-  size_t pos_ = 0;
-  bool ok_ = true;
 };
 
 Status Corrupt(const std::string& what) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fusion/plane_engine_impl.h"
+#include "fusion/state_codec.h"
 
 namespace mapd::fusion {
 namespace {
@@ -18,25 +19,9 @@ constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'P', 'L', 'N', '1'};
 constexpr uint32_t kVersion = 1;
 constexpr int kMaxTreeDepth = 64;  // union by size: at most log2(nodes) deep
 
-uint64_t Fnv1a(std::string_view bytes) {
-  uint64_t h = 1469598103934665603ULL;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
-class Writer {
+class Writer : public StateWriter {
  public:
-  explicit Writer(std::string* out) : out_(out) {}
-  template <typename T>
-  void Raw(const T& v) {
-    out_->append(reinterpret_cast<const char*>(&v), sizeof(T));
-  }
-  void U32(uint32_t v) { Raw(v); }
-  void U64(uint64_t v) { Raw(v); }
-  void F64(double v) { Raw(v); }
+  using StateWriter::StateWriter;
   void V3(const Eigen::Vector3d& v) {
     for (int i = 0; i < 3; ++i) F64(v(i));
   }
@@ -44,71 +29,21 @@ class Writer {
     U64(p.size());
     for (const Eigen::Vector3d& x : p) V3(x);
   }
-  void Ids(const std::vector<uint64_t>& ids) {
-    U64(ids.size());
-    for (uint64_t id : ids) U64(id);
-  }
-  void Str(std::string_view s) {
-    U64(s.size());
-    out_->append(s);
-  }
-
- private:
-  std::string* out_;
 };
 
-class Reader {
+class Reader : public StateReader {
  public:
-  explicit Reader(std::string_view in) : in_(in) {}
-  bool ok() const { return ok_; }
-  bool at_end() const { return pos_ == in_.size(); }
-  template <typename T>
-  T Raw() {
-    T v{};
-    if (!ok_ || in_.size() - pos_ < sizeof(T)) {
-      ok_ = false;
-      return v;
-    }
-    std::memcpy(&v, in_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return v;
-  }
-  uint8_t U8() { return Raw<uint8_t>(); }
-  uint32_t U32() { return Raw<uint32_t>(); }
-  uint64_t U64() { return Raw<uint64_t>(); }
-  double F64() { return Raw<double>(); }
+  using StateReader::StateReader;
   Eigen::Vector3d V3() {
     Eigen::Vector3d v;
     for (int i = 0; i < 3; ++i) v(i) = F64();
     return v;
-  }
-  uint64_t Count(size_t item_bytes) {
-    const uint64_t n = U64();
-    if (!ok_ || n > (in_.size() - pos_) / item_bytes) ok_ = false;
-    return ok_ ? n : 0;
   }
   std::vector<Eigen::Vector3d> Points() {
     std::vector<Eigen::Vector3d> p(Count(24));
     for (Eigen::Vector3d& x : p) x = V3();
     return p;
   }
-  std::vector<uint64_t> Ids() {
-    std::vector<uint64_t> ids(Count(8));
-    for (uint64_t& id : ids) id = U64();
-    return ids;
-  }
-  std::string Str() {
-    const uint64_t n = Count(1);
-    if (!ok_) return {};
-    std::string s(in_.substr(pos_, n));
-    pos_ += n;
-    return s;
-  }
-
- private:
-  std::string_view in_;
-  size_t pos_ = 0;
-  bool ok_ = true;
 };
 
 Status Corrupt(const std::string& what) {

@@ -559,10 +559,7 @@ storage::FusedRow MapCore::ToRow(const fusion::FusedFeature& f) const {
   row.z_max_m = f.z_max_m;
   row.support = f.support;
   row.member_count = f.member_count;
-  for (const std::string& name : RobotNames(f.robots)) {
-    if (!row.robots.empty()) row.robots += ',';
-    row.robots += name;
-  }
+  row.robots = RobotList(f.robots);
   return row;
 }
 
@@ -577,11 +574,17 @@ storage::FusedPlaneRow MapCore::ToPlaneRow(const fusion::FusedPlane& f) const {
   row.z_max_m = f.z_max_m;
   row.support = f.support;
   row.member_count = f.member_count;
-  for (const std::string& name : RobotNames(f.robots)) {
-    if (!row.robots.empty()) row.robots += ',';
-    row.robots += name;
-  }
+  row.robots = RobotList(f.robots);
   return row;
+}
+
+std::string MapCore::RobotList(const std::vector<fusion::RobotId>& ids) const {
+  std::string list;
+  for (const std::string& name : RobotNames(ids)) {
+    if (!list.empty()) list += ',';
+    list += name;
+  }
+  return list;
 }
 
 std::vector<std::string> MapCore::RobotNames(const std::vector<fusion::RobotId>& ids) const {

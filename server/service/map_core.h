@@ -242,6 +242,8 @@ class MapCore {
   storage::FusedRow ToRow(const fusion::FusedFeature& f) const;
   storage::FusedPlaneRow ToPlaneRow(const fusion::FusedPlane& f) const;
   std::vector<std::string> RobotNames(const std::vector<fusion::RobotId>& ids) const;
+  // The same, comma-separated (the fused tables' robots column).
+  std::string RobotList(const std::vector<fusion::RobotId>& ids) const;
   void RecordRate();
 
   const MapCoreOptions options_;

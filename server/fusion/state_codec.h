@@ -1,0 +1,100 @@
+// The byte codec of the engines' snapshots (engine_state.cc,
+// plane_engine_state.cc): little-endian fixed-width values, doubles as their
+// IEEE bits (a restored engine continues bit for bit), length-prefixed
+// strings and id lists, and the FNV-1a checksum that closes a snapshot.
+// Header-only: small, and private to the fusion library.
+#ifndef MAPD_FUSION_STATE_CODEC_H_
+#define MAPD_FUSION_STATE_CODEC_H_
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace mapd::fusion {
+
+inline uint64_t Fnv1a(std::string_view bytes) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+class StateWriter {
+ public:
+  explicit StateWriter(std::string* out) : out_(out) {}
+  template <typename T>
+  void Raw(const T& v) {
+    out_->append(reinterpret_cast<const char*>(&v), sizeof(T));
+  }
+  void U8(uint8_t v) { Raw(v); }
+  void U32(uint32_t v) { Raw(v); }
+  void U64(uint64_t v) { Raw(v); }
+  void F64(double v) { Raw(v); }
+  void Str(std::string_view s) {
+    U64(s.size());
+    out_->append(s);
+  }
+  void Ids(const std::vector<uint64_t>& ids) {
+    U64(ids.size());
+    for (uint64_t id : ids) U64(id);
+  }
+
+ private:
+  std::string* out_;
+};
+
+// Reads what StateWriter wrote. A read past the end, or a count the rest of
+// the bytes cannot hold, clears ok() and yields zeros from then on: callers
+// check ok() once, after reading.
+class StateReader {
+ public:
+  explicit StateReader(std::string_view in) : in_(in) {}
+  bool ok() const { return ok_; }
+  bool at_end() const { return pos_ == in_.size(); }
+  template <typename T>
+  T Raw() {
+    T v{};
+    if (!ok_ || in_.size() - pos_ < sizeof(T)) {
+      ok_ = false;
+      return v;
+    }
+    std::memcpy(&v, in_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  uint8_t U8() { return Raw<uint8_t>(); }
+  uint32_t U32() { return Raw<uint32_t>(); }
+  uint64_t U64() { return Raw<uint64_t>(); }
+  double F64() { return Raw<double>(); }
+  // A count of items of at least `item_bytes` each that the rest can hold.
+  uint64_t Count(size_t item_bytes) {
+    const uint64_t n = U64();
+    if (!ok_ || n > (in_.size() - pos_) / item_bytes) ok_ = false;
+    return ok_ ? n : 0;
+  }
+  std::string Str() {
+    const uint64_t n = Count(1);
+    if (!ok_) return {};
+    std::string s(in_.substr(pos_, n));
+    pos_ += n;
+    return s;
+  }
+  std::vector<uint64_t> Ids() {
+    std::vector<uint64_t> ids(Count(8));
+    for (uint64_t& id : ids) id = U64();
+    return ids;
+  }
+
+ private:
+  std::string_view in_;
+  size_t pos_ = 0;
+  bool ok_ = true;
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_STATE_CODEC_H_
