@@ -87,13 +87,21 @@ Segment2 CornerSnapper::Snapped(ClusterId id) const {
   const Entry& self = entries_.at(id);
   Segment2 out = self.fitted;
   if (snap_m_ <= 0.0) return out;
+  EndRef partner[2];
+  bool paired[2] = {false, false};
   for (int end = 0; end < 2; ++end) {
-    const Vec2& p = EndOf(self, end);
-    EndRef other;
-    if (!Nearest(id, p, &other)) continue;
     EndRef back;
-    if (!Nearest(other.id, other.p, &back)) continue;
-    if (back.id != id || back.end != end) continue;  // not mutual
+    paired[end] = Nearest(id, EndOf(self, end), &partner[end]) &&
+                  Nearest(partner[end].id, partner[end].p, &back) && back.id == id &&
+                  back.end == end;  // mutual
+  }
+  // Both ends paired with the same feature: no corner, two views of one
+  // short stretch; snapping would publish them as one segment twice.
+  if (paired[0] && paired[1] && partner[0].id == partner[1].id) return out;
+  for (int end = 0; end < 2; ++end) {
+    if (!paired[end]) continue;
+    const Vec2& p = EndOf(self, end);
+    const EndRef& other = partner[end];
     const Entry& peer = entries_.at(other.id);
     // Evaluate in (cluster id) order so that both partners get the same point.
     const Vec2 joint = id < other.id

@@ -8,7 +8,9 @@
 //    ties go to the smaller (cluster id, end index), end 0 = fitted.a, 1 = fitted.b.
 //  - e and e' snap iff N(e) = e' and N(e') = e (mutual nearest neighbours), so
 //    every endpoint snaps at most once. Three walls meeting at one point: only
-//    the mutual pair snaps.
+//    the mutual pair snaps. If both endpoints of a feature pair with the two
+//    endpoints of one other feature, neither snaps: that is no corner but two
+//    views of one short stretch, which snapping would make identical.
 //  - The joint point is their midpoint (CornerMode::kMidpoint, the paper), or the
 //    intersection of the two fitted lines (kIntersection) when they cross at more
 //    than kMinCornerAngleRad and the intersection lies within snap_m of both

@@ -322,11 +322,19 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
     }
     return best;
   };
+  const auto mutual = [&](size_t e) {
+    const long o = nearest(e);
+    return o >= 0 && nearest(static_cast<size_t>(o)) == static_cast<long>(e) ? o : -1L;
+  };
   std::vector<Vec2> moved(ends.size());
   for (size_t e = 0; e < ends.size(); ++e) {
     moved[e] = ends[e].p;
-    const long o = nearest(e);
-    if (o < 0 || nearest(static_cast<size_t>(o)) != static_cast<long>(e)) continue;
+    const long o = mutual(e);
+    if (o < 0) continue;
+    // Both ends of this wall paired with ends of the same wall: no corner.
+    const size_t sibling = e ^ 1;  // ends are pushed in pairs: 2k (a), 2k+1 (b)
+    const long so = mutual(sibling);
+    if (so >= 0 && ends[static_cast<size_t>(so)].wall == ends[static_cast<size_t>(o)].wall) continue;
     const End& other = ends[static_cast<size_t>(o)];
     moved[e] = Joint(ends[e].p, fits[ends[e].wall], other.p, fits[other.wall], params);
   }

@@ -86,6 +86,27 @@ TEST(WallConsolidationTest, TheFeedReportsTheJoin) {
   EXPECT_TRUE(feed.removed.empty());
 }
 
+// Two short crossing features whose ends pair at both ends: corner snapping
+// leaves them as they are instead of publishing one segment twice.
+TEST(CornerSnapTest, FeaturesPairedAtBothEndsAreNotSnappedOntoEachOther) {
+  FusionParams p;
+  p.min_support = 1;
+  FusionEngine engine(p);
+  GroundFeature a, b;
+  a.id = 1;
+  a.segment = {Vec2(0, 0), Vec2(1, 0.5)};
+  b.id = 2;
+  b.segment = {Vec2(0, 0.3), Vec2(1, 0.1)};
+  ASSERT_TRUE(engine.Add(1, 0, {a}).ok());
+  ASSERT_TRUE(engine.Add(2, 0, {b}).ok());
+  const std::vector<FusedFeature> published = engine.Published();
+  ASSERT_EQ(published.size(), 2u);
+  for (const FusedFeature& f : published) {
+    EXPECT_EQ(f.segment.a, f.fitted.a);
+    EXPECT_EQ(f.segment.b, f.fitted.b);
+  }
+}
+
 TEST(OnOneWallTest, StatesTheRelation) {
   FusionParams p;  // delta 5 deg, eta 0.3 m, wall_gap_m 0.3 m
   const Segment2 long_wall{Vec2(0, 0), Vec2(10, 0)};
