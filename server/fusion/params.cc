@@ -38,6 +38,7 @@ Status FusionParams::Validate() const {
   }
   MAPD_RETURN_IF_ERROR(CheckRange("chain_max_sse_ratio", chain_max_sse_ratio, 0.0, 1.0));
   MAPD_RETURN_IF_ERROR(CheckRange("wall_gap_m", wall_gap_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckRange("wall_offset_m", wall_offset_m, 0.0, HUGE_VAL));
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }
@@ -48,14 +49,14 @@ Status FusionParams::Validate() const {
 }
 
 std::string FusionParamsKey(const FusionParams& p) {
-  char text[512];
+  char text[1024];
   std::snprintf(text, sizeof(text),
                 "mode=%s cover_m=%.17g delta_rad=%.17g gamma=%.17g eta_m=%.17g min_support=%u "
                 "snap_m=%.17g corner_mode=%s max_plane_tilt_rad=%.17g chain_max_rms_m=%.17g "
-                "chain_max_sse_ratio=%.17g consolidate=%d wall_gap_m=%.17g",
+                "chain_max_sse_ratio=%.17g consolidate=%d wall_gap_m=%.17g wall_offset_m=%.17g",
                 FusionModeName(p.mode), p.cover_m, p.delta_rad, p.gamma, p.eta_m, p.min_support,
                 p.snap_m, CornerModeName(p.corner_mode), p.max_plane_tilt_rad, p.chain_max_rms_m,
-                p.chain_max_sse_ratio, p.consolidate ? 1 : 0, p.wall_gap_m);
+                p.chain_max_sse_ratio, p.consolidate ? 1 : 0, p.wall_gap_m, p.wall_offset_m);
   return text;
 }
 

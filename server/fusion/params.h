@@ -52,11 +52,16 @@ struct FusionParams {
   double chain_max_rms_m = 0.05;
   double chain_max_sse_ratio = 0.5;  // in [0, 1]; 0 never cuts
   // Wall consolidation (wall_consolidation.h; docs/algorithms.md A.11), beyond
-  // the paper: published clusters on one wall (within delta_rad and eta_m,
+  // the paper: published clusters on one wall (within delta_rad and wall_offset_m,
   // overlapping or separated by at most wall_gap_m along it) are published as
   // one feature. false = the paper's output, one feature per cluster.
   bool consolidate = true;
   double wall_gap_m = 0.3;  // metres
+  // Consolidation's lateral tolerance, metres: tighter than eta_m, because
+  // pieces of one wall agree to a few centimetres while parallel surfaces a
+  // decimetre or more apart (a shelf before a wall) are different features
+  // (docs/fusion-real-data.md measures 0.05-0.3).
+  double wall_offset_m = 0.1;
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

@@ -34,17 +34,18 @@ std::vector<Vec2> FiledPoints(const Segment2& s) {
 
 }  // namespace
 
-bool NearIdentical(const Segment2& p, const Segment2& q, double eta_m) {
-  const double eta2 = eta_m * eta_m;
-  const bool same = (p.a - q.a).squaredNorm() <= eta2 && (p.b - q.b).squaredNorm() <= eta2;
-  const bool swapped = (p.a - q.b).squaredNorm() <= eta2 && (p.b - q.a).squaredNorm() <= eta2;
+bool NearIdentical(const Segment2& p, const Segment2& q, double offset_m) {
+  const double d2 = offset_m * offset_m;
+  const bool same = (p.a - q.a).squaredNorm() <= d2 && (p.b - q.b).squaredNorm() <= d2;
+  const bool swapped = (p.a - q.b).squaredNorm() <= d2 && (p.b - q.a).squaredNorm() <= d2;
   return same || swapped;
 }
 
 bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
                const FusionParams& params) {
-  if (NearIdentical(p, q, params.eta_m)) return true;  // b.
-  // a. Collinear within delta and eta, overlapping or within the gap.
+  const double offset_m = params.wall_offset_m;
+  if (NearIdentical(p, q, offset_m)) return true;  // b.
+  // a. Collinear within delta and the offset, overlapping or within the gap.
   const double lp = p.length(), lq = q.length();
   const bool p_longer = lp > lq || (lp == lq && p_id < q_id);
   const Segment2& l = p_longer ? p : q;
@@ -54,11 +55,11 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   if (!(l_length > 0.0) || !(s_length > 0.0)) return false;
   const Vec2 u = l.direction() / l_length;
   const Vec2 v = s.direction() / s_length;
-  if (std::abs(Cross(u, s.a - l.a)) > params.eta_m || std::abs(Cross(u, s.b - l.a)) > params.eta_m) {
+  if (std::abs(Cross(u, s.a - l.a)) > offset_m || std::abs(Cross(u, s.b - l.a)) > offset_m) {
     return false;
   }
   const double ta = u.dot(s.a - l.a), tb = u.dot(s.b - l.a);
-  // c. S lies wholly in the eta band along L: a short piece whose direction
+  // c. S lies wholly in the offset band along L: a short piece whose direction
   // is poorly determined (a corner fragment) repeats the wall whatever its angle.
   if (std::min(ta, tb) >= 0.0 && std::max(ta, tb) <= l_length) return true;
   // Included angle in [0, pi/2]: |sin| <= sin(delta) with |cos| >= cos(delta).
@@ -113,7 +114,7 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) const {
   std::vector<ClusterId> out;
   if (!params_.consolidate) return out;
   const Segment2& s = pieces_.at(id).fit.segment;
-  const double radius = params_.eta_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
+  const double radius = params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
   index_.ForEachNearSegment(s, radius, [&](ClusterId other) {
     if (other != id) out.push_back(other);
   });
@@ -133,7 +134,7 @@ bool WallConsolidator::Twins(const std::vector<ClusterId>& component,
   for (uint32_t i : head) {
     for (uint32_t j : tail) {
       if (NearIdentical(pieces_.at(component[i]).fit.segment, pieces_.at(component[j]).fit.segment,
-                        params_.eta_m)) {
+                        params_.wall_offset_m)) {
         return true;
       }
     }

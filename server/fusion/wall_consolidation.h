@@ -11,12 +11,12 @@
 //   L = the longer of p, q (ties: the smaller id), S = the other;
 //   OnOneWall(p, q) iff
 //     a. the included angle of their fitted directions is <= delta_rad, and
-//        both endpoints of S lie within eta_m of L's fitted line, and S's
+//        both endpoints of S lie within wall_offset_m of L's fitted line, and S's
 //        extent along L overlaps L's or leaves a gap of <= wall_gap_m; or
-//     b. each endpoint of one lies within eta_m of an endpoint of the other
+//     b. each endpoint of one lies within wall_offset_m of an endpoint of the other
 //        (near-identical features: corner snapping would make them one
 //        segment, whatever their directions); or
-//     c. both endpoints of S lie within eta_m of L's line and S's extent
+//     c. both endpoints of S lie within wall_offset_m of L's line and S's extent
 //        lies within L's (a short piece wholly inside L's band, e.g. a
 //        fragment at a corner, whose direction is poorly determined).
 //
@@ -43,8 +43,8 @@
 
 namespace mapd::fusion {
 
-// Rule b: each endpoint of one lies within eta_m of an endpoint of the other.
-bool NearIdentical(const geometry::Segment2& p, const geometry::Segment2& q, double eta_m);
+// Rule b: each endpoint of one lies within offset_m of an endpoint of the other.
+bool NearIdentical(const geometry::Segment2& p, const geometry::Segment2& q, double offset_m);
 
 // The relation above on two fitted segments named by their cluster ids.
 bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segment2& q,

@@ -222,11 +222,14 @@ const std::vector<Setting>& Settings() {
       Real("fusion.chain_max_sse_ratio", "chain guard: cut only where the pieces keep less than this share of "
            "the squared residual; 0 never cuts",
            [](C& c) -> auto& { return c.fusion.chain_max_sse_ratio; }, {0, 1}),
-      Flag("fusion.consolidate", "wall consolidation: published features on one wall (within delta and eta, "
+      Flag("fusion.consolidate", "wall consolidation: published features on one wall (within delta and wall_offset_m, "
            "overlapping or within wall_gap_m) are published as one; false = one feature per cluster (the paper)",
            [](C& c) -> auto& { return c.fusion.consolidate; }),
       Real("fusion.wall_gap_m", "wall consolidation: pieces of one wall this far apart along it still join, metres",
            [](C& c) -> auto& { return c.fusion.wall_gap_m; }, {0, 1000}),
+      Real("fusion.wall_offset_m", "wall consolidation: pieces join only if they lie within this of each other's "
+           "line, metres",
+           [](C& c) -> auto& { return c.fusion.wall_offset_m; }, {0, 100}),
 
       // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
       Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",
