@@ -8,8 +8,9 @@
 // writes docs/fusion-laser-<log>.svg.
 //
 //   laser_bench [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] [--guard-ratio R]
-// (--guard-* set the "on" run's chain_max_rms_m and chain_max_sse_ratio; default:
-// FusionParams' defaults.)
+//               [--wall-offset M]
+// (they set the default run's chain_max_rms_m, chain_max_sse_ratio and
+// wall_offset_m; otherwise FusionParams' defaults.)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -246,10 +247,12 @@ int main(int argc, char** argv) {
       on.chain_max_rms_m = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--guard-ratio") && i + 1 < argc) {
       on.chain_max_sse_ratio = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--wall-offset") && i + 1 < argc) {
+      on.wall_offset_m = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: %s [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] "
-                   "[--guard-ratio R]\n",
+                   "[--guard-ratio R] [--wall-offset M]\n",
                    argv[0]);
       return 2;
     }
