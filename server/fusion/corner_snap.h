@@ -17,10 +17,23 @@
 //    endpoints; otherwise the midpoint.
 // The result for e depends only on endpoints within 2 * snap_m of e (N(e) is
 // within snap_m, and N(N(e)) within snap_m of that).
+//
+// CornerPairing::kGreedy instead pairs the plain way (the paper names no rule:
+// "if the distance between two endpoints is within a certain threshold"):
+// features in ascending id, each endpoint (a, then b) not yet paired takes the
+// nearest endpoint not yet paired of ANOTHER feature with |e - e'| < snap_m (ties
+// as above); both go to the joint point; the twin rule above applies too. Still a
+// function of the published set, but not local in a fixed radius: the pairing of
+// e depends on its connected component in the graph "endpoints of different
+// features closer than snap_m" (greedy in a global order, restricted to a
+// component, is greedy on it); a feature's result, on its two ends' components.
+// docs/fusion.md, "Corner pairing", compares the two against ground truth.
 #ifndef MAPD_FUSION_CORNER_SNAP_H_
 #define MAPD_FUSION_CORNER_SNAP_H_
 
+#include <map>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "fusion/engine.h"
@@ -42,7 +55,8 @@ geometry::Vec2 CornerPoint(const geometry::Vec2& p, const geometry::Line2& lp,
 
 class CornerSnapper {
  public:
-  CornerSnapper(double snap_m, CornerMode mode);
+  CornerSnapper(double snap_m, CornerMode mode,
+                CornerPairing pairing = CornerPairing::kMutualNearest);
 
   // Adds or replaces published feature `id`.
   void Upsert(ClusterId id, const geometry::Segment2& fitted, const geometry::Line2& line);
@@ -54,8 +68,17 @@ class CornerSnapper {
   // The fitted segment and line of published feature `id`; false if absent.
   bool Lookup(ClusterId id, geometry::Segment2* fitted, geometry::Line2* line) const;
 
-  // The corner-optimised segment of published feature `id`. REQUIRES: id is present.
-  geometry::Segment2 Snapped(ClusterId id) const;
+  // Appends the ids of published features whose snapped segment may change when
+  // endpoints appear, move or vanish at `points` (their old and new positions):
+  // mutual, those with an endpoint within 2 * snap_m + slack_m of a point; greedy,
+  // those with an endpoint in the component of an endpoint within snap_m + slack_m.
+  void CollectAffected(const std::vector<geometry::Vec2>& points, double slack_m,
+                       std::vector<ClusterId>* ids) const;
+
+  // The corner-optimised segments of published features `ids`, in that order
+  // (greedy: each component solved once). REQUIRES: every id is present.
+  std::vector<geometry::Segment2> SnappedAll(const std::vector<ClusterId>& ids) const;
+  geometry::Segment2 Snapped(ClusterId id) const { return SnappedAll({id})[0]; }
 
   double snap_m() const { return snap_m_; }
 
@@ -69,14 +92,23 @@ class CornerSnapper {
     int end;  // 0 = a, 1 = b
     geometry::Vec2 p;
   };
-  // Nearest endpoint of another feature within snap_m; false if none.
-  bool Nearest(ClusterId id, const geometry::Vec2& p, EndRef* nearest) const;
+  using EndKey = std::pair<ClusterId, int>;  // (id, end): the order of greedy
+  // Nearest endpoint of another feature within snap_m, among those `skip`
+  // does not reject; false if none.
+  template <typename Skip>
+  bool Nearest(ClusterId id, const geometry::Vec2& p, Skip skip, EndRef* nearest) const;
+  // Greedy: the endpoints of the component of `seed`, in (id, end) order.
+  std::vector<EndRef> Component(const EndRef& seed) const;
+  // Greedy on one component: the partner of each endpoint paired, into *partner.
+  void SolveGreedy(const std::vector<EndRef>& component, std::map<EndKey, EndRef>* partner) const;
+  geometry::Vec2 Joint(const EndRef& e, const EndRef& other) const;
   static const geometry::Vec2& EndOf(const Entry& e, int end) {
     return end == 0 ? e.fitted.a : e.fitted.b;
   }
 
   double snap_m_;
   CornerMode mode_;
+  CornerPairing pairing_;
   std::unordered_map<ClusterId, Entry> entries_;
   UniformGrid<EndRef> grid_;
 };

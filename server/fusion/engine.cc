@@ -299,7 +299,7 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
 void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
                                  const std::vector<ClusterId>& merged_ids, ChangeFeed* feed) {
   // Fitted endpoints that appeared, moved or vanished: the corner result can
-  // change within 2 * snap_m of them (corner_snap.h).
+  // change near them (CornerSnapper::CollectAffected).
   std::vector<Vec2> moved_points;
   // The groups published before by the components this Add touched: every such
   // component was merged into a root of `roots`, so its id is in merged_ids.
@@ -366,19 +366,17 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   // The corner pass, local to the moved endpoints.
   std::vector<ClusterId> dirty = feed->added;
   dirty.insert(dirty.end(), feed->updated.begin(), feed->updated.end());
-  if (params_.snap_m > 0.0) {
-    for (const Vec2& p : moved_points) {
-      snapper_.CollectNear(p, 2.0 * params_.snap_m + kSearchSlackM, &dirty);
-    }
-  }
+  snapper_.CollectAffected(moved_points, kSearchSlackM, &dirty);
   std::sort(dirty.begin(), dirty.end());
   dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
   std::vector<ClusterId> changed(feed->added);
   changed.insert(changed.end(), feed->updated.begin(), feed->updated.end());
   std::sort(changed.begin(), changed.end());
-  for (ClusterId id : dirty) {
+  const std::vector<Segment2> snapped_all = snapper_.SnappedAll(dirty);
+  for (size_t k = 0; k < dirty.size(); ++k) {
+    const ClusterId id = dirty[k];
     FusedFeature& fused = published_.at(id);
-    const Segment2 snapped = snapper_.Snapped(id);
+    const Segment2& snapped = snapped_all[k];
     const bool moved = snapped.a != fused.segment.a || snapped.b != fused.segment.b;
     fused.segment = snapped;
     if (moved && !std::binary_search(changed.begin(), changed.end(), id)) {

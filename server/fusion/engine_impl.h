@@ -68,7 +68,7 @@ class FusionEngine::Impl {
                               : SupportCounter::kUnlimited),
         grid_(kFeatureCellM),
         cover_grid_(kCoverCellM),
-        snapper_(params.snap_m, params.corner_mode),
+        snapper_(params.snap_m, params.corner_mode, params.corner_pairing),
         consolidator_(params, support_cap_) {}
 
   Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;

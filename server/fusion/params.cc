@@ -45,6 +45,9 @@ Status FusionParams::Validate() const {
   if (corner_mode != CornerMode::kMidpoint && corner_mode != CornerMode::kIntersection) {
     return Status::InvalidArgument("fusion params: corner_mode is not a known mode");
   }
+  if (corner_pairing != CornerPairing::kMutualNearest && corner_pairing != CornerPairing::kGreedy) {
+    return Status::InvalidArgument("fusion params: corner_pairing is not a known pairing");
+  }
   return Status::Ok();
 }
 
@@ -52,11 +55,13 @@ std::string FusionParamsKey(const FusionParams& p) {
   char text[1024];
   std::snprintf(text, sizeof(text),
                 "mode=%s cover_m=%.17g delta_rad=%.17g gamma=%.17g eta_m=%.17g min_support=%u "
-                "snap_m=%.17g corner_mode=%s max_plane_tilt_rad=%.17g chain_max_rms_m=%.17g "
-                "chain_max_sse_ratio=%.17g consolidate=%d wall_gap_m=%.17g wall_offset_m=%.17g",
+                "snap_m=%.17g corner_mode=%s corner_pairing=%s max_plane_tilt_rad=%.17g "
+                "chain_max_rms_m=%.17g chain_max_sse_ratio=%.17g consolidate=%d wall_gap_m=%.17g "
+                "wall_offset_m=%.17g",
                 FusionModeName(p.mode), p.cover_m, p.delta_rad, p.gamma, p.eta_m, p.min_support,
-                p.snap_m, CornerModeName(p.corner_mode), p.max_plane_tilt_rad, p.chain_max_rms_m,
-                p.chain_max_sse_ratio, p.consolidate ? 1 : 0, p.wall_gap_m, p.wall_offset_m);
+                p.snap_m, CornerModeName(p.corner_mode), CornerPairingName(p.corner_pairing),
+                p.max_plane_tilt_rad, p.chain_max_rms_m, p.chain_max_sse_ratio,
+                p.consolidate ? 1 : 0, p.wall_gap_m, p.wall_offset_m);
   return text;
 }
 
@@ -96,6 +101,26 @@ Status ParseCornerMode(const std::string& name, CornerMode* mode) {
   } else {
     return Status::InvalidArgument("corner_mode \"" + name +
                                    "\" is unknown; expected \"midpoint\" or \"intersection\"");
+  }
+  return Status::Ok();
+}
+
+const char* CornerPairingName(CornerPairing pairing) {
+  switch (pairing) {
+    case CornerPairing::kMutualNearest: return "mutual";
+    case CornerPairing::kGreedy: return "greedy";
+  }
+  return "unknown";
+}
+
+Status ParseCornerPairing(const std::string& name, CornerPairing* pairing) {
+  if (name == "mutual") {
+    *pairing = CornerPairing::kMutualNearest;
+  } else if (name == "greedy") {
+    *pairing = CornerPairing::kGreedy;
+  } else {
+    return Status::InvalidArgument("corner_pairing \"" + name +
+                                   "\" is unknown; expected \"mutual\" or \"greedy\"");
   }
   return Status::Ok();
 }

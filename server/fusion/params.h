@@ -15,6 +15,12 @@ enum class CornerMode {
   kIntersection,  // the intersection of the two fused lines (falls back to midpoint)
 };
 
+// Which endpoints snap together (corner_snap.h; docs/fusion.md, "Corner pairing").
+enum class CornerPairing {
+  kMutualNearest,  // e and e' snap iff each is the other's nearest: local, the default
+  kGreedy,         // walls in id order, each free endpoint takes its nearest free one
+};
+
 // How the engine keeps a cluster's members (engine.h).
 enum class FusionMode {
   // Every raw feature stays a member a new feature is tested against: exactly
@@ -43,6 +49,7 @@ struct FusionParams {
   uint32_t min_support = 3;    // observations a cluster needs to be published
   double snap_m = 0.5;         // corner optimisation: endpoints closer than this meet
   CornerMode corner_mode = CornerMode::kIntersection;
+  CornerPairing corner_pairing = CornerPairing::kMutualNearest;
   double max_plane_tilt_rad = 10.0 * 3.14159265358979323846 / 180.0;  // vertical-plane test
   // Chain guard (chain_guard.h; docs/algorithms.md A.11):
   // a cluster whose member endpoints lie farther than chain_max_rms_m (RMS
@@ -80,6 +87,10 @@ Status ParseFusionMode(const std::string& name, FusionMode* mode);
 // "midpoint" / "intersection".
 const char* CornerModeName(CornerMode mode);
 Status ParseCornerMode(const std::string& name, CornerMode* mode);
+
+// "mutual" / "greedy".
+const char* CornerPairingName(CornerPairing pairing);
+Status ParseCornerPairing(const std::string& name, CornerPairing* pairing);
 
 }  // namespace mapd::fusion
 

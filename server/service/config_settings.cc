@@ -213,6 +213,12 @@ const std::vector<Setting>& Settings() {
        [](const std::string& v, C* c) { return fusion::ParseCornerMode(v, &c->fusion.corner_mode); },
        [](const C&) { return Status::Ok(); },
        [](const C& c) { return std::string(fusion::CornerModeName(c.fusion.corner_mode)); }},
+      {"fusion.corner_pairing", "mutual|greedy",
+       "which endpoints snap: mutual nearest neighbours (local), or greedy in wall id order "
+       "(docs/fusion.md, \"Corner pairing\")",
+       [](const std::string& v, C* c) { return fusion::ParseCornerPairing(v, &c->fusion.corner_pairing); },
+       [](const C&) { return Status::Ok(); },
+       [](const C& c) { return std::string(fusion::CornerPairingName(c.fusion.corner_pairing)); }},
       Real("fusion.max_plane_tilt_deg", "planes tilted less than this from vertical become walls, degrees",
            [](C& c) -> auto& { return c.fusion.max_plane_tilt_rad; }, {0, 90}, kDegToRad),
       Real("fusion.chain_max_rms_m", "chain guard: a cluster whose member endpoints lie farther than this "

@@ -301,39 +301,57 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
     }
   }
 
-  // Corner rule: mutual nearest endpoints of different walls.
+  // Corner rule: mutual nearest endpoints of different walls, or greedy in
+  // (wall id, end) order (fusion/corner_snap.h).
   struct End {
     size_t wall;
     int end;
     Vec2 p;
   };
-  std::vector<End> ends;
-  for (size_t k = 0; k < result.walls.size(); ++k) {
+  std::vector<size_t> wall_order(result.walls.size());
+  for (size_t k = 0; k < wall_order.size(); ++k) wall_order[k] = k;
+  std::sort(wall_order.begin(), wall_order.end(),
+            [&](size_t x, size_t y) { return result.walls[x].id < result.walls[y].id; });
+  std::vector<End> ends;  // in (wall id, end) order
+  for (size_t k : wall_order) {
     ends.push_back({k, 0, result.walls[k].fitted.a});
     ends.push_back({k, 1, result.walls[k].fitted.b});
   }
-  const auto nearest = [&](size_t e) {
+  // The nearest endpoint of another wall closer than snap_m, not excluded;
+  // ties to the first in (id, end) order.
+  const auto nearest = [&](size_t e, const std::vector<bool>& excluded) {
     long best = -1;
     for (size_t o = 0; o < ends.size(); ++o) {
-      if (ends[o].wall == ends[e].wall) continue;
+      if (ends[o].wall == ends[e].wall || excluded[o]) continue;
       const double d = (ends[o].p - ends[e].p).norm();
       if (!(d < params.snap_m)) continue;
       if (best < 0 || d < (ends[best].p - ends[e].p).norm()) best = static_cast<long>(o);
     }
     return best;
   };
-  const auto mutual = [&](size_t e) {
-    const long o = nearest(e);
-    return o >= 0 && nearest(static_cast<size_t>(o)) == static_cast<long>(e) ? o : -1L;
-  };
+  // partner[e]: the endpoint e pairs with, -1 if none.
+  std::vector<long> partner(ends.size(), -1);
+  const std::vector<bool> none(ends.size(), false);
+  std::vector<bool> paired(ends.size(), false);
+  for (size_t e = 0; e < ends.size(); ++e) {
+    if (params.corner_pairing == CornerPairing::kMutualNearest) {
+      const long o = nearest(e, none);
+      if (o >= 0 && nearest(static_cast<size_t>(o), none) == static_cast<long>(e)) partner[e] = o;
+    } else if (!paired[e]) {
+      const long o = nearest(e, paired);
+      if (o < 0) continue;
+      partner[e] = o;
+      partner[static_cast<size_t>(o)] = static_cast<long>(e);
+      paired[e] = paired[static_cast<size_t>(o)] = true;
+    }
+  }
   std::vector<Vec2> moved(ends.size());
   for (size_t e = 0; e < ends.size(); ++e) {
     moved[e] = ends[e].p;
-    const long o = mutual(e);
+    const long o = partner[e];
     if (o < 0) continue;
     // Both ends of this wall paired with ends of the same wall: no corner.
-    const size_t sibling = e ^ 1;  // ends are pushed in pairs: 2k (a), 2k+1 (b)
-    const long so = mutual(sibling);
+    const long so = partner[e ^ 1];  // ends are pushed in pairs: 2k (a), 2k+1 (b)
     if (so >= 0 && ends[static_cast<size_t>(so)].wall == ends[static_cast<size_t>(o)].wall) continue;
     const End& other = ends[static_cast<size_t>(o)];
     moved[e] = Joint(ends[e].p, fits[ends[e].wall], other.p, fits[other.wall], params);

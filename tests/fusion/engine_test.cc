@@ -198,6 +198,50 @@ INSTANTIATE_TEST_SUITE_P(BothModes, CornerTest,
                            return std::string(CornerModeName(param_info.param));
                          });
 
+// Six walls end on the x axis, at A (wall 1) -0.02, B 0.3, C 0.5, D 0.95, E 1.3,
+// F 1.55 (wall 6), each going off in its own direction; snap_m = 0.5. Mutual
+// nearest: B-C and E-F snap (each the other's nearest), A and D stay. Greedy in
+// id order: A-B, C-D, E-F. Wall 1 arrives last: before it, greedy had B-C and
+// D-E, so it re-pairs a chain reaching farther than 2 * snap_m from wall 1.
+TEST(CornerPairingTest, MutualAndGreedyPairDifferently) {
+  const double x[6] = {-0.02, 0.3, 0.5, 0.95, 1.3, 1.55};
+  const double heading_deg[6] = {180, 90, -60, 45, -100, 120};
+  const auto wall = [&](int k) {
+    const double t = heading_deg[k] * 3.14159265358979323846 / 180.0;
+    return Wall(static_cast<FeatureId>(k + 1), {x[k], 0}, Vec2(x[k], 0) + 8.0 * Vec2(std::cos(t), std::sin(t)));
+  };
+  for (CornerPairing pairing : {CornerPairing::kMutualNearest, CornerPairing::kGreedy}) {
+    SCOPED_TRACE(CornerPairingName(pairing));
+    FusionParams params = Support(1);
+    params.corner_mode = CornerMode::kMidpoint;
+    params.corner_pairing = pairing;
+    FusionEngine engine(params);
+    ChangeFeed feed;
+    ASSERT_TRUE(engine.Add(1, 0, {wall(5), wall(4), wall(3), wall(2), wall(1)}).ok());
+    ASSERT_TRUE(engine.Add(2, 0, {wall(0)}, &feed).ok());
+    EXPECT_THAT(feed.added, ElementsAre(1u));
+    const std::vector<FusedFeature> walls = engine.Published();
+    ASSERT_EQ(walls.size(), 6u);
+    // The end of each wall on the x axis (the fit may orient a segment either way).
+    std::vector<double> ends;
+    for (const FusedFeature& f : walls) {
+      const Vec2& e = std::abs(f.segment.a.y()) < std::abs(f.segment.b.y()) ? f.segment.a : f.segment.b;
+      EXPECT_NEAR(e.y(), 0.0, 1e-9);
+      ends.push_back(e.x());
+    }
+    const std::vector<double> expected =
+        pairing == CornerPairing::kMutualNearest
+            ? std::vector<double>{-0.02, 0.4, 0.4, 0.95, 1.425, 1.425}
+            : std::vector<double>{0.14, 0.14, 0.725, 0.725, 1.425, 1.425};
+    for (size_t k = 0; k < 6; ++k) EXPECT_NEAR(ends[k], expected[k], 1e-9) << "wall " << k + 1;
+    if (pairing == CornerPairing::kMutualNearest) {
+      EXPECT_THAT(feed.updated, IsEmpty());  // wall 1 changed no pair
+    } else {
+      EXPECT_THAT(feed.updated, ElementsAre(2u, 3u, 4u, 5u, 6u));  // B-C, D-E broken up
+    }
+  }
+}
+
 TEST(FusionEngineTest, CreateRefusesInvalidParams) {
   FusionParams params;
   params.gamma = 2.0;

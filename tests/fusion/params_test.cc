@@ -73,5 +73,23 @@ TEST(CornerModeTest, NamesRoundTrip) {
   EXPECT_THAT(s.message(), HasSubstr("nearest"));
 }
 
+TEST(CornerPairingTest, NamesRoundTrip) {
+  for (CornerPairing pairing : {CornerPairing::kMutualNearest, CornerPairing::kGreedy}) {
+    CornerPairing parsed = CornerPairing::kGreedy;
+    ASSERT_TRUE(ParseCornerPairing(CornerPairingName(pairing), &parsed).ok());
+    EXPECT_EQ(parsed, pairing);
+  }
+  CornerPairing parsed = CornerPairing::kMutualNearest;
+  const Status s = ParseCornerPairing("optimal", &parsed);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("optimal"));
+  FusionParams p;
+  p.corner_pairing = static_cast<CornerPairing>(7);
+  EXPECT_THAT(p.Validate().message(), HasSubstr("corner_pairing"));
+  FusionParams greedy;
+  greedy.corner_pairing = CornerPairing::kGreedy;
+  EXPECT_NE(FusionParamsKey(greedy), FusionParamsKey(FusionParams()));
+}
+
 }  // namespace
 }  // namespace mapd::fusion
