@@ -209,6 +209,33 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
       if (label.find("greedy pairing") != std::string::npos) by_pairing[1] = &fused;
     }
     if (by_pairing[0] != nullptr && by_pairing[1] != nullptr) {
+      // Vertex error on the corners both pairings meet.
+      const sc::MapMetrics* q[2] = {nullptr, nullptr};
+      for (const auto& [label, m] : results) {
+        if (label.find("mutual nearest pairing") != std::string::npos) q[0] = &m;
+        if (label.find("greedy pairing") != std::string::npos) q[1] = &m;
+      }
+      std::vector<size_t> both;
+      std::set_intersection(q[0]->met_corners.begin(), q[0]->met_corners.end(),
+                            q[1]->met_corners.begin(), q[1]->met_corners.end(),
+                            std::back_inserter(both));
+      std::printf("\nCorner pairing over the %zu corners both pairings meet (vertex error, cm):\n\n"
+                  "| pairing | mean | median | max | corners met | lateral RMS (cm) |\n"
+                  "|---|---|---|---|---|---|\n", both.size());
+      for (int k = 0; k < 2; ++k) {
+        std::vector<double> e;
+        for (size_t i = 0; i < q[k]->met_corners.size(); ++i) {
+          if (std::binary_search(both.begin(), both.end(), q[k]->met_corners[i])) {
+            e.push_back(q[k]->vertex_errors_m[i]);
+          }
+        }
+        double sum = 0.0;
+        for (double x : e) sum += x;
+        std::printf("| %s | %.3f | %.3f | %.3f | %zu | %.3f |\n", k == 0 ? "mutual nearest" : "greedy",
+                    e.empty() ? 0.0 : 100.0 * sum / e.size(), e.empty() ? 0.0 : 100.0 * Median(e),
+                    e.empty() ? 0.0 : 100.0 * *std::max_element(e.begin(), e.end()),
+                    q[k]->met_corners.size(), 100.0 * q[k]->lateral_rms_m);
+      }
       size_t ends = 0, differ = 0;
       double max_m = 0.0;
       for (const FusedFeature& f : *by_pairing[0]) {
