@@ -36,10 +36,6 @@ int CheckRenderOutput(const std::string& command, const std::string& path, Image
   if (!ImageFormatFromPath(path, format)) {
     return UsageError(command, "cannot tell the image format of '" + path + "': use a .png or .svg name");
   }
-  if (!VoxelSupportBuilt()) {
-    PrintError(command + ": " + kNoVoxelSupport);
-    return kExitFailed;
-  }
   return kContinue;
 }
 

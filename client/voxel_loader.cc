@@ -1,4 +1,3 @@
-// LoadOccupiedVoxels on the voxel library (MAPD_WITH_VOXEL=ON).
 #include "client/voxel_loader.h"
 
 #include <iostream>
@@ -30,8 +29,6 @@ class SilenceCerr {
 };
 
 }  // namespace
-
-bool VoxelSupportBuilt() { return true; }
 
 StatusOr<LoadedVoxels> LoadOccupiedVoxels(std::string_view bytes) {
   StatusOr<voxel::OcTreePtr> tree = [&] {

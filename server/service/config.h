@@ -13,35 +13,10 @@
 #include "common/status.h"
 #include "fusion/params.h"
 #include "fusion/plane_engine.h"
-#include "service/ingest_reactor.h"
-#include "service/stream_limiter.h"
+#include "service/options.h"
 
 namespace mapd::service {
 
-// Voxel submaps and merges. The merge thresholds are voxel::MergeParams's
-// (server/voxel/merge.h); they live here as plain values so that the config
-// builds without the voxel library (MAPD_WITH_VOXEL=OFF).
-struct SubmapOptions {
-  size_t max_submap_bytes = size_t{64} << 20;  // one uploaded file at most, bytes
-  size_t max_concurrent_merges = 1;            // merges computed at once
-  // Merges waiting for a slot at most; one more is refused with
-  // RESOURCE_EXHAUSTED (the caller retries later) rather than queued unbounded.
-  size_t max_queued_merges = 4;
-  int min_matched_corners = 4;          // evidence to accept a pairwise merge
-  double max_residual_voxels = 0.75;    // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
-  double min_overlap_score = 0.9;       // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
-  double max_merge_seconds = 60.0;      // budget of one merge, seconds
-  bool resample_resolutions = false;    // false: different resolutions are refused
-  bool log_odds_fusion = false;         // false: the paper's overlap rule
-  // Occupied voxels one uploaded submap may expand to at the finest
-  // resolution (counted from the tree structure before anything is built).
-  uint64_t max_submap_voxels = 8'000'000;
-  // Uploads being received or stored at once; one more is refused with
-  // RESOURCE_EXHAUSTED at once. Upload memory <= about 2 x this x
-  // max_submap_bytes.
-  size_t max_concurrent_uploads = 2;
-  double upload_idle_timeout_s = 30.0;  // an upload that sends nothing this long is ended
-};
 
 
 struct ServerConfig {

@@ -8,16 +8,6 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-bool ValidId(const std::string& id, uint32_t max_len) {
-  if (id.empty() || id.size() > max_len) return false;
-  for (char c : id) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '-' || c == '.';
-    if (!ok) return false;
-  }
-  return true;
-}
-
 Status CheckScalar(double v, const std::string& field, double max_abs) {
   if (std::isnan(v)) return Status::InvalidArgument(field + " is NaN");
   if (std::isinf(v)) return Status::InvalidArgument(field + " is infinite");
@@ -51,18 +41,16 @@ Status CheckUnitNorm(double norm, const std::string& field, double tol) {
 
 }  // namespace
 
-Status IngestLimits::Validate() const {
-  if (max_features_per_batch == 0 || max_features_per_batch > kMaxFeaturesPerBatchHard) {
-    return Status::InvalidArgument("max_features_per_batch must be in [1, " +
-                                   std::to_string(kMaxFeaturesPerBatchHard) + "]");
+bool ValidId(const std::string& id, uint32_t max_length) {
+  if (id.empty() || id.size() > max_length) return false;
+  for (char c : id) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '-' || c == '.';
+    if (!ok) return false;
   }
-  if (max_boundary_points < 3) return Status::InvalidArgument("max_boundary_points must be >= 3");
-  if (!(max_abs_coordinate_m > 0)) return Status::InvalidArgument("max_abs_coordinate_m must be > 0");
-  if (!(quaternion_tolerance > 0 && quaternion_tolerance < 0.5)) {
-    return Status::InvalidArgument("quaternion_tolerance must be in (0, 0.5)");
-  }
-  return Status::Ok();
+  return true;
 }
+
 
 StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const IngestLimits& limits) {
   IngestBatch out;

@@ -9,24 +9,15 @@
 #include "common/status.h"
 #include "geometry/observation.h"
 #include "mapserver/v1/map_service.pb.h"
+#include "service/options.h"
 #include "storage/store.h"
 
 namespace mapd::service {
 
-// Limits on one batch. Over-limit batches are refused with RESOURCE_EXHAUSTED.
-struct IngestLimits {
-  uint32_t max_features_per_batch = 1024;  // lines + planes; at most kFeatureIdBits allow
-  uint32_t max_boundary_points = 1024;     // per plane
-  double max_abs_coordinate_m = 1e6;       // anything farther is a unit or frame error
-  double quaternion_tolerance = 1e-3;      // accepted | |q| - 1 |
-  uint32_t max_id_length = 128;            // robot_id, session_id
+// A robot or session id of the API: 1 to max_length characters of
+// [A-Za-z0-9_.-] (ingest, submap uploads, tokens' robot scope).
+bool ValidId(const std::string& id, uint32_t max_length = IngestLimits{}.max_id_length);
 
-  Status Validate() const;
-};
-
-// Raw feature ids are (observation id << kFeatureIdBits) | index in the batch.
-constexpr int kFeatureIdBits = 12;
-constexpr uint32_t kMaxFeaturesPerBatchHard = 1u << kFeatureIdBits;
 
 // A validated batch in library types.
 struct IngestBatch {

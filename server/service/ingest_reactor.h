@@ -28,15 +28,12 @@
 #include "mapserver/v1/map_service.pb.h"
 #include "service/access_control.h"
 #include "service/ingest_batch.h"
+#include "service/options.h"
 #include "service/map_core.h"
 #include "service/stream_limiter.h"
 
 namespace mapd::service {
 
-struct IngestOptions {
-  IngestLimits limits;
-  uint32_t max_in_flight = 1024;  // per stream
-};
 
 // Owned by gRPC; deletes itself in OnDone().
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {

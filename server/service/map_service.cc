@@ -5,11 +5,14 @@
 #include <cmath>
 
 #include "service/log.h"
+#include "service/proto_convert.h"
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
 
 namespace mapd::service {
 namespace {
+
+using service::ToProto;  // proto_convert.h, beside the overloads below
 
 // An Ingest stream refused at once (the map is still being recovered, or a
 // stream limit): the robot reconnects and resends, as after any UNAVAILABLE.
@@ -38,15 +41,10 @@ void ToProto(const FusedView& v, pb::FusedFeature* out) {
 
 void ToProto(const PlaneView& v, pb::FusedPlane* out) {
   const fusion::FusedPlane& p = v.plane;
-  const auto vec3 = [](const Eigen::Vector3d& x, pb::Vec3* o) {
-    o->set_x(x.x());
-    o->set_y(x.y());
-    o->set_z(x.z());
-  };
   out->set_id(p.id);
-  vec3(p.normal, out->mutable_normal());
+  ToProto(p.normal, out->mutable_normal());
   out->set_offset(p.offset_m);
-  for (const Eigen::Vector3d& x : p.boundary) vec3(x, out->add_boundary());
+  for (const Eigen::Vector3d& x : p.boundary) ToProto(x, out->add_boundary());
   out->set_area(p.area_m2);
   out->set_z_min(p.z_min_m);
   out->set_z_max(p.z_max_m);

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "service/log.h"
+#include "service/voxel_merge.h"
 
 namespace mapd::service {
 
@@ -63,6 +64,7 @@ MergeRunner::~MergeRunner() { Shutdown(); }
 StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(std::vector<uint64_t> ids,
                                                         std::vector<std::string> bytes,
                                                         const voxel::MergeParams& params) {
+  if (!VoxelMergeBuilt()) return MergeVoxelSubmaps({}, params, {}).status();  // Unimplemented
   auto job = std::make_shared<MergeJob>();
   job->ids_ = std::move(ids);
   job->bytes_ = std::move(bytes);
@@ -92,7 +94,7 @@ void MergeRunner::Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> j
       for (size_t i = 0; i < inputs.size(); ++i) inputs[i] = {job->ids_[i], job->bytes_[i]};
       MergeJob* j = job.get();
       StatusOr<voxel::MergeOutcome> result =
-          voxel::MergeSubmaps(inputs, job->params_, [j](const std::string& stage, double fraction) {
+          MergeVoxelSubmaps(inputs, job->params_, [j](const std::string& stage, double fraction) {
             j->Publish({stage, fraction});
           });
       job->Finish(std::move(result));

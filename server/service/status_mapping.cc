@@ -1,5 +1,7 @@
 #include "service/status_mapping.h"
 
+#include <utility>
+
 namespace mapd::service {
 
 grpc::StatusCode ToGrpcCode(StatusCode code) {
@@ -22,6 +24,14 @@ grpc::StatusCode ToGrpcCode(StatusCode code) {
 grpc::Status ToGrpcStatus(const Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(ToGrpcCode(status.code()), status.message());
+}
+
+grpc::Status InvalidArgument(std::string message) {
+  return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, std::move(message));
+}
+
+grpc::Status ShuttingDown() {
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down; retry after it restarts");
 }
 
 }  // namespace mapd::service

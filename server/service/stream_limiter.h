@@ -16,31 +16,10 @@
 #include <unordered_map>
 
 #include "common/status.h"
+#include "service/options.h"
 
 namespace mapd::service {
 
-// Limits on connections and streams (floods, slow or idle clients).
-struct StreamLimits {
-  // Long-lived streams (Ingest, UploadSubmap) open at once, server-wide;
-  // beyond it a new one is answered RESOURCE_EXHAUSTED at once.
-  size_t max_streams = 2000;
-  uint32_t max_streams_per_connection = 100;  // HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS
-  // Token bucket per client address (host, port ignored): stream opens per
-  // second, and the burst allowed above that rate.
-  double stream_opens_per_s = 200.0;
-  double stream_open_burst = 400.0;
-  double keepalive_time_s = 60.0;       // ping an idle connection this often
-  double keepalive_timeout_s = 20.0;    // ... and drop it when the ping is not answered within this
-  double min_client_ping_interval_s = 10.0;  // clients pinging more often are dropped (ping flood)
-  double max_connection_idle_s = 600.0; // close connections without streams after this; 0 = never
-  double max_connection_age_s = 0.0;    // close any connection after this (gracefully); 0 = never
-  // A read (GetFeatureMap) waits at most this long for the fuser to reflect
-  // every acknowledged batch, unless the request asks for longer; then it
-  // answers with the map as it is (map_version and fusion_pending say how old).
-  double read_wait_s = 0.2;
-  double max_read_wait_s = 30.0;        // the longest wait a request may ask for
-  uint32_t log_lines_per_s = 20;        // per event; the rest is counted in one `log_suppressed` line
-};
 
 class StreamLimiter;
 

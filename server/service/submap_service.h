@@ -36,9 +36,9 @@
 //   frames, so the robots' walls fuse into one feature map.
 // - GetGlobalMap: the merged map of the latest accepted merge (NOT_FOUND
 //   before the first).
-// Built with MAPD_WITH_VOXEL=OFF, UploadSubmap and MergeSubmaps answer
-// UNIMPLEMENTED ("built without voxel support"); listing, fetching and
-// deleting stored submaps still work.
+// Built with MAPD_WITH_VOXEL=OFF (no PCL), MergeSubmaps answers
+// UNIMPLEMENTED (service/voxel_merge.h); uploads, listing, fetching and
+// deleting work in every build (they need only voxel_io).
 //
 // - Who (access_control.h): an upload's header robot id and a deleted
 //   submap's robot are checked against the caller (a robot token touches
@@ -56,6 +56,7 @@
 #include <mutex>
 #include <string>
 #include <unordered_set>
+#include <vector>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/access_control.h"
@@ -65,6 +66,7 @@
 
 namespace mapd::service {
 
+class MergeJob;
 class MergeRunner;
 class UploadReactor;
 
@@ -114,6 +116,25 @@ class SubmapService {
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
  private:
+  // Merge's steps (submap_merge.cc).
+  struct MergeInputs {
+    std::vector<storage::SubmapMeta> metas;
+    std::vector<uint64_t> ids;
+    std::vector<std::string> bytes;  // moved into the job
+  };
+  grpc::Status LoadMergeInputs(const mapserver::v1::MergeSubmapsRequest& request, MergeInputs* inputs);
+  // Streams the job's progress until its result is there; abandons it when the
+  // client goes away or mapd drains (CANCELLED / UNAVAILABLE, nothing stored).
+  grpc::Status AwaitMerge(grpc::ServerContext* context, MergeJob* job, size_t inputs,
+                          grpc::ServerWriter<mapserver::v1::MergeProgress>* writer);
+  // Records the refusal and its reason, audited; returns the library's code.
+  grpc::Status RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why, double seconds,
+                                  const Principal& caller);
+  // The merge, its audit row and the session ties, in one transaction.
+  Status StoreAcceptedMerge(const storage::NewMerge& merge, const MergeInputs& inputs,
+                            const std::vector<geometry::Rigid3>& T_ref_input, const Principal& caller,
+                            storage::MergeIds* stored, size_t* tied);
+
   // Streams a stored submap: info on the first chunk, then 1 MiB chunks.
   grpc::Status StreamSubmap(grpc::ServerContext* context, int64_t id,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
@@ -122,7 +143,7 @@ class SubmapService {
   const SubmapOptions options_;
   AccessControl* const access_;
   std::atomic<bool> draining_{false};
-  std::unique_ptr<MergeRunner> merges_;  // null without voxel support
+  std::unique_ptr<MergeRunner> merges_;
 
   std::mutex uploads_mu_;
   std::condition_variable uploads_cv_;

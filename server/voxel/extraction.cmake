@@ -1,8 +1,6 @@
-# Part 1 of the voxel library: safe octree parsing, the voxel grid view and
-# corner extraction (docs/algorithms.md B.1-B.3). Included by CMakeLists.txt.
+# Part 1 of the voxel library: corner extraction (docs/algorithms.md B.1-B.3).
+# Included by CMakeLists.txt.
 list(APPEND VOXEL_SOURCES
-  ${CMAKE_CURRENT_LIST_DIR}/octree_reader.cc
-  ${CMAKE_CURRENT_LIST_DIR}/voxel_grid.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_window.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_voxel_index.cc
   ${CMAKE_CURRENT_LIST_DIR}/normals_grid.cc

@@ -187,19 +187,6 @@ using ProgressCallback = std::function<void(const std::string& stage, double fra
 StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, const MergeParams& params,
                                     const ProgressCallback& progress = {});
 
-// What the service stores about an uploaded submap (after validation).
-struct SubmapSummary {
-  double resolution = 0.0;  // metres
-  uint64_t occupied_voxels = 0;
-  uint64_t free_voxels = 0;
-  Eigen::Vector3d bounds_min = Eigen::Vector3d::Zero();  // of the occupied voxels, metres
-  Eigen::Vector3d bounds_max = Eigen::Vector3d::Zero();
-};
-// Validates the bytes (ValidateOctree: no tree is built, memory does not grow
-// with the voxels) and summarises them; InvalidArgument names the problem,
-// ResourceExhausted a file beyond `limits` (its expanded occupied voxels too).
-StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes, const OctreeReadLimits& limits = {});
-
 }  // namespace mapd::voxel
 
 #endif  // MAPD_VOXEL_MERGE_H_

@@ -7,6 +7,5 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_pair.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_params.cc
-  ${CMAKE_CURRENT_LIST_DIR}/merge_inspect.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge.cc
 )

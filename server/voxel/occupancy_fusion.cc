@@ -270,12 +270,6 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
   return Status::Ok();
 }
 
-StatusOr<std::string> WriteBinaryOctree(const octomap::OcTree& tree) {
-  std::stringstream out;
-  if (!tree.writeBinaryConst(out)) return Status::Internal("OctoMap could not write the merged tree");
-  return out.str();
-}
-
 std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree) {
   std::uint64_t count = 0;
   const int depth = static_cast<int>(tree.getTreeDepth());

@@ -82,9 +82,6 @@ StatusOr<OcTreePtr> StartMergedMap(const octomap::OcTree& reference, double reso
 Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged_submap,
                 const FusionParams& params, octomap::OcTree* merged, FusionStats* stats = nullptr);
 
-// The tree as a .bt file (OctoMap writeBinaryConst: max-likelihood, pruned).
-StatusOr<std::string> WriteBinaryOctree(const octomap::OcTree& tree);
-
 // Occupied voxels of the tree at its finest resolution.
 std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree);
 

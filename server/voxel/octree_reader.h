@@ -17,6 +17,8 @@
 #include <string>
 #include <string_view>
 
+#include <Eigen/Core>
+
 #include "common/status.h"
 
 namespace octomap {
@@ -92,6 +94,22 @@ StatusOr<OcTreePtr> ReadOctree(std::string_view bytes, const OctreeReadLimits& l
 // Reads the file (refusing one larger than limits.max_bytes before reading it)
 // and calls ReadOctree. NotFound when the file cannot be opened.
 StatusOr<OcTreePtr> ReadOctreeFile(const std::string& path, const OctreeReadLimits& limits = {});
+
+// The tree as a .bt file (OctoMap writeBinaryConst: max-likelihood, pruned).
+StatusOr<std::string> WriteBinaryOctree(const octomap::OcTree& tree);
+
+// What the service stores about an uploaded submap (after validation).
+struct SubmapSummary {
+  double resolution = 0.0;  // metres
+  uint64_t occupied_voxels = 0;
+  uint64_t free_voxels = 0;
+  Eigen::Vector3d bounds_min = Eigen::Vector3d::Zero();  // of the occupied voxels, metres
+  Eigen::Vector3d bounds_max = Eigen::Vector3d::Zero();
+};
+// Validates the bytes (ValidateOctree: no tree is built, memory does not grow
+// with the voxels) and summarises them; InvalidArgument names the problem,
+// ResourceExhausted a file beyond `limits` (its expanded occupied voxels too).
+StatusOr<SubmapSummary> InspectSubmap(std::string_view bytes, const OctreeReadLimits& limits = {});
 
 }  // namespace mapd::voxel
 

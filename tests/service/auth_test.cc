@@ -123,11 +123,7 @@ TEST_F(AuthTest, EachRoleGetsExactlyItsPermissions) {
   EXPECT_THAT(reader_merge.error_message(), HasSubstr("role reader"));
   EXPECT_THAT(reader_merge.error_message(), HasSubstr("merge"));
   EXPECT_EQ(merge(robot_).error_code(), grpc::StatusCode::PERMISSION_DENIED);
-#if MAPD_TEST_WITH_VOXEL
   EXPECT_EQ(merge(operator_).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-#else
-  EXPECT_EQ(merge(operator_).error_code(), grpc::StatusCode::UNIMPLEMENTED);  // past the door, no voxel library
-#endif
 
   // A reader never writes.
   grpc::Status s;
@@ -211,7 +207,6 @@ TEST_F(AuthTest, UploadForAnotherRobotIsDeniedBeforeAnyByteIsStored) {
   writer->Write(chunk);
   writer->WritesDone();
   const grpc::Status s = writer->Finish();
-#if MAPD_TEST_WITH_VOXEL
   EXPECT_EQ(s.error_code(), grpc::StatusCode::PERMISSION_DENIED) << s.error_message();
   EXPECT_THAT(s.error_message(), HasSubstr("robot 'r2'"));
   bool audited = false;
@@ -219,9 +214,6 @@ TEST_F(AuthTest, UploadForAnotherRobotIsDeniedBeforeAnyByteIsStored) {
     audited = audited || (e.action() == "UploadSubmap" && e.result().rfind("denied", 0) == 0);
   }
   EXPECT_TRUE(audited);
-#else
-  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED) << s.error_message();
-#endif
   auto list_ctx = As(admin_);
   pb::ListSubmapsResponse submaps;
   ASSERT_TRUE(stub_->ListSubmaps(list_ctx.get(), {}, &submaps).ok());

@@ -171,12 +171,8 @@ TEST_F(LimitsTest, IdleUploadIsEnded) {
   upload->Write(header);
   // ... and nothing more: ended after limits.upload_idle_timeout_s.
   const grpc::Status s = upload->Finish();
-#if MAPD_TEST_WITH_VOXEL
   EXPECT_EQ(s.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << s.error_message();
   EXPECT_THAT(s.error_message(), HasSubstr("limits.upload_idle_timeout_s"));
-#else
-  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED);
-#endif
 }
 
 TEST_F(LimitsTest, MalformedIngestMessageEndsTheStreamWithInvalidArgument) {

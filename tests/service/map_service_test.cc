@@ -2,13 +2,18 @@
 // restart. (The SIGKILL crash test with the real binary is crash_restart_test.cc.)
 #include <sqlite3.h>
 
+#include <chrono>
 #include <cmath>
+#include <memory>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "common/health.h"
 #include "server_fixture.h"
+#include "service/merge_runner.h"
+#include "service/voxel_merge.h"
 
 namespace mapd::testing {
 namespace {
@@ -231,9 +236,9 @@ TEST_F(ServerFixture, ALockedDatabaseRefusesBatchesRetryablyAndLosesNothing) {
   EXPECT_EQ(Features().size(), before.size());
 }
 
-// Listing works in every build; uploads and merges need the voxel library
-// (tests/service/submap_service_test.cc covers them when it is built).
-TEST_F(ServerFixture, SubmapRpcsAnswerOrSayTheyAreNotBuilt) {
+// Submap RPCs answer in every build (merges of stored submaps are covered by
+// tests/service/submap_service_test.cc where the voxel library is built).
+TEST_F(ServerFixture, SubmapRpcsAnswerInEveryBuild) {
   grpc::ClientContext ctx;
   pb::ListSubmapsResponse resp;
   ASSERT_TRUE(stub_->ListSubmaps(&ctx, {}, &resp).ok());
@@ -247,12 +252,25 @@ TEST_F(ServerFixture, SubmapRpcsAnswerOrSayTheyAreNotBuilt) {
   while (reader->Read(&progress)) {
   }
   const grpc::Status s = reader->Finish();
-#if MAPD_TEST_WITH_VOXEL
   EXPECT_EQ(s.error_code(), grpc::StatusCode::NOT_FOUND) << s.error_message();
-#else
-  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED);
-  EXPECT_THAT(s.error_message(), HasSubstr("built without voxel support"));
-#endif
+}
+
+// The one switch (service/voxel_merge.h): without the voxel library a merge is
+// refused before anything runs, with a message naming the build option.
+TEST(VoxelMergeSwitchTest, TheRunnerRefusesMergesOnlyWhenMergingIsNotBuilt) {
+  EXPECT_EQ(service::VoxelMergeBuilt(), MAPD_TEST_WITH_VOXEL == 1);
+  service::MergeRunner runner(1, 1);
+  StatusOr<std::shared_ptr<service::MergeJob>> job = runner.Submit({1, 2}, {"", ""}, {});
+  if (service::VoxelMergeBuilt()) {
+    ASSERT_TRUE(job.ok()) << job.status().ToString();
+    std::vector<service::MergeProgressEvent> events;
+    while (!(*job)->Wait(std::chrono::milliseconds(50), &events)) {
+    }
+    EXPECT_EQ((*job)->TakeResult().status().code(), StatusCode::kInvalidArgument);  // empty files
+  } else {
+    EXPECT_EQ(job.status().code(), StatusCode::kUnimplemented);
+    EXPECT_THAT(job.status().message(), HasSubstr("MAPD_WITH_VOXEL=OFF"));
+  }
 }
 
 TEST_F(ServerFixture, HealthServiceReportsServing) {

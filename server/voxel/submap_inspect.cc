@@ -1,4 +1,4 @@
-#include "voxel/merge.h"
+#include "voxel/octree_reader.h"
 
 namespace mapd::voxel {
 

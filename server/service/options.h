@@ -1,0 +1,86 @@
+// The plain option structs of mapd's parts (ingest, streams, submaps), kept
+// apart from the code that uses them so that the configuration (config.h)
+// is a leaf: it depends on these and on the algorithm parameters, nothing else.
+// Defaults are the member initialisers here; ranges are checked by the
+// settings table (config_settings.cc) and the Validate() methods.
+#ifndef MAPD_SERVICE_OPTIONS_H_
+#define MAPD_SERVICE_OPTIONS_H_
+
+#include <cstddef>
+#include <cstdint>
+
+#include "common/status.h"
+
+namespace mapd::service {
+
+// Limits on one batch. Over-limit batches are refused with RESOURCE_EXHAUSTED.
+struct IngestLimits {
+  uint32_t max_features_per_batch = 1024;  // lines + planes; at most kFeatureIdBits allow
+  uint32_t max_boundary_points = 1024;     // per plane
+  double max_abs_coordinate_m = 1e6;       // anything farther is a unit or frame error
+  double quaternion_tolerance = 1e-3;      // accepted | |q| - 1 |
+  uint32_t max_id_length = 128;            // robot_id, session_id
+
+  Status Validate() const;
+};
+
+// Raw feature ids are (observation id << kFeatureIdBits) | index in the batch.
+constexpr int kFeatureIdBits = 12;
+constexpr uint32_t kMaxFeaturesPerBatchHard = 1u << kFeatureIdBits;
+
+struct IngestOptions {
+  IngestLimits limits;
+  uint32_t max_in_flight = 1024;  // per stream
+};
+
+// Limits on connections and streams (floods, slow or idle clients).
+struct StreamLimits {
+  // Long-lived streams (Ingest, UploadSubmap) open at once, server-wide;
+  // beyond it a new one is answered RESOURCE_EXHAUSTED at once.
+  size_t max_streams = 2000;
+  uint32_t max_streams_per_connection = 100;  // HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS
+  // Token bucket per client address (host, port ignored): stream opens per
+  // second, and the burst allowed above that rate.
+  double stream_opens_per_s = 200.0;
+  double stream_open_burst = 400.0;
+  double keepalive_time_s = 60.0;       // ping an idle connection this often
+  double keepalive_timeout_s = 20.0;    // ... and drop it when the ping is not answered within this
+  double min_client_ping_interval_s = 10.0;  // clients pinging more often are dropped (ping flood)
+  double max_connection_idle_s = 600.0; // close connections without streams after this; 0 = never
+  double max_connection_age_s = 0.0;    // close any connection after this (gracefully); 0 = never
+  // A read (GetFeatureMap) waits at most this long for the fuser to reflect
+  // every acknowledged batch, unless the request asks for longer; then it
+  // answers with the map as it is (map_version and fusion_pending say how old).
+  double read_wait_s = 0.2;
+  double max_read_wait_s = 30.0;        // the longest wait a request may ask for
+  uint32_t log_lines_per_s = 20;        // per event; the rest is counted in one `log_suppressed` line
+};
+
+// Voxel submaps and merges. The merge thresholds are voxel::MergeParams's
+// (server/voxel/merge.h); they live here as plain values so that the config
+// builds without the voxel library (MAPD_WITH_VOXEL=OFF).
+struct SubmapOptions {
+  size_t max_submap_bytes = size_t{64} << 20;  // one uploaded file at most, bytes
+  size_t max_concurrent_merges = 1;            // merges computed at once
+  // Merges waiting for a slot at most; one more is refused with
+  // RESOURCE_EXHAUSTED (the caller retries later) rather than queued unbounded.
+  size_t max_queued_merges = 4;
+  int min_matched_corners = 4;          // evidence to accept a pairwise merge
+  double max_residual_voxels = 0.75;    // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
+  double min_overlap_score = 0.9;       // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
+  double max_merge_seconds = 60.0;      // budget of one merge, seconds
+  bool resample_resolutions = false;    // false: different resolutions are refused
+  bool log_odds_fusion = false;         // false: the paper's overlap rule
+  // Occupied voxels one uploaded submap may expand to at the finest
+  // resolution (counted from the tree structure before anything is built).
+  uint64_t max_submap_voxels = 8'000'000;
+  // Uploads being received or stored at once; one more is refused with
+  // RESOURCE_EXHAUSTED at once. Upload memory <= about 2 x this x
+  // max_submap_bytes.
+  size_t max_concurrent_uploads = 2;
+  double upload_idle_timeout_s = 30.0;  // an upload that sends nothing this long is ended
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_OPTIONS_H_

@@ -1,0 +1,21 @@
+// Conversions from the libraries' types to the API's messages that more than
+// one handler needs. (Requests are checked and converted where they arrive:
+// ingest_batch.h, map_service.cc.)
+#ifndef MAPD_SERVICE_PROTO_CONVERT_H_
+#define MAPD_SERVICE_PROTO_CONVERT_H_
+
+#include <Eigen/Core>
+
+#include "geometry/rigid3.h"
+#include "mapserver/v1/map_service.pb.h"
+#include "storage/store.h"
+
+namespace mapd::service {
+
+void ToProto(const Eigen::Vector3d& v, mapserver::v1::Vec3* out);
+void ToProto(const geometry::Rigid3& T, mapserver::v1::Rigid3* out);
+void ToProto(const storage::SubmapMeta& m, mapserver::v1::SubmapInfo* out);
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_PROTO_CONVERT_H_

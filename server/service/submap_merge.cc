@@ -1,0 +1,325 @@
+// SubmapService::Merge (MergeSubmaps), in named steps; the rules are in
+// submap_service.h.
+#include <algorithm>
+#include <chrono>
+#include <optional>
+#include <string>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "common/clock.h"
+#include "service/log.h"
+#include "service/merge_runner.h"
+#include "service/proto_convert.h"
+#include "service/status_mapping.h"
+#include "service/submap_service.h"
+#include "voxel/merge.h"
+
+namespace mapd::service {
+namespace {
+
+namespace pb = mapserver::v1;
+
+voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
+  voxel::MergeParams p;
+  p.min_matched_corners = o.min_matched_corners;
+  p.max_residual_voxels = o.max_residual_voxels;
+  p.min_overlap_score = o.min_overlap_score;
+  p.max_seconds = o.max_merge_seconds;
+  p.resolution_policy = o.resample_resolutions ? voxel::ResolutionPolicy::kResampleToFinest
+                                               : voxel::ResolutionPolicy::kRefuse;
+  p.fusion_rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;
+  return p;
+}
+
+std::string MergeTarget(int64_t merge_id, const std::vector<uint64_t>& ids) {
+  std::string s = "merge " + std::to_string(merge_id) + " of submaps";
+  for (uint64_t id : ids) s += " " + std::to_string(id);
+  return s;
+}
+
+geometry::Rigid3 ToRigid(const Eigen::Isometry3d& iso) {
+  geometry::Rigid3 T;
+  T.rotation = Eigen::Quaterniond(iso.rotation()).normalized();
+  T.translation = iso.translation();
+  return T;
+}
+
+// The library checks its thresholds; this second look keeps a bug there from
+// writing a weak merge as a success.
+Status CheckEvidence(const voxel::MergeOutcome& outcome,
+                     const std::vector<storage::SubmapMeta>& inputs, const SubmapOptions& o) {
+  if (outcome.alignments.size() != inputs.size()) {
+    return Status::Internal("the merge returned " + std::to_string(outcome.alignments.size()) +
+                            " alignments for " + std::to_string(inputs.size()) + " inputs");
+  }
+  double finest = inputs[0].resolution_m;
+  for (const auto& m : inputs) finest = std::min(finest, m.resolution_m);
+  for (size_t i = 1; i < outcome.alignments.size(); ++i) {
+    const voxel::Alignment& a = outcome.alignments[i];
+    const std::string which = "submap " + std::to_string(a.id);
+    if (a.matched_corners < o.min_matched_corners) {
+      return Status::FailedPrecondition(which + ": " + std::to_string(a.matched_corners) +
+                                        " matched corners, merge.min_matched_corners is " +
+                                        std::to_string(o.min_matched_corners));
+    }
+    if (!(a.overlap_score >= o.min_overlap_score)) {
+      return Status::FailedPrecondition(
+          which + ": overlap score " + std::to_string(a.overlap_score) +
+          " below merge.min_overlap_score " + std::to_string(o.min_overlap_score));
+    }
+    if (!(a.residual_m <= o.max_residual_voxels * finest * (1 + 1e-9))) {
+      return Status::FailedPrecondition(which + ": residual " + std::to_string(a.residual_m) +
+                                        " m above merge.max_residual_voxels " +
+                                        std::to_string(o.max_residual_voxels) + " voxels");
+    }
+  }
+  if (outcome.merged_bt.empty()) return Status::Internal("the merge returned no merged map");
+  return Status::Ok();
+}
+
+// The session ties an accepted merge implies (see the header comment).
+// T_ref_input[i] maps input i into the reference's frame.
+StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
+    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
+    const std::vector<geometry::Rigid3>& T_ref_input) {
+  std::vector<std::optional<storage::SessionFrame>> frames(inputs.size());
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    if (inputs[i].session_id == 0) continue;
+    StatusOr<storage::SessionFrame> f = store.GetSession(inputs[i].session_id);
+    if (!f.ok()) return f.status();
+    frames[i] = *f;
+  }
+  geometry::Rigid3 T_map_ref = geometry::Rigid3::Identity();
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    if (frames[k] && frames[k]->tied) {
+      T_map_ref = frames[k]->T_map_frame * T_ref_input[k].inverse();
+      break;
+    }
+  }
+  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;
+  std::unordered_set<int64_t> seen;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    if (!frames[i] || frames[i]->tied || !seen.insert(frames[i]->session_id).second) continue;
+    ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
+  }
+  return ties;
+}
+
+
+grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
+  if (request.submap_ids_size() < 2) return InvalidArgument("submap_ids: give two or more submap ids");
+  std::unordered_set<uint64_t> distinct;
+  for (uint64_t id : request.submap_ids()) {
+    if (id == 0) return InvalidArgument("submap_ids: 0 is not a submap id");
+    if (!distinct.insert(id).second)
+      return InvalidArgument("submap_ids: " + std::to_string(id) + " is given twice");
+  }
+  return grpc::Status::OK;
+}
+
+// The merge record of an accepted outcome (alignments in input order) and the
+// pose of every input in the reference frame.
+StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
+                                          const std::vector<uint64_t>& ids,
+                                          std::vector<geometry::Rigid3>* T_ref_input) {
+  storage::NewMerge merge;
+  merge.record.created_ns = UnixNowNs();
+  merge.record.accepted = true;
+  T_ref_input->assign(ids.size(), geometry::Rigid3::Identity());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    const auto it = std::find_if(outcome.alignments.begin(), outcome.alignments.end(),
+                                 [&](const voxel::Alignment& a) { return a.id == ids[i]; });
+    if (it == outcome.alignments.end()) {
+      return Status::Internal("the merge returned no alignment for submap " + std::to_string(ids[i]) +
+                              "; nothing was stored");
+    }
+    (*T_ref_input)[i] = ToRigid(it->T_reference_submap);
+    storage::MergeInputRecord in;
+    in.submap_id = static_cast<int64_t>(ids[i]);
+    in.aligned = true;
+    in.T_reference_submap = (*T_ref_input)[i];
+    in.matched_corners = it->matched_corners;
+    in.residual_m = it->residual_m;
+    in.overlap_score = it->overlap_score;
+    merge.record.inputs.push_back(in);
+  }
+  StatusOr<voxel::SubmapSummary> merged = voxel::InspectSubmap(outcome.merged_bt);
+  if (!merged.ok()) {
+    return Status::Internal("the merged map does not validate (" + merged.status().ToString() +
+                            "); nothing was stored");
+  }
+  storage::SubmapMeta& m = merge.merged.meta;
+  m.format = storage::SubmapFormat::kOctomapBt;
+  m.resolution_m = merged->resolution;
+  m.occupied_voxels = merged->occupied_voxels;
+  m.free_voxels = merged->free_voxels;
+  m.bounds_min = merged->bounds_min;
+  m.bounds_max = merged->bounds_max;
+  m.created_ns = merge.record.created_ns;
+  merge.merged.data = outcome.merged_bt;
+  return merge;
+}
+
+// The last message of an accepted merge.
+pb::MergeProgress ResultMessage(const storage::MergeIds& stored, const storage::MergeRecord& record) {
+  pb::MergeProgress last;
+  last.set_stage("done");
+  last.set_fraction(1.0);
+  pb::MergeResult* result = last.mutable_result();
+  result->set_merge_id(static_cast<uint64_t>(stored.merge_id));
+  result->set_merged_submap_id(static_cast<uint64_t>(stored.merged_submap_id));
+  for (const storage::MergeInputRecord& in : record.inputs) {
+    pb::SubmapAlignment* a = result->add_alignments();
+    a->set_submap_id(static_cast<uint64_t>(in.submap_id));
+    ToProto(in.T_reference_submap, a->mutable_t_reference_submap());
+    a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
+    a->set_residual_m(in.residual_m);
+    a->set_overlap_score(in.overlap_score);
+  }
+  return last;
+}
+
+}  // namespace
+
+grpc::Status SubmapService::LoadMergeInputs(const pb::MergeSubmapsRequest& request,
+                                            MergeInputs* inputs) {
+  for (uint64_t id : request.submap_ids()) {
+    StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(static_cast<int64_t>(id));
+    if (!meta.ok()) return ToGrpcStatus(meta.status());
+    StatusOr<std::string> data = core_->store().GetSubmapData(static_cast<int64_t>(id));
+    if (!data.ok()) return ToGrpcStatus(data.status());
+    inputs->metas.push_back(*meta);
+    inputs->ids.push_back(id);
+    inputs->bytes.push_back(std::move(data).value());
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::AwaitMerge(grpc::ServerContext* context, MergeJob* job, size_t inputs,
+                                       grpc::ServerWriter<pb::MergeProgress>* writer) {
+  std::vector<MergeProgressEvent> events;
+  bool client_gone = false;
+  for (;;) {
+    const bool done = job->Wait(std::chrono::milliseconds(50), &events);
+    for (const MergeProgressEvent& e : events) {
+      pb::MergeProgress progress;
+      progress.set_stage(e.stage);
+      progress.set_fraction(e.fraction);
+      client_gone = client_gone || !writer->Write(progress);
+    }
+    events.clear();
+    if (done) return grpc::Status::OK;
+    if (client_gone || context->IsCancelled() || draining_) break;
+  }
+  job->Abandon();
+  Log(LogLevel::kInfo, "merge_abandoned",
+      {{"inputs", std::to_string(inputs)}, {"why", draining_ ? "shutdown" : "client cancelled"}});
+  if (draining_) {
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                        "mapd is shutting down; the merge was abandoned and nothing was stored");
+  }
+  return grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled the merge; nothing was stored");
+}
+
+grpc::Status SubmapService::RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why,
+                                               double seconds, const Principal& caller) {
+  storage::NewMerge merge;
+  merge.record.created_ns = UnixNowNs();
+  merge.record.accepted = false;
+  merge.record.reason = why.ToString();
+  for (uint64_t id : ids) {
+    storage::MergeInputRecord in;
+    in.submap_id = static_cast<int64_t>(id);
+    merge.record.inputs.push_back(in);
+  }
+  int64_t merge_id = 0;
+  Status recorded = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
+    StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
+    if (!r.ok()) return r.status();
+    merge_id = r->merge_id;
+    return txn->AppendAudit(AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, ids),
+                                                 "refused: " + why.ToString()));
+  });
+  Log(LogLevel::kInfo, "merge_refused",
+      {{"merge", std::to_string(merge_id)},
+       {"inputs", std::to_string(ids.size())},
+       {"reason", why.ToString()},
+       {"s", std::to_string(seconds)},
+       {"recorded", recorded.ok() ? "yes" : recorded.ToString()}});
+  return ToGrpcStatus(Status(why.code(), why.message() + " (merge refused; nothing was merged)"));
+}
+
+Status SubmapService::StoreAcceptedMerge(const storage::NewMerge& merge, const MergeInputs& inputs,
+                                         const std::vector<geometry::Rigid3>& T_ref_input,
+                                         const Principal& caller, storage::MergeIds* stored,
+                                         size_t* tied) {
+  return core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
+    // On the writer thread, so no delete or tie can slip in between these
+    // checks and the commit: the inputs still exist, and two merges
+    // cannot both tie one session from stale views of the frames.
+    for (const storage::SubmapMeta& in : inputs.metas) {
+      StatusOr<storage::SubmapMeta> still = core_->store().GetSubmap(in.id);
+      if (!still.ok()) {
+        return Status::FailedPrecondition("submap " + std::to_string(in.id) +
+                                          " was deleted while the merge ran; nothing was stored");
+      }
+    }
+    StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> ties =
+        FrameTies(core_->store(), inputs.metas, T_ref_input);
+    if (!ties.ok()) return ties.status();
+    StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
+    if (!r.ok()) return r.status();
+    *stored = *r;
+    MAPD_RETURN_IF_ERROR(txn->AppendAudit(
+        AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, inputs.ids), "ok")));
+    for (const auto& [session_id, T_map_frame] : *ties)
+      MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
+    *tied = ties->size();
+    return Status::Ok();
+  });
+}
+
+grpc::Status SubmapService::Merge(grpc::ServerContext* context,
+                                  const pb::MergeSubmapsRequest& request,
+                                  grpc::ServerWriter<pb::MergeProgress>* writer, const Principal& caller) {
+  if (grpc::Status s = CheckMergeRequest(request); !s.ok()) return s;
+  if (draining_) return ShuttingDown();
+  MergeInputs inputs;
+  if (grpc::Status s = LoadMergeInputs(request, &inputs); !s.ok()) return s;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  StatusOr<std::shared_ptr<MergeJob>> job =
+      merges_->Submit(inputs.ids, std::move(inputs.bytes), ToMergeParams(options_));
+  if (!job.ok()) return ToGrpcStatus(job.status());
+  if (grpc::Status s = AwaitMerge(context, job->get(), inputs.ids.size(), writer); !s.ok()) return s;
+  StatusOr<voxel::MergeOutcome> outcome = (*job)->TakeResult();
+  if (outcome.ok()) {
+    Status evidence = CheckEvidence(*outcome, inputs.metas, options_);
+    if (!evidence.ok()) outcome = evidence;
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!outcome.ok()) {
+    if (outcome.status().code() == StatusCode::kUnavailable)
+      return ToGrpcStatus(outcome.status());  // shutdown: nothing to record
+    return RecordRefusedMerge(inputs.ids, outcome.status(), seconds, caller);
+  }
+
+  std::vector<geometry::Rigid3> T_ref_input;
+  StatusOr<storage::NewMerge> merge = AcceptedMerge(*outcome, inputs.ids, &T_ref_input);
+  if (!merge.ok()) return ToGrpcStatus(merge.status());
+  storage::MergeIds stored;
+  size_t tied = 0;
+  MAPD_RETURN_IF_ERROR_GRPC(StoreAcceptedMerge(*merge, inputs, T_ref_input, caller, &stored, &tied));
+  Log(LogLevel::kInfo, "merge_accepted",
+      {{"merge", std::to_string(stored.merge_id)},
+       {"merged_submap", std::to_string(stored.merged_submap_id)},
+       {"inputs", std::to_string(inputs.ids.size())},
+       {"sessions_tied", std::to_string(tied)},
+       {"s", std::to_string(seconds)}});
+  writer->Write(ResultMessage(stored, merge->record));  // stored either way; a client that left can list it
+  return grpc::Status::OK;
+}
+
+}  // namespace mapd::service

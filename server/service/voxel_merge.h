@@ -1,0 +1,26 @@
+// The one place where mapd's build decides whether it can merge voxel
+// submaps. CMake compiles voxel_merge.cc (MAPD_WITH_VOXEL=ON: the voxel
+// library, with PCL) or voxel_merge_unavailable.cc (OFF); nothing else in the
+// service depends on the choice. Uploads, listing, fetching and deleting
+// submaps need only voxel_io and work in both builds.
+#ifndef MAPD_SERVICE_VOXEL_MERGE_H_
+#define MAPD_SERVICE_VOXEL_MERGE_H_
+
+#include <vector>
+
+#include "common/status.h"
+#include "voxel/merge.h"  // types only; the functions live in the voxel library
+
+namespace mapd::service {
+
+// True when this mapd can merge (the voxel library is linked).
+bool VoxelMergeBuilt();
+
+// voxel::MergeSubmaps, or Unimplemented without the voxel library.
+StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapInput>& inputs,
+                                                const voxel::MergeParams& params,
+                                                const voxel::ProgressCallback& progress);
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_VOXEL_MERGE_H_

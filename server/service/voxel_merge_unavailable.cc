@@ -1,0 +1,15 @@
+// MAPD_WITH_VOXEL=OFF: no voxel library (no PCL); MergeSubmaps is refused.
+#include "service/voxel_merge.h"
+
+namespace mapd::service {
+
+bool VoxelMergeBuilt() { return false; }
+
+StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapInput>&,
+                                                const voxel::MergeParams&,
+                                                const voxel::ProgressCallback&) {
+  return Status::Unimplemented(
+      "MergeSubmaps: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
+}  // namespace mapd::service
