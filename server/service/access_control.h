@@ -26,7 +26,7 @@
 
 #include "common/status.h"
 #include "service/auth.h"
-#include "service/map_core.h"
+#include "service/core.h"
 
 namespace mapd::service {
 
@@ -37,7 +37,7 @@ struct AuthOptions {
 
 class AccessControl {
  public:
-  AccessControl(MapCore* core, AuthOptions options) : core_(core), options_(options) {}
+  AccessControl(Core* core, AuthOptions options) : core_(core), options_(options) {}
 
   // Who is calling (see above): UNAUTHENTICATED naming what is missing or wrong.
   StatusOr<Principal> Authenticate(const grpc::ServerContextBase& context);
@@ -73,7 +73,7 @@ class AccessControl {
                    const Status& why);
   static void LogDenied(const Principal& principal, const std::string& action, const std::string& target);
 
-  MapCore* const core_;
+  Core* const core_;
   const AuthOptions options_;
   // Once a token exists it always does (rows are never deleted): cached.
   std::atomic<bool> tokens_exist_{false};

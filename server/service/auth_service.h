@@ -7,13 +7,13 @@
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/access_control.h"
-#include "service/map_core.h"
+#include "service/core.h"
 
 namespace mapd::service {
 
 class AuthService {
  public:
-  AuthService(MapCore* core, AccessControl* access) : core_(core), access_(access) {}
+  AuthService(Core* core, AccessControl* access) : core_(core), access_(access) {}
 
   grpc::Status CreateToken(const grpc::ServerContextBase& context, const mapserver::v1::CreateTokenRequest& request,
                            mapserver::v1::CreateTokenResponse* response);
@@ -25,7 +25,7 @@ class AuthService {
   grpc::Status WhoAmI(const grpc::ServerContextBase& context, mapserver::v1::WhoAmIResponse* response);
 
  private:
-  MapCore* const core_;
+  Core* const core_;
   AccessControl* const access_;
 };
 

@@ -11,7 +11,7 @@ namespace mapd::service {
 
 namespace pb = mapserver::v1;
 
-IngestReactor::IngestReactor(grpc::CallbackServerContext* context, MapCore* core,
+IngestReactor::IngestReactor(grpc::CallbackServerContext* context, Core* core,
                              const IngestOptions* options, const std::atomic<bool>* draining,
                              AccessControl* access, Principal caller, StreamSlot slot)
     : core_(core),

@@ -1,6 +1,6 @@
 // The Ingest RPC: one reactor per robot stream (gRPC callback API).
 //
-// Batches are read continuously and handed to MapCore; acknowledgements are
+// Batches are read continuously and handed to the Core; acknowledgements are
 // written as the writer commits them, so a robot can keep up to
 // `max_in_flight` batches in flight on one stream (reading pauses above that:
 // flow control rather than unbounded memory). A refused batch gets a REJECTED
@@ -29,7 +29,7 @@
 #include "service/access_control.h"
 #include "service/ingest_batch.h"
 #include "service/options.h"
-#include "service/map_core.h"
+#include "service/core.h"
 #include "service/stream_limiter.h"
 
 namespace mapd::service {
@@ -38,7 +38,7 @@ namespace mapd::service {
 // Owned by gRPC; deletes itself in OnDone().
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
-  IngestReactor(grpc::CallbackServerContext* context, MapCore* core, const IngestOptions* options,
+  IngestReactor(grpc::CallbackServerContext* context, Core* core, const IngestOptions* options,
                 const std::atomic<bool>* draining, AccessControl* access, Principal caller, StreamSlot slot);
 
   void OnReadDone(bool ok) override;
@@ -52,7 +52,7 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   void MaybeReadLocked();                                // REQUIRES: mu_ held
   void MaybeFinishLocked();                              // REQUIRES: mu_ held
 
-  MapCore* const core_;
+  Core* const core_;
   const IngestOptions* const options_;
   const std::atomic<bool>* const draining_;
   const std::string peer_;

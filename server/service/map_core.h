@@ -46,6 +46,7 @@
 #include "fusion/params.h"
 #include "fusion/plane_engine.h"
 #include "geometry/box2.h"
+#include "service/core.h"
 #include "service/ingest_batch.h"
 #include "service/write_health.h"
 #include "storage/store.h"
@@ -75,59 +76,7 @@ struct MapCoreOptions {
   double stop_flush_s = 5.0;
 };
 
-struct BatchOutcome {
-  enum class Kind { kStored, kDuplicate, kRejected };
-  Kind kind = Kind::kRejected;
-  Status status;  // why, when kRejected
-};
-using DoneCallback = std::function<void(const BatchOutcome&)>;
-
-enum class KindFilter { kAny = 0, kLine = 1, kPlane = 2 };
-
-struct FeatureQuery {
-  std::optional<geometry::Box2> bbox;  // only features whose segment meets the box
-  uint32_t min_support = 0;            // raised to the fusion min_support
-  KindFilter kind = KindFilter::kAny;
-  // How long to wait for the fuser to reflect every acknowledged batch;
-  // < 0: MapCoreOptions::max_query_wait_s.
-  double max_wait_s = -1;
-};
-
-// A published fused feature, ready for the API.
-struct FusedView {
-  fusion::FusedFeature feature;
-  KindFilter kind = KindFilter::kLine;  // kPlane when a member came from a plane
-  std::vector<std::string> robots;      // names, sorted
-};
-
-// A published fused non-vertical plane, ready for the API.
-struct PlaneView {
-  fusion::FusedPlane plane;
-  std::vector<std::string> robots;  // names, sorted
-};
-
-struct CoreStats {
-  uint64_t batches_stored = 0;    // by this process since it started
-  uint64_t features_stored = 0;
-  double batches_per_s = 0;       // over the last 10 s
-  double features_per_s = 0;
-  uint64_t fused_features = 0;
-  uint64_t clusters = 0;
-  uint64_t map_version = 0;
-  uint64_t fusion_backlog = 0;    // committed observations not fused yet
-  uint64_t commits = 0;           // group commits by this process
-  double uptime_s = 0;
-  bool recovering = false;        // the fused map is being rebuilt at start
-  double snapshot_age_s = 0;      // newest snapshot of the fusion state (0: none)
-  uint64_t replay_length = 0;     // observations fused since that snapshot
-  uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
-  uint64_t fusion_nodes = 0;        // the engine's nodes (representatives in bounded mode)
-  uint64_t fused_planes = 0;        // published non-vertical planes
-  uint64_t plane_nodes = 0;         // the plane engine's nodes
-  std::string write_failure;        // why the database refuses writes now; empty: it takes them
-};
-
-class MapCore {
+class MapCore final : public Core {
  public:
   // Opens (or creates) the database and returns at once; the fuser thread
   // then recovers the fused map: the newest usable snapshot, then the stored
@@ -139,7 +88,7 @@ class MapCore {
 
   bool ready() const { return ready_.load(); }
   // Ok once recovered; else Unavailable saying how far recovery is.
-  Status CheckReady() const;
+  Status CheckReady() const override;
   // Runs `fn` once recovery succeeded (at once if it has), on any thread.
   void OnReady(std::function<void()> fn);
   // Waits until recovery ended (successfully or not); false on timeout.
@@ -149,7 +98,7 @@ class MapCore {
   // Queues a validated batch. `done` runs on the writer thread once the batch
   // is committed, found to be a duplicate, or refused; after Stop() it runs at
   // once with Unavailable.
-  void Submit(IngestBatch batch, DoneCallback done);
+  void Submit(IngestBatch batch, DoneCallback done) override;
 
   // Runs `write` on the writer thread in a transaction of its own and commits
   // it if `write` succeeds (else rolls back); returns once that is done, with
@@ -158,11 +107,11 @@ class MapCore {
   // observations of those sessions; a query sent after this returns waits
   // for that (like for any committed batch). After Stop(): Unavailable,
   // nothing runs.
-  Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write);
+  Status ExecuteWrite(std::function<Status(storage::WriteTransaction*)> write) override;
   // An asynchronous write job: `done` runs on the writer thread with its
   // outcome (at once with Unavailable after Stop()). Nobody waits for it.
   void SubmitWrite(std::function<Status(storage::WriteTransaction*)> write,
-                   std::function<void(const Status&)> done);
+                   std::function<void(const Status&)> done) override;
 
   // Stops taking batches, commits (and acknowledges) everything queued, stops
   // the fuser where it is (what it has not fused is committed and replayed at
@@ -174,14 +123,14 @@ class MapCore {
   // non-vertical planes (same snapshot of the map; kind kLine leaves them
   // out; bbox: the boundary's ground projection meets the box).
   std::vector<FusedView> QueryFeatures(const FeatureQuery& query, uint64_t* map_version,
-                                       std::vector<PlaneView>* planes = nullptr) const;
+                                       std::vector<PlaneView>* planes = nullptr) const override;
   // Committed (acknowledged) observations the fuser has not reflected yet.
-  uint64_t FusionBacklog() const;
-  CoreStats Stats() const;
+  uint64_t FusionBacklog() const override;
+  CoreStats Stats() const override;
   // Whether the database takes writes (write_health.h); the server's health
   // listens to it.
   WriteHealth& write_health() { return write_health_; }
-  storage::Store& store() { return *store_; }
+  storage::Store& store() override { return *store_; }
   const MapCoreOptions& options() const { return options_; }
 
  private:

@@ -76,7 +76,7 @@ Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
 
 }  // namespace
 
-MapServiceImpl::MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options,
+MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options, const SubmapOptions& submap_options,
                                const StreamLimits& stream_limits, AuthOptions auth_options)
     : core_(core),
       ingest_options_(ingest_options),

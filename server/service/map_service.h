@@ -2,7 +2,7 @@
 // see ingest_reactor.h) and UploadSubmap (upload_reactor.h) run on gRPC's
 // callback API, admitted by a StreamLimiter (stream_limiter.h); the other
 // RPCs are short and use the synchronous API. Handlers translate between protobuf and
-// library types and reach the state through MapCore. Every handler first asks
+// library types and reach the state through Core (core.h). Every handler first asks
 // AccessControl who calls and whether they may (auth.h has the role table);
 // the streams ask before they take a place under the stream limits.
 #ifndef MAPD_SERVICE_MAP_SERVICE_H_
@@ -15,7 +15,7 @@
 #include "service/access_control.h"
 #include "service/auth_service.h"
 #include "service/ingest_reactor.h"
-#include "service/map_core.h"
+#include "service/core.h"
 #include "service/stream_limiter.h"
 #include "service/submap_service.h"
 
@@ -25,7 +25,7 @@ class MapServiceImpl final
     : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
           mapserver::v1::MapService::WithRawCallbackMethod_Ingest<mapserver::v1::MapService::Service>> {
  public:
-  MapServiceImpl(MapCore* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
+  MapServiceImpl(Core* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
                  const StreamLimits& stream_limits = {}, AuthOptions auth_options = {});
 
   // Housekeeping, every second: ends idle uploads.
@@ -80,7 +80,7 @@ class MapServiceImpl final
                       mapserver::v1::WhoAmIResponse* response) override;
 
  private:
-  MapCore* const core_;
+  Core* const core_;
   const IngestOptions ingest_options_;
   const StreamLimits stream_limits_;
   std::atomic<bool> draining_{false};

@@ -69,7 +69,7 @@ grpc::Status CheckHeader(const pb::SubmapHeader& h) {
 
 }  // namespace
 
-SubmapService::SubmapService(MapCore* core, const SubmapOptions& options, AccessControl* access)
+SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessControl* access)
     : core_(core),
       options_(options),
       access_(access),

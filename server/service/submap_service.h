@@ -1,7 +1,7 @@
 // The voxel-submap RPCs of mapserver.v1.MapService: UploadSubmap, ListSubmaps,
 // GetSubmap, DeleteSubmap, MergeSubmaps, GetGlobalMap. MapServiceImpl
 // delegates to this class; it translates between protobuf and the voxel and
-// storage libraries and writes through MapCore (one writer thread).
+// storage libraries and writes through the Core (core.h: one writer thread).
 //
 // Rules it implements (see also storage/store.h):
 // - Upload (callback API, upload_reactor.h): at most max_concurrent_uploads
@@ -61,7 +61,7 @@
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/access_control.h"
 #include "service/config.h"
-#include "service/map_core.h"
+#include "service/core.h"
 #include "service/stream_limiter.h"
 
 namespace mapd::service {
@@ -72,7 +72,7 @@ class UploadReactor;
 
 class SubmapService {
  public:
-  SubmapService(MapCore* core, const SubmapOptions& options, AccessControl* access);
+  SubmapService(Core* core, const SubmapOptions& options, AccessControl* access);
   ~SubmapService();
 
   // Shutdown: new uploads and merges are refused with UNAVAILABLE, merges in
@@ -139,7 +139,7 @@ class SubmapService {
   grpc::Status StreamSubmap(grpc::ServerContext* context, int64_t id,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
-  MapCore* const core_;
+  Core* const core_;
   const SubmapOptions options_;
   AccessControl* const access_;
   std::atomic<bool> draining_{false};

@@ -1,0 +1,86 @@
+// A Core (server/service/core.h) whose state a test sets: readiness, the
+// published features, the fusion backlog, what becomes of a batch. Stored rows
+// come from a real Store on a temporary database. Handlers run on it exactly
+// as on MapCore, so a test reaches states the real core shows only under
+// load or faults (recovery, a refusing disk, a backlog) without causing them.
+#ifndef MAPD_TESTS_SERVICE_FAKE_CORE_H_
+#define MAPD_TESTS_SERVICE_FAKE_CORE_H_
+
+#include <memory>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/temp_dir.h"
+#include "service/core.h"
+
+namespace mapd::testing {
+
+class FakeCore final : public service::Core {
+ public:
+  FakeCore() {
+    auto store = storage::Store::Open(dir_.File("map.db"), {});
+    EXPECT_TRUE(store.ok()) << store.status().ToString();
+    if (store.ok()) store_ = std::move(store).value();
+  }
+
+  // What the test sets (before the handlers run).
+  Status ready = Status::Ok();
+  std::vector<service::FusedView> features;
+  uint64_t map_version = 1;
+  uint64_t backlog = 0;
+  service::BatchOutcome outcome{service::BatchOutcome::Kind::kStored, Status::Ok()};
+
+  // What the handlers did.
+  size_t submitted() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return submitted_;
+  }
+
+  Status CheckReady() const override { return ready; }
+  void Submit(service::IngestBatch, service::DoneCallback done) override {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      ++submitted_;
+    }
+    done(outcome);
+  }
+  Status ExecuteWrite(service::WriteFunction write) override {
+    if (!ready.ok()) return ready;
+    std::lock_guard<std::mutex> lock(write_mu_);  // one writer, as in MapCore
+    StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
+    if (!txn.ok()) return txn.status();
+    MAPD_RETURN_IF_ERROR(write(txn->get()));
+    return (*txn)->Commit();
+  }
+  void SubmitWrite(service::WriteFunction write, std::function<void(const Status&)> done) override {
+    done(ExecuteWrite(std::move(write)));
+  }
+  std::vector<service::FusedView> QueryFeatures(const service::FeatureQuery&, uint64_t* version,
+                                                std::vector<service::PlaneView>*) const override {
+    *version = map_version;
+    return features;
+  }
+  uint64_t FusionBacklog() const override { return backlog; }
+  service::CoreStats Stats() const override {
+    service::CoreStats stats;
+    stats.fused_features = features.size();
+    stats.fusion_backlog = backlog;
+    stats.map_version = map_version;
+    return stats;
+  }
+  storage::Store& store() override { return *store_; }
+
+ private:
+  TempDir dir_;
+  std::unique_ptr<storage::Store> store_;
+  mutable std::mutex mu_;
+  std::mutex write_mu_;
+  size_t submitted_ = 0;
+};
+
+}  // namespace mapd::testing
+
+#endif  // MAPD_TESTS_SERVICE_FAKE_CORE_H_
