@@ -9,6 +9,10 @@
 #include "fusion/engine_inspector.h"
 
 namespace mapd::fusion {
+
+// gtest prints parameters with this (not as bytes).
+void PrintTo(CornerMode mode, std::ostream* out) { *out << CornerModeName(mode); }
+
 namespace {
 
 using geometry::Vec2;

@@ -7,6 +7,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 
 #include <Eigen/Geometry>
@@ -17,6 +18,10 @@
 #include "fusion/engine_inspector.h"
 
 namespace mapd::fusion {
+
+// gtest prints parameters with this (not as bytes).
+void PrintTo(CornerPairing pairing, std::ostream* out) { *out << CornerPairingName(pairing); }
+
 namespace {
 
 using geometry::Segment2;
@@ -299,15 +304,24 @@ TEST(PropertyScenes, GreedyPairingDiffersInSomeScenes) {
   EXPECT_GT(differ, 0u);
 }
 
+// Test names read "seed3_curved_guard_mutual".
+std::string PropertyCaseName(const ::testing::TestParamInfo<PropertyTest::ParamType>& info) {
+  const auto& [seed, curved, guard, pairing] = info.param;
+  return "seed" + std::to_string(seed) + (curved ? "_curved" : "_straight") +
+         (guard ? "_guard" : "_noguard") + "_" + CornerPairingName(pairing);
+}
+
 INSTANTIATE_TEST_SUITE_P(Seeds, PropertyTest,
                          ::testing::Combine(::testing::Range(1u, 25u), ::testing::Bool(),
                                             ::testing::Bool(),
-                                            ::testing::Values(CornerPairing::kMutualNearest)));
+                                            ::testing::Values(CornerPairing::kMutualNearest)),
+                         PropertyCaseName);
 // Greedy on half the seeds: ctest time.
 INSTANTIATE_TEST_SUITE_P(Greedy, PropertyTest,
                          ::testing::Combine(::testing::Range(1u, 13u), ::testing::Bool(),
                                             ::testing::Bool(),
-                                            ::testing::Values(CornerPairing::kGreedy)));
+                                            ::testing::Values(CornerPairing::kGreedy)),
+                         PropertyCaseName);
 
 }  // namespace
 }  // namespace mapd::fusion

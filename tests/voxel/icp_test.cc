@@ -13,6 +13,12 @@
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
+
+// gtest prints parameters with this (not as bytes).
+void PrintTo(NeighbourSearch search, std::ostream* out) {
+  *out << (search == NeighbourSearch::kVoxelHash ? "voxel hash" : "k-d tree");
+}
+
 namespace {
 
 using testing::Pose;
@@ -32,6 +38,10 @@ Eigen::AlignedBox3d CropX(double x0, double x1) {
 }
 
 class IcpSearchTest : public ::testing::TestWithParam<NeighbourSearch> {};
+
+std::string SearchName(const ::testing::TestParamInfo<NeighbourSearch>& param) {
+  return param.param == NeighbourSearch::kVoxelHash ? "voxel_hash" : "kd_tree";
+}
 
 // Two rasterisations of one room (different crops, B's grid rotated): ICP
 // from a start 1 deg and ~1 voxel off lands within a fraction of a voxel.
@@ -56,7 +66,8 @@ TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Searches, IcpSearchTest,
-                         ::testing::Values(NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree));
+                         ::testing::Values(NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree),
+                         SearchName);
 
 // Exact correspondences (the same points moved): recovered to numerical
 // precision, both ways.

@@ -80,6 +80,17 @@ struct SceneCase {
   bool use_normals = true;
 };
 
+void PrintTo(const SceneCase& c, std::ostream* out) {
+  *out << "seed " << c.seed << ", " << c.num_a << " corners, manhattan " << c.manhattan_fraction
+       << (c.use_normals ? "" : ", no normals");
+}
+
+std::string SceneCaseName(const ::testing::TestParamInfo<SceneCase>& param) {
+  const SceneCase& c = param.param;
+  return "seed" + std::to_string(c.seed) + "_corners" + std::to_string(c.num_a) + "_manhattan" +
+         std::to_string(static_cast<int>(c.manhattan_fraction * 100)) + (c.use_normals ? "" : "_no_normals");
+}
+
 class GeneratedSceneTest : public ::testing::TestWithParam<SceneCase> {};
 
 TEST_P(GeneratedSceneTest, BothMethodsRecoverTheTransform) {
@@ -129,7 +140,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, GeneratedSceneTest,
                                            SceneCase{60, 5, 1.0}, SceneCase{100, 6, 1.0},
                                            SceneCase{70, 7, 0.0}, SceneCase{50, 8, 0.5},
                                            SceneCase{60, 9, 0.5, false},
-                                           SceneCase{100, 10, 1.0, false}));
+                                           SceneCase{100, 10, 1.0, false}),
+                         SceneCaseName);
 
 TEST(CornerMatchingTest, ExhaustiveBacktrackingEqualsMaxCliqueSize) {
   CornerSceneOptions o;

@@ -49,10 +49,22 @@ void ExpectFusedMapCoversBoth(const MergeOutcome& outcome, const std::string& a_
   EXPECT_GT(merged->occupied_voxels, a->occupied_voxels);
 }
 
-class MergeKnownTransformTest : public ::testing::TestWithParam<Eigen::Isometry3d> {};
+// A pose in degrees and metres, so that test names and failures can say it.
+struct PoseCase {
+  const char* name;
+  double yaw_deg, pitch_deg, roll_deg;
+  double x_m, y_m, z_m;
+};
+void PrintTo(const PoseCase& p, std::ostream* out) {
+  *out << "yaw " << p.yaw_deg << " pitch " << p.pitch_deg << " roll " << p.roll_deg << " deg, t ("
+       << p.x_m << ", " << p.y_m << ", " << p.z_m << ") m";
+}
+
+class MergeKnownTransformTest : public ::testing::TestWithParam<PoseCase> {};
 
 TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
-  const Eigen::Isometry3d T_a_b = GetParam();
+  const PoseCase& p = GetParam();
+  const Eigen::Isometry3d T_a_b = Pose(p.yaw_deg, p.pitch_deg, p.roll_deg, Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
   const Pair pair = MakePair(T_a_b);
   std::vector<std::pair<std::string, double>> progress;
   auto outcome = MergeSubmaps({{11, pair.a}, {12, pair.b}}, MergeParams{},
@@ -77,12 +89,15 @@ TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
   EXPECT_GT(outcome->times.total_s, 0.0);
 }
 
+std::string PoseCaseName(const ::testing::TestParamInfo<PoseCase>& param) { return param.param.name; }
+
 // Poses (yaw, pitch, roll up to 10 deg) where corner matching finds the true
 // clique on this scene.
 INSTANTIATE_TEST_SUITE_P(Poses, MergeKnownTransformTest,
-                         ::testing::Values(Pose(0, 0, 0, Eigen::Vector3d(0, 0, 0)),
-                                           Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4)),
-                                           Pose(-128, -10, 8, Eigen::Vector3d(-4.0, 3.3, -0.7))));
+                         ::testing::Values(PoseCase{"identity", 0, 0, 0, 0, 0, 0},
+                                           PoseCase{"yaw37_pitch4_rollm6", 37, 4, -6, 1.3, -2.1, 0.4},
+                                           PoseCase{"yawm128_pitchm10_roll8", -128, -10, 8, -4.0, 3.3, -0.7}),
+                         PoseCaseName);
 
 // The room is nearly symmetric under a half turn, and for some poses the
 // largest consistent corner set is a wrong one (the room flipped, walls on
