@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mapd needs to build and test. Idempotent:
 # runs apt-get only when something is missing. --ci adds what .ci/run needs
-# beyond that: clang and its libFuzzer runtime (fuzz job), systemd
-# (systemd-analyze verify of deploy/mapd.service).
+# beyond that: clang and its libFuzzer runtime (fuzz job), clang-format and
+# clang-tidy (lint job), systemd (systemd-analyze verify of deploy/mapd.service).
 set -euo pipefail
 
 PACKAGES=(
@@ -12,7 +12,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev
 )
 if [ "${1:-}" = "--ci" ]; then
-  PACKAGES+=(clang-14 libclang-rt-14-dev systemd)
+  PACKAGES+=(clang-14 libclang-rt-14-dev clang-format-14 clang-tidy-14 systemd)
 fi
 
 missing=()

@@ -4,5 +4,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash deploy/install-deps.sh
 bash deploy/build.sh
-cd build
-ctest --output-on-failure -j"$(nproc)" --timeout 300
+ctest --preset release -j"$(nproc)"

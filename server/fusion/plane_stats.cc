@@ -64,7 +64,7 @@ void PlaneStats::Merge(PlaneStats&& o, uint32_t support_cap) {
 
 void PlaneStats::Fit(Eigen::Vector3d* normal, double* offset_m) const {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-  const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+  const Eigen::Vector3d& ev = eig.eigenvalues();  // ascending
   Eigen::Vector3d n = eig.eigenvectors().col(0);
   // Collinear or coincident points leave the normal undetermined: the
   // members' own normals then decide.

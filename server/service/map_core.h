@@ -93,7 +93,7 @@ class MapCore final : public Core {
   void OnReady(std::function<void()> fn);
   // Waits until recovery ended (successfully or not); false on timeout.
   bool WaitUntilReady(std::chrono::duration<double> timeout) const;
-  ~MapCore();  // Stop()
+  ~MapCore() override;  // Stop()
 
   // Queues a validated batch. `done` runs on the writer thread once the batch
   // is committed, found to be a duplicate, or refused; after Stop() it runs at

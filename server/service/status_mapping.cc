@@ -1,7 +1,5 @@
 #include "service/status_mapping.h"
 
-#include <utility>
-
 namespace mapd::service {
 
 grpc::StatusCode ToGrpcCode(StatusCode code) {
@@ -26,8 +24,8 @@ grpc::Status ToGrpcStatus(const Status& status) {
   return grpc::Status(ToGrpcCode(status.code()), status.message());
 }
 
-grpc::Status InvalidArgument(std::string message) {
-  return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, std::move(message));
+grpc::Status InvalidArgument(const std::string& message) {
+  return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
 }
 
 grpc::Status ShuttingDown() {

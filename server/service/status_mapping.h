@@ -14,7 +14,7 @@ grpc::StatusCode ToGrpcCode(StatusCode code);
 grpc::Status ToGrpcStatus(const Status& status);
 
 // INVALID_ARGUMENT with `message` (which names the field).
-grpc::Status InvalidArgument(std::string message);
+grpc::Status InvalidArgument(const std::string& message);
 // UNAVAILABLE while mapd drains for shutdown.
 grpc::Status ShuttingDown();
 

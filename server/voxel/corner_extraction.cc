@@ -293,9 +293,11 @@ StatusOr<CornerExtractionResult> ExtractCorners(const VoxelGrid& original,
     for (std::size_t k = 0; k < 3; ++k) {
       planes[k] = regions.planes[static_cast<std::size_t>(triple[k])];
     }
+    // C++17 lambdas cannot capture a structured binding: name it first.
+    const std::vector<int>& triple_members = members;
     auto nearest_member = [&](const Eigen::Vector3d& x) {
       double nearest = std::numeric_limits<double>::infinity();
-      for (int m : members) {
+      for (int m : triple_members) {
         nearest = std::min(nearest, (Centre(window->keys[static_cast<std::size_t>(m)]) - x).norm());
       }
       return nearest;

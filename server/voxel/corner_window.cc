@@ -90,7 +90,7 @@ StatusOr<WindowCandidates> FindWindowCandidates(const VoxelGrid& grid, int windo
   if (grid.empty()) return result;
   const int h = window_size / 2;
   const int margin = h + 1;  // windows of the shifted centres reach this far
-  const VoxelKey min_key = grid.min_key();
+  const VoxelKey& min_key = grid.min_key();
   const Index3 dims = (grid.max_key() - min_key).cast<std::int64_t>() + Index3::Ones();
   const std::int64_t max_cells = static_cast<std::int64_t>(max_table_bytes / sizeof(std::int32_t));
 

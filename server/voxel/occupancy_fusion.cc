@@ -95,7 +95,7 @@ bool Rasterise(const Leaf& leaf, const Eigen::Isometry3d& T_out_src, const Eigen
     if (volume > *budget) return false;
     *budget -= volume;
   }
-  const Eigen::Vector3d max_m = cube.max();
+  const Eigen::Vector3d& max_m = cube.max();
   octomap::OcTreeKey key;
   for (unsigned x = lo[0]; x <= hi[0]; ++x) {
     for (unsigned y = lo[1]; y <= hi[1]; ++y) {
