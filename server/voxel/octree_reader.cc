@@ -268,6 +268,12 @@ Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes
   return Status::Ok();
 }
 
+// A tree of size 0 has no node records: nothing may follow its header.
+Status CheckEmptyTreeEnds(std::string_view bytes, std::size_t pos) {
+  if (pos == bytes.size()) return Status::Ok();
+  return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after an empty tree (size 0)");
+}
+
 // .bt (OccupancyOcTreeBase::readBinaryNode): each inner node is 2 bytes, two
 // bits per child i (bits 2i, 2i+1 of byte i/4): 00 unknown (no child), 10 free
 // leaf, 01 occupied leaf, 11 inner node whose record follows depth-first in
@@ -275,13 +281,7 @@ Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes
 Status ValidateBinaryData(std::string_view bytes, const Header& header, std::uint64_t max_occupied,
                           OctreeSummary* summary) {
   std::size_t pos = header.data_offset;
-  if (header.size == 0) {
-    if (pos != bytes.size()) {
-      return Status::InvalidArgument(Str(bytes.size() - pos) +
-                                     " trailing bytes after an empty tree (size 0)");
-    }
-    return Status::Ok();
-  }
+  if (header.size == 0) return CheckEmptyTreeEnds(bytes, pos);
   Stack stack;
   int top = -1;
   std::uint64_t nodes = 1;  // the root
@@ -340,13 +340,7 @@ Status ValidateFullData(std::string_view bytes, const Header& header, std::uint6
   std::size_t pos = header.data_offset;
   const std::uint64_t expected = pos + header.size * kFullNodeBytes;
   if (bytes.size() < expected) return Truncated(bytes.size(), expected);
-  if (header.size == 0) {
-    if (pos != bytes.size()) {
-      return Status::InvalidArgument(Str(bytes.size() - pos) +
-                                     " trailing bytes after an empty tree (size 0)");
-    }
-    return Status::Ok();
-  }
+  if (header.size == 0) return CheckEmptyTreeEnds(bytes, pos);
   Stack stack;
   int top = -1;
   std::uint64_t nodes = 0;
