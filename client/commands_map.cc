@@ -4,6 +4,7 @@
 
 #include "client/commands.h"
 #include "client/format.h"
+#include "client/format_svg.h"
 
 namespace mapd::client {
 namespace {

@@ -45,18 +45,6 @@ std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
 // area_m2, z_min, z_max, support, member_count, robots.
 std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes = {});
 
-struct SvgOptions {
-  double pixels_per_metre = 40;  // the pixel size is clamped to [400, 1600] wide
-  std::string title = "mapd fused feature map";
-};
-// An SVG drawing fitted to the features: y axis up, a metre grid, one <line
-// class="feature ..."> per feature coloured by kind with a width growing with
-// support, a scale bar and a legend.
-std::string FormatSvg(const FeatureList& features, const SvgOptions& options = {});
-// The same with the planes drawn first, as translucent polygons (the ground
-// projection of each boundary) under the lines; the drawing fits both.
-std::string FormatSvg(const FeatureList& features, const PlaneList& planes, const SvgOptions& options = {});
-
 // `mapctl status` for people.
 std::string FormatStats(const mapserver::v1::Stats& stats, const std::string& server);
 // `mapctl robots` table; `now_ns` (server clock) makes "last seen 3 s ago".

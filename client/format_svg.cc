@@ -1,11 +1,13 @@
-// FormatSvg: the fused map as an SVG drawing. The viewBox is in metres with
-// the y axis flipped (SVG y = -map y), so the picture has y up and text stays
-// upright; all lengths below are metres unless they say px.
+// FormatSvg: the fused map as an SVG drawing, drawn by cairo on an SVG
+// surface. The drawing coordinates are metres with the y axis flipped
+// (drawing y = -map y), so the picture has y up and text stays upright; one
+// scale maps them to pixels. All lengths below are metres unless they say px.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "client/format.h"
+#include "client/cairo_canvas.h"
+#include "client/format_svg.h"
 #include "client/text_util.h"
 
 namespace mapd::client {
@@ -59,6 +61,8 @@ const char* KindColour(pb::FeatureKind kind) {
 }
 
 constexpr char kPlaneColour[] = "#2ca02c";
+constexpr char kGridColour[] = "#e0e0e0";
+constexpr char kAxesColour[] = "#a0a0a0";
 
 }  // namespace
 
@@ -84,85 +88,91 @@ std::string FormatSvg(const FeatureList& features, const PlaneList& planes, cons
   const double width_px = std::clamp(vw * options.pixels_per_metre, 400.0, 1600.0);
   const double height_px = width_px * vh / vw;
 
-  std::string out = Printf(
-      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"%.3f %.3f %.3f %.3f\">\n"
-      "<title>%s</title>\n"
-      "<desc>Map frame, metres; y axis up. %zu features. Grid step %g m.</desc>\n"
-      "<rect x=\"%.3f\" y=\"%.3f\" width=\"%.3f\" height=\"%.3f\" fill=\"white\"/>\n",
-      width_px, height_px, vx, vy, vw, vh, XmlEscape(options.title).c_str(), features.size(), step, vx, vy, vw, vh);
+  Canvas canvas = Canvas::Svg(width_px, height_px);
+  cairo_t* cr = canvas.cr();
+  cairo_scale(cr, width_px / vw, width_px / vw);
+  cairo_translate(cr, -vx, -vy);
+  const auto stroke = [cr](const char* colour, double width, double alpha = 1.0) {
+    SetColour(cr, ParseHexColour(colour), alpha);
+    cairo_set_line_width(cr, width);
+    cairo_stroke(cr);
+  };
+  const auto text = [cr, font](double x, double y, const std::string& s) {
+    SetColour(cr, Rgb{0, 0, 0});
+    cairo_set_font_size(cr, font);
+    cairo_move_to(cr, x, y);
+    cairo_show_text(cr, s.c_str());
+  };
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  SetColour(cr, Rgb{255, 255, 255});
+  cairo_rectangle(cr, vx, vy, vw, vh);
+  cairo_fill(cr);
 
   // Grid: one path, a line every step; the map axes darker.
-  std::string grid;
-  for (double x = gx0; x <= gx1 + 1e-9; x += step) grid += Printf("M%.3f %.3fV%.3f", x, -gy1, -gy0);
-  for (double y = gy0; y <= gy1 + 1e-9; y += step) grid += Printf("M%.3f %.3fH%.3f", gx0, -y, gx1);
-  out += Printf("<path class=\"grid\" d=\"%s\" stroke=\"#e0e0e0\" stroke-width=\"%.4f\" fill=\"none\"/>\n",
-                grid.c_str(), base_width * 0.5);
+  for (double x = gx0; x <= gx1 + 1e-9; x += step) {
+    cairo_move_to(cr, x, -gy1);
+    cairo_line_to(cr, x, -gy0);
+  }
+  for (double y = gy0; y <= gy1 + 1e-9; y += step) {
+    cairo_move_to(cr, gx0, -y);
+    cairo_line_to(cr, gx1, -y);
+  }
+  stroke(kGridColour, base_width * 0.5);
   if (gx0 <= 0 && 0 <= gx1 && gy0 <= 0 && 0 <= gy1) {
-    out += Printf("<path class=\"axes\" d=\"M%.3f 0H%.3fM0 %.3fV%.3f\" stroke=\"#a0a0a0\" stroke-width=\"%.4f\"/>\n",
-                  gx0, gx1, -gy1, -gy0, base_width * 0.7);
+    cairo_move_to(cr, gx0, 0);
+    cairo_line_to(cr, gx1, 0);
+    cairo_move_to(cr, 0, -gy1);
+    cairo_line_to(cr, 0, -gy0);
+    stroke(kAxesColour, base_width * 0.7);
   }
 
   // Planes under the lines: translucent, so overlapping floor and ceiling both show.
-  if (!planes.empty()) {
-    out += "<g class=\"planes\">\n";
-    for (const pb::FusedPlane& p : planes) {
-      std::string points;
-      for (const pb::Vec3& v : p.boundary()) points += Printf("%s%.3f,%.3f", points.empty() ? "" : " ", v.x(), -v.y());
-      std::string robots;
-      for (const std::string& r : p.robots()) robots += (robots.empty() ? "" : ",") + r;
-      out += Printf(
-          "<polygon class=\"plane\" points=\"%s\" fill=\"%s\" fill-opacity=\"0.15\" stroke=\"%s\" "
-          "stroke-opacity=\"0.5\" stroke-width=\"%.4f\"><title>plane #%llu, z %.2f..%.2f m, %.1f m2, support %u, "
-          "robots %s</title></polygon>\n",
-          points.c_str(), kPlaneColour, kPlaneColour, base_width * 0.5, static_cast<unsigned long long>(p.id()),
-          p.z_min(), p.z_max(), p.area(), p.support(), XmlEscape(robots).c_str());
-    }
-    out += "</g>\n";
+  for (const pb::FusedPlane& p : planes) {
+    if (p.boundary_size() == 0) continue;
+    for (const pb::Vec3& v : p.boundary()) cairo_line_to(cr, v.x(), -v.y());
+    cairo_close_path(cr);
+    SetColour(cr, ParseHexColour(kPlaneColour), 0.15);
+    cairo_fill_preserve(cr);
+    stroke(kPlaneColour, base_width * 0.5, 0.5);
   }
 
-  // Features: width grows with log2(support), capped at 4x.
-  out += "<g class=\"features\" stroke-linecap=\"round\">\n";
+  // Features, one stroke each: width grows with log2(support), capped at 4x.
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
   for (const pb::FusedFeature& f : features) {
     const double w = base_width * std::min(4.0, 1.0 + std::log2(std::max(1u, f.support())) / 2);
-    std::string robots;
-    for (const std::string& r : f.robots()) robots += (robots.empty() ? "" : ",") + r;
-    out += Printf(
-        "<line class=\"feature %s\" x1=\"%.3f\" y1=\"%.3f\" x2=\"%.3f\" y2=\"%.3f\" stroke=\"%s\" "
-        "stroke-width=\"%.4f\"><title>#%llu %s, support %u, %u members, robots %s</title></line>\n",
-        KindName(f.kind()).c_str(), f.a().x(), -f.a().y(), f.b().x(), -f.b().y(), KindColour(f.kind()), w,
-        static_cast<unsigned long long>(f.id()), KindName(f.kind()).c_str(), f.support(), f.member_count(),
-        XmlEscape(robots).c_str());
+    cairo_move_to(cr, f.a().x(), -f.a().y());
+    cairo_line_to(cr, f.b().x(), -f.b().y());
+    stroke(KindColour(f.kind()), w);
   }
-  out += "</g>\n";
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
 
   // Scale bar (one grid step) and legend in the band under the map.
   const double by = -gy0 + 1.5 * font;
   const double bx = gx0 + font;
-  out += Printf("<g class=\"scalebar\"><path d=\"M%.3f %.3fv%.3fh%.3fv%.3f\" stroke=\"black\" "
-                "stroke-width=\"%.4f\" fill=\"none\"/><text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\" "
-                "font-family=\"sans-serif\">%g m</text></g>\n",
-                bx, by - 0.4 * font, 0.4 * font, step, -0.4 * font, base_width, bx + step + 0.5 * font,
-                by + 0.1 * font, font, step);
+  cairo_move_to(cr, bx, by - 0.4 * font);
+  cairo_rel_line_to(cr, 0, 0.4 * font);
+  cairo_rel_line_to(cr, step, 0);
+  cairo_rel_line_to(cr, 0, -0.4 * font);
+  stroke("#000000", base_width);
+  text(bx + step + 0.5 * font, by + 0.1 * font, Printf("%g m", step));
   double lx = bx + step + 4 * font;
-  out += "<g class=\"legend\" font-family=\"sans-serif\">\n";
   for (pb::FeatureKind kind : {pb::FEATURE_KIND_LINE, pb::FEATURE_KIND_PLANE}) {
-    out += Printf("<path d=\"M%.3f %.3fh%.3f\" stroke=\"%s\" stroke-width=\"%.4f\"/>"
-                  "<text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\">%s</text>\n",
-                  lx, by, 1.5 * font, KindColour(kind), base_width * 2, lx + 2 * font, by + 0.35 * font, font,
-                  KindName(kind).c_str());
+    cairo_move_to(cr, lx, by);
+    cairo_rel_line_to(cr, 1.5 * font, 0);
+    stroke(KindColour(kind), base_width * 2);
+    text(lx + 2 * font, by + 0.35 * font, KindName(kind));
     lx += 6 * font;
   }
   if (!planes.empty()) {
-    out += Printf("<rect x=\"%.3f\" y=\"%.3f\" width=\"%.3f\" height=\"%.3f\" fill=\"%s\" fill-opacity=\"0.3\"/>"
-                  "<text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\">floor/ceiling</text>\n",
-                  lx, by - 0.4 * font, 1.5 * font, 0.8 * font, kPlaneColour, lx + 2 * font, by + 0.35 * font, font);
+    SetColour(cr, ParseHexColour(kPlaneColour), 0.3);
+    cairo_rectangle(cr, lx, by - 0.4 * font, 1.5 * font, 0.8 * font);
+    cairo_fill(cr);
+    text(lx + 2 * font, by + 0.35 * font, "floor/ceiling");
     lx += 9 * font;
   }
-  out += Printf("<text x=\"%.3f\" y=\"%.3f\" font-size=\"%.3f\">width ~ support; %zu features</text>\n", lx,
-                by + 0.35 * font, font, features.size());
-  out += "</g>\n</svg>\n";
-  return out;
+  text(lx, by + 0.35 * font, Printf("width ~ support; %zu features", features.size()));
+  StatusOr<std::string> svg = canvas.FinishSvg();
+  return svg.ok() ? std::move(svg.value()) : std::string();
 }
 
 }  // namespace mapd::client

@@ -1,5 +1,6 @@
-// A plain 8-bit RGB raster with the few drawing operations the renderings
-// need (filled rectangles, 5x7 bitmap text). Pixel (0, 0) is the top left.
+// A plain 8-bit RGB raster: the map area of a voxel rendering, computed pixel
+// by pixel before cairo frames it (client/cairo_canvas.h). Pixel (0, 0) is the
+// top left.
 #ifndef MAPD_CLIENT_RGB_IMAGE_H_
 #define MAPD_CLIENT_RGB_IMAGE_H_
 
@@ -29,14 +30,8 @@ class RgbImage {
   // REQUIRES: Contains(x, y).
   Rgb At(int x, int y) const;
   bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width_ && y < height_; }
-  // Out-of-image pixels are ignored by the drawing calls.
+  // Out-of-image pixels are ignored.
   void Set(int x, int y, Rgb colour);
-  void FillRect(int x, int y, int w, int h, Rgb colour);
-  // Draws `text` with its top-left corner at (x, y); each font pixel is a
-  // scale x scale block. Returns the width drawn (TextWidthPx).
-  int DrawText(int x, int y, const std::string& text, int scale, Rgb colour);
-  // Copies `src` with its top-left corner at (x, y).
-  void Blit(const RgbImage& src, int x, int y);
 
  private:
   int width_ = 0, height_ = 0;

@@ -38,7 +38,7 @@ struct RenderOptions {
   // least this many pixels (an 8 m room of 10 cm voxels would be 80 px).
   int min_map_px = 512;
   int margin_px = 12;
-  int text_scale = 2;     // size of the 5x7 font's pixels in image pixels
+  int text_scale = 2;     // text size: the labels' font is 9 px per step (18 px by default)
   Rgb background{255, 255, 255};
 
   // InvalidArgument naming the field: pixel_m finite and >= 0, max_map_px in
@@ -72,8 +72,9 @@ enum class ImageFormat { kPng, kSvg };
 // From the extension (.png, .svg, any case); false otherwise.
 bool ImageFormatFromPath(const std::string& path, ImageFormat* format);
 
-// The complete picture (map, scale bar, caption, legend) as a PNG file, or as
-// an SVG file embedding the map as a PNG with vector scale bar and legend.
+// The complete picture (map, scale bar, caption, legend), drawn by cairo, as a
+// PNG file, or as an SVG file embedding the map as a PNG with vector scale bar
+// and legend (labels as glyph outlines, in their real case). Internal if cairo fails.
 StatusOr<std::string> RenderVoxelImage(const std::vector<VoxelLayer>& layers, const RenderOptions& options,
                                        ImageFormat format);
 

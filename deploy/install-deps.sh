@@ -9,6 +9,7 @@ PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
+  libcairo2-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
 )
 if [ "${1:-}" = "--ci" ]; then

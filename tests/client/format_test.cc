@@ -1,4 +1,6 @@
 #include "client/format.h"
+#include "client/format_svg.h"
+#include "client/support/svg_facts.h"
 
 #include <string>
 
@@ -32,12 +34,6 @@ FeatureList ThreeFeatures() {
   return {Feature(7, pb::FEATURE_KIND_LINE, 0, 0, 10, 0, 12, {"r1", "r2"}),
           Feature(42, pb::FEATURE_KIND_PLANE, 10, 0, 10, 8, 3, {"r1"}),
           Feature(4096, pb::FEATURE_KIND_LINE, 10, 8, 0, 8.5, 1, {"robot \"quoted\""})};
-}
-
-size_t Count(const std::string& text, const std::string& needle) {
-  size_t n = 0;
-  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
-  return n;
 }
 
 // Parses JSON text into a Struct (fails the test on invalid JSON).
@@ -82,26 +78,25 @@ TEST(FormatGeoJsonTest, EmptyMapIsValid) {
   EXPECT_EQ(doc.fields().at("features").list_value().values_size(), 0);
 }
 
-TEST(FormatSvgTest, HasViewBoxAndOneLinePerFeature) {
+// cairo writes each stroke as a <path> in its colour; the legend adds one
+// sample stroke per kind.
+TEST(FormatSvgTest, HasViewBoxAndOneStrokePerFeature) {
   const std::string svg = FormatSvg(ThreeFeatures());
   EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
   EXPECT_NE(svg.find("viewBox=\""), std::string::npos);
-  EXPECT_EQ(Count(svg, "<line class=\"feature"), 3u);
-  EXPECT_EQ(Count(svg, "<line class=\"feature plane\""), 1u);
-  EXPECT_NE(svg.find("class=\"grid\""), std::string::npos);
-  EXPECT_NE(svg.find("class=\"scalebar\""), std::string::npos);
-  EXPECT_NE(svg.find("class=\"legend\""), std::string::npos);
-  // y up: the map point (10, 8) is drawn at SVG y = -8.
-  EXPECT_NE(svg.find("x2=\"10.000\" y2=\"-8.000\""), std::string::npos);
-  // Quotes in robot names are escaped.
-  EXPECT_NE(svg.find("robot &quot;quoted&quot;"), std::string::npos);
-  EXPECT_EQ(svg.find("robot \"quoted\""), std::string::npos);
+  EXPECT_EQ(testing::CountShapesOfColour(svg, "#1f77b4"), 2u + 1u);  // the two walls
+  EXPECT_EQ(testing::CountShapesOfColour(svg, "#d62728"), 1u + 1u);  // the one of kind plane
+  EXPECT_EQ(testing::CountShapesOfColour(svg, "#e0e0e0"), 1u);       // the grid, one path
+  // y up: the map point (10, 8) is drawn at y = -8 in the metre frame.
+  EXPECT_NE(svg.find("L 10 -8"), std::string::npos);
+  // Scale bar and legend text are glyphs (cairo embeds their outlines).
+  EXPECT_GT(testing::CountSubstr(svg, "<use"), 20u);
 }
 
 TEST(FormatSvgTest, EmptyMapStillDraws) {
   const std::string svg = FormatSvg({});
   EXPECT_NE(svg.find("viewBox=\""), std::string::npos);
-  EXPECT_EQ(Count(svg, "<line class=\"feature"), 0u);
+  EXPECT_EQ(testing::CountShapesOfColour(svg, "#1f77b4"), 1u);  // the legend's sample only
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
 }
 

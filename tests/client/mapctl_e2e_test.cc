@@ -10,6 +10,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "client/support/svg_facts.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 
@@ -77,8 +78,11 @@ TEST_F(MapctlE2eTest, ScriptedSession) {
   const std::string svg_text((std::istreambuf_iterator<char>(s)), std::istreambuf_iterator<char>());
   EXPECT_THAT(geojson_text, HasSubstr("FeatureCollection"));
   EXPECT_GT(Count(geojson_text, "\"LineString\""), 3u);
-  EXPECT_GT(Count(svg_text, "<line class=\"feature"), 3u);
-  EXPECT_EQ(Count(geojson_text, "\"LineString\""), Count(svg_text, "<line class=\"feature"));
+  // One cairo stroke per feature in its kind's colour, plus one legend sample per kind.
+  const size_t strokes = testing::CountShapesOfColour(svg_text, "#1f77b4") +
+                         testing::CountShapesOfColour(svg_text, "#d62728") - 2;
+  EXPECT_GT(strokes, 3u);
+  EXPECT_EQ(Count(geojson_text, "\"LineString\""), strokes);
 
   // Re-sending the same session is answered duplicate, and exits 0.
   r = Mapctl({"simulate", "--robots", "1", "--scans", "5", "--session", "e2e"});

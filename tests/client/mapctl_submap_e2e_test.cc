@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "client/support/png_decode.h"
+#include "client/support/svg_facts.h"
 #include "client/support/room_octree.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
@@ -181,9 +182,12 @@ TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
   ASSERT_TRUE(summary.ok()) << summary.status().ToString();
   EXPECT_NEAR(summary->resolution, 0.1, 1e-6);
   const std::string svg = ReadAll(global_svg);
-  EXPECT_EQ(svg.rfind("<svg ", 0), 0u);
+  EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
+  EXPECT_THAT(svg, HasSubstr("<svg "));
   EXPECT_THAT(svg, HasSubstr("data:image/png;base64,"));
-  EXPECT_THAT(svg, HasSubstr("global map"));
+  // One layer: one legend swatch in the first layer colour (labels are glyph outlines).
+  EXPECT_EQ(CountSubstr(svg, CairoRedPrefix("#d55e00")), 1u);
+  EXPECT_THAT(r.out, HasSubstr("rendered 1 layer "));
 
   // Local files need no server.
   const std::string both_png = dir_.File("both.png");

@@ -1,5 +1,4 @@
-// The top-down voxel renderer of mapctl: PNG encoding checked by an
-// independent decoder, pixels of tiny known scenes, bounds, pixel size, scale
+// The top-down voxel renderer of mapctl: PNG files read back with cairo, pixels of tiny known scenes, bounds, pixel size, scale
 // bar, legend, and the transform helpers.
 #include <cmath>
 #include <string>
@@ -8,12 +7,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "client/bitmap_font.h"
-#include "client/png_writer.h"
 #include "client/rgb_image.h"
 #include "client/rigid_transform.h"
 #include "client/voxel_render.h"
 #include "client/support/png_decode.h"
+#include "client/support/svg_facts.h"
 
 namespace mapd::client {
 namespace {
@@ -27,82 +25,6 @@ const Rgb kWhite{255, 255, 255};
 Rgb Scaled(Rgb c, double f) {
   return {static_cast<uint8_t>(std::lround(c.r * f)), static_cast<uint8_t>(std::lround(c.g * f)),
           static_cast<uint8_t>(std::lround(c.b * f))};
-}
-
-// ---------------------------------------------------------------------------
-// PNG
-
-TEST(PngWriterTest, CrcMatchesKnownValues) {
-  // The CRC of every PNG's IEND chunk (type only, no data) is AE 42 60 82.
-  EXPECT_EQ(PngCrc32("IEND"), 0xAE426082u);
-  EXPECT_EQ(PngCrc32("123456789"), 0xCBF43926u);  // the standard CRC-32 check value
-  EXPECT_EQ(PngCrc32("123456789"), testing::BitwiseCrc32("123456789"));
-}
-
-TEST(PngWriterTest, WritesChunksThatAnIndependentDecoderReads) {
-  RgbImage image(3, 2, kWhite);
-  image.Set(0, 0, {255, 0, 0});
-  image.Set(2, 1, {1, 2, 3});
-  StatusOr<std::string> png = EncodePng(image);
-  ASSERT_TRUE(png.ok()) << png.status().ToString();
-  EXPECT_EQ(png->substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-
-  DecodedPng decoded;
-  std::string error;
-  ASSERT_TRUE(DecodePng(*png, &decoded, &error)) << error;
-  EXPECT_EQ(decoded.width, 3);
-  EXPECT_EQ(decoded.height, 2);
-  EXPECT_EQ(decoded.chunk_types, (std::vector<std::string>{"IHDR", "IDAT", "IEND"}));
-  EXPECT_EQ(decoded.rgb, image.bytes());
-  EXPECT_EQ(decoded.r(0, 0), 255);
-  EXPECT_EQ(decoded.g(0, 0), 0);
-  EXPECT_EQ(decoded.b(2, 1), 3);
-}
-
-TEST(PngWriterTest, DecoderCatchesACorruptedByte) {
-  // Guards the test decoder itself: a flipped pixel byte breaks the IDAT CRC.
-  StatusOr<std::string> png = EncodePng(RgbImage(4, 4, {10, 20, 30}));
-  ASSERT_TRUE(png.ok());
-  std::string bad = *png;
-  bad[bad.size() - 20] ^= 0x40;  // inside IDAT's compressed data
-  DecodedPng decoded;
-  std::string error;
-  EXPECT_FALSE(DecodePng(bad, &decoded, &error));
-  EXPECT_THAT(error, HasSubstr("CRC"));
-}
-
-TEST(PngWriterTest, RefusesAnEmptyImage) {
-  StatusOr<std::string> png = EncodePng(RgbImage(0, 5, kWhite));
-  ASSERT_FALSE(png.ok());
-  EXPECT_EQ(png.status().code(), StatusCode::kInvalidArgument);
-}
-
-TEST(PngWriterTest, Base64MatchesRfc4648Vectors) {
-  EXPECT_EQ(Base64(""), "");
-  EXPECT_EQ(Base64("f"), "Zg==");
-  EXPECT_EQ(Base64("fo"), "Zm8=");
-  EXPECT_EQ(Base64("foo"), "Zm9v");
-  EXPECT_EQ(Base64("foob"), "Zm9vYg==");
-  EXPECT_EQ(Base64("foobar"), "Zm9vYmFy");
-  EXPECT_EQ(Base64(std::string("\xff\xfe", 2)), "//4=");
-}
-
-// ---------------------------------------------------------------------------
-// Text
-
-TEST(BitmapFontTest, DrawsGlyphPixels) {
-  RgbImage image(12, 7, kWhite);
-  const int width = image.DrawText(0, 0, "1-", 1, {0, 0, 0});
-  EXPECT_EQ(width, 11);
-  // '1': top row ..#.., bottom row .###.
-  EXPECT_EQ(image.At(2, 0), (Rgb{0, 0, 0}));
-  EXPECT_EQ(image.At(0, 0), kWhite);
-  EXPECT_EQ(image.At(1, 6), (Rgb{0, 0, 0}));
-  // '-' starts at column 6: its row 3 is solid, row 2 empty.
-  for (int x = 6; x < 11; ++x) EXPECT_EQ(image.At(x, 3), (Rgb{0, 0, 0})) << x;
-  EXPECT_EQ(image.At(6, 2), kWhite);
-  EXPECT_EQ(Glyph('m'), Glyph('M'));
-  EXPECT_EQ(Glyph('\x01'), Glyph('?'));
 }
 
 // ---------------------------------------------------------------------------
@@ -416,13 +338,28 @@ TEST(RenderVoxelImageTest, SvgEmbedsTheMapAndWritesVectorLegend) {
   second.colour = LayerColour(1);
   StatusOr<std::string> svg = RenderVoxelImage({Frame(), second}, Unmagnified(), ImageFormat::kSvg);
   ASSERT_TRUE(svg.ok()) << svg.status().ToString();
-  EXPECT_EQ(svg->rfind("<svg ", 0), 0u);
-  EXPECT_THAT(*svg, HasSubstr("data:image/png;base64,iVBORw0KGgo"));  // the PNG signature in base64
-  EXPECT_THAT(*svg, HasSubstr(">2 m</text>"));
-  EXPECT_THAT(*svg, HasSubstr(">frame &lt;1&gt;</text>"));  // labels are escaped
-  EXPECT_THAT(*svg, HasSubstr(">second</text>"));
-  EXPECT_THAT(*svg, HasSubstr("mixed colour: layers overlap"));
+  EXPECT_EQ(svg->rfind("<?xml", 0), 0u);
+  EXPECT_THAT(*svg, HasSubstr("data:image/png;base64,iVBORw0KGgo"));  // the map: a PNG (signature in base64)
+  // The two legend swatches in the layers' colours (cairo paints each as a path).
+  EXPECT_EQ(testing::CountSubstr(*svg, testing::CairoRedPrefix("#d55e00")), 1u);
+  EXPECT_EQ(testing::CountSubstr(*svg, testing::CairoRedPrefix("#0072b2")), 1u);
+  // Text is glyph outlines, one <use> per visible character: at least the
+  // scale bar "2 m", the caption, both labels and the overlap note.
+  EXPECT_GT(testing::CountSubstr(*svg, "<use"), std::string("2mframe<1>secondmixedcolour:layersoverlap").size());
   EXPECT_THAT(*svg, HasSubstr("</svg>"));
+}
+
+// The labels keep their case: "10 m" is metres, "10 M" would be something else.
+TEST(RenderVoxelImageTest, LabelsKeepTheirCase) {
+  for (ImageFormat format : {ImageFormat::kPng, ImageFormat::kSvg}) {
+    VoxelLayer lower = Frame(), upper = Frame();
+    lower.label = "room a";
+    upper.label = "ROOM A";
+    StatusOr<std::string> a = RenderVoxelImage({lower}, Unmagnified(), format);
+    StatusOr<std::string> b = RenderVoxelImage({upper}, Unmagnified(), format);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_NE(*a, *b) << (format == ImageFormat::kPng ? "png" : "svg");
+  }
 }
 
 }  // namespace
