@@ -179,7 +179,10 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
     for (uint64_t s = 0; s < scans; ++s) {
       for (SimRobot& sim : sims) {
         json.clear();
-        (void)google::protobuf::util::MessageToJsonString(sim.NextBatch(), &json);
+        // The .proto field names (snake_case), as `status --json` writes them.
+        google::protobuf::util::JsonPrintOptions options;
+        options.preserve_proto_field_names = true;
+        (void)google::protobuf::util::MessageToJsonString(sim.NextBatch(), &json, options);
         text += json + "\n";
       }
     }

@@ -5,6 +5,7 @@
 #include <ctime>
 
 #include <google/protobuf/util/json_util.h>
+#include <nlohmann/json.hpp>
 
 #include "client/text_util.h"
 
@@ -13,14 +14,12 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-// A finite number with at most 4 decimals and no trailing zeros; null otherwise.
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::string s = Printf("%.4f", v);
-  while (s.back() == '0') s.pop_back();
-  if (s.back() == '.') s.pop_back();
-  if (s == "-0") s = "0";
-  return s;
+// A finite number rounded to 4 decimals (0.1 mm), null otherwise: GeoJSON has
+// no NaN or infinity, and more digits only add bytes.
+nlohmann::ordered_json JsonNumber(double v) {
+  if (!std::isfinite(v)) return nullptr;
+  const double rounded = std::round(v * 1e4) / 1e4;
+  return rounded == 0 ? 0.0 : rounded;  // no "-0.0"
 }
 
 std::string Join(const google::protobuf::RepeatedPtrField<std::string>& items, const char* sep) {
@@ -90,23 +89,6 @@ std::string KindName(pb::FeatureKind kind) {
   }
 }
 
-std::string JsonQuote(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (c < 0x20) out += Printf("\\u%04x", c);
-        else out.push_back(static_cast<char>(c));
-    }
-  }
-  return out + "\"";
-}
-
 std::string MessageToJson(const google::protobuf::Message& message) {
   google::protobuf::util::JsonPrintOptions options;
   options.add_whitespace = true;
@@ -153,47 +135,59 @@ std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
 }
 
 std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes) {
-  std::string out =
-      "{\n  \"type\": \"FeatureCollection\",\n"
-      "  \"properties\": {\"frame\": \"map\", \"units\": \"m\", \"note\": \"coordinates are map-frame "
-      "metres (x, y), not longitude/latitude\"},\n"
-      "  \"features\": [";
-  for (size_t i = 0; i < features.size(); ++i) {
-    const pb::FusedFeature& f = features[i];
-    std::string robots;
-    for (const std::string& r : f.robots()) robots += (robots.empty() ? "" : ", ") + JsonQuote(r);
-    out += i == 0 ? "\n" : ",\n";
-    out += "    {\"type\": \"Feature\", \"id\": " + std::to_string(f.id()) +
-           ", \"geometry\": {\"type\": \"LineString\", \"coordinates\": [[" + JsonNumber(f.a().x()) + ", " +
-           JsonNumber(f.a().y()) + "], [" + JsonNumber(f.b().x()) + ", " + JsonNumber(f.b().y()) + "]]}" +
-           ", \"properties\": {\"id\": " + std::to_string(f.id()) + ", \"kind\": " +
-           JsonQuote(KindName(f.kind())) + ", \"support\": " + std::to_string(f.support()) +
-           ", \"member_count\": " + std::to_string(f.member_count()) + ", \"z_min\": " +
-           JsonNumber(f.z_min()) + ", \"z_max\": " + JsonNumber(f.z_max()) + ", \"robots\": [" + robots +
-           "]}}";
+  // ordered_json keeps the keys in the order written (type, id, geometry, properties).
+  using Json = nlohmann::ordered_json;
+  const auto point = [](double x, double y) { return Json::array({JsonNumber(x), JsonNumber(y)}); };
+  const auto robots = [](const google::protobuf::RepeatedPtrField<std::string>& names) {
+    return Json(std::vector<std::string>(names.begin(), names.end()));
+  };
+  Json items = Json::array();
+  for (const pb::FusedFeature& f : features) {
+    items.push_back({{"type", "Feature"},
+                     {"id", f.id()},
+                     {"geometry",
+                      {{"type", "LineString"},
+                       {"coordinates", Json::array({point(f.a().x(), f.a().y()), point(f.b().x(), f.b().y())})}}},
+                     {"properties",
+                      {{"id", f.id()},
+                       {"kind", KindName(f.kind())},
+                       {"support", f.support()},
+                       {"member_count", f.member_count()},
+                       {"z_min", JsonNumber(f.z_min())},
+                       {"z_max", JsonNumber(f.z_max())},
+                       {"robots", robots(f.robots())}}}});
   }
-  for (size_t i = 0; i < planes.size(); ++i) {
-    const pb::FusedPlane& p = planes[i];
-    std::string robots;
-    for (const std::string& r : p.robots()) robots += (robots.empty() ? "" : ", ") + JsonQuote(r);
+  for (const pb::FusedPlane& p : planes) {
     // A closed ring: the first point again at the end.
-    std::string ring;
+    Json ring = Json::array();
     for (int k = 0; k <= p.boundary_size() && p.boundary_size() > 0; ++k) {
       const pb::Vec3& v = p.boundary(k % p.boundary_size());
-      ring += (k == 0 ? "[" : ", [") + JsonNumber(v.x()) + ", " + JsonNumber(v.y()) + "]";
+      ring.push_back(point(v.x(), v.y()));
     }
-    out += features.empty() && i == 0 ? "\n" : ",\n";
-    out += "    {\"type\": \"Feature\", \"id\": " + std::to_string(p.id()) +
-           ", \"geometry\": {\"type\": \"Polygon\", \"coordinates\": [[" + ring + "]]}" +
-           ", \"properties\": {\"id\": " + std::to_string(p.id()) + ", \"kind\": \"plane\", \"normal\": [" +
-           JsonNumber(p.normal().x()) + ", " + JsonNumber(p.normal().y()) + ", " + JsonNumber(p.normal().z()) +
-           "], \"offset_m\": " + JsonNumber(p.offset()) + ", \"area_m2\": " + JsonNumber(p.area()) +
-           ", \"z_min\": " + JsonNumber(p.z_min()) + ", \"z_max\": " + JsonNumber(p.z_max()) +
-           ", \"support\": " + std::to_string(p.support()) + ", \"member_count\": " +
-           std::to_string(p.member_count()) + ", \"robots\": [" + robots + "]}}";
+    items.push_back(
+        {{"type", "Feature"},
+         {"id", p.id()},
+         {"geometry", {{"type", "Polygon"}, {"coordinates", Json::array({ring})}}},
+         {"properties",
+          {{"id", p.id()},
+           {"kind", "plane"},
+           {"normal", Json::array({JsonNumber(p.normal().x()), JsonNumber(p.normal().y()), JsonNumber(p.normal().z())})},
+           {"offset_m", JsonNumber(p.offset())},
+           {"area_m2", JsonNumber(p.area())},
+           {"z_min", JsonNumber(p.z_min())},
+           {"z_max", JsonNumber(p.z_max())},
+           {"support", p.support()},
+           {"member_count", p.member_count()},
+           {"robots", robots(p.robots())}}}});
   }
-  out += features.empty() && planes.empty() ? "]\n}\n" : "\n  ]\n}\n";
-  return out;
+  const Json doc = {{"type", "FeatureCollection"},
+                    {"properties",
+                     {{"frame", "map"},
+                      {"units", "m"},
+                      {"note", "coordinates are map-frame metres (x, y), not longitude/latitude"}}},
+                    {"features", std::move(items)}};
+  // Invalid UTF-8 in a robot name is replaced rather than aborting the export.
+  return doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 std::string FormatStats(const pb::Stats& s, const std::string& server) {

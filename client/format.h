@@ -54,8 +54,6 @@ std::string FormatSubmaps(const mapserver::v1::ListSubmapsResponse& submaps);
 
 // "line", "plane" or "any".
 std::string KindName(mapserver::v1::FeatureKind kind);
-// A string as a JSON string literal, quotes included.
-std::string JsonQuote(const std::string& s);
 
 }  // namespace mapd::client
 

@@ -103,6 +103,9 @@ TEST_F(MapctlE2eTest, IngestReportsTheRejectedLine) {
   std::vector<std::string> lines;
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   ASSERT_EQ(lines.size(), 3u);
+  // The .proto field names, like `status --json` (not protobuf's camelCase).
+  EXPECT_THAT(lines[0], HasSubstr("\"robot_id\":\"sim-robot-1\""));
+  EXPECT_THAT(lines[0], HasSubstr("\"session_id\":\"file\""));
   const std::string key = "\"translation\":{\"x\":";
   const size_t at = lines[1].find(key);
   ASSERT_NE(at, std::string::npos) << lines[1];
