@@ -81,62 +81,44 @@ int CheckReachable(const Context& ctx, const std::string& what) {
   return status.ok() ? kExitOk : ReportRpcError(ctx, what, status);
 }
 
-bool Args::Parse(const std::vector<std::string>& args, const std::vector<FlagSpec>& specs, std::string* error) {
-  bool flags_done = false;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (flags_done || arg == "-" || arg.empty() || arg[0] != '-') {
-      positionals_.push_back(arg);
-      continue;
-    }
-    if (arg == "--") {
-      flags_done = true;
-      continue;
-    }
-    const size_t eq = arg.find('=');
-    const std::string name = arg.substr(0, eq);
-    const FlagSpec* spec = nullptr;
-    for (const FlagSpec& s : specs) {
-      if (s.name == name) spec = &s;
-    }
-    if (spec == nullptr) {
-      *error = "unknown flag '" + name + "'";
-      return false;
-    }
-    if (!spec->takes_value) {
-      if (eq != std::string::npos) {
-        *error = "flag " + name + " takes no value";
-        return false;
-      }
-      values_[name] = "";
-    } else if (eq != std::string::npos) {
-      values_[name] = arg.substr(eq + 1);
-    } else if (i + 1 < args.size()) {
-      values_[name] = args[++i];
-    } else {
-      *error = "flag " + name + " needs a value";
-      return false;
-    }
-  }
-  return true;
+CLI::Validator PositiveReal() {
+  return CLI::Validator(
+      [](std::string& text) {
+        double v = 0;
+        return ParseDouble(text, &v) && v > 0 ? std::string() : "wants a number > 0, got '" + text + "'";
+      },
+      "> 0");
 }
 
-int ParseCommandArgs(const std::string& command, const char* help, const std::vector<std::string>& args,
-                     std::vector<FlagSpec> specs, Args* out) {
-  specs.push_back({"--help", false});
-  specs.push_back({"-h", false});
-  std::string error;
-  if (!out->Parse(args, specs, &error)) return UsageError(command, error);
-  if (out->Has("--help") || out->Has("-h")) {
-    std::fputs(help, stdout);
-    return kExitOk;
+CLI::Validator PositiveId() {
+  return CLI::Validator(
+      [](std::string& text) {
+        const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+        errno = 0;
+        const bool ok = digits && std::strtoull(text.c_str(), nullptr, 10) > 0 && errno == 0;
+        return ok ? std::string() : "'" + text + "' is not an id (a whole number > 0)";
+      },
+      "ID");
+}
+
+int ParseCommandLine(CLI::App* app, int argc, const char* const* argv) {
+  try {
+    app->parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app->exit(e);  // the help of the (sub)command asked about, on stdout, exit 0
+  } catch (const CLI::ParseError& e) {
+    if (app->get_subcommands().empty() && !app->remaining().empty()) {
+      return UsageError("", "unknown command '" + app->remaining().front() + "'");
+    }
+    // The deepest command reached names the help to see: "token create".
+    std::string command;
+    for (const CLI::App* c = app; !c->get_subcommands().empty();) {
+      c = c->get_subcommands().front();
+      command += (command.empty() ? "" : " ") + c->get_name();
+    }
+    return UsageError(command, e.what());
   }
   return kContinue;
-}
-
-std::string Args::Get(const std::string& name, const std::string& fallback) const {
-  auto it = values_.find(name);
-  return it == values_.end() ? fallback : it->second;
 }
 
 bool ParseDouble(const std::string& s, double* out) {
@@ -145,16 +127,6 @@ bool ParseDouble(const std::string& s, double* out) {
   errno = 0;
   const double v = std::strtod(s.c_str(), &end);
   if (errno != 0 || end != s.c_str() + s.size() || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
-}
-
-bool ParseUint(const std::string& s, uint64_t* out) {
-  if (s.empty() || s[0] < '0' || s[0] > '9') return false;
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long long v = std::strtoull(s.c_str(), &end, 10);
-  if (errno != 0 || end != s.c_str() + s.size()) return false;
   *out = v;
   return true;
 }

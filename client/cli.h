@@ -1,16 +1,18 @@
-// What every mapctl subcommand shares: its connection, flag parsing, exit
+// What every mapctl subcommand shares: its connection, flag parsing (CLI11), exit
 // codes and the one-line error format
 //   mapctl: <what failed>: <server message> (<CODE>)
 #ifndef MAPD_CLIENT_CLI_H_
 #define MAPD_CLIENT_CLI_H_
 
 #include <chrono>
+#include <functional>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -52,38 +54,37 @@ int CheckReachable(const Context& ctx, const std::string& what);
 // "UNAVAILABLE", "INVALID_ARGUMENT", ...
 const char* StatusCodeName(grpc::StatusCode code);
 
-// The flags one command accepts.
-struct FlagSpec {
-  std::string name;  // "--bbox", "-o"
-  bool takes_value = false;
-};
+// What a parsed command line asks for: set by the chosen subcommand's
+// callback (client/commands.h), run once the connection is set up.
+using Action = std::function<int(const Context&)>;
 
-// Flags (`--name value`, `--name=value`, `-o value`) and positionals; `--`
-// ends the flags and a lone `-` is a positional (stdin).
-class Args {
- public:
-  // False with `*error` set for an unknown flag or a flag missing its value.
-  bool Parse(const std::vector<std::string>& args, const std::vector<FlagSpec>& specs, std::string* error);
+// Binds a subcommand to `run`: returns the options struct its flags fill
+// (CLI11 keeps pointers into it, so it lives as long as the app), and makes
+// the parse set `*action` to run it when this subcommand is chosen.
+template <typename Options>
+std::shared_ptr<Options> BindCommand(CLI::App* command, Action* action,
+                                     int (*run)(const Context&, const Options&)) {
+  auto options = std::make_shared<Options>();
+  command->callback([options, action, run] {
+    *action = [options, run](const Context& ctx) { return run(ctx, *options); };
+  });
+  return options;
+}
 
-  bool Has(const std::string& name) const { return values_.count(name) > 0; }
-  std::string Get(const std::string& name, const std::string& fallback = "") const;
-  const std::vector<std::string>& positionals() const { return positionals_; }
-
- private:
-  std::map<std::string, std::string> values_;
-  std::vector<std::string> positionals_;
-};
-
-// Parses a command's arguments; --help and -h are added to `specs`. Returns
-// kContinue to go on, or the exit code to end with: 0 after printing `help`
-// for --help, kExitUsage (reported) for bad flags.
+// Parses argv with `app`; on a bad command line prints one line
+//   mapctl <command>: <what is wrong, naming the flag> (see 'mapctl <command> --help')
+// and returns kExitUsage; --help prints the help of the command asked about and
+// returns kExitOk. kContinue when the parse succeeded.
 constexpr int kContinue = -1;
-int ParseCommandArgs(const std::string& command, const char* help, const std::vector<std::string>& args,
-                     std::vector<FlagSpec> specs, Args* out);
+// A flag check for a finite number > 0 with a plain message ("wants a number
+// > 0, got '0'"); CLI::PositiveNumber would print the range up to DBL_MAX.
+CLI::Validator PositiveReal();
+// The same for ids: a whole number > 0 ("'abc' is not an id (a whole number > 0)").
+CLI::Validator PositiveId();
+int ParseCommandLine(CLI::App* app, int argc, const char* const* argv);
 
 // Whole-string number parsing; false on junk, overflow or a non-finite double.
 bool ParseDouble(const std::string& s, double* out);
-bool ParseUint(const std::string& s, uint64_t* out);
 // Splits on `sep`, keeping empty fields.
 std::vector<std::string> Split(const std::string& s, char sep);
 

@@ -1,5 +1,5 @@
-// The mapctl subcommands. Each takes the arguments after its name, prints its
-// own --help, and returns an ExitCode (client/cli.h).
+// The mapctl subcommands, declared to CLI11 (client/cli.h). Each run returns
+// an ExitCode.
 #ifndef MAPD_CLIENT_COMMANDS_H_
 #define MAPD_CLIENT_COMMANDS_H_
 
@@ -13,30 +13,19 @@
 
 namespace mapd::client {
 
-using CommandArgs = std::vector<std::string>;
-
-// commands_map.cc: reading the map
-int RunStatus(const Context& ctx, const CommandArgs& args);
-int RunRobots(const Context& ctx, const CommandArgs& args);
-int RunFeatures(const Context& ctx, const CommandArgs& args);
-
-// commands_ingest.cc: writing observations
-int RunIngest(const Context& ctx, const CommandArgs& args);
-int RunSimulate(const Context& ctx, const CommandArgs& args);
-
-// commands_submap.cc: voxel submaps and merging
-int RunSubmaps(const Context& ctx, const CommandArgs& args);
-int RunSubmap(const Context& ctx, const CommandArgs& args);  // "submap upload ..."
-int RunMerge(const Context& ctx, const CommandArgs& args);
-int RunGlobalMap(const Context& ctx, const CommandArgs& args);
-
-// commands_auth.cc: tokens, the audit log, whoami
-int RunToken(const Context& ctx, const CommandArgs& args);  // "token create|list|revoke ..."
-int RunAudit(const Context& ctx, const CommandArgs& args);
-int RunWhoAmI(const Context& ctx, const CommandArgs& args);
-
-// commands_render.cc: top-down renderings of OctoMap files
-int RunRender(const Context& ctx, const CommandArgs& args);
+// Each adds its subcommands, their flags (with the defaults the code uses)
+// and their help to `app`; the one the command line picks sets `*action`.
+//
+// commands_map.cc: status, robots, features (reading the map)
+void AddMapCommands(CLI::App* app, Action* action);
+// commands_ingest.cc: ingest, simulate (writing observations)
+void AddIngestCommands(CLI::App* app, Action* action);
+// commands_submap.cc: submaps, submap upload, merge, global-map (voxel submaps)
+void AddSubmapCommands(CLI::App* app, Action* action);
+// commands_auth.cc: token create|list|revoke, audit, whoami
+void AddAuthCommands(CLI::App* app, Action* action);
+// commands_render.cc: render (top-down renderings of OctoMap files)
+void AddRenderCommand(CLI::App* app, Action* action);
 
 // Shared by render, `merge --render` and `global-map --render`. Each returns
 // kContinue to go on, or the exit code to end with (the error printed).

@@ -10,23 +10,21 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-const char kTokenHelp[] =
-    "Usage: mapctl [--token ADMIN_TOKEN] token create --name NAME --role ROLE [--robot ROBOT_ID]\n"
-    "       mapctl [--token ADMIN_TOKEN] token list\n"
-    "       mapctl [--token ADMIN_TOKEN] token revoke ID\n"
-    "Manages bearer tokens (needs an admin token; the first one comes from\n"
-    "`mapd token create --db FILE --role admin --name NAME`).\n"
-    "  ROLE: reader (reads everything), robot (writes its own robot id; needs --robot),\n"
-    "        operator (reads, writes, merges, deletes, reads the audit log), admin.\n"
-    "create prints the secret token once on stdout; the server keeps only its hash.\n";
+struct CreateOptions {
+  std::string name;
+  std::string role;
+  std::string robot;
+};
 
-const char kAuditHelp[] =
-    "Usage: mapctl audit [--limit N]\n"
-    "The audit log, newest first (default 100 entries, at most 10000): uploads, merges,\n"
-    "deletes, token changes and refused writes, with who did them. Operator or admin.\n";
+struct RevokeOptions {
+  uint64_t id = 0;
+};
 
-const char kWhoAmIHelp[] =
-    "Usage: mapctl whoami\nWho the server takes this caller for: name, role, robot id.\n";
+struct AuditOptions {
+  uint32_t limit = 100;
+};
+
+struct NoOptions {};
 
 const char* RoleName(pb::Role r) {
   switch (r) {
@@ -64,15 +62,12 @@ void PrintTokens(const pb::ListTokensResponse& r) {
   }
 }
 
-int TokenCreate(const Context& ctx, const Args& flags) {
+int RunTokenCreate(const Context& ctx, const CreateOptions& flags) {
   pb::CreateTokenRequest request;
-  request.set_name(flags.Get("--name"));
-  request.set_robot_id(flags.Get("--robot"));
+  request.set_name(flags.name);
+  request.set_robot_id(flags.robot);
   pb::Role role = pb::ROLE_UNSPECIFIED;
-  if (!ParseRole(flags.Get("--role"), &role)) {
-    return UsageError("token", "--role must be reader, robot, operator or admin, got '" + flags.Get("--role") + "'");
-  }
-  if (request.name().empty()) return UsageError("token", "create needs --name NAME");
+  ParseRole(flags.role, &role);  // checked by the parser
   request.set_role(role);
   pb::CreateTokenResponse response;
   auto call = ctx.NewCallContext();
@@ -86,54 +81,29 @@ int TokenCreate(const Context& ctx, const Args& flags) {
   return kExitOk;
 }
 
-}  // namespace
-
-int RunToken(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  const std::vector<FlagSpec> specs = {{"--name", true}, {"--role", true}, {"--robot", true}};
-  if (int rc = ParseCommandArgs("token", kTokenHelp, args, specs, &flags); rc != kContinue) return rc;
-  const auto& pos = flags.positionals();
-  const std::string verb = pos.empty() ? "" : pos[0];
-  if (verb == "create") {
-    if (pos.size() != 1) return UsageError("token", "create takes no positional arguments");
-    return TokenCreate(ctx, flags);
-  }
-  if (flags.Has("--name") || flags.Has("--role") || flags.Has("--robot")) {
-    return UsageError("token", "--name, --role and --robot are for 'token create'");
-  }
-  if (verb == "list" && pos.size() == 1) {
-    pb::ListTokensResponse response;
-    auto call = ctx.NewCallContext();
-    const grpc::Status status = ctx.stub->ListTokens(call.get(), pb::ListTokensRequest(), &response);
-    if (!status.ok()) return ReportRpcError(ctx, "token list", status);
-    PrintTokens(response);
-    return kExitOk;
-  }
-  if (verb == "revoke" && pos.size() == 2) {
-    pb::RevokeTokenRequest request;
-    uint64_t id = 0;
-    if (!ParseUint(pos[1], &id) || id == 0) return UsageError("token", "revoke wants a token ID, got '" + pos[1] + "'");
-    request.set_id(id);
-    pb::RevokeTokenResponse response;
-    auto call = ctx.NewCallContext();
-    const grpc::Status status = ctx.stub->RevokeToken(call.get(), request, &response);
-    if (!status.ok()) return ReportRpcError(ctx, "token revoke", status);
-    std::printf("revoked token %llu '%s'\n", static_cast<unsigned long long>(id), response.info().name().c_str());
-    return kExitOk;
-  }
-  return UsageError("token", "use 'token create --name N --role R', 'token list' or 'token revoke ID'");
+int RunTokenList(const Context& ctx, const NoOptions& /*flags*/) {
+  pb::ListTokensResponse response;
+  auto call = ctx.NewCallContext();
+  const grpc::Status status = ctx.stub->ListTokens(call.get(), pb::ListTokensRequest(), &response);
+  if (!status.ok()) return ReportRpcError(ctx, "token list", status);
+  PrintTokens(response);
+  return kExitOk;
 }
 
-int RunAudit(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("audit", kAuditHelp, args, {{"--limit", true}}, &flags); rc != kContinue) return rc;
-  if (!flags.positionals().empty()) return UsageError("audit", "unexpected argument '" + flags.positionals()[0] + "'");
-  uint64_t limit = 100;
-  if (flags.Has("--limit") && (!ParseUint(flags.Get("--limit"), &limit) || limit == 0 || limit > 10000)) {
-    return UsageError("audit", "--limit wants 1..10000, got '" + flags.Get("--limit") + "'");
-  }
+int RunTokenRevoke(const Context& ctx, const RevokeOptions& flags) {
+  pb::RevokeTokenRequest request;
+  request.set_id(flags.id);
+  pb::RevokeTokenResponse response;
+  auto call = ctx.NewCallContext();
+  const grpc::Status status = ctx.stub->RevokeToken(call.get(), request, &response);
+  if (!status.ok()) return ReportRpcError(ctx, "token revoke", status);
+  std::printf("revoked token %llu '%s'\n", static_cast<unsigned long long>(flags.id), response.info().name().c_str());
+  return kExitOk;
+}
+
+int RunAudit(const Context& ctx, const AuditOptions& flags) {
   pb::ListAuditRequest request;
-  request.set_limit(static_cast<uint32_t>(limit));
+  request.set_limit(flags.limit);
   pb::ListAuditResponse response;
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListAudit(call.get(), request, &response);
@@ -147,9 +117,7 @@ int RunAudit(const Context& ctx, const CommandArgs& args) {
   return kExitOk;
 }
 
-int RunWhoAmI(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("whoami", kWhoAmIHelp, args, {}, &flags); rc != kContinue) return rc;
+int RunWhoAmI(const Context& ctx, const NoOptions& /*flags*/) {
   pb::WhoAmIResponse response;
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->WhoAmI(call.get(), pb::WhoAmIRequest(), &response);
@@ -158,6 +126,41 @@ int RunWhoAmI(const Context& ctx, const CommandArgs& args) {
               response.robot_id().empty() ? "" : (", robot " + response.robot_id()).c_str(),
               response.anonymous() ? ": the open mode, no credential needed" : "");
   return kExitOk;
+}
+
+}  // namespace
+
+void AddAuthCommands(CLI::App* app, Action* action) {
+  CLI::App* token = app->add_subcommand("token", "token create|list|revoke: manage bearer tokens (admin)");
+  token->require_subcommand(1);
+  token->footer(
+      "Manages bearer tokens (needs an admin token, --token before the command; the first one\n"
+      "comes from `mapd token create --db FILE --role admin --name NAME`).\n"
+      "ROLE: reader (reads everything), robot (writes its own robot id; needs --robot),\n"
+      "operator (reads, writes, merges, deletes, reads the audit log), admin.");
+  CLI::App* create = token->add_subcommand("create", "create a token; prints the secret once on stdout "
+                                                     "(the server keeps only its hash)");
+  auto c = BindCommand(create, action, RunTokenCreate);
+  create->add_option("--name", c->name, "what the token is for")->required();
+  create->add_option("--role", c->role, "reader, robot, operator or admin")
+      ->required()
+      ->check(CLI::IsMember({"reader", "robot", "operator", "admin"}));
+  create->add_option("--robot", c->robot, "the robot id a robot token may write");
+  CLI::App* list = token->add_subcommand("list", "list the tokens");
+  BindCommand(list, action, RunTokenList);
+  CLI::App* revoke = token->add_subcommand("revoke", "revoke a token");
+  revoke->add_option("ID", BindCommand(revoke, action, RunTokenRevoke)->id, "the token's id (token list)")
+      ->required()
+      ->check(PositiveId());
+
+  CLI::App* audit = app->add_subcommand("audit", "the audit log, newest first (operator, admin)");
+  audit->footer("Uploads, merges, deletes, token changes and refused writes, with who did them.");
+  audit->add_option("--limit", BindCommand(audit, action, RunAudit)->limit, "entries to show")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 10000u));
+
+  CLI::App* whoami = app->add_subcommand("whoami", "who the server takes this caller for: name, role, robot id");
+  BindCommand(whoami, action, RunWhoAmI);
 }
 
 }  // namespace mapd::client

@@ -19,30 +19,18 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-const char kIngestHelp[] =
-    "Usage: mapctl ingest FILE\n"
-    "Streams observation batches to the server over one Ingest stream. FILE (or - for\n"
-    "stdin) holds JSON lines: one ObservationBatch per line in the protobuf JSON mapping;\n"
-    "empty lines and lines starting with # are skipped. Batches are pipelined; the ones\n"
-    "not acknowledged are resent after a dropped connection. Re-running a file is safe:\n"
-    "batches stored before are answered 'duplicate'.\n"
-    "Prints stored / duplicate / rejected counts and each rejection with its line number.\n"
-    "Exit 1 if any batch was rejected; 2 if a line is not an ObservationBatch (the lines\n"
-    "before it are sent).\n";
+struct IngestOptions {
+  std::string path;  // - for stdin
+};
 
-const char kSimulateHelp[] =
-    "Usage: mapctl simulate [options]\n"
-    "Simulated robots drive a loop through a 20 m x 12 m floor, scan it with a 2D laser\n"
-    "(180 beams, 10 m, 1 cm noise), extract wall segments and stream them, one Ingest\n"
-    "stream per robot, concurrently. Deterministic for a seed.\n"
-    "  --robots N        number of robots (default 2), named sim-robot-1..N\n"
-    "  --robot-id ID     name the robots ID (one robot) or ID-1..N; a robot token\n"
-    "                    (--token) may write only its own robot id\n"
-    "  --scans N         scans per robot (default 100), 0.2 m apart\n"
-    "  --seed S          random seed (default 1)\n"
-    "  --session NAME    session id (default sim-<UTC time>, so re-runs add data)\n"
-    "  --export FILE     write the batches as JSON lines (for 'mapctl ingest') instead\n"
-    "                    of streaming them; - for stdout\n";
+struct SimulateOptions {
+  uint64_t robots = 2;
+  uint64_t scans = 100;
+  uint64_t seed = 1;
+  std::string session;  // empty: sim-<UTC time>
+  std::string export_path;
+  std::string robot_id;
+};
 
 struct Tally {
   IngestCounts counts;
@@ -79,13 +67,8 @@ int64_t NowNs() {
       .count();
 }
 
-}  // namespace
-
-int RunIngest(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("ingest", kIngestHelp, args, {}, &flags); rc != kContinue) return rc;
-  if (flags.positionals().size() != 1) return UsageError("ingest", "wants exactly one FILE (or - for stdin)");
-  const std::string path = flags.positionals()[0];
+int RunIngest(const Context& ctx, const IngestOptions& flags) {
+  const std::string& path = flags.path;
   std::ifstream file;
   if (path != "-") {
     file.open(path);
@@ -138,31 +121,14 @@ int RunIngest(const Context& ctx, const CommandArgs& args) {
   return counts.rejected > 0 ? kExitFailed : kExitOk;
 }
 
-int RunSimulate(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  const std::vector<FlagSpec> specs = {
-      {"--robots", true}, {"--scans", true}, {"--seed", true}, {"--session", true}, {"--export", true},
-      {"--robot-id", true}};
-  if (int rc = ParseCommandArgs("simulate", kSimulateHelp, args, specs, &flags); rc != kContinue) return rc;
-  if (!flags.positionals().empty()) {
-    return UsageError("simulate", "unexpected argument '" + flags.positionals()[0] + "'");
-  }
-  uint64_t robots = 0, scans = 0, seed = 0;
-  if (!ParseUint(flags.Get("--robots", "2"), &robots) || robots < 1 || robots > 1000) {
-    return UsageError("simulate", "--robots wants 1..1000, got '" + flags.Get("--robots") + "'");
-  }
-  if (!ParseUint(flags.Get("--scans", "100"), &scans) || scans > 10000000) {
-    return UsageError("simulate", "--scans wants a count, got '" + flags.Get("--scans") + "'");
-  }
-  if (!ParseUint(flags.Get("--seed", "1"), &seed)) {
-    return UsageError("simulate", "--seed wants a non-negative integer, got '" + flags.Get("--seed") + "'");
-  }
-  const std::string session = flags.Get("--session", "sim-" + UtcStampForName());
+int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
+  const uint64_t robots = flags.robots, scans = flags.scans, seed = flags.seed;
+  const std::string session = flags.session.empty() ? "sim-" + UtcStampForName() : flags.session;
 
   const int64_t start_ns = NowNs();
   std::vector<SimRobotParams> params(robots);
   for (size_t i = 0; i < robots; ++i) {
-    const std::string base = flags.Get("--robot-id");
+    const std::string& base = flags.robot_id;
     params[i].robot_id = base.empty() ? "sim-robot-" + std::to_string(i + 1)
                          : robots == 1 ? base
                                        : base + "-" + std::to_string(i + 1);
@@ -172,7 +138,7 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
     params[i].start_stamp_ns = start_ns;
   }
 
-  if (flags.Has("--export")) {
+  if (!flags.export_path.empty()) {
     std::vector<SimRobot> sims;
     for (const SimRobotParams& p : params) sims.emplace_back(DefaultWorld(), p);
     std::string text, json;
@@ -187,14 +153,14 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
       }
     }
     std::string error;
-    if (!WriteOutput(flags.Get("--export"), text, &error)) {
+    if (!WriteOutput(flags.export_path, text, &error)) {
       PrintError("simulate: " + error);
       return kExitFailed;
     }
-    if (flags.Get("--export") != "-") {
+    if (flags.export_path != "-") {
       std::printf("simulate: wrote %llu batches (%llu robots x %llu scans, session %s) to %s\n",
                   static_cast<unsigned long long>(robots * scans), static_cast<unsigned long long>(robots),
-                  static_cast<unsigned long long>(scans), session.c_str(), flags.Get("--export").c_str());
+                  static_cast<unsigned long long>(scans), session.c_str(), flags.export_path.c_str());
     }
     return kExitOk;
   }
@@ -236,6 +202,43 @@ int RunSimulate(const Context& ctx, const CommandArgs& args) {
               seconds, Summary(total).c_str());
   if (rc != kExitOk) return rc;
   return total.rejected > 0 ? kExitFailed : kExitOk;
+}
+
+}  // namespace
+
+void AddIngestCommands(CLI::App* app, Action* action) {
+  CLI::App* ingest = app->add_subcommand("ingest", "stream observation batches from a JSON-lines file");
+  ingest->footer(
+      "Streams observation batches to the server over one Ingest stream. FILE (or - for\n"
+      "stdin) holds JSON lines: one ObservationBatch per line in the protobuf JSON mapping\n"
+      "(.proto or camelCase field names); empty lines and lines starting with # are skipped.\n"
+      "Batches are pipelined; the ones not acknowledged are resent after a dropped\n"
+      "connection. Re-running a file is safe: batches stored before are answered 'duplicate'.\n"
+      "Prints stored / duplicate / rejected counts and each rejection with its line number.\n"
+      "Exit 1 if any batch was rejected; 2 if a line is not an ObservationBatch (the lines\n"
+      "before it are sent).");
+  ingest->add_option("FILE", BindCommand(ingest, action, RunIngest)->path, "JSON lines, - for stdin")->required();
+
+  CLI::App* simulate = app->add_subcommand("simulate", "stream (or export) simulated robots' laser lines");
+  simulate->footer(
+      "Simulated robots drive a loop through a 20 m x 12 m floor, scan it with a 2D laser\n"
+      "(180 beams, 10 m, 1 cm noise), extract wall segments and stream them, one Ingest\n"
+      "stream per robot, concurrently. Deterministic for a seed.");
+  auto s = BindCommand(simulate, action, RunSimulate);
+  simulate->add_option("--robots", s->robots, "number of robots, named sim-robot-1..N")
+      ->capture_default_str()
+      ->check(CLI::Range(uint64_t{1}, uint64_t{1000}));
+  simulate->add_option("--robot-id", s->robot_id,
+                       "name the robots ID (one robot) or ID-1..N; a robot token (--token) may write only its "
+                       "own robot id");
+  simulate->add_option("--scans", s->scans, "scans per robot, 0.2 m apart")
+      ->capture_default_str()
+      ->check(CLI::Range(uint64_t{0}, uint64_t{10000000}));
+  simulate->add_option("--seed", s->seed, "random seed")->capture_default_str();
+  simulate->add_option("--session", s->session, "session id (default sim-<UTC time>, so re-runs add data)");
+  simulate->add_option("--export", s->export_path,
+                       "write the batches as JSON lines (for 'mapctl ingest') instead of streaming them; - for "
+                       "stdout");
 }
 
 }  // namespace mapd::client

@@ -11,31 +11,19 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-const char kStatusHelp[] =
-    "Usage: mapctl status [--json]\n"
-    "Server statistics: robots, sessions, batches, raw and fused features, clusters,\n"
-    "ingest rate, uptime, database size and path, version.\n"
-    "  --json   the Stats message in protobuf JSON (64-bit counts are strings)\n";
+struct JsonOptions {
+  bool json = false;
+};
 
-const char kRobotsHelp[] =
-    "Usage: mapctl robots [--json]\n"
-    "The robots the server has seen: sessions, stored batches and features, whether\n"
-    "their frames are tied to the map frame, first and last seen (UTC).\n"
-    "  --json   the ListRobotsResponse in protobuf JSON\n";
-
-const char kFeaturesHelp[] =
-    "Usage: mapctl features [options]\n"
-    "The fused feature map (map frame, metres): walls as segments, then floors,\n"
-    "ceilings and ramps as planes (id, normal, offset, area, support, robots).\n"
-    "  --bbox XMIN,YMIN,XMAX,YMAX  only features whose segment meets this box, and planes\n"
-    "                              whose boundary's ground projection meets it\n"
-    "  --min-support N             only features seen in at least N observations\n"
-    "                              (values below the server's threshold are raised to it)\n"
-    "  --kind line|plane|any       only this kind (default any; line leaves out the planes)\n"
-    "  --raw-fit                   the raw least-squares fit, not the corner-optimised segment\n"
-    "  --format table|json|geojson|svg\n"
-    "                              default: from the -o extension (.json, .geojson, .svg), else table\n"
-    "  -o, --output FILE           write to FILE (default: stdout)\n";
+struct FeaturesOptions {
+  std::string bbox;
+  uint32_t min_support = 0;
+  CLI::Option* min_support_flag = nullptr;
+  std::string kind = "any";
+  bool raw_fit = false;
+  std::string format;  // empty: from the output name
+  std::string output = "-";
+};
 
 // "xmin,ymin,xmax,ymax" -> bbox; false with `*error` set otherwise.
 bool ParseBbox(const std::string& text, pb::BoundingBox2* out, std::string* error) {
@@ -62,29 +50,21 @@ bool ParseBbox(const std::string& text, pb::BoundingBox2* out, std::string* erro
   return true;
 }
 
-}  // namespace
-
-int RunStatus(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("status", kStatusHelp, args, {{"--json"}}, &flags); rc != kContinue) return rc;
-  if (!flags.positionals().empty()) return UsageError("status", "unexpected argument '" + flags.positionals()[0] + "'");
+int RunStatus(const Context& ctx, const JsonOptions& flags) {
   pb::Stats stats;
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->GetStats(call.get(), pb::GetStatsRequest(), &stats);
   if (!status.ok()) return ReportRpcError(ctx, "status", status);
-  std::fputs(flags.Has("--json") ? MessageToJson(stats).c_str() : FormatStats(stats, ctx.server).c_str(), stdout);
+  std::fputs(flags.json ? MessageToJson(stats).c_str() : FormatStats(stats, ctx.server).c_str(), stdout);
   return kExitOk;
 }
 
-int RunRobots(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("robots", kRobotsHelp, args, {{"--json"}}, &flags); rc != kContinue) return rc;
-  if (!flags.positionals().empty()) return UsageError("robots", "unexpected argument '" + flags.positionals()[0] + "'");
+int RunRobots(const Context& ctx, const JsonOptions& flags) {
   pb::ListRobotsResponse robots;
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListRobots(call.get(), pb::ListRobotsRequest(), &robots);
   if (!status.ok()) return ReportRpcError(ctx, "robots", status);
-  if (flags.Has("--json")) {
+  if (flags.json) {
     std::fputs(MessageToJson(robots).c_str(), stdout);
   } else {
     const int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -95,39 +75,19 @@ int RunRobots(const Context& ctx, const CommandArgs& args) {
   return kExitOk;
 }
 
-int RunFeatures(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  const std::vector<FlagSpec> specs = {{"--bbox", true},   {"--min-support", true}, {"--kind", true},
-                                       {"--raw-fit", false}, {"--format", true},      {"-o", true},
-                                       {"--output", true}};
-  if (int rc = ParseCommandArgs("features", kFeaturesHelp, args, specs, &flags); rc != kContinue) return rc;
-  if (!flags.positionals().empty()) {
-    return UsageError("features", "unexpected argument '" + flags.positionals()[0] + "'");
-  }
-
+int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
   pb::FeatureMapRequest request;
   std::string error;
-  if (flags.Has("--bbox") && !ParseBbox(flags.Get("--bbox"), request.mutable_bbox(), &error)) {
+  if (!flags.bbox.empty() && !ParseBbox(flags.bbox, request.mutable_bbox(), &error)) {
     return UsageError("features", error);
   }
-  if (flags.Has("--min-support")) {
-    uint64_t n = 0;
-    if (!ParseUint(flags.Get("--min-support"), &n) || n > UINT32_MAX) {
-      return UsageError("features", "--min-support wants a count, got '" + flags.Get("--min-support") + "'");
-    }
-    request.set_min_support(static_cast<uint32_t>(n));
-  }
-  const std::string kind = flags.Get("--kind", "any");
-  if (kind == "line") request.set_kind(pb::FEATURE_KIND_LINE);
-  else if (kind == "plane") request.set_kind(pb::FEATURE_KIND_PLANE);
-  else if (kind != "any") return UsageError("features", "--kind wants line, plane or any, got '" + kind + "'");
-  request.set_without_corner_optimisation(flags.Has("--raw-fit"));
+  if (flags.min_support_flag->count() > 0) request.set_min_support(flags.min_support);
+  if (flags.kind == "line") request.set_kind(pb::FEATURE_KIND_LINE);
+  if (flags.kind == "plane") request.set_kind(pb::FEATURE_KIND_PLANE);
+  request.set_without_corner_optimisation(flags.raw_fit);
 
-  const std::string output = flags.Get("-o", flags.Get("--output", "-"));
-  OutputFormat format = GuessOutputFormat(output, OutputFormat::kTable);
-  if (flags.Has("--format") && !ParseOutputFormat(flags.Get("--format"), &format)) {
-    return UsageError("features", "--format wants table, json, geojson or svg, got '" + flags.Get("--format") + "'");
-  }
+  OutputFormat format = GuessOutputFormat(flags.output, OutputFormat::kTable);
+  if (!flags.format.empty()) ParseOutputFormat(flags.format, &format);  // checked by the parser
 
   FeatureList features;
   PlaneList planes;
@@ -150,15 +110,49 @@ int RunFeatures(const Context& ctx, const CommandArgs& args) {
     case OutputFormat::kGeoJson: text = FormatGeoJson(features, planes); break;
     case OutputFormat::kSvg: text = FormatSvg(features, planes); break;
   }
-  if (!WriteOutput(output, text, &error)) {
+  if (!WriteOutput(flags.output, text, &error)) {
     PrintError("features: " + error);
     return kExitFailed;
   }
-  if (output != "-") {
+  if (flags.output != "-") {
     std::printf("wrote %zu features and %zu planes (map version %llu) to %s\n", features.size(), planes.size(),
-                static_cast<unsigned long long>(map_version), output.c_str());
+                static_cast<unsigned long long>(map_version), flags.output.c_str());
   }
   return kExitOk;
+}
+
+}  // namespace
+
+void AddMapCommands(CLI::App* app, Action* action) {
+  CLI::App* status = app->add_subcommand("status", "server statistics");
+  status->footer("Robots, sessions, batches, raw and fused features, clusters, ingest rate, uptime,\n"
+                 "database size and path, version.");
+  status->add_flag("--json", BindCommand(status, action, RunStatus)->json,
+                   "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
+
+  CLI::App* robots = app->add_subcommand("robots", "the robots seen, with their sessions and counts");
+  robots->footer("Sessions, stored batches and features, whether their frames are tied to the map\n"
+                 "frame, first and last seen (UTC).");
+  robots->add_flag("--json", BindCommand(robots, action, RunRobots)->json,
+                   "the ListRobotsResponse in protobuf JSON");
+
+  CLI::App* features = app->add_subcommand("features", "query / export the fused map (table, json, geojson, svg)");
+  features->footer("The fused feature map (map frame, metres): walls as segments, then floors, ceilings\n"
+                   "and ramps as planes (id, normal, offset, area, support, robots).");
+  auto f = BindCommand(features, action, RunFeatures);
+  features->add_option("--bbox", f->bbox,
+                       "XMIN,YMIN,XMAX,YMAX: only features whose segment meets this box, and planes whose "
+                       "boundary's ground projection meets it");
+  f->min_support_flag = features->add_option("--min-support", f->min_support,
+                                             "only features seen in at least N observations (values below "
+                                             "the server's threshold are raised to it)");
+  features->add_option("--kind", f->kind, "only this kind (line leaves out the planes)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"line", "plane", "any"}));
+  features->add_flag("--raw-fit", f->raw_fit, "the raw least-squares fit, not the corner-optimised segment");
+  features->add_option("--format", f->format, "default: from the -o extension (.json, .geojson, .svg), else table")
+      ->check(CLI::IsMember({"table", "json", "geojson", "svg"}));
+  features->add_option("-o,--output", f->output, "write to FILE (- for stdout)")->capture_default_str();
 }
 
 }  // namespace mapd::client

@@ -18,15 +18,11 @@ namespace {
 // Same cap as the server's octree reader: a bigger file is refused unread.
 constexpr uintmax_t kMaxFileBytes = uintmax_t{256} << 20;
 
-const char kRenderHelp[] =
-    "Usage: mapctl render FILE.bt [FILE2.bt ...] -o OUT.png|OUT.svg [--pixel M] [--max-size PX]\n"
-    "Draws OctoMap files (.bt or .ot) seen from above, each file a layer in its own colour,\n"
-    "in its own frame: brighter = higher (the highest occupied voxel per pixel), where layers\n"
-    "overlap their colours mix. A scale bar in metres and a legend naming the files.\n"
-    "Files are checked by the same parser as the server's before anything is drawn.\n"
-    "  -o          output file; the format follows the extension (.png or .svg)\n"
-    "  --pixel     metres per pixel (default: the finest voxel size)\n"
-    "  --max-size  longest side of the map in pixels (default 2048; --pixel grows to fit)\n";
+struct RenderCommandOptions {
+  std::vector<std::string> files;
+  std::string output;
+  RenderOptions render;
+};
 
 std::string LoadErrorCode(const Status& status) { return ::mapd::StatusCodeName(status.code()); }
 
@@ -76,30 +72,17 @@ int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& la
   return kExitOk;
 }
 
-int RunRender(const Context& /*ctx*/, const CommandArgs& args) {
-  Args flags;
-  const std::vector<FlagSpec> specs = {{"-o", true}, {"--output", true}, {"--pixel", true}, {"--max-size", true}};
-  if (int rc = ParseCommandArgs("render", kRenderHelp, args, specs, &flags); rc != kContinue) return rc;
-  const std::string output = flags.Get("-o", flags.Get("--output"));
-  if (output.empty()) return UsageError("render", "needs -o OUT.png or -o OUT.svg");
-  if (flags.positionals().empty()) return UsageError("render", "wants one or more OctoMap files");
-  RenderOptions options;
-  if (flags.Has("--pixel") && (!ParseDouble(flags.Get("--pixel"), &options.pixel_m) || options.pixel_m <= 0)) {
-    return UsageError("render", "--pixel wants metres > 0, got '" + flags.Get("--pixel") + "'");
-  }
-  if (flags.Has("--max-size")) {
-    uint64_t px = 0;
-    if (!ParseUint(flags.Get("--max-size"), &px) || px < 16 || px > 16384) {
-      return UsageError("render", "--max-size wants pixels in [16, 16384], got '" + flags.Get("--max-size") + "'");
-    }
-    options.max_map_px = static_cast<int>(px);
-    options.min_map_px = std::min(options.min_map_px, options.max_map_px);
-  }
+namespace {
+
+int RunRender(const Context& /*ctx*/, const RenderCommandOptions& flags) {
+  const std::string& output = flags.output;
+  RenderOptions options = flags.render;
+  options.min_map_px = std::min(options.min_map_px, options.max_map_px);
   ImageFormat format;
   if (int rc = CheckRenderOutput("render", output, &format); rc != kContinue) return rc;
 
   std::vector<VoxelLayer> layers;
-  for (const std::string& path : flags.positionals()) {
+  for (const std::string& path : flags.files) {
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(path, ec);
     if (!ec && size > kMaxFileBytes) {
@@ -118,6 +101,26 @@ int RunRender(const Context& /*ctx*/, const CommandArgs& args) {
     if (int rc = AddRenderLayer("render", name, bytes.str(), RigidTransform(), &layers); rc != kContinue) return rc;
   }
   return WriteRendering("render", layers, output, format, options);
+}
+
+}  // namespace
+
+void AddRenderCommand(CLI::App* app, Action* action) {
+  CLI::App* render =
+      app->add_subcommand("render", "draw OctoMap files from above as PNG or SVG (no server needed)");
+  render->footer(
+      "Draws OctoMap files (.bt or .ot) seen from above, each file a layer in its own colour,\n"
+      "in its own frame: brighter = higher (the highest occupied voxel per pixel), where layers\n"
+      "overlap their colours mix. A scale bar in metres and a legend naming the files.\n"
+      "Files are checked by the same parser as the server's before anything is drawn.");
+  auto r = BindCommand(render, action, RunRender);
+  render->add_option("FILE", r->files, "OctoMap files, one layer each")->required();
+  render->add_option("-o,--output", r->output, "OUT.png or OUT.svg: the format follows the extension")->required();
+  render->add_option("--pixel", r->render.pixel_m, "metres per pixel (default: the finest voxel size)")
+      ->check(PositiveReal());
+  render->add_option("--max-size", r->render.max_map_px, "longest side of the map in pixels (--pixel grows to fit)")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 16384));
 }
 
 }  // namespace mapd::client

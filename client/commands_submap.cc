@@ -18,35 +18,30 @@ namespace pb = mapserver::v1;
 
 constexpr size_t kChunkBytes = 1 << 20;  // the API's maximum chunk size
 
-const char kSubmapsHelp[] =
-    "Usage: mapctl submaps [--robot R] [--json]\n"
-    "The stored voxel submaps: id, robot, name, format, resolution, voxel counts, size.\n";
+struct SubmapsOptions {
+  std::string robot;
+  bool json = false;
+};
 
-const char kSubmapHelp[] =
-    "Usage: mapctl submap upload FILE --robot R [--name NAME] [--format bt|ot]\n"
-    "                            [--resolution M] [--session S]\n"
-    "Uploads an OctoMap file (.bt or .ot) in 1 MiB chunks and prints the stored submap.\n"
-    "  --name        unique per robot (default: the file name without its extension)\n"
-    "  --format      default: from the extension\n"
-    "  --resolution  metres per voxel; default 0 = from the file\n"
-    "  --session     the session frame the submap was built in\n";
+struct UploadOptions {
+  std::string path;
+  std::string robot;
+  std::string name;    // empty: the file name without its extension
+  std::string format;  // empty: from the extension
+  double resolution = 0;
+  std::string session;
+};
 
-const char kMergeHelp[] =
-    "Usage: mapctl merge ID ID... [--wait] [--render OUT.png|OUT.svg]\n"
-    "Merges two or more submaps without a prior pose and prints, per submap, where it sits\n"
-    "in the first submap's frame (xyz in metres, yaw/pitch/roll in degrees, Z-Y-X), the\n"
-    "matched corners, the residual and the overlap score, and the id of the merged map.\n"
-    "A merge refused for weak evidence prints the server's reason and exits 1.\n"
-    "  --wait    show the progress (stage and percent) while the merge runs (the call\n"
-    "            always lasts until the merge ends)\n"
-    "  --render  after an accepted merge, download the input submaps and draw them from\n"
-    "            above, each in its own colour, moved by its transform: walls that line up\n"
-    "            show the merge is right (see 'mapctl render --help')\n";
+struct MergeOptions {
+  std::vector<uint64_t> ids;
+  bool wait = false;
+  std::string render;
+};
 
-const char kGlobalMapHelp[] =
-    "Usage: mapctl global-map -o FILE [--render OUT.png|OUT.svg]\n"
-    "Downloads the merged global map (OctoMap binary) to FILE.\n"
-    "  --render  also draw it from above (see 'mapctl render --help')\n";
+struct GlobalMapOptions {
+  std::string output;
+  std::string render;
+};
 
 std::string Basename(const std::string& path) {
   const size_t slash = path.find_last_of('/');
@@ -102,52 +97,29 @@ std::string FormatMergeResult(const pb::MergeResult& result) {
   return out;
 }
 
-}  // namespace
-
-int RunSubmaps(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("submaps", kSubmapsHelp, args, {{"--robot", true}, {"--json"}}, &flags);
-      rc != kContinue) {
-    return rc;
-  }
-  if (!flags.positionals().empty()) return UsageError("submaps", "unexpected argument '" + flags.positionals()[0] + "'");
+int RunSubmaps(const Context& ctx, const SubmapsOptions& flags) {
   pb::ListSubmapsRequest request;
-  request.set_robot_id(flags.Get("--robot"));
+  request.set_robot_id(flags.robot);
   pb::ListSubmapsResponse response;
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListSubmaps(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "submaps", status);
-  std::fputs(flags.Has("--json") ? MessageToJson(response).c_str() : FormatSubmaps(response).c_str(), stdout);
+  std::fputs(flags.json ? MessageToJson(response).c_str() : FormatSubmaps(response).c_str(), stdout);
   return kExitOk;
 }
 
-int RunSubmap(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  const std::vector<FlagSpec> specs = {
-      {"--robot", true}, {"--name", true}, {"--format", true}, {"--resolution", true}, {"--session", true}};
-  if (int rc = ParseCommandArgs("submap", kSubmapHelp, args, specs, &flags); rc != kContinue) return rc;
-  const std::vector<std::string>& pos = flags.positionals();
-  if (pos.empty() || pos[0] != "upload") return UsageError("submap", "the only subcommand is 'upload FILE'");
-  if (pos.size() != 2) return UsageError("submap", "upload wants exactly one FILE");
-  if (!flags.Has("--robot")) return UsageError("submap", "upload needs --robot R");
-  const std::string path = pos[1];
-
+int RunUpload(const Context& ctx, const UploadOptions& flags) {
+  const std::string& path = flags.path;
   pb::SubmapHeader header;
-  header.set_robot_id(flags.Get("--robot"));
-  header.set_name(flags.Get("--name", Basename(path)));
-  header.set_session_id(flags.Get("--session"));
-  std::string format = flags.Get("--format");
+  header.set_robot_id(flags.robot);
+  header.set_name(flags.name.empty() ? Basename(path) : flags.name);
+  header.set_session_id(flags.session);
+  std::string format = flags.format;
   if (format.empty()) format = path.size() > 3 ? path.substr(path.size() - 3) : "";
   if (format == "bt" || format == ".bt") header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
   else if (format == "ot" || format == ".ot") header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_OT);
   else return UsageError("submap", "cannot tell the format of '" + path + "': use --format bt|ot");
-  if (flags.Has("--resolution")) {
-    double resolution = 0;
-    if (!ParseDouble(flags.Get("--resolution"), &resolution) || resolution < 0) {
-      return UsageError("submap", "--resolution wants metres, got '" + flags.Get("--resolution") + "'");
-    }
-    header.set_resolution(resolution);
-  }
+  header.set_resolution(flags.resolution);
   std::ifstream file(path, std::ios::binary);
   if (!file) {
     PrintError("submap upload: cannot open " + path + ": " + std::strerror(errno));
@@ -175,20 +147,11 @@ int RunSubmap(const Context& ctx, const CommandArgs& args) {
   return kExitOk;
 }
 
-int RunMerge(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("merge", kMergeHelp, args, {{"--wait"}, {"--render", true}}, &flags);
-      rc != kContinue) {
-    return rc;
-  }
+int RunMerge(const Context& ctx, const MergeOptions& flags) {
   pb::MergeSubmapsRequest request;
-  for (const std::string& id : flags.positionals()) {
-    uint64_t v = 0;
-    if (!ParseUint(id, &v) || v == 0) return UsageError("merge", "'" + id + "' is not a submap id");
-    request.add_submap_ids(v);
-  }
+  for (uint64_t id : flags.ids) request.add_submap_ids(id);
   if (request.submap_ids_size() < 2) return UsageError("merge", "wants two or more submap ids");
-  const std::string render_path = flags.Get("--render");
+  const std::string& render_path = flags.render;
   ImageFormat render_format = ImageFormat::kPng;
   if (!render_path.empty()) {
     if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue) return rc;
@@ -205,7 +168,7 @@ int RunMerge(const Context& ctx, const CommandArgs& args) {
       result = progress.result();
       have_result = true;
     }
-    if (!flags.Has("--wait")) continue;
+    if (!flags.wait) continue;
     // One line per change of stage or whole percent, flushed so that a pipe
     // shows it as it arrives.
     const std::string line = FormatMergeProgress(progress);
@@ -262,19 +225,9 @@ int RunMerge(const Context& ctx, const CommandArgs& args) {
   return WriteRendering("merge", layers, render_path, render_format);
 }
 
-int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
-  Args flags;
-  if (int rc = ParseCommandArgs("global-map", kGlobalMapHelp, args,
-                                {{"-o", true}, {"--output", true}, {"--render", true}}, &flags);
-      rc != kContinue) {
-    return rc;
-  }
-  const std::string output = flags.Get("-o", flags.Get("--output"));
-  if (output.empty()) return UsageError("global-map", "needs -o FILE");
-  if (!flags.positionals().empty()) {
-    return UsageError("global-map", "unexpected argument '" + flags.positionals()[0] + "'");
-  }
-  const std::string render_path = flags.Get("--render");
+int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
+  const std::string& output = flags.output;
+  const std::string& render_path = flags.render;
   ImageFormat render_format = ImageFormat::kPng;
   if (!render_path.empty()) {
     if (int rc = CheckRenderOutput("global-map", render_path, &render_format); rc != kContinue) return rc;
@@ -298,6 +251,56 @@ int RunGlobalMap(const Context& ctx, const CommandArgs& args) {
       Printf("global map (submap %llu)", static_cast<unsigned long long>(info.id()));
   if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue) return rc;
   return WriteRendering("global-map", layers, render_path, render_format);
+}
+
+}  // namespace
+
+void AddSubmapCommands(CLI::App* app, Action* action) {
+  CLI::App* submaps = app->add_subcommand("submaps", "list stored voxel submaps");
+  submaps->footer("The stored voxel submaps: id, robot, name, format, resolution, voxel counts, size.");
+  auto list = BindCommand(submaps, action, RunSubmaps);
+  submaps->add_option("--robot", list->robot, "only this robot's submaps");
+  submaps->add_flag("--json", list->json, "the ListSubmapsResponse in protobuf JSON");
+
+  CLI::App* submap = app->add_subcommand("submap", "submap upload FILE --robot R: upload an OctoMap file");
+  submap->require_subcommand(1);
+  CLI::App* upload = submap->add_subcommand("upload", "upload an OctoMap file (.bt or .ot)");
+  upload->footer("Uploads the file in 1 MiB chunks and prints the stored submap.");
+  auto u = BindCommand(upload, action, RunUpload);
+  upload->add_option("FILE", u->path, "the OctoMap file")->required();
+  upload->add_option("--robot", u->robot, "the robot that built it")->required();
+  upload->add_option("--name", u->name, "unique per robot (default: the file name without its extension)");
+  upload->add_option("--format", u->format, "bt or ot (default: from the extension)")
+      ->check(CLI::IsMember({"bt", "ot", ".bt", ".ot"}));
+  upload->add_option("--resolution", u->resolution, "metres per voxel; 0 = from the file")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  upload->add_option("--session", u->session, "the session frame the submap was built in");
+
+  CLI::App* merge = app->add_subcommand("merge", "merge two or more submaps (--wait: progress, --render: picture)");
+  merge->footer(
+      "Merges two or more submaps without a prior pose and prints, per submap, where it sits\n"
+      "in the first submap's frame (xyz in metres, yaw/pitch/roll in degrees, Z-Y-X), the\n"
+      "matched corners, the residual and the overlap score, and the id of the merged map.\n"
+      "A merge refused for weak evidence prints the server's reason and exits 1.");
+  auto m = BindCommand(merge, action, RunMerge);
+  merge->add_option("ID", m->ids, "submap ids (the first is the reference frame)")
+      ->required()
+      ->expected(2, 1 << 20)
+      ->check(PositiveId());
+  merge->add_flag("--wait", m->wait,
+                  "show the progress (stage and percent) while the merge runs (the call always lasts until "
+                  "the merge ends)");
+  merge->add_option("--render", m->render,
+                    "OUT.png|OUT.svg: after an accepted merge, draw the input submaps from above, each in its "
+                    "own colour, moved by its transform: walls that line up show the merge is right "
+                    "(see 'mapctl render --help')");
+
+  CLI::App* global = app->add_subcommand("global-map", "download the merged global map (-o FILE.bt, --render)");
+  global->footer("Downloads the merged global map (OctoMap binary) to FILE.");
+  auto g = BindCommand(global, action, RunGlobalMap);
+  global->add_option("-o,--output", g->output, "the .bt file to write")->required();
+  global->add_option("--render", g->render, "OUT.png|OUT.svg: also draw it from above (see 'mapctl render --help')");
 }
 
 }  // namespace mapd::client

@@ -135,6 +135,22 @@ TEST_F(MapctlE2eTest, ExitCodesForScripts) {
 
   r = Mapctl({"no-such-command"});
   EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("unknown command 'no-such-command'"));
+
+  // Bad flags: one line naming the flag, exit 2, before any server call.
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"features", "--kind", "wall"}, {"simulate", "--robots", "0"}, {"features", "--bogus"},
+           {"render", "a.bt", "-o", "a.png", "--max-size", "8"}}) {
+    r = Mapctl(args);
+    EXPECT_EQ(r.exit_code, 2) << args[1];
+    EXPECT_THAT(r.err, HasSubstr(args[1] == "--bogus" ? "--bogus" : args[args.size() - 2])) << r.err;
+    EXPECT_EQ(Count(r.err, "\n"), 1u) << r.err;
+  }
+  // --help shows the defaults the code uses.
+  r = Mapctl({"simulate", "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("--scans UINT"));
+  EXPECT_THAT(r.out, HasSubstr("=100"));
 
   r = RunCommand({MAPCTL_BINARY, "--server", "127.0.0.1:1", "status"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
