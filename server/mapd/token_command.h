@@ -5,14 +5,16 @@
 #ifndef MAPD_MAPD_TOKEN_COMMAND_H_
 #define MAPD_MAPD_TOKEN_COMMAND_H_
 
-#include <string>
-#include <vector>
+#include <functional>
+
+#include <CLI/CLI.hpp>
 
 namespace mapd {
 
-// `args` are the arguments after "token". Returns the exit code: 0 ok,
-// 1 the database refused, 2 usage error.
-int RunTokenCommand(const std::vector<std::string>& args);
+// Adds `token create|list|revoke` and their flags to `app`; the one the
+// command line picks sets `*action`, which returns the exit code: 0 ok,
+// 1 the database refused.
+void AddTokenCommand(CLI::App* app, std::function<int()>* action);
 
 }  // namespace mapd
 

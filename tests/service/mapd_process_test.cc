@@ -12,6 +12,7 @@
 #include "common/health.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
+#include "service/config.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
 
 namespace mapd::testing {
@@ -32,6 +33,30 @@ TEST(MapdProcessTest, HelpListsTheSettings) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_THAT(r.out, HasSubstr("--fusion.eta_m"));
   EXPECT_THAT(r.out, HasSubstr("--sync"));
+}
+
+TEST(MapdProcessTest, HelpShowsTheDefaultsOfServerConfig) {
+  const CommandResult r = RunCommand({MAPD_BINARY, "--help"});
+  const service::ServerConfig defaults;
+  EXPECT_THAT(r.out, HasSubstr("--listen <text>=" + defaults.listen));
+  EXPECT_THAT(r.out, HasSubstr("token"));  // the offline token subcommand
+}
+
+TEST(MapdProcessTest, UnknownFlagsAndValuesAreNamedAndLaterFlagsWin) {
+  CommandResult r = RunCommand({MAPD_BINARY, "--no-such-setting", "1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--no-such-setting"));
+  // The container entrypoint passes defaults first and the user's flags after them.
+  r = RunCommand({MAPD_BINARY, "--fusion.gamma", "0.3", "--fusion.gamma=0.5", "--print-config"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("fusion.gamma = 0.5"));
+  TempDir dir;
+  r = RunCommand({MAPD_BINARY, "token", "create", "--db", dir.File("t.db"), "--role", "boss", "--name", "x"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--role"));
+  r = RunCommand({MAPD_BINARY, "token", "revoke", "--db", dir.File("t.db"), "--id", "0"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--id"));
 }
 
 TEST(MapdProcessTest, VersionPrintsTheProjectVersion) {
