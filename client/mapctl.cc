@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
   // Global flags come before the command; each command's flags after it.
   CLI::App app("The command-line client of the mapd map server.", "mapctl");
   app.require_subcommand(1);
+  // A flag given twice: the later one wins, as scripts that append overrides expect
+  // (subcommands inherit this).
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_option("--server", ctx.server, "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051)")
       ->check(CLI::Validator([](std::string& v) { return v.empty() ? "wants HOST:PORT" : ""; }, "HOST:PORT"));
   app.add_option("--timeout", ctx.timeout_s, "seconds to wait for an answer")

@@ -39,6 +39,9 @@ struct CommandLine {
 
 void AddFlags(CLI::App* app, CommandLine* line) {
   using mapd::service::Setting;
+  // A flag given twice: the later one wins (the container entrypoint passes its
+  // defaults first, the user's flags after them). Subcommands inherit this.
+  app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app->footer("Every KEY may also be set in the config file as 'KEY = VALUE'; flags override the file.");
   app->add_option("--config", line->config_files, "read settings from FILE first")
       ->type_name("FILE")
@@ -50,8 +53,7 @@ void AddFlags(CLI::App* app, CommandLine* line) {
     app->add_option_function<std::string>(
            "--" + s.key, [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); }, s.help)
         ->type_name("<" + s.kind + ">")
-        ->default_str(s.get(defaults))
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // a later flag overrides (container args)
+        ->default_str(s.get(defaults));
   }
   mapd::AddTokenCommand(app, &line->token);
 }

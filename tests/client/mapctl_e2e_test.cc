@@ -146,6 +146,10 @@ TEST_F(MapctlE2eTest, ExitCodesForScripts) {
     EXPECT_THAT(r.err, HasSubstr(args[1] == "--bogus" ? "--bogus" : args[args.size() - 2])) << r.err;
     EXPECT_EQ(Count(r.err, "\n"), 1u) << r.err;
   }
+  // A flag given twice: the later one wins, as before CLI11.
+  r = Mapctl({"simulate", "--robots", "1", "--scans", "5", "--scans", "2", "--export", "-"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Count(r.out, "\n"), 2u);
   // --help shows the defaults the code uses.
   r = Mapctl({"simulate", "--help"});
   EXPECT_EQ(r.exit_code, 0);
