@@ -23,7 +23,8 @@ Canvas Canvas::Raster(int width, int height) {
 
 Canvas Canvas::Svg(double width_px, double height_px) {
   Canvas c;
-  c.surface_.reset(cairo_svg_surface_create_for_stream(Append, c.bytes_.get(), width_px, height_px));
+  c.surface_.reset(
+      cairo_svg_surface_create_for_stream(Append, c.bytes_.get(), width_px, height_px));
   cairo_svg_surface_set_document_unit(c.surface_.get(), CAIRO_SVG_UNIT_PX);
   c.cr_.reset(cairo_create(c.surface_.get()));
   return c;
@@ -42,7 +43,8 @@ StatusOr<std::string> Canvas::Png() {
   std::string out;
   const cairo_status_t status = cairo_surface_write_to_png_stream(surface_.get(), Append, &out);
   if (status != CAIRO_STATUS_SUCCESS) {
-    return Status::Internal(std::string("cairo cannot write the PNG: ") + cairo_status_to_string(status));
+    return Status::Internal(std::string("cairo cannot write the PNG: ") +
+                            cairo_status_to_string(status));
   }
   return out;
 }
@@ -53,7 +55,8 @@ StatusOr<std::string> Canvas::FinishSvg() {
   cairo_surface_finish(surface_.get());
   const cairo_status_t status = cairo_surface_status(surface_.get());
   if (status != CAIRO_STATUS_SUCCESS) {
-    return Status::Internal(std::string("cairo cannot write the SVG: ") + cairo_status_to_string(status));
+    return Status::Internal(std::string("cairo cannot write the SVG: ") +
+                            cairo_status_to_string(status));
   }
   return std::move(*bytes_);
 }
@@ -65,7 +68,8 @@ Rgb ParseHexColour(const char* hex) {
 }
 
 CairoSurface ToSurface(const RgbImage& image) {
-  CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width(), image.height()));
+  CairoSurface surface(
+      cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width(), image.height()));
   if (image.width() <= 0 || image.height() <= 0) return surface;
   cairo_surface_flush(surface.get());
   unsigned char* data = cairo_image_surface_get_data(surface.get());
@@ -74,7 +78,8 @@ CairoSurface ToSurface(const RgbImage& image) {
     auto* row = reinterpret_cast<uint32_t*>(data + static_cast<ptrdiff_t>(y) * stride);
     for (int x = 0; x < image.width(); ++x) {
       const Rgb c = image.At(x, y);
-      row[x] = (uint32_t{c.r} << 16) | (uint32_t{c.g} << 8) | uint32_t{c.b};  // RGB24: native-endian xRGB
+      row[x] = (uint32_t{c.r} << 16) | (uint32_t{c.g} << 8) |
+               uint32_t{c.b};  // RGB24: native-endian xRGB
     }
   }
   cairo_surface_mark_dirty(surface.get());

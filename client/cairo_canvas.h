@@ -43,7 +43,8 @@ class Canvas {
   Canvas() = default;
   Status CheckStatus() const;
 
-  std::unique_ptr<std::string> bytes_ = std::make_unique<std::string>();  // stable address for the callback
+  std::unique_ptr<std::string> bytes_ =
+      std::make_unique<std::string>();  // stable address for the callback
   CairoSurface surface_;
   Cairo cr_;
 };

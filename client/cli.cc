@@ -29,28 +29,48 @@ std::chrono::milliseconds Context::timeout() const {
 
 const char* StatusCodeName(grpc::StatusCode code) {
   switch (code) {
-    case grpc::StatusCode::OK: return "OK";
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED: return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    default: return "UNKNOWN";
+    case grpc::StatusCode::OK:
+      return "OK";
+    case grpc::StatusCode::CANCELLED:
+      return "CANCELLED";
+    case grpc::StatusCode::UNKNOWN:
+      return "UNKNOWN";
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND:
+      return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS:
+      return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED:
+      return "PERMISSION_DENIED";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      return "FAILED_PRECONDITION";
+    case grpc::StatusCode::ABORTED:
+      return "ABORTED";
+    case grpc::StatusCode::OUT_OF_RANGE:
+      return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNIMPLEMENTED:
+      return "UNIMPLEMENTED";
+    case grpc::StatusCode::INTERNAL:
+      return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE:
+      return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS:
+      return "DATA_LOSS";
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return "UNAUTHENTICATED";
+    default:
+      return "UNKNOWN";
   }
 }
 
-void PrintError(const std::string& message) { std::fprintf(stderr, "mapctl: %s\n", message.c_str()); }
+void PrintError(const std::string& message) {
+  std::fprintf(stderr, "mapctl: %s\n", message.c_str());
+}
 
 int ReportRpcError(const Context& ctx, const std::string& what, const grpc::Status& status) {
   // A deadline is "unreachable" only if the channel never got connected.
@@ -62,15 +82,16 @@ int ReportRpcError(const Context& ctx, const std::string& what, const grpc::Stat
   for (char& c : message) {
     if (c == '\n') c = ' ';
   }
-  const std::string prefix = unreachable ? "cannot reach mapd at " + ctx.server + ": " + what : what;
+  const std::string prefix =
+      unreachable ? "cannot reach mapd at " + ctx.server + ": " + what : what;
   std::fprintf(stderr, "mapctl: %s: %s (%s)\n", prefix.c_str(), message.c_str(),
                StatusCodeName(status.error_code()));
   return unreachable ? kExitUnreachable : kExitFailed;
 }
 
 int UsageError(const std::string& command, const std::string& message) {
-  std::fprintf(stderr, "mapctl%s%s: %s (see 'mapctl %s--help')\n", command.empty() ? "" : " ", command.c_str(),
-               message.c_str(), command.empty() ? "" : (command + " ").c_str());
+  std::fprintf(stderr, "mapctl%s%s: %s (see 'mapctl %s--help')\n", command.empty() ? "" : " ",
+               command.c_str(), message.c_str(), command.empty() ? "" : (command + " ").c_str());
   return kExitUsage;
 }
 
@@ -85,7 +106,8 @@ CLI::Validator PositiveReal() {
   return CLI::Validator(
       [](std::string& text) {
         double v = 0;
-        return ParseDouble(text, &v) && v > 0 ? std::string() : "wants a number > 0, got '" + text + "'";
+        return ParseDouble(text, &v) && v > 0 ? std::string()
+                                              : "wants a number > 0, got '" + text + "'";
       },
       "> 0");
 }
@@ -93,7 +115,8 @@ CLI::Validator PositiveReal() {
 CLI::Validator PositiveId() {
   return CLI::Validator(
       [](std::string& text) {
-        const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+        const bool digits =
+            !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
         errno = 0;
         const bool ok = digits && std::strtoull(text.c_str(), nullptr, 10) > 0 && errno == 0;
         return ok ? std::string() : "'" + text + "' is not an id (a whole number > 0)";
@@ -134,15 +157,18 @@ bool ParseDouble(const std::string& s, double* out) {
 std::vector<std::string> Split(const std::string& s, char sep) {
   std::vector<std::string> out(1);
   for (char c : s) {
-    if (c == sep) out.emplace_back();
-    else out.back().push_back(c);
+    if (c == sep)
+      out.emplace_back();
+    else
+      out.back().push_back(c);
   }
   return out;
 }
 
 bool WriteOutput(const std::string& path, const std::string& data, std::string* error) {
   if (path == "-") {
-    if (std::fwrite(data.data(), 1, data.size(), stdout) != data.size() || std::fflush(stdout) != 0) {
+    if (std::fwrite(data.data(), 1, data.size(), stdout) != data.size() ||
+        std::fflush(stdout) != 0) {
       *error = "cannot write to stdout";
       return false;
     }

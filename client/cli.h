@@ -4,16 +4,16 @@
 #ifndef MAPD_CLIENT_CLI_H_
 #define MAPD_CLIENT_CLI_H_
 
+#include <grpcpp/grpcpp.h>
+
+#include <CLI/CLI.hpp>
 #include <chrono>
-#include <functional>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
-#include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 
@@ -22,15 +22,15 @@ namespace mapd::client {
 // Exit codes scripts can rely on.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailed = 1,       // the server answered an error, batches were rejected, or a local file failed
-  kExitUsage = 2,        // bad flags, unknown command, malformed input file
+  kExitFailed = 1,  // the server answered an error, batches were rejected, or a local file failed
+  kExitUsage = 2,   // bad flags, unknown command, malformed input file
   kExitUnreachable = 3,  // the server could not be reached
 };
 
 struct Context {
-  std::string server;      // host:port
-  double timeout_s = 10;   // RPC deadline; for ingest/simulate the wait for the last acks
-  std::string token;       // bearer token (--token / $MAPD_TOKEN); empty: none
+  std::string server;     // host:port
+  double timeout_s = 10;  // RPC deadline; for ingest/simulate the wait for the last acks
+  std::string token;      // bearer token (--token / $MAPD_TOKEN); empty: none
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<mapserver::v1::MapService::Stub> stub;
 

@@ -39,8 +39,8 @@ int AddRenderLayer(const std::string& command, const std::string& what, std::str
                    const RigidTransform& T_view_layer, std::vector<VoxelLayer>* layers);
 // Renders and writes `path`; prints one line saying what was written. Returns
 // kExitOk or kExitFailed.
-int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& layers, const std::string& path,
-                   ImageFormat format, const RenderOptions& options = {});
+int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& layers,
+                   const std::string& path, ImageFormat format, const RenderOptions& options = {});
 
 }  // namespace mapd::client
 

@@ -28,11 +28,16 @@ struct NoOptions {};
 
 const char* RoleName(pb::Role r) {
   switch (r) {
-    case pb::ROLE_READER: return "reader";
-    case pb::ROLE_ROBOT: return "robot";
-    case pb::ROLE_OPERATOR: return "operator";
-    case pb::ROLE_ADMIN: return "admin";
-    default: return "?";
+    case pb::ROLE_READER:
+      return "reader";
+    case pb::ROLE_ROBOT:
+      return "robot";
+    case pb::ROLE_OPERATOR:
+      return "operator";
+    case pb::ROLE_ADMIN:
+      return "admin";
+    default:
+      return "?";
   }
 }
 
@@ -54,10 +59,12 @@ std::string Utc(int64_t ns) {
 }
 
 void PrintTokens(const pb::ListTokensResponse& r) {
-  std::printf("%-5s %-24s %-9s %-16s %-20s %-20s %s\n", "ID", "NAME", "ROLE", "ROBOT", "CREATED", "BY", "REVOKED");
+  std::printf("%-5s %-24s %-9s %-16s %-20s %-20s %s\n", "ID", "NAME", "ROLE", "ROBOT", "CREATED",
+              "BY", "REVOKED");
   for (const pb::TokenInfo& t : r.tokens()) {
-    std::printf("%-5llu %-24s %-9s %-16s %-20s %-20s %s\n", static_cast<unsigned long long>(t.id()), t.name().c_str(),
-                RoleName(t.role()), t.robot_id().empty() ? "-" : t.robot_id().c_str(), Utc(t.created_ns()).c_str(),
+    std::printf("%-5llu %-24s %-9s %-16s %-20s %-20s %s\n", static_cast<unsigned long long>(t.id()),
+                t.name().c_str(), RoleName(t.role()),
+                t.robot_id().empty() ? "-" : t.robot_id().c_str(), Utc(t.created_ns()).c_str(),
                 t.created_by().c_str(), Utc(t.revoked_ns()).c_str());
   }
 }
@@ -73,10 +80,11 @@ int RunTokenCreate(const Context& ctx, const CreateOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->CreateToken(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "token create", status);
-  std::fprintf(stderr, "created token %llu '%s' (role %s%s); the secret is shown only now:\n",
-               static_cast<unsigned long long>(response.info().id()), response.info().name().c_str(),
-               RoleName(response.info().role()),
-               response.info().robot_id().empty() ? "" : (", robot " + response.info().robot_id()).c_str());
+  std::fprintf(
+      stderr, "created token %llu '%s' (role %s%s); the secret is shown only now:\n",
+      static_cast<unsigned long long>(response.info().id()), response.info().name().c_str(),
+      RoleName(response.info().role()),
+      response.info().robot_id().empty() ? "" : (", robot " + response.info().robot_id()).c_str());
   std::printf("%s\n", response.token().c_str());
   return kExitOk;
 }
@@ -97,7 +105,8 @@ int RunTokenRevoke(const Context& ctx, const RevokeOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->RevokeToken(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "token revoke", status);
-  std::printf("revoked token %llu '%s'\n", static_cast<unsigned long long>(flags.id), response.info().name().c_str());
+  std::printf("revoked token %llu '%s'\n", static_cast<unsigned long long>(flags.id),
+              response.info().name().c_str());
   return kExitOk;
 }
 
@@ -108,11 +117,12 @@ int RunAudit(const Context& ctx, const AuditOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListAudit(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "audit", status);
-  std::printf("%-6s %-20s %-20s %-9s %-14s %-40s %s\n", "ID", "TIME", "WHO", "ROLE", "ACTION", "TARGET", "RESULT");
+  std::printf("%-6s %-20s %-20s %-9s %-14s %-40s %s\n", "ID", "TIME", "WHO", "ROLE", "ACTION",
+              "TARGET", "RESULT");
   for (const pb::AuditEntry& e : response.entries()) {
     std::printf("%-6llu %-20s %-20s %-9s %-14s %-40s %s\n", static_cast<unsigned long long>(e.id()),
-                Utc(e.time_ns()).c_str(), e.who().c_str(), e.role().c_str(), e.action().c_str(), e.target().c_str(),
-                e.result().c_str());
+                Utc(e.time_ns()).c_str(), e.who().c_str(), e.role().c_str(), e.action().c_str(),
+                e.target().c_str(), e.result().c_str());
   }
   return kExitOk;
 }
@@ -131,15 +141,17 @@ int RunWhoAmI(const Context& ctx, const NoOptions& /*flags*/) {
 }  // namespace
 
 void AddAuthCommands(CLI::App* app, Action* action) {
-  CLI::App* token = app->add_subcommand("token", "token create|list|revoke: manage bearer tokens (admin)");
+  CLI::App* token =
+      app->add_subcommand("token", "token create|list|revoke: manage bearer tokens (admin)");
   token->require_subcommand(1);
   token->footer(
       "Manages bearer tokens (needs an admin token, --token before the command; the first one\n"
       "comes from `mapd token create --db FILE --role admin --name NAME`).\n"
       "ROLE: reader (reads everything), robot (writes its own robot id; needs --robot),\n"
       "operator (reads, writes, merges, deletes, reads the audit log), admin.");
-  CLI::App* create = token->add_subcommand("create", "create a token; prints the secret once on stdout "
-                                                     "(the server keeps only its hash)");
+  CLI::App* create = token->add_subcommand("create",
+                                           "create a token; prints the secret once on stdout "
+                                           "(the server keeps only its hash)");
   auto c = BindCommand(create, action, RunTokenCreate);
   create->add_option("--name", c->name, "what the token is for")->required();
   create->add_option("--role", c->role, "reader, robot, operator or admin")
@@ -149,7 +161,9 @@ void AddAuthCommands(CLI::App* app, Action* action) {
   CLI::App* list = token->add_subcommand("list", "list the tokens");
   BindCommand(list, action, RunTokenList);
   CLI::App* revoke = token->add_subcommand("revoke", "revoke a token");
-  revoke->add_option("ID", BindCommand(revoke, action, RunTokenRevoke)->id, "the token's id (token list)")
+  revoke
+      ->add_option("ID", BindCommand(revoke, action, RunTokenRevoke)->id,
+                   "the token's id (token list)")
       ->required()
       ->check(PositiveId());
 
@@ -159,7 +173,8 @@ void AddAuthCommands(CLI::App* app, Action* action) {
       ->capture_default_str()
       ->check(CLI::Range(1u, 10000u));
 
-  CLI::App* whoami = app->add_subcommand("whoami", "who the server takes this caller for: name, role, robot id");
+  CLI::App* whoami =
+      app->add_subcommand("whoami", "who the server takes this caller for: name, role, robot id");
   BindCommand(whoami, action, RunWhoAmI);
 }
 

@@ -1,4 +1,6 @@
 // mapctl ingest | simulate
+#include <google/protobuf/util/json_util.h>
+
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -6,8 +8,6 @@
 #include <iostream>
 #include <map>
 #include <thread>
-
-#include <google/protobuf/util/json_util.h>
 
 #include "client/commands.h"
 #include "client/robot_client.h"
@@ -49,8 +49,11 @@ void Add(const IngestCounts& c, IngestCounts* total) {
 std::string Summary(const IngestCounts& c) {
   return Printf("%llu batches sent: %llu stored, %llu duplicate, %llu rejected",
                 static_cast<unsigned long long>(c.sent), static_cast<unsigned long long>(c.stored),
-                static_cast<unsigned long long>(c.duplicate), static_cast<unsigned long long>(c.rejected)) +
-         (c.reconnects > 0 ? Printf(" (%llu reconnects)", static_cast<unsigned long long>(c.reconnects)) : "");
+                static_cast<unsigned long long>(c.duplicate),
+                static_cast<unsigned long long>(c.rejected)) +
+         (c.reconnects > 0
+              ? Printf(" (%llu reconnects)", static_cast<unsigned long long>(c.reconnects))
+              : "");
 }
 
 std::string UtcStampForName() {
@@ -63,7 +66,8 @@ std::string UtcStampForName() {
 }
 
 int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -96,8 +100,8 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
     if (!parsed.ok()) {
       std::string why(parsed.message());
       why = why.substr(0, why.find('\n'));  // the parser adds the line and a caret below
-      parse_error = Printf("ingest: %s line %zu is not an ObservationBatch in protobuf JSON: %s", path.c_str(),
-                           line_number, why.c_str());
+      parse_error = Printf("ingest: %s line %zu is not an ObservationBatch in protobuf JSON: %s",
+                           path.c_str(), line_number, why.c_str());
       break;
     }
     line_of.emplace(std::make_pair(batch.session_id(), batch.seq()), line_number);
@@ -109,9 +113,9 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
   for (const Rejection& r : client.rejections()) {
     const auto it = line_of.find({r.session_id, r.seq});
     const std::string where = it == line_of.end() ? "a batch" : Printf("line %zu", it->second);
-    std::fprintf(stderr, "mapctl: ingest: %s (session %s, seq %llu) rejected: %s (%s)\n", where.c_str(),
-                 r.session_id.c_str(), static_cast<unsigned long long>(r.seq), r.message.c_str(),
-                 StatusCodeName(r.code));
+    std::fprintf(stderr, "mapctl: ingest: %s (session %s, seq %llu) rejected: %s (%s)\n",
+                 where.c_str(), r.session_id.c_str(), static_cast<unsigned long long>(r.seq),
+                 r.message.c_str(), StatusCodeName(r.code));
   }
   if (!parse_error.empty()) {
     PrintError(parse_error);
@@ -129,7 +133,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   std::vector<SimRobotParams> params(robots);
   for (size_t i = 0; i < robots; ++i) {
     const std::string& base = flags.robot_id;
-    params[i].robot_id = base.empty() ? "sim-robot-" + std::to_string(i + 1)
+    params[i].robot_id = base.empty()  ? "sim-robot-" + std::to_string(i + 1)
                          : robots == 1 ? base
                                        : base + "-" + std::to_string(i + 1);
     params[i].session_id = session;
@@ -159,8 +163,9 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
     }
     if (flags.export_path != "-") {
       std::printf("simulate: wrote %llu batches (%llu robots x %llu scans, session %s) to %s\n",
-                  static_cast<unsigned long long>(robots * scans), static_cast<unsigned long long>(robots),
-                  static_cast<unsigned long long>(scans), session.c_str(), flags.export_path.c_str());
+                  static_cast<unsigned long long>(robots * scans),
+                  static_cast<unsigned long long>(robots), static_cast<unsigned long long>(scans),
+                  session.c_str(), flags.export_path.c_str());
     }
     return kExitOk;
   }
@@ -183,23 +188,25 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
     });
   }
   for (std::thread& t : threads) t.join();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   IngestCounts total;
   int rc = kExitOk;
   for (size_t i = 0; i < robots; ++i) {
     Add(tallies[i].counts, &total);
     for (const Rejection& r : tallies[i].rejections) {
-      std::fprintf(stderr, "mapctl: simulate: %s seq %llu rejected: %s (%s)\n", params[i].robot_id.c_str(),
-                   static_cast<unsigned long long>(r.seq), r.message.c_str(), StatusCodeName(r.code));
+      std::fprintf(stderr, "mapctl: simulate: %s seq %llu rejected: %s (%s)\n",
+                   params[i].robot_id.c_str(), static_cast<unsigned long long>(r.seq),
+                   r.message.c_str(), StatusCodeName(r.code));
     }
     if (!tallies[i].status.ok() && rc == kExitOk) {
       rc = ReportRpcError(ctx, "simulate " + params[i].robot_id, tallies[i].status);
     }
   }
   std::printf("simulate: %llu robots x %llu scans, session %s, %.1f s: %s\n",
-              static_cast<unsigned long long>(robots), static_cast<unsigned long long>(scans), session.c_str(),
-              seconds, Summary(total).c_str());
+              static_cast<unsigned long long>(robots), static_cast<unsigned long long>(scans),
+              session.c_str(), seconds, Summary(total).c_str());
   if (rc != kExitOk) return rc;
   return total.rejected > 0 ? kExitFailed : kExitOk;
 }
@@ -207,7 +214,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
 }  // namespace
 
 void AddIngestCommands(CLI::App* app, Action* action) {
-  CLI::App* ingest = app->add_subcommand("ingest", "stream observation batches from a JSON-lines file");
+  CLI::App* ingest =
+      app->add_subcommand("ingest", "stream observation batches from a JSON-lines file");
   ingest->footer(
       "Streams observation batches to the server over one Ingest stream. FILE (or - for\n"
       "stdin) holds JSON lines: one ObservationBatch per line in the protobuf JSON mapping\n"
@@ -217,9 +225,12 @@ void AddIngestCommands(CLI::App* app, Action* action) {
       "Prints stored / duplicate / rejected counts and each rejection with its line number.\n"
       "Exit 1 if any batch was rejected; 2 if a line is not an ObservationBatch (the lines\n"
       "before it are sent).");
-  ingest->add_option("FILE", BindCommand(ingest, action, RunIngest)->path, "JSON lines, - for stdin")->required();
+  ingest
+      ->add_option("FILE", BindCommand(ingest, action, RunIngest)->path, "JSON lines, - for stdin")
+      ->required();
 
-  CLI::App* simulate = app->add_subcommand("simulate", "stream (or export) simulated robots' laser lines");
+  CLI::App* simulate =
+      app->add_subcommand("simulate", "stream (or export) simulated robots' laser lines");
   simulate->footer(
       "Simulated robots drive a loop through a 20 m x 12 m floor, scan it with a 2D laser\n"
       "(180 beams, 10 m, 1 cm noise), extract wall segments and stream them, one Ingest\n"
@@ -228,17 +239,20 @@ void AddIngestCommands(CLI::App* app, Action* action) {
   simulate->add_option("--robots", s->robots, "number of robots, named sim-robot-1..N")
       ->capture_default_str()
       ->check(CLI::Range(uint64_t{1}, uint64_t{1000}));
-  simulate->add_option("--robot-id", s->robot_id,
-                       "name the robots ID (one robot) or ID-1..N; a robot token (--token) may write only its "
-                       "own robot id");
+  simulate->add_option(
+      "--robot-id", s->robot_id,
+      "name the robots ID (one robot) or ID-1..N; a robot token (--token) may write only its "
+      "own robot id");
   simulate->add_option("--scans", s->scans, "scans per robot, 0.2 m apart")
       ->capture_default_str()
       ->check(CLI::Range(uint64_t{0}, uint64_t{10000000}));
   simulate->add_option("--seed", s->seed, "random seed")->capture_default_str();
-  simulate->add_option("--session", s->session, "session id (default sim-<UTC time>, so re-runs add data)");
-  simulate->add_option("--export", s->export_path,
-                       "write the batches as JSON lines (for 'mapctl ingest') instead of streaming them; - for "
-                       "stdout");
+  simulate->add_option("--session", s->session,
+                       "session id (default sim-<UTC time>, so re-runs add data)");
+  simulate->add_option(
+      "--export", s->export_path,
+      "write the batches as JSON lines (for 'mapctl ingest') instead of streaming them; - for "
+      "stdout");
 }
 
 }  // namespace mapd::client

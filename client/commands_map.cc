@@ -55,7 +55,8 @@ int RunStatus(const Context& ctx, const JsonOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->GetStats(call.get(), pb::GetStatsRequest(), &stats);
   if (!status.ok()) return ReportRpcError(ctx, "status", status);
-  std::fputs(flags.json ? MessageToJson(stats).c_str() : FormatStats(stats, ctx.server).c_str(), stdout);
+  std::fputs(flags.json ? MessageToJson(stats).c_str() : FormatStats(stats, ctx.server).c_str(),
+             stdout);
   return kExitOk;
 }
 
@@ -93,7 +94,8 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
   PlaneList planes;
   uint64_t map_version = 0;
   auto call = ctx.NewCallContext();
-  std::unique_ptr<grpc::ClientReader<pb::FeatureMapPage>> reader = ctx.stub->GetFeatureMap(call.get(), request);
+  std::unique_ptr<grpc::ClientReader<pb::FeatureMapPage>> reader =
+      ctx.stub->GetFeatureMap(call.get(), request);
   pb::FeatureMapPage page;
   while (reader->Read(&page)) {
     map_version = page.map_version();
@@ -105,18 +107,26 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
 
   std::string text;
   switch (format) {
-    case OutputFormat::kTable: text = FormatFeatureTable(features, planes); break;
-    case OutputFormat::kJson: text = FormatFeatureJson(features, map_version, planes); break;
-    case OutputFormat::kGeoJson: text = FormatGeoJson(features, planes); break;
-    case OutputFormat::kSvg: text = FormatSvg(features, planes); break;
+    case OutputFormat::kTable:
+      text = FormatFeatureTable(features, planes);
+      break;
+    case OutputFormat::kJson:
+      text = FormatFeatureJson(features, map_version, planes);
+      break;
+    case OutputFormat::kGeoJson:
+      text = FormatGeoJson(features, planes);
+      break;
+    case OutputFormat::kSvg:
+      text = FormatSvg(features, planes);
+      break;
   }
   if (!WriteOutput(flags.output, text, &error)) {
     PrintError("features: " + error);
     return kExitFailed;
   }
   if (flags.output != "-") {
-    std::printf("wrote %zu features and %zu planes (map version %llu) to %s\n", features.size(), planes.size(),
-                static_cast<unsigned long long>(map_version), flags.output.c_str());
+    std::printf("wrote %zu features and %zu planes (map version %llu) to %s\n", features.size(),
+                planes.size(), static_cast<unsigned long long>(map_version), flags.output.c_str());
   }
   return kExitOk;
 }
@@ -125,34 +135,46 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
 
 void AddMapCommands(CLI::App* app, Action* action) {
   CLI::App* status = app->add_subcommand("status", "server statistics");
-  status->footer("Robots, sessions, batches, raw and fused features, clusters, ingest rate, uptime,\n"
-                 "database size and path, version.");
-  status->add_flag("--json", BindCommand(status, action, RunStatus)->json,
-                   "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
+  status->footer(
+      "Robots, sessions, batches, raw and fused features, clusters, ingest rate, uptime,\n"
+      "database size and path, version.");
+  status->add_flag(
+      "--json", BindCommand(status, action, RunStatus)->json,
+      "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
 
-  CLI::App* robots = app->add_subcommand("robots", "the robots seen, with their sessions and counts");
-  robots->footer("Sessions, stored batches and features, whether their frames are tied to the map\n"
-                 "frame, first and last seen (UTC).");
+  CLI::App* robots =
+      app->add_subcommand("robots", "the robots seen, with their sessions and counts");
+  robots->footer(
+      "Sessions, stored batches and features, whether their frames are tied to the map\n"
+      "frame, first and last seen (UTC).");
   robots->add_flag("--json", BindCommand(robots, action, RunRobots)->json,
                    "the ListRobotsResponse in protobuf JSON");
 
-  CLI::App* features = app->add_subcommand("features", "query / export the fused map (table, json, geojson, svg)");
-  features->footer("The fused feature map (map frame, metres): walls as segments, then floors, ceilings\n"
-                   "and ramps as planes (id, normal, offset, area, support, robots).");
+  CLI::App* features =
+      app->add_subcommand("features", "query / export the fused map (table, json, geojson, svg)");
+  features->footer(
+      "The fused feature map (map frame, metres): walls as segments, then floors, ceilings\n"
+      "and ramps as planes (id, normal, offset, area, support, robots).");
   auto f = BindCommand(features, action, RunFeatures);
-  features->add_option("--bbox", f->bbox,
-                       "XMIN,YMIN,XMAX,YMAX: only features whose segment meets this box, and planes whose "
-                       "boundary's ground projection meets it");
-  f->min_support_flag = features->add_option("--min-support", f->min_support,
-                                             "only features seen in at least N observations (values below "
-                                             "the server's threshold are raised to it)");
+  features->add_option(
+      "--bbox", f->bbox,
+      "XMIN,YMIN,XMAX,YMAX: only features whose segment meets this box, and planes whose "
+      "boundary's ground projection meets it");
+  f->min_support_flag =
+      features->add_option("--min-support", f->min_support,
+                           "only features seen in at least N observations (values below "
+                           "the server's threshold are raised to it)");
   features->add_option("--kind", f->kind, "only this kind (line leaves out the planes)")
       ->capture_default_str()
       ->check(CLI::IsMember({"line", "plane", "any"}));
-  features->add_flag("--raw-fit", f->raw_fit, "the raw least-squares fit, not the corner-optimised segment");
-  features->add_option("--format", f->format, "default: from the -o extension (.json, .geojson, .svg), else table")
+  features->add_flag("--raw-fit", f->raw_fit,
+                     "the raw least-squares fit, not the corner-optimised segment");
+  features
+      ->add_option("--format", f->format,
+                   "default: from the -o extension (.json, .geojson, .svg), else table")
       ->check(CLI::IsMember({"table", "json", "geojson", "svg"}));
-  features->add_option("-o,--output", f->output, "write to FILE (- for stdout)")->capture_default_str();
+  features->add_option("-o,--output", f->output, "write to FILE (- for stdout)")
+      ->capture_default_str();
 }
 
 }  // namespace mapd::client

@@ -30,7 +30,8 @@ std::string LoadErrorCode(const Status& status) { return ::mapd::StatusCodeName(
 
 int CheckRenderOutput(const std::string& command, const std::string& path, ImageFormat* format) {
   if (!ImageFormatFromPath(path, format)) {
-    return UsageError(command, "cannot tell the image format of '" + path + "': use a .png or .svg name");
+    return UsageError(command,
+                      "cannot tell the image format of '" + path + "': use a .png or .svg name");
   }
   return kContinue;
 }
@@ -39,12 +40,13 @@ int AddRenderLayer(const std::string& command, const std::string& what, std::str
                    const RigidTransform& T_view_layer, std::vector<VoxelLayer>* layers) {
   StatusOr<LoadedVoxels> voxels = LoadOccupiedVoxels(bytes);
   if (!voxels.ok()) {
-    PrintError(command + ": " + what + ": " + voxels.status().message() + " (" + LoadErrorCode(voxels.status()) +
-               ")");
+    PrintError(command + ": " + what + ": " + voxels.status().message() + " (" +
+               LoadErrorCode(voxels.status()) + ")");
     return voxels.status().code() == StatusCode::kUnimplemented ? kExitFailed : kExitUsage;
   }
   VoxelLayer layer;
-  layer.label = Printf("%s: %zu voxels, %.3g m", what.c_str(), voxels->centres_m.size(), voxels->resolution_m);
+  layer.label = Printf("%s: %zu voxels, %.3g m", what.c_str(), voxels->centres_m.size(),
+                       voxels->resolution_m);
   layer.colour = LayerColour(layers->size());
   layer.resolution_m = voxels->resolution_m;
   layer.centres_m = std::move(voxels->centres_m);
@@ -53,8 +55,8 @@ int AddRenderLayer(const std::string& command, const std::string& what, std::str
   return kContinue;
 }
 
-int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& layers, const std::string& path,
-                   ImageFormat format, const RenderOptions& options) {
+int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& layers,
+                   const std::string& path, ImageFormat format, const RenderOptions& options) {
   StatusOr<std::string> image = RenderVoxelImage(layers, options, format);
   if (!image.ok()) {
     PrintError(command + ": cannot render " + path + ": " + image.status().message());
@@ -67,8 +69,8 @@ int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& la
   }
   size_t voxels = 0;
   for (const VoxelLayer& layer : layers) voxels += layer.centres_m.size();
-  std::printf("rendered %zu layer%s (%zu voxels) to %s\n", layers.size(), layers.size() == 1 ? "" : "s", voxels,
-              path.c_str());
+  std::printf("rendered %zu layer%s (%zu voxels) to %s\n", layers.size(),
+              layers.size() == 1 ? "" : "s", voxels, path.c_str());
   return kExitOk;
 }
 
@@ -86,8 +88,8 @@ int RunRender(const Context& /*ctx*/, const RenderCommandOptions& flags) {
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(path, ec);
     if (!ec && size > kMaxFileBytes) {
-      PrintError(Printf("render: %s: %ju bytes, more than the %ju the reader accepts", path.c_str(), size,
-                        kMaxFileBytes));
+      PrintError(Printf("render: %s: %ju bytes, more than the %ju the reader accepts", path.c_str(),
+                        size, kMaxFileBytes));
       return kExitFailed;
     }
     std::ifstream file(path, std::ios::binary);
@@ -98,7 +100,9 @@ int RunRender(const Context& /*ctx*/, const RenderCommandOptions& flags) {
     std::stringstream bytes;
     bytes << file.rdbuf();
     const std::string name = std::filesystem::path(path).filename().string();
-    if (int rc = AddRenderLayer("render", name, bytes.str(), RigidTransform(), &layers); rc != kContinue) return rc;
+    if (int rc = AddRenderLayer("render", name, bytes.str(), RigidTransform(), &layers);
+        rc != kContinue)
+      return rc;
   }
   return WriteRendering("render", layers, output, format, options);
 }
@@ -106,8 +110,8 @@ int RunRender(const Context& /*ctx*/, const RenderCommandOptions& flags) {
 }  // namespace
 
 void AddRenderCommand(CLI::App* app, Action* action) {
-  CLI::App* render =
-      app->add_subcommand("render", "draw OctoMap files from above as PNG or SVG (no server needed)");
+  CLI::App* render = app->add_subcommand(
+      "render", "draw OctoMap files from above as PNG or SVG (no server needed)");
   render->footer(
       "Draws OctoMap files (.bt or .ot) seen from above, each file a layer in its own colour,\n"
       "in its own frame: brighter = higher (the highest occupied voxel per pixel), where layers\n"
@@ -115,10 +119,16 @@ void AddRenderCommand(CLI::App* app, Action* action) {
       "Files are checked by the same parser as the server's before anything is drawn.");
   auto r = BindCommand(render, action, RunRender);
   render->add_option("FILE", r->files, "OctoMap files, one layer each")->required();
-  render->add_option("-o,--output", r->output, "OUT.png or OUT.svg: the format follows the extension")->required();
-  render->add_option("--pixel", r->render.pixel_m, "metres per pixel (default: the finest voxel size)")
+  render
+      ->add_option("-o,--output", r->output, "OUT.png or OUT.svg: the format follows the extension")
+      ->required();
+  render
+      ->add_option("--pixel", r->render.pixel_m,
+                   "metres per pixel (default: the finest voxel size)")
       ->check(PositiveReal());
-  render->add_option("--max-size", r->render.max_map_px, "longest side of the map in pixels (--pixel grows to fit)")
+  render
+      ->add_option("--max-size", r->render.max_map_px,
+                   "longest side of the map in pixels (--pixel grows to fit)")
       ->capture_default_str()
       ->check(CLI::Range(16, 16384));
 }

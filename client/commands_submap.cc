@@ -51,17 +51,19 @@ std::string Basename(const std::string& path) {
 }
 
 std::string DescribeSubmap(const pb::SubmapInfo& m) {
-  return Printf("submap %llu: robot %s, name %s, resolution %.3f m, %llu occupied / %llu free voxels, "
-                "bounds (%.2f, %.2f, %.2f)..(%.2f, %.2f, %.2f) m, %llu bytes",
-                static_cast<unsigned long long>(m.id()), m.robot_id().c_str(), m.name().c_str(), m.resolution(),
-                static_cast<unsigned long long>(m.occupied_voxels()),
-                static_cast<unsigned long long>(m.free_voxels()), m.bounds_min().x(), m.bounds_min().y(),
-                m.bounds_min().z(), m.bounds_max().x(), m.bounds_max().y(), m.bounds_max().z(),
-                static_cast<unsigned long long>(m.size_bytes()));
+  return Printf(
+      "submap %llu: robot %s, name %s, resolution %.3f m, %llu occupied / %llu free voxels, "
+      "bounds (%.2f, %.2f, %.2f)..(%.2f, %.2f, %.2f) m, %llu bytes",
+      static_cast<unsigned long long>(m.id()), m.robot_id().c_str(), m.name().c_str(),
+      m.resolution(), static_cast<unsigned long long>(m.occupied_voxels()),
+      static_cast<unsigned long long>(m.free_voxels()), m.bounds_min().x(), m.bounds_min().y(),
+      m.bounds_min().z(), m.bounds_max().x(), m.bounds_max().y(), m.bounds_max().z(),
+      static_cast<unsigned long long>(m.size_bytes()));
 }
 
 // Reads a DataChunk stream to its end: the file's bytes, and the info of the first message.
-grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data, pb::SubmapInfo* info) {
+grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data,
+                        pb::SubmapInfo* info) {
   pb::DataChunk chunk;
   while (reader->Read(&chunk)) {
     if (chunk.has_info()) *info = chunk.info();
@@ -71,8 +73,9 @@ grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* 
 }
 
 RigidTransform ToRigidTransform(const pb::Rigid3& T) {
-  return RigidTransform::FromQuaternion(T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z(),
-                                        {T.translation().x(), T.translation().y(), T.translation().z()});
+  return RigidTransform::FromQuaternion(
+      T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z(),
+      {T.translation().x(), T.translation().y(), T.translation().z()});
 }
 
 std::string FormatMergeProgress(const pb::MergeProgress& p) {
@@ -89,10 +92,11 @@ std::string FormatMergeResult(const pb::MergeResult& result) {
     const RigidTransform T = ToRigidTransform(a.t_reference_submap());
     double yaw = 0, pitch = 0, roll = 0;
     T.YawPitchRollDeg(&yaw, &pitch, &roll);
-    out += Printf("  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
-                  "%u matched corners, residual %.3f m, overlap %.2f\n",
-                  static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
-                  a.matched_corners(), a.residual_m(), a.overlap_score());
+    out += Printf(
+        "  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
+        "%u matched corners, residual %.3f m, overlap %.2f\n",
+        static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
+        a.matched_corners(), a.residual_m(), a.overlap_score());
   }
   return out;
 }
@@ -104,7 +108,8 @@ int RunSubmaps(const Context& ctx, const SubmapsOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListSubmaps(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "submaps", status);
-  std::fputs(flags.json ? MessageToJson(response).c_str() : FormatSubmaps(response).c_str(), stdout);
+  std::fputs(flags.json ? MessageToJson(response).c_str() : FormatSubmaps(response).c_str(),
+             stdout);
   return kExitOk;
 }
 
@@ -116,9 +121,12 @@ int RunUpload(const Context& ctx, const UploadOptions& flags) {
   header.set_session_id(flags.session);
   std::string format = flags.format;
   if (format.empty()) format = path.size() > 3 ? path.substr(path.size() - 3) : "";
-  if (format == "bt" || format == ".bt") header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
-  else if (format == "ot" || format == ".ot") header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_OT);
-  else return UsageError("submap", "cannot tell the format of '" + path + "': use --format bt|ot");
+  if (format == "bt" || format == ".bt")
+    header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
+  else if (format == "ot" || format == ".ot")
+    header.set_format(pb::SUBMAP_FORMAT_OCTOMAP_OT);
+  else
+    return UsageError("submap", "cannot tell the format of '" + path + "': use --format bt|ot");
   header.set_resolution(flags.resolution);
   std::ifstream file(path, std::ios::binary);
   if (!file) {
@@ -128,7 +136,8 @@ int RunUpload(const Context& ctx, const UploadOptions& flags) {
 
   auto call = ctx.NewStreamContext();  // no deadline: large uploads take their time
   pb::SubmapInfo info;
-  std::unique_ptr<grpc::ClientWriter<pb::UploadSubmapRequest>> writer = ctx.stub->UploadSubmap(call.get(), &info);
+  std::unique_ptr<grpc::ClientWriter<pb::UploadSubmapRequest>> writer =
+      ctx.stub->UploadSubmap(call.get(), &info);
   pb::UploadSubmapRequest message;
   *message.mutable_header() = header;
   bool open = writer->Write(message);
@@ -154,11 +163,13 @@ int RunMerge(const Context& ctx, const MergeOptions& flags) {
   const std::string& render_path = flags.render;
   ImageFormat render_format = ImageFormat::kPng;
   if (!render_path.empty()) {
-    if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue) return rc;
+    if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue)
+      return rc;
   }
 
   auto call = ctx.NewStreamContext();  // no deadline: a merge takes as long as it takes
-  std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader = ctx.stub->MergeSubmaps(call.get(), request);
+  std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader =
+      ctx.stub->MergeSubmaps(call.get(), request);
   pb::MergeProgress progress;
   bool have_result = false;
   pb::MergeResult result;
@@ -214,13 +225,17 @@ int RunMerge(const Context& ctx, const MergeOptions& flags) {
     auto get_call = ctx.NewStreamContext();
     pb::GetSubmapRequest get_request;
     get_request.set_id(id);
-    const grpc::Status get_status = ReadChunks(ctx.stub->GetSubmap(get_call.get(), get_request).get(), &data, &info);
+    const grpc::Status get_status =
+        ReadChunks(ctx.stub->GetSubmap(get_call.get(), get_request).get(), &data, &info);
     if (!get_status.ok()) {
-      return ReportRpcError(ctx, Printf("merge: GetSubmap %llu", static_cast<unsigned long long>(id)), get_status);
+      return ReportRpcError(
+          ctx, Printf("merge: GetSubmap %llu", static_cast<unsigned long long>(id)), get_status);
     }
-    const std::string what = Printf("submap %llu (robot %s, %s)", static_cast<unsigned long long>(id),
-                                    info.robot_id().c_str(), info.name().c_str());
-    if (int rc = AddRenderLayer("merge", what, data, T_reference_submap, &layers); rc != kContinue) return rc;
+    const std::string what =
+        Printf("submap %llu (robot %s, %s)", static_cast<unsigned long long>(id),
+               info.robot_id().c_str(), info.name().c_str());
+    if (int rc = AddRenderLayer("merge", what, data, T_reference_submap, &layers); rc != kContinue)
+      return rc;
   }
   return WriteRendering("merge", layers, render_path, render_format);
 }
@@ -230,7 +245,8 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
   const std::string& render_path = flags.render;
   ImageFormat render_format = ImageFormat::kPng;
   if (!render_path.empty()) {
-    if (int rc = CheckRenderOutput("global-map", render_path, &render_format); rc != kContinue) return rc;
+    if (int rc = CheckRenderOutput("global-map", render_path, &render_format); rc != kContinue)
+      return rc;
   }
   auto call = ctx.NewStreamContext();
   std::string data;
@@ -243,13 +259,15 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
     PrintError("global-map: " + error);
     return kExitFailed;
   }
-  std::printf("wrote %zu bytes to %s (%s)\n", data.size(), output.c_str(), DescribeSubmap(info).c_str());
+  std::printf("wrote %zu bytes to %s (%s)\n", data.size(), output.c_str(),
+              DescribeSubmap(info).c_str());
   std::fflush(stdout);
   if (render_path.empty()) return kExitOk;
   std::vector<VoxelLayer> layers;
   const std::string what =
       Printf("global map (submap %llu)", static_cast<unsigned long long>(info.id()));
-  if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue) return rc;
+  if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue)
+    return rc;
   return WriteRendering("global-map", layers, render_path, render_format);
 }
 
@@ -257,19 +275,22 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
 
 void AddSubmapCommands(CLI::App* app, Action* action) {
   CLI::App* submaps = app->add_subcommand("submaps", "list stored voxel submaps");
-  submaps->footer("The stored voxel submaps: id, robot, name, format, resolution, voxel counts, size.");
+  submaps->footer(
+      "The stored voxel submaps: id, robot, name, format, resolution, voxel counts, size.");
   auto list = BindCommand(submaps, action, RunSubmaps);
   submaps->add_option("--robot", list->robot, "only this robot's submaps");
   submaps->add_flag("--json", list->json, "the ListSubmapsResponse in protobuf JSON");
 
-  CLI::App* submap = app->add_subcommand("submap", "submap upload FILE --robot R: upload an OctoMap file");
+  CLI::App* submap =
+      app->add_subcommand("submap", "submap upload FILE --robot R: upload an OctoMap file");
   submap->require_subcommand(1);
   CLI::App* upload = submap->add_subcommand("upload", "upload an OctoMap file (.bt or .ot)");
   upload->footer("Uploads the file in 1 MiB chunks and prints the stored submap.");
   auto u = BindCommand(upload, action, RunUpload);
   upload->add_option("FILE", u->path, "the OctoMap file")->required();
   upload->add_option("--robot", u->robot, "the robot that built it")->required();
-  upload->add_option("--name", u->name, "unique per robot (default: the file name without its extension)");
+  upload->add_option("--name", u->name,
+                     "unique per robot (default: the file name without its extension)");
   upload->add_option("--format", u->format, "bt or ot (default: from the extension)")
       ->check(CLI::IsMember({"bt", "ot", ".bt", ".ot"}));
   upload->add_option("--resolution", u->resolution, "metres per voxel; 0 = from the file")
@@ -277,7 +298,8 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
       ->check(CLI::NonNegativeNumber);
   upload->add_option("--session", u->session, "the session frame the submap was built in");
 
-  CLI::App* merge = app->add_subcommand("merge", "merge two or more submaps (--wait: progress, --render: picture)");
+  CLI::App* merge = app->add_subcommand(
+      "merge", "merge two or more submaps (--wait: progress, --render: picture)");
   merge->footer(
       "Merges two or more submaps without a prior pose and prints, per submap, where it sits\n"
       "in the first submap's frame (xyz in metres, yaw/pitch/roll in degrees, Z-Y-X), the\n"
@@ -288,19 +310,23 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
       ->required()
       ->expected(2, 1 << 20)
       ->check(PositiveId());
-  merge->add_flag("--wait", m->wait,
-                  "show the progress (stage and percent) while the merge runs (the call always lasts until "
-                  "the merge ends)");
-  merge->add_option("--render", m->render,
-                    "OUT.png|OUT.svg: after an accepted merge, draw the input submaps from above, each in its "
-                    "own colour, moved by its transform: walls that line up show the merge is right "
-                    "(see 'mapctl render --help')");
+  merge->add_flag(
+      "--wait", m->wait,
+      "show the progress (stage and percent) while the merge runs (the call always lasts until "
+      "the merge ends)");
+  merge->add_option(
+      "--render", m->render,
+      "OUT.png|OUT.svg: after an accepted merge, draw the input submaps from above, each in its "
+      "own colour, moved by its transform: walls that line up show the merge is right "
+      "(see 'mapctl render --help')");
 
-  CLI::App* global = app->add_subcommand("global-map", "download the merged global map (-o FILE.bt, --render)");
+  CLI::App* global =
+      app->add_subcommand("global-map", "download the merged global map (-o FILE.bt, --render)");
   global->footer("Downloads the merged global map (OctoMap binary) to FILE.");
   auto g = BindCommand(global, action, RunGlobalMap);
   global->add_option("-o,--output", g->output, "the .bt file to write")->required();
-  global->add_option("--render", g->render, "OUT.png|OUT.svg: also draw it from above (see 'mapctl render --help')");
+  global->add_option("--render", g->render,
+                     "OUT.png|OUT.svg: also draw it from above (see 'mapctl render --help')");
 }
 
 }  // namespace mapd::client

@@ -1,10 +1,10 @@
 #include "client/format.h"
 
+#include <google/protobuf/util/json_util.h>
+
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-
-#include <google/protobuf/util/json_util.h>
 #include <nlohmann/json.hpp>
 
 #include "client/text_util.h"
@@ -39,7 +39,8 @@ std::string HumanBytes(uint64_t bytes) {
     v /= 1024;
     ++u;
   }
-  return u == 0 ? Printf("%llu B", static_cast<unsigned long long>(bytes)) : Printf("%.1f %s", v, units[u]);
+  return u == 0 ? Printf("%llu B", static_cast<unsigned long long>(bytes))
+                : Printf("%.1f %s", v, units[u]);
 }
 
 std::string HumanDuration(double seconds) {
@@ -63,17 +64,23 @@ std::string IsoTime(int64_t ns) {
 }  // namespace
 
 bool ParseOutputFormat(const std::string& name, OutputFormat* out) {
-  if (name == "table") *out = OutputFormat::kTable;
-  else if (name == "json") *out = OutputFormat::kJson;
-  else if (name == "geojson") *out = OutputFormat::kGeoJson;
-  else if (name == "svg") *out = OutputFormat::kSvg;
-  else return false;
+  if (name == "table")
+    *out = OutputFormat::kTable;
+  else if (name == "json")
+    *out = OutputFormat::kJson;
+  else if (name == "geojson")
+    *out = OutputFormat::kGeoJson;
+  else if (name == "svg")
+    *out = OutputFormat::kSvg;
+  else
+    return false;
   return true;
 }
 
 OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback) {
   auto ends_with = [&path](const std::string& suffix) {
-    return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+    return path.size() >= suffix.size() &&
+           path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
   };
   if (ends_with(".geojson")) return OutputFormat::kGeoJson;
   if (ends_with(".json")) return OutputFormat::kJson;
@@ -83,9 +90,12 @@ OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback) {
 
 std::string KindName(pb::FeatureKind kind) {
   switch (kind) {
-    case pb::FEATURE_KIND_LINE: return "line";
-    case pb::FEATURE_KIND_PLANE: return "plane";
-    default: return "any";
+    case pb::FEATURE_KIND_LINE:
+      return "line";
+    case pb::FEATURE_KIND_PLANE:
+      return "plane";
+    default:
+      return "any";
   }
 }
 
@@ -105,27 +115,30 @@ std::string FormatFeatureTable(const FeatureList& features, const PlaneList& pla
                            "B (x, y) m", "LEN m", "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
   for (const pb::FusedFeature& f : features) {
     const double length = std::hypot(f.b().x() - f.a().x(), f.b().y() - f.a().y());
-    out += Printf("%-8llu %-5s %21s %21s %7.2f %15s %7u %7u  %s\n", static_cast<unsigned long long>(f.id()),
-                  KindName(f.kind()).c_str(), Printf("(%.2f, %.2f)", f.a().x(), f.a().y()).c_str(),
+    out += Printf("%-8llu %-5s %21s %21s %7.2f %15s %7u %7u  %s\n",
+                  static_cast<unsigned long long>(f.id()), KindName(f.kind()).c_str(),
+                  Printf("(%.2f, %.2f)", f.a().x(), f.a().y()).c_str(),
                   Printf("(%.2f, %.2f)", f.b().x(), f.b().y()).c_str(), length,
                   Printf("%.2f..%.2f", f.z_min(), f.z_max()).c_str(), f.support(), f.member_count(),
                   Join(f.robots(), ",").c_str());
   }
   out += Printf("%zu feature%s\n", features.size(), features.size() == 1 ? "" : "s");
   if (planes.empty()) return out;
-  out += Printf("\n%-8s %-24s %9s %9s %15s %7s %7s  %s\n", "PLANE", "NORMAL (x, y, z)", "OFFSET m", "AREA m2",
-                "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
+  out += Printf("\n%-8s %-24s %9s %9s %15s %7s %7s  %s\n", "PLANE", "NORMAL (x, y, z)", "OFFSET m",
+                "AREA m2", "Z m", "SUPPORT", "MEMBERS", "ROBOTS");
   for (const pb::FusedPlane& p : planes) {
-    out += Printf("%-8llu %-24s %9.3f %9.2f %15s %7u %7u  %s\n", static_cast<unsigned long long>(p.id()),
-                  Printf("(%.3f, %.3f, %.3f)", p.normal().x(), p.normal().y(), p.normal().z()).c_str(), p.offset(),
-                  p.area(), Printf("%.2f..%.2f", p.z_min(), p.z_max()).c_str(), p.support(), p.member_count(),
-                  Join(p.robots(), ",").c_str());
+    out += Printf(
+        "%-8llu %-24s %9.3f %9.2f %15s %7u %7u  %s\n", static_cast<unsigned long long>(p.id()),
+        Printf("(%.3f, %.3f, %.3f)", p.normal().x(), p.normal().y(), p.normal().z()).c_str(),
+        p.offset(), p.area(), Printf("%.2f..%.2f", p.z_min(), p.z_max()).c_str(), p.support(),
+        p.member_count(), Join(p.robots(), ",").c_str());
   }
   out += Printf("%zu plane%s\n", planes.size(), planes.size() == 1 ? "" : "s");
   return out;
 }
 
-std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version, const PlaneList& planes) {
+std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
+                              const PlaneList& planes) {
   pb::FeatureMapPage page;
   for (const pb::FusedFeature& f : features) *page.add_features() = f;
   for (const pb::FusedPlane& p : planes) *page.add_planes() = p;
@@ -147,7 +160,8 @@ std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes) 
                      {"id", f.id()},
                      {"geometry",
                       {{"type", "LineString"},
-                       {"coordinates", Json::array({point(f.a().x(), f.a().y()), point(f.b().x(), f.b().y())})}}},
+                       {"coordinates",
+                        Json::array({point(f.a().x(), f.a().y()), point(f.b().x(), f.b().y())})}}},
                      {"properties",
                       {{"id", f.id()},
                        {"kind", KindName(f.kind())},
@@ -171,7 +185,8 @@ std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes) 
          {"properties",
           {{"id", p.id()},
            {"kind", "plane"},
-           {"normal", Json::array({JsonNumber(p.normal().x()), JsonNumber(p.normal().y()), JsonNumber(p.normal().z())})},
+           {"normal", Json::array({JsonNumber(p.normal().x()), JsonNumber(p.normal().y()),
+                                   JsonNumber(p.normal().z())})},
            {"offset_m", JsonNumber(p.offset())},
            {"area_m2", JsonNumber(p.area())},
            {"z_min", JsonNumber(p.z_min())},
@@ -197,11 +212,14 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   };
   auto num = [](uint64_t v) { return std::to_string(v); };
   row("uptime", HumanDuration(s.uptime_s()));
-  row("database", s.db_path() + " (" + HumanBytes(s.db_size_bytes()) +
-                      (s.raw_features() > 0 ? Printf(", %.0f bytes per raw feature", s.bytes_per_raw_feature())
-                                            : std::string()) + ")");
+  row("database",
+      s.db_path() + " (" + HumanBytes(s.db_size_bytes()) +
+          (s.raw_features() > 0 ? Printf(", %.0f bytes per raw feature", s.bytes_per_raw_feature())
+                                : std::string()) +
+          ")");
   if (s.recovering()) row("state", "RECOVERING the fused map (health NOT_SERVING)");
-  if (!s.write_failure().empty()) row("state", "NOT WRITABLE (health NOT_SERVING): " + s.write_failure());
+  if (!s.write_failure().empty())
+    row("state", "NOT WRITABLE (health NOT_SERVING): " + s.write_failure());
   row("robots", num(s.robots()));
   row("sessions", num(s.sessions()));
   row("batches", num(s.batches()));
@@ -209,12 +227,13 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("fused features", num(s.fused_features()) + " published, " + num(s.clusters()) + " clusters");
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
   row("fused planes", num(s.fused_planes()) + " published (floors, ceilings, ramps)");
-  row("fusion nodes", num(s.fusion_nodes()) + " (representatives kept for " + num(s.fused_raw_features()) +
-                          " fused raw features)");
+  row("fusion nodes", num(s.fusion_nodes()) + " (representatives kept for " +
+                          num(s.fused_raw_features()) + " fused raw features)");
   row("submaps", num(s.submaps()));
   row("map version", num(s.map_version()));
   row("snapshot", s.snapshot_age_s() > 0
-                      ? Printf("%s old, %llu observations to replay on restart", HumanDuration(s.snapshot_age_s()).c_str(),
+                      ? Printf("%s old, %llu observations to replay on restart",
+                               HumanDuration(s.snapshot_age_s()).c_str(),
                                static_cast<unsigned long long>(s.replay_length()))
                       : Printf("none yet, %llu observations to replay on restart",
                                static_cast<unsigned long long>(s.replay_length())));
@@ -224,30 +243,32 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
 }
 
 std::string FormatRobots(const pb::ListRobotsResponse& robots, int64_t now_ns) {
-  std::string out = Printf("%-24s %8s %9s %10s %-6s %-20s %s\n", "ROBOT", "SESSIONS", "BATCHES", "FEATURES",
-                           "FRAME", "FIRST SEEN (UTC)", "LAST SEEN");
+  std::string out = Printf("%-24s %8s %9s %10s %-6s %-20s %s\n", "ROBOT", "SESSIONS", "BATCHES",
+                           "FEATURES", "FRAME", "FIRST SEEN (UTC)", "LAST SEEN");
   for (const pb::RobotInfo& r : robots.robots()) {
     std::string last = IsoTime(r.last_seen_ns());
     if (now_ns > 0 && r.last_seen_ns() > 0 && now_ns >= r.last_seen_ns()) {
       last += " (" + HumanDuration(static_cast<double>(now_ns - r.last_seen_ns()) * 1e-9) + " ago)";
     }
     out += Printf("%-24s %8u %9llu %10llu %-6s %-20s %s\n", r.robot_id().c_str(), r.sessions(),
-                  static_cast<unsigned long long>(r.batches()), static_cast<unsigned long long>(r.features()),
-                  r.frame_tied() ? "map" : "local", IsoTime(r.first_seen_ns()).c_str(), last.c_str());
+                  static_cast<unsigned long long>(r.batches()),
+                  static_cast<unsigned long long>(r.features()), r.frame_tied() ? "map" : "local",
+                  IsoTime(r.first_seen_ns()).c_str(), last.c_str());
   }
   out += Printf("%d robot%s\n", robots.robots_size(), robots.robots_size() == 1 ? "" : "s");
   return out;
 }
 
 std::string FormatSubmaps(const pb::ListSubmapsResponse& submaps) {
-  std::string out = Printf("%-6s %-16s %-20s %-4s %7s %10s %10s %10s\n", "ID", "ROBOT", "NAME", "FMT", "RES m",
-                           "OCCUPIED", "FREE", "SIZE");
+  std::string out = Printf("%-6s %-16s %-20s %-4s %7s %10s %10s %10s\n", "ID", "ROBOT", "NAME",
+                           "FMT", "RES m", "OCCUPIED", "FREE", "SIZE");
   for (const pb::SubmapInfo& m : submaps.submaps()) {
-    out += Printf("%-6llu %-16s %-20s %-4s %7.3f %10llu %10llu %10s\n", static_cast<unsigned long long>(m.id()),
-                  m.robot_id().c_str(), m.name().c_str(),
+    out += Printf("%-6llu %-16s %-20s %-4s %7.3f %10llu %10llu %10s\n",
+                  static_cast<unsigned long long>(m.id()), m.robot_id().c_str(), m.name().c_str(),
                   m.format() == pb::SUBMAP_FORMAT_OCTOMAP_OT ? "ot" : "bt", m.resolution(),
                   static_cast<unsigned long long>(m.occupied_voxels()),
-                  static_cast<unsigned long long>(m.free_voxels()), HumanBytes(m.size_bytes()).c_str());
+                  static_cast<unsigned long long>(m.free_voxels()),
+                  HumanBytes(m.size_bytes()).c_str());
   }
   out += Printf("%d submap%s\n", submaps.submaps_size(), submaps.submaps_size() == 1 ? "" : "s");
   return out;

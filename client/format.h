@@ -6,10 +6,10 @@
 #ifndef MAPD_CLIENT_FORMAT_H_
 #define MAPD_CLIENT_FORMAT_H_
 
+#include <google/protobuf/message.h>
+
 #include <string>
 #include <vector>
-
-#include <google/protobuf/message.h>
 
 #include "mapserver/v1/map_service.pb.h"
 

@@ -2,12 +2,13 @@
 // surface. The drawing coordinates are metres with the y axis flipped
 // (drawing y = -map y), so the picture has y up and text stays upright; one
 // scale maps them to pixels. All lengths below are metres unless they say px.
+#include "client/format_svg.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "client/cairo_canvas.h"
-#include "client/format_svg.h"
 #include "client/text_util.h"
 
 namespace mapd::client {
@@ -54,9 +55,12 @@ double NiceStep(double extent) {
 
 const char* KindColour(pb::FeatureKind kind) {
   switch (kind) {
-    case pb::FEATURE_KIND_LINE: return "#1f77b4";
-    case pb::FEATURE_KIND_PLANE: return "#d62728";
-    default: return "#7f7f7f";
+    case pb::FEATURE_KIND_LINE:
+      return "#1f77b4";
+    case pb::FEATURE_KIND_PLANE:
+      return "#d62728";
+    default:
+      return "#7f7f7f";
   }
 }
 
@@ -70,7 +74,8 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options) {
   return FormatSvg(features, {}, options);
 }
 
-std::string FormatSvg(const FeatureList& features, const PlaneList& planes, const SvgOptions& options) {
+std::string FormatSvg(const FeatureList& features, const PlaneList& planes,
+                      const SvgOptions& options) {
   const Box data = Bounds(features, planes);
   const double extent = std::max(data.xmax - data.xmin, data.ymax - data.ymin);
   const double margin = std::max(0.5, 0.05 * extent);

@@ -20,7 +20,8 @@ std::string FormatSvg(const FeatureList& features, const SvgOptions& options = {
 // The same with the planes drawn first, as translucent filled paths (the
 // ground projection of each boundary, #2ca02c) under the lines; the drawing
 // fits both.
-std::string FormatSvg(const FeatureList& features, const PlaneList& planes, const SvgOptions& options = {});
+std::string FormatSvg(const FeatureList& features, const PlaneList& planes,
+                      const SvgOptions& options = {});
 
 }  // namespace mapd::client
 

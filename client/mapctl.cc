@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <tuple>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "client/cli.h"
@@ -31,7 +31,10 @@ bool ReadPem(const std::string& path, std::string* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace mapd::client;
+  using mapd::client::Action;
+  using mapd::client::Context;
+  using mapd::client::kContinue;
+  using mapd::client::UsageError;
   Context ctx;
   const char* env_server = std::getenv("MAPD_SERVER");
   ctx.server = env_server != nullptr && *env_server != '\0' ? env_server : "127.0.0.1:50051";
@@ -44,14 +47,18 @@ int main(int argc, char** argv) {
   // A flag given twice: the later one wins, as scripts that append overrides expect
   // (subcommands inherit this).
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  app.add_option("--server", ctx.server, "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051)")
-      ->check(CLI::Validator([](std::string& v) { return v.empty() ? "wants HOST:PORT" : ""; }, "HOST:PORT"));
+  app.add_option("--server", ctx.server,
+                 "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051)")
+      ->check(CLI::Validator([](std::string& v) { return v.empty() ? "wants HOST:PORT" : ""; },
+                             "HOST:PORT"));
   app.add_option("--timeout", ctx.timeout_s, "seconds to wait for an answer")
       ->capture_default_str()
-      ->check(PositiveReal());
+      ->check(mapd::client::PositiveReal());
   app.add_option("--token", ctx.token, "bearer token (default $MAPD_TOKEN; docs/security.md)");
-  CLI::Option* ca = app.add_option("--tls-ca", tls_ca, "use TLS, trusting this CA (PEM) for the server's certificate");
-  CLI::Option* cert = app.add_option("--tls-cert", tls_cert, "client certificate (PEM) for mTLS")->needs(ca);
+  CLI::Option* ca = app.add_option("--tls-ca", tls_ca,
+                                   "use TLS, trusting this CA (PEM) for the server's certificate");
+  CLI::Option* cert =
+      app.add_option("--tls-cert", tls_cert, "client certificate (PEM) for mTLS")->needs(ca);
   CLI::Option* key = app.add_option("--tls-key", tls_key, "its private key (PEM)")->needs(ca);
   cert->needs(key);
   key->needs(cert);
@@ -61,12 +68,12 @@ int main(int argc, char** argv) {
       "2 usage error, 3 the server could not be reached.");
 
   Action action;
-  AddMapCommands(&app, &action);
-  AddIngestCommands(&app, &action);
-  AddSubmapCommands(&app, &action);
-  AddRenderCommand(&app, &action);
-  AddAuthCommands(&app, &action);
-  if (int rc = ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;
+  mapd::client::AddMapCommands(&app, &action);
+  mapd::client::AddIngestCommands(&app, &action);
+  mapd::client::AddSubmapCommands(&app, &action);
+  mapd::client::AddRenderCommand(&app, &action);
+  mapd::client::AddAuthCommands(&app, &action);
+  if (int rc = mapd::client::ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;
 
   // The channel connects lazily, on the first call: --help needs no server.
   // A restarted server is found again within 2 s (gRPC's default backoff grows to 120 s).

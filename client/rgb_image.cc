@@ -15,13 +15,15 @@ RgbImage::RgbImage(int width, int height, Rgb fill)
 }
 
 Rgb RgbImage::At(int x, int y) const {
-  const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)) * 3;
+  const size_t i =
+      (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)) * 3;
   return {bytes_[i], bytes_[i + 1], bytes_[i + 2]};
 }
 
 void RgbImage::Set(int x, int y, Rgb colour) {
   if (!Contains(x, y)) return;
-  const size_t i = (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)) * 3;
+  const size_t i =
+      (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)) * 3;
   bytes_[i] = colour.r;
   bytes_[i + 1] = colour.g;
   bytes_[i + 2] = colour.b;

@@ -17,9 +17,9 @@ const Rgb kFrame{190, 190, 190};
 constexpr char kFontFamily[] = "sans-serif";
 
 struct Line {
-  int y = 0;             // top of the line, px
+  int y = 0;  // top of the line, px
   std::string text;
-  bool swatch = false;   // a coloured square before the text
+  bool swatch = false;  // a coloured square before the text
   Rgb colour;
 };
 
@@ -33,16 +33,15 @@ struct Layout {
   std::vector<Line> lines;  // caption, then the legend
 };
 
-std::string FormatMetres(double m) {
-  return m >= 1 ? Printf("%g m", m) : Printf("%g cm", m * 100);
-}
+std::string FormatMetres(double m) { return m >= 1 ? Printf("%g m", m) : Printf("%g cm", m * 100); }
 
 void SelectFont(cairo_t* cr, double size_px) {
   cairo_select_font_face(cr, kFontFamily, CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, size_px);
 }
 
-Layout MakeLayout(const TopView& view, const std::vector<VoxelLayer>& layers, const RenderOptions& options) {
+Layout MakeLayout(const TopView& view, const std::vector<VoxelLayer>& layers,
+                  const RenderOptions& options) {
   // Text is measured on a scratch surface with the font the drawing uses.
   Canvas scratch = Canvas::Raster(1, 1);
   cairo_t* cr = scratch.cr();
@@ -79,8 +78,8 @@ Layout MakeLayout(const TopView& view, const std::vector<VoxelLayer>& layers, co
     l.lines.push_back({y, std::move(text), swatch, colour});
     y += l.line_h;
   };
-  add(Printf("top view, %.3g m/px, brighter = higher (z %.2f .. %.2f m)", view.pixel_m, view.z_min_m,
-             view.z_max_m),
+  add(Printf("top view, %.3g m/px, brighter = higher (z %.2f .. %.2f m)", view.pixel_m,
+             view.z_min_m, view.z_max_m),
       false, kInk);
   for (const VoxelLayer& layer : layers) add(layer.label, true, layer.colour);
   if (layers.size() > 1) add("mixed colour: layers overlap", false, kInk);
@@ -120,7 +119,8 @@ void Draw(cairo_t* cr, const TopView& view, const Layout& l, const RenderOptions
   for (const Line& line : l.lines) {
     int x = l.map_x;
     if (line.swatch) {
-      FillRect(cr, x, line.y + static_cast<int>(l.ascent_px) - l.swatch_px, l.swatch_px, l.swatch_px, line.colour);
+      FillRect(cr, x, line.y + static_cast<int>(l.ascent_px) - l.swatch_px, l.swatch_px,
+               l.swatch_px, line.colour);
       x += l.swatch_px + 3 * l.text_scale;
     }
     DrawText(cr, l, x, line.y, line.text);
@@ -129,8 +129,8 @@ void Draw(cairo_t* cr, const TopView& view, const Layout& l, const RenderOptions
 
 }  // namespace
 
-StatusOr<std::string> RenderVoxelImage(const std::vector<VoxelLayer>& layers, const RenderOptions& options,
-                                       ImageFormat format) {
+StatusOr<std::string> RenderVoxelImage(const std::vector<VoxelLayer>& layers,
+                                       const RenderOptions& options, ImageFormat format) {
   StatusOr<TopView> view = RenderTopView(layers, options);
   if (!view.ok()) return view.status();
   const Layout layout = MakeLayout(*view, layers, options);

@@ -1,4 +1,5 @@
 // mapd: the multi-robot map server.
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <functional>
@@ -6,8 +7,6 @@
 #include <thread>
 #include <utility>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "service/config.h"
 #include "service/config_settings.h"
@@ -42,16 +41,20 @@ void AddFlags(CLI::App* app, CommandLine* line) {
   // A flag given twice: the later one wins (the container entrypoint passes its
   // defaults first, the user's flags after them). Subcommands inherit this.
   app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  app->footer("Every KEY may also be set in the config file as 'KEY = VALUE'; flags override the file.");
+  app->footer(
+      "Every KEY may also be set in the config file as 'KEY = VALUE'; flags override the file.");
   app->add_option("--config", line->config_files, "read settings from FILE first")
       ->type_name("FILE")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  app->add_flag("--print-config", line->print_config, "print the settings in effect as a config file, and exit");
+  app->add_flag("--print-config", line->print_config,
+                "print the settings in effect as a config file, and exit");
   app->add_flag("--version", line->version, "print the version and exit");
   const mapd::service::ServerConfig defaults;
   for (const Setting& s : mapd::service::Settings()) {
     app->add_option_function<std::string>(
-           "--" + s.key, [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); }, s.help)
+           "--" + s.key,
+           [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); },
+           s.help)
         ->type_name("<" + s.kind + ">")
         ->default_str(s.get(defaults));
   }
@@ -61,7 +64,14 @@ void AddFlags(CLI::App* app, CommandLine* line) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace mapd::service;
+  using mapd::service::ApplySetting;
+  using mapd::service::ConfigFileText;
+  using mapd::service::LoadConfigFile;
+  using mapd::service::Log;
+  using mapd::service::LogLevel;
+  using mapd::service::MapServer;
+  using mapd::service::ServerConfig;
+  using mapd::service::SetLogLevel;
   CLI::App app("mapd: serves the mapserver.v1 gRPC API.", "mapd");
   CommandLine line;
   AddFlags(&app, &line);
@@ -70,7 +80,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "mapd%s: %s (see 'mapd%s --help')\n", app.got_subcommand("token") ? " token" : "", e.what(),
+    std::fprintf(stderr, "mapd%s: %s (see 'mapd%s --help')\n",
+                 app.got_subcommand("token") ? " token" : "", e.what(),
                  app.got_subcommand("token") ? " token" : "");
     return 2;
   }
@@ -82,7 +93,8 @@ int main(int argc, char** argv) {
   // The config file first, so that flags override it wherever they stand.
   ServerConfig config;
   mapd::Status s = mapd::Status::Ok();
-  for (size_t i = 0; i < line.config_files.size() && s.ok(); ++i) s = LoadConfigFile(line.config_files[i], &config);
+  for (size_t i = 0; i < line.config_files.size() && s.ok(); ++i)
+    s = LoadConfigFile(line.config_files[i], &config);
   for (size_t i = 0; i < line.settings.size() && s.ok(); ++i) {
     s = ApplySetting(line.settings[i].first, line.settings[i].second, &config);
   }

@@ -62,8 +62,9 @@ int RunCreate(const TokenOptions& flags) {
     StatusOr<service::IssuedToken> r = service::IssueToken(t, UnixNowNs(), txn);
     if (!r.ok()) return r.status();
     issued = std::move(r).value();
-    return txn->AppendAudit(OfflineAudit("CreateToken", "token " + std::to_string(issued.record.id) + " '" +
-                                                            t.name + "' role " + issued.record.role));
+    return txn->AppendAudit(
+        OfflineAudit("CreateToken", "token " + std::to_string(issued.record.id) + " '" + t.name +
+                                        "' role " + issued.record.role));
   });
   if (!s.ok()) return Fail(s);
   std::fprintf(stderr, "created token %lld '%s' (role %s%s); the secret is shown only now:\n",
@@ -80,8 +81,9 @@ int RunList(const TokenOptions& flags) {
   if (!tokens.ok()) return Fail(tokens.status());
   std::printf("%-6s %-24s %-9s %-16s %s\n", "ID", "NAME", "ROLE", "ROBOT", "STATE");
   for (const auto& t : *tokens) {
-    std::printf("%-6lld %-24s %-9s %-16s %s\n", static_cast<long long>(t.id), t.name.c_str(), t.role.c_str(),
-                t.robot_id.empty() ? "-" : t.robot_id.c_str(), t.revoked_ns ? "revoked" : "active");
+    std::printf("%-6lld %-24s %-9s %-16s %s\n", static_cast<long long>(t.id), t.name.c_str(),
+                t.role.c_str(), t.robot_id.empty() ? "-" : t.robot_id.c_str(),
+                t.revoked_ns ? "revoked" : "active");
   }
   return 0;
 }
@@ -101,7 +103,8 @@ int RunRevoke(const TokenOptions& flags) {
 }  // namespace
 
 void AddTokenCommand(CLI::App* app, std::function<int()>* action) {
-  CLI::App* token = app->add_subcommand("token", "create|list|revoke: manage tokens offline (docs/security.md)");
+  CLI::App* token =
+      app->add_subcommand("token", "create|list|revoke: manage tokens offline (docs/security.md)");
   token->require_subcommand(1);
   token->footer(
       "Manages mapd's bearer tokens directly in the database file (no server needed;\n"
@@ -120,8 +123,9 @@ void AddTokenCommand(CLI::App* app, std::function<int()>* action) {
       ->check(CLI::Validator(
           [](std::string& v) {
             service::Role role;
-            return service::ParseRole(v, &role) ? std::string()
-                                                : "must be reader, robot, operator or admin, got '" + v + "'";
+            return service::ParseRole(v, &role)
+                       ? std::string()
+                       : "must be reader, robot, operator or admin, got '" + v + "'";
           },
           "ROLE"));
   create->add_option("--name", flags->name, "what the token is for")->required();

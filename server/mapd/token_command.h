@@ -5,9 +5,8 @@
 #ifndef MAPD_MAPD_TOKEN_COMMAND_H_
 #define MAPD_MAPD_TOKEN_COMMAND_H_
 
-#include <functional>
-
 #include <CLI/CLI.hpp>
+#include <functional>
 
 namespace mapd {
 

@@ -1,9 +1,9 @@
 // Fused non-vertical planes in mapctl's output formats.
-#include <string>
-
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
+
+#include <string>
 
 #include "client/format.h"
 #include "client/format_svg.h"
@@ -67,7 +67,8 @@ TEST(FormatPlanesTest, GeoJsonDrawsAPlaneAsAClosedPolygonWithItsProperties) {
     EXPECT_EQ(props.at("kind").string_value(), "plane");
     EXPECT_EQ(props.at("id").number_value(), 8192);
     EXPECT_EQ(props.at("normal").list_value().values(2).number_value(), 1);
-    for (const char* key : {"offset_m", "area_m2", "z_min", "z_max", "support", "member_count", "robots"}) {
+    for (const char* key :
+         {"offset_m", "area_m2", "z_min", "z_max", "support", "member_count", "robots"}) {
       EXPECT_TRUE(props.count(key)) << key;
     }
   }
@@ -81,7 +82,7 @@ TEST(FormatPlanesTest, SvgDrawsTranslucentPolygonsUnderTheLines) {
   ASSERT_NE(polygon, std::string::npos);
   ASSERT_NE(line, std::string::npos);
   EXPECT_LT(polygon, line) << "planes are drawn first, under the lines";
-  EXPECT_NE(svg.find("0.15"), std::string::npos);  // fill opacity
+  EXPECT_NE(svg.find("0.15"), std::string::npos);     // fill opacity
   EXPECT_NE(svg.find("L 10 -8"), std::string::npos);  // y up
   EXPECT_EQ(testing::CountShapesOfColour(FormatSvg({Wall()}), "#2ca02c"), 0u);
 }
@@ -99,7 +100,9 @@ TEST(FormatPlanesTest, TableListsPlanesAfterTheFeatures) {
 
 TEST(FormatPlanesTest, JsonCarriesThePlanes) {
   pb::FeatureMapPage page;
-  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(FormatFeatureJson({Wall()}, 3, {Floor()}), &page).ok());
+  ASSERT_TRUE(
+      google::protobuf::util::JsonStringToMessage(FormatFeatureJson({Wall()}, 3, {Floor()}), &page)
+          .ok());
   ASSERT_EQ(page.planes_size(), 1);
   EXPECT_EQ(page.planes(0).SerializeAsString(), Floor().SerializeAsString());
 }

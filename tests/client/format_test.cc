@@ -1,20 +1,21 @@
 #include "client/format.h"
-#include "client/format_svg.h"
-#include "client/support/svg_facts.h"
-
-#include <string>
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
+
+#include <string>
+
+#include "client/format_svg.h"
+#include "client/support/svg_facts.h"
 
 namespace mapd::client {
 namespace {
 
 namespace pb = mapserver::v1;
 
-pb::FusedFeature Feature(uint64_t id, pb::FeatureKind kind, double ax, double ay, double bx, double by,
-                         uint32_t support, std::vector<std::string> robots) {
+pb::FusedFeature Feature(uint64_t id, pb::FeatureKind kind, double ax, double ay, double bx,
+                         double by, uint32_t support, std::vector<std::string> robots) {
   pb::FusedFeature f;
   f.set_id(id);
   f.set_kind(kind);
@@ -65,11 +66,18 @@ TEST(FormatGeoJsonTest, IsAFeatureCollectionWithOneLineStringPerFeature) {
   const auto& second = features[1].struct_value().fields();
   EXPECT_EQ(second.at("properties").struct_value().fields().at("kind").string_value(), "plane");
   EXPECT_EQ(second.at("properties").struct_value().fields().at("id").number_value(), 42);
-  const auto& b = second.at("geometry").struct_value().fields().at("coordinates").list_value().values(1);
+  const auto& b =
+      second.at("geometry").struct_value().fields().at("coordinates").list_value().values(1);
   EXPECT_EQ(b.list_value().values(0).number_value(), 10);
   EXPECT_EQ(b.list_value().values(1).number_value(), 8);
-  const auto& robots =
-      features[2].struct_value().fields().at("properties").struct_value().fields().at("robots").list_value();
+  const auto& robots = features[2]
+                           .struct_value()
+                           .fields()
+                           .at("properties")
+                           .struct_value()
+                           .fields()
+                           .at("robots")
+                           .list_value();
   EXPECT_EQ(robots.values(0).string_value(), "robot \"quoted\"");
 }
 
@@ -102,7 +110,8 @@ TEST(FormatSvgTest, EmptyMapStillDraws) {
 
 TEST(FormatTableTest, ListsEveryId) {
   const std::string table = FormatFeatureTable(ThreeFeatures());
-  for (const char* id : {"\n7 ", "\n42 ", "\n4096 "}) EXPECT_NE(table.find(id), std::string::npos) << id;
+  for (const char* id : {"\n7 ", "\n42 ", "\n4096 "})
+    EXPECT_NE(table.find(id), std::string::npos) << id;
   EXPECT_NE(table.find("r1,r2"), std::string::npos);
   EXPECT_NE(table.find("3 features"), std::string::npos);
 }
@@ -110,7 +119,8 @@ TEST(FormatTableTest, ListsEveryId) {
 TEST(FormatJsonTest, RoundTripsThroughFeatureMapPage) {
   const FeatureList features = ThreeFeatures();
   pb::FeatureMapPage page;
-  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(FormatFeatureJson(features, 9), &page).ok());
+  ASSERT_TRUE(
+      google::protobuf::util::JsonStringToMessage(FormatFeatureJson(features, 9), &page).ok());
   ASSERT_EQ(page.features_size(), 3);
   EXPECT_EQ(page.total(), 3u);
   EXPECT_EQ(page.map_version(), 9u);

@@ -1,14 +1,13 @@
 // mapctl against the real mapd: a server on a free loopback port with a
 // temporary database, driven through the command line as a script would.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "client/support/svg_facts.h"
 #include "common/process.h"
@@ -41,7 +40,8 @@ class MapctlE2eTest : public ::testing::Test {
   }
   static size_t Count(const std::string& text, const std::string& needle) {
     size_t n = 0;
-    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1))
+      ++n;
     return n;
   }
 
@@ -74,7 +74,8 @@ TEST_F(MapctlE2eTest, ScriptedSession) {
   ASSERT_GT(FileSize(geojson), 0u);
   ASSERT_GT(FileSize(svg), 0u);
   std::ifstream g(geojson), s(svg);
-  const std::string geojson_text((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+  const std::string geojson_text((std::istreambuf_iterator<char>(g)),
+                                 std::istreambuf_iterator<char>());
   const std::string svg_text((std::istreambuf_iterator<char>(s)), std::istreambuf_iterator<char>());
   EXPECT_THAT(geojson_text, HasSubstr("FeatureCollection"));
   EXPECT_GT(Count(geojson_text, "\"LineString\""), 3u);
@@ -97,7 +98,8 @@ TEST_F(MapctlE2eTest, ScriptedSession) {
 TEST_F(MapctlE2eTest, IngestReportsTheRejectedLine) {
   // Three batches as JSON lines; the second gets a NaN coordinate.
   const std::string jsonl = dir_.File("batches.jsonl");
-  CommandResult r = Mapctl({"simulate", "--robots", "1", "--scans", "3", "--session", "file", "--export", jsonl});
+  CommandResult r =
+      Mapctl({"simulate", "--robots", "1", "--scans", "3", "--session", "file", "--export", jsonl});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in(jsonl);
   std::vector<std::string> lines;
@@ -139,11 +141,14 @@ TEST_F(MapctlE2eTest, ExitCodesForScripts) {
 
   // Bad flags: one line naming the flag, exit 2, before any server call.
   for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
-           {"features", "--kind", "wall"}, {"simulate", "--robots", "0"}, {"features", "--bogus"},
+           {"features", "--kind", "wall"},
+           {"simulate", "--robots", "0"},
+           {"features", "--bogus"},
            {"render", "a.bt", "-o", "a.png", "--max-size", "8"}}) {
     r = Mapctl(args);
     EXPECT_EQ(r.exit_code, 2) << args[1];
-    EXPECT_THAT(r.err, HasSubstr(args[1] == "--bogus" ? "--bogus" : args[args.size() - 2])) << r.err;
+    EXPECT_THAT(r.err, HasSubstr(args[1] == "--bogus" ? "--bogus" : args[args.size() - 2]))
+        << r.err;
     EXPECT_EQ(Count(r.err, "\n"), 1u) << r.err;
   }
   // A flag given twice: the later one wins, as before CLI11.
@@ -188,8 +193,8 @@ namespace {
 // Bootstrap as docs/security.md describes it: the first admin token from the
 // database file, then everything else through mapctl with tokens.
 TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
-  CommandResult r = RunCommand({MAPD_BINARY, "token", "create", "--db", dir_.File("map.db"), "--role", "admin",
-                                "--name", "root"});
+  CommandResult r = RunCommand({MAPD_BINARY, "token", "create", "--db", dir_.File("map.db"),
+                                "--role", "admin", "--name", "root"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string admin = r.out.substr(0, r.out.find('\n'));
   ASSERT_EQ(admin.rfind("mapd_", 0), 0u) << r.out;
@@ -198,7 +203,8 @@ TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("UNAUTHENTICATED"));
 
-  r = Mapctl({"--token", admin, "token", "create", "--name", "r1-key", "--role", "robot", "--robot", "r1"});
+  r = Mapctl({"--token", admin, "token", "create", "--name", "r1-key", "--role", "robot", "--robot",
+              "r1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string robot = r.out.substr(0, r.out.find('\n'));
   r = Mapctl({"--token", robot, "whoami"});

@@ -3,6 +3,8 @@
 // and a rendering, download the global map, render files; a corrupt upload is
 // refused with a clear error and the server keeps serving; a merge without
 // evidence is refused with the server's reason.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 
 #include <cmath>
@@ -14,12 +16,9 @@
 #include <string>
 #include <vector>
 
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
 #include "client/support/png_decode.h"
-#include "client/support/svg_facts.h"
 #include "client/support/room_octree.h"
+#include "client/support/svg_facts.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "voxel/octree_reader.h"
@@ -76,7 +75,8 @@ PrintedAlignment ParseAlignment(const std::string& out, const std::string& id) {
 ::testing::AssertionResult IsValidPng(const std::string& path) {
   DecodedPng png;
   std::string error;
-  if (!DecodePng(ReadAll(path), &png, &error)) return ::testing::AssertionFailure() << path << ": " << error;
+  if (!DecodePng(ReadAll(path), &png, &error))
+    return ::testing::AssertionFailure() << path << ": " << error;
   if (png.width < 20 || png.height < 20) {
     return ::testing::AssertionFailure() << path << ": only " << png.width << "x" << png.height;
   }
@@ -84,7 +84,8 @@ PrintedAlignment ParseAlignment(const std::string& out, const std::string& id) {
   for (size_t i = 0; i + 2 < png.rgb.size(); i += 3) {
     if (png.rgb[i] != png.rgb[i + 1] || png.rgb[i + 1] != png.rgb[i + 2]) ++coloured;
   }
-  if (coloured < 500) return ::testing::AssertionFailure() << path << ": only " << coloured << " coloured pixels";
+  if (coloured < 500)
+    return ::testing::AssertionFailure() << path << ": only " << coloured << " coloured pixels";
   return ::testing::AssertionSuccess();
 }
 
@@ -157,7 +158,8 @@ TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
   const PrintedAlignment b = ParseAlignment(r.out, id_b);
   ASSERT_TRUE(b.found) << r.out;
   const Eigen::Vector3d t = maps_->T_a_b.translation();
-  const double truth_yaw = std::atan2(maps_->T_a_b.linear()(1, 0), maps_->T_a_b.linear()(0, 0)) * 180 / M_PI;
+  const double truth_yaw =
+      std::atan2(maps_->T_a_b.linear()(1, 0), maps_->T_a_b.linear()(0, 0)) * 180 / M_PI;
   // Within 1.5 voxels and 1.5 degrees of the generated transform.
   EXPECT_NEAR(b.x, t.x(), 0.15) << r.out;
   EXPECT_NEAR(b.y, t.y(), 0.15) << r.out;

@@ -1,24 +1,24 @@
-// The top-down voxel renderer of mapctl: PNG files read back with cairo, pixels of tiny known scenes, bounds, pixel size, scale
-// bar, legend, and the transform helpers.
+// The top-down voxel renderer of mapctl: PNG files read back with cairo, pixels of tiny known
+// scenes, bounds, pixel size, scale bar, legend, and the transform helpers.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
 
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
 #include "client/rgb_image.h"
 #include "client/rigid_transform.h"
-#include "client/voxel_render.h"
 #include "client/support/png_decode.h"
 #include "client/support/svg_facts.h"
+#include "client/voxel_render.h"
 
 namespace mapd::client {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::DecodedPng;
 using testing::DecodePng;
+using ::testing::HasSubstr;
 
 const Rgb kWhite{255, 255, 255};
 
@@ -37,7 +37,8 @@ TEST(RigidTransformTest, YawPitchRollRoundTrip) {
                sp = std::sin(pitch / 2), cr = std::cos(roll / 2), sr = std::sin(roll / 2);
   const double w = cy * cp * cr + sy * sp * sr, x = cy * cp * sr - sy * sp * cr,
                y = cy * sp * cr + sy * cp * sr, z = sy * cp * cr - cy * sp * sr;
-  const RigidTransform T = RigidTransform::FromQuaternion(2 * w, 2 * x, 2 * y, 2 * z, {1, 2, 3});  // not unit
+  const RigidTransform T =
+      RigidTransform::FromQuaternion(2 * w, 2 * x, 2 * y, 2 * z, {1, 2, 3});  // not unit
   double out_yaw, out_pitch, out_roll;
   T.YawPitchRollDeg(&out_yaw, &out_pitch, &out_roll);
   EXPECT_NEAR(out_yaw, 30, 1e-9);
@@ -127,7 +128,7 @@ TEST(RenderTopViewTest, TransformedLayersThatCoincideMixTheirColours) {
   ASSERT_EQ(view->map.width(), 3);
   ASSERT_EQ(view->map.height(), 2);
   EXPECT_EQ(view->map.At(2, 0), (Rgb{100, 0, 100}));  // the mean of red and blue
-  EXPECT_EQ(view->map.At(0, 1), Scaled(red, 0.35));  // red alone
+  EXPECT_EQ(view->map.At(0, 1), Scaled(red, 0.35));   // red alone
 }
 
 TEST(RenderTopViewTest, RotatedLayerKeepsAWallClosed) {
@@ -138,7 +139,8 @@ TEST(RenderTopViewTest, RotatedLayerKeepsAWallClosed) {
   wall.colour = {0, 150, 0};
   wall.resolution_m = 0.1;
   for (int i = 0; i < 20; ++i) wall.centres_m.push_back({0.05 + 0.1 * i, 0.05, 0.05});
-  wall.T_view_layer = RigidTransform::FromQuaternion(std::cos(M_PI / 8), 0, 0, std::sin(M_PI / 8), {});
+  wall.T_view_layer =
+      RigidTransform::FromQuaternion(std::cos(M_PI / 8), 0, 0, std::sin(M_PI / 8), {});
   StatusOr<TopView> view = RenderTopView({wall}, RenderOptions());
   ASSERT_TRUE(view.ok());
   int holes = 0;
@@ -168,9 +170,9 @@ TEST(RenderTopViewTest, ShadingIgnoresAFewOutlierHeights) {
   ASSERT_TRUE(view.ok());
   EXPECT_DOUBLE_EQ(view->z_min_m, 0.5);
   EXPECT_DOUBLE_EQ(view->z_max_m, 2.5);
-  EXPECT_EQ(view->map.At(10, 1), green);                 // a wall top, row 1 = y in [1, 2]
+  EXPECT_EQ(view->map.At(10, 1), green);                // a wall top, row 1 = y in [1, 2]
   EXPECT_EQ(view->map.At(10, 2), Scaled(green, 0.35));  // the floor
-  EXPECT_EQ(view->map.At(0, 0), green);                  // the stray voxel, clamped to the brightest
+  EXPECT_EQ(view->map.At(0, 0), green);                 // the stray voxel, clamped to the brightest
 }
 
 TEST(RenderTopViewTest, PixelSizeGrowsToTheMaximumImageSize) {
@@ -258,11 +260,11 @@ TEST(RenderTopViewTest, RefusesBadInputNamingIt) {
 }
 
 TEST(ScaleBarTest, LargestNiceLengthWithinFortyPercent) {
-  EXPECT_DOUBLE_EQ(ScaleBarLengthM(10), 2);     // 4 m allowed
-  EXPECT_DOUBLE_EQ(ScaleBarLengthM(100), 20);   // 40 m allowed
-  EXPECT_DOUBLE_EQ(ScaleBarLengthM(13), 5);     // 5.2 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(10), 2);    // 4 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(100), 20);  // 40 m allowed
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(13), 5);    // 5.2 m allowed
   EXPECT_DOUBLE_EQ(ScaleBarLengthM(1.3), 0.5);
-  EXPECT_DOUBLE_EQ(ScaleBarLengthM(2.5), 1);    // exactly 40%
+  EXPECT_DOUBLE_EQ(ScaleBarLengthM(2.5), 1);  // exactly 40%
   EXPECT_DOUBLE_EQ(ScaleBarLengthM(0), 0);
 }
 
@@ -287,7 +289,8 @@ VoxelLayer Frame() {
   layer.resolution_m = 0.5;
   for (int i = 0; i < 20; ++i) {
     for (int j = 0; j < 8; ++j) {
-      if (i == 0 || j == 0 || i == 19 || j == 7) layer.centres_m.push_back({0.25 + 0.5 * i, 0.25 + 0.5 * j, 1.0});
+      if (i == 0 || j == 0 || i == 19 || j == 7)
+        layer.centres_m.push_back({0.25 + 0.5 * i, 0.25 + 0.5 * j, 1.0});
     }
   }
   return layer;
@@ -339,13 +342,16 @@ TEST(RenderVoxelImageTest, SvgEmbedsTheMapAndWritesVectorLegend) {
   StatusOr<std::string> svg = RenderVoxelImage({Frame(), second}, Unmagnified(), ImageFormat::kSvg);
   ASSERT_TRUE(svg.ok()) << svg.status().ToString();
   EXPECT_EQ(svg->rfind("<?xml", 0), 0u);
-  EXPECT_THAT(*svg, HasSubstr("data:image/png;base64,iVBORw0KGgo"));  // the map: a PNG (signature in base64)
+  EXPECT_THAT(
+      *svg,
+      HasSubstr("data:image/png;base64,iVBORw0KGgo"));  // the map: a PNG (signature in base64)
   // The two legend swatches in the layers' colours (cairo paints each as a path).
   EXPECT_EQ(testing::CountSubstr(*svg, testing::CairoRedPrefix("#d55e00")), 1u);
   EXPECT_EQ(testing::CountSubstr(*svg, testing::CairoRedPrefix("#0072b2")), 1u);
   // Text is glyph outlines, one <use> per visible character: at least the
   // scale bar "2 m", the caption, both labels and the overlap note.
-  EXPECT_GT(testing::CountSubstr(*svg, "<use"), std::string("2mframe<1>secondmixedcolour:layersoverlap").size());
+  EXPECT_GT(testing::CountSubstr(*svg, "<use"),
+            std::string("2mframe<1>secondmixedcolour:layersoverlap").size());
   EXPECT_THAT(*svg, HasSubstr("</svg>"));
 }
 

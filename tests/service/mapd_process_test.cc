@@ -1,19 +1,19 @@
 // The mapd binary as an operator meets it: bad flags, a damaged database,
 // SIGTERM with robots still streaming.
-#include <atomic>
-#include <fstream>
-#include <thread>
-
 #include <gmock/gmock.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
+
+#include <atomic>
+#include <fstream>
+#include <thread>
 
 #include "common/batches.h"
 #include "common/health.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
-#include "service/config.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/config.h"
 
 namespace mapd::testing {
 namespace {
@@ -23,7 +23,8 @@ using ::testing::HasSubstr;
 
 TEST(MapdProcessTest, ABadFlagExitsTwoNamingTheSetting) {
   TempDir dir;
-  const CommandResult r = RunCommand({MAPD_BINARY, "--db", dir.File("m.db"), "--fusion.gamma", "7"});
+  const CommandResult r =
+      RunCommand({MAPD_BINARY, "--db", dir.File("m.db"), "--fusion.gamma", "7"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("gamma"));
 }
@@ -51,7 +52,8 @@ TEST(MapdProcessTest, UnknownFlagsAndValuesAreNamedAndLaterFlagsWin) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("fusion.gamma = 0.5"));
   TempDir dir;
-  r = RunCommand({MAPD_BINARY, "token", "create", "--db", dir.File("t.db"), "--role", "boss", "--name", "x"});
+  r = RunCommand(
+      {MAPD_BINARY, "token", "create", "--db", dir.File("t.db"), "--role", "boss", "--name", "x"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("--role"));
   r = RunCommand({MAPD_BINARY, "token", "revoke", "--db", dir.File("t.db"), "--id", "0"});
@@ -83,7 +85,8 @@ TEST(MapdProcessTest, AFileThatIsNotADatabaseIsRefusedAndLeftAlone) {
   TempDir dir;
   const std::string junk(4096, 'j');
   std::ofstream(dir.File("junk.db")) << junk;
-  const CommandResult r = RunCommand({MAPD_BINARY, "--db", dir.File("junk.db"), "--listen", "127.0.0.1:0"});
+  const CommandResult r =
+      RunCommand({MAPD_BINARY, "--db", dir.File("junk.db"), "--listen", "127.0.0.1:0"});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("not a database"));
   std::ifstream in(dir.File("junk.db"));
@@ -95,7 +98,8 @@ TEST(MapdProcessTest, APortInUseIsReportedClearly) {
   TempDir dir;
   MapdProcess first = StartMapd(dir.File("a.db"));
   ASSERT_GT(first.port, 0) << first.log();
-  const CommandResult r = RunCommand({MAPD_BINARY, "--db", dir.File("b.db"), "--listen", first.address});
+  const CommandResult r =
+      RunCommand({MAPD_BINARY, "--db", dir.File("b.db"), "--listen", first.address});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("cannot listen"));
   EXPECT_EQ(Stop(first.pid, SIGTERM), 0);
@@ -105,7 +109,8 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   TempDir dir;
   MapdProcess mapd = StartMapd(dir.File("map.db"), {"--shutdown_grace_s", "2"});
   ASSERT_GT(mapd.port, 0) << mapd.log();
-  auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  auto stub = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
   grpc::ClientContext ctx;
   auto stream = stub->Ingest(&ctx);
   std::atomic<int> stored{0};
@@ -117,7 +122,8 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   bool terminated = false;
   // SIGTERM once some batches are acknowledged, while more are still being written.
   for (uint64_t seq = 1; seq <= 5000; ++seq) {
-    if (!stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.01 * static_cast<double>(seq), &rng))) break;
+    if (!stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.01 * static_cast<double>(seq), &rng)))
+      break;
     if (!terminated && stored >= 100) {
       kill(mapd.pid, SIGTERM);
       terminated = true;
@@ -137,7 +143,8 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   // Everything acknowledged is in the database after the restart.
   mapd = StartMapd(dir.File("map.db"));
   ASSERT_GT(mapd.port, 0) << mapd.log();
-  auto stub2 = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  auto stub2 = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
   grpc::ClientContext ctx2;
   pb::Stats stats;
   ASSERT_TRUE(stub2->GetStats(&ctx2, {}, &stats).ok());
@@ -156,7 +163,8 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   ASSERT_GT(mapd.port, 0) << mapd.log();
   EXPECT_EQ(CheckHealth(mapd.address), Health::kServing);
   {
-    auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+    auto stub = pb::MapService::NewStub(
+        grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
     auto stream = stub->Ingest(&ctx);
     std::thread reader([&] {
@@ -166,7 +174,8 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
     });
     std::mt19937_64 rng(5);
     for (uint64_t seq = 1; seq <= 8000; ++seq) {
-      ASSERT_TRUE(stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.001 * static_cast<double>(seq), &rng)));
+      ASSERT_TRUE(
+          stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.001 * static_cast<double>(seq), &rng)));
     }
     stream->WritesDone();
     reader.join();
@@ -190,7 +199,8 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   }
   EXPECT_EQ(early, Health::kNotServing);
   {
-    auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+    auto stub = pb::MapService::NewStub(
+        grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
     // Recovery may finish between the health check and this call; the stream
     // is then accepted, and without WritesDone the Read below would wait forever.

@@ -35,7 +35,8 @@ inline bool DecodePng(const std::string& file, DecodedPng* out, std::string* err
   };
   cairo_surface_t* surface = cairo_image_surface_create_from_png_stream(read, &reader);
   if (cairo_surface_status(surface) != CAIRO_STATUS_SUCCESS) {
-    *error = std::string("not a readable PNG: ") + cairo_status_to_string(cairo_surface_status(surface));
+    *error =
+        std::string("not a readable PNG: ") + cairo_status_to_string(cairo_surface_status(surface));
     cairo_surface_destroy(surface);
     return false;
   }
@@ -47,7 +48,8 @@ inline bool DecodePng(const std::string& file, DecodedPng* out, std::string* err
   for (int y = 0; y < out->height; ++y) {
     const auto* row = reinterpret_cast<const uint32_t*>(data + static_cast<size_t>(y) * stride);
     for (int x = 0; x < out->width; ++x) {
-      out->rgb.push_back(static_cast<uint8_t>(row[x] >> 16));  // opaque pixels: no premultiplication to undo
+      out->rgb.push_back(
+          static_cast<uint8_t>(row[x] >> 16));  // opaque pixels: no premultiplication to undo
       out->rgb.push_back(static_cast<uint8_t>(row[x] >> 8));
       out->rgb.push_back(static_cast<uint8_t>(row[x]));
     }
