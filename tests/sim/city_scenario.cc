@@ -1,10 +1,10 @@
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "fusion/scenario/extraction.h"
+#include "sim/scan_lines.h"
 
 namespace mapd::fusion::scenario {
 

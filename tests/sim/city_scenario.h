@@ -10,8 +10,8 @@
 //
 // A multi-beam LiDAR with plane features in this world is test support in
 // tests/sim (city_world.h; docs/planes-3d.md).
-#ifndef MAPD_FUSION_SCENARIO_SCENARIO_H_
-#define MAPD_FUSION_SCENARIO_SCENARIO_H_
+#ifndef MAPD_SIM_CITY_SCENARIO_H_
+#define MAPD_SIM_CITY_SCENARIO_H_
 
 #include <cstdint>
 #include <vector>
@@ -115,4 +115,4 @@ class ScanSimulator {
 
 }  // namespace mapd::fusion::scenario
 
-#endif  // MAPD_FUSION_SCENARIO_SCENARIO_H_
+#endif  // MAPD_SIM_CITY_SCENARIO_H_

@@ -1,4 +1,4 @@
-#include "fusion/baselines/mean_shift_fuser.h"
+#include "eval/baselines/mean_shift_fuser.h"
 
 #include <utility>
 

@@ -1,4 +1,4 @@
-#include "fusion/baselines/density_fuser.h"
+#include "eval/baselines/density_fuser.h"
 
 #include <algorithm>
 #include <cmath>

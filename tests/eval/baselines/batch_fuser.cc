@@ -1,4 +1,4 @@
-#include "fusion/baselines/batch_fuser.h"
+#include "eval/baselines/batch_fuser.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,15 +7,15 @@
 // Li et al. 2023, section 4.2: "the same post processing has been employed for all three
 // algorithms") is applied to the merged segments: the corner optimisation of
 // corner_snap.h with FusionParams::snap_m and corner_mode.
-#ifndef MAPD_FUSION_BASELINES_BATCH_FUSER_H_
-#define MAPD_FUSION_BASELINES_BATCH_FUSER_H_
+#ifndef MAPD_EVAL_BASELINES_BATCH_FUSER_H_
+#define MAPD_EVAL_BASELINES_BATCH_FUSER_H_
 
 #include <cstdint>
 #include <map>
 #include <unordered_set>
 #include <vector>
 
-#include "fusion/fuser.h"
+#include "eval/fuser.h"
 #include "geometry/line_fit.h"
 
 namespace mapd::fusion::baselines {
@@ -66,4 +66,4 @@ class BatchFuser : public Fuser {
 
 }  // namespace mapd::fusion::baselines
 
-#endif  // MAPD_FUSION_BASELINES_BATCH_FUSER_H_
+#endif  // MAPD_EVAL_BASELINES_BATCH_FUSER_H_
