@@ -15,6 +15,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "eval/baselines/mean_shift.h"
 #include "eval/fuser.h"
 #include "geometry/line_fit.h"
 
@@ -52,6 +53,11 @@ class BatchFuser : public Fuser {
   // the members' endpoints projected onto it.
   virtual geometry::Line2 MergeLine(const std::vector<Member>& members,
                                     const std::vector<uint32_t>& cluster) const = 0;
+
+  // Step 1 of both methods: the members grouped by their mode of mean shift on
+  // the axial orientation (unweighted), in mode order; indices into `members`.
+  static std::vector<std::vector<uint32_t>> OrientationGroups(const std::vector<Member>& members,
+                                                              const OrientationShiftParams& params);
 
  private:
   std::vector<FusedFeature> Compute() const;
