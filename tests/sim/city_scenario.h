@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "client/sim/laser_sim.h"
 #include "fusion/engine.h"
 #include "geometry/segment2.h"
 
@@ -51,11 +52,7 @@ struct ScenarioParams {
   double min_length_m = 0.5;
 };
 
-struct Pose2 {
-  geometry::Vec2 t = geometry::Vec2::Zero();  // metres, map frame
-  double yaw_rad = 0.0;
-  geometry::Vec2 Apply(const geometry::Vec2& p) const;  // sensor frame -> map frame
-};
+using Pose2 = sim::Pose2;  // the vehicle pose, the sensor at its origin
 
 enum class StructureKind { kWall, kTrivial };
 
@@ -107,6 +104,7 @@ class ScanSimulator {
  private:
   const ScenarioParams params_;
   const World& world_;
+  sim::LaserFan fan_;
   double cell_m_;
   std::vector<std::vector<int>> cells_;  // structure indices by cell
   int cells_x_ = 0;
