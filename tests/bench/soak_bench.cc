@@ -39,7 +39,7 @@
 #include "common/temp_dir.h"
 #include "sim/city_scenario.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
-#include "service/support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 namespace {
 
