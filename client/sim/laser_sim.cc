@@ -25,7 +25,7 @@ void CastBeams(const Segment2& wall, int index, const Pose2& pose, const LaserFa
     const Vec2 dir(std::cos(ang), std::sin(ang));
     const double den = Cross(dir, d);
     if (den == 0.0) continue;
-    const double t = Cross(wall.a - pose.t, d) / den;   // along the ray
+    const double t = Cross(wall.a - pose.t, d) / den;    // along the ray
     const double u = Cross(wall.a - pose.t, dir) / den;  // along the wall
     if (t <= 0.0 || t > fan.max_range_m || u < 0.0 || u > 1.0) continue;
     if (t < scan->range_m[static_cast<size_t>(beam)]) {

@@ -16,8 +16,8 @@ namespace mapd::sim {
 
 // A sensor (or vehicle) pose in the ground plane.
 struct Pose2 {
-  geometry::Vec2 t = geometry::Vec2::Zero();  // metres, map frame
-  double yaw_rad = 0.0;                       // counter-clockwise from the map x axis
+  geometry::Vec2 t = geometry::Vec2::Zero();            // metres, map frame
+  double yaw_rad = 0.0;                                 // counter-clockwise from the map x axis
   geometry::Vec2 Apply(const geometry::Vec2& p) const;  // sensor frame -> map frame
 };
 
