@@ -13,6 +13,7 @@
 #include "client/robot_client.h"
 #include "client/sim_robot.h"
 #include "client/text_util.h"
+#include "common/clock.h"
 
 namespace mapd::client {
 namespace {
@@ -63,12 +64,6 @@ std::string UtcStampForName() {
   char out[32];
   std::strftime(out, sizeof(out), "%Y%m%dT%H%M%SZ", &tm);
   return out;
-}
-
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 int RunIngest(const Context& ctx, const IngestOptions& flags) {
@@ -129,7 +124,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   const uint64_t robots = flags.robots, scans = flags.scans, seed = flags.seed;
   const std::string session = flags.session.empty() ? "sim-" + UtcStampForName() : flags.session;
 
-  const int64_t start_ns = NowNs();
+  const int64_t start_ns = UnixNowNs();
   std::vector<SimRobotParams> params(robots);
   for (size_t i = 0; i < robots; ++i) {
     const std::string& base = flags.robot_id;

@@ -1,10 +1,10 @@
 // mapctl status | robots | features
-#include <chrono>
 #include <cstdio>
 
 #include "client/commands.h"
 #include "client/format.h"
 #include "client/format_svg.h"
+#include "common/clock.h"
 
 namespace mapd::client {
 namespace {
@@ -68,10 +68,7 @@ int RunRobots(const Context& ctx, const JsonOptions& flags) {
   if (flags.json) {
     std::fputs(MessageToJson(robots).c_str(), stdout);
   } else {
-    const int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                               std::chrono::system_clock::now().time_since_epoch())
-                               .count();
-    std::fputs(FormatRobots(robots, now_ns).c_str(), stdout);
+    std::fputs(FormatRobots(robots, UnixNowNs()).c_str(), stdout);
   }
   return kExitOk;
 }

@@ -1,7 +1,9 @@
 // A deterministic simulated robot for demos and tests: a floor of walls, a
 // robot driving a closed loop, a 2D laser ray-cast against the walls, and
-// split-and-merge line extraction per scan. Everything random comes from one
-// seeded std::mt19937_64, so a seed gives the same batches on every run.
+// split-and-merge line extraction per scan (client/sim/laser_sim.h and
+// geometry/split_and_merge.h, shared with the tests' synthetic city).
+// Everything random comes from one seeded std::mt19937_64, so a seed gives the
+// same batches on every run.
 //
 // Frames: the world (walls, robot poses) is the map frame; extracted lines are
 // in the sensor frame (x forward, y left, z = 0); the sensor sits at the robot's
@@ -14,31 +16,22 @@
 #include <string>
 #include <vector>
 
+#include "client/sim/laser_sim.h"
+#include "geometry/segment2.h"
 #include "mapserver/v1/map_service.pb.h"
 
 namespace mapd::client {
 
-struct Point2 {
-  double x = 0;
-  double y = 0;
-};
-
-struct Segment2 {
-  Point2 a, b;
-};
-
-struct Pose2 {
-  double x = 0;
-  double y = 0;
-  double yaw = 0;  // radians, counter-clockwise from the x axis
-};
+using geometry::Segment2;
+using geometry::Vec2;
+using sim::Pose2;
 
 // The default world: a 20 m x 12 m floor (corner at the origin) with three
 // interior wall stubs and a 2 m x 1.5 m box in the middle; the robot loop runs
 // around the box, 1 m clear of every wall.
 struct SimWorld {
   std::vector<Segment2> walls;  // ground truth, map frame
-  std::vector<Point2> loop;     // closed path the robots drive, map frame
+  std::vector<Vec2> loop;       // closed path the robots drive, map frame
 };
 SimWorld DefaultWorld();
 
@@ -53,8 +46,8 @@ struct ExtractionParams {
   int min_points = 5;              // per segment
   double split_threshold_m = 0.05; // max point-to-chord distance before splitting
   double min_length_m = 0.3;       // shorter segments are dropped
-  // Consecutive points further apart than max(min_gap_m, gap_factor * range *
-  // beam spacing) start a new run (doorways, occlusion edges).
+  // Consecutive points further apart than min_gap_m + gap_factor * range *
+  // beam spacing start a new run (doorways, occlusion edges).
   double min_gap_m = 0.2;
   double gap_factor = 4.0;
 };
@@ -77,12 +70,10 @@ struct SimRobotParams {
 std::vector<double> CastScan(const std::vector<Segment2>& walls, const Pose2& T_map_sensor,
                              const LaserParams& laser, std::mt19937_64* rng);
 
-// Split-and-merge over the scan's points, in beam order; sensor frame.
+// Split-and-merge (geometry/split_and_merge.h) over the scan's points, in beam
+// order; sensor frame.
 std::vector<Segment2> ExtractSegments(const std::vector<double>& ranges, const LaserParams& laser,
                                       const ExtractionParams& params);
-
-// Distance from p to the segment s (not its infinite line), metres.
-double DistanceToSegment(const Point2& p, const Segment2& s);
 
 class SimRobot {
  public:

@@ -1,5 +1,4 @@
-// Wall-clock time for records (received_ns, created_ns, logs): nanoseconds
-// since the Unix epoch. Durations use std::chrono::steady_clock instead.
+// The project's two clocks, so that every binary reads time the same way.
 #ifndef MAPD_COMMON_CLOCK_H_
 #define MAPD_COMMON_CLOCK_H_
 
@@ -8,9 +7,19 @@
 
 namespace mapd {
 
+// Wall-clock time for records (received_ns, created_ns, logs, batch stamps):
+// nanoseconds since the Unix epoch. Jumps when the system clock is set.
 inline int64_t UnixNowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Monotonic time for durations and latencies: nanoseconds since an unspecified
+// start (std::chrono::steady_clock); only differences mean anything.
+inline int64_t SteadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
 

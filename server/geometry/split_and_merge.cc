@@ -61,11 +61,18 @@ std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
   std::vector<Piece> pieces;
   std::vector<size_t> run_of;  // run index of each piece: merging stays inside a run
   size_t run_count = 0;
+  const auto continues = [&](const Vec2& p, const Vec2& q) {
+    if (!q.allFinite()) return false;
+    const double limit = params.max_gap_m + params.gap_per_range * std::max(p.norm(), q.norm());
+    return (q - p).norm() <= limit;
+  };
   for (size_t start = 0; start < points.size();) {
-    size_t end = start;
-    while (end + 1 < points.size() && (points[end + 1] - points[end]).norm() <= params.max_gap_m) {
-      ++end;
+    if (!points[start].allFinite()) {
+      ++start;
+      continue;
     }
+    size_t end = start;
+    while (end + 1 < points.size() && continues(points[end], points[end + 1])) ++end;
     Split(points, {start, end}, params.split_m, &pieces);
     run_of.resize(pieces.size(), run_count);
     ++run_count;

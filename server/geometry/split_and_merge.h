@@ -2,8 +2,12 @@
 // 1974; the "split-and-merge" of Nguyen et al., "A comparison of line extraction
 // algorithms using 2D laser rangefinder data", IROS 2005, algorithm 1).
 //
-//  1. Runs: consecutive points farther apart than max_gap_m start a new run, so
-//     a segment never bridges a gap (an occlusion, a door, a missing return).
+//  1. Runs: consecutive points farther apart than the gap limit start a new run,
+//     so a segment never bridges a gap (an occlusion, a door, a missing return);
+//     a non-finite point (a beam without a return) ends a run too. The limit is
+//     max_gap_m + gap_per_range * (the larger distance of the two points from
+//     the origin): neighbouring beams d_theta apart hit a wall r away about
+//     r d_theta apart, so points in the sensor frame want a gap growing with range.
 //  2. Split: a run is split recursively at the point farthest from the chord
 //     through its first and last point while that distance exceeds split_m.
 //  3. Merge: adjacent pieces of one run are joined when the point of the joined
@@ -27,6 +31,7 @@ struct SplitAndMergeParams {
   size_t min_points = 6;       // points a segment needs (>= 2)
   double min_length_m = 0.3;   // shorter fitted segments are dropped, metres
   double max_gap_m = 0.3;      // consecutive points farther apart start a new run, metres
+  double gap_per_range = 0.0;  // added to max_gap_m per metre of range (e.g. 4 d_theta); 0: fixed
 };
 
 struct ExtractedLine {
@@ -37,7 +42,8 @@ struct ExtractedLine {
 };
 
 // Lines of an ordered scan (e.g. beam order), in the frame of `points`.
-// REQUIRES: params.min_points >= 2; split_m, max_gap_m > 0; points finite.
+// Non-finite points (missing returns) belong to no line.
+// REQUIRES: params.min_points >= 2; split_m, max_gap_m > 0; gap_per_range >= 0.
 std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
                                          const SplitAndMergeParams& params);
 

@@ -6,7 +6,6 @@
 #include <string>
 #include <utility>
 
-#include "voxel/backtracking_mcs.h"
 #include "voxel/corner_directions.h"
 #include "voxel/rigid_fit.h"
 
@@ -19,42 +18,19 @@ double SecondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-struct SearchOutcome {
-  std::vector<std::vector<int>> solutions;  // equal size, first found first
-  bool proven_optimal = false;
-  int64_t nodes = 0;
-  double seconds = 0.0;
-};
-
-SearchOutcome Search(const BitGraph& graph, const std::vector<CornerPair>& pairs,
-                     const std::vector<Eigen::Vector3d>& points_a,
-                     const std::vector<Eigen::Vector3d>& points_b,
-                     const CornerMatchingParams& params, bool want_ties) {
-  SearchOutcome out;
-  const int ties = want_ties ? params.max_tied_solutions : 1;
-  if (params.method == MatchMethod::kMaxClique) {
-    MaxCliqueOptions options;
-    options.max_nodes = params.max_search_nodes;
-    options.max_seconds = params.max_search_seconds;
-    options.max_tied_cliques = ties;
-    MaxCliqueResult r = FindMaximumClique(graph, options);
-    out.solutions = std::move(r.ties);
-    out.proven_optimal = r.proven_optimal;
-    out.nodes = r.nodes;
-    out.seconds = r.seconds;
-  } else {
-    BacktrackingOptions options;
-    options.consistency_distance_m = params.consistency_distance_m;
-    options.shortcut_matches = params.backtracking_shortcut;
-    options.max_tied_solutions = ties;
-    options.max_nodes = params.max_search_nodes;
-    options.max_seconds = params.max_search_seconds;
-    BacktrackingResult r = FindCommonSubgraphByBacktracking(graph, pairs, points_a, points_b, options);
-    out.solutions = std::move(r.schemes);
-    out.proven_optimal = r.exhausted_search_space && params.backtracking_shortcut == 0;
-    out.nodes = r.nodes;
-    out.seconds = r.seconds;
-  }
+// The default step 3: the exact maximum clique.
+PairSetSearchResult MaxCliqueSearch(const BitGraph& graph, const CornerMatchingParams& params,
+                                    int max_solutions) {
+  MaxCliqueOptions options;
+  options.max_nodes = params.max_search_nodes;
+  options.max_seconds = params.max_search_seconds;
+  options.max_tied_cliques = max_solutions;
+  MaxCliqueResult r = FindMaximumClique(graph, options);
+  PairSetSearchResult out;
+  out.solutions = std::move(r.ties);
+  out.proven_optimal = r.proven_optimal;
+  out.nodes = r.nodes;
+  out.seconds = r.seconds;
   return out;
 }
 
@@ -74,15 +50,16 @@ StatusOr<CornerMatchResult> Solve(const std::vector<Eigen::Vector3d>& points_a,
                                   const CornerMatchingParams& params, const TransformScore& score,
                                   const PairConsistency& extra, Clock::time_point start) {
   CornerMatchResult result;
-  result.method = params.method;
   const BitGraph graph =
       BuildConsistencyGraph(points_a, points_b, pairs, params.consistency_distance_m, extra);
   result.candidate_pairs = graph.num_vertices();
   result.graph_edges = graph.num_edges();
   result.graph_density = graph.density();
 
-  const SearchOutcome found =
-      Search(graph, pairs, points_a, points_b, params, /*want_ties=*/score != nullptr);
+  const int max_solutions = score != nullptr ? params.max_tied_solutions : 1;
+  const PairSetSearchResult found =
+      params.search ? params.search(graph, pairs, points_a, points_b, params, max_solutions)
+                    : MaxCliqueSearch(graph, params, max_solutions);
   result.search_nodes = found.nodes;
   result.search_seconds = found.seconds;
   result.proven_optimal = found.proven_optimal;
@@ -125,14 +102,6 @@ StatusOr<CornerMatchResult> Solve(const std::vector<Eigen::Vector3d>& points_a,
 
 }  // namespace
 
-const char* MatchMethodName(MatchMethod method) {
-  switch (method) {
-    case MatchMethod::kMaxClique: return "max_clique";
-    case MatchMethod::kBacktracking: return "backtracking";
-  }
-  return "unknown";
-}
-
 Status CornerMatchingParams::Validate() const {
   auto bad = [](const std::string& what) {
     return Status::InvalidArgument("corner matching params: " + what);
@@ -145,12 +114,8 @@ Status CornerMatchingParams::Validate() const {
   if (!(normal_tolerance_rad >= 0.0)) return bad("normal_tolerance_rad must be >= 0");
   if (min_matches < 3) return bad("min_matches must be >= 3 (a rigid transform needs 3)");
   if (max_tied_solutions < 1) return bad("max_tied_solutions must be >= 1");
-  if (backtracking_shortcut != 0 && backtracking_shortcut < 3)
-    return bad("backtracking_shortcut must be 0 (off) or >= 3");
   if (max_search_nodes < 0) return bad("max_search_nodes must be >= 0");
   if (!(max_search_seconds >= 0.0)) return bad("max_search_seconds must be >= 0");
-  if (method != MatchMethod::kMaxClique && method != MatchMethod::kBacktracking)
-    return bad("unknown method");
   return Status::Ok();
 }
 

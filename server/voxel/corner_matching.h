@@ -14,8 +14,9 @@
 //      the corner's own normals.
 //   2. The consistency graph over candidate pairs (eq. (4), distinct corners,
 //      optionally the same direction-vs-normals check).
-//   3. Its maximum clique: exact branch and bound (max_clique.h, default) or
-//      the paper's backtracking search with its five-match transform shortcut.
+//   3. Its maximum clique: exact branch and bound (max_clique.h). Tests and
+//      benchmarks can plug in another search (CornerMatchingParams::search),
+//      e.g. the paper's backtracking search (tests/eval/backtracking_mcs.h).
 //   4. T_a_b by Umeyama without scaling on the matched corner positions.
 // Ties on the clique size go to a caller's score of the transform (the paper:
 // the most coinciding occupied voxels).
@@ -40,15 +41,29 @@
 
 namespace mapd::voxel {
 
-enum class MatchMethod {
-  kMaxClique,     // exact maximum clique, colouring bounds (default: faster, see docs/voxel-matching.md)
-  kBacktracking,  // the paper's Algorithm 1 with the five-match shortcut
+struct CornerMatchingParams;
+struct CornerPair;
+
+// What step 3 found: sets of mutually consistent candidate pairs (graph
+// vertex ids, ascending) of the best size, first found first.
+struct PairSetSearchResult {
+  std::vector<std::vector<int>> solutions;
+  bool proven_optimal = false;  // no larger set exists in the graph
+  int64_t nodes = 0;
+  double seconds = 0.0;
 };
 
-const char* MatchMethodName(MatchMethod method);
+// Step 3 as a function: vertex v of `graph` is pairs[v]; at most max_solutions
+// equal-size sets; the budget is params.max_search_nodes / max_search_seconds.
+using PairSetSearch = std::function<PairSetSearchResult(
+    const BitGraph& graph, const std::vector<CornerPair>& pairs,
+    const std::vector<Eigen::Vector3d>& points_a, const std::vector<Eigen::Vector3d>& points_b,
+    const CornerMatchingParams& params, int max_solutions)>;
 
 struct CornerMatchingParams {
-  MatchMethod method = MatchMethod::kMaxClique;
+  // Step 3; null: the exact maximum clique (max_clique.h), mapd's search
+  // (faster than the paper's, see docs/voxel-matching.md).
+  PairSetSearch search;
   // D of eq. (4), metres. Default: 2 voxels of 10 cm; use 2 * voxel size.
   double consistency_distance_m = 0.2;
   // Candidate partners kept per corner, for each corner of A and of B.
@@ -68,9 +83,6 @@ struct CornerMatchingParams {
   int min_matches = 3;
   // With a tie-break score: at most this many equal-size solutions are scored.
   int max_tied_solutions = 16;
-  // Backtracking: matches after which the transform shortcut closes a branch
-  // (the paper: 5). 0 turns the shortcut off (exhaustive, exact, slow).
-  int backtracking_shortcut = 5;
   // Search budget; exhausted => proven_optimal false, best found returned.
   int64_t max_search_nodes = 0;     // 0 = unlimited
   double max_search_seconds = 10.0;  // 0 = unlimited
@@ -122,7 +134,6 @@ struct CornerMatchResult {
   bool transform_valid = false;  // >= min_matches, not collinear
   double rms_residual_m = 0.0;   // of T_a_b on the correspondences
   int matched_count = 0;         // correspondences.size()
-  MatchMethod method = MatchMethod::kMaxClique;
   // Diagnostics.
   int candidate_pairs = 0;  // graph vertices
   int64_t graph_edges = 0;

@@ -3,6 +3,5 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/max_clique.cc
   ${CMAKE_CURRENT_LIST_DIR}/rigid_fit.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_candidates.cc
-  ${CMAKE_CURRENT_LIST_DIR}/backtracking_mcs.cc
   ${CMAKE_CURRENT_LIST_DIR}/corner_matching.cc
 )

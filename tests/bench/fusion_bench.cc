@@ -1,6 +1,6 @@
 // The paper's comparison (feature-fusion paper, Li et al. 2023, section 4,
 // Tables 1-3) on the
-// synthetic urban scenario (fusion/scenario), for the three strategies side by
+// synthetic urban scenario (sim/city_scenario.h), for the three strategies side by
 // side, with and without pose noise; and the speed targets of the fusion issue
 // (item 8). A benchmark, not a test: run it by hand, figures go to docs/.
 //
@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "fusion/fuser_registry.h"
-#include "fusion/scenario/metrics.h"
-#include "fusion/scenario/scenario.h"
-#include "fusion/scenario/svg.h"
+#include "eval/fuser_registry.h"
+#include "eval/metrics.h"
+#include "sim/city_scenario.h"
+#include "eval/svg.h"
 
 namespace {
 

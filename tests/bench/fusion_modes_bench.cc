@@ -19,8 +19,8 @@
 #include "fusion/engine.h"
 #include "fusion/projection.h"
 #include "service/ingest_batch.h"
-#include "fusion/scenario/metrics.h"
-#include "fusion/scenario/scenario.h"
+#include "eval/metrics.h"
+#include "sim/city_scenario.h"
 
 namespace mapd::bench {
 namespace {

@@ -28,6 +28,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "common/clock.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -46,10 +47,6 @@ struct Options {
   std::string mapd = MAPD_BINARY;
   std::string server;  // use a running server instead of starting one
 };
-
-int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 // A city block grid: walls on x = 10 k and y = 10 k within 400 m x 400 m.
 // Each batch: `n` wall pieces 1-3 m long near the robot, 1 cm noise, sensor frame.
@@ -115,7 +112,7 @@ void RunRobot(const std::shared_ptr<grpc::Channel>& channel, int index, const Op
     pb::IngestAck ack;
     result->latencies_ms.reserve(static_cast<size_t>(opt.batches));
     while (stream->Read(&ack)) {
-      const int64_t now = NowNs();
+      const int64_t now = mapd::SteadyNowNs();
       result->latencies_ms.push_back(static_cast<double>(now - sent_ns[ack.seq()]) / 1e6);
       switch (ack.result()) {
         case pb::IngestAck::STORED: ++result->stored; break;
@@ -136,7 +133,7 @@ void RunRobot(const std::shared_ptr<grpc::Channel>& channel, int index, const Op
       cv.wait(lock, [&] { return in_flight < opt.window; });
       ++in_flight;
     }
-    sent_ns[static_cast<size_t>(seq)] = NowNs();
+    sent_ns[static_cast<size_t>(seq)] = mapd::SteadyNowNs();
     if (!stream->Write(b)) break;
   }
   stream->WritesDone();

@@ -9,8 +9,10 @@ mapd_set_warnings(laser_bench)
 
 # Bounded against exact fusion on the synthetic city and the laser logs:
 # ./fusion_modes_bench (figures in docs/long-running.md). On demand.
-add_executable(fusion_modes_bench fusion_modes_bench.cc carmen.cc)
-target_include_directories(fusion_modes_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(fusion_modes_bench PRIVATE fusion fusion_scenario service mapclient ZLIB::ZLIB)
-target_compile_definitions(fusion_modes_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-mapd_set_warnings(fusion_modes_bench)
+if(MAPD_WITH_SERVICE)  # it links the service and the client library
+  add_executable(fusion_modes_bench fusion_modes_bench.cc carmen.cc)
+  target_include_directories(fusion_modes_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  target_link_libraries(fusion_modes_bench PRIVATE fusion mapd_eval service mapclient ZLIB::ZLIB)
+  target_compile_definitions(fusion_modes_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  mapd_set_warnings(fusion_modes_bench)
+endif()

@@ -3,6 +3,6 @@
 # ./plane_bench [--data DIR] (figures in docs/planes-3d.md). On demand, not by ctest.
 add_executable(plane_bench ${CMAKE_CURRENT_LIST_DIR}/plane_bench.cc)
 target_include_directories(plane_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(plane_bench PRIVATE lidar_sim fusion_scenario)
+target_link_libraries(plane_bench PRIVATE lidar_sim mapd_eval)
 target_compile_definitions(plane_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 mapd_set_warnings(plane_bench)

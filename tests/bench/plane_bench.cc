@@ -1,5 +1,5 @@
 // Planes from a simulated 3D sensor through fusion (issue 10). A 16-beam
-// LiDAR (tests/sim) drives (a) the synthetic city of fusion/scenario, walls
+// LiDAR (tests/sim) drives (a) the synthetic city of sim/city_scenario.h, walls
 // extruded to 6-20 m over the ground plane, and (b) the real OctoMap maps
 // geb079 and fr_078_tidyup (rays cast with OcTree::castRay from poses sampled
 // in known-free space). Each scan's planes (RANSAC, tests/sim/plane_extraction.h)
@@ -30,9 +30,9 @@
 #include "bench/plane_fusion_adapter.h"
 #include "fusion/engine.h"
 #include "fusion/projection.h"
-#include "fusion/scenario/metrics.h"
-#include "fusion/scenario/scenario.h"
-#include "fusion/scenario/svg.h"
+#include "eval/metrics.h"
+#include "sim/city_scenario.h"
+#include "eval/svg.h"
 #include "geometry/segment2.h"
 #include "sim/city_world.h"
 #include "sim/lidar_sim.h"

@@ -37,9 +37,9 @@
 #include "client/sim_robot.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
-#include "service/support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 namespace {
 

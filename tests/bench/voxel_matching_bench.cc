@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/backtracking_mcs.h"
 #include "voxel/corner_matching.h"
 #include "voxel/support/corner_scene.h"
 
@@ -19,7 +20,7 @@ namespace {
 
 using mapd::voxel::CornerMatchingParams;
 using mapd::voxel::CornerMatchResult;
-using mapd::voxel::MatchMethod;
+using mapd::voxel::NamedSearch;
 
 struct Row {
   int seeds = 0;
@@ -55,7 +56,7 @@ int main(int argc, char** argv) {
                                 {85, 20.0 / 85, 65.0 / 85, 0.05, 3.0}};
   for (const Scenario& sc : scenarios) {
     const int num_a = sc.num_a;
-    for (MatchMethod method : {MatchMethod::kMaxClique, MatchMethod::kBacktracking}) {
+    for (const NamedSearch& method : mapd::voxel::SearchesToCompare()) {
       Row row;
       int num_b = 0, truth = 0;
       for (int seed = 1; seed <= seeds; ++seed) {
@@ -70,7 +71,7 @@ int main(int argc, char** argv) {
         num_b = static_cast<int>(scene.b.size());
         truth = static_cast<int>(scene.truth.size());
         CornerMatchingParams params;
-        params.method = method;
+        params.search = method.search;
         params.max_search_seconds = 30.0;
         const auto r = mapd::voxel::MatchCorners(scene.a, scene.b, params);
         if (!r.ok()) {
@@ -94,7 +95,7 @@ int main(int argc, char** argv) {
         row.seconds.push_back(r->total_seconds);
         row.search_seconds.push_back(r->search_seconds);
         std::fprintf(stderr, "%3d %-12s seed %d: %.3f s (search %.3f s, %lld nodes) matched %d correct %d %s\n",
-                     num_a, mapd::voxel::MatchMethodName(method), seed, r->total_seconds,
+                     num_a, method.name.c_str(), seed, r->total_seconds,
                      r->search_seconds, static_cast<long long>(r->search_nodes), r->matched_count,
                      correct, ok ? "ok" : "FAIL");
       }
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
       std::snprintf(line, sizeof(line),
                     "| %d | %d | %d | %s | %s | %.0f | %.3f | %.3f | %.3f | %.1f | %.1f | %d/%d | %d/%d |\n",
                     num_a, num_b, truth, sc.noise_m > 0.0 ? "0.05" : "0.01-0.02",
-                    mapd::voxel::MatchMethodName(method),
+                    method.name.c_str(),
                     row.candidate_pairs / row.seeds, row.density / row.seeds, Median(row.seconds),
                     *std::max_element(row.seconds.begin(), row.seconds.end()),
                     row.matched / row.seeds, row.correct / row.seeds, row.success, row.seeds,
@@ -137,7 +138,7 @@ int main(int argc, char** argv) {
       << "- A failure on the paper-like rows with all matches correct is an estimation\n"
       << "  limit (5 cm noise, corners up to 30 m apart), not a matching error: ICP on\n"
       << "  the voxels refines it.\n"
-      << "- Hence MatchMethod::kMaxClique is the default.\n";
+      << "- Hence the maximum clique is mapd's search (the default of CornerMatchingParams::search).\n";
   std::cerr << "wrote " << out_path << "\n";
   return 0;
 }

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "client/support/png_decode.h"
-#include "client/support/room_octree.h"
 #include "client/support/svg_facts.h"
+#include "common/octomap_scenes.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "voxel/octree_reader.h"
@@ -87,6 +87,28 @@ PrintedAlignment ParseAlignment(const std::string& out, const std::string& id) {
   if (coloured < 500)
     return ::testing::AssertionFailure() << path << ": only " << coloured << " coloured pixels";
   return ::testing::AssertionSuccess();
+}
+
+// Two overlapping views of the shared test room (common/octomap_scenes.h):
+// A in the map frame, B a quarter turn and a shift away (x in [2, 10)); and a
+// bare floor, which has no corner to match (a merge with it must be refused).
+struct RoomMaps {
+  std::string a_bt, b_bt, floor_bt;
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  // maps B into A
+};
+
+RoomMaps MakeRoomMaps() {
+  RoomMaps maps;
+  const RoomScene room;
+  maps.T_a_b = YawTranslation(M_PI / 2, Eigen::Vector3d(2.0, -1.0, 0.0));
+  maps.a_bt = RoomSubmap(room, 0, 8, Eigen::Isometry3d::Identity());
+  maps.b_bt = RoomSubmap(room, 2, 10, maps.T_a_b);
+  RoomScene floor;
+  floor.size_x_m = 4.0;
+  floor.size_y_m = 4.0;
+  floor.floor_only = true;
+  maps.floor_bt = RoomSubmap(floor, 0, 4, Eigen::Isometry3d::Identity());
+  return maps;
 }
 
 class MapctlSubmapE2eTest : public ::testing::Test {

@@ -18,7 +18,7 @@ SimRobotParams Params(uint64_t seed) {
 }
 
 // Sensor-frame point -> map frame, with the batch's pose (a yaw quaternion).
-Point2 ToMap(const pb::ObservationBatch& batch, const pb::Vec3& p) {
+Vec2 ToMap(const pb::ObservationBatch& batch, const pb::Vec3& p) {
   const auto& t = batch.t_frame_sensor().translation();
   const auto& q = batch.t_frame_sensor().rotation();
   const double yaw = 2 * std::atan2(q.z(), q.w());
@@ -26,9 +26,9 @@ Point2 ToMap(const pb::ObservationBatch& batch, const pb::Vec3& p) {
           t.y() + std::sin(yaw) * p.x() + std::cos(yaw) * p.y()};
 }
 
-double DistanceToWorld(const Point2& p, const SimWorld& world) {
+double DistanceToWorld(const Vec2& p, const SimWorld& world) {
   double best = INFINITY;
-  for (const Segment2& w : world.walls) best = std::min(best, DistanceToSegment(p, w));
+  for (const Segment2& w : world.walls) best = std::min(best, geometry::PointSegmentDistance(p, w));
   return best;
 }
 
@@ -74,12 +74,12 @@ TEST(SimRobotTest, ExtractedSegmentsLieOnTrueWalls) {
     const pb::ObservationBatch batch = robot.NextBatch();
     EXPECT_GE(batch.lines_size(), 2) << "scan " << scan;
     for (const auto& line : batch.lines()) {
-      const Point2 a = ToMap(batch, line.a()), b = ToMap(batch, line.b());
-      EXPECT_LT(DistanceToWorld(a, robot.world()), 0.1) << "scan " << scan << " a " << a.x << "," << a.y;
-      EXPECT_LT(DistanceToWorld(b, robot.world()), 0.1) << "scan " << scan << " b " << b.x << "," << b.y;
+      const Vec2 a = ToMap(batch, line.a()), b = ToMap(batch, line.b());
+      EXPECT_LT(DistanceToWorld(a, robot.world()), 0.1) << "scan " << scan << " a " << a.transpose();
+      EXPECT_LT(DistanceToWorld(b, robot.world()), 0.1) << "scan " << scan << " b " << b.transpose();
       // The midpoint too: a segment must not bridge two walls.
-      EXPECT_LT(DistanceToWorld({(a.x + b.x) / 2, (a.y + b.y) / 2}, robot.world()), 0.1) << "scan " << scan;
-      EXPECT_GE(std::hypot(b.x - a.x, b.y - a.y), 0.3);
+      EXPECT_LT(DistanceToWorld((a + b) / 2, robot.world()), 0.1) << "scan " << scan;
+      EXPECT_GE((b - a).norm(), 0.3);
       ++segments;
     }
   }
@@ -95,9 +95,9 @@ TEST(ExtractSegmentsTest, OneStraightWallGivesOneSegment) {
   const std::vector<double> ranges = CastScan(walls, Pose2{}, laser, &rng);
   const std::vector<Segment2> segments = ExtractSegments(ranges, laser, ExtractionParams{});
   ASSERT_EQ(segments.size(), 1u);
-  EXPECT_NEAR(segments[0].a.x, 2, 1e-6);
-  EXPECT_NEAR(segments[0].b.x, 2, 1e-6);
-  EXPECT_GT(std::abs(segments[0].b.y - segments[0].a.y), 5.0);
+  EXPECT_NEAR(segments[0].a.x(), 2, 1e-6);
+  EXPECT_NEAR(segments[0].b.x(), 2, 1e-6);
+  EXPECT_GT(std::abs(segments[0].b.y() - segments[0].a.y()), 5.0);
 }
 
 TEST(ExtractSegmentsTest, CornerSplitsIntoTwo) {
@@ -107,8 +107,8 @@ TEST(ExtractSegmentsTest, CornerSplitsIntoTwo) {
   const std::vector<Segment2> segments = ExtractSegments(CastScan(walls, Pose2{}, laser, &rng), laser, {});
   ASSERT_EQ(segments.size(), 2u);
   for (const Segment2& s : segments) {
-    EXPECT_LT(std::min(DistanceToSegment(s.a, walls[0]), DistanceToSegment(s.a, walls[1])), 0.05);
-    EXPECT_LT(std::min(DistanceToSegment(s.b, walls[0]), DistanceToSegment(s.b, walls[1])), 0.05);
+    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.a, walls[0]), geometry::PointSegmentDistance(s.a, walls[1])), 0.05);
+    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.b, walls[0]), geometry::PointSegmentDistance(s.b, walls[1])), 0.05);
   }
 }
 

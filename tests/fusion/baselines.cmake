@@ -1,4 +1,4 @@
 # The Fuser interface, the competing methods and the scenario generator.
 mapd_add_test(fusion_baselines_test
   SOURCES baselines_test.cc
-  LIBS fusion_baselines fusion_scenario)
+  LIBS mapd_eval)

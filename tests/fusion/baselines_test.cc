@@ -7,11 +7,11 @@
 
 #include <gtest/gtest.h>
 
-#include "fusion/baselines/density_fuser.h"
-#include "fusion/baselines/mean_shift.h"
-#include "fusion/fuser_registry.h"
-#include "fusion/scenario/metrics.h"
-#include "fusion/scenario/scenario.h"
+#include "eval/baselines/density_fuser.h"
+#include "eval/baselines/mean_shift.h"
+#include "eval/fuser_registry.h"
+#include "eval/metrics.h"
+#include "sim/city_scenario.h"
 
 namespace mapd::fusion {
 namespace {

@@ -1,5 +1,5 @@
 // Writes the generated part of the fuzz seed corpus: small OctoMap files made
-// with OctoMap itself (tests/service/support/octomap_scenes) and valid
+// with OctoMap itself (tests/common/octomap_scenes) and valid
 // ObservationBatch messages (tests/common/batches.h), serialized.
 // Usage: fuzz_make_seeds DIR   (writes DIR/octree_reader/*, DIR/ingest_batch/*)
 #include <cstdio>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "common/batches.h"
-#include "support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 namespace {
 

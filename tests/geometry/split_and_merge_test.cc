@@ -56,6 +56,35 @@ TEST(SplitAndMergeTest, NeverBridgesAGap) {
   EXPECT_EQ(SplitAndMerge(points, params).size(), 1u);
 }
 
+TEST(SplitAndMergeTest, GapGrowsWithRangeWhenAsked) {
+  // The same 0.5 m gap 10 m from the origin: bridged once the limit grows by
+  // 0.03 per metre of range (0.3 + 0.3 = 0.6 m), not with a fixed limit.
+  std::vector<Vec2> points = Sample({10, 0}, {10, 2}, 21);
+  const std::vector<Vec2> far = Sample({10, 2.5}, {10, 4.5}, 21);
+  points.insert(points.end(), far.begin(), far.end());
+  SplitAndMergeParams params;
+  params.max_gap_m = 0.3;
+  EXPECT_EQ(SplitAndMerge(points, params).size(), 2u);
+  params.gap_per_range = 0.03;
+  EXPECT_EQ(SplitAndMerge(points, params).size(), 1u);
+}
+
+TEST(SplitAndMergeTest, MissingReturnsEndARun) {
+  // A NaN between two close collinear pieces (a beam without a return) cuts the
+  // wall, and no line uses the NaN.
+  std::vector<Vec2> points = Sample({0, 0}, {2, 0}, 21);
+  points.push_back(Vec2(NAN, NAN));
+  const std::vector<Vec2> rest = Sample({2.1, 0}, {4, 0}, 20);
+  points.insert(points.end(), rest.begin(), rest.end());
+  points.push_back(Vec2(NAN, NAN));
+  const std::vector<ExtractedLine> lines = SplitAndMerge(points, SplitAndMergeParams());
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].last, 20u);
+  EXPECT_EQ(lines[1].first, 22u);
+  EXPECT_EQ(lines[1].last, 41u);
+  EXPECT_TRUE(lines[1].segment.a.allFinite() && lines[1].segment.b.allFinite());
+}
+
 TEST(SplitAndMergeTest, DropsShortAndSparsePieces) {
   SplitAndMergeParams params;
   params.min_points = 6;

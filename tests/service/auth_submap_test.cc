@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "service/support/auth_fixture.h"
-#include "service/support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 namespace mapd::testing {
 namespace {

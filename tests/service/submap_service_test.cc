@@ -12,7 +12,7 @@
 #include "server_fixture.h"
 #include "storage/sqlite.h"
 #include "voxel/merge.h"
-#include "support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 namespace mapd::testing {
 namespace {

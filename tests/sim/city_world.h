@@ -1,4 +1,4 @@
-// The synthetic city of fusion/scenario (2D building outlines, fences, poles)
+// The synthetic city of sim/city_scenario.h (2D building outlines, fences, poles)
 // as a 3D LidarWorld: every structure is extruded from the ground plane z = 0
 // to a height, and the ground is an infinite plane. Labels: the structure
 // index (World::structures), -1 for the ground, -10 - k for ramp k.
@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 #include "sim/lidar_sim.h"
 
 namespace mapd::sim {

@@ -5,4 +5,4 @@ mapd_add_test(voxel_matching_test
           ${CMAKE_CURRENT_LIST_DIR}/rigid_fit_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corner_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/ply_reader.cc
-  LIBS voxel)
+  LIBS voxel_eval)

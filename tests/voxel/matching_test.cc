@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
-#include "voxel/backtracking_mcs.h"
+#include "eval/backtracking_mcs.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/ply_reader.h"
 
@@ -44,9 +44,6 @@ TEST(CornerMatchingParamsTest, ValidatesEveryField) {
   EXPECT_FALSE(p.Validate().ok());
   p = {};
   p.min_matches = 2;
-  EXPECT_FALSE(p.Validate().ok());
-  p = {};
-  p.backtracking_shortcut = 2;
   EXPECT_FALSE(p.Validate().ok());
   p = {};
   p.max_search_seconds = -1;
@@ -108,12 +105,12 @@ TEST_P(GeneratedSceneTest, BothMethodsRecoverTheTransform) {
   EXPECT_GE(truth_kept, 0.9 * scene.truth.size()) << "signatures dropped true pairs";
 
   int clique_size = 0;
-  for (MatchMethod method : {MatchMethod::kMaxClique, MatchMethod::kBacktracking}) {
-    SCOPED_TRACE(MatchMethodName(method));
-    params.method = method;
+  for (const NamedSearch& method : SearchesToCompare()) {
+    SCOPED_TRACE(method.name);
+    params.search = method.search;
     // The backtracking search finds the answer early but takes long to
     // exhaust its search space (see docs/voxel-matching.md): cap it.
-    params.max_search_seconds = method == MatchMethod::kBacktracking ? 2.0 : 20.0;
+    params.max_search_seconds = method.search ? 2.0 : 20.0;
     const StatusOr<CornerMatchResult> r = MatchCorners(scene.a, scene.b, params);
     ASSERT_TRUE(r.ok()) << r.status().ToString();
     ASSERT_TRUE(r->transform_valid);
@@ -125,7 +122,7 @@ TEST_P(GeneratedSceneTest, BothMethodsRecoverTheTransform) {
     EXPECT_GE(correct, r->matched_count - 1) << "at most one wrong pair";
     EXPECT_LT(r->rms_residual_m, 0.05);
     EXPECT_EQ(r->candidate_pairs, static_cast<int>(candidates.size()));
-    if (method == MatchMethod::kMaxClique) {
+    if (!method.search) {  // the maximum clique
       EXPECT_TRUE(r->proven_optimal);
       clique_size = r->matched_count;
     } else {
@@ -271,10 +268,10 @@ TEST(CornerMatchingTest, TiesGoToTheBestScore) {
     a.push_back(c);
     a.push_back(d);
   }
-  for (MatchMethod method : {MatchMethod::kMaxClique, MatchMethod::kBacktracking}) {
-    SCOPED_TRACE(MatchMethodName(method));
+  for (const NamedSearch& method : SearchesToCompare()) {
+    SCOPED_TRACE(method.name);
     CornerMatchingParams params;
-    params.method = method;
+    params.search = method.search;
     for (const Eigen::Isometry3d& wanted : {Eigen::Isometry3d::Identity(), half_turn}) {
       const auto score = [&](const Eigen::Isometry3d& T) { return -(T.matrix() - wanted.matrix()).norm(); };
       const StatusOr<CornerMatchResult> r = MatchCorners(a, a, params, score);
@@ -358,10 +355,10 @@ TEST_P(TeaserBenchmarkTest, MaxCliqueRejectsOutliers) {
   double extent = 0.0;
   for (const auto& p : dst) extent = std::max(extent, (p - dst.front()).norm());
 
-  for (MatchMethod method : {MatchMethod::kMaxClique, MatchMethod::kBacktracking}) {
-    SCOPED_TRACE(MatchMethodName(method));
+  for (const NamedSearch& method : SearchesToCompare()) {
+    SCOPED_TRACE(method.name);
     CornerMatchingParams params;
-    params.method = method;
+    params.search = method.search;
     // Each point is off by at most the noise bound: distances by twice that.
     params.consistency_distance_m = 2.0 * noise_bound;
     const StatusOr<CornerMatchResult> m = MatchCandidatePairs(dst, scaled_src, pairs, params);
@@ -370,7 +367,7 @@ TEST_P(TeaserBenchmarkTest, MaxCliqueRejectsOutliers) {
     EXPECT_GE(m->matched_count, inliers);
     EXPECT_LT(RotationErrorDeg(m->T_a_b, T_ref), 2.0);
     EXPECT_LT(TranslationError(m->T_a_b, T_ref), 0.01 * extent + noise_bound);
-    if (method == MatchMethod::kMaxClique) {
+    if (!method.search) {  // the maximum clique
       EXPECT_TRUE(m->proven_optimal);
     }
 

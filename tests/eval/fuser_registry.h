@@ -1,18 +1,18 @@
 // Fusion strategies by name (docs/algorithms.md A.13, "Baselines"):
 //   "three_criteria"  the proposed method (FusionEngine, fusion/engine.h)
-//   "mean_shift"      competing algorithm 1 (fusion/baselines/mean_shift_fuser.h)
-//   "density"         competing algorithm 2 (fusion/baselines/density_fuser.h)
-#ifndef MAPD_FUSION_FUSER_REGISTRY_H_
-#define MAPD_FUSION_FUSER_REGISTRY_H_
+//   "mean_shift"      competing algorithm 1 (eval/baselines/mean_shift_fuser.h)
+//   "density"         competing algorithm 2 (eval/baselines/density_fuser.h)
+#ifndef MAPD_EVAL_FUSER_REGISTRY_H_
+#define MAPD_EVAL_FUSER_REGISTRY_H_
 
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/status.h"
-#include "fusion/baselines/density_fuser.h"
-#include "fusion/baselines/mean_shift_fuser.h"
-#include "fusion/fuser.h"
+#include "eval/baselines/density_fuser.h"
+#include "eval/baselines/mean_shift_fuser.h"
+#include "eval/fuser.h"
 #include "fusion/params.h"
 
 namespace mapd::fusion {
@@ -39,4 +39,4 @@ StatusOr<std::unique_ptr<Fuser>> MakeFuser(const std::string& name, const FuserO
 
 }  // namespace mapd::fusion
 
-#endif  // MAPD_FUSION_FUSER_REGISTRY_H_
+#endif  // MAPD_EVAL_FUSER_REGISTRY_H_

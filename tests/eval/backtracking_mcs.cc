@@ -1,4 +1,4 @@
-#include "voxel/backtracking_mcs.h"
+#include "eval/backtracking_mcs.h"
 
 #include <algorithm>
 #include <chrono>
@@ -151,6 +151,31 @@ BacktrackingResult FindCommonSubgraphByBacktracking(const BitGraph& graph,
   result.nodes = search.nodes();
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
+}
+
+PairSetSearch BacktrackingSearch(int shortcut_matches) {
+  return [shortcut_matches](const BitGraph& graph, const std::vector<CornerPair>& pairs,
+                            const std::vector<Eigen::Vector3d>& points_a,
+                            const std::vector<Eigen::Vector3d>& points_b,
+                            const CornerMatchingParams& params, int max_solutions) {
+    BacktrackingOptions options;
+    options.consistency_distance_m = params.consistency_distance_m;
+    options.shortcut_matches = shortcut_matches;
+    options.max_tied_solutions = max_solutions;
+    options.max_nodes = params.max_search_nodes;
+    options.max_seconds = params.max_search_seconds;
+    BacktrackingResult r = FindCommonSubgraphByBacktracking(graph, pairs, points_a, points_b, options);
+    PairSetSearchResult out;
+    out.solutions = std::move(r.schemes);
+    out.proven_optimal = r.exhausted_search_space && shortcut_matches == 0;
+    out.nodes = r.nodes;
+    out.seconds = r.seconds;
+    return out;
+  };
+}
+
+std::vector<NamedSearch> SearchesToCompare() {
+  return {{"max_clique", nullptr}, {"backtracking", BacktrackingSearch()}};
 }
 
 }  // namespace mapd::voxel

@@ -1,4 +1,4 @@
-#include "fusion/scenario/extraction.h"
+#include "sim/scan_lines.h"
 
 #include <cmath>
 

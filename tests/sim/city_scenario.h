@@ -10,12 +10,13 @@
 //
 // A multi-beam LiDAR with plane features in this world is test support in
 // tests/sim (city_world.h; docs/planes-3d.md).
-#ifndef MAPD_FUSION_SCENARIO_SCENARIO_H_
-#define MAPD_FUSION_SCENARIO_SCENARIO_H_
+#ifndef MAPD_SIM_CITY_SCENARIO_H_
+#define MAPD_SIM_CITY_SCENARIO_H_
 
 #include <cstdint>
 #include <vector>
 
+#include "client/sim/laser_sim.h"
 #include "fusion/engine.h"
 #include "geometry/segment2.h"
 
@@ -51,11 +52,7 @@ struct ScenarioParams {
   double min_length_m = 0.5;
 };
 
-struct Pose2 {
-  geometry::Vec2 t = geometry::Vec2::Zero();  // metres, map frame
-  double yaw_rad = 0.0;
-  geometry::Vec2 Apply(const geometry::Vec2& p) const;  // sensor frame -> map frame
-};
+using Pose2 = sim::Pose2;  // the vehicle pose, the sensor at its origin
 
 enum class StructureKind { kWall, kTrivial };
 
@@ -107,6 +104,7 @@ class ScanSimulator {
  private:
   const ScenarioParams params_;
   const World& world_;
+  sim::LaserFan fan_;
   double cell_m_;
   std::vector<std::vector<int>> cells_;  // structure indices by cell
   int cells_x_ = 0;
@@ -115,4 +113,4 @@ class ScanSimulator {
 
 }  // namespace mapd::fusion::scenario
 
-#endif  // MAPD_FUSION_SCENARIO_SCENARIO_H_
+#endif  // MAPD_SIM_CITY_SCENARIO_H_

@@ -1,9 +1,10 @@
-// Small OctoMap files for submap tests, generated with OctoMap itself: a room
+// Small OctoMap files for the submap tests of the service, mapctl, the fuzz
+// seeds and the soak benchmark, generated with OctoMap itself: a room
 // (floor, four walls) furnished with boxes of different sizes, cut into
 // overlapping submaps seen from different frames; plus hand-made hostile
 // files (truncated, garbage, too deep) built like tests/voxel/octree_reader_test.cc.
-#ifndef MAPD_TESTS_SERVICE_SUPPORT_OCTOMAP_SCENES_H_
-#define MAPD_TESTS_SERVICE_SUPPORT_OCTOMAP_SCENES_H_
+#ifndef MAPD_TESTS_COMMON_OCTOMAP_SCENES_H_
+#define MAPD_TESTS_COMMON_OCTOMAP_SCENES_H_
 
 #include <Eigen/Geometry>
 #include <string>
@@ -35,4 +36,4 @@ Eigen::Isometry3d YawTranslation(double yaw_rad, const Eigen::Vector3d& t_m);
 
 }  // namespace mapd::testing
 
-#endif  // MAPD_TESTS_SERVICE_SUPPORT_OCTOMAP_SCENES_H_
+#endif  // MAPD_TESTS_COMMON_OCTOMAP_SCENES_H_

@@ -1,4 +1,4 @@
-#include "fusion/baselines/density_fuser.h"
+#include "eval/baselines/density_fuser.h"
 
 #include <algorithm>
 #include <cmath>
@@ -38,17 +38,8 @@ bool DensityNeighbours(const Segment2& f, const Segment2& g, double lateral_m,
 }
 
 std::vector<std::vector<uint32_t>> DensityFuser::Cluster(const std::vector<Member>& members) const {
-  std::vector<double> theta(members.size());
-  const std::vector<double> weights(members.size(), 1.0);
-  for (size_t i = 0; i < members.size(); ++i) theta[i] = AxialAngle(members[i].feature.segment);
-  const Modes orientation = OrientationModes(theta, weights, params_.orientation);
-  std::vector<std::vector<uint32_t>> by_mode(orientation.mode.size());
-  for (size_t i = 0; i < members.size(); ++i) {
-    by_mode[orientation.label[i]].push_back(static_cast<uint32_t>(i));
-  }
-
   std::vector<std::vector<uint32_t>> clusters;
-  for (const std::vector<uint32_t>& group : by_mode) {
+  for (const std::vector<uint32_t>& group : OrientationGroups(members, params_.orientation)) {
     UniformGrid<uint32_t> grid(kCellM);
     double max_half_m = 0.0;
     for (uint32_t i : group) {

@@ -1,4 +1,4 @@
-#include "fusion/scenario/svg.h"
+#include "eval/svg.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "fusion/baselines/mean_shift.h"
+#include "eval/baselines/mean_shift.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,10 +1,10 @@
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
+#include <utility>
 
-#include "fusion/scenario/extraction.h"
+#include "sim/scan_lines.h"
 
 namespace mapd::fusion::scenario {
 
@@ -42,8 +42,6 @@ class Rng {
  private:
   uint64_t state_;
 };
-
-double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
 
 Vec2 Rotate(const Vec2& p, double yaw) {
   const double c = std::cos(yaw), s = std::sin(yaw);
@@ -91,8 +89,6 @@ std::vector<Pose2> Route(const ScenarioParams& p) {
 }
 
 }  // namespace
-
-Vec2 Pose2::Apply(const Vec2& p) const { return t + Rotate(p, yaw_rad); }
 
 World GenerateWorld(const ScenarioParams& p) {
   World world;
@@ -170,6 +166,11 @@ World GenerateWorld(const ScenarioParams& p) {
 
 ScanSimulator::ScanSimulator(const ScenarioParams& params, const World& world)
     : params_(params), world_(world), cell_m_(kStructureCellM) {
+  fan_.start_rad = -kPi;  // beam b at the centre of sector b of 2 pi / beams
+  fan_.step_rad = 2.0 * kPi / params.beams;
+  fan_.beam_offset = 0.5;
+  fan_.beams = params.beams;
+  fan_.max_range_m = params.max_range_m;
   cells_x_ = static_cast<int>(std::ceil(world.max.x() / cell_m_)) + 1;
   cells_y_ = static_cast<int>(std::ceil(world.max.y() / cell_m_)) + 1;
   cells_.resize(static_cast<size_t>(cells_x_ * cells_y_));
@@ -188,10 +189,7 @@ ScanSimulator::ScanSimulator(const ScenarioParams& params, const World& world)
 
 void ScanSimulator::Ranges(size_t index, std::vector<double>* ranges, std::vector<int>* hits) const {
   const Pose2& pose = world_.route[index];
-  const int beams = params_.beams;
-  const double step = 2.0 * kPi / beams;
-  ranges->assign(static_cast<size_t>(beams), std::numeric_limits<double>::infinity());
-  hits->assign(static_cast<size_t>(beams), -1);
+  hits->assign(static_cast<size_t>(params_.beams), -1);
   // Candidate structures: those filed in the cells that the range square meets.
   std::vector<int> candidates;
   const double r = params_.max_range_m;
@@ -207,35 +205,13 @@ void ScanSimulator::Ranges(size_t index, std::vector<double>* ranges, std::vecto
   }
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-  // Rasterise each candidate into the beams its angular extent covers.
-  for (int s : candidates) {
-    const Segment2& seg = world_.structures[static_cast<size_t>(s)].segment;
-    if (geometry::PointSegmentDistance(pose.t, seg) > r) continue;
-    const Vec2 a = seg.a - pose.t, b = seg.b - pose.t;
-    const auto beam_of = [&](const Vec2& v) {
-      double ang = std::atan2(v.y(), v.x()) - pose.yaw_rad + kPi;  // [0, 2 pi) after wrap
-      ang = std::fmod(ang, 2.0 * kPi);
-      if (ang < 0.0) ang += 2.0 * kPi;
-      return ang / step - 0.5;  // fractional beam index
-    };
-    double fa = beam_of(a), fb = beam_of(b);
-    if (Cross(a, b) < 0.0) std::swap(fa, fb);  // sweep counter-clockwise from fa to fb
-    if (fb < fa) fb += beams;
-    const Vec2 d = seg.b - seg.a;
-    for (int k = static_cast<int>(std::ceil(fa)); k <= static_cast<int>(std::floor(fb)); ++k) {
-      const int beam = ((k % beams) + beams) % beams;
-      const double ang = pose.yaw_rad - kPi + (beam + 0.5) * step;
-      const Vec2 dir(std::cos(ang), std::sin(ang));
-      const double den = Cross(dir, d);
-      if (den == 0.0) continue;
-      const double t = Cross(seg.a - pose.t, d) / den;   // along the ray
-      const double u = Cross(seg.a - pose.t, dir) / den;  // along the segment
-      if (t <= 0.0 || t > r || u < 0.0 || u > 1.0) continue;
-      if (t < (*ranges)[static_cast<size_t>(beam)]) {
-        (*ranges)[static_cast<size_t>(beam)] = t;
-        (*hits)[static_cast<size_t>(beam)] = s;
-      }
-    }
+  std::vector<Segment2> walls;
+  walls.reserve(candidates.size());
+  for (int c : candidates) walls.push_back(world_.structures[static_cast<size_t>(c)].segment);
+  sim::LaserScan scan = sim::CastLaser(walls, pose, fan_);
+  *ranges = std::move(scan.range_m);
+  for (size_t k = 0; k < scan.hit.size(); ++k) {
+    (*hits)[k] = scan.hit[k] < 0 ? -1 : candidates[static_cast<size_t>(scan.hit[k])];
   }
   Rng rng(params_.seed * 0x9E3779B97F4A7C15ULL + 0x1000003ULL * (index + 1));
   for (double& range : *ranges) {
@@ -255,12 +231,11 @@ Scan ScanSimulator::Simulate(size_t index) const {
   scan.estimated_pose.t += Vec2(rng.Normal(params_.pose_sigma_xy_m), rng.Normal(params_.pose_sigma_xy_m));
   scan.estimated_pose.yaw_rad += rng.Normal(params_.pose_sigma_yaw_rad);
 
-  const double step = 2.0 * kPi / params_.beams;
   std::vector<Vec2> points(ranges.size(), Vec2::Zero());
   std::vector<bool> valid(ranges.size(), false);
   for (size_t b = 0; b < ranges.size(); ++b) {
     if (!std::isfinite(ranges[b]) || ranges[b] <= 0.0) continue;
-    const double ang = -kPi + (static_cast<double>(b) + 0.5) * step;
+    const double ang = fan_.BeamAngle(static_cast<int>(b));
     points[b] = ranges[b] * Vec2(std::cos(ang), std::sin(ang));
     valid[b] = true;
   }
@@ -270,7 +245,7 @@ Scan ScanSimulator::Simulate(size_t index) const {
   ep.break_factor = params_.break_factor;
   ep.min_points = params_.min_points;
   ep.min_length_m = params_.min_length_m;
-  const std::vector<ExtractedLine> lines = ExtractLines(points, valid, step, ep);
+  const std::vector<ExtractedLine> lines = ExtractLines(points, valid, fan_.step_rad, ep);
   for (size_t k = 0; k < lines.size() && k < 1024; ++k) {
     GroundFeature f;
     f.id = (static_cast<FeatureId>(index) << 10) | k;

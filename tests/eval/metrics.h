@@ -5,14 +5,14 @@
 // segment is nearest to its midpoint, if its direction is within
 // max_angle_rad of the structure's, both its endpoints lie within match_m of
 // the structure's line, and its projection overlaps the structure.
-#ifndef MAPD_FUSION_SCENARIO_METRICS_H_
-#define MAPD_FUSION_SCENARIO_METRICS_H_
+#ifndef MAPD_EVAL_METRICS_H_
+#define MAPD_EVAL_METRICS_H_
 
 #include <cstddef>
 #include <vector>
 
 #include "fusion/engine.h"
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 
 namespace mapd::fusion::scenario {
 
@@ -57,4 +57,4 @@ int MatchStructure(const World& world, const geometry::Segment2& s, const Metric
 
 }  // namespace mapd::fusion::scenario
 
-#endif  // MAPD_FUSION_SCENARIO_METRICS_H_
+#endif  // MAPD_EVAL_METRICS_H_

@@ -7,11 +7,11 @@
 //     line through the middle of the cluster: through the mean of the member
 //     centres, along the members' mean (axial) orientation, unweighted.
 // Registry name "mean_shift".
-#ifndef MAPD_FUSION_BASELINES_MEAN_SHIFT_FUSER_H_
-#define MAPD_FUSION_BASELINES_MEAN_SHIFT_FUSER_H_
+#ifndef MAPD_EVAL_BASELINES_MEAN_SHIFT_FUSER_H_
+#define MAPD_EVAL_BASELINES_MEAN_SHIFT_FUSER_H_
 
-#include "fusion/baselines/batch_fuser.h"
-#include "fusion/baselines/mean_shift.h"
+#include "eval/baselines/batch_fuser.h"
+#include "eval/baselines/mean_shift.h"
 
 namespace mapd::fusion::baselines {
 
@@ -39,4 +39,4 @@ class MeanShiftFuser : public BatchFuser {
 
 }  // namespace mapd::fusion::baselines
 
-#endif  // MAPD_FUSION_BASELINES_MEAN_SHIFT_FUSER_H_
+#endif  // MAPD_EVAL_BASELINES_MEAN_SHIFT_FUSER_H_

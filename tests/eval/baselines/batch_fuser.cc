@@ -1,4 +1,4 @@
-#include "fusion/baselines/batch_fuser.h"
+#include "eval/baselines/batch_fuser.h"
 
 #include <algorithm>
 #include <cmath>
@@ -117,6 +117,19 @@ std::vector<FusedFeature> BatchFuser::Compute() const {
   std::sort(out.begin(), out.end(),
             [](const FusedFeature& a, const FusedFeature& b) { return a.id < b.id; });
   return out;
+}
+
+std::vector<std::vector<uint32_t>> BatchFuser::OrientationGroups(
+    const std::vector<Member>& members, const OrientationShiftParams& params) {
+  std::vector<double> theta(members.size());
+  const std::vector<double> weights(members.size(), 1.0);
+  for (size_t i = 0; i < members.size(); ++i) theta[i] = AxialAngle(members[i].feature.segment);
+  const Modes orientation = OrientationModes(theta, weights, params);
+  std::vector<std::vector<uint32_t>> by_mode(orientation.mode.size());
+  for (size_t i = 0; i < members.size(); ++i) {
+    by_mode[orientation.label[i]].push_back(static_cast<uint32_t>(i));
+  }
+  return by_mode;
 }
 
 }  // namespace mapd::fusion::baselines

@@ -4,8 +4,8 @@
 // by side. Strategies are chosen by name through fuser_registry.h.
 //
 // Thread safety: none; the caller serialises all calls.
-#ifndef MAPD_FUSION_FUSER_H_
-#define MAPD_FUSION_FUSER_H_
+#ifndef MAPD_EVAL_FUSER_H_
+#define MAPD_EVAL_FUSER_H_
 
 #include <memory>
 #include <vector>
@@ -58,4 +58,4 @@ class EngineFuser : public Fuser {
 
 }  // namespace mapd::fusion
 
-#endif  // MAPD_FUSION_FUSER_H_
+#endif  // MAPD_EVAL_FUSER_H_

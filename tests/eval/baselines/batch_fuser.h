@@ -7,15 +7,16 @@
 // Li et al. 2023, section 4.2: "the same post processing has been employed for all three
 // algorithms") is applied to the merged segments: the corner optimisation of
 // corner_snap.h with FusionParams::snap_m and corner_mode.
-#ifndef MAPD_FUSION_BASELINES_BATCH_FUSER_H_
-#define MAPD_FUSION_BASELINES_BATCH_FUSER_H_
+#ifndef MAPD_EVAL_BASELINES_BATCH_FUSER_H_
+#define MAPD_EVAL_BASELINES_BATCH_FUSER_H_
 
 #include <cstdint>
 #include <map>
 #include <unordered_set>
 #include <vector>
 
-#include "fusion/fuser.h"
+#include "eval/baselines/mean_shift.h"
+#include "eval/fuser.h"
 #include "geometry/line_fit.h"
 
 namespace mapd::fusion::baselines {
@@ -53,6 +54,11 @@ class BatchFuser : public Fuser {
   virtual geometry::Line2 MergeLine(const std::vector<Member>& members,
                                     const std::vector<uint32_t>& cluster) const = 0;
 
+  // Step 1 of both methods: the members grouped by their mode of mean shift on
+  // the axial orientation (unweighted), in mode order; indices into `members`.
+  static std::vector<std::vector<uint32_t>> OrientationGroups(const std::vector<Member>& members,
+                                                              const OrientationShiftParams& params);
+
  private:
   std::vector<FusedFeature> Compute() const;
 
@@ -66,4 +72,4 @@ class BatchFuser : public Fuser {
 
 }  // namespace mapd::fusion::baselines
 
-#endif  // MAPD_FUSION_BASELINES_BATCH_FUSER_H_
+#endif  // MAPD_EVAL_BASELINES_BATCH_FUSER_H_

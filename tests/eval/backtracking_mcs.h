@@ -10,10 +10,14 @@
 // matches are chosen, fit a transform to them, add every candidate pair that
 // lands within D of it (and is consistent), and take that as the scheme of the
 // branch. With the shortcut the search is a heuristic; without it, exact.
-#ifndef MAPD_VOXEL_BACKTRACKING_MCS_H_
-#define MAPD_VOXEL_BACKTRACKING_MCS_H_
+//
+// Test and benchmark support (mapd searches by maximum clique): plugged into
+// corner matching through CornerMatchingParams::search.
+#ifndef MAPD_EVAL_BACKTRACKING_MCS_H_
+#define MAPD_EVAL_BACKTRACKING_MCS_H_
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -45,6 +49,19 @@ BacktrackingResult FindCommonSubgraphByBacktracking(const BitGraph& graph,
                                                     const std::vector<Eigen::Vector3d>& points_b,
                                                     const BacktrackingOptions& options);
 
+// The search above as step 3 of corner matching: consistency_distance_m, the
+// tie count and the budget come from the matching params.
+// REQUIRES: shortcut_matches == 0 (exhaustive) or >= 3.
+PairSetSearch BacktrackingSearch(int shortcut_matches = 5);
+
+// The searches the tests and benchmarks compare, by name: "max_clique" (null,
+// mapd's default) and "backtracking" (the paper's, with its shortcut).
+struct NamedSearch {
+  std::string name;
+  PairSetSearch search;
+};
+std::vector<NamedSearch> SearchesToCompare();
+
 }  // namespace mapd::voxel
 
-#endif  // MAPD_VOXEL_BACKTRACKING_MCS_H_
+#endif  // MAPD_EVAL_BACKTRACKING_MCS_H_

@@ -1,8 +1,8 @@
 // Mean-shift clustering (Comaniciu & Meer 2002) as the two competing methods of
 // the paper use it (feature-fusion paper, Li et al. 2023, section 2): on line
 // orientations, an axial quantity with period pi, and on 2D feature centres.
-#ifndef MAPD_FUSION_BASELINES_MEAN_SHIFT_H_
-#define MAPD_FUSION_BASELINES_MEAN_SHIFT_H_
+#ifndef MAPD_EVAL_BASELINES_MEAN_SHIFT_H_
+#define MAPD_EVAL_BASELINES_MEAN_SHIFT_H_
 
 #include <cstdint>
 #include <vector>
@@ -69,4 +69,4 @@ class AxialMean {
 
 }  // namespace mapd::fusion::baselines
 
-#endif  // MAPD_FUSION_BASELINES_MEAN_SHIFT_H_
+#endif  // MAPD_EVAL_BASELINES_MEAN_SHIFT_H_

@@ -1,13 +1,13 @@
 // An SVG picture of fused maps over the scenario's ground truth, one panel per
 // map side by side, cropped to a window of the world (for docs/).
-#ifndef MAPD_FUSION_SCENARIO_SVG_H_
-#define MAPD_FUSION_SCENARIO_SVG_H_
+#ifndef MAPD_EVAL_SVG_H_
+#define MAPD_EVAL_SVG_H_
 
 #include <string>
 #include <vector>
 
 #include "common/status.h"
-#include "fusion/scenario/scenario.h"
+#include "sim/city_scenario.h"
 
 namespace mapd::fusion::scenario {
 
@@ -23,4 +23,4 @@ Status WriteSvg(const std::string& path, const World& world, const std::vector<S
 
 }  // namespace mapd::fusion::scenario
 
-#endif  // MAPD_FUSION_SCENARIO_SVG_H_
+#endif  // MAPD_EVAL_SVG_H_

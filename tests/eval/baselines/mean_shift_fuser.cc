@@ -1,4 +1,4 @@
-#include "fusion/baselines/mean_shift_fuser.h"
+#include "eval/baselines/mean_shift_fuser.h"
 
 #include <utility>
 
@@ -8,17 +8,8 @@ using geometry::Vec2;
 
 std::vector<std::vector<uint32_t>> MeanShiftFuser::Cluster(
     const std::vector<Member>& members) const {
-  std::vector<double> theta(members.size());
-  const std::vector<double> weights(members.size(), 1.0);
-  for (size_t i = 0; i < members.size(); ++i) theta[i] = AxialAngle(members[i].feature.segment);
-  const Modes orientation = OrientationModes(theta, weights, params_.orientation);
-
-  std::vector<std::vector<uint32_t>> by_mode(orientation.mode.size());
-  for (size_t i = 0; i < members.size(); ++i) {
-    by_mode[orientation.label[i]].push_back(static_cast<uint32_t>(i));
-  }
   std::vector<std::vector<uint32_t>> clusters;
-  for (const std::vector<uint32_t>& group : by_mode) {
+  for (const std::vector<uint32_t>& group : OrientationGroups(members, params_.orientation)) {
     std::vector<Vec2> centres;
     centres.reserve(group.size());
     for (uint32_t i : group) centres.push_back(members[i].feature.segment.midpoint());

@@ -1,4 +1,4 @@
-#include "fusion/scenario/metrics.h"
+#include "eval/metrics.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,8 +4,8 @@
 // recursively at the point farthest from its chord, and every piece with enough
 // points is fitted by total least squares; its endpoints are the projections of
 // its first and last points.
-#ifndef MAPD_FUSION_SCENARIO_EXTRACTION_H_
-#define MAPD_FUSION_SCENARIO_EXTRACTION_H_
+#ifndef MAPD_SIM_SCAN_LINES_H_
+#define MAPD_SIM_SCAN_LINES_H_
 
 #include <vector>
 
@@ -34,4 +34,4 @@ std::vector<ExtractedLine> ExtractLines(const std::vector<geometry::Vec2>& point
 
 }  // namespace mapd::fusion::scenario
 
-#endif  // MAPD_FUSION_SCENARIO_EXTRACTION_H_
+#endif  // MAPD_SIM_SCAN_LINES_H_

@@ -1,4 +1,4 @@
-#include "support/octomap_scenes.h"
+#include "common/octomap_scenes.h"
 
 #include <octomap/OcTree.h>
 

@@ -1,4 +1,4 @@
-#include "fusion/fuser_registry.h"
+#include "eval/fuser_registry.h"
 
 #include <cmath>
 

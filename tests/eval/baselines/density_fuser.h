@@ -13,13 +13,13 @@
 //     length-weighted mean of the midpoints, along the length-weighted mean
 //     orientation; endpoints are the extreme projections of the members.
 // Registry name "density".
-#ifndef MAPD_FUSION_BASELINES_DENSITY_FUSER_H_
-#define MAPD_FUSION_BASELINES_DENSITY_FUSER_H_
+#ifndef MAPD_EVAL_BASELINES_DENSITY_FUSER_H_
+#define MAPD_EVAL_BASELINES_DENSITY_FUSER_H_
 
 #include <cstdint>
 
-#include "fusion/baselines/batch_fuser.h"
-#include "fusion/baselines/mean_shift.h"
+#include "eval/baselines/batch_fuser.h"
+#include "eval/baselines/mean_shift.h"
 
 namespace mapd::fusion::baselines {
 
@@ -52,4 +52,4 @@ class DensityFuser : public BatchFuser {
 
 }  // namespace mapd::fusion::baselines
 
-#endif  // MAPD_FUSION_BASELINES_DENSITY_FUSER_H_
+#endif  // MAPD_EVAL_BASELINES_DENSITY_FUSER_H_
