@@ -127,55 +127,6 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config) {
   return Status::Ok();
 }
 
-Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, FlagAction* action) {
-  *action = FlagAction::kServe;
-  // The config file first, so that flags override it wherever they stand.
-  std::vector<std::pair<std::string, std::string>> settings;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--help" || a == "-h") return *action = FlagAction::kHelp, Status::Ok();
-    if (a == "--version") return *action = FlagAction::kVersion, Status::Ok();
-    if (a == "--print-config") {
-      *action = FlagAction::kPrintConfig;
-      continue;
-    }
-    if (a.rfind("--", 0) != 0) return Status::InvalidArgument("unexpected argument '" + a + "'");
-    std::string key = a.substr(2), value;
-    if (const size_t eq = key.find('='); eq != std::string::npos) {
-      value = key.substr(eq + 1);
-      key = key.substr(0, eq);
-    } else if (i + 1 < args.size()) {
-      value = args[++i];
-    } else {
-      return Status::InvalidArgument("--" + key + " needs a value");
-    }
-    if (key == "config") {
-      MAPD_RETURN_IF_ERROR(LoadConfigFile(value, config));
-    } else {
-      settings.emplace_back(key, value);
-    }
-  }
-  for (const auto& [k, v] : settings) MAPD_RETURN_IF_ERROR(ApplySetting(k, v, config));
-  return config->Validate();
-}
-
-std::string FlagsHelp() {
-  const ServerConfig defaults;
-  std::ostringstream out;
-  out << "usage: mapd [--config FILE] [--KEY VALUE | --KEY=VALUE ...]\n"
-         "       mapd --print-config [...]   print the settings in effect as a config file, and exit\n"
-         "       mapd --version\n\n"
-         "Serves the mapserver.v1 gRPC API. Every KEY may also be set in the config file as\n"
-         "'KEY = VALUE'; flags override the file.\n\n";
-  out << "  --config FILE\n      read settings from FILE first\n";
-  for (const Setting& s : Settings()) {
-    const std::string value = s.get(defaults);
-    out << "  --" << s.key << " <" << s.kind << ">" << (value.empty() ? "" : "  (default " + value + ")")
-        << "\n      " << s.help << "\n";
-  }
-  return out.str();
-}
-
 std::string ConfigFileText(const ServerConfig& config) {
   std::ostringstream out;
   out << "# mapd configuration: `key = value`; every key is also a flag (--key value).\n"

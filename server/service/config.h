@@ -1,6 +1,7 @@
 // mapd's configuration: one struct, filled from defaults, then a config file,
 // then command-line flags. The file holds `key = value` lines (# comments);
-// every key is also a flag: `--fusion.gamma=0.4` or `--fusion.gamma 0.4`.
+// every key is also a flag: `--fusion.gamma=0.4` or `--fusion.gamma 0.4`
+// (parsed in server/mapd/command_line.h).
 // The defaults are the member initialisers below and nowhere else: the
 // settings table (config_settings.cc) reads them for --help and the example
 // file.
@@ -58,13 +59,6 @@ std::string DefaultDbPath();
 Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config);
 Status LoadConfigFile(const std::string& path, ServerConfig* config);
 
-// What the command line asks of mapd besides its settings.
-enum class FlagAction { kServe, kHelp, kVersion, kPrintConfig };
-
-// Parses argv (without argv[0]) and validates the result; --help and
-// --version stop parsing.
-Status ParseFlags(const std::vector<std::string>& args, ServerConfig* config, FlagAction* action);
-std::string FlagsHelp();
 // `config` as a config file: every setting with its help line, in table order.
 // ConfigFileText(ServerConfig()) is deploy/mapd.conf.example.
 std::string ConfigFileText(const ServerConfig& config);

@@ -1,5 +1,6 @@
 #include "service/config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -10,15 +11,32 @@
 #include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
+#include "mapd/command_line.h"
 
 namespace mapd::service {
 namespace {
 
+using ::mapd::AddFlags;
+using ::mapd::ApplyCommandLine;
+using ::mapd::CommandLine;
 using ::testing::HasSubstr;
 
-Status Parse(std::vector<std::string> args, ServerConfig* c) {
-  FlagAction action;
-  return ParseFlags(args, c, &action);
+// Settings as mapd gets them: parsed by its command line (CLI11), then the
+// config files and flags applied and validated.
+Status Parse(std::vector<std::string> args, ServerConfig* c, CommandLine* line = nullptr,
+             std::string* help = nullptr) {
+  CLI::App app("mapd", "mapd");
+  CommandLine parsed;
+  AddFlags(&app, &parsed);
+  if (help != nullptr) *help = app.help();
+  std::reverse(args.begin(), args.end());  // CLI11 takes a vector from its back
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    return Status::InvalidArgument(e.what());
+  }
+  if (line != nullptr) *line = parsed;
+  return ApplyCommandLine(parsed, c);
 }
 
 TEST(ConfigTest, DefaultsAreValidAndLoopback) {
@@ -43,9 +61,11 @@ TEST(ConfigTest, BadValuesAreNamed) {
   ServerConfig d;
   EXPECT_THAT(Parse({"--fusion.eta_m=abc"}, &d).message(), HasSubstr("fusion.eta_m"));
   ServerConfig e;
-  EXPECT_THAT(Parse({"--no-such-thing=1"}, &e).message(), HasSubstr("unknown setting 'no-such-thing'"));
+  EXPECT_THAT(Parse({"--no-such-thing=1"}, &e).message(), HasSubstr("--no-such-thing"));
   ServerConfig f;
-  EXPECT_THAT(Parse({"--db"}, &f).message(), HasSubstr("needs a value"));
+  EXPECT_THAT(Parse({"--db"}, &f).message(), HasSubstr("--db"));
+  EXPECT_EQ(ApplySetting("no-such-thing", "1", &f).message(),
+            "unknown setting 'no-such-thing' (see mapd --help)");
 }
 
 // Found while writing tests/fuzz/config_fuzz.cc: the parser before the
@@ -175,12 +195,15 @@ TEST(ConfigTest, TheExampleFileIsTheDefaults) {
 }
 
 TEST(ConfigTest, HelpShowsTheRealDefaults) {
-  const std::string help = FlagsHelp();
+  ServerConfig c;
+  std::string help;
+  ASSERT_TRUE(Parse({}, &c, nullptr, &help).ok());
   // These two once showed 2 and 0.3 while the code used 0.75 and 0.9.
-  EXPECT_THAT(help, HasSubstr("--merge.max_residual_voxels <number>  (default 0.75)"));
-  EXPECT_THAT(help, HasSubstr("--merge.min_overlap_score <number>  (default 0.9)"));
-  EXPECT_THAT(help, HasSubstr("--fusion.delta_deg <number>  (default 5)"));
-  EXPECT_THAT(help, HasSubstr("--sync <normal|full>  (default normal)"));
+  using ::testing::ContainsRegex;
+  EXPECT_THAT(help, ContainsRegex("--merge\\.max_residual_voxels <number>=0\\.75[[:space:]]"));
+  EXPECT_THAT(help, ContainsRegex("--merge\\.min_overlap_score <number>=0\\.9[[:space:]]"));
+  EXPECT_THAT(help, ContainsRegex("--fusion\\.delta_deg <number>=5[[:space:]]"));
+  EXPECT_THAT(help, HasSubstr("--sync <normal|full>=normal "));
 }
 
 TEST(ConfigTest, PrintedConfigReadsBackToTheSameSettings) {
@@ -216,11 +239,12 @@ TEST(ConfigTest, RangesAreCheckedForParsedAndBuiltConfigs) {
 
 TEST(ConfigTest, VersionAndPrintConfigAreActions) {
   ServerConfig c;
-  FlagAction action;
-  ASSERT_TRUE(ParseFlags({"--version"}, &c, &action).ok());
-  EXPECT_EQ(action, FlagAction::kVersion);
-  ASSERT_TRUE(ParseFlags({"--fusion.gamma=0.4", "--print-config"}, &c, &action).ok());
-  EXPECT_EQ(action, FlagAction::kPrintConfig);
+  CommandLine line;
+  ASSERT_TRUE(Parse({"--version"}, &c, &line).ok());
+  EXPECT_TRUE(line.version);
+  ASSERT_TRUE(Parse({"--fusion.gamma=0.4", "--print-config"}, &c, &line).ok());
+  EXPECT_TRUE(line.print_config);
+  EXPECT_FALSE(line.version);
   EXPECT_THAT(ConfigFileText(c), HasSubstr("fusion.gamma = 0.4\n"));
 }
 
