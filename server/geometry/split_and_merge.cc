@@ -36,21 +36,28 @@ std::pair<size_t, double> FarthestFromChord(const std::vector<Vec2>& points, siz
 }
 
 // Step 2: recursive split of one run, in order (explicit stack: runs can be long).
-void Split(const std::vector<Vec2>& points, Piece run, double split_m, std::vector<Piece>* out) {
+void Split(const std::vector<Vec2>& points, Piece run, const SplitAndMergeParams& params,
+           std::vector<Piece>* out) {
   std::vector<Piece> stack = {run};
   while (!stack.empty()) {
     const Piece p = stack.back();
     stack.pop_back();
     if (p.last - p.first >= 2) {
       const auto [k, dist_m] = FarthestFromChord(points, p.first, p.last);
-      if (dist_m > split_m) {
-        stack.push_back({k, p.last});   // the right half is processed second
-        stack.push_back({p.first, k});  // the break point ends one piece and starts the next
+      if (dist_m > params.split_m) {
+        // The right half is processed second; the break point k ends the left one.
+        stack.push_back({params.split_point_in_both ? k : k + 1, p.last});
+        stack.push_back({p.first, k});
         continue;
       }
     }
     out->push_back(p);
   }
+}
+
+// The foot of the perpendicular from p to `line`.
+Vec2 Project(const Line2& line, const Vec2& p) {
+  return line.point + (p - line.point).dot(line.direction) * line.direction;
 }
 
 }  // namespace
@@ -63,7 +70,8 @@ std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
   size_t run_count = 0;
   const auto continues = [&](const Vec2& p, const Vec2& q) {
     if (!q.allFinite()) return false;
-    const double limit = params.max_gap_m + params.gap_per_range * std::max(p.norm(), q.norm());
+    const double range_m = params.gap_from_farther_point ? std::max(p.norm(), q.norm()) : q.norm();
+    const double limit = params.max_gap_m + params.gap_per_range * range_m;
     return (q - p).norm() <= limit;
   };
   for (size_t start = 0; start < points.size();) {
@@ -73,16 +81,17 @@ std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
     }
     size_t end = start;
     while (end + 1 < points.size() && continues(points[end], points[end + 1])) ++end;
-    Split(points, {start, end}, params.split_m, &pieces);
+    Split(points, {start, end}, params, &pieces);
     run_of.resize(pieces.size(), run_count);
     ++run_count;
     start = end + 1;
   }
 
-  // Step 3: merge neighbours of one run while the joined piece stays straight.
+  // Step 3: merge neighbours of one run while the joined piece stays straight
+  // (the pieces of a run tile it in order, sharing the break point or not).
   std::vector<Piece> merged;
   for (size_t i = 0; i < pieces.size(); ++i) {
-    if (!merged.empty() && run_of[i] == run_of[i - 1] && merged.back().last == pieces[i].first) {
+    if (params.merge_neighbours && !merged.empty() && run_of[i] == run_of[i - 1]) {
       const Piece joined{merged.back().first, pieces[i].last};
       if (FarthestFromChord(points, joined.first, joined.last).second <= params.split_m) {
         merged.back() = joined;
@@ -100,9 +109,12 @@ std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
     for (size_t i = p.first; i <= p.last; ++i) moments.Add(points[i]);
     const Line2 line = FitLine(moments);
     ExtractedLine out;
-    out.segment = ExtremeProjections(
-        line, std::vector<Vec2>(points.begin() + static_cast<std::ptrdiff_t>(p.first),
-                                points.begin() + static_cast<std::ptrdiff_t>(p.last) + 1));
+    out.segment =
+        params.clip_to_extremes
+            ? ExtremeProjections(
+                  line, std::vector<Vec2>(points.begin() + static_cast<std::ptrdiff_t>(p.first),
+                                          points.begin() + static_cast<std::ptrdiff_t>(p.last) + 1))
+            : Segment2{Project(line, points[p.first]), Project(line, points[p.last])};
     if (out.segment.length() < params.min_length_m) continue;
     out.first = p.first;
     out.last = p.last;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -132,6 +133,99 @@ TEST(SplitAndMergeTest, NoisyRoomFromAScanHasItsWalls) {
   }
   EXPECT_EQ(long_lines, 5u);
   EXPECT_LE(lines.size(), 7u);
+}
+
+// Variants (SplitAndMergeParams: the synthetic city's extractor flips all four).
+
+// A polyline through `corners`, n points per edge, each corner once.
+std::vector<Vec2> Polyline(const std::vector<Vec2>& corners, int n) {
+  std::vector<Vec2> out = {corners.front()};
+  for (size_t i = 1; i < corners.size(); ++i) {
+    const std::vector<Vec2> edge = Sample(corners[i - 1], corners[i], n + 1);
+    out.insert(out.end(), edge.begin() + 1, edge.end());
+  }
+  return out;
+}
+
+TEST(SplitAndMergeTest, SplitPointGoesToTheFirstPieceOnlyWhenAsked) {
+  const std::vector<Vec2> points = Polyline({{0, 0}, {3, 0}, {3, 2}}, 30);  // corner: index 30
+  SplitAndMergeParams params;
+  std::vector<ExtractedLine> lines = SplitAndMerge(points, params);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].last, 30u);
+  EXPECT_EQ(lines[1].first, 30u);  // the default: the corner is in both walls
+  params.split_point_in_both = false;
+  lines = SplitAndMerge(points, params);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].last, 30u);
+  EXPECT_EQ(lines[1].first, 31u);
+  EXPECT_LE(SegmentDistance(lines[0].segment, {{0, 0}, {3, 0}}), 1e-9);
+  // The second wall starts at its first own point, one beam past the corner.
+  EXPECT_LE(SegmentDistance(lines[1].segment, {{3, 2.0 / 30.0}, {3, 2}}), 1e-9);
+}
+
+TEST(SplitAndMergeTest, MergeRejoinsAWallTheSplitCutNeedlessly) {
+  // The whole run's chord makes (2, -0.01) the farthest point (12 cm), and the
+  // rest is cut again at (3, 0.05) (5.5 cm from its chord): three pieces. The
+  // first two joined stay within split_m (4.3 cm), so the merge makes them one,
+  // whether or not the pieces share their break point.
+  const std::vector<Vec2> points = Polyline({{0, 0}, {2, -0.01}, {3, 0.05}, {4, 0.22}}, 10);
+  using Pieces = std::vector<std::pair<size_t, size_t>>;  // first, last
+  const struct {
+    bool in_both;
+    bool merge;
+    Pieces expected;
+  } cases[] = {
+      {true, true, {{0, 20}, {20, 30}}},
+      {true, false, {{0, 10}, {10, 20}, {20, 30}}},
+      {false, true, {{0, 20}, {21, 30}}},
+      {false, false, {{0, 10}, {11, 20}, {21, 30}}},
+  };
+  for (const auto& c : cases) {
+    SplitAndMergeParams params;
+    params.split_m = 0.05;
+    params.split_point_in_both = c.in_both;
+    params.merge_neighbours = c.merge;
+    Pieces pieces;
+    for (const ExtractedLine& line : SplitAndMerge(points, params)) {
+      pieces.emplace_back(line.first, line.last);
+    }
+    EXPECT_EQ(pieces, c.expected) << "split_point_in_both " << c.in_both << ", merge " << c.merge;
+  }
+}
+
+TEST(SplitAndMergeTest, GapFromTheJoiningPointDependsOnScanDirection) {
+  // Two collinear pieces 2 m apart, 18 m and 16 m from the origin at the gap.
+  // Limit 0.3 + 0.1 r: 2.1 m with the farther point's range (bridged either
+  // way round), 1.9 m with the joining point's when the scan runs inwards.
+  std::vector<Vec2> inwards = Sample({20, 0}, {18, 0}, 21);
+  const std::vector<Vec2> near = Sample({16, 0}, {14, 0}, 21);
+  inwards.insert(inwards.end(), near.begin(), near.end());
+  const std::vector<Vec2> outwards(inwards.rbegin(), inwards.rend());
+  SplitAndMergeParams params;
+  params.max_gap_m = 0.3;
+  params.gap_per_range = 0.1;
+  EXPECT_EQ(SplitAndMerge(inwards, params).size(), 1u);
+  EXPECT_EQ(SplitAndMerge(outwards, params).size(), 1u);
+  params.gap_from_farther_point = false;
+  EXPECT_EQ(SplitAndMerge(inwards, params).size(), 2u);
+  EXPECT_EQ(SplitAndMerge(outwards, params).size(), 1u);
+}
+
+TEST(SplitAndMergeTest, EndsFromFirstAndLastPointWhenNotClipped) {
+  // A wall scanned from x = 3 to x = 0 whose second point overshoots to 3.05.
+  std::vector<Vec2> points = Sample({3, 0}, {0, 0}, 31);
+  points[1] = Vec2(3.05, 0);
+  SplitAndMergeParams params;
+  std::vector<ExtractedLine> lines = SplitAndMerge(points, params);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NEAR(lines[0].segment.length(), 3.05, 1e-9);  // the extremes: all the points
+  params.clip_to_extremes = false;
+  lines = SplitAndMerge(points, params);
+  ASSERT_EQ(lines.size(), 1u);
+  // The projections of the first and last point, in input order.
+  EXPECT_LE((lines[0].segment.a - Vec2(3, 0)).norm(), 1e-9);
+  EXPECT_LE((lines[0].segment.b - Vec2(0, 0)).norm(), 1e-9);
 }
 
 TEST(SplitAndMergeTest, EmptyAndTinyInputs) {

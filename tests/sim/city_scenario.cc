@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
-#include "sim/scan_lines.h"
+#include "geometry/split_and_merge.h"
 
 namespace mapd::fusion::scenario {
 
@@ -231,21 +232,25 @@ Scan ScanSimulator::Simulate(size_t index) const {
   scan.estimated_pose.t += Vec2(rng.Normal(params_.pose_sigma_xy_m), rng.Normal(params_.pose_sigma_xy_m));
   scan.estimated_pose.yaw_rad += rng.Normal(params_.pose_sigma_yaw_rad);
 
-  std::vector<Vec2> points(ranges.size(), Vec2::Zero());
-  std::vector<bool> valid(ranges.size(), false);
+  // Beam order; a beam without a return is NaN, which ends a run.
+  std::vector<Vec2> points(ranges.size(), Vec2::Constant(std::numeric_limits<double>::quiet_NaN()));
   for (size_t b = 0; b < ranges.size(); ++b) {
     if (!std::isfinite(ranges[b]) || ranges[b] <= 0.0) continue;
     const double ang = fan_.BeamAngle(static_cast<int>(b));
     points[b] = ranges[b] * Vec2(std::cos(ang), std::sin(ang));
-    valid[b] = true;
   }
-  ExtractionParams ep;
-  ep.split_m = params_.split_m;
-  ep.break_base_m = params_.break_base_m;
-  ep.break_factor = params_.break_factor;
-  ep.min_points = params_.min_points;
-  ep.min_length_m = params_.min_length_m;
-  const std::vector<ExtractedLine> lines = ExtractLines(points, valid, fan_.step_rad, ep);
+  geometry::SplitAndMergeParams sm;
+  sm.split_m = params_.split_m;
+  sm.min_points = static_cast<size_t>(params_.min_points);
+  sm.min_length_m = params_.min_length_m;
+  sm.max_gap_m = params_.break_base_m;
+  sm.gap_per_range = params_.break_factor * fan_.step_rad;
+  // The variant docs/fusion.md's figures were measured with (split_and_merge.h).
+  sm.split_point_in_both = false;
+  sm.merge_neighbours = false;
+  sm.gap_from_farther_point = false;
+  sm.clip_to_extremes = false;
+  const std::vector<geometry::ExtractedLine> lines = geometry::SplitAndMerge(points, sm);
   for (size_t k = 0; k < lines.size() && k < 1024; ++k) {
     GroundFeature f;
     f.id = (static_cast<FeatureId>(index) << 10) | k;
@@ -254,7 +259,7 @@ Scan ScanSimulator::Simulate(size_t index) const {
     f.z_max_m = 3.0;
     // Majority vote of the beams' hits.
     std::vector<int> votes;
-    for (int b = lines[k].first; b <= lines[k].last; ++b) votes.push_back(hits[static_cast<size_t>(b)]);
+    for (size_t b = lines[k].first; b <= lines[k].last; ++b) votes.push_back(hits[b]);
     std::sort(votes.begin(), votes.end());
     int best = -1;
     size_t best_n = 0;
