@@ -174,11 +174,11 @@ void RobotClient::ReaderLoop() {
       failing_since = now;
       if (got_ack) backoff = options_.initial_backoff;
     }
-    last_error_ = status.ok() ? grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                                             "the server ended the Ingest stream with " +
-                                                 std::to_string(pending_.size()) +
-                                                 " batches unacknowledged")
-                              : status;
+    last_error_ =
+        status.ok() ? grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                                   "the server ended the Ingest stream with " +
+                                       std::to_string(pending_.size()) + " batches unacknowledged")
+                    : status;
     const Clock::time_point give_up_at = *failing_since + options_.give_up_after;
     const bool refused = status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
                          status.error_code() == grpc::StatusCode::PERMISSION_DENIED;
@@ -208,7 +208,8 @@ void RobotClient::WaitForChannel(std::chrono::steady_clock::time_point deadline)
       std::lock_guard<std::mutex> lock(mu_);
       if (stopping_) return;
     }
-    const auto until = std::min(deadline, now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(kSlice));
+    const auto until = std::min(
+        deadline, now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(kSlice));
     channel_->WaitForStateChange(state, std::chrono::system_clock::now() + (until - now));
   }
 }
@@ -218,17 +219,22 @@ void RobotClient::HandleAck(const pb::IngestAck& ack) {
   auto it = order_of_.find(Key(ack.session_id(), ack.seq()));
   if (it == order_of_.end()) return;  // not pending (e.g. a resend's second answer)
   switch (ack.result()) {
-    case pb::IngestAck::STORED: ++counts_.stored; break;
-    case pb::IngestAck::DUPLICATE: ++counts_.duplicate; break;
+    case pb::IngestAck::STORED:
+      ++counts_.stored;
+      break;
+    case pb::IngestAck::DUPLICATE:
+      ++counts_.duplicate;
+      break;
     case pb::IngestAck::REJECTED:
       // UNAVAILABLE is the server draining: not a verdict on the batch. Keep it;
       // it is resent on the next stream.
       if (ack.code() == grpc::StatusCode::UNAVAILABLE) return;
       ++counts_.rejected;
-      rejections_.push_back({ack.session_id(), ack.seq(), static_cast<grpc::StatusCode>(ack.code()),
-                             ack.message()});
+      rejections_.push_back(
+          {ack.session_id(), ack.seq(), static_cast<grpc::StatusCode>(ack.code()), ack.message()});
       break;
-    default: return;  // RESULT_UNSPECIFIED: not final
+    default:
+      return;  // RESULT_UNSPECIFIED: not final
   }
   pending_.erase(it->second);
   order_of_.erase(it);

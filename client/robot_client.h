@@ -17,6 +17,8 @@
 #ifndef MAPD_CLIENT_ROBOT_CLIENT_H_
 #define MAPD_CLIENT_ROBOT_CLIENT_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -27,8 +29,6 @@
 #include <thread>
 #include <utility>
 #include <vector>
-
-#include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 
@@ -97,7 +97,8 @@ class RobotClient {
 
  private:
   using Key = std::pair<std::string, uint64_t>;  // (session_id, seq)
-  using Stream = grpc::ClientReaderWriter<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>;
+  using Stream =
+      grpc::ClientReaderWriter<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>;
 
   void ReaderLoop();
   // Opens a stream and writes every pending batch to it. REQUIRES: write_mu_ held.
@@ -126,13 +127,13 @@ class RobotClient {
   uint64_t next_order_ = 0;                                      // GUARDED_BY(mu_)
   IngestCounts counts_;                                          // GUARDED_BY(mu_)
   std::vector<Rejection> rejections_;                            // GUARDED_BY(mu_)
-  bool closing_ = false;  // Finish() called                     // GUARDED_BY(mu_)
-  bool stopping_ = false;  // destructor: stop at once            // GUARDED_BY(mu_)
-  bool gave_up_ = false;                                         // GUARDED_BY(mu_)
-  bool reader_done_ = false;                                     // GUARDED_BY(mu_)
-  grpc::Status last_error_;                                      // GUARDED_BY(mu_)
+  bool closing_ = false;      // Finish() called                     // GUARDED_BY(mu_)
+  bool stopping_ = false;     // destructor: stop at once            // GUARDED_BY(mu_)
+  bool gave_up_ = false;      // GUARDED_BY(mu_)
+  bool reader_done_ = false;  // GUARDED_BY(mu_)
+  grpc::Status last_error_;   // GUARDED_BY(mu_)
   // The current stream's context, for cancelling without write_mu_.
-  grpc::ClientContext* cancel_target_ = nullptr;                 // GUARDED_BY(mu_)
+  grpc::ClientContext* cancel_target_ = nullptr;  // GUARDED_BY(mu_)
 
   std::thread reader_;
 };

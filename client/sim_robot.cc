@@ -1,11 +1,10 @@
 #include "client/sim_robot.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
-
-#include <Eigen/Geometry>
 
 #include "geometry/split_and_merge.h"
 
@@ -37,10 +36,10 @@ SimWorld DefaultWorld() {
   wall(20, 12, 0, 12);
   wall(0, 12, 0, 0);
   // Interior wall stubs, outside the robot loop.
-  wall(7, 0, 7, 2);     // from the bottom wall
-  wall(13, 12, 13, 10); // from the top wall
-  wall(0, 6, 2.5, 6);   // from the left wall
-  wall(20, 4, 18, 4);   // from the right wall
+  wall(7, 0, 7, 2);      // from the bottom wall
+  wall(13, 12, 13, 10);  // from the top wall
+  wall(0, 6, 2.5, 6);    // from the left wall
+  wall(20, 4, 18, 4);    // from the right wall
   // A box in the middle of the loop.
   wall(9, 5.25, 11, 5.25);
   wall(11, 5.25, 11, 6.75);
@@ -88,7 +87,8 @@ std::vector<Segment2> ExtractSegments(const std::vector<double>& ranges, const L
 SimRobot::SimRobot(SimWorld world, SimRobotParams params)
     : world_(std::move(world)), params_(std::move(params)), rng_(params_.seed) {
   const size_t n = world_.loop.size();
-  for (size_t i = 0; i < n; ++i) loop_length_m_ += (world_.loop[(i + 1) % n] - world_.loop[i]).norm();
+  for (size_t i = 0; i < n; ++i)
+    loop_length_m_ += (world_.loop[(i + 1) % n] - world_.loop[i]).norm();
   double start = params_.start_fraction - std::floor(params_.start_fraction);
   travelled_m_ = start * loop_length_m_;
 }
@@ -122,7 +122,8 @@ pb::ObservationBatch SimRobot::NextBatch() {
   batch.set_robot_id(params_.robot_id);
   batch.set_session_id(params_.session_id);
   batch.set_seq(params_.first_seq + scans_);
-  batch.set_stamp_ns(params_.start_stamp_ns + static_cast<int64_t>(scans_) * params_.scan_period_ns);
+  batch.set_stamp_ns(params_.start_stamp_ns +
+                     static_cast<int64_t>(scans_) * params_.scan_period_ns);
   batch.set_session_frame(pb::SESSION_FRAME_MAP);
   pb::Rigid3* T_frame_sensor = batch.mutable_t_frame_sensor();
   const Eigen::Quaterniond q(Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()));

@@ -43,9 +43,9 @@ struct LaserParams {
 };
 
 struct ExtractionParams {
-  int min_points = 5;              // per segment
-  double split_threshold_m = 0.05; // max point-to-chord distance before splitting
-  double min_length_m = 0.3;       // shorter segments are dropped
+  int min_points = 5;               // per segment
+  double split_threshold_m = 0.05;  // max point-to-chord distance before splitting
+  double min_length_m = 0.3;        // shorter segments are dropped
   // Consecutive points further apart than min_gap_m + gap_factor * range *
   // beam spacing start a new run (doorways, occlusion edges).
   double min_gap_m = 0.2;

@@ -14,8 +14,8 @@
 namespace mapd::client {
 
 struct LoadedVoxels {
-  double resolution_m = 0;          // voxel edge
-  std::vector<Point3> centres_m;    // occupied voxels at the finest resolution, file frame
+  double resolution_m = 0;        // voxel edge
+  std::vector<Point3> centres_m;  // occupied voxels at the finest resolution, file frame
 };
 
 // InvalidArgument for a malformed file, ResourceExhausted beyond the reader's

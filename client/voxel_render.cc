@@ -16,7 +16,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // exactly on a pixel edge covers one pixel, not two.
 constexpr double kEdgeEps = 1e-6;
 
-bool IsFinite(const Point3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool IsFinite(const Point3& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 
 // Darkest shade at the lowest voxel: floors stay visible but walls stand out.
 constexpr double kMinBrightness = 0.35;
@@ -31,19 +33,23 @@ Rgb Shade(Rgb c, double brightness) {
 
 Rgb LayerColour(size_t index) {
   // Colour-blind friendly first (Okabe-Ito), saturated enough to shade.
-  static const Rgb kColours[] = {{213, 94, 0},   {0, 114, 178},  {0, 158, 115}, {204, 121, 167},
-                                 {230, 159, 0},  {86, 180, 233}, {120, 60, 200}, {160, 160, 40}};
+  static const Rgb kColours[] = {{213, 94, 0},  {0, 114, 178},  {0, 158, 115},  {204, 121, 167},
+                                 {230, 159, 0}, {86, 180, 233}, {120, 60, 200}, {160, 160, 40}};
   return kColours[index % (sizeof(kColours) / sizeof(kColours[0]))];
 }
 
 Status RenderOptions::Validate() const {
-  if (!std::isfinite(pixel_m) || pixel_m < 0) return Status::InvalidArgument("pixel_m must be finite and >= 0 metres");
-  if (max_map_px < 16 || max_map_px > 16384) return Status::InvalidArgument("max_map_px must be in [16, 16384]");
+  if (!std::isfinite(pixel_m) || pixel_m < 0)
+    return Status::InvalidArgument("pixel_m must be finite and >= 0 metres");
+  if (max_map_px < 16 || max_map_px > 16384)
+    return Status::InvalidArgument("max_map_px must be in [16, 16384]");
   if (min_map_px < 1 || min_map_px > max_map_px) {
     return Status::InvalidArgument("min_map_px must be in [1, max_map_px]");
   }
-  if (margin_px < 0 || margin_px > 1000) return Status::InvalidArgument("margin_px must be in [0, 1000]");
-  if (text_scale < 1 || text_scale > 8) return Status::InvalidArgument("text_scale must be in [1, 8]");
+  if (margin_px < 0 || margin_px > 1000)
+    return Status::InvalidArgument("margin_px must be in [0, 1000]");
+  if (text_scale < 1 || text_scale > 8)
+    return Status::InvalidArgument("text_scale must be in [1, 8]");
   return Status::Ok();
 }
 
@@ -52,7 +58,8 @@ void TopView::MetresToPixel(double x, double y, int* col, int* row) const {
   *row = static_cast<int>(std::floor((y_max_m - y) / pixel_m));
 }
 
-StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const RenderOptions& options) {
+StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
+                                const RenderOptions& options) {
   MAPD_RETURN_IF_ERROR(options.Validate());
   if (layers.empty()) return Status::InvalidArgument("layers is empty: nothing to render");
 
@@ -63,7 +70,8 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const Ren
   for (size_t i = 0; i < layers.size(); ++i) {
     const VoxelLayer& layer = layers[i];
     if (!std::isfinite(layer.resolution_m) || layer.resolution_m <= 0) {
-      return Status::InvalidArgument("layers[" + std::to_string(i) + "].resolution_m must be finite and > 0");
+      return Status::InvalidArgument("layers[" + std::to_string(i) +
+                                     "].resolution_m must be finite and > 0");
     }
     const double half = layer.resolution_m / 2;
     points[i].reserve(layer.centres_m.size());
@@ -80,7 +88,8 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const Ren
     }
     if (!layer.centres_m.empty()) finest = std::min(finest, layer.resolution_m);
   }
-  if (!(x_min <= x_max)) return Status::InvalidArgument("no occupied voxel in any layer: nothing to render");
+  if (!(x_min <= x_max))
+    return Status::InvalidArgument("no occupied voxel in any layer: nothing to render");
 
   TopView view;
   const double extent = std::max(x_max - x_min, y_max - y_min);
@@ -89,8 +98,10 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const Ren
   view.pixel_m = std::max(pixel_m, extent / options.max_map_px);
   view.x_min_m = x_min;
   view.y_max_m = y_max;
-  const int width = std::max(1, static_cast<int>(std::ceil((x_max - x_min) / view.pixel_m - kEdgeEps)));
-  const int height = std::max(1, static_cast<int>(std::ceil((y_max - y_min) / view.pixel_m - kEdgeEps)));
+  const int width =
+      std::max(1, static_cast<int>(std::ceil((x_max - x_min) / view.pixel_m - kEdgeEps)));
+  const int height =
+      std::max(1, static_cast<int>(std::ceil((y_max - y_min) / view.pixel_m - kEdgeEps)));
   view.x_max_m = x_min + width * view.pixel_m;
   view.y_min_m = y_max - height * view.pixel_m;
   // Shading range: the 1st to 99th percentile of the heights, so that a few
@@ -124,12 +135,15 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const Ren
       // is drawn as its axis-aligned square, which keeps rotated walls closed.
       const double cx = (p.x - x_min) / view.pixel_m, cy = (y_max - p.y) / view.pixel_m;
       const int c0 = std::max(0, static_cast<int>(std::floor(cx - half_px + kEdgeEps)));
-      const int c1 = std::min(width - 1, std::max(c0, static_cast<int>(std::ceil(cx + half_px - kEdgeEps)) - 1));
+      const int c1 = std::min(
+          width - 1, std::max(c0, static_cast<int>(std::ceil(cx + half_px - kEdgeEps)) - 1));
       const int r0 = std::max(0, static_cast<int>(std::floor(cy - half_px + kEdgeEps)));
-      const int r1 = std::min(height - 1, std::max(r0, static_cast<int>(std::ceil(cy + half_px - kEdgeEps)) - 1));
+      const int r1 = std::min(
+          height - 1, std::max(r0, static_cast<int>(std::ceil(cy + half_px - kEdgeEps)) - 1));
       for (int r = r0; r <= r1; ++r) {
         for (int c = c0; c <= c1; ++c) {
-          float& z = top[i][static_cast<size_t>(r) * static_cast<size_t>(width) + static_cast<size_t>(c)];
+          float& z =
+              top[i][static_cast<size_t>(r) * static_cast<size_t>(width) + static_cast<size_t>(c)];
           z = std::max(z, static_cast<float>(p.z));
         }
       }
@@ -141,19 +155,23 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers, const Ren
   const double z_range = z_max - z_min;
   for (int r = 0; r < height; ++r) {
     for (int c = 0; c < width; ++c) {
-      const size_t at = static_cast<size_t>(r) * static_cast<size_t>(width) + static_cast<size_t>(c);
+      const size_t at =
+          static_cast<size_t>(r) * static_cast<size_t>(width) + static_cast<size_t>(c);
       double sum[3] = {0, 0, 0};
       int n = 0;
       for (size_t i = 0; i < layers.size(); ++i) {
         if (top[i].empty() || !std::isfinite(top[i][at])) continue;
         const double h = z_range > 0 ? (top[i][at] - z_min) / z_range : 1.0;
-        const Rgb s = Shade(layers[i].colour, kMinBrightness + (1 - kMinBrightness) * std::clamp(h, 0.0, 1.0));
+        const Rgb s = Shade(layers[i].colour,
+                            kMinBrightness + (1 - kMinBrightness) * std::clamp(h, 0.0, 1.0));
         sum[0] += s.r, sum[1] += s.g, sum[2] += s.b;
         ++n;
       }
       if (n == 0) continue;
-      view.map.Set(c, r, {static_cast<uint8_t>(std::lround(sum[0] / n)), static_cast<uint8_t>(std::lround(sum[1] / n)),
-                          static_cast<uint8_t>(std::lround(sum[2] / n))});
+      view.map.Set(c, r,
+                   {static_cast<uint8_t>(std::lround(sum[0] / n)),
+                    static_cast<uint8_t>(std::lround(sum[1] / n)),
+                    static_cast<uint8_t>(std::lround(sum[2] / n))});
     }
   }
   return view;
@@ -163,7 +181,8 @@ double ScaleBarLengthM(double width_m) {
   const double limit = 0.4 * width_m;
   if (!(limit > 0) || !std::isfinite(limit)) return 0;
   double best = 0;
-  for (double decade = std::pow(10.0, std::floor(std::log10(limit)) - 1); decade <= limit * 1.0001; decade *= 10) {
+  for (double decade = std::pow(10.0, std::floor(std::log10(limit)) - 1); decade <= limit * 1.0001;
+       decade *= 10) {
     for (double m : {1.0, 2.0, 5.0}) {
       if (decade * m <= limit * (1 + 1e-9)) best = std::max(best, decade * m);
     }
@@ -176,9 +195,12 @@ bool ImageFormatFromPath(const std::string& path, ImageFormat* format) {
   if (dot == std::string::npos) return false;
   std::string ext = path.substr(dot + 1);
   for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (ext == "png") *format = ImageFormat::kPng;
-  else if (ext == "svg") *format = ImageFormat::kSvg;
-  else return false;
+  if (ext == "png")
+    *format = ImageFormat::kPng;
+  else if (ext == "svg")
+    *format = ImageFormat::kSvg;
+  else
+    return false;
   return true;
 }
 

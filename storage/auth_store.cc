@@ -32,10 +32,13 @@ StatusOr<int64_t> WriteTransaction::InsertToken(const TokenRecord& t) {
   exists->Bind(1, t.name);
   StatusOr<bool> found = exists->Step();
   if (!found.ok()) return found.status();
-  if (*found) return Status::AlreadyExists("a token named '" + t.name + "' exists already (names are never reused)");
+  if (*found)
+    return Status::AlreadyExists("a token named '" + t.name +
+                                 "' exists already (names are never reused)");
   StatusOr<Statement> q = Statement::Prepare(
-      w, "INSERT INTO tokens (name, role, robot_id, secret_sha256, created_ns, created_by) "
-         "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+      w,
+      "INSERT INTO tokens (name, role, robot_id, secret_sha256, created_ns, created_by) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
   if (!q.ok()) return q.status();
   q->Bind(1, t.name).Bind(2, t.role).Bind(3, t.robot_id);
   q->BindBlob(4, t.secret_sha256.data(), t.secret_sha256.size());
@@ -46,13 +49,15 @@ StatusOr<int64_t> WriteTransaction::InsertToken(const TokenRecord& t) {
 
 Status WriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
   sqlite3* w = store_->writer_.get();
-  StatusOr<Statement> q = Statement::Prepare(w, "SELECT coalesce(revoked_ns, 0) FROM tokens WHERE id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(w, "SELECT coalesce(revoked_ns, 0) FROM tokens WHERE id = ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, id);
   StatusOr<bool> row = q->Step();
   if (!row.ok()) return row.status();
   if (!*row) return Status::NotFound("no token with id " + std::to_string(id));
-  if (q->ColumnInt(0) != 0) return Status::FailedPrecondition("token " + std::to_string(id) + " is revoked already");
+  if (q->ColumnInt(0) != 0)
+    return Status::FailedPrecondition("token " + std::to_string(id) + " is revoked already");
   StatusOr<Statement> u = Statement::Prepare(w, "UPDATE tokens SET revoked_ns = ?2 WHERE id = ?1");
   if (!u.ok()) return u.status();
   u->Bind(1, id).Bind(2, now_ns);
@@ -60,17 +65,23 @@ Status WriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
 }
 
 Status WriteTransaction::AppendAudit(const AuditEntry& e) {
-  StatusOr<Statement> q = Statement::Prepare(
-      store_->writer_.get(),
-      "INSERT INTO audit_log (time_ns, who, role, action, target, result) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(),
+                                             "INSERT INTO audit_log (time_ns, who, role, action, "
+                                             "target, result) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
   if (!q.ok()) return q.status();
-  q->Bind(1, e.time_ns).Bind(2, e.who).Bind(3, e.role).Bind(4, e.action).Bind(5, e.target).Bind(6, e.result);
+  q->Bind(1, e.time_ns)
+      .Bind(2, e.who)
+      .Bind(3, e.role)
+      .Bind(4, e.action)
+      .Bind(5, e.target)
+      .Bind(6, e.result);
   return q->Run();
 }
 
 StatusOr<TokenRecord> Store::GetToken(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "WHERE id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "WHERE id = ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, id);
   StatusOr<bool> row = q->Step();
@@ -81,7 +92,8 @@ StatusOr<TokenRecord> Store::GetToken(int64_t id) {
 
 StatusOr<std::vector<TokenRecord>> Store::ListTokens() {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "ORDER BY id");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "ORDER BY id");
   if (!q.ok()) return q.status();
   std::vector<TokenRecord> out;
   for (;;) {
@@ -103,8 +115,9 @@ StatusOr<bool> Store::AnyTokenEver() {
 
 StatusOr<std::vector<AuditEntry>> Store::ListAudit(int limit) {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), "SELECT id, time_ns, who, role, action, target, result FROM audit_log ORDER BY id DESC LIMIT ?1");
+  StatusOr<Statement> q = Statement::Prepare(reader_.get(),
+                                             "SELECT id, time_ns, who, role, action, target, "
+                                             "result FROM audit_log ORDER BY id DESC LIMIT ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(limit));
   std::vector<AuditEntry> out;

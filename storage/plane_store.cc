@@ -52,7 +52,8 @@ Status WriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
 }
 
 Status WriteTransaction::DeleteFusedPlane(uint64_t id) {
-  StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(), "DELETE FROM fused_planes WHERE id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(store_->writer_.get(), "DELETE FROM fused_planes WHERE id = ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(id));
   return q->Run();

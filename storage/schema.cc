@@ -168,7 +168,8 @@ const std::vector<const char*>& Migrations() {
 }
 
 StatusOr<int> ReadVersion(sqlite3* db) {
-  MAPD_RETURN_IF_ERROR(Exec(db, "CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)"));
+  MAPD_RETURN_IF_ERROR(
+      Exec(db, "CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)"));
   StatusOr<Statement> q = Statement::Prepare(db, "SELECT max(version) FROM schema_version");
   if (!q.ok()) return q.status();
   StatusOr<bool> row = q->Step();
@@ -183,28 +184,32 @@ int CurrentSchemaVersion() { return static_cast<int>(Migrations().size()); }
 Status ClaimDatabase(sqlite3* db, const std::string& path) {
   // SQLite opens a file it cannot write read-only without a word.
   if (sqlite3_db_readonly(db, "main") == 1) {
-    return Status::FailedPrecondition("database '" + path +
-                                      "' is read-only (file or directory permissions, or a read-only mount); "
-                                      "mapd must be able to write it");
+    return Status::FailedPrecondition(
+        "database '" + path +
+        "' is read-only (file or directory permissions, or a read-only mount); "
+        "mapd must be able to write it");
   }
   StatusOr<Statement> id_query = Statement::Prepare(db, "PRAGMA application_id");
   if (!id_query.ok()) return id_query.status();
   StatusOr<bool> id_row = id_query->Step();
   if (!id_row.ok()) {
-    return Status::FailedPrecondition("cannot read '" + path + "' as an SQLite database: " +
-                                      id_row.status().message());
+    return Status::FailedPrecondition("cannot read '" + path +
+                                      "' as an SQLite database: " + id_row.status().message());
   }
   const int32_t id = *id_row ? static_cast<int32_t>(id_query->ColumnInt(0)) : 0;
   id_query = Status::Ok();  // finalize
   if (id != 0 && id != kApplicationId) {
     char hex[16];
     std::snprintf(hex, sizeof hex, "0x%08x", static_cast<uint32_t>(id));
-    return Status::FailedPrecondition("'" + path + "' is not a mapd database (its application_id is " + hex +
+    return Status::FailedPrecondition("'" + path +
+                                      "' is not a mapd database (its application_id is " + hex +
                                       ", another application's); give mapd a --db of its own");
   }
   if (id == 0) {
-    StatusOr<Statement> tables = Statement::Prepare(
-        db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' ORDER BY name");
+    StatusOr<Statement> tables =
+        Statement::Prepare(db,
+                           "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE "
+                           "'sqlite_%' ORDER BY name");
     if (!tables.ok()) return tables.status();
     std::vector<std::string> names;
     bool mapd_tables = false;
@@ -221,8 +226,9 @@ Status ClaimDatabase(sqlite3* db, const std::string& path) {
       std::string list;
       for (size_t i = 0; i < names.size() && i < 5; ++i) list += (i ? ", " : "") + names[i];
       if (names.size() > 5) list += ", ...";
-      return Status::FailedPrecondition("'" + path + "' holds tables of another application (" + list +
-                                        ") and is not a mapd database; give mapd a --db of its own");
+      return Status::FailedPrecondition(
+          "'" + path + "' holds tables of another application (" + list +
+          ") and is not a mapd database; give mapd a --db of its own");
     }
   }
   // A new database gives freed pages back to the file system (raw retention,
@@ -235,9 +241,11 @@ Status ClaimDatabase(sqlite3* db, const std::string& path) {
   if (!stamp.ok()) {
     const int code = sqlite3_extended_errcode(db) & 0xff;
     if (code == SQLITE_READONLY || code == SQLITE_CANTOPEN || code == SQLITE_PERM) {
-      return Status::FailedPrecondition("database '" + path +
-                                        "' is read-only (file or directory permissions, or a read-only "
-                                        "mount); mapd must be able to write it: " + stamp.message());
+      return Status::FailedPrecondition(
+          "database '" + path +
+          "' is read-only (file or directory permissions, or a read-only "
+          "mount); mapd must be able to write it: " +
+          stamp.message());
     }
     return Status(stamp.code(), "cannot write database '" + path + "': " + stamp.message());
   }
@@ -260,8 +268,8 @@ Status Migrate(sqlite3* db) {
     }
     if (!s.ok()) {
       (void)Exec(db, "ROLLBACK");
-      return Status(s.code(), "migrating schema to version " + std::to_string(v + 1) + ": " +
-                                  s.message());
+      return Status(s.code(),
+                    "migrating schema to version " + std::to_string(v + 1) + ": " + s.message());
     }
     MAPD_RETURN_IF_ERROR(Exec(db, "COMMIT"));
   }

@@ -64,8 +64,8 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
                                       mode->ColumnText(0) + "); is it on a network file system?");
   }
   mode = Status::Ok();  // finalize before further statements
-  MAPD_RETURN_IF_ERROR(Exec(w, options.synchronous_full ? "PRAGMA synchronous=FULL"
-                                                        : "PRAGMA synchronous=NORMAL"));
+  MAPD_RETURN_IF_ERROR(
+      Exec(w, options.synchronous_full ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL"));
   // 16 MiB of page cache: inserts touch the tails of the tables and one
   // index leaf per session, and RSS should not grow with the database file.
   MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA cache_size=-16384; PRAGMA temp_store=MEMORY"));
@@ -75,7 +75,8 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
     if (!page.ok()) return page.status();
     StatusOr<bool> page_row = page->Step();
     if (!page_row.ok()) return page_row.status();
-    const uint64_t pages = std::max<uint64_t>(1, options.max_db_bytes / static_cast<uint64_t>(page->ColumnInt(0)));
+    const uint64_t pages =
+        std::max<uint64_t>(1, options.max_db_bytes / static_cast<uint64_t>(page->ColumnInt(0)));
     page = Status::Ok();
     MAPD_RETURN_IF_ERROR(Exec(w, "PRAGMA max_page_count = " + std::to_string(pages)));
   }
@@ -97,27 +98,32 @@ Status Store::Prepare() {
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "BEGIN IMMEDIATE", &begin_));
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "COMMIT", &commit_));
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "ROLLBACK", &rollback_));
+  MAPD_RETURN_IF_ERROR(
+      PrepareInto(w, "INSERT INTO robots (name, first_seen_ns, last_seen_ns) VALUES (?1, ?2, ?2)",
+                  &insert_robot_));
+  MAPD_RETURN_IF_ERROR(PrepareInto(w,
+                                   "INSERT INTO sessions (robot_id, name, created_ns, frame_kind, "
+                                   "tied, qw, qx, qy, qz, tx, ty, tz) "
+                                   "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+                                   &insert_session_));
+  MAPD_RETURN_IF_ERROR(
+      PrepareInto(w,
+                  "INSERT OR IGNORE INTO observations (session_id, seq, stamp_ns, received_ns, "
+                  "qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload) "
+                  "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+                  &insert_obs_));
+  MAPD_RETURN_IF_ERROR(
+      PrepareInto(w, "SELECT id FROM observations WHERE session_id = ?1 AND seq = ?2", &find_obs_));
+  MAPD_RETURN_IF_ERROR(
+      PrepareInto(w,
+                  "UPDATE robots SET batches = batches + ?2, features = features + ?3, "
+                  "last_seen_ns = max(last_seen_ns, ?4) WHERE id = ?1",
+                  &update_robot_));
   MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "INSERT INTO robots (name, first_seen_ns, last_seen_ns) VALUES (?1, ?2, ?2)",
-      &insert_robot_));
-  MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "INSERT INTO sessions (robot_id, name, created_ns, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz) "
-         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
-      &insert_session_));
-  MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "INSERT OR IGNORE INTO observations (session_id, seq, stamp_ns, received_ns, "
-         "qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload) "
-         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
-      &insert_obs_));
-  MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "SELECT id FROM observations WHERE session_id = ?1 AND seq = ?2", &find_obs_));
-  MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "UPDATE robots SET batches = batches + ?2, features = features + ?3, "
-         "last_seen_ns = max(last_seen_ns, ?4) WHERE id = ?1",
-      &update_robot_));
-  MAPD_RETURN_IF_ERROR(PrepareInto(
-      w, "INSERT OR REPLACE INTO fused_features (id, kind, ax, ay, bx, by, z_min, z_max, support, "
-         "member_count, robots, updated_ns) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+      w,
+      "INSERT OR REPLACE INTO fused_features (id, kind, ax, ay, bx, by, z_min, z_max, support, "
+      "member_count, robots, updated_ns) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, "
+      "?12)",
       &upsert_fused_));
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "DELETE FROM fused_features WHERE id = ?1", &delete_fused_));
 
@@ -131,9 +137,10 @@ Status Store::Prepare() {
     robot_ids_[robots->ColumnText(1)] = robots->ColumnInt(0);
     robot_names_[robots->ColumnInt(0)] = robots->ColumnText(1);
   }
-  StatusOr<Statement> sessions = Statement::Prepare(
-      w, "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz, "
-         "tied_through_observation, tie_seq FROM sessions");
+  StatusOr<Statement> sessions =
+      Statement::Prepare(w,
+                         "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz, "
+                         "tied_through_observation, tie_seq FROM sessions");
   if (!sessions.ok()) return sessions.status();
   for (;;) {
     StatusOr<bool> row = sessions->Step();
@@ -169,12 +176,14 @@ Status Store::ProbeWrite() {
   // freed, or on its last blocks) and fail the next batch again: writes are
   // declared possible only with real room left.
   struct statvfs fs {};
-  const std::string dir = path_.find('/') == std::string::npos ? "." : path_.substr(0, path_.rfind('/') + 1);
+  const std::string dir =
+      path_.find('/') == std::string::npos ? "." : path_.substr(0, path_.rfind('/') + 1);
   if (statvfs(dir.c_str(), &fs) == 0) {
     const uint64_t free_bytes = static_cast<uint64_t>(fs.f_bavail) * fs.f_frsize;
     if (free_bytes < kProbeFreeBytes) {
-      return Status::ResourceExhausted("the file system of the database has " + std::to_string(free_bytes >> 10) +
-                                       " KiB free (disk full; " + std::to_string(kProbeFreeBytes >> 20) +
+      return Status::ResourceExhausted("the file system of the database has " +
+                                       std::to_string(free_bytes >> 10) + " KiB free (disk full; " +
+                                       std::to_string(kProbeFreeBytes >> 20) +
                                        " MiB needed to resume)");
     }
   }
@@ -239,7 +248,8 @@ StatusOr<InsertResult> WriteTransaction::InsertObservation(const NewObservation&
   if (frame->kind != obs.frame_kind) {
     return Status::InvalidArgument(
         "session_frame disagrees with session '" + obs.session + "' of robot '" + obs.robot +
-        "', which was opened with " + (frame->kind == FrameKind::kMap ? "SESSION_FRAME_MAP" : "SESSION_FRAME_LOCAL") +
+        "', which was opened with " +
+        (frame->kind == FrameKind::kMap ? "SESSION_FRAME_MAP" : "SESSION_FRAME_LOCAL") +
         "; start a new session_id to change it");
   }
   InsertResult result;
@@ -278,7 +288,10 @@ StatusOr<InsertResult> WriteTransaction::InsertObservation(const NewObservation&
 Status WriteTransaction::UpsertFused(const FusedRow& r) {
   Statement& s = store_->upsert_fused_;
   s.Bind(1, static_cast<int64_t>(r.id)).Bind(2, static_cast<int64_t>(r.kind));
-  s.Bind(3, r.segment.a.x()).Bind(4, r.segment.a.y()).Bind(5, r.segment.b.x()).Bind(6, r.segment.b.y());
+  s.Bind(3, r.segment.a.x())
+      .Bind(4, r.segment.a.y())
+      .Bind(5, r.segment.b.x())
+      .Bind(6, r.segment.b.y());
   s.Bind(7, r.z_min_m).Bind(8, r.z_max_m);
   s.Bind(9, static_cast<int64_t>(r.support)).Bind(10, static_cast<int64_t>(r.member_count));
   s.Bind(11, r.robots).Bind(12, static_cast<int64_t>(0));
@@ -331,13 +344,14 @@ StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before
   // replayed from), only of sessions whose tie those snapshots reflect, and
   // never the newest row (ids must keep growing: SQLite reuses max(id) + 1).
   StatusOr<Statement> q = Statement::Prepare(
-      w, "DELETE FROM observations WHERE id IN ("
-         " SELECT o.id FROM observations o JOIN sessions s ON s.id = o.session_id,"
-         "  (SELECT min(through_observation) AS through, min(through_tie_seq) AS tie_seq,"
-         "          count(*) AS n FROM fusion_snapshots) AS snap"
-         " WHERE snap.n > 0 AND o.id <= snap.through AND s.tied = 1 AND s.tie_seq <= snap.tie_seq"
-         "  AND o.received_ns < ?1 AND o.id < (SELECT max(id) FROM observations)"
-         " ORDER BY o.id LIMIT ?2)");
+      w,
+      "DELETE FROM observations WHERE id IN ("
+      " SELECT o.id FROM observations o JOIN sessions s ON s.id = o.session_id,"
+      "  (SELECT min(through_observation) AS through, min(through_tie_seq) AS tie_seq,"
+      "          count(*) AS n FROM fusion_snapshots) AS snap"
+      " WHERE snap.n > 0 AND o.id <= snap.through AND s.tied = 1 AND s.tie_seq <= snap.tie_seq"
+      "  AND o.received_ns < ?1 AND o.id < (SELECT max(id) FROM observations)"
+      " ORDER BY o.id LIMIT ?2)");
   if (!q.ok()) return q.status();
   q->Bind(1, received_before_ns).Bind(2, static_cast<int64_t>(limit));
   MAPD_RETURN_IF_ERROR(q->Run());
@@ -349,17 +363,21 @@ StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before
 Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
-      w, "INSERT INTO fusion_snapshots (created_ns, map_version, through_observation, "
-         "through_tie_seq, params, state, plane_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+      w,
+      "INSERT INTO fusion_snapshots (created_ns, map_version, through_observation, "
+      "through_tie_seq, params, state, plane_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   if (!q.ok()) return q.status();
   q->Bind(1, snapshot.created_ns).Bind(2, static_cast<int64_t>(snapshot.map_version));
   q->Bind(3, snapshot.through_observation).Bind(4, snapshot.through_tie_seq);
-  q->Bind(5, std::string_view(snapshot.params)).BindBlob(6, snapshot.state.data(), snapshot.state.size());
-  if (snapshot.has_plane_state) q->BindBlob(7, snapshot.plane_state.data(), snapshot.plane_state.size());
+  q->Bind(5, std::string_view(snapshot.params))
+      .BindBlob(6, snapshot.state.data(), snapshot.state.size());
+  if (snapshot.has_plane_state)
+    q->BindBlob(7, snapshot.plane_state.data(), snapshot.plane_state.size());
   MAPD_RETURN_IF_ERROR(q->Run());
-  StatusOr<Statement> prune = Statement::Prepare(
-      w, "DELETE FROM fusion_snapshots WHERE id NOT IN "
-         "(SELECT id FROM fusion_snapshots ORDER BY id DESC LIMIT ?1)");
+  StatusOr<Statement> prune =
+      Statement::Prepare(w,
+                         "DELETE FROM fusion_snapshots WHERE id NOT IN "
+                         "(SELECT id FROM fusion_snapshots ORDER BY id DESC LIMIT ?1)");
   if (!prune.ok()) return prune.status();
   prune->Bind(1, static_cast<int64_t>(keep));
   return prune->Run();
@@ -379,16 +397,19 @@ StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
       session_id = it->second.session_id;
     } else {
       std::lock_guard<std::mutex> lock(store_->cache_mu_);
-      if (auto c = store_->sessions_.find(key); c != store_->sessions_.end()) session_id = c->second.session_id;
+      if (auto c = store_->sessions_.find(key); c != store_->sessions_.end())
+        session_id = c->second.session_id;
     }
     if (session_id == 0) {
-      return Status::FailedPrecondition("session '" + submap.session + "' of robot '" + m.robot +
-                                        "' is unknown: stream at least one batch in it before uploading "
-                                        "a submap built in its frame, or leave session_id empty");
+      return Status::FailedPrecondition(
+          "session '" + submap.session + "' of robot '" + m.robot +
+          "' is unknown: stream at least one batch in it before uploading "
+          "a submap built in its frame, or leave session_id empty");
     }
   }
   sqlite3* w = store_->writer_.get();
-  StatusOr<Statement> exists = Statement::Prepare(w, "SELECT id FROM submaps WHERE robot_id = ?1 AND name = ?2");
+  StatusOr<Statement> exists =
+      Statement::Prepare(w, "SELECT id FROM submaps WHERE robot_id = ?1 AND name = ?2");
   if (!exists.ok()) return exists.status();
   exists->Bind(1, *robot_id).Bind(2, m.name);
   StatusOr<bool> found = exists->Step();
@@ -399,9 +420,10 @@ StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
                                  "); choose another name or delete that one first");
   }
   StatusOr<Statement> q = Statement::Prepare(
-      w, "INSERT INTO submaps (robot_id, session_id, name, format, resolution, occupied, free, "
-         "min_x, min_y, min_z, max_x, max_y, max_z, created_ns, data) "
-         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
+      w,
+      "INSERT INTO submaps (robot_id, session_id, name, format, resolution, occupied, free, "
+      "min_x, min_y, min_z, max_x, max_y, max_z, created_ns, data) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)");
   if (!q.ok()) return q.status();
   q->Bind(1, *robot_id);
   if (session_id != 0) q->Bind(2, session_id);  // else NULL
@@ -420,17 +442,18 @@ StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
 Status WriteTransaction::DeleteSubmap(int64_t id) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> pinned = Statement::Prepare(
-      w, "SELECT m.id FROM merges m WHERE m.status = 'accepted' AND (m.merged_submap_id = ?1 OR "
-         "EXISTS (SELECT 1 FROM merge_inputs i WHERE i.merge_id = m.id AND i.submap_id = ?1)) "
-         "ORDER BY m.id LIMIT 1");
+      w,
+      "SELECT m.id FROM merges m WHERE m.status = 'accepted' AND (m.merged_submap_id = ?1 OR "
+      "EXISTS (SELECT 1 FROM merge_inputs i WHERE i.merge_id = m.id AND i.submap_id = ?1)) "
+      "ORDER BY m.id LIMIT 1");
   if (!pinned.ok()) return pinned.status();
   pinned->Bind(1, id);
   StatusOr<bool> row = pinned->Step();
   if (!row.ok()) return row.status();
   if (*row) {
-    return Status::FailedPrecondition("submap " + std::to_string(id) + " belongs to accepted merge " +
-                                      std::to_string(pinned->ColumnInt(0)) +
-                                      " (as an input or its result) and is kept with it");
+    return Status::FailedPrecondition(
+        "submap " + std::to_string(id) + " belongs to accepted merge " +
+        std::to_string(pinned->ColumnInt(0)) + " (as an input or its result) and is kept with it");
   }
   StatusOr<Statement> del = Statement::Prepare(w, "DELETE FROM submaps WHERE id = ?1");
   if (!del.ok()) return del.status();
@@ -443,23 +466,29 @@ Status WriteTransaction::DeleteSubmap(int64_t id) {
 StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   const MergeRecord& r = merge.record;
   sqlite3* w = store_->writer_.get();
-  StatusOr<Statement> q = Statement::Prepare(
-      w, "INSERT INTO merges (created_ns, status, reason, merged_submap_id) VALUES (?1, ?2, ?3, NULL)");
+  StatusOr<Statement> q = Statement::Prepare(w,
+                                             "INSERT INTO merges (created_ns, status, reason, "
+                                             "merged_submap_id) VALUES (?1, ?2, ?3, NULL)");
   if (!q.ok()) return q.status();
-  q->Bind(1, r.created_ns).Bind(2, std::string_view(r.accepted ? "accepted" : "refused")).Bind(3, r.reason);
+  q->Bind(1, r.created_ns)
+      .Bind(2, std::string_view(r.accepted ? "accepted" : "refused"))
+      .Bind(3, r.reason);
   MAPD_RETURN_IF_ERROR(q->Run());
   MergeIds ids;
   ids.merge_id = sqlite3_last_insert_rowid(w);
 
   StatusOr<Statement> in = Statement::Prepare(
-      w, "INSERT INTO merge_inputs (merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, matched_corners, "
-         "residual_m, overlap_score) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
+      w,
+      "INSERT INTO merge_inputs (merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, matched_corners, "
+      "residual_m, overlap_score) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
   if (!in.ok()) return in.status();
   for (const MergeInputRecord& i : r.inputs) {
     in->Bind(1, ids.merge_id).Bind(2, i.submap_id);
     if (i.aligned) {
       BindPose(*in, 3, i.T_reference_submap);
-      in->Bind(10, static_cast<int64_t>(i.matched_corners)).Bind(11, i.residual_m).Bind(12, i.overlap_score);
+      in->Bind(10, static_cast<int64_t>(i.matched_corners))
+          .Bind(11, i.residual_m)
+          .Bind(12, i.overlap_score);
     }
     MAPD_RETURN_IF_ERROR(in->Run());
   }
@@ -472,7 +501,8 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   StatusOr<int64_t> submap_id = InsertSubmap(merged);
   if (!submap_id.ok()) return submap_id.status();
   ids.merged_submap_id = *submap_id;
-  StatusOr<Statement> link = Statement::Prepare(w, "UPDATE merges SET merged_submap_id = ?2 WHERE id = ?1");
+  StatusOr<Statement> link =
+      Statement::Prepare(w, "UPDATE merges SET merged_submap_id = ?2 WHERE id = ?1");
   if (!link.ok()) return link.status();
   link->Bind(1, ids.merge_id).Bind(2, ids.merged_submap_id);
   MAPD_RETURN_IF_ERROR(link->Run());
@@ -488,10 +518,11 @@ Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& 
   if (current->tied) {
     return Status::FailedPrecondition("session " + std::to_string(session_id) + " is tied already");
   }
-  StatusOr<Statement> q = Statement::Prepare(
-      store_->writer_.get(),
-      "UPDATE sessions SET tied = 1, qw = ?2, qx = ?3, qy = ?4, qz = ?5, tx = ?6, ty = ?7, tz = ?8, "
-      "tied_through_observation = ?9, tie_seq = ?10 WHERE id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(store_->writer_.get(),
+                         "UPDATE sessions SET tied = 1, qw = ?2, qx = ?3, qy = ?4, qz = ?5, tx = "
+                         "?6, ty = ?7, tz = ?8, "
+                         "tied_through_observation = ?9, tie_seq = ?10 WHERE id = ?1");
   if (!q.ok()) return q.status();
   if (tie_seq_ == 0) {
     std::lock_guard<std::mutex> lock(store_->cache_mu_);
@@ -515,7 +546,8 @@ constexpr const char* kObservationColumns =
     "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.id = o.session_id ";
 
 // Calls fn for every row of a query on kObservationColumns.
-Status ForEachObservationRow(Statement& q, const std::function<Status(const StoredObservation&)>& fn) {
+Status ForEachObservationRow(Statement& q,
+                             const std::function<Status(const StoredObservation&)>& fn) {
   StoredObservation obs;
   for (;;) {
     StatusOr<bool> row = q.Step();
@@ -528,7 +560,8 @@ Status ForEachObservationRow(Statement& q, const std::function<Status(const Stor
     obs.stamp_ns = q.ColumnInt(4);
     obs.features.T_frame_sensor = ColumnPose(q, 5);
     Status s = DecodeFeatures(q.ColumnBlob(12), &obs.features);
-    if (!s.ok()) return Status(s.code(), "observation " + std::to_string(obs.id) + ": " + s.message());
+    if (!s.ok())
+      return Status(s.code(), "observation " + std::to_string(obs.id) + ": " + s.message());
     MAPD_RETURN_IF_ERROR(fn(obs));
   }
 }
@@ -577,7 +610,8 @@ Status Store::ForEachObservationWhere(const std::string& condition, int64_t afte
 
 StatusOr<int64_t> Store::NewestObservationId() {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(reader_.get(), "SELECT coalesce(max(id), 0) FROM observations");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), "SELECT coalesce(max(id), 0) FROM observations");
   if (!q.ok()) return q.status();
   StatusOr<bool> row = q->Step();
   if (!row.ok()) return row.status();
@@ -587,8 +621,9 @@ StatusOr<int64_t> Store::NewestObservationId() {
 StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
-                     "params, state, plane_state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
+      reader_.get(),
+      "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
+      "params, state, plane_state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(skip));
   StatusOr<bool> row = q->Step();
@@ -607,8 +642,9 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   return snap;
 }
 
-Status Store::ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
-                                           const std::function<Status(const StoredObservation&)>& fn) {
+Status Store::ForEachObservationOfSessions(
+    const std::vector<int64_t>& session_ids, int64_t max_id,
+    const std::function<Status(const StoredObservation&)>& fn) {
   if (session_ids.empty()) return Status::Ok();
   std::string in;
   for (int64_t id : session_ids) in += (in.empty() ? "" : ",") + std::to_string(id);
@@ -631,7 +667,8 @@ StatusOr<SessionFrame> Store::GetSession(int64_t session_id) const {
   return Status::NotFound("no session with id " + std::to_string(session_id));
 }
 
-StatusOr<SessionFrame> Store::FindSession(const std::string& robot, const std::string& session) const {
+StatusOr<SessionFrame> Store::FindSession(const std::string& robot,
+                                          const std::string& session) const {
   std::lock_guard<std::mutex> lock(cache_mu_);
   auto r = robot_ids_.find(robot);
   if (r != robot_ids_.end()) {
@@ -684,7 +721,8 @@ StatusOr<std::vector<SubmapMeta>> Store::ListSubmaps(const std::string& robot) {
 
 StatusOr<SubmapMeta> Store::GetSubmap(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(reader_.get(), std::string(kSubmapColumns) + "WHERE s.id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), std::string(kSubmapColumns) + "WHERE s.id = ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, id);
   StatusOr<bool> row = q->Step();
@@ -695,7 +733,8 @@ StatusOr<SubmapMeta> Store::GetSubmap(int64_t id) {
 
 StatusOr<std::string> Store::GetSubmapData(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(reader_.get(), "SELECT data FROM submaps WHERE id = ?1");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(), "SELECT data FROM submaps WHERE id = ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, id);
   StatusOr<bool> row = q->Step();
@@ -708,14 +747,15 @@ StatusOr<SubmapMeta> Store::LatestGlobalMap() {
   int64_t id = 0;
   {
     std::lock_guard<std::mutex> lock(reader_mu_);
-    StatusOr<Statement> q = Statement::Prepare(
-        reader_.get(),
-        "SELECT merged_submap_id FROM merges WHERE status = 'accepted' AND merged_submap_id IS NOT NULL "
-        "ORDER BY id DESC LIMIT 1");
+    StatusOr<Statement> q = Statement::Prepare(reader_.get(),
+                                               "SELECT merged_submap_id FROM merges WHERE status = "
+                                               "'accepted' AND merged_submap_id IS NOT NULL "
+                                               "ORDER BY id DESC LIMIT 1");
     if (!q.ok()) return q.status();
     StatusOr<bool> row = q->Step();
     if (!row.ok()) return row.status();
-    if (!*row) return Status::NotFound("no global map yet: no merge has been accepted (see MergeSubmaps)");
+    if (!*row)
+      return Status::NotFound("no global map yet: no merge has been accepted (see MergeSubmaps)");
     id = q->ColumnInt(0);
   }
   return GetSubmap(id);
@@ -723,8 +763,10 @@ StatusOr<SubmapMeta> Store::LatestGlobalMap() {
 
 StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(), "SELECT id, created_ns, status, reason, coalesce(merged_submap_id, 0) FROM merges ORDER BY id");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(),
+                         "SELECT id, created_ns, status, reason, coalesce(merged_submap_id, 0) "
+                         "FROM merges ORDER BY id");
   if (!q.ok()) return q.status();
   std::vector<MergeRecord> out;
   for (;;) {
@@ -804,7 +846,8 @@ StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
       "SELECT r.id, r.name, r.first_seen_ns, r.last_seen_ns, r.batches, r.features, "
-      "count(s.id), coalesce(min(s.tied), 0) FROM robots r LEFT JOIN sessions s ON s.robot_id = r.id "
+      "count(s.id), coalesce(min(s.tied), 0) FROM robots r LEFT JOIN sessions s ON s.robot_id = "
+      "r.id "
       "WHERE r.name NOT GLOB '@*' GROUP BY r.id ORDER BY r.name");
   if (!q.ok()) return q.status();
   std::vector<RobotSummary> out;
@@ -827,11 +870,13 @@ StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
 
 StatusOr<StoreCounts> Store::Counts() {
   std::lock_guard<std::mutex> lock(reader_mu_);
-  StatusOr<Statement> q = Statement::Prepare(
-      reader_.get(),
-      "SELECT (SELECT count(*) FROM robots WHERE name NOT GLOB '@*'), (SELECT count(*) FROM sessions), "
-      "(SELECT coalesce(sum(batches), 0) FROM robots), (SELECT coalesce(sum(features), 0) FROM robots), "
-      "(SELECT count(*) FROM fused_features), (SELECT count(*) FROM submaps)");
+  StatusOr<Statement> q =
+      Statement::Prepare(reader_.get(),
+                         "SELECT (SELECT count(*) FROM robots WHERE name NOT GLOB '@*'), (SELECT "
+                         "count(*) FROM sessions), "
+                         "(SELECT coalesce(sum(batches), 0) FROM robots), (SELECT "
+                         "coalesce(sum(features), 0) FROM robots), "
+                         "(SELECT count(*) FROM fused_features), (SELECT count(*) FROM submaps)");
   if (!q.ok()) return q.status();
   StatusOr<bool> row = q->Step();
   if (!row.ok()) return row.status();

@@ -11,6 +11,7 @@
 #ifndef MAPD_STORAGE_STORE_H_
 #define MAPD_STORAGE_STORE_H_
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -19,8 +20,6 @@
 #include <string_view>
 #include <unordered_map>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 #include "geometry/observation.h"
@@ -52,8 +51,8 @@ struct SessionFrame {
   int64_t session_id = 0;
   int64_t robot_id = 0;
   FrameKind kind = FrameKind::kMap;
-  bool tied = false;               // T_map_frame is known
-  geometry::Rigid3 T_map_frame;    // valid when tied
+  bool tied = false;             // T_map_frame is known
+  geometry::Rigid3 T_map_frame;  // valid when tied
   // Where the tie happened in the commit order (0, 0: tied from the start):
   // the newest observation id committed before it, and the tying
   // transaction's sequence number (1, 2, ...).
@@ -90,8 +89,8 @@ struct NewObservation {
 };
 
 struct InsertResult {
-  bool stored = false;          // false: (robot, session, seq) was stored before
-  int64_t observation_id = 0;   // the row id (of the earlier row for a duplicate)
+  bool stored = false;         // false: (robot, session, seq) was stored before
+  int64_t observation_id = 0;  // the row id (of the earlier row for a duplicate)
   SessionFrame frame;
 };
 
@@ -166,9 +165,9 @@ struct SubmapMeta {
 };
 
 struct NewSubmap {
-  SubmapMeta meta;         // id, session_id and size_bytes are filled in by the store
-  std::string session;     // the robot's session the map is built in; empty = none
-  std::string_view data;   // the validated file; must outlive InsertSubmap()
+  SubmapMeta meta;        // id, session_id and size_bytes are filled in by the store
+  std::string session;    // the robot's session the map is built in; empty = none
+  std::string_view data;  // the validated file; must outlive InsertSubmap()
 };
 
 // One input of a merge as recorded. For a refused merge only submap_id is meaningful.
@@ -185,14 +184,14 @@ struct MergeRecord {
   int64_t id = 0;
   int64_t created_ns = 0;
   bool accepted = false;
-  std::string reason;             // why it was refused (empty when accepted)
-  int64_t merged_submap_id = 0;   // 0 unless accepted
+  std::string reason;            // why it was refused (empty when accepted)
+  int64_t merged_submap_id = 0;  // 0 unless accepted
   std::vector<MergeInputRecord> inputs;
 };
 
 struct NewMerge {
-  MergeRecord record;    // id and merged_submap_id are filled in by the store
-  NewSubmap merged;      // accepted merges only: the merged map, stored as a submap
+  MergeRecord record;  // id and merged_submap_id are filled in by the store
+  NewSubmap merged;    // accepted merges only: the merged map, stored as a submap
 };
 
 struct MergeIds {
@@ -214,14 +213,14 @@ struct TokenRecord {
   std::string robot_id;       // robot tokens: the robot they write for
   std::string secret_sha256;  // 32 bytes
   int64_t created_ns = 0;
-  std::string created_by;     // the creator's name ("mapd token create" offline)
-  int64_t revoked_ns = 0;     // 0 while valid
+  std::string created_by;  // the creator's name ("mapd token create" offline)
+  int64_t revoked_ns = 0;  // 0 while valid
 };
 
 struct AuditEntry {
   int64_t id = 0;
   int64_t time_ns = 0;
-  std::string who;     // token name or certificate CN
+  std::string who;  // token name or certificate CN
   std::string role;
   std::string action;  // the RPC, e.g. "UploadSubmap"
   std::string target;  // what it acted on, e.g. "robot r1 submap 'room'"
@@ -313,7 +312,8 @@ class WriteTransaction {
 
 class Store {
  public:
-  static StatusOr<std::unique_ptr<Store>> Open(const std::string& path, const StoreOptions& options);
+  static StatusOr<std::unique_ptr<Store>> Open(const std::string& path,
+                                               const StoreOptions& options);
   ~Store();
 
   // --- Writer thread only.
@@ -346,12 +346,12 @@ class Store {
 
   // Submaps, by id; `robot` empty = all robots (merged maps included).
   StatusOr<std::vector<SubmapMeta>> ListSubmaps(const std::string& robot);
-  StatusOr<SubmapMeta> GetSubmap(int64_t id);          // NotFound
-  StatusOr<std::string> GetSubmapData(int64_t id);     // the stored file; NotFound
+  StatusOr<SubmapMeta> GetSubmap(int64_t id);       // NotFound
+  StatusOr<std::string> GetSubmapData(int64_t id);  // the stored file; NotFound
   // The merged map of the latest accepted merge; NotFound before the first.
   StatusOr<SubmapMeta> LatestGlobalMap();
-  StatusOr<MergeRecord> GetMerge(int64_t id);          // NotFound
-  StatusOr<std::vector<MergeRecord>> ListMerges();     // by id
+  StatusOr<MergeRecord> GetMerge(int64_t id);       // NotFound
+  StatusOr<std::vector<MergeRecord>> ListMerges();  // by id
   StatusOr<std::vector<FusedRow>> LoadFused();
   StatusOr<std::vector<FusedPlaneRow>> LoadFusedPlanes();  // by id
   StatusOr<std::vector<RobotSummary>> ListRobots();

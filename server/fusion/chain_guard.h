@@ -40,7 +40,7 @@ namespace mapd::fusion {
 // `segment` in every SSE; the order key stays the midpoint of `segment`.
 struct GuardMember {
   FeatureId id = 0;
-  geometry::Segment2 segment;  // map frame, metres
+  geometry::Segment2 segment;                       // map frame, metres
   const geometry::PointMoments2* folded = nullptr;  // null: just the segment's endpoints
 };
 

@@ -13,15 +13,15 @@
 namespace mapd::fusion {
 
 struct ClusterStats {
-  ClusterId id = 0;                      // smallest member FeatureId
+  ClusterId id = 0;  // smallest member FeatureId
   uint32_t member_count = 0;
-  uint32_t plane_members = 0;            // members projected from vertical planes
-  geometry::PointMoments2 moments;       // of all member endpoints
-  std::vector<geometry::Vec2> hull;      // convex hull of all member endpoints
+  uint32_t plane_members = 0;        // members projected from vertical planes
+  geometry::PointMoments2 moments;   // of all member endpoints
+  std::vector<geometry::Vec2> hull;  // convex hull of all member endpoints
   double z_min_m = 0.0;
   double z_max_m = 0.0;
-  SupportCounter observations;         // distinct observations: the support
-  std::vector<RobotId> robots;          // distinct, ascending
+  SupportCounter observations;  // distinct observations: the support
+  std::vector<RobotId> robots;  // distinct, ascending
 
   static ClusterStats OfFeature(const GroundFeature& f, ObservationId observation, RobotId robot);
 

@@ -179,7 +179,8 @@ std::vector<Segment2> CornerSnapper::SnappedAll(const std::vector<ClusterId>& id
     if (snap_m_ > 0.0) {
       EndRef partner[2];
       bool paired[2];
-      for (int end = 0; end < 2; ++end) paired[end] = partner_of({id, end, EndOf(self, end)}, &partner[end]);
+      for (int end = 0; end < 2; ++end)
+        paired[end] = partner_of({id, end, EndOf(self, end)}, &partner[end]);
       // Both ends paired with the same feature: no corner, two views of one
       // short stretch; snapping would publish them as one segment twice.
       const bool twin = paired[0] && paired[1] && partner[0].id == partner[1].id;

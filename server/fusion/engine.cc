@@ -1,5 +1,4 @@
 #include "fusion/engine.h"
-#include "fusion/engine_impl.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +12,7 @@
 #include "fusion/cluster_stats.h"
 #include "fusion/corner_snap.h"
 #include "fusion/criteria.h"
+#include "fusion/engine_impl.h"
 #include "fusion/engine_inspector.h"
 #include "fusion/grid_index.h"
 #include "fusion/support_counter.h"
@@ -52,9 +52,7 @@ Status CheckPoint(const Vec2& p, size_t index, const char* name) {
   return Status::Ok();
 }
 
-
 }  // namespace
-
 
 std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root) const {
   std::vector<uint32_t> nodes;
@@ -77,11 +75,11 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
     for (uint32_t i : subset) subset_nodes.push_back(nodes[i]);
     return StatsOf(subset_nodes).support() >= params_.min_support;
   };
-  std::vector<std::vector<uint32_t>> groups = SplitChain(
-      members, params_.chain_max_rms_m, params_.chain_max_sse_ratio,
-      [&](const std::vector<uint32_t>& head, const std::vector<uint32_t>& tail) {
-        return publishable(head) && publishable(tail);
-      });
+  std::vector<std::vector<uint32_t>> groups =
+      SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio,
+                 [&](const std::vector<uint32_t>& head, const std::vector<uint32_t>& tail) {
+                   return publishable(head) && publishable(tail);
+                 });
   for (std::vector<uint32_t>& group : groups) {
     for (uint32_t& index : group) index = nodes[index];
   }
@@ -460,9 +458,7 @@ std::vector<FusedFeature> FusionEngine::Published() const {
 std::optional<FusedFeature> FusionEngine::Get(ClusterId id) const { return impl_->Get(id); }
 size_t FusionEngine::feature_count() const { return impl_->raw_feature_count_; }
 size_t FusionEngine::node_count() const { return impl_->parent_.size(); }
-size_t FusionEngine::cluster_count() const {
-  return impl_->cluster_count_ + impl_->extra_groups_;
-}
+size_t FusionEngine::cluster_count() const { return impl_->cluster_count_ + impl_->extra_groups_; }
 size_t FusionEngine::published_count() const { return impl_->published_.size(); }
 const FusionParams& FusionEngine::params() const { return impl_->params_; }
 

@@ -66,9 +66,9 @@ struct FusedFeature {
   geometry::Segment2 fitted;   // total-least-squares fit, before corner optimisation
   double z_min_m = 0.0;
   double z_max_m = 0.0;
-  uint32_t support = 0;       // distinct observations among the members
-  uint32_t member_count = 0;  // raw features in the cluster
-  uint32_t plane_members = 0;  // members that came from vertical planes (origin kPlane)
+  uint32_t support = 0;         // distinct observations among the members
+  uint32_t member_count = 0;    // raw features in the cluster
+  uint32_t plane_members = 0;   // members that came from vertical planes (origin kPlane)
   std::vector<RobotId> robots;  // distinct contributing robots, ascending
 };
 

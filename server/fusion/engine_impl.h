@@ -57,7 +57,6 @@ struct IndexedFeature {
   uint32_t node;
 };
 
-
 class FusionEngine::Impl {
  public:
   explicit Impl(const FusionParams& params)
@@ -77,8 +76,8 @@ class FusionEngine::Impl {
   std::optional<FusedFeature> Get(ClusterId id) const;
 
   const FusionParams params_;
-  const bool guard_on_;  // chain guard (chain_guard.h) enabled
-  const bool bounded_;   // FusionMode::kBounded: nodes are representatives
+  const bool guard_on_;         // chain guard (chain_guard.h) enabled
+  const bool bounded_;          // FusionMode::kBounded: nodes are representatives
   const uint32_t support_cap_;  // exact support up to this many observations
   // A node is a raw feature (exact mode) or a representative (bounded mode:
   // the first feature of it, plus every later one folded into it).
@@ -90,7 +89,7 @@ class FusionEngine::Impl {
   std::vector<uint32_t> parent_;
   std::vector<uint32_t> size_;
   std::vector<std::unique_ptr<ClusterStats>> stats_;
-  size_t cluster_count_ = 0;  // components
+  size_t cluster_count_ = 0;        // components
   uint64_t raw_feature_count_ = 0;  // features added, folded ones included
   // Per node, kept when the guard is on or in bounded mode: the node's own
   // feature (the guard refits subsets; snapshots refile the grid from it).

@@ -171,7 +171,8 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   if (params.mode != FusionMode::kBounded) {
     return Status::Unimplemented("snapshots are for fusion.mode = bounded");
   }
-  if (state.size() < sizeof(kMagic) + 12 || std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
+  if (state.size() < sizeof(kMagic) + 12 ||
+      std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
     return Corrupt("not a fusion snapshot");
   }
   const std::string_view body = state.substr(0, state.size() - 8);
@@ -247,7 +248,8 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   for (uint64_t i = 0; i < pieces && r.ok(); ++i) {
     const ClusterStats stats = r.Stats();
     if (!r.ok()) break;
-    if (stats.hull.empty() || stats.moments.count == 0) return Corrupt("an empty published cluster");
+    if (stats.hull.empty() || stats.moments.count == 0)
+      return Corrupt("an empty published cluster");
     e.consolidator_.Upsert(stats, stats.Refit());
   }
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");

@@ -65,7 +65,8 @@ class UniformGrid {
   void ForEachNear(const geometry::Vec2& p, double radius_m, Fn&& fn) const {
     const CellKey lo = KeyOf(p - geometry::Vec2(radius_m, radius_m));
     const CellKey hi = KeyOf(p + geometry::Vec2(radius_m, radius_m));
-    const double box_cells = static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
+    const double box_cells =
+        static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
     if (box_cells > static_cast<double>(cells_.size())) {
       // A huge query (long feature, large threshold): scanning the occupied
       // cells is cheaper than probing empty ones.
@@ -93,7 +94,8 @@ class UniformGrid {
     const geometry::Vec2 r(radius_m, radius_m);
     const CellKey lo = KeyOf(s.a.cwiseMin(s.b) - r);
     const CellKey hi = KeyOf(s.a.cwiseMax(s.b) + r);
-    const double box_cells = static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
+    const double box_cells =
+        static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
     // A cell meets the band if its centre is within radius + half its diagonal.
     const double reach_m = radius_m + 0.7072 * cell_m_;
     if (box_cells > static_cast<double>(cells_.size())) {

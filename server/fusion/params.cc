@@ -67,8 +67,10 @@ std::string FusionParamsKey(const FusionParams& p) {
 
 const char* FusionModeName(FusionMode mode) {
   switch (mode) {
-    case FusionMode::kExact: return "exact";
-    case FusionMode::kBounded: return "bounded";
+    case FusionMode::kExact:
+      return "exact";
+    case FusionMode::kBounded:
+      return "bounded";
   }
   return "unknown";
 }
@@ -87,8 +89,10 @@ Status ParseFusionMode(const std::string& name, FusionMode* mode) {
 
 const char* CornerModeName(CornerMode mode) {
   switch (mode) {
-    case CornerMode::kMidpoint: return "midpoint";
-    case CornerMode::kIntersection: return "intersection";
+    case CornerMode::kMidpoint:
+      return "midpoint";
+    case CornerMode::kIntersection:
+      return "intersection";
   }
   return "unknown";
 }
@@ -107,8 +111,10 @@ Status ParseCornerMode(const std::string& name, CornerMode* mode) {
 
 const char* CornerPairingName(CornerPairing pairing) {
   switch (pairing) {
-    case CornerPairing::kMutualNearest: return "mutual";
-    case CornerPairing::kGreedy: return "greedy";
+    case CornerPairing::kMutualNearest:
+      return "mutual";
+    case CornerPairing::kGreedy:
+      return "greedy";
   }
   return "unknown";
 }

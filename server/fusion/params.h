@@ -45,9 +45,9 @@ struct FusionParams {
   // Criterion 2: min feature-circle overlap ratio, in [0, 1]. 0 is allowed (criterion 2
   // off): the engine's candidate search is bounded by criterion 3, not by the circles.
   double gamma = 0.3;
-  double eta_m = 0.3;          // criterion 3: max centre-to-segment distance, metres
-  uint32_t min_support = 3;    // observations a cluster needs to be published
-  double snap_m = 0.5;         // corner optimisation: endpoints closer than this meet
+  double eta_m = 0.3;        // criterion 3: max centre-to-segment distance, metres
+  uint32_t min_support = 3;  // observations a cluster needs to be published
+  double snap_m = 0.5;       // corner optimisation: endpoints closer than this meet
   CornerMode corner_mode = CornerMode::kIntersection;
   CornerPairing corner_pairing = CornerPairing::kMutualNearest;
   double max_plane_tilt_rad = 10.0 * 3.14159265358979323846 / 180.0;  // vertical-plane test

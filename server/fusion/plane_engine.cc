@@ -62,8 +62,8 @@ Status PlaneFusionEngine::Impl::Validate(const std::vector<MapPlane>& planes,
       return Status::InvalidArgument(name + ": normal or offset is not finite");
     }
     if (std::abs(p.normal.norm() - 1.0) > 1e-3) {
-      return Status::InvalidArgument(name + ": normal is not unit length (|n| = " +
-                                     std::to_string(p.normal.norm()) + ")");
+      return Status::InvalidArgument(
+          name + ": normal is not unit length (|n| = " + std::to_string(p.normal.norm()) + ")");
     }
     if (std::abs(p.offset_m) > kMaxCoordinateM) {
       return Status::InvalidArgument(name + ": offset_m is beyond 1e6 m");
@@ -109,7 +109,8 @@ bool PlaneFusionEngine::Impl::Linked(const PlaneNode& a, const PlaneNode& b) con
   if (ConvexPolygonGap(ha, hb) > params_.max_gap_m) return false;
   if (params_.min_overlap > 0.0) {
     const double smaller = std::min(std::abs(PolygonArea(ha)), std::abs(PolygonArea(hb)));
-    if (!(smaller > 0.0) || ConvexIntersectionArea(ha, hb) < params_.min_overlap * smaller) return false;
+    if (!(smaller > 0.0) || ConvexIntersectionArea(ha, hb) < params_.min_overlap * smaller)
+      return false;
   }
   return true;
 }
@@ -149,7 +150,9 @@ void PlaneFusionEngine::Impl::FileInGrid(uint32_t i) {
   }
   for (int64_t x = a.x; x <= b.x; ++x) {
     for (int64_t y = a.y; y <= b.y; ++y) {
-      grid_.Insert({(static_cast<double>(x) + 0.5) * kPlaneCellM, (static_cast<double>(y) + 0.5) * kPlaneCellM}, i);
+      grid_.Insert({(static_cast<double>(x) + 0.5) * kPlaneCellM,
+                    (static_cast<double>(y) + 0.5) * kPlaneCellM},
+                   i);
     }
   }
 }
@@ -169,7 +172,8 @@ uint32_t PlaneFusionEngine::Impl::Find(uint32_t x) {
   return root;
 }
 
-uint32_t PlaneFusionEngine::Impl::Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids) {
+uint32_t PlaneFusionEngine::Impl::Union(uint32_t a, uint32_t b,
+                                        std::vector<ClusterId>* merged_ids) {
   a = Find(a);
   b = Find(b);
   if (a == b) return a;
@@ -248,7 +252,8 @@ void PlaneFusionEngine::Impl::Add(ObservationId observation, RobotId robot,
     parent_.push_back(n);
     size_.push_back(1);
     visited_.push_back(stamp_);
-    stats_.push_back(std::make_unique<PlaneStats>(PlaneStats::OfNode(nodes_[n], robot, support_cap_)));
+    stats_.push_back(
+        std::make_unique<PlaneStats>(PlaneStats::OfNode(nodes_[n], robot, support_cap_)));
     root_of_id_[stats_[n]->id] = n;
     ++cluster_count_;
     FileInGrid(n);
@@ -304,7 +309,8 @@ PlaneFusionEngine::~PlaneFusionEngine() = default;
 PlaneFusionEngine::PlaneFusionEngine(PlaneFusionEngine&&) noexcept = default;
 PlaneFusionEngine& PlaneFusionEngine::operator=(PlaneFusionEngine&&) noexcept = default;
 
-StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::Create(const PlaneFusionParams& params) {
+StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::Create(
+    const PlaneFusionParams& params) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   return std::make_unique<PlaneFusionEngine>(params);
 }

@@ -34,14 +34,13 @@
 #ifndef MAPD_FUSION_PLANE_ENGINE_H_
 #define MAPD_FUSION_PLANE_ENGINE_H_
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 #include "fusion/engine.h"
@@ -55,8 +54,8 @@ struct PlaneFusionParams {
   // Criterion 3: min overlap, as the intersection's share of the smaller
   // projected boundary's area, in [0, 1]; 0 = any overlap or a gap up to max_gap_m.
   double min_overlap = 0.0;
-  double max_gap_m = 0.3;      // criterion 3: max gap between projected boundaries, metres
-  uint32_t min_support = 3;    // distinct observations a fused plane needs to be published
+  double max_gap_m = 0.3;    // criterion 3: max gap between projected boundaries, metres
+  uint32_t min_support = 3;  // distinct observations a fused plane needs to be published
   // Folding (see above): a plane within this of an established cluster's
   // fused boundary is folded into it, metres.
   double cover_m = 0.05;
@@ -73,18 +72,18 @@ std::string PlaneFusionParamsKey(const PlaneFusionParams& params);
 constexpr uint32_t kPlaneEstablishedSupport = 32;
 
 struct FusedPlane {
-  ClusterId id = 0;                  // smallest member FeatureId
+  ClusterId id = 0;                                   // smallest member FeatureId
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, map frame, CanonicalNormal sign
-  double offset_m = 0.0;             // normal.dot(x) + offset_m = 0
+  double offset_m = 0.0;                              // normal.dot(x) + offset_m = 0
   // Convex hull of the member boundaries projected onto the fused plane,
   // counter-clockwise about `normal`, map frame, metres.
   std::vector<Eigen::Vector3d> boundary;
-  double area_m2 = 0.0;              // of `boundary`
-  double z_min_m = 0.0;              // height range of `boundary`
+  double area_m2 = 0.0;  // of `boundary`
+  double z_min_m = 0.0;  // height range of `boundary`
   double z_max_m = 0.0;
-  uint32_t support = 0;              // distinct observations among the members
-  uint32_t member_count = 0;         // raw planes, folded ones included
-  std::vector<RobotId> robots;       // ascending
+  uint32_t support = 0;         // distinct observations among the members
+  uint32_t member_count = 0;    // raw planes, folded ones included
+  std::vector<RobotId> robots;  // ascending
 };
 
 // What one Add() changed among the published planes (support >= min_support);

@@ -3,12 +3,11 @@
 #ifndef MAPD_FUSION_PLANE_ENGINE_IMPL_H_
 #define MAPD_FUSION_PLANE_ENGINE_IMPL_H_
 
+#include <Eigen/Core>
 #include <map>
 #include <memory>
 #include <unordered_map>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "fusion/grid_index.h"
 #include "fusion/plane_engine.h"
@@ -44,9 +43,9 @@ struct PlaneNode {
 struct PlaneStats {
   ClusterId id = 0;
   uint32_t member_count = 0;
-  uint64_t point_count = 0;                            // boundary points of all members
+  uint64_t point_count = 0;  // boundary points of all members
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();   // sum (p - mean)(p - mean)^T, m^2
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();     // sum (p - mean)(p - mean)^T, m^2
   Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();  // member normals, sign-aligned
   // Member boundary points whose projections are the vertices of the fused
   // boundary, counter-clockwise about the fused normal.
@@ -89,13 +88,13 @@ class PlaneFusionEngine::Impl {
   std::vector<PlaneNode> nodes_;
   std::vector<uint32_t> parent_;
   std::vector<uint32_t> size_;
-  std::vector<std::unique_ptr<PlaneStats>> stats_;  // non-null at roots only
+  std::vector<std::unique_ptr<PlaneStats>> stats_;      // non-null at roots only
   std::unordered_map<ClusterId, uint32_t> root_of_id_;  // cluster id -> root node
   size_t cluster_count_ = 0;
   uint64_t plane_count_ = 0;
-  UniformGrid<uint32_t> grid_;  // node indices, under every cell they cover
+  UniformGrid<uint32_t> grid_;         // node indices, under every cell they cover
   std::vector<uint32_t> large_nodes_;  // nodes too large for the grid, ascending
-  std::vector<uint64_t> visited_;  // per node: the query stamp that saw it last
+  std::vector<uint64_t> visited_;      // per node: the query stamp that saw it last
   uint64_t stamp_ = 0;
   std::map<ClusterId, FusedPlane> published_;
 

@@ -90,10 +90,11 @@ Status PlaneFusionEngine::SaveState(std::string* out) const {
   return Status::Ok();
 }
 
-StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(const PlaneFusionParams& params,
-                                                                          std::string_view state) {
+StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
+    const PlaneFusionParams& params, std::string_view state) {
   MAPD_RETURN_IF_ERROR(params.Validate());
-  if (state.size() < sizeof(kMagic) + 12 || std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
+  if (state.size() < sizeof(kMagic) + 12 ||
+      std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
     return Corrupt("not a plane fusion snapshot");
   }
   const std::string_view body = state.substr(0, state.size() - 8);
@@ -104,7 +105,8 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(const 
   if (r.U32() != kVersion) return Corrupt("unknown format version");
   const std::string key = r.Str();
   if (key != PlaneFusionParamsKey(params)) {
-    return Status::FailedPrecondition("plane fusion snapshot was taken with other parameters (" + key + ")");
+    return Status::FailedPrecondition("plane fusion snapshot was taken with other parameters (" +
+                                      key + ")");
   }
   auto engine = std::make_unique<PlaneFusionEngine>(params);
   Impl& e = *engine->impl_;
@@ -125,7 +127,8 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(const 
     node.boundary = r.Points();
     e.parent_[i] = r.U32();
     e.size_[i] = r.U32();
-    if (!r.ok() || node.boundary.size() < 3) return Corrupt("node " + std::to_string(i) + " is malformed");
+    if (!r.ok() || node.boundary.size() < 3)
+      return Corrupt("node " + std::to_string(i) + " is malformed");
     node.Prepare();
     if (r.U8() == 0) continue;
     auto s = std::make_unique<PlaneStats>();
@@ -146,7 +149,8 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(const 
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
   size_t roots = 0;
   for (uint64_t i = 0; i < n; ++i) {
-    if (e.parent_[i] >= n) return Corrupt("node " + std::to_string(i) + " points outside the snapshot");
+    if (e.parent_[i] >= n)
+      return Corrupt("node " + std::to_string(i) + " points outside the snapshot");
     const bool root = e.parent_[i] == i;
     if (root != (e.stats_[i] != nullptr)) return Corrupt("cluster statistics off the roots");
     roots += root;

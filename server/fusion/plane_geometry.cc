@@ -1,9 +1,8 @@
 #include "fusion/plane_geometry.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Geometry>
 
 #include "geometry/convex_hull2.h"
 
@@ -69,7 +68,8 @@ PlaneBasis PlaneBasis::Of(const Eigen::Vector3d& n) {
   return b;
 }
 
-std::vector<Vec2> ProjectedHull(const std::vector<Eigen::Vector3d>& points, const PlaneBasis& basis) {
+std::vector<Vec2> ProjectedHull(const std::vector<Eigen::Vector3d>& points,
+                                const PlaneBasis& basis) {
   std::vector<Vec2> p;
   p.reserve(points.size());
   for (const Eigen::Vector3d& x : points) p.push_back(basis.Project(x));

@@ -4,9 +4,8 @@
 #ifndef MAPD_FUSION_PLANE_GEOMETRY_H_
 #define MAPD_FUSION_PLANE_GEOMETRY_H_
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "geometry/segment2.h"
 

@@ -1,13 +1,11 @@
 // PlaneNode and PlaneStats (plane_engine_impl.h): a raw plane's derived
 // fields, and a cluster's moments, hull and fit.
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <utility>
-
-#include <iterator>
-
-#include <Eigen/Eigenvalues>
 
 #include "fusion/plane_engine_impl.h"
 #include "geometry/convex_hull2.h"

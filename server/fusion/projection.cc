@@ -26,7 +26,8 @@ StatusOr<ProjectedObservation> ProjectToGround(const geometry::SensorObservation
                                                const geometry::Rigid3& T_map_frame,
                                                FeatureId first_id, const FusionParams& params) {
   if (!FinitePose(T_map_frame)) return Status::InvalidArgument("T_map_frame is not finite");
-  if (!FinitePose(obs.T_frame_sensor)) return Status::InvalidArgument("T_frame_sensor is not finite");
+  if (!FinitePose(obs.T_frame_sensor))
+    return Status::InvalidArgument("T_frame_sensor is not finite");
   for (size_t i = 0; i < obs.lines.size(); ++i) {
     if (!Finite(obs.lines[i].a) || !Finite(obs.lines[i].b)) {
       return Status::InvalidArgument("lines[" + std::to_string(i) + "] is not finite");

@@ -22,8 +22,8 @@ struct MapPlane {
 };
 
 struct ProjectedObservation {
-  std::vector<GroundFeature> ground;     // lines, and near-vertical planes as segments
-  std::vector<MapPlane> other_planes;    // planes tilted more than max_plane_tilt_rad
+  std::vector<GroundFeature> ground;   // lines, and near-vertical planes as segments
+  std::vector<MapPlane> other_planes;  // planes tilted more than max_plane_tilt_rad
   size_t skipped = 0;  // features whose ground projection degenerates (a vertical line)
 };
 

@@ -11,7 +11,8 @@ void SupportCounter::Add(ObservationId id, uint32_t cap) {
     if (id != last_) ++count_;
   } else if (ids_.empty() || id > ids_.back()) {
     ids_.push_back(id);  // the common case: observations arrive in id order
-  } else if (auto it = std::lower_bound(ids_.begin(), ids_.end(), id); it == ids_.end() || *it != id) {
+  } else if (auto it = std::lower_bound(ids_.begin(), ids_.end(), id);
+             it == ids_.end() || *it != id) {
     ids_.insert(it, id);
   }
   last_ = id;

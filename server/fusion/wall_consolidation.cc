@@ -122,7 +122,8 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) const {
   out.erase(std::unique(out.begin(), out.end()), out.end());
   out.erase(std::remove_if(out.begin(), out.end(),
                            [&](ClusterId other) {
-                             return !OnOneWall(s, id, pieces_.at(other).fit.segment, other, params_);
+                             return !OnOneWall(s, id, pieces_.at(other).fit.segment, other,
+                                               params_);
                            }),
             out.end());
   return out;

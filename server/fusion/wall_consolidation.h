@@ -96,7 +96,7 @@ class WallConsolidator {
   std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending
   std::vector<ClusterId> touched_pieces_;
   std::vector<ClusterId> touched_walls_;  // walls of pieces that changed or vanished
-  UniformGrid<ClusterId> index_;  // pieces filed at points along their fitted segment
+  UniformGrid<ClusterId> index_;          // pieces filed at points along their fitted segment
 };
 
 }  // namespace mapd::fusion

@@ -42,7 +42,8 @@ bool StrictlyInsideHull(const std::vector<Vec2>& hull, const Vec2& p) {
     const Vec2& a = hull[i];
     const Vec2& b = hull[(i + 1) % hull.size()];
     const Vec2 e = b - a, q = p - a;
-    if (!(e.x() * q.y() - e.y() * q.x() > 0.0)) return false;  // counter-clockwise: left of every edge
+    if (!(e.x() * q.y() - e.y() * q.x() > 0.0))
+      return false;  // counter-clockwise: left of every edge
   }
   return true;
 }

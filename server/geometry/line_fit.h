@@ -9,9 +9,8 @@
 #ifndef MAPD_GEOMETRY_LINE_FIT_H_
 #define MAPD_GEOMETRY_LINE_FIT_H_
 
-#include <cstdint>
-
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "geometry/segment2.h"
 
@@ -29,8 +28,8 @@ struct PointMoments2 {
 
 // An infinite line: point + t * direction.
 struct Line2 {
-  Vec2 point = Vec2::Zero();          // metres
-  Vec2 direction = Vec2::UnitX();     // unit length, canonical sign (see CanonicalDirection)
+  Vec2 point = Vec2::Zero();       // metres
+  Vec2 direction = Vec2::UnitX();  // unit length, canonical sign (see CanonicalDirection)
 };
 
 // The orthogonal-regression line: through the centroid, along the principal

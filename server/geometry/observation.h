@@ -6,9 +6,8 @@
 #ifndef MAPD_GEOMETRY_OBSERVATION_H_
 #define MAPD_GEOMETRY_OBSERVATION_H_
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "geometry/rigid3.h"
 

@@ -10,7 +10,8 @@ void AddFlags(CLI::App* app, CommandLine* line) {
   // A flag given twice: the later one wins (the container entrypoint passes its
   // defaults first, the user's flags after them). Subcommands inherit this.
   app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  app->footer("Every KEY may also be set in the config file as 'KEY = VALUE'; flags override the file.");
+  app->footer(
+      "Every KEY may also be set in the config file as 'KEY = VALUE'; flags override the file.");
   app->add_option("--config", line->config_files, "read settings from FILE first")
       ->type_name("FILE")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
@@ -20,7 +21,8 @@ void AddFlags(CLI::App* app, CommandLine* line) {
   const service::ServerConfig defaults;
   for (const Setting& s : service::Settings()) {
     app->add_option_function<std::string>(
-           "--" + s.key, [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); },
+           "--" + s.key,
+           [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); },
            s.help)
         ->type_name("<" + s.kind + ">")
         ->default_str(s.get(defaults));
@@ -29,8 +31,10 @@ void AddFlags(CLI::App* app, CommandLine* line) {
 }
 
 Status ApplyCommandLine(const CommandLine& line, service::ServerConfig* config) {
-  for (const std::string& file : line.config_files) MAPD_RETURN_IF_ERROR(service::LoadConfigFile(file, config));
-  for (const auto& [key, value] : line.settings) MAPD_RETURN_IF_ERROR(service::ApplySetting(key, value, config));
+  for (const std::string& file : line.config_files)
+    MAPD_RETURN_IF_ERROR(service::LoadConfigFile(file, config));
+  for (const auto& [key, value] : line.settings)
+    MAPD_RETURN_IF_ERROR(service::ApplySetting(key, value, config));
   return config->Validate();
 }
 

@@ -5,14 +5,14 @@
 #ifndef MAPD_MAPD_HEALTH_CHECK_H_
 #define MAPD_MAPD_HEALTH_CHECK_H_
 
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+
 #include <chrono>
 #include <future>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <grpcpp/generic/generic_stub.h>
-#include <grpcpp/grpcpp.h>
 
 namespace mapd {
 
@@ -21,9 +21,12 @@ enum class ServingStatus { kUnknown = 0, kServing = 1, kNotServing = 2 };
 
 inline const char* ServingStatusName(ServingStatus s) {
   switch (s) {
-    case ServingStatus::kServing: return "SERVING";
-    case ServingStatus::kNotServing: return "NOT_SERVING";
-    case ServingStatus::kUnknown: break;
+    case ServingStatus::kServing:
+      return "SERVING";
+    case ServingStatus::kNotServing:
+      return "NOT_SERVING";
+    case ServingStatus::kUnknown:
+      break;
   }
   return "UNKNOWN";
 }
@@ -47,7 +50,8 @@ inline grpc::Status CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
   std::vector<grpc::Slice> slices;
   if (!response.Dump(&slices).ok()) return call;
   std::string bytes;
-  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  for (const grpc::Slice& s : slices)
+    bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
   // HealthCheckResponse{status}: field 1, varint; proto3 omits 0 (UNKNOWN).
   if (bytes.size() == 2 && bytes[0] == 0x08 && bytes[1] >= 0 && bytes[1] <= 2) {
     *status = static_cast<ServingStatus>(bytes[1]);

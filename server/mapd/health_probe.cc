@@ -19,15 +19,19 @@
 int main(int argc, char** argv) {
   std::string server = "127.0.0.1:50051", ca_path, tls_name;
   double timeout_s = 5.0;
-  CLI::App app("mapd-health: the health of a running mapd, as an exit code (0 SERVING, 1 not, "
-               "2 usage, 3 unreachable).",
-               "mapd-health");
+  CLI::App app(
+      "mapd-health: the health of a running mapd, as an exit code (0 SERVING, 1 not, "
+      "2 usage, 3 unreachable).",
+      "mapd-health");
   app.add_option("--server", server, "HOST:PORT of mapd")->capture_default_str();
   app.add_option("--timeout", timeout_s, "seconds to wait for the answer")
       ->check(CLI::Range(0.001, 3600.0))
       ->capture_default_str();
-  CLI::Option* ca = app.add_option("--tls-ca", ca_path, "PEM file of the CA that signed mapd's certificate");
-  app.add_option("--tls-name", tls_name, "the name mapd's certificate carries (when dialling another)")->needs(ca);
+  CLI::Option* ca =
+      app.add_option("--tls-ca", ca_path, "PEM file of the CA that signed mapd's certificate");
+  app.add_option("--tls-name", tls_name,
+                 "the name mapd's certificate carries (when dialling another)")
+      ->needs(ca);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -58,8 +62,8 @@ int main(int argc, char** argv) {
       mapd::CheckHealth(grpc::CreateCustomChannel(server, credentials, args),
                         std::chrono::milliseconds(static_cast<long>(timeout_s * 1000)), &serving);
   if (!status.ok()) {
-    std::fprintf(stderr, "mapd-health: %s: %s (code %d)\n", server.c_str(), status.error_message().c_str(),
-                 static_cast<int>(status.error_code()));
+    std::fprintf(stderr, "mapd-health: %s: %s (code %d)\n", server.c_str(),
+                 status.error_message().c_str(), static_cast<int>(status.error_code()));
     return 3;
   }
   std::printf("%s %s\n", server.c_str(), mapd::ServingStatusName(serving));

@@ -33,18 +33,22 @@ StatusOr<Principal> AccessControl::FromToken(std::string_view bearer) {
   int64_t id = 0;
   std::string secret;
   Status parsed = ParseToken(bearer, &id, &secret);
-  if (!parsed.ok()) return Status::Unauthenticated("the bearer token is malformed: " + parsed.message());
+  if (!parsed.ok())
+    return Status::Unauthenticated("the bearer token is malformed: " + parsed.message());
   StatusOr<storage::TokenRecord> record = core_->store().GetToken(id);
   const Status unknown = Status::Unauthenticated("unknown token (wrong secret or no such token)");
-  if (!record.ok()) return record.status().code() == StatusCode::kNotFound ? unknown : record.status();
+  if (!record.ok())
+    return record.status().code() == StatusCode::kNotFound ? unknown : record.status();
   if (!ConstantTimeEqual(Sha256(secret), record->secret_sha256)) return unknown;
   if (record->revoked_ns != 0) {
-    return Status::Unauthenticated("token '" + record->name + "' was revoked; ask an admin for a new one");
+    return Status::Unauthenticated("token '" + record->name +
+                                   "' was revoked; ask an admin for a new one");
   }
   Principal p;
   p.name = record->name;
   p.robot_id = record->robot_id;
-  if (!ParseRole(record->role, &p.role)) return Status::Internal("token '" + record->name + "' has unknown role");
+  if (!ParseRole(record->role, &p.role))
+    return Status::Internal("token '" + record->name + "' has unknown role");
   tokens_exist_ = true;
   return p;
 }
@@ -57,7 +61,9 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       return Status::Unauthenticated("the authorization metadata must be 'Bearer <token>'");
     }
     StatusOr<Principal> p = FromToken(value.substr(sizeof(kBearer) - 1));
-    if (!p.ok()) Log(LogLevel::kWarn, "auth_refused", {{"peer", context.peer()}, {"error", p.status().ToString()}});
+    if (!p.ok())
+      Log(LogLevel::kWarn, "auth_refused",
+          {{"peer", context.peer()}, {"error", p.status().ToString()}});
     return p;
   }
   if (options_.client_certs) {
@@ -88,24 +94,26 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       std::string(options_.client_certs ? " or a client certificate signed by tls_client_ca" : ""));
 }
 
-StatusOr<Principal> AccessControl::Admit(const grpc::ServerContextBase& context, Permission permission,
-                                         const std::string& action, const std::string& robot) {
+StatusOr<Principal> AccessControl::Admit(const grpc::ServerContextBase& context,
+                                         Permission permission, const std::string& action,
+                                         const std::string& robot) {
   StatusOr<Principal> p = Authenticate(context);
   if (!p.ok()) return p.status();
   MAPD_RETURN_IF_ERROR(Check(*p, permission, action, robot, robot.empty() ? "" : "robot " + robot));
   return p;
 }
 
-Status AccessControl::Check(const Principal& principal, Permission permission, const std::string& action,
-                            const std::string& robot, const std::string& target) {
+Status AccessControl::Check(const Principal& principal, Permission permission,
+                            const std::string& action, const std::string& robot,
+                            const std::string& target) {
   Status s = Authorize(principal, permission, action, robot);
   if (!s.ok() && IsWrite(permission)) AuditDenied(principal, action, target, s);
   return s;
 }
 
-void AccessControl::CheckAsync(const Principal& principal, Permission permission, const std::string& action,
-                               const std::string& robot, const std::string& target,
-                               std::function<void(const Status&)> done) {
+void AccessControl::CheckAsync(const Principal& principal, Permission permission,
+                               const std::string& action, const std::string& robot,
+                               const std::string& target, std::function<void(const Status&)> done) {
   Status s = Authorize(principal, permission, action, robot);
   if (s.ok() || !IsWrite(permission)) {
     done(s);
@@ -116,16 +124,21 @@ void AccessControl::CheckAsync(const Principal& principal, Permission permission
              [done = std::move(done), s] { done(s); });
 }
 
-void AccessControl::LogDenied(const Principal& principal, const std::string& action, const std::string& target) {
+void AccessControl::LogDenied(const Principal& principal, const std::string& action,
+                              const std::string& target) {
   Log(LogLevel::kWarn, "permission_denied",
-      {{"who", principal.name}, {"role", RoleName(principal.role)}, {"action", action}, {"target", target}});
+      {{"who", principal.name},
+       {"role", RoleName(principal.role)},
+       {"action", action},
+       {"target", target}});
 }
 
 void AccessControl::AuditDenied(const Principal& principal, const std::string& action,
                                 const std::string& target, const Status& why) {
   LogDenied(principal, action, target);
   storage::AuditEntry e = Entry(principal, action, target, "denied: " + why.message());
-  Status s = core_->ExecuteWrite([&e](storage::WriteTransaction* txn) { return txn->AppendAudit(e); });
+  Status s =
+      core_->ExecuteWrite([&e](storage::WriteTransaction* txn) { return txn->AppendAudit(e); });
   if (!s.ok()) Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
 }
 
@@ -143,11 +156,15 @@ storage::AuditEntry AccessControl::Entry(const Principal& principal, const std::
 
 void AccessControl::AuditAsync(storage::AuditEntry entry, std::function<void()> done) {
   std::string action = entry.action;
-  core_->SubmitWrite([entry = std::move(entry)](storage::WriteTransaction* txn) { return txn->AppendAudit(entry); },
-                     [done = std::move(done), action = std::move(action)](const Status& s) {
-                       if (!s.ok()) Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
-                       done();
-                     });
+  core_->SubmitWrite(
+      [entry = std::move(entry)](storage::WriteTransaction* txn) {
+        return txn->AppendAudit(entry);
+      },
+      [done = std::move(done), action = std::move(action)](const Status& s) {
+        if (!s.ok())
+          Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
+        done();
+      });
 }
 
 }  // namespace mapd::service

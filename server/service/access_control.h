@@ -18,11 +18,11 @@
 #ifndef MAPD_SERVICE_ACCESS_CONTROL_H_
 #define MAPD_SERVICE_ACCESS_CONTROL_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <atomic>
 #include <functional>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
 
 #include "common/status.h"
 #include "service/auth.h"
@@ -56,7 +56,8 @@ class AccessControl {
   // otherwise on the writer thread once the refusal's audit row is committed
   // (or has failed, which is logged like in Check).
   void CheckAsync(const Principal& principal, Permission permission, const std::string& action,
-                  const std::string& robot, const std::string& target, std::function<void(const Status&)> done);
+                  const std::string& robot, const std::string& target,
+                  std::function<void(const Status&)> done);
 
   // True when a call without a credential is refused now.
   bool Required();
@@ -71,7 +72,8 @@ class AccessControl {
   StatusOr<Principal> FromToken(std::string_view bearer);
   void AuditDenied(const Principal& principal, const std::string& action, const std::string& target,
                    const Status& why);
-  static void LogDenied(const Principal& principal, const std::string& action, const std::string& target);
+  static void LogDenied(const Principal& principal, const std::string& action,
+                        const std::string& target);
 
   Core* const core_;
   const AuthOptions options_;

@@ -7,12 +7,16 @@ namespace {
 bool Grants(Role role, Permission p) {
   switch (p) {
     case Permission::kReadMap:
-    case Permission::kReadSubmaps: return true;
+    case Permission::kReadSubmaps:
+      return true;
     case Permission::kWrite:
-    case Permission::kDelete: return role != Role::kReader;
+    case Permission::kDelete:
+      return role != Role::kReader;
     case Permission::kMerge:
-    case Permission::kReadAudit: return role == Role::kOperator || role == Role::kAdmin;
-    case Permission::kManageTokens: return role == Role::kAdmin;
+    case Permission::kReadAudit:
+      return role == Role::kOperator || role == Role::kAdmin;
+    case Permission::kManageTokens:
+      return role == Role::kAdmin;
   }
   return false;
 }
@@ -32,10 +36,14 @@ std::string Describe(const Principal& p) {
 
 const char* RoleName(Role role) {
   switch (role) {
-    case Role::kReader: return "reader";
-    case Role::kRobot: return "robot";
-    case Role::kOperator: return "operator";
-    case Role::kAdmin: return "admin";
+    case Role::kReader:
+      return "reader";
+    case Role::kRobot:
+      return "robot";
+    case Role::kOperator:
+      return "operator";
+    case Role::kAdmin:
+      return "admin";
   }
   return "unknown";
 }
@@ -49,13 +57,20 @@ bool ParseRole(const std::string& name, Role* role) {
 
 const char* PermissionName(Permission p) {
   switch (p) {
-    case Permission::kReadMap: return "read_map";
-    case Permission::kReadSubmaps: return "read_submaps";
-    case Permission::kWrite: return "write";
-    case Permission::kDelete: return "delete";
-    case Permission::kMerge: return "merge";
-    case Permission::kReadAudit: return "read_audit";
-    case Permission::kManageTokens: return "manage_tokens";
+    case Permission::kReadMap:
+      return "read_map";
+    case Permission::kReadSubmaps:
+      return "read_submaps";
+    case Permission::kWrite:
+      return "write";
+    case Permission::kDelete:
+      return "delete";
+    case Permission::kMerge:
+      return "merge";
+    case Permission::kReadAudit:
+      return "read_audit";
+    case Permission::kManageTokens:
+      return "manage_tokens";
   }
   return "unknown";
 }
@@ -75,8 +90,9 @@ Status Authorize(const Principal& principal, Permission permission, const std::s
   if (principal.anonymous) {
     if (permission != Permission::kManageTokens) return Status::Ok();
     return Status::PermissionDenied(
-        action + ": token management needs an admin token, and the open mode has none; create the "
-                 "first with `mapd token create --db FILE --role admin --name NAME`");
+        action +
+        ": token management needs an admin token, and the open mode has none; create the "
+        "first with `mapd token create --db FILE --role admin --name NAME`");
   }
   if (!Grants(principal.role, permission)) {
     return Status::PermissionDenied(action + ": " + Describe(principal) + " lacks permission " +
@@ -84,10 +100,10 @@ Status Authorize(const Principal& principal, Permission permission, const std::s
                                     RolesGranting(permission) + ")");
   }
   if (principal.role == Role::kRobot && RobotScoped(permission) && robot != principal.robot_id) {
-    return Status::PermissionDenied(action + ": " + Describe(principal) + " may not touch robot '" +
-                                    robot + "': a robot token acts only for its own robot; permission " +
-                                    PermissionName(permission) + " on any robot is granted to " +
-                                    RolesGranting(permission));
+    return Status::PermissionDenied(
+        action + ": " + Describe(principal) + " may not touch robot '" + robot +
+        "': a robot token acts only for its own robot; permission " + PermissionName(permission) +
+        " on any robot is granted to " + RolesGranting(permission));
   }
   return Status::Ok();
 }

@@ -27,7 +27,7 @@ enum class Permission {
 };
 
 struct Principal {
-  std::string name;      // token name, certificate CN, or "anonymous"
+  std::string name;  // token name, certificate CN, or "anonymous"
   Role role = Role::kReader;
   std::string robot_id;  // role kRobot: the robot it acts for
   // No credential, auth not required (loopback, no tokens ever made): the
@@ -35,9 +35,9 @@ struct Principal {
   bool anonymous = false;
 };
 
-const char* RoleName(Role role);            // "reader", "robot", "operator", "admin"
+const char* RoleName(Role role);  // "reader", "robot", "operator", "admin"
 bool ParseRole(const std::string& name, Role* role);
-const char* PermissionName(Permission p);   // "read_map", "write", ...
+const char* PermissionName(Permission p);  // "read_map", "write", ...
 // The roles granting `p` (on any robot), e.g. "operator, admin".
 std::string RolesGranting(Permission p);
 

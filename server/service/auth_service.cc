@@ -15,21 +15,34 @@ constexpr uint32_t kMaxAuditLimit = 10000;
 
 pb::Role ToProto(Role r) {
   switch (r) {
-    case Role::kReader: return pb::ROLE_READER;
-    case Role::kRobot: return pb::ROLE_ROBOT;
-    case Role::kOperator: return pb::ROLE_OPERATOR;
-    case Role::kAdmin: return pb::ROLE_ADMIN;
+    case Role::kReader:
+      return pb::ROLE_READER;
+    case Role::kRobot:
+      return pb::ROLE_ROBOT;
+    case Role::kOperator:
+      return pb::ROLE_OPERATOR;
+    case Role::kAdmin:
+      return pb::ROLE_ADMIN;
   }
   return pb::ROLE_UNSPECIFIED;
 }
 
 bool FromProto(pb::Role r, Role* out) {
   switch (r) {
-    case pb::ROLE_READER: *out = Role::kReader; return true;
-    case pb::ROLE_ROBOT: *out = Role::kRobot; return true;
-    case pb::ROLE_OPERATOR: *out = Role::kOperator; return true;
-    case pb::ROLE_ADMIN: *out = Role::kAdmin; return true;
-    default: return false;
+    case pb::ROLE_READER:
+      *out = Role::kReader;
+      return true;
+    case pb::ROLE_ROBOT:
+      *out = Role::kRobot;
+      return true;
+    case pb::ROLE_OPERATOR:
+      *out = Role::kOperator;
+      return true;
+    case pb::ROLE_ADMIN:
+      *out = Role::kAdmin;
+      return true;
+    default:
+      return false;
   }
 }
 
@@ -50,7 +63,8 @@ std::string TokenTarget(int64_t id, const std::string& name) {
 
 }  // namespace
 
-grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context, const pb::CreateTokenRequest& request,
+grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
+                                      const pb::CreateTokenRequest& request,
                                       pb::CreateTokenResponse* response) {
   StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "CreateToken");
   if (!admin.ok()) return ToGrpcStatus(admin.status());
@@ -67,21 +81,25 @@ grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context, co
     StatusOr<IssuedToken> r = IssueToken(t, UnixNowNs(), txn);
     if (!r.ok()) return r.status();
     issued = std::move(r).value();
-    return txn->AppendAudit(AccessControl::Entry(
-        *admin, "CreateToken",
-        TokenTarget(issued.record.id, t.name) + " role " + RoleName(t.role) +
-            (t.robot_id.empty() ? "" : " robot " + t.robot_id),
-        "ok"));
+    return txn->AppendAudit(
+        AccessControl::Entry(*admin, "CreateToken",
+                             TokenTarget(issued.record.id, t.name) + " role " + RoleName(t.role) +
+                                 (t.robot_id.empty() ? "" : " robot " + t.robot_id),
+                             "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);
   Log(LogLevel::kInfo, "token_created",
-      {{"id", std::to_string(issued.record.id)}, {"name", t.name}, {"role", RoleName(t.role)}, {"by", admin->name}});
+      {{"id", std::to_string(issued.record.id)},
+       {"name", t.name},
+       {"role", RoleName(t.role)},
+       {"by", admin->name}});
   ToProto(issued.record, response->mutable_info());
   response->set_token(issued.token);
   return grpc::Status::OK;
 }
 
-grpc::Status AuthService::ListTokens(const grpc::ServerContextBase& context, pb::ListTokensResponse* response) {
+grpc::Status AuthService::ListTokens(const grpc::ServerContextBase& context,
+                                     pb::ListTokensResponse* response) {
   StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "ListTokens");
   if (!admin.ok()) return ToGrpcStatus(admin.status());
   StatusOr<std::vector<storage::TokenRecord>> tokens = core_->store().ListTokens();
@@ -90,7 +108,8 @@ grpc::Status AuthService::ListTokens(const grpc::ServerContextBase& context, pb:
   return grpc::Status::OK;
 }
 
-grpc::Status AuthService::RevokeToken(const grpc::ServerContextBase& context, const pb::RevokeTokenRequest& request,
+grpc::Status AuthService::RevokeToken(const grpc::ServerContextBase& context,
+                                      const pb::RevokeTokenRequest& request,
                                       pb::RevokeTokenResponse* response) {
   StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "RevokeToken");
   if (!admin.ok()) return ToGrpcStatus(admin.status());
@@ -100,26 +119,31 @@ grpc::Status AuthService::RevokeToken(const grpc::ServerContextBase& context, co
   if (!before.ok()) return ToGrpcStatus(before.status());
   Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
     MAPD_RETURN_IF_ERROR(txn->RevokeToken(id, UnixNowNs()));
-    return txn->AppendAudit(AccessControl::Entry(*admin, "RevokeToken", TokenTarget(id, before->name), "ok"));
+    return txn->AppendAudit(
+        AccessControl::Entry(*admin, "RevokeToken", TokenTarget(id, before->name), "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);
-  Log(LogLevel::kInfo, "token_revoked", {{"id", std::to_string(id)}, {"name", before->name}, {"by", admin->name}});
+  Log(LogLevel::kInfo, "token_revoked",
+      {{"id", std::to_string(id)}, {"name", before->name}, {"by", admin->name}});
   StatusOr<storage::TokenRecord> after = core_->store().GetToken(id);
   if (!after.ok()) return ToGrpcStatus(after.status());
   ToProto(*after, response->mutable_info());
   return grpc::Status::OK;
 }
 
-grpc::Status AuthService::ListAudit(const grpc::ServerContextBase& context, const pb::ListAuditRequest& request,
+grpc::Status AuthService::ListAudit(const grpc::ServerContextBase& context,
+                                    const pb::ListAuditRequest& request,
                                     pb::ListAuditResponse* response) {
   StatusOr<Principal> p = access_->Admit(context, Permission::kReadAudit, "ListAudit");
   if (!p.ok()) return ToGrpcStatus(p.status());
   if (request.limit() > kMaxAuditLimit) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        "limit " + std::to_string(request.limit()) + " is above " + std::to_string(kMaxAuditLimit));
+    return grpc::Status(
+        grpc::StatusCode::INVALID_ARGUMENT,
+        "limit " + std::to_string(request.limit()) + " is above " + std::to_string(kMaxAuditLimit));
   }
   const uint32_t limit = request.limit() == 0 ? kDefaultAuditLimit : request.limit();
-  StatusOr<std::vector<storage::AuditEntry>> entries = core_->store().ListAudit(static_cast<int>(limit));
+  StatusOr<std::vector<storage::AuditEntry>> entries =
+      core_->store().ListAudit(static_cast<int>(limit));
   if (!entries.ok()) return ToGrpcStatus(entries.status());
   for (const storage::AuditEntry& e : *entries) {
     pb::AuditEntry* out = response->add_entries();
@@ -134,7 +158,8 @@ grpc::Status AuthService::ListAudit(const grpc::ServerContextBase& context, cons
   return grpc::Status::OK;
 }
 
-grpc::Status AuthService::WhoAmI(const grpc::ServerContextBase& context, pb::WhoAmIResponse* response) {
+grpc::Status AuthService::WhoAmI(const grpc::ServerContextBase& context,
+                                 pb::WhoAmIResponse* response) {
   StatusOr<Principal> p = access_->Authenticate(context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   response->set_name(p->name);

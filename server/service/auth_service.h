@@ -15,14 +15,19 @@ class AuthService {
  public:
   AuthService(Core* core, AccessControl* access) : core_(core), access_(access) {}
 
-  grpc::Status CreateToken(const grpc::ServerContextBase& context, const mapserver::v1::CreateTokenRequest& request,
+  grpc::Status CreateToken(const grpc::ServerContextBase& context,
+                           const mapserver::v1::CreateTokenRequest& request,
                            mapserver::v1::CreateTokenResponse* response);
-  grpc::Status ListTokens(const grpc::ServerContextBase& context, mapserver::v1::ListTokensResponse* response);
-  grpc::Status RevokeToken(const grpc::ServerContextBase& context, const mapserver::v1::RevokeTokenRequest& request,
+  grpc::Status ListTokens(const grpc::ServerContextBase& context,
+                          mapserver::v1::ListTokensResponse* response);
+  grpc::Status RevokeToken(const grpc::ServerContextBase& context,
+                           const mapserver::v1::RevokeTokenRequest& request,
                            mapserver::v1::RevokeTokenResponse* response);
-  grpc::Status ListAudit(const grpc::ServerContextBase& context, const mapserver::v1::ListAuditRequest& request,
+  grpc::Status ListAudit(const grpc::ServerContextBase& context,
+                         const mapserver::v1::ListAuditRequest& request,
                          mapserver::v1::ListAuditResponse* response);
-  grpc::Status WhoAmI(const grpc::ServerContextBase& context, mapserver::v1::WhoAmIResponse* response);
+  grpc::Status WhoAmI(const grpc::ServerContextBase& context,
+                      mapserver::v1::WhoAmIResponse* response);
 
  private:
   Core* const core_;

@@ -47,7 +47,8 @@ bool ListenIsLoopback(const std::string& listen) {
   const size_t colon = listen.rfind(':');
   if (colon == std::string::npos) return false;
   std::string host = listen.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
   if (host.empty()) return false;  // ":50051" listens on every interface
   // The addresses the name stands for, not its text: a host name that
   // resolves to 0.0.0.0 (or to a public address) is not loopback.
@@ -89,24 +90,28 @@ Status ServerConfig::Validate() const {
     return Status::InvalidArgument("tls_cert and tls_key must be given together");
   }
   if (tls_cert.empty() && !allow_insecure_remote && !ListenIsLoopback(listen)) {
-    return Status::InvalidArgument("listen: '" + listen +
-                                   "' is not (or does not resolve only to) a loopback address; give tls_cert "
-                                   "and tls_key, or allow_insecure_remote=true on a trusted network");
+    return Status::InvalidArgument(
+        "listen: '" + listen +
+        "' is not (or does not resolve only to) a loopback address; give tls_cert "
+        "and tls_key, or allow_insecure_remote=true on a trusted network");
   }
   if (!tls_client_ca.empty() && tls_cert.empty()) {
-    return Status::InvalidArgument("tls_client_ca needs tls_cert and tls_key (client certificates need TLS)");
+    return Status::InvalidArgument(
+        "tls_client_ca needs tls_cert and tls_key (client certificates need TLS)");
   }
   if (!auth_required && tls_client_ca.empty() && !ListenIsLoopback(listen)) {
-    return Status::InvalidArgument("listen: '" + listen +
-                                   "' is not loopback; set auth.required = true (create tokens with "
-                                   "`mapd token create`) or tls_client_ca");
+    return Status::InvalidArgument(
+        "listen: '" + listen +
+        "' is not loopback; set auth.required = true (create tokens with "
+        "`mapd token create`) or tls_client_ca");
   }
   return Status::Ok();
 }
 
 Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config) {
   const Setting* s = Find(key);
-  if (s == nullptr) return Status::InvalidArgument("unknown setting '" + key + "' (see mapd --help)");
+  if (s == nullptr)
+    return Status::InvalidArgument("unknown setting '" + key + "' (see mapd --help)");
   return s->set(value, config);
 }
 
@@ -122,7 +127,8 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config) {
       return Status::InvalidArgument(path + ":" + std::to_string(n) + ": expected key = value");
     }
     Status s = ApplySetting(Trim(line.substr(0, eq)), Trim(line.substr(eq + 1)), config);
-    if (!s.ok()) return Status::InvalidArgument(path + ":" + std::to_string(n) + ": " + s.message());
+    if (!s.ok())
+      return Status::InvalidArgument(path + ":" + std::to_string(n) + ": " + s.message());
   }
   return Status::Ok();
 }

@@ -18,34 +18,32 @@
 
 namespace mapd::service {
 
-
-
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   std::string db_path;                     // empty: DefaultDbPath()
   bool sync_full = false;                  // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;              // wait for a database lock held by another process
   fusion::FusionParams fusion;
-  fusion::PlaneFusionParams planes;        // non-vertical planes (floors, ramps)
+  fusion::PlaneFusionParams planes;  // non-vertical planes (floors, ramps)
   IngestOptions ingest;
   SubmapOptions submaps;
   StreamLimits streams;
-  size_t max_message_bytes = 16u << 20;    // largest gRPC message accepted
-  size_t max_group_batches = 4096;         // batches per group commit at most
+  size_t max_message_bytes = 16u << 20;          // largest gRPC message accepted
+  size_t max_group_batches = 4096;               // batches per group commit at most
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)
   double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
   double raw_retention_days = 0.0;               // 0: keep raw observations forever
-  double shutdown_grace_s = 5.0;           // SIGTERM: time given to streams to finish
-  double shutdown_flush_s = 5.0;           // ... then to commit what is queued if the disk fails
-  uint64_t max_db_bytes = 0;               // database size cap (as a full disk beyond), 0: none
-  std::string tls_cert;                    // PEM files; required off loopback
+  double shutdown_grace_s = 5.0;                 // SIGTERM: time given to streams to finish
+  double shutdown_flush_s = 5.0;  // ... then to commit what is queued if the disk fails
+  uint64_t max_db_bytes = 0;      // database size cap (as a full disk beyond), 0: none
+  std::string tls_cert;           // PEM files; required off loopback
   std::string tls_key;
-  bool allow_insecure_remote = false;      // serve plaintext off loopback anyway
+  bool allow_insecure_remote = false;  // serve plaintext off loopback anyway
   // Identities (docs/security.md): every call needs a credential even with no
   // token in the database yet. Required off loopback (or tls_client_ca).
   bool auth_required = false;
-  std::string tls_client_ca;               // PEM CA: clients must present a certificate it signed
-  std::string log_level = "info";          // debug, info, warn, error
+  std::string tls_client_ca;       // PEM CA: clients must present a certificate it signed
+  std::string log_level = "info";  // debug, info, warn, error
 
   // Every setting's range (the table), the libraries' own checks, and the
   // rules between settings (TLS off loopback).

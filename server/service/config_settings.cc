@@ -37,7 +37,8 @@ struct Range {
 };
 
 std::string RangeText(const Range& r) {
-  return std::string(r.lo_open ? "(" : "[") + Number(r.lo) + ", " + (r.hi == kInf ? "inf)" : Number(r.hi) + "]");
+  return std::string(r.lo_open ? "(" : "[") + Number(r.lo) + ", " +
+         (r.hi == kInf ? "inf)" : Number(r.hi) + "]");
 }
 
 Status CheckRange(const std::string& key, double v, const Range& r) {
@@ -52,7 +53,9 @@ Status CheckRange(const std::string& key, double v, const Range& r) {
 // (degrees written, radians stored).
 Setting Real(std::string key, std::string help, Ref<double> ref, Range range, double scale = 1.0) {
   help += ", " + RangeText(range);
-  return {key, "number", help,
+  return {key,
+          "number",
+          help,
           [key, ref, range, scale](const std::string& v, ServerConfig* c) {
             char* end = nullptr;
             const double d = std::strtod(v.c_str(), &end);
@@ -63,7 +66,9 @@ Setting Real(std::string key, std::string help, Ref<double> ref, Range range, do
             ref(*c) = d * scale;
             return Status::Ok();
           },
-          [key, ref, range, scale](const ServerConfig& c) { return CheckRange(key, Read(ref, c) / scale, range); },
+          [key, ref, range, scale](const ServerConfig& c) {
+            return CheckRange(key, Read(ref, c) / scale, range);
+          },
           [ref, scale](const ServerConfig& c) { return Number(Read(ref, c) / scale); }};
 }
 
@@ -73,12 +78,14 @@ Setting Count(std::string key, std::string help, F ref, uint64_t lo, uint64_t hi
   help += ", [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   auto check = [key, lo, hi](uint64_t u) {
     if (u < lo || u > hi) {
-      return Status::InvalidArgument(key + " = " + std::to_string(u) + " is outside [" + std::to_string(lo) +
-                                     ", " + std::to_string(hi) + "]");
+      return Status::InvalidArgument(key + " = " + std::to_string(u) + " is outside [" +
+                                     std::to_string(lo) + ", " + std::to_string(hi) + "]");
     }
     return Status::Ok();
   };
-  return {key, "integer", help,
+  return {key,
+          "integer",
+          help,
           [key, ref, check](const std::string& v, ServerConfig* c) {
             char* end = nullptr;
             errno = 0;
@@ -93,7 +100,8 @@ Setting Count(std::string key, std::string help, F ref, uint64_t lo, uint64_t hi
           [key, ref, check](const ServerConfig& c) {
             const T v = Read(ref, c);
             if constexpr (std::is_signed_v<T>) {
-              if (v < 0) return Status::InvalidArgument(key + " = " + std::to_string(v) + " is negative");
+              if (v < 0)
+                return Status::InvalidArgument(key + " = " + std::to_string(v) + " is negative");
             }
             return check(static_cast<uint64_t>(v));
           },
@@ -101,7 +109,9 @@ Setting Count(std::string key, std::string help, F ref, uint64_t lo, uint64_t hi
 }
 
 Setting Flag(std::string key, std::string help, Ref<bool> ref) {
-  return {key, "bool", help,
+  return {key,
+          "bool",
+          help,
           [key, ref](const std::string& v, ServerConfig* c) {
             if (v == "true" || v == "1" || v == "yes") return ref(*c) = true, Status::Ok();
             if (v == "false" || v == "0" || v == "no") return ref(*c) = false, Status::Ok();
@@ -112,7 +122,9 @@ Setting Flag(std::string key, std::string help, Ref<bool> ref) {
 }
 
 Setting Text(std::string key, std::string help, Ref<std::string> ref) {
-  return {key, "text", help,
+  return {key,
+          "text",
+          help,
           [ref](const std::string& v, ServerConfig* c) {
             ref(*c) = v;
             return Status::Ok();
@@ -122,17 +134,23 @@ Setting Text(std::string key, std::string help, Ref<std::string> ref) {
 }
 
 // One of a few names, stored as a bool: `names` = {false name, true name}.
-Setting Choice(std::string key, std::string help, Ref<bool> ref, std::string when_false, std::string when_true) {
-  return {key, when_false + "|" + when_true, help,
+Setting Choice(std::string key, std::string help, Ref<bool> ref, std::string when_false,
+               std::string when_true) {
+  return {key,
+          when_false + "|" + when_true,
+          help,
           [key, ref, when_false, when_true](const std::string& v, ServerConfig* c) {
             if (v != when_false && v != when_true) {
-              return Status::InvalidArgument(key + ": '" + v + "' is neither " + when_false + " nor " + when_true);
+              return Status::InvalidArgument(key + ": '" + v + "' is neither " + when_false +
+                                             " nor " + when_true);
             }
             ref(*c) = v == when_true;
             return Status::Ok();
           },
           [](const ServerConfig&) { return Status::Ok(); },
-          [ref, when_false, when_true](const ServerConfig& c) { return Read(ref, c) ? when_true : when_false; }};
+          [ref, when_false, when_true](const ServerConfig& c) {
+            return Read(ref, c) ? when_true : when_false;
+          }};
 }
 
 }  // namespace

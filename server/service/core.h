@@ -61,19 +61,19 @@ struct PlaneView {
 };
 
 struct CoreStats {
-  uint64_t batches_stored = 0;    // by this process since it started
+  uint64_t batches_stored = 0;  // by this process since it started
   uint64_t features_stored = 0;
-  double batches_per_s = 0;       // over the last 10 s
+  double batches_per_s = 0;  // over the last 10 s
   double features_per_s = 0;
   uint64_t fused_features = 0;
   uint64_t clusters = 0;
   uint64_t map_version = 0;
-  uint64_t fusion_backlog = 0;    // committed observations not fused yet
-  uint64_t commits = 0;           // group commits by this process
+  uint64_t fusion_backlog = 0;  // committed observations not fused yet
+  uint64_t commits = 0;         // group commits by this process
   double uptime_s = 0;
-  bool recovering = false;        // the fused map is being rebuilt at start
-  double snapshot_age_s = 0;      // newest snapshot of the fusion state (0: none)
-  uint64_t replay_length = 0;     // observations fused since that snapshot
+  bool recovering = false;          // the fused map is being rebuilt at start
+  double snapshot_age_s = 0;        // newest snapshot of the fusion state (0: none)
+  uint64_t replay_length = 0;       // observations fused since that snapshot
   uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)
   uint64_t fusion_nodes = 0;        // the engine's nodes (representatives in bounded mode)
   uint64_t fused_planes = 0;        // published non-vertical planes

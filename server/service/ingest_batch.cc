@@ -20,7 +20,8 @@ Status CheckScalar(double v, const std::string& field, double max_abs) {
   return Status::Ok();
 }
 
-Status ConvertVec(const pb::Vec3& v, const std::string& field, double max_abs, Eigen::Vector3d* out) {
+Status ConvertVec(const pb::Vec3& v, const std::string& field, double max_abs,
+                  Eigen::Vector3d* out) {
   MAPD_RETURN_IF_ERROR(CheckScalar(v.x(), field + ".x", max_abs));
   MAPD_RETURN_IF_ERROR(CheckScalar(v.y(), field + ".y", max_abs));
   MAPD_RETURN_IF_ERROR(CheckScalar(v.z(), field + ".z", max_abs));
@@ -32,7 +33,8 @@ Status ConvertVec(const pb::Vec3& v, const std::string& field, double max_abs, E
 Status CheckUnitNorm(double norm, const std::string& field, double tol) {
   if (std::abs(norm - 1.0) > tol) {
     std::ostringstream m;
-    m << field << " has norm " << norm << "; a unit " << (field.find("rotation") != std::string::npos ? "quaternion" : "vector")
+    m << field << " has norm " << norm << "; a unit "
+      << (field.find("rotation") != std::string::npos ? "quaternion" : "vector")
       << " is required (|norm - 1| <= " << tol << ")";
     return Status::InvalidArgument(m.str());
   }
@@ -51,29 +53,28 @@ bool ValidId(const std::string& id, uint32_t max_length) {
   return true;
 }
 
-
 StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const IngestLimits& limits) {
   IngestBatch out;
   if (!ValidId(in.robot_id(), limits.max_id_length)) {
-    return Status::InvalidArgument("robot_id '" + in.robot_id().substr(0, 64) +
-                                   "' must be 1-" + std::to_string(limits.max_id_length) +
+    return Status::InvalidArgument("robot_id '" + in.robot_id().substr(0, 64) + "' must be 1-" +
+                                   std::to_string(limits.max_id_length) +
                                    " characters of [A-Za-z0-9_.-]");
   }
   if (!ValidId(in.session_id(), limits.max_id_length)) {
-    return Status::InvalidArgument("session_id '" + in.session_id().substr(0, 64) +
-                                   "' must be 1-" + std::to_string(limits.max_id_length) +
+    return Status::InvalidArgument("session_id '" + in.session_id().substr(0, 64) + "' must be 1-" +
+                                   std::to_string(limits.max_id_length) +
                                    " characters of [A-Za-z0-9_.-]");
   }
   if (in.seq() == 0) return Status::InvalidArgument("seq is 0; sequence numbers start at 1");
   if (in.seq() > static_cast<uint64_t>(INT64_MAX)) {
     return Status::InvalidArgument("seq is larger than 2^63 - 1");
   }
-  const size_t n_features = static_cast<size_t>(in.lines_size()) + static_cast<size_t>(in.planes_size());
+  const size_t n_features =
+      static_cast<size_t>(in.lines_size()) + static_cast<size_t>(in.planes_size());
   if (n_features > limits.max_features_per_batch) {
-    return Status::ResourceExhausted("batch has " + std::to_string(n_features) +
-                                     " features (lines + planes); the limit is " +
-                                     std::to_string(limits.max_features_per_batch) +
-                                     " (max_features_per_batch): split it");
+    return Status::ResourceExhausted(
+        "batch has " + std::to_string(n_features) + " features (lines + planes); the limit is " +
+        std::to_string(limits.max_features_per_batch) + " (max_features_per_batch): split it");
   }
   if (!in.has_t_frame_sensor() || !in.t_frame_sensor().has_rotation() ||
       !in.t_frame_sensor().has_translation()) {
@@ -81,10 +82,15 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
   }
   switch (in.session_frame()) {
     case pb::SESSION_FRAME_UNSPECIFIED:
-    case pb::SESSION_FRAME_MAP: out.frame_kind = storage::FrameKind::kMap; break;
-    case pb::SESSION_FRAME_LOCAL: out.frame_kind = storage::FrameKind::kLocal; break;
-    default: return Status::InvalidArgument("session_frame has unknown value " +
-                                            std::to_string(in.session_frame()));
+    case pb::SESSION_FRAME_MAP:
+      out.frame_kind = storage::FrameKind::kMap;
+      break;
+    case pb::SESSION_FRAME_LOCAL:
+      out.frame_kind = storage::FrameKind::kLocal;
+      break;
+    default:
+      return Status::InvalidArgument("session_frame has unknown value " +
+                                     std::to_string(in.session_frame()));
   }
   const double max_abs = limits.max_abs_coordinate_m;
   geometry::SensorObservation& f = out.features;
@@ -95,7 +101,8 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
     MAPD_RETURN_IF_ERROR(CheckScalar(v, std::string("T_frame_sensor.rotation.") + name, 2.0));
   }
   Eigen::Quaterniond rotation(q.w(), q.x(), q.y(), q.z());
-  MAPD_RETURN_IF_ERROR(CheckUnitNorm(rotation.norm(), "T_frame_sensor.rotation", limits.quaternion_tolerance));
+  MAPD_RETURN_IF_ERROR(
+      CheckUnitNorm(rotation.norm(), "T_frame_sensor.rotation", limits.quaternion_tolerance));
   f.T_frame_sensor.rotation = rotation.normalized();
 
   f.lines.resize(static_cast<size_t>(in.lines_size()));
@@ -114,7 +121,8 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
     const pb::Plane& p = in.planes(i);
     geometry::PlaneFeature& out_p = f.planes[static_cast<size_t>(i)];
     MAPD_RETURN_IF_ERROR(ConvertVec(p.normal(), field + ".normal", 2.0, &out_p.normal));
-    MAPD_RETURN_IF_ERROR(CheckUnitNorm(out_p.normal.norm(), field + ".normal", limits.quaternion_tolerance));
+    MAPD_RETURN_IF_ERROR(
+        CheckUnitNorm(out_p.normal.norm(), field + ".normal", limits.quaternion_tolerance));
     out_p.normal.normalize();
     MAPD_RETURN_IF_ERROR(CheckScalar(p.offset(), field + ".offset", max_abs));
     out_p.offset = p.offset();
@@ -123,10 +131,10 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
                                      " points; a plane needs at least 3");
     }
     if (static_cast<uint32_t>(p.boundary_size()) > limits.max_boundary_points) {
-      return Status::ResourceExhausted(field + ".boundary has " + std::to_string(p.boundary_size()) +
-                                       " points; the limit is " +
-                                       std::to_string(limits.max_boundary_points) +
-                                       " (max_boundary_points): send its convex hull");
+      return Status::ResourceExhausted(
+          field + ".boundary has " + std::to_string(p.boundary_size()) + " points; the limit is " +
+          std::to_string(limits.max_boundary_points) +
+          " (max_boundary_points): send its convex hull");
     }
     out_p.boundary.resize(static_cast<size_t>(p.boundary_size()));
     for (int k = 0; k < p.boundary_size(); ++k) {

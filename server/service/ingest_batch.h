@@ -18,7 +18,6 @@ namespace mapd::service {
 // [A-Za-z0-9_.-] (ingest, submap uploads, tokens' robot scope).
 bool ValidId(const std::string& id, uint32_t max_length = IngestLimits{}.max_id_length);
 
-
 // A validated batch in library types.
 struct IngestBatch {
   std::string robot;

@@ -1,8 +1,8 @@
 #include "service/ingest_reactor.h"
 
+#include <grpcpp/impl/codegen/proto_utils.h>
 #include <grpcpp/support/proto_buffer_reader.h>
 #include <grpcpp/support/proto_buffer_writer.h>
-#include <grpcpp/impl/codegen/proto_utils.h>
 
 #include "service/log.h"
 #include "service/status_mapping.h"
@@ -47,10 +47,13 @@ void IngestReactor::OnReadDone(bool ok) {
       end_status_ = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                                  "message " + std::to_string(index) +
                                      " of the stream (0-based) is not a valid ObservationBatch (" +
-                                     parsed.error_message() + "); the stream ends, the batches before it are "
+                                     parsed.error_message() +
+                                     "); the stream ends, the batches before it are "
                                      "acknowledged, nothing after it was read");
       Log(LogLevel::kWarn, "ingest_malformed",
-          {{"robot", robot_}, {"peer", peer_}, {"message", std::to_string(index)},
+          {{"robot", robot_},
+           {"peer", peer_},
+           {"message", std::to_string(index)},
            {"error", parsed.error_message()}});
       MaybeFinishLocked();
       return;
@@ -68,17 +71,23 @@ void IngestReactor::OnReadDone(bool ok) {
     ack.set_code(grpc::StatusCode::UNAVAILABLE);
     ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
     Complete(std::move(ack));
-  } else if (Status may = Authorize(caller_, Permission::kWrite, "Ingest", request_.robot_id()); !may.ok()) {
+  } else if (Status may = Authorize(caller_, Permission::kWrite, "Ingest", request_.robot_id());
+             !may.ok()) {
     ack.set_result(pb::IngestAck::REJECTED);
     ack.set_code(ToGrpcCode(may.code()));
     ack.set_message(may.message());
     if (denied_++ == 0) {
       Log(LogLevel::kWarn, "permission_denied",
-          {{"who", caller_.name}, {"action", "Ingest"}, {"robot", request_.robot_id().substr(0, 64)}, {"peer", peer_}});
-      access_->AuditAsync(AccessControl::Entry(caller_, "Ingest", "robot " + request_.robot_id().substr(0, 128) +
-                                                   " session " + request_.session_id().substr(0, 128),
-                                               "denied: " + may.message()),
-                          [this, ack]() mutable { Complete(std::move(ack)); });
+          {{"who", caller_.name},
+           {"action", "Ingest"},
+           {"robot", request_.robot_id().substr(0, 64)},
+           {"peer", peer_}});
+      access_->AuditAsync(
+          AccessControl::Entry(caller_, "Ingest",
+                               "robot " + request_.robot_id().substr(0, 128) + " session " +
+                                   request_.session_id().substr(0, 128),
+                               "denied: " + may.message()),
+          [this, ack]() mutable { Complete(std::move(ack)); });
     } else {
       Complete(std::move(ack));
     }
@@ -86,8 +95,11 @@ void IngestReactor::OnReadDone(bool ok) {
     StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits);
     if (!batch.ok()) {
       Log(LogLevel::kWarn, "ingest_rejected",
-          {{"robot", request_.robot_id().substr(0, 64)}, {"session", request_.session_id().substr(0, 64)},
-           {"seq", std::to_string(request_.seq())}, {"peer", peer_}, {"error", batch.status().ToString()}});
+          {{"robot", request_.robot_id().substr(0, 64)},
+           {"session", request_.session_id().substr(0, 64)},
+           {"seq", std::to_string(request_.seq())},
+           {"peer", peer_},
+           {"error", batch.status().ToString()}});
       ack.set_result(pb::IngestAck::REJECTED);
       ack.set_code(ToGrpcCode(batch.status().code()));
       ack.set_message(batch.status().message());
@@ -95,8 +107,12 @@ void IngestReactor::OnReadDone(bool ok) {
     } else {
       core_->Submit(std::move(batch).value(), [this, ack](const BatchOutcome& outcome) mutable {
         switch (outcome.kind) {
-          case BatchOutcome::Kind::kStored: ack.set_result(pb::IngestAck::STORED); break;
-          case BatchOutcome::Kind::kDuplicate: ack.set_result(pb::IngestAck::DUPLICATE); break;
+          case BatchOutcome::Kind::kStored:
+            ack.set_result(pb::IngestAck::STORED);
+            break;
+          case BatchOutcome::Kind::kDuplicate:
+            ack.set_result(pb::IngestAck::DUPLICATE);
+            break;
           case BatchOutcome::Kind::kRejected:
             ack.set_result(pb::IngestAck::REJECTED);
             ack.set_code(ToGrpcCode(outcome.status.code()));
@@ -116,9 +132,14 @@ void IngestReactor::Complete(pb::IngestAck ack) {
   std::lock_guard<std::mutex> lock(mu_);
   --in_flight_;
   switch (ack.result()) {
-    case pb::IngestAck::STORED: ++stored_; break;
-    case pb::IngestAck::DUPLICATE: ++duplicates_; break;
-    default: ++rejected_;
+    case pb::IngestAck::STORED:
+      ++stored_;
+      break;
+    case pb::IngestAck::DUPLICATE:
+      ++duplicates_;
+      break;
+    default:
+      ++rejected_;
   }
   if (!broken_) acks_.push_back(std::move(ack));
   if (!writing_) StartNextWriteLocked();
@@ -130,7 +151,8 @@ void IngestReactor::StartNextWriteLocked() {
   if (acks_.empty() || broken_) return;
   bool own_buffer = false;
   write_buffer_.Clear();
-  grpc::Status s = grpc::SerializationTraits<pb::IngestAck>::Serialize(acks_.front(), &write_buffer_, &own_buffer);
+  grpc::Status s = grpc::SerializationTraits<pb::IngestAck>::Serialize(acks_.front(),
+                                                                       &write_buffer_, &own_buffer);
   acks_.pop_front();
   if (!s.ok()) {  // an ack always serialises; if not, the client cannot be told
     broken_ = true;
@@ -169,11 +191,15 @@ void IngestReactor::OnCancel() {
 
 void IngestReactor::MaybeFinishLocked() {
   // Finish only when no callback of MapCore can still reach this reactor.
-  if (finished_ || !read_closed_ || reading_ || in_flight_ > 0 || writing_ || !acks_.empty()) return;
+  if (finished_ || !read_closed_ || reading_ || in_flight_ > 0 || writing_ || !acks_.empty())
+    return;
   finished_ = true;
   Log(LogLevel::kInfo, "ingest_stream_closed",
-      {{"robot", robot_}, {"peer", peer_}, {"stored", std::to_string(stored_)},
-       {"duplicate", std::to_string(duplicates_)}, {"rejected", std::to_string(rejected_)},
+      {{"robot", robot_},
+       {"peer", peer_},
+       {"stored", std::to_string(stored_)},
+       {"duplicate", std::to_string(duplicates_)},
+       {"rejected", std::to_string(rejected_)},
        {"client_gone", broken_ ? "true" : "false"}});
   slot_.Release();  // before the client sees the status (its next stream must find the place)
   Finish(end_status_);

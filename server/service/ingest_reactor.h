@@ -18,28 +18,28 @@
 #ifndef MAPD_SERVICE_INGEST_REACTOR_H_
 #define MAPD_SERVICE_INGEST_REACTOR_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <atomic>
 #include <deque>
 #include <mutex>
 #include <string>
 
-#include <grpcpp/grpcpp.h>
-
 #include "mapserver/v1/map_service.pb.h"
 #include "service/access_control.h"
+#include "service/core.h"
 #include "service/ingest_batch.h"
 #include "service/options.h"
-#include "service/core.h"
 #include "service/stream_limiter.h"
 
 namespace mapd::service {
-
 
 // Owned by gRPC; deletes itself in OnDone().
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, Core* core, const IngestOptions* options,
-                const std::atomic<bool>* draining, AccessControl* access, Principal caller, StreamSlot slot);
+                const std::atomic<bool>* draining, AccessControl* access, Principal caller,
+                StreamSlot slot);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -47,10 +47,10 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   void OnDone() override;
 
  private:
-  void Complete(mapserver::v1::IngestAck ack);           // a batch's outcome is final
-  void StartNextWriteLocked();                           // REQUIRES: mu_ held
-  void MaybeReadLocked();                                // REQUIRES: mu_ held
-  void MaybeFinishLocked();                              // REQUIRES: mu_ held
+  void Complete(mapserver::v1::IngestAck ack);  // a batch's outcome is final
+  void StartNextWriteLocked();                  // REQUIRES: mu_ held
+  void MaybeReadLocked();                       // REQUIRES: mu_ held
+  void MaybeFinishLocked();                     // REQUIRES: mu_ held
 
   Core* const core_;
   const IngestOptions* const options_;
@@ -65,18 +65,19 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   grpc::ByteBuffer read_buffer_;             // the buffer of the outstanding read
   mapserver::v1::ObservationBatch request_;  // read_buffer_ parsed
   grpc::ByteBuffer write_buffer_;            // the buffer of the outstanding write
-  uint64_t messages_read_ = 0;  // GUARDED_BY(mu_), index of the next message
-  grpc::Status end_status_;     // GUARDED_BY(mu_), what Finish reports (a malformed message)
+  uint64_t messages_read_ = 0;               // GUARDED_BY(mu_), index of the next message
+  grpc::Status end_status_;  // GUARDED_BY(mu_), what Finish reports (a malformed message)
   std::deque<mapserver::v1::IngestAck> acks_;  // GUARDED_BY(mu_), waiting to be written
-  uint32_t in_flight_ = 0;   // GUARDED_BY(mu_), batches handed out, outcome pending
-  bool reading_ = false;     // GUARDED_BY(mu_), a read is outstanding or being processed
-  bool writing_ = false;     // GUARDED_BY(mu_)
-  bool read_closed_ = false; // GUARDED_BY(mu_), the client half-closed or the call ended
-  bool broken_ = false;      // GUARDED_BY(mu_), a write failed: the client is gone
-  bool finished_ = false;    // GUARDED_BY(mu_)
-  std::string robot_;        // for logs, from the first batch
-  uint64_t stored_ = 0, duplicates_ = 0, rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
-  uint64_t denied_ = 0;  // batches refused PERMISSION_DENIED; reader thread only
+  uint32_t in_flight_ = 0;    // GUARDED_BY(mu_), batches handed out, outcome pending
+  bool reading_ = false;      // GUARDED_BY(mu_), a read is outstanding or being processed
+  bool writing_ = false;      // GUARDED_BY(mu_)
+  bool read_closed_ = false;  // GUARDED_BY(mu_), the client half-closed or the call ended
+  bool broken_ = false;       // GUARDED_BY(mu_), a write failed: the client is gone
+  bool finished_ = false;     // GUARDED_BY(mu_)
+  std::string robot_;         // for logs, from the first batch
+  uint64_t stored_ = 0, duplicates_ = 0,
+           rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
+  uint64_t denied_ = 0;    // batches refused PERMISSION_DENIED; reader thread only
 };
 
 }  // namespace mapd::service

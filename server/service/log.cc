@@ -24,19 +24,25 @@ struct EventWindow {
   uint64_t suppressed = 0;
 };
 std::mutex g_rate_mu;
-std::unordered_map<std::string, EventWindow>* g_windows = new std::unordered_map<std::string, EventWindow>();
+std::unordered_map<std::string, EventWindow>* g_windows =
+    new std::unordered_map<std::string, EventWindow>();
 
 int64_t NowSecond() {
-  return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::seconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
 
 const char* LevelName(LogLevel l) {
   switch (l) {
-    case LogLevel::kDebug: return "debug";
-    case LogLevel::kInfo: return "info";
-    case LogLevel::kWarn: return "warn";
-    case LogLevel::kError: return "error";
+    case LogLevel::kDebug:
+      return "debug";
+    case LogLevel::kInfo:
+      return "info";
+    case LogLevel::kWarn:
+      return "warn";
+    case LogLevel::kError:
+      return "error";
   }
   return "info";
 }

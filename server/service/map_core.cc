@@ -13,7 +13,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-
 // Records one change feed into a set of clusters to rewrite.
 void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
   for (const auto* ids : {&feed.added, &feed.updated, &feed.removed}) {
@@ -43,7 +42,6 @@ bool PolygonMeetsBox(const std::vector<Eigen::Vector3d>& boundary, const geometr
   return inside;
 }
 
-
 }  // namespace
 
 struct MapCore::WriteJob {
@@ -59,7 +57,8 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   params = options.planes.Validate();
   if (!params.ok()) return Status::InvalidArgument("plane fusion parameters: " + params.message());
   std::unique_ptr<MapCore> core(new MapCore(options));
-  StatusOr<std::unique_ptr<storage::Store>> store = storage::Store::Open(options.db_path, options.store);
+  StatusOr<std::unique_ptr<storage::Store>> store =
+      storage::Store::Open(options.db_path, options.store);
   if (!store.ok()) {
     return Status(store.status().code(), "cannot open the database '" + options.db_path +
                                              "': " + store.status().message());
@@ -209,8 +208,9 @@ void MapCore::Stop() {
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     stopping_ = true;
-    stop_flush_deadline_ = std::chrono::steady_clock::now() +
-                           std::chrono::milliseconds(static_cast<int64_t>(options_.stop_flush_s * 1000));
+    stop_flush_deadline_ =
+        std::chrono::steady_clock::now() +
+        std::chrono::milliseconds(static_cast<int64_t>(options_.stop_flush_s * 1000));
     queue_cv_.notify_all();
   }
   // Every queued batch is committed and acknowledged, or, if the database
@@ -249,7 +249,8 @@ void MapCore::Stop() {
     if (!s.ok()) Log(LogLevel::kWarn, "fused_table_write_failed", {{"error", s.ToString()}});
   }
   // A snapshot of the final state makes the next start replay nothing.
-  if (store_ && ready_.load() && CheckReady().ok() && write_health_.ok()) MaybeSnapshot(/*force=*/true);
+  if (store_ && ready_.load() && CheckReady().ok() && write_health_.ok())
+    MaybeSnapshot(/*force=*/true);
   if (store_) {
     Status s = store_->Checkpoint();
     if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
@@ -268,7 +269,8 @@ void MapCore::WriterLoop() {
     bool backlogged = false;
     {
       std::lock_guard<std::mutex> lock(fuse_mu_);
-      backlogged = committed_count_ - fused_count_ > options_.max_fusion_backlog && !stop_requested_;
+      backlogged =
+          committed_count_ - fused_count_ > options_.max_fusion_backlog && !stop_requested_;
     }
     bool probe = false;
     {
@@ -283,7 +285,8 @@ void MapCore::WriterLoop() {
         const bool was_stopping = stopping_;
         const auto pause = was_stopping ? std::chrono::milliseconds(100) : write_health_.Backoff();
         queue_cv_.wait_for(lock, pause, [&] { return stopping_ != was_stopping; });
-        if (stopping_ && !write_health_.ok() && std::chrono::steady_clock::now() >= stop_flush_deadline_) {
+        if (stopping_ && !write_health_.ok() &&
+            std::chrono::steady_clock::now() >= stop_flush_deadline_) {
           AbandonQueuedWrites(lock);
           break;
         }
@@ -293,11 +296,13 @@ void MapCore::WriterLoop() {
       } else {
         if (backlogged) {
           // The fuser's progress is signalled on fuse_cv_, not here: look again soon.
-          queue_cv_.wait_for(lock, std::chrono::milliseconds(20), [&] { return has_work() || stopping_; });
+          queue_cv_.wait_for(lock, std::chrono::milliseconds(20),
+                             [&] { return has_work() || stopping_; });
         } else {
           queue_cv_.wait(lock, [&] { return has_work() || stopping_; });
         }
-        if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty() && stopping_) break;  // nothing left
+        if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty() && stopping_)
+          break;  // nothing left
         if (!has_work()) continue;
       }
       if (!probe) {
@@ -337,7 +342,8 @@ void MapCore::AbandonQueuedWrites(std::unique_lock<std::mutex>& lock) {
        {"fused_rows_dropped", std::to_string(fused_rows)},
        {"reason", why.message()},
        {"action", "nothing acknowledged is lost; fused rows are recomputed at the next start"}});
-  const Status refused = Status::Unavailable("mapd stopped while the database refused writes; resend");
+  const Status refused =
+      Status::Unavailable("mapd stopped while the database refused writes; resend");
   for (Pending& p : batches) p.done({BatchOutcome::Kind::kRejected, refused});
   for (const std::shared_ptr<WriteJob>& job : jobs) job->done(refused);
   lock.lock();
@@ -502,7 +508,8 @@ Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransacti
   }
   for (const storage::FusedRow& row : upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFused(row));
   for (fusion::ClusterId id : deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFused(id));
-  for (const storage::FusedPlaneRow& row : plane_upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFusedPlane(row));
+  for (const storage::FusedPlaneRow& row : plane_upserts)
+    MAPD_RETURN_IF_ERROR(txn->UpsertFusedPlane(row));
   for (fusion::ClusterId id : plane_deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFusedPlane(id));
   return Status::Ok();
 }
@@ -515,7 +522,8 @@ void MapCore::WaitForFuser(std::chrono::duration<double> timeout) const {
 
 void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observation_id,
                    int64_t robot_id, const geometry::Rigid3& T_map_frame, FusedDelta* delta) {
-  const fusion::FeatureId first_id = static_cast<fusion::FeatureId>(observation_id) << kFeatureIdBits;
+  const fusion::FeatureId first_id = static_cast<fusion::FeatureId>(observation_id)
+                                     << kFeatureIdBits;
   StatusOr<fusion::ProjectedObservation> projected =
       fusion::ProjectToGround(features, T_map_frame, first_id, options_.fusion);
   Status s = projected.status();
@@ -523,8 +531,8 @@ void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observat
   fusion::PlaneChangeFeed plane_feed;
   if (s.ok() && !projected->ground.empty()) {
     s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
-                      static_cast<fusion::RobotId>(robot_id), projected->ground,
-                      delta ? &feed : nullptr);
+                     static_cast<fusion::RobotId>(robot_id), projected->ground,
+                     delta ? &feed : nullptr);
   }
   // Lines and planes are separate engines: a refused plane set leaves the
   // lines fused (and the other way round); both are logged.
@@ -606,7 +614,8 @@ uint64_t MapCore::FusionBacklog() const {
 
 std::vector<FusedView> MapCore::QueryFeatures(const FeatureQuery& query, uint64_t* map_version,
                                               std::vector<PlaneView>* planes) const {
-  WaitForFuser(std::chrono::duration<double>(query.max_wait_s >= 0 ? query.max_wait_s : options_.max_query_wait_s));
+  WaitForFuser(std::chrono::duration<double>(query.max_wait_s >= 0 ? query.max_wait_s
+                                                                   : options_.max_query_wait_s));
   const uint32_t min_support = std::max(query.min_support, options_.fusion.min_support);
   std::vector<fusion::FusedFeature> published;
   std::vector<fusion::FusedPlane> published_planes;
@@ -679,7 +688,8 @@ CoreStats MapCore::Stats() const {
       base_b = r.batches;
       base_f = r.features;
     }
-    const double window = std::max(1e-3, std::min(10.0, std::chrono::duration<double>(now - started_).count()));
+    const double window =
+        std::max(1e-3, std::min(10.0, std::chrono::duration<double>(now - started_).count()));
     s.batches_per_s = static_cast<double>(s.batches_stored - base_b) / window;
     s.features_per_s = static_cast<double>(s.features_stored - base_f) / window;
   }

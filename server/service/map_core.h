@@ -57,10 +57,10 @@ struct MapCoreOptions {
   std::string db_path;
   storage::StoreOptions store;
   fusion::FusionParams fusion;
-  fusion::PlaneFusionParams planes;    // non-vertical planes (fusion/plane_engine.h)
-  size_t max_group_batches = 4096;     // batches in one commit at most
-  size_t max_fusion_backlog = 50000;   // committed, not yet fused observations at most
-  double max_query_wait_s = 5.0;       // a query waits this long for the fuser at most
+  fusion::PlaneFusionParams planes;   // non-vertical planes (fusion/plane_engine.h)
+  size_t max_group_batches = 4096;    // batches in one commit at most
+  size_t max_fusion_backlog = 50000;  // committed, not yet fused observations at most
+  double max_query_wait_s = 5.0;      // a query waits this long for the fuser at most
   // Snapshots of the fusion state (bounded mode): after this many fused
   // observations, or once the newest is this old and anything changed. A
   // restart loads the newest and replays only what came after it. 0 = never.
@@ -202,18 +202,20 @@ class MapCore final : public Core {
   mutable std::shared_mutex engine_mu_;  // writer: exclusive while fusing; queries: shared
   std::unique_ptr<fusion::FusionEngine> engine_;
   std::unique_ptr<fusion::PlaneFusionEngine> plane_engine_;  // same lock and thread as engine_
-  std::atomic<uint64_t> map_version_{0};  // observations reflected in the map
+  std::atomic<uint64_t> map_version_{0};                     // observations reflected in the map
 
   mutable std::mutex names_mu_;
   std::unordered_map<int64_t, std::string> robot_names_;
 
   std::mutex queue_mu_;
-  std::condition_variable queue_cv_;  // the writer waits for work or for the fuser's backlog to drop
+  std::condition_variable
+      queue_cv_;               // the writer waits for work or for the fuser's backlog to drop
   std::deque<Pending> queue_;  // GUARDED_BY(queue_mu_)
   std::deque<std::shared_ptr<WriteJob>> write_jobs_;  // GUARDED_BY(queue_mu_)
-  bool stopping_ = false;      // GUARDED_BY(queue_mu_)
-  FusedDelta fused_pending_;   // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
-  std::chrono::steady_clock::time_point stop_flush_deadline_;  // GUARDED_BY(queue_mu_), set by Stop()
+  bool stopping_ = false;                             // GUARDED_BY(queue_mu_)
+  FusedDelta fused_pending_;  // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
+  std::chrono::steady_clock::time_point
+      stop_flush_deadline_;  // GUARDED_BY(queue_mu_), set by Stop()
   WriteHealth write_health_;
   std::thread writer_;
 
@@ -232,13 +234,13 @@ class MapCore final : public Core {
   };
   mutable std::mutex fuse_mu_;
   mutable std::condition_variable fuse_cv_;  // the fuser waits for work; queries wait for the fuser
-  std::deque<ToFuse> fuse_queue_;  // GUARDED_BY(fuse_mu_)
-  uint64_t committed_count_ = 0;   // GUARDED_BY(fuse_mu_), observations handed to the fuser
-  uint64_t fused_count_ = 0;       // GUARDED_BY(fuse_mu_), observations the fuser finished
-  bool fuser_stopping_ = false;    // GUARDED_BY(fuse_mu_)
-  bool stop_requested_ = false;    // GUARDED_BY(fuse_mu_): Stop() began; no more backpressure
+  std::deque<ToFuse> fuse_queue_;            // GUARDED_BY(fuse_mu_)
+  uint64_t committed_count_ = 0;  // GUARDED_BY(fuse_mu_), observations handed to the fuser
+  uint64_t fused_count_ = 0;      // GUARDED_BY(fuse_mu_), observations the fuser finished
+  bool fuser_stopping_ = false;   // GUARDED_BY(fuse_mu_)
+  bool stop_requested_ = false;   // GUARDED_BY(fuse_mu_): Stop() began; no more backpressure
   std::atomic<bool> fuser_abandon_{false};  // Stop(): the fuser leaves the rest of its work
-  int64_t last_observation_id_ = 0;  // writer thread: the newest stored observation
+  int64_t last_observation_id_ = 0;         // writer thread: the newest stored observation
   // Fuser thread: where the engine stands in the commit order (what a
   // snapshot of it reflects): every tied observation up to this id, every tie
   // up to this sequence number.

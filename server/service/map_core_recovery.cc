@@ -25,15 +25,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-
 int64_t MsSince(Clock::time_point t0) {
   return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
 }
 
 bool SamePlaneRow(const storage::FusedPlaneRow& a, const storage::FusedPlaneRow& b) {
-  return a.id == b.id && a.normal == b.normal && a.offset_m == b.offset_m && a.boundary == b.boundary &&
-         a.area_m2 == b.area_m2 && a.z_min_m == b.z_min_m && a.z_max_m == b.z_max_m &&
-         a.support == b.support && a.member_count == b.member_count && a.robots == b.robots;
+  return a.id == b.id && a.normal == b.normal && a.offset_m == b.offset_m &&
+         a.boundary == b.boundary && a.area_m2 == b.area_m2 && a.z_min_m == b.z_min_m &&
+         a.z_max_m == b.z_max_m && a.support == b.support && a.member_count == b.member_count &&
+         a.robots == b.robots;
 }
 
 bool SameFusedRow(const storage::FusedRow& a, const storage::FusedRow& b) {
@@ -82,7 +82,8 @@ void MapCore::Recover() {
         from = "snapshot";
       } else {
         Log(LogLevel::kWarn, "snapshot_unusable",
-            {{"snapshot", std::to_string(snap->id)}, {"error", loaded.status().ToString()},
+            {{"snapshot", std::to_string(snap->id)},
+             {"error", loaded.status().ToString()},
              {"action", skip + 1 < kSnapshotsKept ? "trying the one before"
                                                   : "replaying every stored observation"}});
       }
@@ -105,20 +106,23 @@ void MapCore::Recover() {
   if (s.ok()) {
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
     Log(LogLevel::kInfo, "map_recovered",
-        {{"from", from}, {"replayed", std::to_string(recovery_replayed_.load())},
+        {{"from", from},
+         {"replayed", std::to_string(recovery_replayed_.load())},
          {"raw_features", std::to_string(engine_->feature_count())},
          {"nodes", std::to_string(engine_->node_count())},
          {"fused", std::to_string(engine_->published_count())},
          {"fused_planes", std::to_string(plane_engine_->published_count())},
-         {"map_version", std::to_string(map_version_.load())}, {"ms", std::to_string(MsSince(t0))}});
+         {"map_version", std::to_string(map_version_.load())},
+         {"ms", std::to_string(MsSince(t0))}});
   } else if (!cancel_recovery_.load()) {
     Log(LogLevel::kError, "map_recovery_failed", {{"error", s.ToString()}});
   }
   std::vector<std::function<void()>> callbacks;
   {
     std::lock_guard<std::mutex> lock(ready_mu_);
-    recovery_status_ = s.ok() ? Status::Ok()
-                              : Status::Internal("mapd could not recover its fused map: " + s.message());
+    recovery_status_ =
+        s.ok() ? Status::Ok()
+               : Status::Internal("mapd could not recover its fused map: " + s.message());
     ready_ = true;
     callbacks.swap(on_ready_);
   }
@@ -161,7 +165,8 @@ Status MapCore::Replay() {
       last_log = Clock::now();
       const double s = std::chrono::duration<double>(last_log - t0).count();
       Log(LogLevel::kInfo, "recovering",
-          {{"replayed", std::to_string(done)}, {"at_id", std::to_string(obs.id)},
+          {{"replayed", std::to_string(done)},
+           {"at_id", std::to_string(obs.id)},
            {"newest_id", std::to_string(*newest)},
            {"per_s", std::to_string(static_cast<int64_t>(static_cast<double>(done) / s))}});
     }
@@ -181,12 +186,12 @@ Status MapCore::Replay() {
     MAPD_RETURN_IF_ERROR(stream_until(at.first));
     std::unordered_map<int64_t, geometry::Rigid3> frames;
     for (const storage::SessionFrame& f : *sessions) {
-      if (std::find(tied.begin(), tied.end(), f.session_id) != tied.end()) frames[f.session_id] = f.T_map_frame;
+      if (std::find(tied.begin(), tied.end(), f.session_id) != tied.end())
+        frames[f.session_id] = f.T_map_frame;
     }
     MAPD_RETURN_IF_ERROR(store_->ForEachObservationOfSessions(
-        tied, at.first, [&](const storage::StoredObservation& obs) {
-          return fuse(obs, frames[obs.session_id]);
-        }));
+        tied, at.first,
+        [&](const storage::StoredObservation& obs) { return fuse(obs, frames[obs.session_id]); }));
     streaming.insert(frames.begin(), frames.end());
     fused_tie_seq_ = at.second;
   }
@@ -208,7 +213,8 @@ Status MapCore::QueueFusedTableSync() {
       if (it != old_rows.end()) old_rows.erase(it);
     }
   }
-  for (const auto& [id, row] : old_rows) delta.lines.insert(id);  // gone: WriteFusedDelta deletes it
+  for (const auto& [id, row] : old_rows)
+    delta.lines.insert(id);  // gone: WriteFusedDelta deletes it
   StatusOr<std::vector<storage::FusedPlaneRow>> stored_planes = store_->LoadFusedPlanes();
   if (!stored_planes.ok()) return stored_planes.status();
   std::unordered_map<uint64_t, storage::FusedPlaneRow> old_planes;
@@ -259,15 +265,16 @@ void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
   }
   Log(LogLevel::kInfo, "tied_sessions_fused",
       {{"sessions", std::to_string(tie.tied_sessions.size())},
-       {"observations", std::to_string(added)}, {"ms", std::to_string(MsSince(t0))}});
+       {"observations", std::to_string(added)},
+       {"ms", std::to_string(MsSince(t0))}});
 }
 
 void MapCore::MaybeSnapshot(bool force) {
   if (options_.fusion.mode != fusion::FusionMode::kBounded) return;
   if (options_.snapshot_every_observations == 0 || fused_since_snapshot_.load() == 0) return;
-  const bool due = fused_since_snapshot_.load() >= options_.snapshot_every_observations ||
-                   Clock::now() - last_snapshot_ >=
-                       std::chrono::duration<double>(options_.snapshot_max_age_s);
+  const bool due =
+      fused_since_snapshot_.load() >= options_.snapshot_every_observations ||
+      Clock::now() - last_snapshot_ >= std::chrono::duration<double>(options_.snapshot_max_age_s);
   if (!force && (!due || snapshot_in_flight_.load())) return;
   const auto t0 = Clock::now();
   storage::FusionSnapshot snap;
@@ -314,7 +321,8 @@ void MapCore::MaybeSnapshot(bool force) {
     }
     snapshot_created_ns_ = created_ns;
     Log(LogLevel::kInfo, "snapshot_written",
-        {{"bytes", std::to_string(bytes)}, {"encode_ms", std::to_string(encode_ms)},
+        {{"bytes", std::to_string(bytes)},
+         {"encode_ms", std::to_string(encode_ms)},
          {"ms", std::to_string(MsSince(t0))}});
     if (options_.raw_retention_days > 0) DropExpiredObservations();
   };

@@ -18,7 +18,6 @@ using service::ToProto;  // proto_convert.h, beside the overloads below
 // stream limit): the robot reconnects and resends, as after any UNAVAILABLE.
 using RefusedIngest = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;
 
-
 namespace pb = mapserver::v1;
 
 constexpr int kFeaturesPerPage = 4096;
@@ -66,17 +65,25 @@ Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
   }
   out->min_support = in.min_support();
   switch (in.kind()) {
-    case pb::FEATURE_KIND_UNSPECIFIED: out->kind = KindFilter::kAny; break;
-    case pb::FEATURE_KIND_LINE: out->kind = KindFilter::kLine; break;
-    case pb::FEATURE_KIND_PLANE: out->kind = KindFilter::kPlane; break;
-    default: return Status::InvalidArgument("kind has unknown value " + std::to_string(in.kind()));
+    case pb::FEATURE_KIND_UNSPECIFIED:
+      out->kind = KindFilter::kAny;
+      break;
+    case pb::FEATURE_KIND_LINE:
+      out->kind = KindFilter::kLine;
+      break;
+    case pb::FEATURE_KIND_PLANE:
+      out->kind = KindFilter::kPlane;
+      break;
+    default:
+      return Status::InvalidArgument("kind has unknown value " + std::to_string(in.kind()));
   }
   return Status::Ok();
 }
 
 }  // namespace
 
-MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options, const SubmapOptions& submap_options,
+MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options,
+                               const SubmapOptions& submap_options,
                                const StreamLimits& stream_limits, AuthOptions auth_options)
     : core_(core),
       ingest_options_(ingest_options),
@@ -92,36 +99,44 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
   // stream limits: a flood of opens costs one refusal each, before any token
   // lookup or audit row (the per-client bucket also bounds the refused writes
   // audited below).
-  if (Status ready = core_->CheckReady(); !ready.ok()) return new RefusedIngest(ToGrpcStatus(ready));
+  if (Status ready = core_->CheckReady(); !ready.ok())
+    return new RefusedIngest(ToGrpcStatus(ready));
   StreamSlot slot;
   if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
-    Log(LogLevel::kWarn, "stream_refused", {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
+    Log(LogLevel::kWarn, "stream_refused",
+        {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new RefusedIngest(ToGrpcStatus(admitted));
   }
   StatusOr<Principal> who = access_.Authenticate(*context);
   if (!who.ok()) return new RefusedIngest(ToGrpcStatus(who.status()));
   // The role first (a reader never writes); each batch's robot id is then
   // checked by the reactor.
-  if (Status may = access_.Check(*who, Permission::kWrite, "Ingest", who->robot_id, "stream"); !may.ok()) {
+  if (Status may = access_.Check(*who, Permission::kWrite, "Ingest", who->robot_id, "stream");
+      !may.ok()) {
     return new RefusedIngest(ToGrpcStatus(may));
   }
-  return new IngestReactor(context, core_, &ingest_options_, &draining_, &access_, *std::move(who), std::move(slot));
+  return new IngestReactor(context, core_, &ingest_options_, &draining_, &access_, *std::move(who),
+                           std::move(slot));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
                                            const pb::FeatureMapRequest* request,
                                            grpc::ServerWriter<pb::FeatureMapPage>* writer) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok()) return ToGrpcStatus(p.status());
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
+    return ToGrpcStatus(p.status());
   FeatureQuery query;
   Status s = FromProto(*request, &query);
   if (!s.ok()) return ToGrpcStatus(s);
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   // Bounded wait for the fuser (see FeatureMapRequest.max_wait_ms): never
   // past the server's cap or the call's deadline (less a margin to answer).
-  double wait_s = request->max_wait_ms() == 0 ? stream_limits_.read_wait_s
-                                              : std::min(request->max_wait_ms() * 1e-3, stream_limits_.max_read_wait_s);
+  double wait_s = request->max_wait_ms() == 0
+                      ? stream_limits_.read_wait_s
+                      : std::min(request->max_wait_ms() * 1e-3, stream_limits_.max_read_wait_s);
   const double to_deadline =
-      std::chrono::duration<double>(context->deadline() - std::chrono::system_clock::now()).count() - 0.05;
+      std::chrono::duration<double>(context->deadline() - std::chrono::system_clock::now())
+          .count() -
+      0.05;
   query.max_wait_s = std::max(0.0, std::min(wait_s, to_deadline));
   uint64_t version = 0;
   std::vector<PlaneView> planes;
@@ -132,10 +147,12 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   page.set_map_version(version);
   page.set_fusion_pending(core_->FusionBacklog());
   for (size_t i = 0; i < features.size(); ++i) {
-    if (request->without_corner_optimisation()) features[i].feature.segment = features[i].feature.fitted;
+    if (request->without_corner_optimisation())
+      features[i].feature.segment = features[i].feature.fitted;
     ToProto(features[i], page.add_features());
     if (page.features_size() == kFeaturesPerPage) {
-      if (!writer->Write(page)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+      if (!writer->Write(page))
+        return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
       page.clear_features();
       page.clear_planes();
     }
@@ -146,7 +163,8 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
 
 grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,
                                         pb::ListRobotsResponse* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok()) return ToGrpcStatus(p.status());
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok())
+    return ToGrpcStatus(p.status());
   StatusOr<std::vector<storage::RobotSummary>> robots = core_->store().ListRobots();
   if (!robots.ok()) return ToGrpcStatus(robots.status());
   for (const auto& r : *robots) {
@@ -164,7 +182,8 @@ grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::
 
 grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::GetStatsRequest*,
                                       pb::Stats* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetStats"); !p.ok()) return ToGrpcStatus(p.status());
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetStats"); !p.ok())
+    return ToGrpcStatus(p.status());
   StatusOr<storage::StoreCounts> counts = core_->store().Counts();
   if (!counts.ok()) return ToGrpcStatus(counts.status());
   const CoreStats s = core_->Stats();
@@ -198,8 +217,8 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   return grpc::Status::OK;
 }
 
-grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(grpc::CallbackServerContext* context,
-                                                                               pb::SubmapInfo* response) {
+grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
+    grpc::CallbackServerContext* context, pb::SubmapInfo* response) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StreamSlot slot;
   if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
@@ -210,30 +229,37 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(g
   StatusOr<Principal> p = access_.Authenticate(*context);
   if (!p.ok()) return new Refused(ToGrpcStatus(p.status()));
   // The role here; the header's robot id once it is read (UploadReactor).
-  if (Status may = access_.Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload"); !may.ok()) {
+  if (Status may = access_.Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload");
+      !may.ok()) {
     return new Refused(ToGrpcStatus(may));
   }
-  if (draining_) return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
+  if (draining_)
+    return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
   return submaps_.Upload(context, response, std::move(slot), *std::move(p));
 }
-grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context, const pb::ListSubmapsRequest* request,
+grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
+                                         const pb::ListSubmapsRequest* request,
                                          pb::ListSubmapsResponse* response) {
   StatusOr<Principal> p = access_.Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   pb::ListSubmapsRequest scoped = *request;
   // A robot lists its own submaps unless it names another robot (refused).
-  if (p->role == Role::kRobot && !p->anonymous && scoped.robot_id().empty()) scoped.set_robot_id(p->robot_id);
-  if (Status may = Authorize(*p, Permission::kReadSubmaps, "ListSubmaps", scoped.robot_id()); !may.ok()) {
+  if (p->role == Role::kRobot && !p->anonymous && scoped.robot_id().empty())
+    scoped.set_robot_id(p->robot_id);
+  if (Status may = Authorize(*p, Permission::kReadSubmaps, "ListSubmaps", scoped.robot_id());
+      !may.ok()) {
     return ToGrpcStatus(may);
   }
   return submaps_.List(scoped, response);
 }
-grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context, const pb::GetSubmapRequest* request,
+grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context,
+                                       const pb::GetSubmapRequest* request,
                                        grpc::ServerWriter<pb::DataChunk>* writer) {
   StatusOr<Principal> p = access_.Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   if (p->role == Role::kRobot && !p->anonymous) {
-    StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(static_cast<int64_t>(request->id()));
+    StatusOr<storage::SubmapMeta> meta =
+        core_->store().GetSubmap(static_cast<int64_t>(request->id()));
     if (!meta.ok()) return ToGrpcStatus(meta.status());
     if (Status may = Authorize(*p, Permission::kReadSubmaps, "GetSubmap", meta->robot); !may.ok()) {
       return ToGrpcStatus(may);
@@ -241,25 +267,30 @@ grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context, const pb::G
   }
   return submaps_.Get(context, *request, writer);
 }
-grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context, const pb::DeleteSubmapRequest* request,
+grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context,
+                                          const pb::DeleteSubmapRequest* request,
                                           pb::DeleteSubmapResponse*) {
   StatusOr<Principal> p = access_.Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Delete(*request, *p);
 }
-grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context, const pb::MergeSubmapsRequest* request,
+grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context,
+                                          const pb::MergeSubmapsRequest* request,
                                           grpc::ServerWriter<pb::MergeProgress>* writer) {
   StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "MergeSubmaps");
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Merge(context, *request, writer, *p);
 }
-grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context, const pb::GetGlobalMapRequest*,
+grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
+                                          const pb::GetGlobalMapRequest*,
                                           grpc::ServerWriter<pb::DataChunk>* writer) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok()) return ToGrpcStatus(p.status());
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok())
+    return ToGrpcStatus(p.status());
   return submaps_.GetGlobalMap(context, writer);
 }
 
-grpc::Status MapServiceImpl::CreateToken(grpc::ServerContext* context, const pb::CreateTokenRequest* request,
+grpc::Status MapServiceImpl::CreateToken(grpc::ServerContext* context,
+                                         const pb::CreateTokenRequest* request,
                                          pb::CreateTokenResponse* response) {
   return auth_.CreateToken(*context, *request, response);
 }
@@ -267,11 +298,13 @@ grpc::Status MapServiceImpl::ListTokens(grpc::ServerContext* context, const pb::
                                         pb::ListTokensResponse* response) {
   return auth_.ListTokens(*context, response);
 }
-grpc::Status MapServiceImpl::RevokeToken(grpc::ServerContext* context, const pb::RevokeTokenRequest* request,
+grpc::Status MapServiceImpl::RevokeToken(grpc::ServerContext* context,
+                                         const pb::RevokeTokenRequest* request,
                                          pb::RevokeTokenResponse* response) {
   return auth_.RevokeToken(*context, *request, response);
 }
-grpc::Status MapServiceImpl::ListAudit(grpc::ServerContext* context, const pb::ListAuditRequest* request,
+grpc::Status MapServiceImpl::ListAudit(grpc::ServerContext* context,
+                                       const pb::ListAuditRequest* request,
                                        pb::ListAuditResponse* response) {
   return auth_.ListAudit(*context, *request, response);
 }

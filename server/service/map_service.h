@@ -14,16 +14,16 @@
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/access_control.h"
 #include "service/auth_service.h"
-#include "service/ingest_reactor.h"
 #include "service/core.h"
+#include "service/ingest_reactor.h"
 #include "service/stream_limiter.h"
 #include "service/submap_service.h"
 
 namespace mapd::service {
 
-class MapServiceImpl final
-    : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
-          mapserver::v1::MapService::WithRawCallbackMethod_Ingest<mapserver::v1::MapService::Service>> {
+class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
+                                 mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
+                                     mapserver::v1::MapService::Service>> {
  public:
   MapServiceImpl(Core* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
                  const StreamLimits& stream_limits = {}, AuthOptions auth_options = {});
@@ -45,7 +45,8 @@ class MapServiceImpl final
   grpc::Status GetFeatureMap(grpc::ServerContext* context,
                              const mapserver::v1::FeatureMapRequest* request,
                              grpc::ServerWriter<mapserver::v1::FeatureMapPage>* writer) override;
-  grpc::Status ListRobots(grpc::ServerContext* context, const mapserver::v1::ListRobotsRequest* request,
+  grpc::Status ListRobots(grpc::ServerContext* context,
+                          const mapserver::v1::ListRobotsRequest* request,
                           mapserver::v1::ListRobotsResponse* response) override;
   grpc::Status GetStats(grpc::ServerContext* context, const mapserver::v1::GetStatsRequest* request,
                         mapserver::v1::Stats* response) override;
@@ -53,9 +54,11 @@ class MapServiceImpl final
   // Voxel submaps: delegated to SubmapService (submap_service.h).
   grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(
       grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response) override;
-  grpc::Status ListSubmaps(grpc::ServerContext* context, const mapserver::v1::ListSubmapsRequest* request,
+  grpc::Status ListSubmaps(grpc::ServerContext* context,
+                           const mapserver::v1::ListSubmapsRequest* request,
                            mapserver::v1::ListSubmapsResponse* response) override;
-  grpc::Status GetSubmap(grpc::ServerContext* context, const mapserver::v1::GetSubmapRequest* request,
+  grpc::Status GetSubmap(grpc::ServerContext* context,
+                         const mapserver::v1::GetSubmapRequest* request,
                          grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
   grpc::Status DeleteSubmap(grpc::ServerContext* context,
                             const mapserver::v1::DeleteSubmapRequest* request,
@@ -68,13 +71,17 @@ class MapServiceImpl final
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
 
   // Identities and the audit log: delegated to AuthService (auth_service.h).
-  grpc::Status CreateToken(grpc::ServerContext* context, const mapserver::v1::CreateTokenRequest* request,
+  grpc::Status CreateToken(grpc::ServerContext* context,
+                           const mapserver::v1::CreateTokenRequest* request,
                            mapserver::v1::CreateTokenResponse* response) override;
-  grpc::Status ListTokens(grpc::ServerContext* context, const mapserver::v1::ListTokensRequest* request,
+  grpc::Status ListTokens(grpc::ServerContext* context,
+                          const mapserver::v1::ListTokensRequest* request,
                           mapserver::v1::ListTokensResponse* response) override;
-  grpc::Status RevokeToken(grpc::ServerContext* context, const mapserver::v1::RevokeTokenRequest* request,
+  grpc::Status RevokeToken(grpc::ServerContext* context,
+                           const mapserver::v1::RevokeTokenRequest* request,
                            mapserver::v1::RevokeTokenResponse* response) override;
-  grpc::Status ListAudit(grpc::ServerContext* context, const mapserver::v1::ListAuditRequest* request,
+  grpc::Status ListAudit(grpc::ServerContext* context,
+                         const mapserver::v1::ListAuditRequest* request,
                          mapserver::v1::ListAuditResponse* response) override;
   grpc::Status WhoAmI(grpc::ServerContext* context, const mapserver::v1::WhoAmIRequest* request,
                       mapserver::v1::WhoAmIResponse* response) override;

@@ -72,8 +72,8 @@ class MergeRunner {
   ~MergeRunner();  // Shutdown()
 
   // Starts the merge now, or queues it behind the running ones.
-  // Unimplemented when mapd was built without voxel merging; ResourceExhausted when max_concurrent run and max_queued wait already;
-  // Unavailable after Shutdown().
+  // Unimplemented when mapd was built without voxel merging; ResourceExhausted when max_concurrent
+  // run and max_queued wait already; Unavailable after Shutdown().
   StatusOr<std::shared_ptr<MergeJob>> Submit(std::vector<uint64_t> ids,
                                              std::vector<std::string> bytes,
                                              const voxel::MergeParams& params);

@@ -43,17 +43,17 @@ struct StreamLimits {
   // second, and the burst allowed above that rate.
   double stream_opens_per_s = 200.0;
   double stream_open_burst = 400.0;
-  double keepalive_time_s = 60.0;       // ping an idle connection this often
-  double keepalive_timeout_s = 20.0;    // ... and drop it when the ping is not answered within this
+  double keepalive_time_s = 60.0;     // ping an idle connection this often
+  double keepalive_timeout_s = 20.0;  // ... and drop it when the ping is not answered within this
   double min_client_ping_interval_s = 10.0;  // clients pinging more often are dropped (ping flood)
-  double max_connection_idle_s = 600.0; // close connections without streams after this; 0 = never
-  double max_connection_age_s = 0.0;    // close any connection after this (gracefully); 0 = never
+  double max_connection_idle_s = 600.0;  // close connections without streams after this; 0 = never
+  double max_connection_age_s = 0.0;     // close any connection after this (gracefully); 0 = never
   // A read (GetFeatureMap) waits at most this long for the fuser to reflect
   // every acknowledged batch, unless the request asks for longer; then it
   // answers with the map as it is (map_version and fusion_pending say how old).
   double read_wait_s = 0.2;
-  double max_read_wait_s = 30.0;        // the longest wait a request may ask for
-  uint32_t log_lines_per_s = 20;        // per event; the rest is counted in one `log_suppressed` line
+  double max_read_wait_s = 30.0;  // the longest wait a request may ask for
+  uint32_t log_lines_per_s = 20;  // per event; the rest is counted in one `log_suppressed` line
 };
 
 // Voxel submaps and merges. The merge thresholds are voxel::MergeParams's
@@ -65,12 +65,14 @@ struct SubmapOptions {
   // Merges waiting for a slot at most; one more is refused with
   // RESOURCE_EXHAUSTED (the caller retries later) rather than queued unbounded.
   size_t max_queued_merges = 4;
-  int min_matched_corners = 4;          // evidence to accept a pairwise merge
-  double max_residual_voxels = 0.75;    // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
-  double min_overlap_score = 0.9;       // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
-  double max_merge_seconds = 60.0;      // budget of one merge, seconds
-  bool resample_resolutions = false;    // false: different resolutions are refused
-  bool log_odds_fusion = false;         // false: the paper's overlap rule
+  int min_matched_corners = 4;  // evidence to accept a pairwise merge
+  double max_residual_voxels =
+      0.75;  // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
+  double min_overlap_score =
+      0.9;  // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
+  double max_merge_seconds = 60.0;    // budget of one merge, seconds
+  bool resample_resolutions = false;  // false: different resolutions are refused
+  bool log_odds_fusion = false;       // false: the paper's overlap rule
   // Occupied voxels one uploaded submap may expand to at the finest
   // resolution (counted from the tree structure before anything is built).
   uint64_t max_submap_voxels = 8'000'000;

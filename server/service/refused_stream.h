@@ -3,9 +3,9 @@
 #ifndef MAPD_SERVICE_REFUSED_STREAM_H_
 #define MAPD_SERVICE_REFUSED_STREAM_H_
 
-#include <utility>
-
 #include <grpcpp/grpcpp.h>
+
+#include <utility>
 
 namespace mapd::service {
 

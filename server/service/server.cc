@@ -1,14 +1,13 @@
 #include "service/server.h"
 
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
 #include <malloc.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
-#include <grpcpp/health_check_service_interface.h>
 
 #include "service/log.h"
 
@@ -34,7 +33,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   std::error_code ec;
   const auto parent = std::filesystem::path(db).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  if (ec) return Status::FailedPrecondition("cannot create the directory of --db '" + db + "': " + ec.message());
+  if (ec)
+    return Status::FailedPrecondition("cannot create the directory of --db '" + db +
+                                      "': " + ec.message());
 
   MapCoreOptions core_options;
   core_options.db_path = db;
@@ -54,8 +55,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   AuthOptions auth;  // docs/security.md
   auth.required = config.auth_required;
   auth.client_certs = !config.tls_client_ca.empty();
-  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest, config.submaps,
-                                                      config.streams, auth);
+  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest,
+                                                      config.submaps, config.streams, auth);
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -90,7 +91,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   // protection, idle and maximal connection age.
   const StreamLimits& limits = config.streams;
   auto ms = [](double s) { return static_cast<int>(std::min(s * 1000.0, 2.0e9)); };
-  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, static_cast<int>(limits.max_streams_per_connection));
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS,
+                             static_cast<int>(limits.max_streams_per_connection));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ms(limits.keepalive_time_s));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ms(limits.keepalive_timeout_s));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
@@ -111,7 +113,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   }
   server->server_->GetHealthCheckService()->SetServingStatus(false);
   Log(LogLevel::kInfo, "listening",
-      {{"address", server->address()}, {"db", db}, {"health", "NOT_SERVING"},
+      {{"address", server->address()},
+       {"db", db},
+       {"health", "NOT_SERVING"},
        {"reason", "recovering the fused map"}});
   MapServer* s = server.get();
   server->core_->write_health().SetListener([s](const Status& failure) {
@@ -120,9 +124,11 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
       Log(LogLevel::kInfo, "writable_again", {{"health", "SERVING"}});
     } else {
       Log(LogLevel::kError, "not_writable",
-          {{"health", "NOT_SERVING"}, {"reason", failure.message()},
-           {"action", "batches and uploads are refused (robots resend); free disk space or fix the database "
-                      "file; mapd probes every second and serves again by itself"}});
+          {{"health", "NOT_SERVING"},
+           {"reason", failure.message()},
+           {"action",
+            "batches and uploads are refused (robots resend); free disk space or fix the database "
+            "file; mapd probes every second and serves again by itself"}});
     }
     s->UpdateHealthLocked();
   });
@@ -131,7 +137,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     if (s->shut_down_) return;
     s->UpdateHealthLocked();
     Log(LogLevel::kInfo, "serving",
-        {{"address", s->address()}, {"db", db}, {"sync", sync ? "full" : "normal"},
+        {{"address", s->address()},
+         {"db", db},
+         {"sync", sync ? "full" : "normal"},
          {"fusion_mode", fusion::FusionModeName(fusion.mode)},
          {"corner_mode", fusion::CornerModeName(fusion.corner_mode)}});
   });
@@ -140,14 +148,16 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
 }
 
 void MapServer::UpdateHealthLocked() {
-  server_->GetHealthCheckService()->SetServingStatus(!shut_down_ && core_->ready() && core_->write_health().ok());
+  server_->GetHealthCheckService()->SetServingStatus(!shut_down_ && core_->ready() &&
+                                                     core_->write_health().ok());
 }
 
 void MapServer::Housekeeping() {
   uint64_t last_events = 0, since_trim = 0;
   int seconds_since_trim = 0;
   std::unique_lock<std::mutex> lock(housekeeping_mu_);
-  while (!housekeeping_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return housekeeping_stop_; })) {
+  while (!housekeeping_cv_.wait_for(lock, std::chrono::seconds(1),
+                                    [this] { return housekeeping_stop_; })) {
     lock.unlock();
     service_->Tick();
     FlushSuppressedLogs();
@@ -186,11 +196,12 @@ void MapServer::Shutdown() {
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
   server_->GetHealthCheckService()->SetServingStatus(false);
   service_->StartDraining();
-  const auto deadline = std::chrono::system_clock::now() +
-                        std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
+  const auto deadline =
+      std::chrono::system_clock::now() +
+      std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
   server_->Shutdown(deadline);  // returns once every RPC has ended
   StopHousekeeping();
-  core_->Stop();                // commits what is queued, checkpoints
+  core_->Stop();  // commits what is queued, checkpoints
   Log(LogLevel::kInfo, "stopped");
 }
 

@@ -2,14 +2,14 @@
 #ifndef MAPD_SERVICE_SERVER_H_
 #define MAPD_SERVICE_SERVER_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <chrono>
 #include <condition_variable>
-#include <thread>
 #include <memory>
 #include <mutex>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
+#include <thread>
 
 #include "common/status.h"
 #include "service/config.h"

@@ -2,9 +2,9 @@
 #ifndef MAPD_SERVICE_STATUS_MAPPING_H_
 #define MAPD_SERVICE_STATUS_MAPPING_H_
 
-#include <string>
-
 #include <grpcpp/support/status.h>
+
+#include <string>
 
 #include "common/status.h"
 
@@ -19,8 +19,8 @@ grpc::Status InvalidArgument(const std::string& message);
 grpc::Status ShuttingDown();
 
 // Returns the mapped status from a handler when `expr` (a Status) fails.
-#define MAPD_RETURN_IF_ERROR_GRPC(expr)                                        \
-  do {                                                                         \
+#define MAPD_RETURN_IF_ERROR_GRPC(expr)                                                 \
+  do {                                                                                  \
     if (::mapd::Status _s = (expr); !_s.ok()) return ::mapd::service::ToGrpcStatus(_s); \
   } while (0)
 

@@ -42,15 +42,17 @@ bool StreamLimiter::TakeToken(const std::string& host) {
       for (auto b = buckets_.begin(); b != buckets_.end();) {
         const double refill = std::chrono::duration<double>(now - b->second.last).count() *
                               limits_.stream_opens_per_s;
-        b = b->second.tokens + refill >= limits_.stream_open_burst ? buckets_.erase(b) : std::next(b);
+        b = b->second.tokens + refill >= limits_.stream_open_burst ? buckets_.erase(b)
+                                                                   : std::next(b);
       }
       if (buckets_.size() >= kMaxBuckets) return false;  // that many distinct clients, all busy
     }
     it = buckets_.emplace(host, Bucket{limits_.stream_open_burst, now}).first;
   }
   Bucket& b = it->second;
-  b.tokens = std::min(limits_.stream_open_burst,
-                      b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.stream_opens_per_s);
+  b.tokens = std::min(
+      limits_.stream_open_burst,
+      b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.stream_opens_per_s);
   b.last = now;
   if (b.tokens < 1.0) return false;
   b.tokens -= 1.0;
@@ -61,14 +63,16 @@ Status StreamLimiter::TryOpen(const std::string& peer, StreamSlot* slot) {
   if (open_.fetch_add(1) >= limits_.max_streams) {
     open_.fetch_sub(1);
     refused_.fetch_add(1);
-    return Status::ResourceExhausted("mapd has limits.max_streams = " + std::to_string(limits_.max_streams) +
-                                     " streams open; retry later");
+    return Status::ResourceExhausted(
+        "mapd has limits.max_streams = " + std::to_string(limits_.max_streams) +
+        " streams open; retry later");
   }
   if (!TakeToken(PeerHost(peer))) {
     open_.fetch_sub(1);
     refused_.fetch_add(1);
-    return Status::ResourceExhausted("this client opens streams faster than limits.stream_opens_per_s = " +
-                                     std::to_string(limits_.stream_opens_per_s) + " per second; retry later");
+    return Status::ResourceExhausted(
+        "this client opens streams faster than limits.stream_opens_per_s = " +
+        std::to_string(limits_.stream_opens_per_s) + " per second; retry later");
   }
   admitted_.fetch_add(1);
   *slot = StreamSlot(this);

@@ -20,7 +20,6 @@
 
 namespace mapd::service {
 
-
 class StreamLimiter;
 
 // One admitted stream; releases its place when destroyed.

@@ -107,9 +107,9 @@ StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
   return ties;
 }
 
-
 grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
-  if (request.submap_ids_size() < 2) return InvalidArgument("submap_ids: give two or more submap ids");
+  if (request.submap_ids_size() < 2)
+    return InvalidArgument("submap_ids: give two or more submap ids");
   std::unordered_set<uint64_t> distinct;
   for (uint64_t id : request.submap_ids()) {
     if (id == 0) return InvalidArgument("submap_ids: 0 is not a submap id");
@@ -132,8 +132,8 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
     const auto it = std::find_if(outcome.alignments.begin(), outcome.alignments.end(),
                                  [&](const voxel::Alignment& a) { return a.id == ids[i]; });
     if (it == outcome.alignments.end()) {
-      return Status::Internal("the merge returned no alignment for submap " + std::to_string(ids[i]) +
-                              "; nothing was stored");
+      return Status::Internal("the merge returned no alignment for submap " +
+                              std::to_string(ids[i]) + "; nothing was stored");
     }
     (*T_ref_input)[i] = ToRigid(it->T_reference_submap);
     storage::MergeInputRecord in;
@@ -163,7 +163,8 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
 }
 
 // The last message of an accepted merge.
-pb::MergeProgress ResultMessage(const storage::MergeIds& stored, const storage::MergeRecord& record) {
+pb::MergeProgress ResultMessage(const storage::MergeIds& stored,
+                                const storage::MergeRecord& record) {
   pb::MergeProgress last;
   last.set_stage("done");
   last.set_fraction(1.0);
@@ -220,7 +221,8 @@ grpc::Status SubmapService::AwaitMerge(grpc::ServerContext* context, MergeJob* j
     return grpc::Status(grpc::StatusCode::UNAVAILABLE,
                         "mapd is shutting down; the merge was abandoned and nothing was stored");
   }
-  return grpc::Status(grpc::StatusCode::CANCELLED, "the client cancelled the merge; nothing was stored");
+  return grpc::Status(grpc::StatusCode::CANCELLED,
+                      "the client cancelled the merge; nothing was stored");
 }
 
 grpc::Status SubmapService::RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why,
@@ -239,8 +241,8 @@ grpc::Status SubmapService::RecordRefusedMerge(const std::vector<uint64_t>& ids,
     StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
     if (!r.ok()) return r.status();
     merge_id = r->merge_id;
-    return txn->AppendAudit(AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, ids),
-                                                 "refused: " + why.ToString()));
+    return txn->AppendAudit(AccessControl::Entry(
+        caller, "MergeSubmaps", MergeTarget(r->merge_id, ids), "refused: " + why.ToString()));
   });
   Log(LogLevel::kInfo, "merge_refused",
       {{"merge", std::to_string(merge_id)},
@@ -283,7 +285,8 @@ Status SubmapService::StoreAcceptedMerge(const storage::NewMerge& merge, const M
 
 grpc::Status SubmapService::Merge(grpc::ServerContext* context,
                                   const pb::MergeSubmapsRequest& request,
-                                  grpc::ServerWriter<pb::MergeProgress>* writer, const Principal& caller) {
+                                  grpc::ServerWriter<pb::MergeProgress>* writer,
+                                  const Principal& caller) {
   if (grpc::Status s = CheckMergeRequest(request); !s.ok()) return s;
   if (draining_) return ShuttingDown();
   MergeInputs inputs;
@@ -293,13 +296,15 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
   StatusOr<std::shared_ptr<MergeJob>> job =
       merges_->Submit(inputs.ids, std::move(inputs.bytes), ToMergeParams(options_));
   if (!job.ok()) return ToGrpcStatus(job.status());
-  if (grpc::Status s = AwaitMerge(context, job->get(), inputs.ids.size(), writer); !s.ok()) return s;
+  if (grpc::Status s = AwaitMerge(context, job->get(), inputs.ids.size(), writer); !s.ok())
+    return s;
   StatusOr<voxel::MergeOutcome> outcome = (*job)->TakeResult();
   if (outcome.ok()) {
     Status evidence = CheckEvidence(*outcome, inputs.metas, options_);
     if (!evidence.ok()) outcome = evidence;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!outcome.ok()) {
     if (outcome.status().code() == StatusCode::kUnavailable)
       return ToGrpcStatus(outcome.status());  // shutdown: nothing to record
@@ -311,14 +316,16 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
   if (!merge.ok()) return ToGrpcStatus(merge.status());
   storage::MergeIds stored;
   size_t tied = 0;
-  MAPD_RETURN_IF_ERROR_GRPC(StoreAcceptedMerge(*merge, inputs, T_ref_input, caller, &stored, &tied));
+  MAPD_RETURN_IF_ERROR_GRPC(
+      StoreAcceptedMerge(*merge, inputs, T_ref_input, caller, &stored, &tied));
   Log(LogLevel::kInfo, "merge_accepted",
       {{"merge", std::to_string(stored.merge_id)},
        {"merged_submap", std::to_string(stored.merged_submap_id)},
        {"inputs", std::to_string(inputs.ids.size())},
        {"sessions_tied", std::to_string(tied)},
        {"s", std::to_string(seconds)}});
-  writer->Write(ResultMessage(stored, merge->record));  // stored either way; a client that left can list it
+  writer->Write(
+      ResultMessage(stored, merge->record));  // stored either way; a client that left can list it
   return grpc::Status::OK;
 }
 

@@ -12,12 +12,11 @@
 #include "common/clock.h"
 #include "service/ingest_batch.h"  // ValidId
 #include "service/log.h"
+#include "service/merge_runner.h"
 #include "service/proto_convert.h"
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
 #include "service/upload_reactor.h"
-
-#include "service/merge_runner.h"
 #include "voxel/merge.h"  // MergeParams, MergeOutcome (the merge itself: service/voxel_merge.h)
 #include "voxel/octree_reader.h"
 
@@ -62,7 +61,8 @@ grpc::Status CheckHeader(const pb::SubmapHeader& h) {
     return InvalidArgument("header.resolution must be finite and >= 0 metres (0 = from the file)");
   }
   if (!h.session_id().empty() && !ValidId(h.session_id())) {
-    return InvalidArgument("header.session_id must be 1-128 characters of [A-Za-z0-9_.-] (or empty)");
+    return InvalidArgument(
+        "header.session_id must be 1-128 characters of [A-Za-z0-9_.-] (or empty)");
   }
   return grpc::Status::OK;
 }
@@ -73,7 +73,8 @@ SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessCon
     : core_(core),
       options_(options),
       access_(access),
-      merges_(std::make_unique<MergeRunner>(options.max_concurrent_merges, options.max_queued_merges)) {}
+      merges_(std::make_unique<MergeRunner>(options.max_concurrent_merges,
+                                            options.max_queued_merges)) {}
 
 SubmapService::~SubmapService() {
   // The gRPC server has shut down (every upload is done); store threads may
@@ -130,19 +131,23 @@ grpc::Status SubmapService::StreamSubmap(grpc::ServerContext* context, int64_t i
   return grpc::Status::OK;
 }
 
-grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request, const Principal& caller) {
+grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request,
+                                   const Principal& caller) {
   if (request.id() == 0) return InvalidArgument("id is required");
   if (draining_) return ShuttingDown();
   const int64_t id = static_cast<int64_t>(request.id());
   StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(id);
   if (!meta.ok()) return ToGrpcStatus(meta.status());
-  const std::string target = "robot " + meta->robot + " submap " + std::to_string(id) + " '" + meta->name + "'";
-  MAPD_RETURN_IF_ERROR_GRPC(access_->Check(caller, Permission::kDelete, "DeleteSubmap", meta->robot, target));
+  const std::string target =
+      "robot " + meta->robot + " submap " + std::to_string(id) + " '" + meta->name + "'";
+  MAPD_RETURN_IF_ERROR_GRPC(
+      access_->Check(caller, Permission::kDelete, "DeleteSubmap", meta->robot, target));
   Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
     MAPD_RETURN_IF_ERROR(txn->DeleteSubmap(id));
     return txn->AppendAudit(AccessControl::Entry(caller, "DeleteSubmap", target, "ok"));
   });
-  if (s.ok()) Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}, {"by", caller.name}});
+  if (s.ok())
+    Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}, {"by", caller.name}});
   return ToGrpcStatus(s);
 }
 
@@ -177,18 +182,19 @@ std::string SubmapService::UploadTarget(const pb::SubmapHeader& header) {
   return "robot " + header.robot_id() + " submap '" + header.name() + "'";
 }
 
-
-grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::CallbackServerContext* context,
-                                                                       pb::SubmapInfo* response,
-                                                                       StreamSlot slot, Principal caller) {
+grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(
+    grpc::CallbackServerContext* context, pb::SubmapInfo* response, StreamSlot slot,
+    Principal caller) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   if (draining_) return new Refused(ShuttingDown());
   std::lock_guard<std::mutex> lock(uploads_mu_);
   if (active_uploads_ >= options_.max_concurrent_uploads) {
-    Log(LogLevel::kWarn, "upload_refused", {{"peer", context->peer()}, {"why", "max_concurrent_uploads"}});
-    return new Refused(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                    std::to_string(active_uploads_.load()) +
-                                        " uploads are in progress (limits.max_concurrent_uploads); retry later"));
+    Log(LogLevel::kWarn, "upload_refused",
+        {{"peer", context->peer()}, {"why", "max_concurrent_uploads"}});
+    return new Refused(
+        grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                     std::to_string(active_uploads_.load()) +
+                         " uploads are in progress (limits.max_concurrent_uploads); retry later"));
   }
   ++active_uploads_;
   auto* reactor = new UploadReactor(this, context, response, std::move(slot), std::move(caller));
@@ -196,7 +202,8 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(grpc::Ca
   return reactor;
 }
 
-grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest& first, pb::SubmapHeader* header) {
+grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest& first,
+                                              pb::SubmapHeader* header) {
   if (!first.has_header())
     return InvalidArgument("the first message must be the header (SubmapHeader), not a chunk");
   *header = first.header();
@@ -204,20 +211,24 @@ grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest& fir
 }
 
 grpc::Status SubmapService::AppendUploadChunk(const pb::SubmapHeader& header, size_t index,
-                                              pb::UploadSubmapRequest* message, std::string* bytes) {
+                                              pb::UploadSubmapRequest* message,
+                                              std::string* bytes) {
   if (message->has_header())
-    return InvalidArgument("a second header arrived after the first (message " + std::to_string(index + 1) + ")");
+    return InvalidArgument("a second header arrived after the first (message " +
+                           std::to_string(index + 1) + ")");
   const std::string& chunk = message->chunk();
   if (chunk.size() > kChunkBytes) {
-    return InvalidArgument("chunk " + std::to_string(index) + " has " + std::to_string(chunk.size()) +
-                   " bytes; chunks are at most 1 MiB (1048576 bytes)");
+    return InvalidArgument("chunk " + std::to_string(index) + " has " +
+                           std::to_string(chunk.size()) +
+                           " bytes; chunks are at most 1 MiB (1048576 bytes)");
   }
   if (bytes->size() + chunk.size() > options_.max_submap_bytes) {
     return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                         "submap '" + header.name() + "' is larger than limits.max_submap_bytes = " +
                             std::to_string(options_.max_submap_bytes) + " bytes");
   }
-  if (bytes->empty() && chunk.size() > 0) bytes->reserve(std::min(options_.max_submap_bytes, 2 * chunk.size()));
+  if (bytes->empty() && chunk.size() > 0)
+    bytes->reserve(std::min(options_.max_submap_bytes, 2 * chunk.size()));
   *bytes += chunk;
   message->clear_chunk();
   return grpc::Status::OK;
@@ -231,9 +242,9 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
   const bool is_bt = StartsWith(bytes, kMagicBt), is_ot = StartsWith(bytes, kMagicOt);
   if ((header.format() == pb::SUBMAP_FORMAT_OCTOMAP_BT && is_ot) ||
       (header.format() == pb::SUBMAP_FORMAT_OCTOMAP_OT && is_bt)) {
-    return InvalidArgument(std::string("header.format is ") + FormatName(header.format()) +
-                   " but the file is " +
-                   FormatName(is_bt ? pb::SUBMAP_FORMAT_OCTOMAP_BT : pb::SUBMAP_FORMAT_OCTOMAP_OT));
+    return InvalidArgument(
+        std::string("header.format is ") + FormatName(header.format()) + " but the file is " +
+        FormatName(is_bt ? pb::SUBMAP_FORMAT_OCTOMAP_BT : pb::SUBMAP_FORMAT_OCTOMAP_OT));
   }
   // Untrusted bytes: our own iterative, depth- and size-limited parser, which
   // also counts the voxels the tree expands to (limits.max_submap_voxels)
@@ -252,16 +263,18 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
         message.find("occupied voxels") != std::string::npos) {
       message += " (limits.max_submap_voxels = " + std::to_string(options_.max_submap_voxels) + ")";
     }
-    return ToGrpcStatus(Status(summary.status().code(), "the submap file is not a valid OctoMap " +
-                                                            std::string(FormatName(header.format())) +
-                                                            " within the limits: " + message));
+    return ToGrpcStatus(
+        Status(summary.status().code(), "the submap file is not a valid OctoMap " +
+                                            std::string(FormatName(header.format())) +
+                                            " within the limits: " + message));
   }
   if (!is_bt && !is_ot)
     return InvalidArgument("the file lacks the OctoMap magic line");  // parser accepted it: a bug
   if (header.resolution() != 0 && std::abs(header.resolution() - summary->resolution) >
                                       1e-9 * std::max(1.0, summary->resolution)) {
     return InvalidArgument("header.resolution " + std::to_string(header.resolution()) +
-                   " m does not match the file's " + std::to_string(summary->resolution) + " m");
+                           " m does not match the file's " + std::to_string(summary->resolution) +
+                           " m");
   }
   const size_t size_bytes = bytes.size();
 
@@ -283,8 +296,8 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
     StatusOr<int64_t> r = txn->InsertSubmap(submap);
     if (!r.ok()) return r.status();
     id = *r;
-    return txn->AppendAudit(
-        AccessControl::Entry(caller, "UploadSubmap", UploadTarget(header) + " id " + std::to_string(id), "ok"));
+    return txn->AppendAudit(AccessControl::Entry(
+        caller, "UploadSubmap", UploadTarget(header) + " id " + std::to_string(id), "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);
   StatusOr<storage::SubmapMeta> stored = core_->store().GetSubmap(id);

@@ -82,9 +82,9 @@ class SubmapService {
   // A reactor for one upload (or a refusal: shutdown, too many uploads).
   // `caller` may write (its role was checked); the reactor checks the
   // header's robot id against it before accepting any chunk.
-  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* Upload(grpc::CallbackServerContext* context,
-                                                                     mapserver::v1::SubmapInfo* response,
-                                                                     StreamSlot slot, Principal caller);
+  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* Upload(
+      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response, StreamSlot slot,
+      Principal caller);
   // Ends uploads idle for longer than upload_idle_timeout_s (called every second).
   void ExpireIdleUploads();
 
@@ -111,7 +111,8 @@ class SubmapService {
   grpc::Status Delete(const mapserver::v1::DeleteSubmapRequest& request, const Principal& caller);
   grpc::Status Merge(grpc::ServerContext* context,
                      const mapserver::v1::MergeSubmapsRequest& request,
-                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer, const Principal& caller);
+                     grpc::ServerWriter<mapserver::v1::MergeProgress>* writer,
+                     const Principal& caller);
   grpc::Status GetGlobalMap(grpc::ServerContext* context,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
@@ -122,18 +123,19 @@ class SubmapService {
     std::vector<uint64_t> ids;
     std::vector<std::string> bytes;  // moved into the job
   };
-  grpc::Status LoadMergeInputs(const mapserver::v1::MergeSubmapsRequest& request, MergeInputs* inputs);
+  grpc::Status LoadMergeInputs(const mapserver::v1::MergeSubmapsRequest& request,
+                               MergeInputs* inputs);
   // Streams the job's progress until its result is there; abandons it when the
   // client goes away or mapd drains (CANCELLED / UNAVAILABLE, nothing stored).
   grpc::Status AwaitMerge(grpc::ServerContext* context, MergeJob* job, size_t inputs,
                           grpc::ServerWriter<mapserver::v1::MergeProgress>* writer);
   // Records the refusal and its reason, audited; returns the library's code.
-  grpc::Status RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why, double seconds,
-                                  const Principal& caller);
+  grpc::Status RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why,
+                                  double seconds, const Principal& caller);
   // The merge, its audit row and the session ties, in one transaction.
   Status StoreAcceptedMerge(const storage::NewMerge& merge, const MergeInputs& inputs,
-                            const std::vector<geometry::Rigid3>& T_ref_input, const Principal& caller,
-                            storage::MergeIds* stored, size_t* tied);
+                            const std::vector<geometry::Rigid3>& T_ref_input,
+                            const Principal& caller, storage::MergeIds* stored, size_t* tied);
 
   // Streams a stored submap: info on the first chunk, then 1 MiB chunks.
   grpc::Status StreamSubmap(grpc::ServerContext* context, int64_t id,

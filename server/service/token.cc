@@ -1,10 +1,10 @@
 #include "service/token.h"
 
-#include <algorithm>
-
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/rand.h>
+
+#include <algorithm>
 
 namespace mapd::service {
 namespace {
@@ -13,7 +13,8 @@ constexpr char kPrefix[] = "mapd_";
 constexpr size_t kSecretBytes = 32;
 
 std::string Base64Url(const unsigned char* data, size_t n) {
-  static const char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_";
+  static const char kAlphabet[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_";
   std::string out;
   uint32_t acc = 0;
   int bits = 0;
@@ -66,16 +67,21 @@ Status ParseToken(std::string_view token, int64_t* id, std::string* secret) {
   return secret->empty() ? bad : Status::Ok();
 }
 
-StatusOr<IssuedToken> IssueToken(const NewToken& t, int64_t now_ns, storage::WriteTransaction* txn) {
-  if (!ValidTokenName(t.name)) return Status::InvalidArgument("name must be 1-128 characters of [A-Za-z0-9_.-]");
+StatusOr<IssuedToken> IssueToken(const NewToken& t, int64_t now_ns,
+                                 storage::WriteTransaction* txn) {
+  if (!ValidTokenName(t.name))
+    return Status::InvalidArgument("name must be 1-128 characters of [A-Za-z0-9_.-]");
   if (t.role == Role::kRobot && !ValidTokenName(t.robot_id)) {
-    return Status::InvalidArgument("a robot token needs robot_id (1-128 characters of [A-Za-z0-9_.-])");
+    return Status::InvalidArgument(
+        "a robot token needs robot_id (1-128 characters of [A-Za-z0-9_.-])");
   }
   if (t.role != Role::kRobot && !t.robot_id.empty()) {
-    return Status::InvalidArgument(std::string("robot_id is only for role robot, not ") + RoleName(t.role));
+    return Status::InvalidArgument(std::string("robot_id is only for role robot, not ") +
+                                   RoleName(t.role));
   }
   unsigned char raw[kSecretBytes];
-  if (RAND_bytes(raw, sizeof(raw)) != 1) return Status::Internal("the CSPRNG (OpenSSL RAND_bytes) failed");
+  if (RAND_bytes(raw, sizeof(raw)) != 1)
+    return Status::Internal("the CSPRNG (OpenSSL RAND_bytes) failed");
   const std::string secret = Base64Url(raw, sizeof(raw));
   OPENSSL_cleanse(raw, sizeof(raw));
   IssuedToken out;

@@ -30,7 +30,7 @@ bool ValidTokenName(const std::string& name);
 struct NewToken {
   std::string name;
   Role role = Role::kReader;
-  std::string robot_id;    // required for Role::kRobot, refused otherwise
+  std::string robot_id;  // required for Role::kRobot, refused otherwise
   std::string created_by;
 };
 

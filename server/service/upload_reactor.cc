@@ -29,7 +29,8 @@ void UploadReactor::OnReadDone(bool ok) {
     // The client half-closed, or went away (a partial file is never stored).
     if (context_->IsCancelled()) {
       lock.unlock();
-      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "the upload was cancelled; nothing was stored"));
+      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED,
+                              "the upload was cancelled; nothing was stored"));
       return;
     }
     if (messages_ == 0) {
@@ -66,20 +67,23 @@ bool UploadReactor::CallerMayUpload() {
     if (finished_) return false;  // cancelled or expired meanwhile: nothing to answer
     storing_ = true;              // the audit's completion ends the call
   }
-  service_->access()->CheckAsync(caller_, Permission::kWrite, "UploadSubmap", header_.robot_id(),
-                                 SubmapService::UploadTarget(header_), [this](const Status& may) {
-                                   // Authorize is a pure function: CheckAsync refuses too.
-                                   FinishOnce(may.ok() ? grpc::Status(grpc::StatusCode::INTERNAL,
-                                                                      "authorization changed during the upload")
-                                                       : ToGrpcStatus(may));
-                                 });
+  service_->access()->CheckAsync(
+      caller_, Permission::kWrite, "UploadSubmap", header_.robot_id(),
+      SubmapService::UploadTarget(header_), [this](const Status& may) {
+        // Authorize is a pure function: CheckAsync refuses too.
+        FinishOnce(may.ok() ? grpc::Status(grpc::StatusCode::INTERNAL,
+                                           "authorization changed during the upload")
+                            : ToGrpcStatus(may));
+      });
   return false;
 }
 
 void UploadReactor::ExpireIfIdle(std::chrono::steady_clock::time_point now, double idle_s) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    if (finished_ || storing_ || std::chrono::duration<double>(now - last_activity_).count() < idle_s) return;
+    if (finished_ || storing_ ||
+        std::chrono::duration<double>(now - last_activity_).count() < idle_s)
+      return;
   }
   FinishOnce(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
                           "the upload sent nothing for limits.upload_idle_timeout_s = " +
@@ -91,7 +95,8 @@ void UploadReactor::OnCancel() {
     std::lock_guard<std::mutex> lock(mu_);
     if (storing_) return;  // every byte was in: the store finishes the call
   }
-  FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "the upload was cancelled; nothing was stored"));
+  FinishOnce(
+      grpc::Status(grpc::StatusCode::CANCELLED, "the upload was cancelled; nothing was stored"));
 }
 
 void UploadReactor::FinishOnce(const grpc::Status& status) {

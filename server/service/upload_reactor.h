@@ -16,11 +16,11 @@
 #ifndef MAPD_SERVICE_UPLOAD_REACTOR_H_
 #define MAPD_SERVICE_UPLOAD_REACTOR_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <chrono>
 #include <mutex>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
 
 #include "mapserver/v1/map_service.pb.h"
 #include "service/access_control.h"
@@ -59,12 +59,12 @@ class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmap
 
   std::mutex mu_;
   mapserver::v1::UploadSubmapRequest message_;  // the buffer of the outstanding read
-  bool finished_ = false;   // GUARDED_BY(mu_)
+  bool finished_ = false;                       // GUARDED_BY(mu_)
   // GUARDED_BY(mu_): every byte is in (validating and storing), or a refusal
   // is being audited; either way that work finishes the call, not a cancel.
   bool storing_ = false;
   std::chrono::steady_clock::time_point last_activity_;  // GUARDED_BY(mu_)
-  size_t messages_ = 0;     // read so far
+  size_t messages_ = 0;                                  // read so far
   mapserver::v1::SubmapHeader header_;
   std::string bytes_;
 };

@@ -40,8 +40,8 @@ class WriteHealth {
 
  private:
   mutable std::mutex mu_;
-  Status failure_;            // GUARDED_BY(mu_)
-  int consecutive_ = 0;       // GUARDED_BY(mu_), failures in a row
+  Status failure_;                               // GUARDED_BY(mu_)
+  int consecutive_ = 0;                          // GUARDED_BY(mu_), failures in a row
   std::function<void(const Status&)> listener_;  // GUARDED_BY(mu_)
 };
 

@@ -5,10 +5,9 @@
 #ifndef MAPD_VOXEL_CORNER_H_
 #define MAPD_VOXEL_CORNER_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace mapd::voxel {
 

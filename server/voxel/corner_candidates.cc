@@ -63,7 +63,8 @@ int ContextScore(const std::vector<Neighbour>& na, const std::vector<Neighbour>&
 
 double SignatureDifference(const CornerSignature& x, const CornerSignature& y) {
   double d = 0.0;
-  for (int k = 0; k < 3; ++k) d = std::max(d, std::abs(x.plane_angles_rad[k] - y.plane_angles_rad[k]));
+  for (int k = 0; k < 3; ++k)
+    d = std::max(d, std::abs(x.plane_angles_rad[k] - y.plane_angles_rad[k]));
   return d;
 }
 
@@ -131,8 +132,10 @@ std::vector<CornerPair> SelectCandidatePairs(const CornerSet& corners_a, const C
   if (params.max_candidate_pairs > 0) {
     auto count = [&](int kk) {
       std::size_t n = 0;
-      for (const auto& r : for_a) n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
-      for (const auto& r : for_b) n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
+      for (const auto& r : for_a)
+        n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
+      for (const auto& r : for_b)
+        n += std::min<std::size_t>(r.size(), static_cast<std::size_t>(kk));
       return n;
     };
     while (k > 1 && count(k) > static_cast<std::size_t>(params.max_candidate_pairs)) --k;

@@ -3,10 +3,9 @@
 #ifndef MAPD_VOXEL_CORNER_DIRECTIONS_H_
 #define MAPD_VOXEL_CORNER_DIRECTIONS_H_
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Core>
 
 #include "voxel/corner.h"
 

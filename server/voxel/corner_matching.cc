@@ -173,19 +173,21 @@ StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const Corne
     for (size_t i = 0; i < set->size(); ++i) {
       for (const Eigen::Vector3d& n : (*set)[i].normals) {
         if (!n.allFinite() || n.norm() < 1e-9) {
-          return Status::InvalidArgument(std::string(set == &corners_a ? "corners_a" : "corners_b") +
-                                         "[" + std::to_string(i) + "] has a zero or non-finite normal");
+          return Status::InvalidArgument(
+              std::string(set == &corners_a ? "corners_a" : "corners_b") + "[" + std::to_string(i) +
+              "] has a zero or non-finite normal");
         }
       }
     }
   }
   std::vector<CornerPair> pairs = SelectCandidatePairs(corners_a, corners_b, params);
   if (!params.excluded_pairs.empty()) {
-    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
-                               [&](const CornerPair& p) {
-                                 return std::find(params.excluded_pairs.begin(), params.excluded_pairs.end(),
-                                                  std::make_pair(p.a, p.b)) != params.excluded_pairs.end();
-                               }),
+    pairs.erase(std::remove_if(
+                    pairs.begin(), pairs.end(),
+                    [&](const CornerPair& p) {
+                      return std::find(params.excluded_pairs.begin(), params.excluded_pairs.end(),
+                                       std::make_pair(p.a, p.b)) != params.excluded_pairs.end();
+                    }),
                 pairs.end());
   }
 

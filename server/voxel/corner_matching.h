@@ -25,15 +25,14 @@
 #ifndef MAPD_VOXEL_CORNER_MATCHING_H_
 #define MAPD_VOXEL_CORNER_MATCHING_H_
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "common/status.h"
 #include "voxel/corner.h"
@@ -84,7 +83,7 @@ struct CornerMatchingParams {
   // With a tie-break score: at most this many equal-size solutions are scored.
   int max_tied_solutions = 16;
   // Search budget; exhausted => proven_optimal false, best found returned.
-  int64_t max_search_nodes = 0;     // 0 = unlimited
+  int64_t max_search_nodes = 0;      // 0 = unlimited
   double max_search_seconds = 10.0;  // 0 = unlimited
   // Candidate pairs (index into A, index into B) never to use, e.g. those of a
   // solution that alignment refused, so the next search finds another one.
@@ -131,16 +130,16 @@ using TransformScore = std::function<double(const Eigen::Isometry3d& T_a_b)>;
 struct CornerMatchResult {
   std::vector<CornerPair> correspondences;                  // sorted by a
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  // maps B's frame into A's
-  bool transform_valid = false;  // >= min_matches, not collinear
-  double rms_residual_m = 0.0;   // of T_a_b on the correspondences
-  int matched_count = 0;         // correspondences.size()
+  bool transform_valid = false;                             // >= min_matches, not collinear
+  double rms_residual_m = 0.0;                              // of T_a_b on the correspondences
+  int matched_count = 0;                                    // correspondences.size()
   // Diagnostics.
   int candidate_pairs = 0;  // graph vertices
   int64_t graph_edges = 0;
   double graph_density = 0.0;
   int64_t search_nodes = 0;
-  int tied_solutions = 1;     // equal-size solutions compared (>1 only with a score)
-  double tie_score = 0.0;     // the score callback's value of the chosen T_a_b, if given
+  int tied_solutions = 1;       // equal-size solutions compared (>1 only with a score)
+  double tie_score = 0.0;       // the score callback's value of the chosen T_a_b, if given
   bool proven_optimal = false;  // the clique is maximum in the graph (not for the shortcut)
   double search_seconds = 0.0;
   double total_seconds = 0.0;  // signatures + graph + search + fit

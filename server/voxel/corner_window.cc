@@ -100,8 +100,8 @@ StatusOr<WindowCandidates> FindWindowCandidates(const VoxelGrid& grid, int windo
   const Index3 dense_cells = dims + Index3::Constant(2 * margin + 1);
   const double dense = static_cast<double>(dense_cells.x()) * dense_cells.y() * dense_cells.z();
   if (dense > static_cast<double>(max_cells)) {
-    const auto edge = static_cast<std::int64_t>(std::cbrt(static_cast<double>(max_cells))) -
-                      2 * margin - 1;
+    const auto edge =
+        static_cast<std::int64_t>(std::cbrt(static_cast<double>(max_cells))) - 2 * margin - 1;
     if (edge < 1) {
       return Status::ResourceExhausted("max_table_bytes " + std::to_string(max_table_bytes) +
                                        " cannot hold a summed-volume block for a " +
@@ -136,8 +136,8 @@ StatusOr<WindowCandidates> FindWindowCandidates(const VoxelGrid& grid, int windo
 
   for (auto& [id, b] : blocks) {
     if (b.core.empty()) continue;
-    const Index3 index(id / (num_blocks.y() * num_blocks.z()), (id / num_blocks.z()) % num_blocks.y(),
-                       id % num_blocks.z());
+    const Index3 index(id / (num_blocks.y() * num_blocks.z()),
+                       (id / num_blocks.z()) % num_blocks.y(), id % num_blocks.z());
     const VoxelKey origin =
         min_key + index.cwiseProduct(block).cast<int>() - VoxelKey::Constant(margin);
     SummedVolume table(block + Index3::Constant(2 * margin), origin);

@@ -1,5 +1,9 @@
 #include "voxel/icp.h"
 
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -7,10 +11,6 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
-
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
 
 namespace mapd::voxel {
 namespace {
@@ -39,7 +39,8 @@ Box Grown(Box box, double margin) {
 }
 
 bool AllFinite(const std::vector<Eigen::Vector3d>& points) {
-  return std::all_of(points.begin(), points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); });
+  return std::all_of(points.begin(), points.end(),
+                     [](const Eigen::Vector3d& p) { return p.allFinite(); });
 }
 
 // Closed-form rigid fit of dst ~ T src (Umeyama without scaling).
@@ -52,10 +53,12 @@ Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& 
 // Exact nearest neighbour within a radius on a hash of one-voxel cells.
 class VoxelHashIndex {
  public:
-  VoxelHashIndex(const std::vector<Eigen::Vector3d>& points, double cell_m) : points_(points), cell_m_(cell_m) {
+  VoxelHashIndex(const std::vector<Eigen::Vector3d>& points, double cell_m)
+      : points_(points), cell_m_(cell_m) {
     std::vector<std::pair<std::uint64_t, int>> keyed;
     keyed.reserve(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) keyed.push_back({Pack(Cell(points[i])), static_cast<int>(i)});
+    for (std::size_t i = 0; i < points.size(); ++i)
+      keyed.push_back({Pack(Cell(points[i])), static_cast<int>(i)});
     std::sort(keyed.begin(), keyed.end());
     order_.reserve(keyed.size());
     cells_.reserve(keyed.size());
@@ -136,7 +139,8 @@ class NearestTarget {
 
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
     if (search_ == NeighbourSearch::kVoxelHash) return hash_->Nearest(q, max_m, squared_m2);
-    const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+    const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()),
+                          static_cast<float>(q.z()));
     if (tree_.nearestKSearch(p, 1, index_, sq_) < 1 || sq_[0] > max_m * max_m) return -1;
     *squared_m2 = sq_[0];
     return index_[0];
@@ -241,7 +245,8 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
     // Even stride over the (lexicographically ordered) points: deterministic.
     std::vector<Eigen::Vector3d> sub;
     sub.reserve(params.max_source_points);
-    const double stride = static_cast<double>(src.size()) / static_cast<double>(params.max_source_points);
+    const double stride =
+        static_cast<double>(src.size()) / static_cast<double>(params.max_source_points);
     for (std::size_t i = 0; i < params.max_source_points; ++i) {
       sub.push_back(src[static_cast<std::size_t>(static_cast<double>(i) * stride)]);
     }
@@ -253,10 +258,11 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
   }
   result.source_points = src.size();
   result.target_points = tgt.size();
-  if (static_cast<int>(src.size()) < params.min_inliers || static_cast<int>(tgt.size()) < params.min_inliers) {
-    return Status::FailedPrecondition("ICP: the maps do not overlap (" + std::to_string(src.size()) +
-                                      " source and " + std::to_string(tgt.size()) +
-                                      " target points in the overlap)");
+  if (static_cast<int>(src.size()) < params.min_inliers ||
+      static_cast<int>(tgt.size()) < params.min_inliers) {
+    return Status::FailedPrecondition(
+        "ICP: the maps do not overlap (" + std::to_string(src.size()) + " source and " +
+        std::to_string(tgt.size()) + " target points in the overlap)");
   }
   const NearestTarget tree(tgt, voxel_size_m, params.search);
   double previous_rms = -1.0;
@@ -266,7 +272,8 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
     const Pairs pairs = Correspond(tree, src, T, max_distance_m, params.trim_fraction);
     const int n = static_cast<int>(pairs.source_index.size());
     if (n < params.min_inliers) {
-      return Status::FailedPrecondition("ICP: only " + std::to_string(n) + " correspondences within " +
+      return Status::FailedPrecondition("ICP: only " + std::to_string(n) +
+                                        " correspondences within " +
                                         std::to_string(params.max_correspondence_voxels) +
                                         " voxels, need " + std::to_string(params.min_inliers));
     }
@@ -279,7 +286,8 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
     for (float sq : pairs.squared_distance_m2) sum += sq;
     const double rms = std::sqrt(sum / n);
     const bool rms_settled =
-        previous_rms >= 0 && std::abs(previous_rms - rms) <= params.convergence_rms_relative * previous_rms;
+        previous_rms >= 0 &&
+        std::abs(previous_rms - rms) <= params.convergence_rms_relative * previous_rms;
     previous_rms = rms;
     const Eigen::Isometry3d T_new = FitPairs(s, d);
     const Eigen::Isometry3d step = T_new * T.inverse();
@@ -287,7 +295,8 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
     result.iterations = iteration + 1;
     const double rotation = Eigen::AngleAxisd(step.linear()).angle();
     const double translation = step.translation().norm() / voxel_size_m;
-    if ((rotation < params.convergence_rotation_rad && translation < params.convergence_translation_voxels) ||
+    if ((rotation < params.convergence_rotation_rad &&
+         translation < params.convergence_translation_voxels) ||
         rms_settled) {
       result.converged = true;
       break;

@@ -24,11 +24,10 @@
 #ifndef MAPD_VOXEL_ICP_H_
 #define MAPD_VOXEL_ICP_H_
 
-#include <cstddef>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
+#include <vector>
 
 #include "common/status.h"
 

@@ -80,9 +80,7 @@ class Searcher {
   }
 
   // Can a clique of size `reachable` still matter?
-  bool Prunes(int reachable) const {
-    return tie_mode() ? reachable < best_ : reachable <= best_;
-  }
+  bool Prunes(int reachable) const { return tie_mode() ? reachable < best_ : reachable <= best_; }
 
   void Record() {
     const int size = static_cast<int>(current_.size());

@@ -31,9 +31,7 @@ class BitGraph {
 
   // REQUIRES: 0 <= u, v < num_vertices(), u != v.
   void AddEdge(int u, int v);
-  bool HasEdge(int u, int v) const {
-    return (Row(u)[v >> 6] >> (v & 63)) & 1u;
-  }
+  bool HasEdge(int u, int v) const { return (Row(u)[v >> 6] >> (v & 63)) & 1u; }
   int Degree(int u) const;
   // The neighbourhood of u: num_words() words, bit v set when {u, v} is an edge.
   const uint64_t* Row(int u) const { return bits_.data() + static_cast<size_t>(u) * words_; }
@@ -45,8 +43,8 @@ class BitGraph {
 };
 
 struct MaxCliqueOptions {
-  int64_t max_nodes = 0;        // search-tree nodes; 0 = unlimited
-  double max_seconds = 0.0;     // wall time; 0 = unlimited
+  int64_t max_nodes = 0;     // search-tree nodes; 0 = unlimited
+  double max_seconds = 0.0;  // wall time; 0 = unlimited
   // > 1: also collect up to this many distinct cliques of the maximum size
   // (for tie-breaking by the caller). Costs more search: ties cannot be
   // pruned with "<=" but only with "<".
@@ -54,10 +52,10 @@ struct MaxCliqueOptions {
 };
 
 struct MaxCliqueResult {
-  std::vector<int> clique;               // vertex ids, ascending; the first maximum found
-  std::vector<std::vector<int>> ties;    // all collected cliques of clique.size(), incl. clique
-  bool proven_optimal = false;           // the search finished within its budget
-  int64_t nodes = 0;                     // search-tree nodes expanded
+  std::vector<int> clique;             // vertex ids, ascending; the first maximum found
+  std::vector<std::vector<int>> ties;  // all collected cliques of clique.size(), incl. clique
+  bool proven_optimal = false;         // the search finished within its budget
+  int64_t nodes = 0;                   // search-tree nodes expanded
   double seconds = 0.0;
 };
 

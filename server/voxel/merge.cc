@@ -1,13 +1,13 @@
 #include "voxel/merge.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <set>
 #include <string>
 #include <utility>
-
-#include <octomap/OcTree.h>
 
 #include "voxel/merge_graph.h"
 #include "voxel/merge_pair.h"
@@ -53,8 +53,8 @@ struct Submap {
 
 Status OverBudget(Clock::time_point start, const MergeParams& params, const char* stage) {
   if (SecondsSince(start) <= params.max_seconds) return Status::Ok();
-  return Status::ResourceExhausted("merge exceeded max_seconds = " + std::to_string(params.max_seconds) +
-                                   " s during " + stage);
+  return Status::ResourceExhausted(
+      "merge exceeded max_seconds = " + std::to_string(params.max_seconds) + " s during " + stage);
 }
 
 // Why `node` has no accepted edge to the tree: its refused pairs.
@@ -70,17 +70,20 @@ std::string RefusalsOf(uint64_t id, const std::vector<PairReport>& pairs) {
 
 }  // namespace
 
-StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, const MergeParams& params,
+StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
+                                    const MergeParams& params,
                                     const ProgressCallback& progress_callback) {
   const Clock::time_point start = Clock::now();
   const Progress progress(progress_callback);
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (inputs.size() < 2) {
-    return Status::InvalidArgument("a merge needs at least two submaps, got " + std::to_string(inputs.size()));
+    return Status::InvalidArgument("a merge needs at least two submaps, got " +
+                                   std::to_string(inputs.size()));
   }
   std::set<uint64_t> ids;
   for (const auto& input : inputs) {
-    if (!ids.insert(input.id).second) return Status::InvalidArgument(Name(input.id) + " is given twice");
+    if (!ids.insert(input.id).second)
+      return Status::InvalidArgument(Name(input.id) + " is given twice");
   }
   MergeOutcome outcome;
 
@@ -90,9 +93,11 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     submaps[i].id = inputs[i].id;
     auto tree = ReadOctree(inputs[i].bytes);
-    if (!tree.ok()) return Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
+    if (!tree.ok())
+      return Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
     auto grid = VoxelGrid::FromOcTree(**tree);
-    if (!grid.ok()) return Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
+    if (!grid.ok())
+      return Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
     submaps[i].tree = std::move(tree).value();
     submaps[i].grid = std::move(grid).value();
   }
@@ -100,10 +105,11 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
   double finest = submaps[0].grid.resolution();
   for (const auto& submap : submaps) {
     const double resolution = submap.grid.resolution();
-    if (resolution != submaps[0].grid.resolution() && params.resolution_policy == ResolutionPolicy::kRefuse) {
+    if (resolution != submaps[0].grid.resolution() &&
+        params.resolution_policy == ResolutionPolicy::kRefuse) {
       return Status::FailedPrecondition(Name(submaps[0].id) + " has resolution " +
-                                        Metres(submaps[0].grid.resolution()) + ", " + Name(submap.id) +
-                                        " has " + Metres(resolution) +
+                                        Metres(submaps[0].grid.resolution()) + ", " +
+                                        Name(submap.id) + " has " + Metres(resolution) +
                                         "; resolution_policy kRefuse does not resample");
     }
     finest = std::min(finest, resolution);
@@ -116,7 +122,8 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     auto corners = ExtractCorners(submaps[i].grid, params.corners);
     if (!corners.ok()) {
-      return Status(corners.status().code(), Name(submaps[i].id) + ": " + corners.status().message());
+      return Status(corners.status().code(),
+                    Name(submaps[i].id) + ": " + corners.status().message());
     }
     submaps[i].corners = std::move(corners->corners);
     const std::size_t found = submaps[i].corners.size();
@@ -127,7 +134,8 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
                                         Name(submaps[i].id) + ", need " +
                                         std::to_string(params.min_matched_corners));
     }
-    progress.Report("corners", 0.4 * static_cast<double>(i + 1) / static_cast<double>(submaps.size()));
+    progress.Report("corners",
+                    0.4 * static_cast<double>(i + 1) / static_cast<double>(submaps.size()));
     MAPD_RETURN_IF_ERROR(OverBudget(start, params, "corner extraction"));
   }
   outcome.times.corners_s = SecondsSince(stage_start);
@@ -156,11 +164,12 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
   }
 
   // B.7: the maximum spanning tree from the first input.
-  const TreePlacement placement = PlaceAlongMaximumSpanningTree(static_cast<int>(submaps.size()), edges, 0);
+  const TreePlacement placement =
+      PlaceAlongMaximumSpanningTree(static_cast<int>(submaps.size()), edges, 0);
   if (submaps.size() == 2 && !placement.placed[1]) {
     const PairReport& pair = outcome.pairs.front();
-    return Status::FailedPrecondition(Name(pair.id_a) + " and " + Name(pair.id_b) + " not merged: " +
-                                      pair.reason);
+    return Status::FailedPrecondition(Name(pair.id_a) + " and " + Name(pair.id_b) +
+                                      " not merged: " + pair.reason);
   }
   std::string unplaced;
   for (std::size_t i = 1; i < submaps.size(); ++i) {
@@ -181,7 +190,8 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
     for (const auto& pair : outcome.pairs) {
       if (parent < 0 || !pair.accepted) continue;
       const uint64_t pid = submaps[static_cast<std::size_t>(parent)].id;
-      if ((pair.id_a == pid && pair.id_b == alignment.id) || (pair.id_b == pid && pair.id_a == alignment.id)) {
+      if ((pair.id_a == pid && pair.id_b == alignment.id) ||
+          (pair.id_b == pid && pair.id_a == alignment.id)) {
         alignment.matched_corners = pair.matched_corners;
         alignment.residual_m = pair.residual_m;
         alignment.overlap_score = pair.overlap_score;
@@ -201,8 +211,10 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, cons
   if (!merged.ok()) return merged.status();
   for (std::size_t k = 1; k < placement.order.size(); ++k) {
     const auto i = static_cast<std::size_t>(placement.order[k]);
-    MAPD_RETURN_IF_ERROR(FuseInto(*submaps[i].tree, placement.T_root_node[i], fusion, merged->get(), &stats));
-    progress.Report("fusion", 0.8 + 0.2 * static_cast<double>(k) / static_cast<double>(placement.order.size()));
+    MAPD_RETURN_IF_ERROR(
+        FuseInto(*submaps[i].tree, placement.T_root_node[i], fusion, merged->get(), &stats));
+    progress.Report(
+        "fusion", 0.8 + 0.2 * static_cast<double>(k) / static_cast<double>(placement.order.size()));
     MAPD_RETURN_IF_ERROR(OverBudget(start, params, "fusion"));
   }
   auto bytes = WriteBinaryOctree(**merged);

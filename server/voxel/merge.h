@@ -14,6 +14,7 @@
 #ifndef MAPD_VOXEL_MERGE_H_
 #define MAPD_VOXEL_MERGE_H_
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -21,14 +22,12 @@
 #include <string_view>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "common/status.h"
 #include "voxel/corner_extraction.h"
 #include "voxel/corner_matching.h"
 #include "voxel/icp.h"
-#include "voxel/octree_reader.h"
 #include "voxel/occupancy_fusion.h"  // FusionRule, ResolutionPolicy (exact rules there)
+#include "voxel/octree_reader.h"
 
 namespace mapd::voxel {
 
@@ -162,9 +161,9 @@ struct MergeOutcome {
   std::string merged_bt;              // the merged map as an OctoMap .bt file
   uint64_t occupied_voxels = 0;
   StageTimes times;
-  std::vector<PairReport> pairs;      // every pair tried, accepted or not
-  std::vector<uint64_t> corners;      // corners found per input, in input order
-  double resolution = 0.0;            // of the merged map, metres
+  std::vector<PairReport> pairs;  // every pair tried, accepted or not
+  std::vector<uint64_t> corners;  // corners found per input, in input order
+  double resolution = 0.0;        // of the merged map, metres
   // Free voxels left out of the fusion by max_fusion_free_voxels (left unknown).
   uint64_t free_voxels_skipped = 0;
 };
@@ -184,7 +183,8 @@ using ProgressCallback = std::function<void(const std::string& stage, double fra
 // and fused in breadth-first order from the first. A submap not connected to
 // the first makes the whole merge FailedPrecondition, naming every such
 // submap and why its pairs were refused. Nothing is merged then.
-StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs, const MergeParams& params,
+StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
+                                    const MergeParams& params,
                                     const ProgressCallback& progress = {});
 
 }  // namespace mapd::voxel

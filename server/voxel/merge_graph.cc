@@ -18,7 +18,8 @@ int Find(std::vector<int>* parent, int x) {
 
 }  // namespace
 
-TreePlacement PlaceAlongMaximumSpanningTree(int num_nodes, const std::vector<MergeEdge>& edges, int root) {
+TreePlacement PlaceAlongMaximumSpanningTree(int num_nodes, const std::vector<MergeEdge>& edges,
+                                            int root) {
   const auto n = static_cast<std::size_t>(num_nodes);
   // Kruskal on descending weight.
   std::vector<int> by_weight(edges.size());
@@ -55,7 +56,8 @@ TreePlacement PlaceAlongMaximumSpanningTree(int num_nodes, const std::vector<Mer
       if (out.placed[static_cast<std::size_t>(other)]) continue;
       // T_node_other is T_a_b when node is a, its inverse when node is b.
       const Eigen::Isometry3d T_node_other = edge.a == node ? edge.T_a_b : edge.T_a_b.inverse();
-      out.T_root_node[static_cast<std::size_t>(other)] = out.T_root_node[static_cast<std::size_t>(node)] * T_node_other;
+      out.T_root_node[static_cast<std::size_t>(other)] =
+          out.T_root_node[static_cast<std::size_t>(node)] * T_node_other;
       out.parent[static_cast<std::size_t>(other)] = node;
       out.placed[static_cast<std::size_t>(other)] = true;
       queue.push(other);

@@ -6,9 +6,8 @@
 #ifndef MAPD_VOXEL_MERGE_GRAPH_H_
 #define MAPD_VOXEL_MERGE_GRAPH_H_
 
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace mapd::voxel {
 
@@ -29,7 +28,8 @@ struct TreePlacement {
 
 // REQUIRES: 0 <= root < num_nodes, edge endpoints in [0, num_nodes).
 // Equal weights are broken by edge order (deterministic).
-TreePlacement PlaceAlongMaximumSpanningTree(int num_nodes, const std::vector<MergeEdge>& edges, int root);
+TreePlacement PlaceAlongMaximumSpanningTree(int num_nodes, const std::vector<MergeEdge>& edges,
+                                            int root);
 
 }  // namespace mapd::voxel
 

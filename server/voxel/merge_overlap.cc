@@ -18,13 +18,14 @@ bool OccupiedNear(const VoxelGrid& grid, const VoxelKey& key) {
 
 }  // namespace
 
-OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b, const Eigen::Isometry3d& T_a_b,
-                                 std::size_t max_points) {
+OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
+                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
   OverlapScore out;
   const auto& centres = b.occupied_centres();
   if (centres.empty() || a.empty()) return out;
   std::size_t step = 1;
-  if (max_points > 0 && centres.size() > max_points) step = (centres.size() + max_points - 1) / max_points;
+  if (max_points > 0 && centres.size() > max_points)
+    step = (centres.size() + max_points - 1) / max_points;
   for (std::size_t i = 0; i < centres.size(); i += step) {
     const VoxelKey key = a.PointToKey(T_a_b * centres[i]);
     if (OccupiedNear(a, key)) {
@@ -34,7 +35,8 @@ OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b, const E
       ++out.observed;
     }
   }
-  if (out.observed > 0) out.score = static_cast<double>(out.coinciding) / static_cast<double>(out.observed);
+  if (out.observed > 0)
+    out.score = static_cast<double>(out.coinciding) / static_cast<double>(out.observed);
   return out;
 }
 

@@ -14,10 +14,9 @@
 #ifndef MAPD_VOXEL_MERGE_OVERLAP_H_
 #define MAPD_VOXEL_MERGE_OVERLAP_H_
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
-
-#include <Eigen/Geometry>
 
 #include "voxel/voxel_grid.h"
 
@@ -32,8 +31,8 @@ struct OverlapScore {
 // Evaluates at most `max_points` voxels of B (an even, deterministic
 // subsample; 0 = all), so the tie-break over several candidate transforms
 // stays cheap. The counts are of the evaluated voxels.
-OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b, const Eigen::Isometry3d& T_a_b,
-                                 std::size_t max_points = 0);
+OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
+                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points = 0);
 
 }  // namespace mapd::voxel
 

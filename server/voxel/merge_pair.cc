@@ -1,8 +1,8 @@
 #include "voxel/merge_pair.h"
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -25,8 +25,8 @@ std::string Fixed(double value, int digits) {
 
 // e.g. "residual 0.320 m (1.60 voxels) above 0.75 voxels"
 std::string ResidualReason(double residual_m, double residual_voxels, double max_voxels) {
-  return "residual " + Fixed(residual_m, 3) + " m (" + Fixed(residual_voxels, 2) + " voxels) above " +
-         Fixed(max_voxels, 2) + " voxels";
+  return "residual " + Fixed(residual_m, 3) + " m (" + Fixed(residual_voxels, 2) +
+         " voxels) above " + Fixed(max_voxels, 2) + " voxels";
 }
 
 // One corner solution: the maximum clique (minus `matching.excluded_pairs`),
@@ -42,7 +42,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   // makes the most occupied voxels coincide (the paper, section IV.C).
   auto start = std::chrono::steady_clock::now();
   const TransformScore tie_score = [&](const Eigen::Isometry3d& T_a_b) {
-    return static_cast<double>(ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
+    return static_cast<double>(
+        ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
   };
   auto match = MatchCorners(*a.corners, *b.corners, matching, tie_score);
   times->matching_s += SecondsSince(start);
@@ -75,8 +76,9 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
         report.T_a_b = screen->T_target_source;
         report.residual_m = screen->rms_residual_m;
         report.icp_iterations = screen->iterations;
-        report.reason = ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
-                        " (on " + std::to_string(screen->source_points) + " points)";
+        report.reason =
+            ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
+            " (on " + std::to_string(screen->source_points) + " points)";
         return report;
       }
       T_start = screen->T_target_source;
@@ -93,7 +95,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   report.T_a_b = icp->T_target_source;
   report.residual_m = icp->rms_residual_m;
   report.icp_iterations = icp->iterations;
-  const OverlapScore overlap = ComputeOverlapScore(*a.grid, *b.grid, report.T_a_b, params.overlap_points);
+  const OverlapScore overlap =
+      ComputeOverlapScore(*a.grid, *b.grid, report.T_a_b, params.overlap_points);
   report.overlap_score = overlap.score;
   times->alignment_s += SecondsSince(start);
 
@@ -103,8 +106,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   // still 0.65 deg / 3 voxels off after 50 iterations, and converged to the
   // right transform (0.53 voxel) after 85.
   if (!icp->converged) {
-    report.reason = "ICP did not converge in " + std::to_string(icp->iterations) + " iterations (residual " +
-                    Fixed(residual_voxels, 2) + " voxels)";
+    report.reason = "ICP did not converge in " + std::to_string(icp->iterations) +
+                    " iterations (residual " + Fixed(residual_voxels, 2) + " voxels)";
     return report;
   }
   if (residual_voxels > params.max_residual_voxels) {
@@ -155,7 +158,8 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   }
   // Refused: report the strict graph's maximum clique (the first solution).
   if (first.ok() && tried > 1) {
-    first->reason += " (first of " + std::to_string(tried) + " corner solutions tried, all refused)";
+    first->reason +=
+        " (first of " + std::to_string(tried) + " corner solutions tried, all refused)";
   }
   return first;
 }

@@ -36,7 +36,8 @@ Status MergeParams::Validate() const {
   }
   for (std::size_t i = 0; i < looser_tolerances.size(); ++i) {
     const MatchTolerances& t = looser_tolerances[i];
-    if (!(t.signature_deg >= 0 && t.signature_deg <= 180) || !(t.normal_deg >= 0 && t.normal_deg <= 180)) {
+    if (!(t.signature_deg >= 0 && t.signature_deg <= 180) ||
+        !(t.normal_deg >= 0 && t.normal_deg <= 180)) {
       return Status::InvalidArgument("looser_tolerances[" + std::to_string(i) +
                                      "]: angles must be in [0, 180] degrees");
     }

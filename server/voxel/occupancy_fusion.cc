@@ -1,12 +1,12 @@
 #include "voxel/occupancy_fusion.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <utility>
 #include <vector>
-
-#include <octomap/OcTree.h>
 
 namespace mapd::voxel {
 namespace {
@@ -30,7 +30,8 @@ std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
     Leaf leaf;
     leaf.edge_m = it.getSize();
     const octomap::point3d c = it.getCoordinate();
-    leaf.min_m = Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
+    leaf.min_m =
+        Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
     leaf.log_odds = it->getLogOdds();
     leaf.occupied = tree.isNodeOccupied(*it);
     leaf.level = depth - static_cast<int>(it.getDepth());
@@ -38,7 +39,8 @@ std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
     leaves.push_back(leaf);
   }
   // Free leaves smallest first, so that the cap drops the big open cubes.
-  std::stable_sort(leaves.begin(), leaves.end(), [](const Leaf& x, const Leaf& y) { return x.level < y.level; });
+  std::stable_sort(leaves.begin(), leaves.end(),
+                   [](const Leaf& x, const Leaf& y) { return x.level < y.level; });
   return leaves;
 }
 
@@ -54,13 +56,15 @@ Box BoundsOf(const std::vector<Leaf>& leaves) {
 Box Transformed(const Box& box, const Eigen::Isometry3d& T) {
   Box out;
   if (box.isEmpty()) return out;
-  for (int corner = 0; corner < 8; ++corner) out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
+  for (int corner = 0; corner < 8; ++corner)
+    out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
   return out;
 }
 
 // Keys of `out` whose centre lies in box_out (axis-aligned, out's frame),
 // clipped to the key range. False when nothing is left.
-bool KeyRange(const octomap::OcTree& out, const Box& box_out, octomap::OcTreeKey* lo, octomap::OcTreeKey* hi) {
+bool KeyRange(const octomap::OcTree& out, const Box& box_out, octomap::OcTreeKey* lo,
+              octomap::OcTreeKey* hi) {
   const double res = out.getResolution();
   for (unsigned axis = 0; axis < 3; ++axis) {
     // Centre of key k is (k - 32768 + 0.5) * res.
@@ -76,7 +80,8 @@ bool KeyRange(const octomap::OcTree& out, const Box& box_out, octomap::OcTreeKey
 
 std::uint64_t RangeVolume(const octomap::OcTreeKey& lo, const octomap::OcTreeKey& hi) {
   std::uint64_t v = 1;
-  for (unsigned axis = 0; axis < 3; ++axis) v *= static_cast<std::uint64_t>(hi[axis] - lo[axis] + 1);
+  for (unsigned axis = 0; axis < 3; ++axis)
+    v *= static_cast<std::uint64_t>(hi[axis] - lo[axis] + 1);
   return v;
 }
 
@@ -85,8 +90,9 @@ std::uint64_t RangeVolume(const octomap::OcTreeKey& lo, const octomap::OcTreeKey
 // lies inside the leaf's cube. Returns false (doing nothing) when the voxels
 // to test exceed *budget (when budget is non-null), else subtracts them.
 template <typename Visit>
-bool Rasterise(const Leaf& leaf, const Eigen::Isometry3d& T_out_src, const Eigen::Isometry3d& T_src_out,
-               const octomap::OcTree& out, std::uint64_t* budget, Visit&& visit) {
+bool Rasterise(const Leaf& leaf, const Eigen::Isometry3d& T_out_src,
+               const Eigen::Isometry3d& T_src_out, const octomap::OcTree& out,
+               std::uint64_t* budget, Visit&& visit) {
   const Box cube(leaf.min_m, leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
   octomap::OcTreeKey lo, hi;
   if (!KeyRange(out, Transformed(cube, T_out_src), &lo, &hi)) return true;
@@ -194,7 +200,8 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
                 const FusionParams& params, octomap::OcTree* merged, FusionStats* stats) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (merged == nullptr) return Status::InvalidArgument("merged tree is null");
-  if (!T_merged_submap.matrix().allFinite()) return Status::InvalidArgument("transform is not finite");
+  if (!T_merged_submap.matrix().allFinite())
+    return Status::InvalidArgument("transform is not finite");
   FusionStats local;
   if (stats == nullptr) stats = &local;
   const Eigen::Isometry3d T_submap_merged = T_merged_submap.inverse();
@@ -203,12 +210,12 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
 
   if (params.rule == FusionRule::kLogOdds) {
     for (const Leaf& leaf : submap_leaves) {
-      const bool done = Rasterise(leaf, T_merged_submap, T_submap_merged, *merged,
-                                  leaf.occupied ? nullptr : &budget,
-                                  [&](const octomap::OcTreeKey& key, const Eigen::Vector3d&) {
-                                    merged->updateNode(key, leaf.log_odds, true);
-                                    ++(leaf.occupied ? stats->occupied_written : stats->free_written);
-                                  });
+      const bool done = Rasterise(
+          leaf, T_merged_submap, T_submap_merged, *merged, leaf.occupied ? nullptr : &budget,
+          [&](const octomap::OcTreeKey& key, const Eigen::Vector3d&) {
+            merged->updateNode(key, leaf.log_odds, true);
+            ++(leaf.occupied ? stats->occupied_written : stats->free_written);
+          });
       if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
     }
     merged->updateInnerOccupancy();
@@ -234,7 +241,8 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
                                 [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
                                   const Eigen::Vector3d q = T_submap_merged * centre;
                                   if (!submap_box.contains(q)) return;
-                                  if (submap.search(q.x(), q.y(), q.z()) == nullptr) to_clear.push_back(key);
+                                  if (submap.search(q.x(), q.y(), q.z()) == nullptr)
+                                    to_clear.push_back(key);
                                 });
     if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
   }
@@ -259,7 +267,8 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
     if (leaf.occupied) continue;
     const bool done = Rasterise(leaf, T_merged_submap, T_submap_merged, *merged, &budget,
                                 [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
-                                  if (merged_box.contains(centre) || merged->search(key) != nullptr) return;
+                                  if (merged_box.contains(centre) || merged->search(key) != nullptr)
+                                    return;
                                   merged->setNodeValue(key, free_log_odds, true);
                                   ++stats->free_written;
                                 });
@@ -274,7 +283,8 @@ std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree) {
   std::uint64_t count = 0;
   const int depth = static_cast<int>(tree.getTreeDepth());
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (tree.isNodeOccupied(*it)) count += std::uint64_t{1} << (3 * (depth - static_cast<int>(it.getDepth())));
+    if (tree.isNodeOccupied(*it))
+      count += std::uint64_t{1} << (3 * (depth - static_cast<int>(it.getDepth())));
   }
   return count;
 }

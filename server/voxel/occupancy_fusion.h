@@ -34,11 +34,10 @@
 #ifndef MAPD_VOXEL_OCCUPANCY_FUSION_H_
 #define MAPD_VOXEL_OCCUPANCY_FUSION_H_
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "common/status.h"
 #include "voxel/octree_reader.h"
@@ -65,10 +64,10 @@ struct FusionParams {
 };
 
 struct FusionStats {
-  std::uint64_t occupied_written = 0;      // B's occupied voxels written into the merged grid
-  std::uint64_t free_written = 0;          // B's free voxels written (new free space)
-  std::uint64_t free_cleared = 0;          // A's free voxels made unknown (overlap rule)
-  std::uint64_t free_voxels_skipped = 0;   // free voxels left out by the cap
+  std::uint64_t occupied_written = 0;     // B's occupied voxels written into the merged grid
+  std::uint64_t free_written = 0;         // B's free voxels written (new free space)
+  std::uint64_t free_cleared = 0;         // A's free voxels made unknown (overlap rule)
+  std::uint64_t free_voxels_skipped = 0;  // free voxels left out by the cap
 };
 
 // A new tree at `resolution_m` holding `reference`: a copy when the

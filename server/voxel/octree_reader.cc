@@ -1,5 +1,8 @@
 #include "voxel/octree_reader.h"
 
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -8,9 +11,6 @@
 #include <limits>
 #include <sstream>
 #include <utility>
-
-#include <octomap/AbstractOcTree.h>
-#include <octomap/OcTree.h>
 
 namespace mapd::voxel {
 namespace {
@@ -66,14 +66,12 @@ Status ParseResolution(std::string_view value, double* resolution) {
   double res = 0.0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), res);
   if (ec != std::errc() || end != value.data() + value.size()) {
-    return Status::InvalidArgument("header: resolution '" + Printable(value) +
-                                   "' is not a number");
+    return Status::InvalidArgument("header: resolution '" + Printable(value) + "' is not a number");
   }
   if (std::isnan(res)) return Status::InvalidArgument("header: resolution is NaN");
   if (std::isinf(res)) return Status::InvalidArgument("header: resolution is infinite");
   if (res <= 0.0) {
-    return Status::InvalidArgument("header: resolution " + std::string(value) +
-                                   " is not positive");
+    return Status::InvalidArgument("header: resolution " + std::string(value) + " is not positive");
   }
   if (res > kMaxResolution) {
     return Status::InvalidArgument("header: resolution " + std::string(value) +
@@ -124,8 +122,8 @@ StatusOr<Header> ParseHeader(std::string_view bytes) {
         header.format = OctreeFormat::kFull;
       } else {
         return Status::InvalidArgument("not an octree file: first line '" + Printable(line) +
-                                       "' is neither '" + std::string(kBinaryMagic) +
-                                       "' nor '" + std::string(kFullMagic) + "'");
+                                       "' is neither '" + std::string(kBinaryMagic) + "' nor '" +
+                                       std::string(kFullMagic) + "'");
       }
       continue;
     }
@@ -134,8 +132,8 @@ StatusOr<Header> ParseHeader(std::string_view bytes) {
     const std::string_view keyword = NextToken(line);
     if (keyword == "data") {
       if (!line.empty()) {
-        return Status::InvalidArgument("header: unexpected text after 'data': '" +
-                                       Printable(line) + "'");
+        return Status::InvalidArgument("header: unexpected text after 'data': '" + Printable(line) +
+                                       "'");
       }
       header.data_offset = pos;
       break;
@@ -181,8 +179,8 @@ Status DeeperThanMax(std::size_t offset) {
 }
 
 Status TooManyNodes(std::uint64_t size, std::size_t offset) {
-  return Status::InvalidArgument("more nodes than the header's size " + Str(size) +
-                                 " (at byte " + Str(offset) + ")");
+  return Status::InvalidArgument("more nodes than the header's size " + Str(size) + " (at byte " +
+                                 Str(offset) + ")");
 }
 
 // One open inner node of the depth-first walk: its depth and the children
@@ -212,7 +210,8 @@ bool AddLeaf(bool occupied, int depth, const std::uint32_t key[3], std::uint64_t
   const int level = kOctreeMaxDepth - depth;
   const std::uint64_t voxels = std::uint64_t{1} << (3 * level);
   if (!occupied) {
-    s->free_voxels = s->free_voxels + voxels < s->free_voxels ? ~std::uint64_t{0} : s->free_voxels + voxels;
+    s->free_voxels =
+        s->free_voxels + voxels < s->free_voxels ? ~std::uint64_t{0} : s->free_voxels + voxels;
     return true;
   }
   const bool first = s->occupied_voxels == 0;
@@ -255,7 +254,8 @@ std::uint64_t PendingRecords(const Stack& stack, int top) {
 }
 
 // After the last node: every byte consumed, and as many nodes as the header said.
-Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes, const Header& header) {
+Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes,
+                    const Header& header) {
   if (pos != bytes.size()) {
     return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after the tree (" +
                                    "tree ends at byte " + Str(pos) + " of " + Str(bytes.size()) +
@@ -271,7 +271,8 @@ Status CheckTreeEnd(std::string_view bytes, std::size_t pos, std::uint64_t nodes
 // A tree of size 0 has no node records: nothing may follow its header.
 Status CheckEmptyTreeEnds(std::string_view bytes, std::size_t pos) {
   if (pos == bytes.size()) return Status::Ok();
-  return Status::InvalidArgument(Str(bytes.size() - pos) + " trailing bytes after an empty tree (size 0)");
+  return Status::InvalidArgument(Str(bytes.size() - pos) +
+                                 " trailing bytes after an empty tree (size 0)");
 }
 
 // .bt (OccupancyOcTreeBase::readBinaryNode): each inner node is 2 bytes, two
@@ -284,8 +285,8 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, std::uin
   if (header.size == 0) return CheckEmptyTreeEnds(bytes, pos);
   Stack stack;
   int top = -1;
-  std::uint64_t nodes = 1;  // the root
-  int depth = 0;            // depth of the node whose record comes next
+  std::uint64_t nodes = 1;           // the root
+  int depth = 0;                     // depth of the node whose record comes next
   std::uint32_t key[3] = {0, 0, 0};  // its smallest key
   int max_depth = 0;
   while (true) {
@@ -305,7 +306,8 @@ Status ValidateBinaryData(std::string_view bytes, const Header& header, std::uin
       if (code == 1 || code == 2) {  // 1: free leaf, 2: occupied leaf
         std::uint32_t child[3];
         ChildKey(key, depth, i, child);
-        if (depth + 1 <= kOctreeMaxDepth && !AddLeaf(code == 2, depth + 1, child, max_occupied, summary)) {
+        if (depth + 1 <= kOctreeMaxDepth &&
+            !AddLeaf(code == 2, depth + 1, child, max_occupied, summary)) {
           return TooManyVoxels(max_occupied, pos);
         }
       }
@@ -374,7 +376,6 @@ Status ValidateFullData(std::string_view bytes, const Header& header, std::uint6
   summary->max_depth = max_depth;
   return Status::Ok();
 }
-
 
 }  // namespace
 

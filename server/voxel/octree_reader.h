@@ -11,13 +11,12 @@
 #ifndef MAPD_VOXEL_OCTREE_READER_H_
 #define MAPD_VOXEL_OCTREE_READER_H_
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 
@@ -57,14 +56,14 @@ enum class OctreeFormat {
 // What the validator learned about well-formed input.
 struct OctreeSummary {
   OctreeFormat format = OctreeFormat::kBinary;
-  double resolution = 0.0;         // metres, finite and > 0
-  std::uint64_t num_nodes = 0;     // equals the header's `size`
-  int max_depth = 0;               // deepest node, root = 0, <= kOctreeMaxDepth
-  std::size_t data_offset = 0;     // first byte after the `data` line
+  double resolution = 0.0;      // metres, finite and > 0
+  std::uint64_t num_nodes = 0;  // equals the header's `size`
+  int max_depth = 0;            // deepest node, root = 0, <= kOctreeMaxDepth
+  std::size_t data_offset = 0;  // first byte after the `data` line
   // Leaves expanded to the finest resolution, as VoxelGrid::FromOcTree and
   // OcTree::isNodeOccupied see them (.ot: log-odds >= 0 is occupied).
   std::uint64_t occupied_voxels = 0;
-  std::uint64_t free_voxels = 0;   // saturates at 2^64 - 1
+  std::uint64_t free_voxels = 0;  // saturates at 2^64 - 1
   // Inclusive key bounds of the occupied voxels (OctoMap keys minus 32768, as
   // VoxelGrid's); meaningful only when occupied_voxels > 0.
   std::int32_t occupied_min_key[3] = {0, 0, 0};
@@ -74,9 +73,9 @@ struct OctreeSummary {
 // Parses and checks `bytes` without building a tree: header grammar (magic
 // line, `id OcTree`, `size`, `res`, `data`), resolution finite and in
 // (0, 1000] m, depth <= 16, node count within the limit and equal to `size`,
-// every byte consumed exactly, occupied voxels within the limit. Iterative: stack use does not depend on input.
-// Errors: InvalidArgument for malformed input, ResourceExhausted for input
-// beyond `limits`.
+// every byte consumed exactly, occupied voxels within the limit. Iterative: stack use does not
+// depend on input. Errors: InvalidArgument for malformed input, ResourceExhausted for input beyond
+// `limits`.
 StatusOr<OctreeSummary> ValidateOctree(std::string_view bytes, const OctreeReadLimits& limits = {});
 
 // Deletes an octomap::OcTree; lets callers hold one without OctoMap headers.

@@ -1,6 +1,6 @@
-#include <sstream>
-
 #include <octomap/OcTree.h>
+
+#include <sstream>
 
 #include "voxel/octree_reader.h"
 

@@ -1,10 +1,9 @@
 #include "voxel/rigid_fit.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <Eigen/Eigenvalues>
 
 namespace mapd::voxel {
 

@@ -5,10 +5,9 @@
 #ifndef MAPD_VOXEL_RIGID_FIT_H_
 #define MAPD_VOXEL_RIGID_FIT_H_
 
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 #include "common/status.h"
 

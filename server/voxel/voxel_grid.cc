@@ -1,10 +1,10 @@
 #include "voxel/voxel_grid.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <octomap/OcTree.h>
 
 namespace mapd::voxel {
 namespace {
@@ -136,7 +136,8 @@ VoxelKey VoxelGrid::PointToKey(const Eigen::Vector3d& point) const {
       (point / resolution_).cwiseMax(-1e9).cwiseMin(1e9).unaryExpr([](double v) {
         return std::isnan(v) ? 1e9 : v;
       });
-  return VoxelKey(static_cast<int>(std::floor(scaled.x())), static_cast<int>(std::floor(scaled.y())),
+  return VoxelKey(static_cast<int>(std::floor(scaled.x())),
+                  static_cast<int>(std::floor(scaled.y())),
                   static_cast<int>(std::floor(scaled.z())));
 }
 

@@ -11,13 +11,12 @@
 #ifndef MAPD_VOXEL_VOXEL_GRID_H_
 #define MAPD_VOXEL_VOXEL_GRID_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <unordered_set>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 

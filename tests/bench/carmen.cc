@@ -1,12 +1,12 @@
 #include "bench/carmen.h"
 
+#include <zlib.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
-
-#include <zlib.h>
 
 #include "geometry/split_and_merge.h"
 

@@ -51,9 +51,9 @@ ScanLines ExtractLaserLines(const LaserScan& scan, double max_range_m);
 // The three logs of shared/data/laser with their "no return" ranges: Intel and
 // Freiburg use 81.83 / 81.91 m (a SICK in 80 m mode), ACES 50 m.
 struct LaserLogSpec {
-  const char* name;     // short name, e.g. "intel"
-  const char* file;     // under the data directory
-  double max_range_m;   // readings at or beyond are "no return"
+  const char* name;    // short name, e.g. "intel"
+  const char* file;    // under the data directory
+  double max_range_m;  // readings at or beyond are "no return"
 };
 const std::vector<LaserLogSpec>& LaserLogs();
 

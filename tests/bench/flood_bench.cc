@@ -10,6 +10,7 @@
 // Targets (issue "Safe on a real network"): health p99 < 100 ms, robot ack
 // p99 < 100 ms, RSS < 512 MiB, RSS after the flood within 2x of baseline.
 // Not a test: run it on demand (see docs/reliability.md).
+#include <grpcpp/grpcpp.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,8 +23,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <grpcpp/grpcpp.h>
 
 #include "common/batches.h"
 #include "common/health.h"
@@ -45,7 +44,9 @@ double Percentile(std::vector<double> v, double q) {
 // One grpc.health.v1.Health/Check; latency in ms, or -1 on failure.
 double HealthCheck(const std::shared_ptr<grpc::Channel>& channel) {
   const auto t0 = Clock::now();
-  if (mapd::testing::CheckHealth(channel, std::chrono::seconds(30)) == mapd::testing::Health::kError) return -1;
+  if (mapd::testing::CheckHealth(channel, std::chrono::seconds(30)) ==
+      mapd::testing::Health::kError)
+    return -1;
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
@@ -65,15 +66,22 @@ int main(int argc, char** argv) {
     }
     if (i + 1 >= argc) return std::fprintf(stderr, "flood_bench: %s needs a value\n", k.c_str()), 2;
     const std::string v = argv[++i];
-    if (k == "--streams") streams = std::stol(v);
-    else if (k == "--seconds") seconds = std::stod(v);
-    else if (k == "--threads") threads = std::stoi(v);
-    else if (k == "--settle") settle = std::stod(v);
-    else if (k == "--mapd") mapd_binary = v;
-    else return std::fprintf(stderr, "flood_bench: unknown flag %s\n", k.c_str()), 2;
+    if (k == "--streams")
+      streams = std::stol(v);
+    else if (k == "--seconds")
+      seconds = std::stod(v);
+    else if (k == "--threads")
+      threads = std::stoi(v);
+    else if (k == "--settle")
+      settle = std::stod(v);
+    else if (k == "--mapd")
+      mapd_binary = v;
+    else
+      return std::fprintf(stderr, "flood_bench: unknown flag %s\n", k.c_str()), 2;
   }
   mapd::testing::TempDir dir;
-  const mapd::testing::MapdProcess mapd = mapd::testing::StartMapd(dir.File("map.db"), mapd_args, mapd_binary);
+  const mapd::testing::MapdProcess mapd =
+      mapd::testing::StartMapd(dir.File("map.db"), mapd_args, mapd_binary);
   if (mapd.port == 0) {
     std::fprintf(stderr, "flood_bench: mapd did not start:\n%s\n", mapd.log().c_str());
     return 1;
@@ -106,7 +114,10 @@ int main(int argc, char** argv) {
     while (flooding) {
       const double ms = HealthCheck(ch);
       std::lock_guard<std::mutex> lock(mu);
-      if (ms < 0) ++health_failures; else health_ms.push_back(ms);
+      if (ms < 0)
+        ++health_failures;
+      else
+        health_ms.push_back(ms);
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   });
@@ -126,13 +137,15 @@ int main(int argc, char** argv) {
         const auto now = Clock::now();
         std::lock_guard<std::mutex> lock(mu);
         if (ack.seq() >= 1 && ack.seq() <= sent.size()) {
-          ack_ms.push_back(std::chrono::duration<double, std::milli>(now - sent[ack.seq() - 1]).count());
+          ack_ms.push_back(
+              std::chrono::duration<double, std::milli>(now - sent[ack.seq() - 1]).count());
         }
         (ack.result() == pb::IngestAck::STORED ? acks_stored : acks_other)++;
       }
     });
     for (uint64_t seq = 1; flooding; ++seq) {
-      const pb::ObservationBatch b = mapd::testing::RoomBatch("robot", "s1", seq, 2.0 + 0.01 * seq, 4.0, 0.0, &rng);
+      const pb::ObservationBatch b =
+          mapd::testing::RoomBatch("robot", "s1", seq, 2.0 + 0.01 * seq, 4.0, 0.0, &rng);
       {
         std::lock_guard<std::mutex> lock(mu);
         sent.push_back(Clock::now());
@@ -159,7 +172,8 @@ int main(int argc, char** argv) {
       const long mine = streams / threads;
       for (long i = 0; i < mine; ++i) {
         // Pace: stream i of this thread not before its share of the window.
-        const auto due = t0 + std::chrono::duration<double>(seconds * static_cast<double>(i) / mine);
+        const auto due =
+            t0 + std::chrono::duration<double>(seconds * static_cast<double>(i) / mine);
         if (Clock::now() < due) std::this_thread::sleep_until(due);
         grpc::ClientContext ctx;
         ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
@@ -190,17 +204,23 @@ int main(int argc, char** argv) {
     std::string line;
     while (std::getline(log, line)) ++log_lines;
   }
-  std::printf("flood: %ld streams opened+cancelled in %.2f s (%.0f/s) from %d threads; %ld refused "
-              "RESOURCE_EXHAUSTED by the server\n",
-              opened.load(), flood_s, opened.load() / flood_s, threads, refused.load());
-  std::printf("health: %zu checks, p50 %.1f ms, p99 %.1f ms, max %.1f ms, %d failed; after the flood %.1f ms\n",
-              health_ms.size(), Percentile(health_ms, 0.5), Percentile(health_ms, 0.99),
-              Percentile(health_ms, 1.0), health_failures, health_after);
-  std::printf("robot: %zu acks (%ld stored, %ld other), ack p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
-              ack_ms.size(), acks_stored, acks_other, Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99),
-              Percentile(ack_ms, 1.0));
-  std::printf("mapd RSS: baseline %.0f MiB, peak %.0f MiB, %.0f s after the flood %.0f MiB (%.2fx baseline)\n",
-              rss_baseline, rss_flood_peak, settle, rss_after, rss_after / rss_baseline);
+  std::printf(
+      "flood: %ld streams opened+cancelled in %.2f s (%.0f/s) from %d threads; %ld refused "
+      "RESOURCE_EXHAUSTED by the server\n",
+      opened.load(), flood_s, opened.load() / flood_s, threads, refused.load());
+  std::printf(
+      "health: %zu checks, p50 %.1f ms, p99 %.1f ms, max %.1f ms, %d failed; after the flood %.1f "
+      "ms\n",
+      health_ms.size(), Percentile(health_ms, 0.5), Percentile(health_ms, 0.99),
+      Percentile(health_ms, 1.0), health_failures, health_after);
+  std::printf(
+      "robot: %zu acks (%ld stored, %ld other), ack p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+      ack_ms.size(), acks_stored, acks_other, Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99),
+      Percentile(ack_ms, 1.0));
+  std::printf(
+      "mapd RSS: baseline %.0f MiB, peak %.0f MiB, %.0f s after the flood %.0f MiB (%.2fx "
+      "baseline)\n",
+      rss_baseline, rss_flood_peak, settle, rss_after, rss_after / rss_baseline);
   std::printf("mapd log: %ld lines\n", log_lines);
   return 0;
 }

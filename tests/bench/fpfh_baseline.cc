@@ -1,9 +1,5 @@
 #include "bench/fpfh_baseline.h"
 
-#include <chrono>
-#include <cmath>
-#include <cstdlib>
-
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d_omp.h>
 #include <pcl/filters/voxel_grid.h>
@@ -12,6 +8,10 @@
 #include <pcl/registration/icp.h>
 #include <pcl/registration/sample_consensus_prerejective.h>
 #include <pcl/search/kdtree.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
 
 namespace mapd::bench {
 namespace {
@@ -79,7 +79,8 @@ Status FpfhParams::Validate() const {
   if (!(leaf_voxels >= 1.0 && leaf_voxels <= 20.0)) {
     return Status::InvalidArgument("leaf_voxels must be in [1, 20]");
   }
-  if (!(normal_radius_leaves > 0.0)) return Status::InvalidArgument("normal_radius_leaves must be > 0");
+  if (!(normal_radius_leaves > 0.0))
+    return Status::InvalidArgument("normal_radius_leaves must be > 0");
   if (!(feature_radius_leaves > normal_radius_leaves)) {
     return Status::InvalidArgument("feature_radius_leaves must exceed normal_radius_leaves");
   }
@@ -169,7 +170,8 @@ StatusOr<FpfhResult> AlignFpfh(const std::vector<Eigen::Vector3d>& a,
     icp.align(refined, guess);
     if (icp.hasConverged()) {
       final_T = icp.getFinalTransformation();
-      result.icp_fitness_m2 = icp.getFitnessScore(params.icp_max_correspondence_voxels * resolution);
+      result.icp_fitness_m2 =
+          icp.getFitnessScore(params.icp_max_correspondence_voxels * resolution);
     }
   }
   result.times.icp_s = Since(start);

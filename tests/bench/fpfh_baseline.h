@@ -12,10 +12,9 @@
 #ifndef MAPD_TESTS_BENCH_FPFH_BASELINE_H_
 #define MAPD_TESTS_BENCH_FPFH_BASELINE_H_
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "common/status.h"
 
@@ -25,20 +24,20 @@ struct FpfhParams {
   // VoxelGrid leaf, in map voxels: 3 leaves 15-30k points per 150k-voxel crop
   // (2 gives 30-60k and doubles the time of features and RANSAC).
   double leaf_voxels = 3.0;
-  double normal_radius_leaves = 2.0;        // tutorial: 0.01 m / 0.005 m
-  double feature_radius_leaves = 5.0;       // tutorial: 0.025 m / 0.005 m
-  int max_iterations = 50000;               // tutorial
-  int num_samples = 3;                      // tutorial
-  int correspondence_randomness = 5;        // tutorial
-  double similarity_threshold = 0.9;        // tutorial: polygonal edge-length ratio
-  double max_correspondence_leaves = 2.5;   // tutorial: 2.5 * leaf
-  double inlier_fraction = 0.25;            // tutorial: accept with >= 25 % inliers
+  double normal_radius_leaves = 2.0;       // tutorial: 0.01 m / 0.005 m
+  double feature_radius_leaves = 5.0;      // tutorial: 0.025 m / 0.005 m
+  int max_iterations = 50000;              // tutorial
+  int num_samples = 3;                     // tutorial
+  int correspondence_randomness = 5;       // tutorial
+  double similarity_threshold = 0.9;       // tutorial: polygonal edge-length ratio
+  double max_correspondence_leaves = 2.5;  // tutorial: 2.5 * leaf
+  double inlier_fraction = 0.25;           // tutorial: accept with >= 25 % inliers
   // ICP from the RANSAC pose, on the downsampled clouds (or on every voxel
   // centre: ~0.3 s per iteration at 120k points on this machine).
   bool icp_full_resolution = false;
   double icp_max_correspondence_voxels = 4.0;
   int icp_max_iterations = 30;
-  int threads = 1;                          // OpenMP threads for normals and features
+  int threads = 1;  // OpenMP threads for normals and features
   unsigned seed = 1;
 
   Status Validate() const;
@@ -55,7 +54,7 @@ struct FpfhResult {
   bool accepted = false;
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  // maps B into A's frame
   double ransac_inlier_fraction = 0.0;
-  double icp_fitness_m2 = 0.0;  // PCL's fitness score: mean squared distance, m^2
+  double icp_fitness_m2 = 0.0;             // PCL's fitness score: mean squared distance, m^2
   std::size_t points_a = 0, points_b = 0;  // after downsampling
   FpfhTimes times;
 };

@@ -22,8 +22,8 @@
 
 #include "eval/fuser_registry.h"
 #include "eval/metrics.h"
-#include "sim/city_scenario.h"
 #include "eval/svg.h"
+#include "sim/city_scenario.h"
 
 namespace {
 
@@ -141,17 +141,20 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
       scans.push_back(sim.Simulate(k));
       raw += scans.back().features.size();
     }
-    std::printf("\n### %s (seed %llu)\n\n", noisy ? "With pose noise (5 cm, 0.2 deg per scan)"
-                                                 : "Without pose noise",
+    std::printf("\n### %s (seed %llu)\n\n",
+                noisy ? "With pose noise (5 cm, 0.2 deg per scan)" : "Without pose noise",
                 static_cast<unsigned long long>(seed));
-    std::printf("World: %zu buildings (%zu close pairs), %zu walls, %zu trivial segments; "
-                "%zu scans, %zu raw line features; generated in %.2f s.\n\n",
-                world.buildings.size(), world.close_pairs.size(), world.wall_count,
-                world.structures.size() - world.wall_count, scans.size(), raw, Seconds(start));
-    std::printf("| method | fused (T1) | walls seen / matched | features per matched wall | "
-                "on fences | spurious | completeness | lateral RMS (cm) | corners met / evaluated | "
-                "vertex error mean / median (cm) (T2) | CPU time, median of %d (s) (T3) | wall time, median (s) | raw features per CPU s |\n",
-                repeats);
+    std::printf(
+        "World: %zu buildings (%zu close pairs), %zu walls, %zu trivial segments; "
+        "%zu scans, %zu raw line features; generated in %.2f s.\n\n",
+        world.buildings.size(), world.close_pairs.size(), world.wall_count,
+        world.structures.size() - world.wall_count, scans.size(), raw, Seconds(start));
+    std::printf(
+        "| method | fused (T1) | walls seen / matched | features per matched wall | "
+        "on fences | spurious | completeness | lateral RMS (cm) | corners met / evaluated | "
+        "vertex error mean / median (cm) (T2) | CPU time, median of %d (s) (T3) | wall time, "
+        "median (s) | raw features per CPU s |\n",
+        repeats);
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<sc::SvgPanel> panels;
     std::vector<std::pair<std::string, sc::MapMetrics>> results;
@@ -166,12 +169,13 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
       }
       const sc::MapMetrics q = sc::Evaluate(world, scans, run.fused, sc::MetricsParams());
       const double t = Median(cpu_times);
-      std::printf("| %s | %zu | %zu / %zu | %.2f | %zu | %zu | %.3f | %.2f | %zu / %zu | %.2f / %.2f "
-                  "| %.3f | %.3f | %.0f |\n",
-                  m.label.c_str(), q.fused, q.walls_seen, q.walls_matched, q.redundancy,
-                  q.on_trivial, q.spurious, q.completeness, 100.0 * q.lateral_rms_m, q.corners_met,
-                  q.corners_evaluated, 100.0 * q.vertex_error_mean_m,
-                  100.0 * q.vertex_error_median_m, t, Median(times), raw / t);
+      std::printf(
+          "| %s | %zu | %zu / %zu | %.2f | %zu | %zu | %.3f | %.2f | %zu / %zu | %.2f / %.2f "
+          "| %.3f | %.3f | %.0f |\n",
+          m.label.c_str(), q.fused, q.walls_seen, q.walls_matched, q.redundancy, q.on_trivial,
+          q.spurious, q.completeness, 100.0 * q.lateral_rms_m, q.corners_met, q.corners_evaluated,
+          100.0 * q.vertex_error_mean_m, 100.0 * q.vertex_error_median_m, t, Median(times),
+          raw / t);
       results.push_back({m.label, q});
       fused_by_label.push_back({m.label, run.fused});
       sc::SvgPanel panel;
@@ -187,9 +191,11 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
                             q.met_corners.end(), std::back_inserter(keep));
       common = keep;
     }
-    std::printf("\nVertex error over the %zu corners met by every method (sum of the two "
-                "endpoint distances per corner, cm):\n\n| method | mean | median | max |\n"
-                "|---|---|---|---|\n", common.size());
+    std::printf(
+        "\nVertex error over the %zu corners met by every method (sum of the two "
+        "endpoint distances per corner, cm):\n\n| method | mean | median | max |\n"
+        "|---|---|---|---|\n",
+        common.size());
     for (const auto& [label, q] : results) {
       std::vector<double> e;
       for (size_t k = 0; k < q.met_corners.size(); ++k) {
@@ -220,9 +226,11 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
       std::set_intersection(pm[0]->met_corners.begin(), pm[0]->met_corners.end(),
                             pm[1]->met_corners.begin(), pm[1]->met_corners.end(),
                             std::back_inserter(both));
-      std::printf("\nCorner pairing over the %zu corners both pairings meet (vertex error, cm):\n\n"
-                  "| pairing | mean | median | max | corners met | lateral RMS (cm) |\n"
-                  "|---|---|---|---|---|---|\n", both.size());
+      std::printf(
+          "\nCorner pairing over the %zu corners both pairings meet (vertex error, cm):\n\n"
+          "| pairing | mean | median | max | corners met | lateral RMS (cm) |\n"
+          "|---|---|---|---|---|---|\n",
+          both.size());
       for (int k = 0; k < 2; ++k) {
         std::vector<double> e;
         for (size_t i = 0; i < pm[k]->met_corners.size(); ++i) {
@@ -232,8 +240,9 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
         }
         double sum = 0.0;
         for (double x : e) sum += x;
-        std::printf("| %s | %.3f | %.3f | %.3f | %zu | %.3f |\n", k == 0 ? "mutual nearest" : "greedy",
-                    e.empty() ? 0.0 : 100.0 * sum / e.size(), e.empty() ? 0.0 : 100.0 * Median(e),
+        std::printf("| %s | %.3f | %.3f | %.3f | %zu | %.3f |\n",
+                    k == 0 ? "mutual nearest" : "greedy", e.empty() ? 0.0 : 100.0 * sum / e.size(),
+                    e.empty() ? 0.0 : 100.0 * Median(e),
                     e.empty() ? 0.0 : 100.0 * *std::max_element(e.begin(), e.end()),
                     pm[k]->met_corners.size(), 100.0 * pm[k]->lateral_rms_m);
       }
@@ -262,12 +271,15 @@ int Compare(int repeats, uint64_t seed, const std::string& svg_dir) {
           }
         }
       }
-      std::printf("\nMutual nearest vs greedy pairing, on the %zu endpoints of identical walls: "
-                  "%zu differ by more than 1 cm, at most %.2f cm.\n", ends, differ, 100.0 * max_m);
+      std::printf(
+          "\nMutual nearest vs greedy pairing, on the %zu endpoints of identical walls: "
+          "%zu differ by more than 1 cm, at most %.2f cm.\n",
+          ends, differ, 100.0 * max_m);
       if (differ > 0) {
-        std::printf("Of those, greedy's is nearer the nearest true corner for %zu; mean distance to "
-                    "it: mutual %.2f cm, greedy %.2f cm.\n", greedy_nearer,
-                    100.0 * to_corner_m[0] / differ, 100.0 * to_corner_m[1] / differ);
+        std::printf(
+            "Of those, greedy's is nearer the nearest true corner for %zu; mean distance to "
+            "it: mutual %.2f cm, greedy %.2f cm.\n",
+            greedy_nearer, 100.0 * to_corner_m[0] / differ, 100.0 * to_corner_m[1] / differ);
       }
     }
     if (!svg_dir.empty() && !world.close_pairs.empty()) {
@@ -323,12 +335,15 @@ int Million(int blocks_x, int blocks_y, mapd::fusion::FusionMode mode) {
       return 1;
     }
   }
-  std::printf("mode %s, world %dx%d blocks: %zu buildings, %zu walls; %zu scans, %zu raw features\n",
-              mapd::fusion::FusionModeName(mode), blocks_x, blocks_y, world.buildings.size(), world.wall_count, sim.size(), raw);
-  std::printf("fusion (Add only): %.2f s CPU (%.0f raw features per CPU s), %.2f s wall "
-              "(%.0f/s); %zu clusters, %zu published\n",
-              fuse_cpu_s, raw / fuse_cpu_s, fuse_s, raw / fuse_s, engine.cluster_count(),
-              engine.published_count());
+  std::printf(
+      "mode %s, world %dx%d blocks: %zu buildings, %zu walls; %zu scans, %zu raw features\n",
+      mapd::fusion::FusionModeName(mode), blocks_x, blocks_y, world.buildings.size(),
+      world.wall_count, sim.size(), raw);
+  std::printf(
+      "fusion (Add only): %.2f s CPU (%.0f raw features per CPU s), %.2f s wall "
+      "(%.0f/s); %zu clusters, %zu published\n",
+      fuse_cpu_s, raw / fuse_cpu_s, fuse_s, raw / fuse_s, engine.cluster_count(),
+      engine.published_count());
   std::printf("total incl. simulation: %.2f s; peak RSS %ld MiB\n", Seconds(start), PeakRssMiB());
   return 0;
 }
@@ -344,17 +359,27 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
-    if (a == "--repeats" && has_value) repeats = std::atoi(argv[++i]);
-    else if (a == "--seed" && has_value) seed = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--svg-dir" && has_value) svg_dir = argv[++i];
-    else if (a == "--wall-gap" && has_value) g_wall_gap_m = std::atof(argv[++i]);
-    else if (a == "--million") million = true;
-    else if (a == "--bounded") mode = mapd::fusion::FusionMode::kBounded;
-    else if (a == "--blocks-x" && has_value) blocks_x = std::atoi(argv[++i]);
-    else if (a == "--blocks-y" && has_value) blocks_y = std::atoi(argv[++i]);
+    if (a == "--repeats" && has_value)
+      repeats = std::atoi(argv[++i]);
+    else if (a == "--seed" && has_value)
+      seed = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--svg-dir" && has_value)
+      svg_dir = argv[++i];
+    else if (a == "--wall-gap" && has_value)
+      g_wall_gap_m = std::atof(argv[++i]);
+    else if (a == "--million")
+      million = true;
+    else if (a == "--bounded")
+      mode = mapd::fusion::FusionMode::kBounded;
+    else if (a == "--blocks-x" && has_value)
+      blocks_x = std::atoi(argv[++i]);
+    else if (a == "--blocks-y" && has_value)
+      blocks_y = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] | --million "
-                           "[--blocks-x X --blocks-y Y] [--bounded]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] | --million "
+                   "[--blocks-x X --blocks-y Y] [--bounded]\n",
+                   argv[0]);
       return 2;
     }
   }

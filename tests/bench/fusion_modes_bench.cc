@@ -5,7 +5,8 @@
 // site) and the real CARMEN laser logs (shared/data/laser; skipped when absent).
 // A markdown table on stdout, for docs/long-running.md.
 //
-//   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N] [--floor N [--exact]]
+//   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N]
+//   [--floor N [--exact]]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,10 +17,10 @@
 
 #include "bench/carmen.h"
 #include "client/sim_robot.h"
+#include "eval/metrics.h"
 #include "fusion/engine.h"
 #include "fusion/projection.h"
 #include "service/ingest_batch.h"
-#include "eval/metrics.h"
 #include "sim/city_scenario.h"
 
 namespace mapd::bench {
@@ -74,14 +75,15 @@ double SegmentGap(const Segment2& f, const Segment2& g) {
 
 struct Comparison {
   size_t exact = 0, bounded = 0;
-  size_t same_id = 0;        // bounded has a feature of the same id
-  size_t within_1cm = 0;     // exact features with a bounded one within 1 cm (any id)
-  double worst_m = 0;        // largest gap of an exact feature to its nearest bounded one
+  size_t same_id = 0;               // bounded has a feature of the same id
+  size_t within_1cm = 0;            // exact features with a bounded one within 1 cm (any id)
+  double worst_m = 0;               // largest gap of an exact feature to its nearest bounded one
   size_t support_differs = 0;       // where the exact support is within the exact cap (32)
   size_t support_differs_high = 0;  // past it, where bounded support is a count (may overcount)
 };
 
-Comparison Compare(const std::vector<FusedFeature>& exact, const std::vector<FusedFeature>& bounded) {
+Comparison Compare(const std::vector<FusedFeature>& exact,
+                   const std::vector<FusedFeature>& bounded) {
   Comparison c;
   c.exact = exact.size();
   c.bounded = bounded.size();
@@ -113,21 +115,24 @@ Comparison Compare(const std::vector<FusedFeature>& exact, const std::vector<Fus
 }
 
 void PrintHeader() {
-  std::printf("| case | observations | raw features | exact: fused / nodes / CPU s | "
-              "bounded: fused / nodes / CPU s | same id | within 1 cm | worst gap (m) | "
-              "support differs (<= 32 / > 32) | walls found exact / bounded |\n");
+  std::printf(
+      "| case | observations | raw features | exact: fused / nodes / CPU s | "
+      "bounded: fused / nodes / CPU s | same id | within 1 cm | worst gap (m) | "
+      "support differs (<= 32 / > 32) | walls found exact / bounded |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
 }
 
-void PrintRow(const std::string& name, const std::vector<Observation>& observations, const ModeRun& exact,
-              const ModeRun& bounded, const std::string& walls) {
+void PrintRow(const std::string& name, const std::vector<Observation>& observations,
+              const ModeRun& exact, const ModeRun& bounded, const std::string& walls) {
   size_t raw = 0;
   for (const Observation& o : observations) raw += o.features.size();
   const Comparison c = Compare(exact.published, bounded.published);
-  std::printf("| %s | %zu | %zu | %zu / %zu / %.2f | %zu / %zu / %.2f | %zu | %zu | %.4f | %zu / %zu | %s |\n",
-              name.c_str(), observations.size(), raw, c.exact, exact.nodes, exact.cpu_s, c.bounded,
-              bounded.nodes, bounded.cpu_s, c.same_id, c.within_1cm, c.worst_m, c.support_differs,
-              c.support_differs_high, walls.c_str());
+  std::printf(
+      "| %s | %zu | %zu | %zu / %zu / %.2f | %zu / %zu / %.2f | %zu | %zu | %.4f | %zu / %zu | %s "
+      "|\n",
+      name.c_str(), observations.size(), raw, c.exact, exact.nodes, exact.cpu_s, c.bounded,
+      bounded.nodes, bounded.cpu_s, c.same_id, c.within_1cm, c.worst_m, c.support_differs,
+      c.support_differs_high, walls.c_str());
   std::fflush(stdout);
 }
 
@@ -167,8 +172,9 @@ void CityCases(int seeds, const FusionParams& params) {
         const sc::MetricsParams mp;
         const sc::MapMetrics me = sc::Evaluate(world, all_scans, exact.published, mp);
         const sc::MapMetrics mb = sc::Evaluate(world, all_scans, bounded.published, mp);
-        const std::string walls = std::to_string(me.walls_matched) + " / " + std::to_string(mb.walls_matched) +
-                                  " of " + std::to_string(me.walls_seen);
+        const std::string walls = std::to_string(me.walls_matched) + " / " +
+                                  std::to_string(mb.walls_matched) + " of " +
+                                  std::to_string(me.walls_seen);
         PrintRow("city seed " + std::to_string(seed) + (noisy ? ", pose noise" : ", clean") +
                      (laps > 1 ? ", " + std::to_string(laps) + " laps" : ""),
                  observations, exact, bounded, walls);
@@ -258,8 +264,9 @@ void FloorRevisit(const FusionParams& params, int robots, uint64_t total, uint64
     chunk_features += ground.size();
     fed += ground.size();
     if (fed < next_report) return;
-    std::printf("| %llu | %zu | %zu | %.0f |\n", static_cast<unsigned long long>(fed), engine.node_count(),
-                engine.published_count(), static_cast<double>(chunk_features) / std::max(chunk_cpu, 1e-9));
+    std::printf("| %llu | %zu | %zu | %.0f |\n", static_cast<unsigned long long>(fed),
+                engine.node_count(), engine.published_count(),
+                static_cast<double>(chunk_features) / std::max(chunk_cpu, 1e-9));
     std::fflush(stdout);
     chunk_cpu = 0;
     chunk_features = 0;
@@ -294,7 +301,10 @@ int main(int argc, char** argv) {
     } else if (a == "--guard-rms" && has_value) {
       params.chain_max_rms_m = std::atof(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N] [--floor N [--exact]]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case "
+                   "N] [--floor N [--exact]]\n",
+                   argv[0]);
       return 2;
     }
   }

@@ -7,6 +7,7 @@
 //                [--sync normal|full] [--mapd PATH] [--server HOST:PORT]
 //
 // Not a test: run it on demand (see docs/benchmarks.md).
+#include <grpcpp/grpcpp.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -26,8 +27,6 @@
 #include <thread>
 #include <vector>
 
-#include <grpcpp/grpcpp.h>
-
 #include "common/clock.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
@@ -42,7 +41,7 @@ struct Options {
   int robots = 16;
   int batches = 4000;  // per robot
   int features = 20;
-  int window = 256;    // unacknowledged batches per robot
+  int window = 256;  // unacknowledged batches per robot
   std::string sync = "normal";
   std::string mapd = MAPD_BINARY;
   std::string server;  // use a running server instead of starting one
@@ -115,8 +114,12 @@ void RunRobot(const std::shared_ptr<grpc::Channel>& channel, int index, const Op
       const int64_t now = mapd::SteadyNowNs();
       result->latencies_ms.push_back(static_cast<double>(now - sent_ns[ack.seq()]) / 1e6);
       switch (ack.result()) {
-        case pb::IngestAck::STORED: ++result->stored; break;
-        case pb::IngestAck::DUPLICATE: ++result->duplicate; break;
+        case pb::IngestAck::STORED:
+          ++result->stored;
+          break;
+        case pb::IngestAck::DUPLICATE:
+          ++result->duplicate;
+          break;
         default:
           if (result->rejected++ == 0) result->error = ack.message();
       }
@@ -149,8 +152,10 @@ double SqliteRowsPerSecond(const std::string& path, const std::string& sync, int
   sqlite3_open(path.c_str(), &db);
   sqlite3_exec(db, "PRAGMA journal_mode=WAL", nullptr, nullptr, nullptr);
   sqlite3_exec(db, ("PRAGMA synchronous=" + sync).c_str(), nullptr, nullptr, nullptr);
-  sqlite3_exec(db, "CREATE TABLE IF NOT EXISTS t (id INTEGER PRIMARY KEY, k INTEGER, s INTEGER, "
-                   "payload BLOB, UNIQUE (k, s))", nullptr, nullptr, nullptr);
+  sqlite3_exec(db,
+               "CREATE TABLE IF NOT EXISTS t (id INTEGER PRIMARY KEY, k INTEGER, s INTEGER, "
+               "payload BLOB, UNIQUE (k, s))",
+               nullptr, nullptr, nullptr);
   sqlite3_stmt* ins = nullptr;
   sqlite3_prepare_v2(db, "INSERT INTO t (k, s, payload) VALUES (?1, ?2, ?3)", -1, &ins, nullptr);
   const std::string blob(blob_bytes, 'x');
@@ -198,7 +203,10 @@ double CpuSeconds(pid_t pid) {
   double utime = 0, stime = 0;
   for (int i = 3; fields >> f; ++i) {
     if (i == 14) utime = std::stod(f);
-    if (i == 15) { stime = std::stod(f); break; }
+    if (i == 15) {
+      stime = std::stod(f);
+      break;
+    }
   }
   return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
@@ -216,14 +224,24 @@ int main(int argc, char** argv) {
   Options opt;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--robots") opt.robots = std::stoi(v);
-    else if (k == "--batches") opt.batches = std::stoi(v);
-    else if (k == "--features") opt.features = std::stoi(v);
-    else if (k == "--window") opt.window = std::stoi(v);
-    else if (k == "--sync") opt.sync = v;
-    else if (k == "--mapd") opt.mapd = v;
-    else if (k == "--server") opt.server = v;
-    else { std::fprintf(stderr, "ingest_bench: unknown flag %s\n", k.c_str()); return 2; }
+    if (k == "--robots")
+      opt.robots = std::stoi(v);
+    else if (k == "--batches")
+      opt.batches = std::stoi(v);
+    else if (k == "--features")
+      opt.features = std::stoi(v);
+    else if (k == "--window")
+      opt.window = std::stoi(v);
+    else if (k == "--sync")
+      opt.sync = v;
+    else if (k == "--mapd")
+      opt.mapd = v;
+    else if (k == "--server")
+      opt.server = v;
+    else {
+      std::fprintf(stderr, "ingest_bench: unknown flag %s\n", k.c_str());
+      return 2;
+    }
   }
   mapd::testing::TempDir dir;
   pid_t pid = 0;
@@ -278,14 +296,16 @@ int main(int argc, char** argv) {
     duplicate += r.duplicate;
     if (!r.error.empty()) std::fprintf(stderr, "robot error: %s\n", r.error.c_str());
   }
-  std::printf("group commit: %llu commits, %.1f batches per commit\n",
-              static_cast<unsigned long long>(stats.commits()),
-              stats.commits() ? static_cast<double>(stored) / static_cast<double>(stats.commits()) : 0.0);
-  std::printf("fused map: %llu fused features from %llu raw, caught up %.2f s after the last ack "
-              "(fusion rate %.0f features/s)\n",
-              static_cast<unsigned long long>(stats.fused_features()),
-              static_cast<unsigned long long>(stats.raw_features()), fused_after - seconds,
-              stored * static_cast<double>(opt.features) / fused_after);
+  std::printf(
+      "group commit: %llu commits, %.1f batches per commit\n",
+      static_cast<unsigned long long>(stats.commits()),
+      stats.commits() ? static_cast<double>(stored) / static_cast<double>(stats.commits()) : 0.0);
+  std::printf(
+      "fused map: %llu fused features from %llu raw, caught up %.2f s after the last ack "
+      "(fusion rate %.0f features/s)\n",
+      static_cast<unsigned long long>(stats.fused_features()),
+      static_cast<unsigned long long>(stats.raw_features()), fused_after - seconds,
+      stored * static_cast<double>(opt.features) / fused_after);
   const std::string rss = pid ? ProcStatus(pid, "VmRSS:") : "?";
   const std::string hwm = pid ? ProcStatus(pid, "VmHWM:") : "?";
   std::printf("robots=%d batches/robot=%d features/batch=%d window=%d sync=%s\n", opt.robots,
@@ -294,7 +314,8 @@ int main(int argc, char** argv) {
               rejected, seconds);
   std::printf("throughput: %.0f batches/s, %.0f features/s\n", stored / seconds,
               stored * static_cast<double>(opt.features) / seconds);
-  const double p50 = Percentile(lat, 0.50), p99 = Percentile(lat, 0.99), pmax = Percentile(lat, 1.0);
+  const double p50 = Percentile(lat, 0.50), p99 = Percentile(lat, 0.99),
+               pmax = Percentile(lat, 1.0);
   std::printf("ack latency: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n", p50, p99, pmax);
   std::printf("server: RSS %s, peak RSS %s, CPU %.2f s (%.0f%% of one core)\n", rss.c_str(),
               hwm.c_str(), server_cpu, 100 * server_cpu / seconds);
@@ -305,8 +326,10 @@ int main(int argc, char** argv) {
   const double one = SqliteRowsPerSecond(dir.File("ceiling1.db"), opt.sync, 1, blob, 2.0);
   const double thirty = SqliteRowsPerSecond(dir.File("ceiling30.db"), opt.sync, 30, blob, 2.0);
   const double big = SqliteRowsPerSecond(dir.File("ceiling512.db"), opt.sync, 512, blob, 2.0);
-  std::printf("sqlite ceiling (%zu-byte rows, WAL, %s): %.0f rows/s at 1 row/commit, %.0f at 30, "
-              "%.0f at 512\n", blob, opt.sync.c_str(), one, thirty, big);
+  std::printf(
+      "sqlite ceiling (%zu-byte rows, WAL, %s): %.0f rows/s at 1 row/commit, %.0f at 30, "
+      "%.0f at 512\n",
+      blob, opt.sync.c_str(), one, thirty, big);
   std::printf("ratio: mapd batches/s = %.2fx SQLite 1-row commits/s, %.2f of its 512-row rate\n",
               (stored / seconds) / one, (stored / seconds) / big);
   return rejected == 0 ? 0 : 1;

@@ -2,10 +2,10 @@
 // shared/data/laser, lines extracted per scan by split-and-merge
 // (geometry/split_and_merge.h), moved into the map frame by the corrected laser
 // pose, fed to FusionEngine one observation per scan, as the paper (no chain
-// guard, no wall consolidation) and with the defaults (both on). Reports raw and fused feature counts and the
-// share of valid scan points (range < max range) within 5 cm and 10 cm of a
-// fused segment (a markdown table on stdout, for docs/fusion-real-data.md);
-// writes docs/fusion-laser-<log>.svg.
+// guard, no wall consolidation) and with the defaults (both on). Reports raw and fused feature
+// counts and the share of valid scan points (range < max range) within 5 cm and 10 cm of a fused
+// segment (a markdown table on stdout, for docs/fusion-real-data.md); writes
+// docs/fusion-laser-<log>.svg.
 //
 //   laser_bench [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] [--guard-ratio R]
 //               [--wall-offset M]
@@ -44,7 +44,8 @@ struct Coverage {
   double within_10cm = 0.0;
 };
 
-Coverage MeasureCoverage(const std::vector<ScanLines>& scans, const std::vector<Segment2>& segments) {
+Coverage MeasureCoverage(const std::vector<ScanLines>& scans,
+                         const std::vector<Segment2>& segments) {
   constexpr double kCellM = 1.0;
   constexpr double kReachM = 0.1;
   fusion::UniformGrid<uint32_t> grid(kCellM);
@@ -56,7 +57,8 @@ Coverage MeasureCoverage(const std::vector<ScanLines>& scans, const std::vector<
     for (int64_t x = lo.x; x <= hi.x; ++x) {
       for (int64_t y = lo.y; y <= hi.y; ++y) {
         // Only cells the segment's 10 cm band can reach.
-        const Vec2 centre((static_cast<double>(x) + 0.5) * kCellM, (static_cast<double>(y) + 0.5) * kCellM);
+        const Vec2 centre((static_cast<double>(x) + 0.5) * kCellM,
+                          (static_cast<double>(y) + 0.5) * kCellM);
         if (geometry::PointSegmentDistance(centre, s) > kCellM * 0.7072 + kReachM) continue;
         cells[{x, y}].push_back(k);
       }
@@ -69,7 +71,8 @@ Coverage MeasureCoverage(const std::vector<ScanLines>& scans, const std::vector<
       auto it = cells.find(grid.KeyOf(p));
       if (it == cells.end()) continue;
       double best = 1e300;
-      for (uint32_t k : it->second) best = std::min(best, geometry::PointSegmentDistance(p, segments[k]));
+      for (uint32_t k : it->second)
+        best = std::min(best, geometry::PointSegmentDistance(p, segments[k]));
       near5 += best <= 0.05;
       near10 += best <= 0.10;
     }
@@ -169,15 +172,18 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
   if (!out) return false;
   const double panel = w + 20.0;
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << static_cast<int>(2 * panel + 20)
-      << "\" height=\"" << static_cast<int>(h + 60) << "\" font-family=\"sans-serif\" font-size=\"14\">\n"
+      << "\" height=\"" << static_cast<int>(h + 60)
+      << "\" font-family=\"sans-serif\" font-size=\"14\">\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   const RunResult* runs[2] = {&off, &on};
-  const char* titles[2] = {"the paper (no guard, no consolidation)", "default (guard, consolidation)"};
+  const char* titles[2] = {"the paper (no guard, no consolidation)",
+                           "default (guard, consolidation)"};
   for (int k = 0; k < 2; ++k) {
     const RunResult& r = *runs[k];
     char title[256];
-    std::snprintf(title, sizeof(title), "%s, %s: %zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm",
-                  log.c_str(), titles[k], r.published, 100.0 * r.coverage.within_5cm,
+    std::snprintf(title, sizeof(title),
+                  "%s, %s: %zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm", log.c_str(),
+                  titles[k], r.published, 100.0 * r.coverage.within_5cm,
                   100.0 * r.coverage.within_10cm);
     out << "<g transform=\"translate(" << 10 + k * panel << ",40)\">\n"
         << "<text x=\"0\" y=\"-14\">" << title << "</text>\n"
@@ -216,10 +222,13 @@ std::string Table(const std::vector<Row>& rows) {
   for (const Row& r : rows) {
     for (int k = 0; k < 2; ++k) {
       const RunResult& run = k == 0 ? r.off : r.on;
-      std::snprintf(buf, sizeof(buf), "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %.1f%% | %.1f%% | %.3f | %.0f |\n",
-                    r.log.c_str(), r.scans, r.points, r.raw, k == 0 ? "paper" : "default", run.published,
-                    run.clusters, run.identical_pairs, 100.0 * run.coverage.within_5cm, 100.0 * run.coverage.within_10cm,
-                    run.engine_s, static_cast<double>(r.raw) / run.engine_s);
+      std::snprintf(
+          buf, sizeof(buf),
+          "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %.1f%% | %.1f%% | %.3f | %.0f |\n",
+          r.log.c_str(), r.scans, r.points, r.raw, k == 0 ? "paper" : "default", run.published,
+          run.clusters, run.identical_pairs, 100.0 * run.coverage.within_5cm,
+          100.0 * run.coverage.within_10cm, run.engine_s,
+          static_cast<double>(r.raw) / run.engine_s);
       t << buf;
     }
   }
@@ -235,7 +244,8 @@ int main(int argc, char** argv) {
   std::string docs_dir = MAPD_SOURCE_DIR "/docs";
   bool write = true;
   mapd::fusion::FusionParams on;  // the defaults, guard included, in the exact (reference) mode
-  on.mode = mapd::fusion::FusionMode::kExact;  // docs/fusion-real-data.md; bounded: fusion_modes_bench
+  on.mode =
+      mapd::fusion::FusionMode::kExact;  // docs/fusion-real-data.md; bounded: fusion_modes_bench
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
       data_dir = argv[++i];
@@ -289,8 +299,8 @@ int main(int argc, char** argv) {
     }
     row.off = Fuse(lines, off);
     row.on = Fuse(lines, on);
-    std::printf("%s: %zu scans, %zu points, %zu raw lines (read %.2f s, extract %.2f s)\n", spec.name,
-                row.scans, row.points, row.raw, row.read_s, row.extract_s);
+    std::printf("%s: %zu scans, %zu points, %zu raw lines (read %.2f s, extract %.2f s)\n",
+                spec.name, row.scans, row.points, row.raw, row.read_s, row.extract_s);
     std::fflush(stdout);
     if (write) {
       const std::string svg = docs_dir + "/fusion-laser-" + spec.name + ".svg";

@@ -5,13 +5,16 @@
 // in known-free space). Each scan's planes (RANSAC, tests/sim/plane_extraction.h)
 // go through fusion::ProjectToGround: near-vertical planes become ground
 // segments for fusion::FusionEngine, the others MapPlanes for
-// fusion::PlaneFusionEngine (plane_fusion_adapter.h). Prints markdown tables for docs/planes-3d.md and writes
-// docs/planes-3d-<world>.svg.
+// fusion::PlaneFusionEngine (plane_fusion_adapter.h). Prints markdown tables for docs/planes-3d.md
+// and writes docs/planes-3d-<world>.svg.
 //
 //   plane_bench [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]
 // --data: the folder holding geb079.bt and fr_078_tidyup.bt (the shared data
-// folder's data/octomap; default $MAPD_SHARED_DIR/data/octomap); --scans: poses per real map (default 80);
+// folder's data/octomap; default $MAPD_SHARED_DIR/data/octomap); --scans: poses per real map
+// (default 80);
 // --city-step: route metres between city scans (default 2).
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,15 +28,13 @@
 #include <unordered_set>
 #include <vector>
 
-#include <octomap/OcTree.h>
-
 #include "bench/plane_fusion_adapter.h"
+#include "eval/metrics.h"
+#include "eval/svg.h"
 #include "fusion/engine.h"
 #include "fusion/projection.h"
-#include "eval/metrics.h"
-#include "sim/city_scenario.h"
-#include "eval/svg.h"
 #include "geometry/segment2.h"
+#include "sim/city_scenario.h"
 #include "sim/city_world.h"
 #include "sim/lidar_sim.h"
 #include "sim/octomap_world.h"
@@ -56,13 +57,13 @@ struct Run {
   size_t scans = 0;
   size_t points = 0;
   size_t raw_planes = 0;
-  size_t raw_vertical = 0;   // became ground segments
-  size_t raw_other = 0;      // MapPlanes
-  size_t skipped = 0;        // vertical planes whose projection degenerates
+  size_t raw_vertical = 0;  // became ground segments
+  size_t raw_other = 0;     // MapPlanes
+  size_t skipped = 0;       // vertical planes whose projection degenerates
   double sim_s = 0.0, extract_s = 0.0, wall_fusion_s = 0.0;
   std::vector<fusion::FusedFeature> walls;
   PlaneFusionResult planes;
-  std::vector<sc::Scan> raw;  // ground features per scan with truth labels (city metrics)
+  std::vector<sc::Scan> raw;          // ground features per scan with truth labels (city metrics)
   std::vector<Eigen::Vector3d> hits;  // scan points in the map frame (real maps)
   std::vector<Rigid3> poses;
 };
@@ -118,9 +119,10 @@ Status Drive(const sim::LidarWorld& world, const std::vector<Rigid3>& poses, boo
 }
 
 void PrintRunHeader() {
-  std::printf("| world | scans | points per scan | raw planes (vertical / other) | fused walls | "
-              "fused planes | simulation ms/scan | extraction ms/scan | wall fusion ms/scan | "
-              "plane fusion ms/scan |\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "| world | scans | points per scan | raw planes (vertical / other) | fused walls | "
+      "fused planes | simulation ms/scan | extraction ms/scan | wall fusion ms/scan | "
+      "plane fusion ms/scan |\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|\n");
 }
 
 void PrintRun(const std::string& name, const Run& r) {
@@ -138,7 +140,8 @@ double WallDistance(const Eigen::Vector3d& p, const fusion::FusedFeature& w) {
   return std::hypot(d, dz);
 }
 
-double SegmentDistance3(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+double SegmentDistance3(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                        const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
   const double t = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-12), 0.0, 1.0);
   return (a + t * ab - p).norm();
@@ -165,19 +168,22 @@ double PolygonDistance(const Eigen::Vector3d& p, const FusedPlaneView& f) {
 
 struct Coverage {
   size_t occupied = 0;
-  size_t near_hit = 0;     // within 10 cm of a simulated scan point: what the scans saw
-  size_t near_wall = 0;    // within 10 cm of a fused wall strip
-  size_t near_plane = 0;   // within 10 cm of a fused non-vertical plane
-  size_t near_fused = 0;   // either
+  size_t near_hit = 0;    // within 10 cm of a simulated scan point: what the scans saw
+  size_t near_wall = 0;   // within 10 cm of a fused wall strip
+  size_t near_plane = 0;  // within 10 cm of a fused non-vertical plane
+  size_t near_fused = 0;  // either
   size_t near_both = 0;
 };
 
 Coverage MeasureCoverage(const octomap::OcTree& tree, const Run& r) {
   constexpr double kReach = 0.10;
   std::unordered_set<int64_t> hit_cells;  // 10 cm cells holding a scan point
-  auto key = [](int64_t x, int64_t y, int64_t z) { return (x * 73856093) ^ (y * 19349663) ^ (z * 83492791); };
+  auto key = [](int64_t x, int64_t y, int64_t z) {
+    return (x * 73856093) ^ (y * 19349663) ^ (z * 83492791);
+  };
   for (const auto& h : r.hits) {
-    hit_cells.insert(key(std::llround(std::floor(h.x() / kReach)), std::llround(std::floor(h.y() / kReach)),
+    hit_cells.insert(key(std::llround(std::floor(h.x() / kReach)),
+                         std::llround(std::floor(h.y() / kReach)),
                          std::llround(std::floor(h.z() / kReach))));
   }
   Coverage c;
@@ -186,13 +192,16 @@ Coverage MeasureCoverage(const octomap::OcTree& tree, const Run& r) {
     const Eigen::Vector3d p(it.getX(), it.getY(), it.getZ());
     ++c.occupied;
     bool seen = false;
-    const int64_t cx = std::llround(std::floor(p.x() / kReach)), cy = std::llround(std::floor(p.y() / kReach)),
+    const int64_t cx = std::llround(std::floor(p.x() / kReach)),
+                  cy = std::llround(std::floor(p.y() / kReach)),
                   cz = std::llround(std::floor(p.z() / kReach));
     for (int dx = -1; dx <= 1 && !seen; ++dx)
       for (int dy = -1; dy <= 1 && !seen; ++dy)
-        for (int dz = -1; dz <= 1 && !seen; ++dz) seen = hit_cells.count(key(cx + dx, cy + dy, cz + dz)) > 0;
+        for (int dz = -1; dz <= 1 && !seen; ++dz)
+          seen = hit_cells.count(key(cx + dx, cy + dy, cz + dz)) > 0;
     bool wall = false, plane = false;
-    for (size_t i = 0; !wall && i < r.walls.size(); ++i) wall = WallDistance(p, r.walls[i]) <= kReach;
+    for (size_t i = 0; !wall && i < r.walls.size(); ++i)
+      wall = WallDistance(p, r.walls[i]) <= kReach;
     for (size_t i = 0; !plane && i < r.planes.fused.size(); ++i) {
       plane = PolygonDistance(p, r.planes.fused[i]) <= kReach;
     }
@@ -207,7 +216,8 @@ Coverage MeasureCoverage(const octomap::OcTree& tree, const Run& r) {
 }
 
 std::string Colour(uint64_t id) {
-  static const char* kPalette[] = {"#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628", "#f781bf"};
+  static const char* kPalette[] = {"#e41a1c", "#377eb8", "#4daf4a", "#984ea3",
+                                   "#ff7f00", "#a65628", "#f781bf"};
   return kPalette[(id * 2654435761u) % 7];
 }
 
@@ -226,11 +236,14 @@ Status WriteTopView(const std::string& path, const std::string& title, const oct
   auto Y = [&](double y) { return m + 20 + (y1 - y) * s; };
   out << "<svg xmlns='http://www.w3.org/2000/svg' width='" << (x1 - x0) * s + 2 * m << "' height='"
       << (y1 - y0) * s + 2 * m + 20 << "'>\n<rect width='100%' height='100%' fill='white'/>\n"
-      << "<text x='" << m << "' y='16' font-family='sans-serif' font-size='13'>" << title << "</text>\n";
+      << "<text x='" << m << "' y='16' font-family='sans-serif' font-size='13'>" << title
+      << "</text>\n";
   std::set<std::pair<int64_t, int64_t>> columns;
   const double floor_z = sim::EstimateFloorZ(tree);
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (tree.isNodeOccupied(*it) && it.getZ() > floor_z + 0.3 && it.getZ() < floor_z + 1.8) columns.insert({std::llround(std::floor(it.getX() / 0.2)), std::llround(std::floor(it.getY() / 0.2))});
+    if (tree.isNodeOccupied(*it) && it.getZ() > floor_z + 0.3 && it.getZ() < floor_z + 1.8)
+      columns.insert(
+          {std::llround(std::floor(it.getX() / 0.2)), std::llround(std::floor(it.getY() / 0.2))});
   }
   out << "<g fill='#bbbbbb'>\n";
   for (const auto& [cx, cy] : columns) {
@@ -250,7 +263,8 @@ Status WriteTopView(const std::string& path, const std::string& title, const oct
         << "' stroke-width='3'/>\n";
   }
   for (const auto& p : r.poses) {
-    out << "<circle cx='" << X(p.translation.x()) << "' cy='" << Y(p.translation.y()) << "' r='2'/>\n";
+    out << "<circle cx='" << X(p.translation.x()) << "' cy='" << Y(p.translation.y())
+        << "' r='2'/>\n";
   }
   out << "</svg>\n";
   return out.good() ? Status::Ok() : Status::Unavailable("write failed: " + path);
@@ -287,7 +301,8 @@ int RealMaps(const std::string& data_dir, const std::string& docs_dir, bool writ
     const auto t = std::chrono::steady_clock::now();
     const Coverage c = MeasureCoverage(tree, run);
     char row[512];
-    std::snprintf(row, sizeof row, "| %s | %zu | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f |\n",
+    std::snprintf(row, sizeof row,
+                  "| %s | %zu | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f |\n",
                   name.c_str(), c.occupied, 100.0 * c.near_wall / c.occupied,
                   100.0 * c.near_plane / c.occupied, 100.0 * c.near_fused / c.occupied,
                   100.0 * c.near_hit / c.occupied,
@@ -295,20 +310,24 @@ int RealMaps(const std::string& data_dir, const std::string& docs_dir, bool writ
     coverage_rows.push_back(row);
     if (write) {
       const std::string svg = docs_dir + "/planes-3d-" + name + ".svg";
-      if (Status s = WriteTopView(svg, name + ": fused walls (lines) and planes (dashed)", tree, run); !s.ok()) {
+      if (Status s =
+              WriteTopView(svg, name + ": fused walls (lines) and planes (dashed)", tree, run);
+          !s.ok()) {
         std::fprintf(stderr, "%s\n", s.ToString().c_str());
         return 1;
       }
     }
   }
-  std::printf("\nOccupied voxels (leaf centres) within 10 cm of a fused wall strip or fused plane:\n\n"
-              "| map | occupied leaves | near a fused wall | near a fused plane | near either | "
-              "near a scan point (seen) | seen ones near either | measured in (s) |\n"
-              "|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "\nOccupied voxels (leaf centres) within 10 cm of a fused wall strip or fused plane:\n\n"
+      "| map | occupied leaves | near a fused wall | near a fused plane | near either | "
+      "near a scan point (seen) | seen ones near either | measured in (s) |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& row : coverage_rows) std::printf("%s", row.c_str());
   if (!plane_rows.empty()) {
-    std::printf("\nFused non-vertical planes (map frame):\n\n| map | id | normal | offset (m) | "
-                "area (m^2) | support |\n|---|---:|---|---:|---:|---:|\n");
+    std::printf(
+        "\nFused non-vertical planes (map frame):\n\n| map | id | normal | offset (m) | "
+        "area (m^2) | support |\n|---|---:|---|---:|---:|---:|\n");
     for (const auto& row : plane_rows) std::printf("%s", row.c_str());
   }
   return 0;
@@ -341,24 +360,27 @@ int City(const std::string& docs_dir, bool write, double step_m) {
     std::fprintf(stderr, "city: %s\n", s.ToString().c_str());
     return 1;
   }
-  std::printf("\n### Synthetic city (%dx%d blocks, %zu buildings, %zu walls, a scan every %.1f m)\n\n",
-              params.blocks_x, params.blocks_y, world.buildings.size(), world.wall_count, step_m);
+  std::printf(
+      "\n### Synthetic city (%dx%d blocks, %zu buildings, %zu walls, a scan every %.1f m)\n\n",
+      params.blocks_x, params.blocks_y, world.buildings.size(), world.wall_count, step_m);
   PrintRunHeader();
   PrintRun("city", run);
   const sc::MapMetrics q = sc::Evaluate(world, run.raw, run.walls, sc::MetricsParams());
-  std::printf("\n| fused walls | walls seen / matched | features per matched wall | on fences/poles | "
-              "spurious | completeness | lateral RMS (cm) | corners met / evaluated | "
-              "vertex error mean / median (cm) |\n|---:|---|---:|---:|---:|---:|---:|---|---|\n"
-              "| %zu | %zu / %zu | %.2f | %zu | %zu | %.3f | %.2f | %zu / %zu | %.1f / %.1f |\n",
-              q.fused, q.walls_seen, q.walls_matched, q.redundancy, q.on_trivial, q.spurious,
-              q.completeness, 100.0 * q.lateral_rms_m, q.corners_met, q.corners_evaluated,
-              100.0 * q.vertex_error_mean_m, 100.0 * q.vertex_error_median_m);
+  std::printf(
+      "\n| fused walls | walls seen / matched | features per matched wall | on fences/poles | "
+      "spurious | completeness | lateral RMS (cm) | corners met / evaluated | "
+      "vertex error mean / median (cm) |\n|---:|---|---:|---:|---:|---:|---:|---|---|\n"
+      "| %zu | %zu / %zu | %.2f | %zu | %zu | %.3f | %.2f | %zu / %zu | %.1f / %.1f |\n",
+      q.fused, q.walls_seen, q.walls_matched, q.redundancy, q.on_trivial, q.spurious,
+      q.completeness, 100.0 * q.lateral_rms_m, q.corners_met, q.corners_evaluated,
+      100.0 * q.vertex_error_mean_m, 100.0 * q.vertex_error_median_m);
   std::printf("\nPlane fusion: %zu raw non-vertical planes, %zu kept as nodes at the end.\n",
               run.planes.raw, run.planes.nodes);
   const Eigen::Vector3d rn = ramp.normal();
-  std::printf("\nFused non-vertical planes (truth: the ground, normal (0, 0, 1), offset 0; "
-              "the ramp, normal (%.3f, %.3f, %.3f), offset %.3f, 40 m^2):\n\n",
-              rn.x(), rn.y(), rn.z(), ramp.offset());
+  std::printf(
+      "\nFused non-vertical planes (truth: the ground, normal (0, 0, 1), offset 0; "
+      "the ramp, normal (%.3f, %.3f, %.3f), offset %.3f, 40 m^2):\n\n",
+      rn.x(), rn.y(), rn.z(), ramp.offset());
   std::printf("| id | normal | offset (m) | area (m^2) | support |\n|---:|---|---:|---:|---:|\n");
   for (const auto& f : run.planes.fused) {
     std::printf("| %llu | (%.3f, %.3f, %.3f) | %.3f | %.0f | %u |\n",
@@ -370,7 +392,9 @@ int City(const std::string& docs_dir, bool write, double step_m) {
     panel.title = "city: fused walls from 16-beam LiDAR planes";
     for (const auto& w : run.walls) panel.segments.push_back(w.segment);
     const std::string svg = docs_dir + "/planes-3d-city.svg";
-    if (Status s = sc::WriteSvg(svg, world, {panel}, world.min, world.min + Vec2(100.0, 100.0), 6.0); !s.ok()) {
+    if (Status s =
+            sc::WriteSvg(svg, world, {panel}, world.min, world.min + Vec2(100.0, 100.0), 6.0);
+        !s.ok()) {
       std::fprintf(stderr, "%s\n", s.ToString().c_str());
       return 1;
     }
@@ -400,7 +424,8 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--city-step") && i + 1 < argc) {
       step_m = std::atof(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]\n",
+      std::fprintf(stderr,
+                   "usage: %s [--data DIR] [--docs DIR] [--no-write] [--scans N] [--city-step M]\n",
                    argv[0]);
       return 2;
     }
@@ -410,8 +435,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (data_dir.empty()) {
-    std::fprintf(stderr, "pass --data DIR (the folder of geb079.bt and fr_078_tidyup.bt) "
-                         "or set MAPD_SHARED_DIR\n");
+    std::fprintf(stderr,
+                 "pass --data DIR (the folder of geb079.bt and fr_078_tidyup.bt) "
+                 "or set MAPD_SHARED_DIR\n");
     return 2;
   }
   if (int rc = mapd::bench::City(docs_dir, write, step_m); rc != 0) return rc;

@@ -4,11 +4,10 @@
 #ifndef MAPD_TESTS_BENCH_PLANE_FUSION_ADAPTER_H_
 #define MAPD_TESTS_BENCH_PLANE_FUSION_ADAPTER_H_
 
+#include <Eigen/Core>
 #include <chrono>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 #include "fusion/plane_engine.h"
@@ -39,7 +38,8 @@ class PlaneFuser {
     result_.raw += planes.size();
     const auto start = std::chrono::steady_clock::now();
     Status s = engine_.Add(observation, robot, planes);
-    result_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result_.seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return s;
   }
   PlaneFusionResult Result() const {

@@ -14,6 +14,7 @@
 //              [--mapd PATH] [--keep DIR]
 //
 // Run on demand (docs/long-running.md); never by ctest.
+#include <grpcpp/grpcpp.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -32,14 +33,12 @@
 #include <unordered_map>
 #include <vector>
 
-#include <grpcpp/grpcpp.h>
-
 #include "client/sim_robot.h"
+#include "common/octomap_scenes.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
-#include "sim/city_scenario.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
-#include "common/octomap_scenes.h"
+#include "sim/city_scenario.h"
 
 namespace {
 
@@ -57,7 +56,9 @@ struct Options {
   std::string keep;  // keep the database here instead of a temporary directory
 };
 
-double Seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // --- Batches. A pool per robot, replayed in loops with a fresh seq and a
 // centimetre of pose jitter per send, so that no two laps are identical.
@@ -131,7 +132,8 @@ struct Robot {
 
 // Streams until shared.stop; returns when every sent batch is acknowledged.
 void RunRobot(const std::string& address, Robot* robot, Shared* shared) {
-  auto stub = pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  auto stub =
+      pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
   grpc::ClientContext ctx;
   auto stream = stub->Ingest(&ctx);
   std::mutex mu;
@@ -252,14 +254,16 @@ double ThreadCpuSeconds(pid_t pid, const std::string& name) {
 
 double P99(std::vector<double> v) {
   if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())));
+  const size_t k =
+      std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())));
   std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
   return v[k];
 }
 
 // --- The tie at the end: two views of a room as submaps, one per robot.
 
-double TieLateRobot(pb::MapService::Stub* stub, const std::string& mapd_log, const std::string& late) {
+double TieLateRobot(pb::MapService::Stub* stub, const std::string& mapd_log,
+                    const std::string& late) {
   mapd::testing::RoomScene scene;
   const std::string west = mapd::testing::RoomSubmap(scene, 0, 8, Eigen::Isometry3d::Identity());
   const std::string east = mapd::testing::RoomSubmap(
@@ -326,19 +330,28 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool v = i + 1 < argc;
-    if (a == "--world" && v) opt.world = argv[++i];
-    else if (a == "--robots" && v) opt.robots = std::atoi(argv[++i]);
-    else if (a == "--total" && v) opt.total = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--every" && v) opt.every = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--mapd" && v) opt.mapd = argv[++i];
-    else if (a == "--keep" && v) opt.keep = argv[++i];
+    if (a == "--world" && v)
+      opt.world = argv[++i];
+    else if (a == "--robots" && v)
+      opt.robots = std::atoi(argv[++i]);
+    else if (a == "--total" && v)
+      opt.total = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--every" && v)
+      opt.every = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--mapd" && v)
+      opt.mapd = argv[++i];
+    else if (a == "--keep" && v)
+      opt.keep = argv[++i];
     else if (a == "--restart-at" && v) {
       opt.restart_at.clear();
       std::stringstream list(argv[++i]);
-      for (std::string item; std::getline(list, item, ',');) opt.restart_at.push_back(std::stoull(item));
+      for (std::string item; std::getline(list, item, ',');)
+        opt.restart_at.push_back(std::stoull(item));
     } else {
-      std::fprintf(stderr, "usage: %s [--world floor|city] [--robots N] [--total N] [--every N] "
-                           "[--restart-at A,B,..] [--mapd PATH] [--keep DIR]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--world floor|city] [--robots N] [--total N] [--every N] "
+                   "[--restart-at A,B,..] [--mapd PATH] [--keep DIR]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -354,7 +367,8 @@ int main(int argc, char** argv) {
   for (int r = 0; r <= opt.robots; ++r) {
     const bool late = r == opt.robots;  // the robot in its own frame, tied at the end
     Robot& robot = robots[static_cast<size_t>(r)];
-    robot.pool = opt.world == "floor" ? FloorPool(r, opt.robots, late) : CityPool(r, opt.robots, late);
+    robot.pool =
+        opt.world == "floor" ? FloorPool(r, opt.robots, late) : CityPool(r, opt.robots, late);
     robot.rng.seed(static_cast<uint64_t>(r) + 77);
     robot.every_nth = late ? 4 : 1;
   }
@@ -365,12 +379,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mapd did not start\n%s", mapd.log().c_str());
     return 1;
   }
-  auto stub = pb::MapService::NewStub(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  auto stub = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
   std::printf("world %s, %d robots + 1 in its own frame (streams a quarter as often), mapd %s\n\n",
               opt.world.c_str(), opt.robots, mapd.address.c_str());
-  std::printf("| raw features | ingest batches/s | fused features/s (wall) | fused features/CPU-s "
-              "(fuser) | fusion nodes | backlog | p99 ack ms | mapd RSS MiB | db MiB | db bytes/feature |\n"
-              "|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| raw features | ingest batches/s | fused features/s (wall) | fused features/CPU-s "
+      "(fuser) | fusion nodes | backlog | p99 ack ms | mapd RSS MiB | db MiB | db bytes/feature |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n");
 
   Shared shared;
   shared.robots = opt.robots;
@@ -405,14 +421,15 @@ int main(int argc, char** argv) {
         std::lock_guard<std::mutex> lock(shared.mu);
         latencies.swap(shared.latencies_ms);
       }
-      std::printf("| %.2fM | %.0f | %.0f | %.0f | %llu | %llu | %.1f | %.0f | %.0f | %.0f |\n", raw / 1e6,
-                  static_cast<double>(batches - window_batches) / dt,
+      std::printf("| %.2fM | %.0f | %.0f | %.0f | %llu | %llu | %.1f | %.0f | %.0f | %.0f |\n",
+                  raw / 1e6, static_cast<double>(batches - window_batches) / dt,
                   static_cast<double>(stats.fused_raw_features() - window_fused) / dt,
                   static_cast<double>(stats.fused_raw_features() - window_fused) /
                       std::max(1e-9, cpu - window_cpu),
                   static_cast<unsigned long long>(stats.fusion_nodes()),
                   static_cast<unsigned long long>(stats.fusion_backlog()), P99(latencies),
-                  mapd::testing::ResidentMiB(mapd.pid), stats.db_size_bytes() / 1048576.0, stats.bytes_per_raw_feature());
+                  mapd::testing::ResidentMiB(mapd.pid), stats.db_size_bytes() / 1048576.0,
+                  stats.bytes_per_raw_feature());
       std::fflush(stdout);
       window_t = Clock::now();
       window_batches = batches;
@@ -420,7 +437,8 @@ int main(int argc, char** argv) {
       window_cpu = cpu;
       while (next_report <= raw) next_report += opt.every;
     }
-    const bool restart_due = next_restart < opt.restart_at.size() && raw >= opt.restart_at[next_restart];
+    const bool restart_due =
+        next_restart < opt.restart_at.size() && raw >= opt.restart_at[next_restart];
     if (!restart_due && raw < opt.total) continue;
 
     // Quiesce: robots stop, every ack in, the fuser catches up.
@@ -438,7 +456,8 @@ int main(int argc, char** argv) {
       // Back as soon as it listens (it recovers the map after that).
       mapd = mapd::testing::StartMapd(db, {}, opt.mapd, std::chrono::seconds(120), "listening");
       const std::string address = mapd.address;
-      stub = pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+      stub =
+          pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
       double serving_s = -1, full_s = -1;
       while (Seconds(t0) < 600) {
         if (serving_s < 0 && !GetStats(stub.get()).recovering()) serving_s = Seconds(t0);
@@ -448,8 +467,9 @@ int main(int argc, char** argv) {
             full_s = Seconds(t0);
             char line[256];
             std::snprintf(line, sizeof(line),
-                          "| %.2fM | %.3f | %.3f | %s (%zu features, map_version %llu) |", raw / 1e6,
-                          serving_s, full_s, after.features == before.features ? "identical" : "DIFFERENT",
+                          "| %.2fM | %.3f | %.3f | %s (%zu features, map_version %llu) |",
+                          raw / 1e6, serving_s, full_s,
+                          after.features == before.features ? "identical" : "DIFFERENT",
                           after.features.size(), static_cast<unsigned long long>(after.version));
             restarts.push_back(line);
             break;
@@ -467,9 +487,10 @@ int main(int argc, char** argv) {
   std::printf("\nsoak: %.0f s to %.2fM raw features, %llu batches rejected\n", Seconds(soak_start),
               GetStats(stub.get()).raw_features() / 1e6,
               static_cast<unsigned long long>(shared.rejected.load()));
-  std::printf("\nRestarts (SIGKILL, then restart on the same database):\n\n"
-              "| raw features | to SERVING (s) | to the full map (s) | map after vs before |\n"
-              "|---|---|---|---|\n");
+  std::printf(
+      "\nRestarts (SIGKILL, then restart on the same database):\n\n"
+      "| raw features | to SERVING (s) | to the full map (s) | map after vs before |\n"
+      "|---|---|---|---|\n");
   for (const std::string& r : restarts) std::printf("%s\n", r.c_str());
   std::printf("\n");
   const double tie_s = TieLateRobot(stub.get(), mapd.log_path, late_name);

@@ -1,13 +1,13 @@
 #include "bench/voxel_crops.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
 #include <unordered_set>
 #include <vector>
-
-#include <octomap/OcTree.h>
 
 namespace mapd::bench {
 namespace {
@@ -182,8 +182,8 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   pair.T_a_b = T_b_map.inverse();
   pair.centroid_b = c + t;
 
-  StatusOr<Resampled> a = Resample(map, slab_a, Eigen::Isometry3d::Identity(),
-                                   params.free_band_voxels);
+  StatusOr<Resampled> a =
+      Resample(map, slab_a, Eigen::Isometry3d::Identity(), params.free_band_voxels);
   if (!a.ok()) return a.status();
   StatusOr<Resampled> b = Resample(map, slab_b, T_b_map, params.free_band_voxels);
   if (!b.ok()) return b.status();
@@ -196,11 +196,13 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   return pair;
 }
 
-std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap, int trial) {
+std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap,
+                        int trial) {
   std::uint64_t name_hash = 14695981039346656037ULL;  // FNV-1a: std::hash is not specified
   for (unsigned char c : map_file_name) name_hash = (name_hash ^ c) * 1099511628211ULL;
   return base_seed * 1000003ULL + name_hash % 1000003ULL * 10007ULL +
-         static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL + static_cast<std::uint64_t>(trial);
+         static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL +
+         static_cast<std::uint64_t>(trial);
 }
 
 double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {

@@ -25,11 +25,10 @@
 #ifndef MAPD_TESTS_BENCH_VOXEL_CROPS_H_
 #define MAPD_TESTS_BENCH_VOXEL_CROPS_H_
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "common/status.h"
 #include "voxel/voxel_grid.h"
@@ -37,11 +36,11 @@
 namespace mapd::bench {
 
 struct CropParams {
-  double overlap = 0.5;                       // requested |A n B| / min(|A|, |B|), in (0, 1)
+  double overlap = 0.5;  // requested |A n B| / min(|A|, |B|), in (0, 1)
   std::size_t max_occupied_per_crop = 150'000;
-  double max_tilt_deg = 10.0;                 // roll and pitch uniform in [-max, max]
-  double max_translation_m = 20.0;            // translation uniform in a ball of this radius
-  int free_band_voxels = 1;                   // free space kept within this many voxels of occupied
+  double max_tilt_deg = 10.0;       // roll and pitch uniform in [-max, max]
+  double max_translation_m = 20.0;  // translation uniform in a ball of this radius
+  int free_band_voxels = 1;         // free space kept within this many voxels of occupied
   std::uint64_t seed = 1;
 
   Status Validate() const;
@@ -53,12 +52,12 @@ struct CropPair {
   // Ground truth: maps B's coordinates into A's (= the map's) frame.
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
   Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();  // of B's occupied voxels, B frame, metres
-  int axis = 0;                   // 0 = x, 1 = y: the slab axis
-  std::size_t occupied_a = 0;     // source voxels in crop A
-  std::size_t occupied_b = 0;     // source voxels in crop B
-  std::size_t shared = 0;         // source voxels in both
-  double achieved_overlap = 0.0;  // shared / min(occupied_a, occupied_b)
-  std::size_t out_occupied_a = 0, out_occupied_b = 0;  // after re-voxelisation
+  int axis = 0;                                          // 0 = x, 1 = y: the slab axis
+  std::size_t occupied_a = 0;                            // source voxels in crop A
+  std::size_t occupied_b = 0;                            // source voxels in crop B
+  std::size_t shared = 0;                                // source voxels in both
+  double achieved_overlap = 0.0;                         // shared / min(occupied_a, occupied_b)
+  std::size_t out_occupied_a = 0, out_occupied_b = 0;    // after re-voxelisation
   std::size_t out_free_a = 0, out_free_b = 0;
   double yaw_deg = 0, roll_deg = 0, pitch_deg = 0, translation_m = 0;  // the drawn motion
 };
@@ -71,7 +70,8 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
 // directory), the overlap and the trial index, not on the order of the maps or
 // overlaps in a run, so that a run of one map or one method, and the
 // diagnostic tool, draw the same trials.
-std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap, int trial);
+std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_name, double overlap,
+                        int trial);
 
 // Errors of an estimate against the truth. The translation error is measured
 // where it matters: the distance between est * c and truth * c for the centroid

@@ -41,9 +41,10 @@ int main(int argc, char** argv) {
   const std::string out_path = argc > 1 ? argv[1] : MAPD_DOCS_DIR "/voxel-matching.md";
   const int seeds = argc > 2 ? std::stoi(argv[2]) : 5;
   std::ostringstream table;
-  table << "| corners A | corners B | true pairs | noise (m) | method | candidate pairs | density | "
-           "median time (s) | max time (s) | matched | correct | success | proven optimal |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  table
+      << "| corners A | corners B | true pairs | noise (m) | method | candidate pairs | density | "
+         "median time (s) | max time (s) | matched | correct | success | proven optimal |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   struct Scenario {
     int num_a;
     double overlap, outlier_fraction, noise_m, normal_noise_deg;
@@ -94,20 +95,20 @@ int main(int argc, char** argv) {
         row.correct += correct;
         row.seconds.push_back(r->total_seconds);
         row.search_seconds.push_back(r->search_seconds);
-        std::fprintf(stderr, "%3d %-12s seed %d: %.3f s (search %.3f s, %lld nodes) matched %d correct %d %s\n",
-                     num_a, method.name.c_str(), seed, r->total_seconds,
-                     r->search_seconds, static_cast<long long>(r->search_nodes), r->matched_count,
-                     correct, ok ? "ok" : "FAIL");
+        std::fprintf(
+            stderr,
+            "%3d %-12s seed %d: %.3f s (search %.3f s, %lld nodes) matched %d correct %d %s\n",
+            num_a, method.name.c_str(), seed, r->total_seconds, r->search_seconds,
+            static_cast<long long>(r->search_nodes), r->matched_count, correct, ok ? "ok" : "FAIL");
       }
       char line[512];
-      std::snprintf(line, sizeof(line),
-                    "| %d | %d | %d | %s | %s | %.0f | %.3f | %.3f | %.3f | %.1f | %.1f | %d/%d | %d/%d |\n",
-                    num_a, num_b, truth, sc.noise_m > 0.0 ? "0.05" : "0.01-0.02",
-                    method.name.c_str(),
-                    row.candidate_pairs / row.seeds, row.density / row.seeds, Median(row.seconds),
-                    *std::max_element(row.seconds.begin(), row.seconds.end()),
-                    row.matched / row.seeds, row.correct / row.seeds, row.success, row.seeds,
-                    row.proven, row.seeds);
+      std::snprintf(
+          line, sizeof(line),
+          "| %d | %d | %d | %s | %s | %.0f | %.3f | %.3f | %.3f | %.1f | %.1f | %d/%d | %d/%d |\n",
+          num_a, num_b, truth, sc.noise_m > 0.0 ? "0.05" : "0.01-0.02", method.name.c_str(),
+          row.candidate_pairs / row.seeds, row.density / row.seeds, Median(row.seconds),
+          *std::max_element(row.seconds.begin(), row.seconds.end()), row.matched / row.seeds,
+          row.correct / row.seeds, row.success, row.seeds, row.proven, row.seeds);
       table << line;
     }
   }
@@ -123,7 +124,8 @@ int main(int argc, char** argv) {
       << "translation within 5 cm of the truth. The last rows are like the paper's maps: about\n"
       << "85 corners each, 20 shared, 5 cm noise (half a 10 cm voxel), 3 deg normal noise.\n"
       << "Backtracking = the paper's Algorithm 1 with its five-match shortcut.\n"
-      << "Density is that of the consistency graph over the candidate pairs. " << seeds << " seeds per row; time is the whole\n"
+      << "Density is that of the consistency graph over the candidate pairs. " << seeds
+      << " seeds per row; time is the whole\n"
       << "MatchCorners call (signatures, graph, search, fit), single thread.\n\n"
       << table.str()
       << "\nReading (as of the first run; check against the table after a rerun):\n\n"
@@ -138,7 +140,8 @@ int main(int argc, char** argv) {
       << "- A failure on the paper-like rows with all matches correct is an estimation\n"
       << "  limit (5 cm noise, corners up to 30 m apart), not a matching error: ICP on\n"
       << "  the voxels refines it.\n"
-      << "- Hence the maximum clique is mapd's search (the default of CornerMatchingParams::search).\n";
+      << "- Hence the maximum clique is mapd's search (the default of "
+         "CornerMatchingParams::search).\n";
   std::cerr << "wrote " << out_path << "\n";
   return 0;
 }

@@ -34,9 +34,9 @@
 
 #include "bench/fpfh_baseline.h"
 #include "bench/voxel_crops.h"
+#include "voxel/merge.h"
 #include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
-#include "voxel/merge.h"
 
 namespace {
 
@@ -83,9 +83,8 @@ std::vector<std::string> Split(const std::string& s, char sep) {
 
 // ---------------------------------------------------------------------------
 // Worker side: one merge, one line of results on stdout.
-//   RESULT <code> <accepted> <T 16 numbers, row-major> <n stages> <stage_s>... <total_s> <rss_kb> <cpu_s>
-//   STAGES <name>...
-//   MESSAGE <text>
+//   RESULT <code> <accepted> <T 16 numbers, row-major> <n stages> <stage_s>... <total_s> <rss_kb>
+//   <cpu_s> STAGES <name>... MESSAGE <text>
 struct WorkerOutput {
   StatusCode code = StatusCode::kOk;
   bool accepted = false;
@@ -122,12 +121,14 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   // benchmark reports time itself, so the budget only guards against hangs.
   params.max_seconds = 600.0;
   // Threshold studies without a rebuild (the workers inherit the environment).
-  if (const char* v = std::getenv("MAPD_BENCH_MAX_RESIDUAL_VOXELS")) params.max_residual_voxels = std::atof(v);
-  if (const char* v = std::getenv("MAPD_BENCH_MIN_OVERLAP_SCORE")) params.min_overlap_score = std::atof(v);
-  if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS")) params.min_matched_corners = std::atoi(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MAX_RESIDUAL_VOXELS"))
+    params.max_residual_voxels = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MIN_OVERLAP_SCORE"))
+    params.min_overlap_score = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS"))
+    params.min_matched_corners = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
-  const StatusOr<mapd::voxel::MergeOutcome> r =
-      mapd::voxel::MergeSubmaps({{1, a}, {2, b}}, params);
+  const StatusOr<mapd::voxel::MergeOutcome> r = mapd::voxel::MergeSubmaps({{1, a}, {2, b}}, params);
   out.total_s = Since(start);
   out.code = r.status().code();
   out.message = r.status().message();
@@ -233,8 +234,8 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
   WorkerOutput out;
   out.code = StatusCode::kInternal;
   *rss_kb = 0;
-  const std::string cmd = "timeout 900 '" + self + "' --worker=" + method + " '" + path_a +
-                          "' '" + path_b + "' --threads=" + std::to_string(threads) +
+  const std::string cmd = "timeout 900 '" + self + "' --worker=" + method + " '" + path_a + "' '" +
+                          path_b + "' --threads=" + std::to_string(threads) +
                           " --seed=" + std::to_string(seed);
   FILE* pipe = popen(cmd.c_str(), "r");
   if (pipe == nullptr) {
@@ -320,12 +321,11 @@ std::string RowToMarkdown(const Row& row) {
   s << "| " << row.map << " | " << row.resolution << " | " << Fmt("%.1f", row.overlap) << " / "
     << Fmt("%.2f", Median(row.achieved)) << " | " << Fmt("%.0f", Median(row.crop_a)) << " / "
     << Fmt("%.0f", Median(row.crop_b)) << " | " << row.method << " | " << row.success << "/"
-    << row.trials << " (" << Fmt("%.0f", 100.0 * row.success / std::max(1, row.trials))
-    << " %) | " << row.wrong << " | " << row.refused << " | " << row.errors << " | "
+    << row.trials << " (" << Fmt("%.0f", 100.0 * row.success / std::max(1, row.trials)) << " %) | "
+    << row.wrong << " | " << row.refused << " | " << row.errors << " | "
     << Fmt("%.2f", Median(row.rot_deg)) << " | " << Fmt("%.2f", Median(row.trans_vox)) << " | "
     << stages << " | " << Fmt("%.2f", Median(row.total_s)) << " | "
-    << Fmt("%.2f", Median(row.cpu_s)) << " | "
-    << Fmt("%.0f", row.peak_rss_kb / 1024.0) << " |\n";
+    << Fmt("%.2f", Median(row.cpu_s)) << " | " << Fmt("%.0f", row.peak_rss_kb / 1024.0) << " |\n";
   return s.str();
 }
 
@@ -472,9 +472,9 @@ int main(int argc, char** argv) {
                      "%s overlap %.1f trial %d: crops %zu/%zu (out %zu/%zu occ, %zu/%zu free), "
                      "achieved %.3f, yaw %.1f roll %.1f pitch %.1f t %.1f m, gen %.2f s\n",
                      opt.maps[mi].c_str(), overlap, trial, pair->occupied_a, pair->occupied_b,
-                     pair->out_occupied_a, pair->out_occupied_b, pair->out_free_a,
-                     pair->out_free_b, pair->achieved_overlap, pair->yaw_deg, pair->roll_deg,
-                     pair->pitch_deg, pair->translation_m, gen_s);
+                     pair->out_occupied_a, pair->out_occupied_b, pair->out_free_a, pair->out_free_b,
+                     pair->achieved_overlap, pair->yaw_deg, pair->roll_deg, pair->pitch_deg,
+                     pair->translation_m, gen_s);
         for (std::size_t k = 0; k < opt.methods.size(); ++k) {
           Row& row = method_rows[k];
           long rss_kb = 0;
@@ -514,8 +514,8 @@ int main(int argc, char** argv) {
             ++row.error_messages[verdict + ": " + w.message.substr(0, 120)];
           }
           std::fprintf(stderr, "  %-4s %-40s %.2f s (cpu %.2f s), peak %.0f MiB |%s\n",
-                       opt.methods[k].c_str(), verdict.c_str(), w.total_s, w.cpu_s,
-                       rss_kb / 1024.0, w.message.c_str());
+                       opt.methods[k].c_str(), verdict.c_str(), w.total_s, w.cpu_s, rss_kb / 1024.0,
+                       w.message.c_str());
           std::string stage_log;
           for (std::size_t i = 0; i < w.stage_s.size() && i < w.stage_names.size(); ++i) {
             stage_log += " " + w.stage_names[i] + "=" + Fmt("%.2f", w.stage_s[i]);

@@ -2,9 +2,8 @@
 // after the server died, giving up on a server that is not there.
 #include "client/robot_client.h"
 
-#include <signal.h>
-
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include "client/sim_robot.h"
 #include "common/process.h"
@@ -13,8 +12,8 @@
 namespace mapd::client {
 namespace {
 
-using std::chrono::seconds;
 using mapd::testing::MapdProcess;
+using std::chrono::seconds;
 
 std::shared_ptr<grpc::Channel> Channel(const std::string& address) {
   return grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
@@ -82,7 +81,8 @@ TEST_F(RobotClientTest, KeepsRejectionsAndGoesOn) {
   ASSERT_EQ(rejections.size(), 1u);
   EXPECT_EQ(rejections[0].seq, 2u);
   EXPECT_EQ(rejections[0].code, grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_NE(rejections[0].message.find("translation.y is NaN"), std::string::npos) << rejections[0].message;
+  EXPECT_NE(rejections[0].message.find("translation.y is NaN"), std::string::npos)
+      << rejections[0].message;
 }
 
 TEST_F(RobotClientTest, ReconnectsAndResendsAfterTheServerDied) {

@@ -1,8 +1,8 @@
 #include "client/sim_robot.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace mapd::client {
 namespace {
@@ -75,8 +75,10 @@ TEST(SimRobotTest, ExtractedSegmentsLieOnTrueWalls) {
     EXPECT_GE(batch.lines_size(), 2) << "scan " << scan;
     for (const auto& line : batch.lines()) {
       const Vec2 a = ToMap(batch, line.a()), b = ToMap(batch, line.b());
-      EXPECT_LT(DistanceToWorld(a, robot.world()), 0.1) << "scan " << scan << " a " << a.transpose();
-      EXPECT_LT(DistanceToWorld(b, robot.world()), 0.1) << "scan " << scan << " b " << b.transpose();
+      EXPECT_LT(DistanceToWorld(a, robot.world()), 0.1)
+          << "scan " << scan << " a " << a.transpose();
+      EXPECT_LT(DistanceToWorld(b, robot.world()), 0.1)
+          << "scan " << scan << " b " << b.transpose();
       // The midpoint too: a segment must not bridge two walls.
       EXPECT_LT(DistanceToWorld((a + b) / 2, robot.world()), 0.1) << "scan " << scan;
       EXPECT_GE((b - a).norm(), 0.3);
@@ -104,11 +106,16 @@ TEST(ExtractSegmentsTest, CornerSplitsIntoTwo) {
   const std::vector<Segment2> walls = {{{3, -4}, {3, 1}}, {{3, 1}, {-3, 1}}};
   LaserParams laser;
   std::mt19937_64 rng(2);
-  const std::vector<Segment2> segments = ExtractSegments(CastScan(walls, Pose2{}, laser, &rng), laser, {});
+  const std::vector<Segment2> segments =
+      ExtractSegments(CastScan(walls, Pose2{}, laser, &rng), laser, {});
   ASSERT_EQ(segments.size(), 2u);
   for (const Segment2& s : segments) {
-    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.a, walls[0]), geometry::PointSegmentDistance(s.a, walls[1])), 0.05);
-    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.b, walls[0]), geometry::PointSegmentDistance(s.b, walls[1])), 0.05);
+    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.a, walls[0]),
+                       geometry::PointSegmentDistance(s.a, walls[1])),
+              0.05);
+    EXPECT_LT(std::min(geometry::PointSegmentDistance(s.b, walls[0]),
+                       geometry::PointSegmentDistance(s.b, walls[1])),
+              0.05);
   }
 }
 
@@ -118,7 +125,7 @@ TEST(CastScanTest, BeamsWithoutAWallAreNaN) {
   std::mt19937_64 rng(1);
   const std::vector<double> ranges = CastScan(walls, Pose2{}, laser, &rng);
   ASSERT_EQ(ranges.size(), 180u);
-  EXPECT_TRUE(std::isnan(ranges.front()));           // pointing along -y
+  EXPECT_TRUE(std::isnan(ranges.front()));                          // pointing along -y
   EXPECT_NEAR(ranges[89], 2.0 / std::cos(0.5 * M_PI / 179), 0.05);  // about straight ahead
 }
 

@@ -3,12 +3,11 @@
 #ifndef MAPD_TESTS_COMMON_BATCHES_H_
 #define MAPD_TESTS_COMMON_BATCHES_H_
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "mapserver/v1/map_service.pb.h"
 
@@ -31,9 +30,10 @@ inline void SetVec3(const Eigen::Vector3d& v, mapserver::v1::Vec3* out) {
 
 // A batch seen from (x, y, yaw): each wall as one segment covering 80-95% of
 // it, endpoints jittered by `noise_m`, expressed in the sensor frame.
-inline mapserver::v1::ObservationBatch RoomBatch(const std::string& robot, const std::string& session,
-                                                 uint64_t seq, double x, double y, double yaw,
-                                                 std::mt19937_64* rng, double noise_m = 0.01) {
+inline mapserver::v1::ObservationBatch RoomBatch(const std::string& robot,
+                                                 const std::string& session, uint64_t seq, double x,
+                                                 double y, double yaw, std::mt19937_64* rng,
+                                                 double noise_m = 0.01) {
   std::uniform_real_distribution<double> trim(0.02, 0.1);
   std::normal_distribution<double> noise(0.0, noise_m);
   const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));

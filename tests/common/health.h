@@ -3,11 +3,11 @@
 #ifndef MAPD_TESTS_COMMON_HEALTH_H_
 #define MAPD_TESTS_COMMON_HEALTH_H_
 
+#include <grpcpp/grpcpp.h>
+
 #include <chrono>
 #include <memory>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
 
 #include "mapd/health_check.h"
 

@@ -22,7 +22,8 @@ class PrivateTmpfs {
   PrivateTmpfs(const std::string& dir, size_t bytes) : dir_(dir) {
     mkdir(dir.c_str(), 0755);
     static const bool private_namespace =
-        unshare(CLONE_NEWNS) == 0 && mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) == 0;
+        unshare(CLONE_NEWNS) == 0 &&
+        mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) == 0;
     if (!private_namespace) {
       error_ = std::string("no private mount namespace: ") + std::strerror(errno);
       return;
@@ -47,10 +48,14 @@ class PrivateTmpfs {
   bool Resize(size_t bytes) {
     return mount("tmpfs", dir_.c_str(), "tmpfs", MS_REMOUNT, Options(bytes).c_str()) == 0;
   }
-  bool SetReadOnly() { return mount("tmpfs", dir_.c_str(), "tmpfs", MS_REMOUNT | MS_RDONLY, nullptr) == 0; }
+  bool SetReadOnly() {
+    return mount("tmpfs", dir_.c_str(), "tmpfs", MS_REMOUNT | MS_RDONLY, nullptr) == 0;
+  }
 
  private:
-  static std::string Options(size_t bytes) { return "size=" + std::to_string(bytes) + ",mode=0755"; }
+  static std::string Options(size_t bytes) {
+    return "size=" + std::to_string(bytes) + ",mode=0755";
+  }
 
   std::string dir_;
   std::string error_;

@@ -17,8 +17,8 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <csignal>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -82,10 +82,12 @@ struct MapdProcess {
 // `event=<ready_event> address=HOST:PORT` line: "serving" (the map is
 // recovered, the default) or "listening" (the port is open). On failure port
 // is 0 and the child, if still running, is killed.
-inline MapdProcess StartMapd(const std::string& db_path, const std::vector<std::string>& extra_args = {},
+inline MapdProcess StartMapd(const std::string& db_path,
+                             const std::vector<std::string>& extra_args = {},
                              const std::string& binary = kDefaultMapdBinary,
                              std::chrono::milliseconds timeout = std::chrono::seconds(20),
-                             const std::string& ready_event = "serving", const std::string& log_path = "") {
+                             const std::string& ready_event = "serving",
+                             const std::string& log_path = "") {
   MapdProcess p;
   p.log_path = log_path.empty() ? db_path + ".log" : log_path;
   std::vector<std::string> argv = {binary, "--db", db_path, "--listen", "127.0.0.1:0"};
@@ -131,7 +133,8 @@ struct CommandResult {
 
 // Runs argv[0] (a path, no PATH lookup) with `stdin_data` on its stdin,
 // capturing stdout and stderr. Kills it after `timeout`.
-inline CommandResult RunCommand(const std::vector<std::string>& argv, const std::string& stdin_data = "",
+inline CommandResult RunCommand(const std::vector<std::string>& argv,
+                                const std::string& stdin_data = "",
                                 std::chrono::milliseconds timeout = std::chrono::seconds(60)) {
   CommandResult r;
   std::signal(SIGPIPE, SIG_IGN);  // a child that exits early must not kill the test
@@ -161,7 +164,8 @@ inline CommandResult RunCommand(const std::vector<std::string>& argv, const std:
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   char buf[65536];
   while (out_open || err_open) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       timed_out = true;
       kill(pid, SIGKILL);
@@ -212,7 +216,8 @@ inline double ResidentMiB(pid_t pid) {
   return 0;
 }
 
-inline int Stop(pid_t pid, int signal = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+inline int Stop(pid_t pid, int signal = SIGTERM,
+                std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
   if (pid <= 0) return -1;
   kill(pid, signal);
   const auto deadline = std::chrono::steady_clock::now() + timeout;

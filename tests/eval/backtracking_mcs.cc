@@ -20,7 +20,11 @@ class Backtracker {
   Backtracker(const BitGraph& graph, const std::vector<CornerPair>& pairs,
               const std::vector<Eigen::Vector3d>& points_a,
               const std::vector<Eigen::Vector3d>& points_b, const BacktrackingOptions& options)
-      : g_(graph), pairs_(pairs), pa_(points_a), pb_(points_b), options_(options),
+      : g_(graph),
+        pairs_(pairs),
+        pa_(points_a),
+        pb_(points_b),
+        options_(options),
         start_(Clock::now()) {
     std::map<int, std::vector<int>> by_a;
     for (int v = 0; v < g_.num_vertices(); ++v) by_a[pairs_[v].a].push_back(v);
@@ -57,7 +61,8 @@ class Backtracker {
     if (size > best_) {
       best_ = size;
       schemes_.assign(1, std::move(scheme));
-    } else if (tie_mode() && std::find(schemes_.begin(), schemes_.end(), scheme) == schemes_.end()) {
+    } else if (tie_mode() &&
+               std::find(schemes_.begin(), schemes_.end(), scheme) == schemes_.end()) {
       schemes_.push_back(std::move(scheme));
     }
   }
@@ -111,8 +116,8 @@ class Backtracker {
       matches_.push_back(v);
       const uint64_t* nb = g_.Row(v);
       for (int w = 0; w < g_.num_words(); ++w) P_[depth + 1][w] = P_[depth][w] & nb[w];
-      const bool closed = options_.shortcut_matches > 0 &&
-                          depth + 1 == options_.shortcut_matches && CompleteByTransform(depth + 1);
+      const bool closed = options_.shortcut_matches > 0 && depth + 1 == options_.shortcut_matches &&
+                          CompleteByTransform(depth + 1);
       if (!closed) Search(row + 1, depth + 1);
       matches_.pop_back();
       if (aborted_) return;
@@ -164,7 +169,8 @@ PairSetSearch BacktrackingSearch(int shortcut_matches) {
     options.max_tied_solutions = max_solutions;
     options.max_nodes = params.max_search_nodes;
     options.max_seconds = params.max_search_seconds;
-    BacktrackingResult r = FindCommonSubgraphByBacktracking(graph, pairs, points_a, points_b, options);
+    BacktrackingResult r =
+        FindCommonSubgraphByBacktracking(graph, pairs, points_a, points_b, options);
     PairSetSearchResult out;
     out.solutions = std::move(r.schemes);
     out.proven_optimal = r.exhausted_search_space && shortcut_matches == 0;

@@ -16,11 +16,10 @@
 #ifndef MAPD_EVAL_BACKTRACKING_MCS_H_
 #define MAPD_EVAL_BACKTRACKING_MCS_H_
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "voxel/corner_matching.h"
 #include "voxel/max_clique.h"
@@ -36,8 +35,9 @@ struct BacktrackingOptions {
 };
 
 struct BacktrackingResult {
-  std::vector<std::vector<int>> schemes;  // vertex ids (ascending) of the best size, first found first
-  bool exhausted_search_space = false;    // finished within the budget
+  std::vector<std::vector<int>>
+      schemes;  // vertex ids (ascending) of the best size, first found first
+  bool exhausted_search_space = false;  // finished within the budget
   int64_t nodes = 0;
   double seconds = 0.0;
 };

@@ -140,7 +140,8 @@ MapMetrics Evaluate(const World& world, const std::vector<Scan>& raw,
     const Segment2& ws = world.structures[static_cast<size_t>(wall)].segment;
     const double at = (corner - ws.a).dot(ws.direction().normalized());
     for (const auto& [lo, hi] : seen_iv[static_cast<size_t>(wall)]) {
-      if (std::abs(lo - at) <= params.corner_reach_m || std::abs(hi - at) <= params.corner_reach_m) {
+      if (std::abs(lo - at) <= params.corner_reach_m ||
+          std::abs(hi - at) <= params.corner_reach_m) {
         return true;
       }
     }

@@ -29,20 +29,20 @@ struct MetricsParams {
 };
 
 struct MapMetrics {
-  size_t fused = 0;             // Table 1: number of fused features
+  size_t fused = 0;  // Table 1: number of fused features
   size_t walls_seen = 0;
-  size_t walls_matched = 0;     // seen walls with at least one matching fused feature
-  size_t on_walls = 0;          // fused features matching a wall
-  size_t on_trivial = 0;        // fused features matching a fence or pole
-  size_t spurious = 0;          // fused features matching no structure
-  double redundancy = 0.0;      // on_walls / walls_matched (1 = one feature per wall)
-  double completeness = 0.0;    // seen wall length covered by matching fused features
-  double lateral_rms_m = 0.0;   // RMS distance of matched fused endpoints to their wall line
+  size_t walls_matched = 0;    // seen walls with at least one matching fused feature
+  size_t on_walls = 0;         // fused features matching a wall
+  size_t on_trivial = 0;       // fused features matching a fence or pole
+  size_t spurious = 0;         // fused features matching no structure
+  double redundancy = 0.0;     // on_walls / walls_matched (1 = one feature per wall)
+  double completeness = 0.0;   // seen wall length covered by matching fused features
+  double lateral_rms_m = 0.0;  // RMS distance of matched fused endpoints to their wall line
   // Table 2: per evaluated corner, the sum over its two walls of the distance
   // from the corner to the nearest endpoint of a fused feature of that wall.
   size_t corners_evaluated = 0;
-  size_t corners_met = 0;       // both walls have an endpoint within corner_radius_m
-  double vertex_error_mean_m = 0.0;    // over met corners
+  size_t corners_met = 0;            // both walls have an endpoint within corner_radius_m
+  double vertex_error_mean_m = 0.0;  // over met corners
   double vertex_error_median_m = 0.0;
   std::vector<double> vertex_errors_m;  // per met corner
   std::vector<size_t> met_corners;      // their indices into World::corners, ascending

@@ -1,11 +1,11 @@
 // The Fuser interface, the two competing methods (hand-checked cases), and the
 // scenario generator (determinism, extraction near the true walls, metrics).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "eval/baselines/density_fuser.h"
 #include "eval/baselines/mean_shift.h"
@@ -86,7 +86,8 @@ TEST_P(EveryFuserTest, SeparatesPerpendicularWallsAndJoinsTheirCorner) {
     const double e = 0.01 * k;
     ASSERT_TRUE(fuser
                     ->Add(k + 1, 0,
-                          {Wall(10 * k + 1, {0, e}, {9.8, e}), Wall(10 * k + 2, {10 - e, 0.2}, {10 - e, 6})},
+                          {Wall(10 * k + 1, {0, e}, {9.8, e}),
+                           Wall(10 * k + 2, {10 - e, 0.2}, {10 - e, 6})},
                           nullptr)
                     .ok());
   }
@@ -266,8 +267,10 @@ TEST(MetricsTest, VertexErrorIsTheSumOfEndpointDistancesAtACorner) {
   scenario::World w;
   w.buildings.push_back({{0, 0}, {10, 0}, {10, 6}, {0, 6}});
   for (int k = 0; k < 4; ++k) {
-    w.structures.push_back({{w.buildings[0][static_cast<size_t>(k)], w.buildings[0][static_cast<size_t>((k + 1) % 4)]},
-                            scenario::StructureKind::kWall, 0});
+    w.structures.push_back(
+        {{w.buildings[0][static_cast<size_t>(k)], w.buildings[0][static_cast<size_t>((k + 1) % 4)]},
+         scenario::StructureKind::kWall,
+         0});
     w.corners.push_back({w.buildings[0][static_cast<size_t>(k)], (k + 3) % 4, k});
   }
   w.wall_count = 4;

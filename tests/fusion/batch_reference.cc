@@ -1,12 +1,11 @@
 #include "fusion/batch_reference.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <queue>
 #include <set>
-
-#include <Eigen/Eigenvalues>
 
 #include "fusion/criteria.h"
 #include "fusion/wall_consolidation.h"
@@ -86,7 +85,8 @@ bool Publishable(const std::vector<Unit>& units, const std::vector<size_t>& memb
 
 std::vector<Vec2> PointsOf(const std::vector<Unit>& units, const std::vector<size_t>& members) {
   std::vector<Vec2> points;
-  for (size_t i : members) points.insert(points.end(), units[i].points.begin(), units[i].points.end());
+  for (size_t i : members)
+    points.insert(points.end(), units[i].points.begin(), units[i].points.end());
   return points;
 }
 
@@ -121,8 +121,8 @@ void GuardGroups(const std::vector<Unit>& units, const std::vector<size_t>& memb
   for (size_t k = 1; k < order.size(); ++k) {
     const std::vector<size_t> head(order.begin(), order.begin() + static_cast<long>(k));
     const std::vector<size_t> tail(order.begin() + static_cast<long>(k), order.end());
-    const double cost = std::max(0.0, Sse(PointsOf(units, head))) +
-                        std::max(0.0, Sse(PointsOf(units, tail)));
+    const double cost =
+        std::max(0.0, Sse(PointsOf(units, head))) + std::max(0.0, Sse(PointsOf(units, tail)));
     if (!(cost < params.chain_max_sse_ratio * sse)) continue;
     if (!cut_allowed(head, tail)) continue;
     if (best_k == 0 || cost < best_cost) {
@@ -189,8 +189,10 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
   }
   std::vector<Unit> features;
   for (const Flat& f : all) {
-    features.push_back({f.feature.id, f.feature.segment.midpoint(),
-                        {f.feature.segment.a, f.feature.segment.b}, {f.observation}});
+    features.push_back({f.feature.id,
+                        f.feature.segment.midpoint(),
+                        {f.feature.segment.a, f.feature.segment.b},
+                        {f.observation}});
   }
   const std::vector<std::vector<size_t>> components =
       Components(all.size(), [&](size_t i, size_t j) {
@@ -203,11 +205,12 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
   std::vector<std::vector<size_t>> members_of;  // per cluster, indices into `all`
   for (const std::vector<size_t>& component : components) {
     std::vector<std::vector<size_t>> groups;
-    GuardGroups(features, component, params,
-                [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
-                  return Publishable(features, head, params) && Publishable(features, tail, params);
-                },
-                &groups);
+    GuardGroups(
+        features, component, params,
+        [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
+          return Publishable(features, head, params) && Publishable(features, tail, params);
+        },
+        &groups);
     for (std::vector<size_t>& group : groups) {
       std::sort(group.begin(), group.end());
       members_of.push_back(group);
@@ -275,11 +278,12 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
     };
     std::vector<std::vector<size_t>> groups;
     if (component.size() > 1) {
-      GuardGroups(units, index, params,
-                  [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
-                    return !twins(head, tail);
-                  },
-                  &groups);
+      GuardGroups(
+          units, index, params,
+          [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
+            return !twins(head, tail);
+          },
+          &groups);
     } else {
       groups.push_back(index);
     }
@@ -352,7 +356,8 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
     if (o < 0) continue;
     // Both ends of this wall paired with ends of the same wall: no corner.
     const long so = partner[e ^ 1];  // ends are pushed in pairs: 2k (a), 2k+1 (b)
-    if (so >= 0 && ends[static_cast<size_t>(so)].wall == ends[static_cast<size_t>(o)].wall) continue;
+    if (so >= 0 && ends[static_cast<size_t>(so)].wall == ends[static_cast<size_t>(o)].wall)
+      continue;
     const End& other = ends[static_cast<size_t>(o)];
     moved[e] = Joint(ends[e].p, fits[ends[e].wall], other.p, fits[other.wall], params);
   }

@@ -23,9 +23,9 @@ struct BatchCluster {
   std::vector<FeatureId> members;  // ascending
   ClusterId id = 0;                // members.front()
   geometry::Segment2 fitted;
-  geometry::Segment2 segment;      // walls: corner-optimised; clusters: == fitted
+  geometry::Segment2 segment;  // walls: corner-optimised; clusters: == fitted
   uint32_t support = 0;
-  bool published = false;          // clusters: support >= min_support
+  bool published = false;  // clusters: support >= min_support
 };
 
 struct BatchResult {

@@ -1,11 +1,11 @@
 // FusionMode::kBounded against kExact: a revisited wall keeps a bounded number
 // of nodes and publishes what the exact engine publishes.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <memory>
 #include <random>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "fusion/engine.h"
 

@@ -1,9 +1,9 @@
 #include "fusion/criteria.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 namespace mapd::fusion {
 namespace {
@@ -63,7 +63,7 @@ TEST(MaxCentreDistanceTest, UsesClampedSegmentDistance) {
 TEST(MeetsAllCriteriaTest, ParallelWallsAcrossARoadFailCriterion2) {
   const Segment2 left{{0, 0}, {10, 0}};
   const Segment2 right{{0, 20}, {10, 20}};
-  EXPECT_LE(IncludedAngle(left, right), FusionParams().delta_rad);            // 1 passes
+  EXPECT_LE(IncludedAngle(left, right), FusionParams().delta_rad);                 // 1 passes
   EXPECT_LT(OverlapRatio(CircleOf(left), CircleOf(right)), FusionParams().gamma);  // 2 fails
   EXPECT_FALSE(MeetsAllCriteria(left, right, FusionParams()));
 }
@@ -73,9 +73,9 @@ TEST(MeetsAllCriteriaTest, FenceBesideAWallFailsCriterion3) {
   const Segment2 wall{{0, 0}, {10, 0}};
   const Segment2 fence{{3, 1.5}, {7, 1.5}};
   const FusionParams params;
-  EXPECT_LE(IncludedAngle(wall, fence), params.delta_rad);                      // 1 passes
-  EXPECT_EQ(OverlapRatio(CircleOf(wall), CircleOf(fence)), 1.0);                // 2 passes
-  EXPECT_DOUBLE_EQ(MaxCentreDistance(wall, fence), 1.5);                        // 3 fails
+  EXPECT_LE(IncludedAngle(wall, fence), params.delta_rad);        // 1 passes
+  EXPECT_EQ(OverlapRatio(CircleOf(wall), CircleOf(fence)), 1.0);  // 2 passes
+  EXPECT_DOUBLE_EQ(MaxCentreDistance(wall, fence), 1.5);          // 3 fails
   EXPECT_FALSE(MeetsAllCriteria(wall, fence, params));
 }
 

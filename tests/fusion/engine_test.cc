@@ -1,10 +1,10 @@
 #include "fusion/engine.h"
 
-#include <cmath>
-#include <limits>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
 
 #include "fusion/engine_inspector.h"
 
@@ -120,8 +120,9 @@ TEST(FusionEngineTest, RefusedInputLeavesTheEngineUnchanged) {
 // as several segments counts once (proto FusedFeature.support).
 TEST(FusionEngineTest, SupportCountsDistinctObservations) {
   FusionEngine once(Support(2));
-  ASSERT_TRUE(once.Add(1, 0, {Wall(1, {0, 0}, {6, 0}), Wall(2, {4, 0}, {10, 0}),
-                              Wall(3, {2, 0}, {8, 0})}).ok());
+  ASSERT_TRUE(
+      once.Add(1, 0, {Wall(1, {0, 0}, {6, 0}), Wall(2, {4, 0}, {10, 0}), Wall(3, {2, 0}, {8, 0})})
+          .ok());
   EXPECT_EQ(once.published_count(), 0u) << "three segments of one scan are support 1";
 
   FusionEngine engine(Support(3));
@@ -212,7 +213,8 @@ TEST(CornerPairingTest, MutualAndGreedyPairDifferently) {
   const double heading_deg[6] = {180, 90, -60, 45, -100, 120};
   const auto wall = [&](int k) {
     const double t = heading_deg[k] * 3.14159265358979323846 / 180.0;
-    return Wall(static_cast<FeatureId>(k + 1), {x[k], 0}, Vec2(x[k], 0) + 8.0 * Vec2(std::cos(t), std::sin(t)));
+    return Wall(static_cast<FeatureId>(k + 1), {x[k], 0},
+                Vec2(x[k], 0) + 8.0 * Vec2(std::cos(t), std::sin(t)));
   };
   for (CornerPairing pairing : {CornerPairing::kMutualNearest, CornerPairing::kGreedy}) {
     SCOPED_TRACE(CornerPairingName(pairing));
@@ -229,7 +231,8 @@ TEST(CornerPairingTest, MutualAndGreedyPairDifferently) {
     // The end of each wall on the x axis (the fit may orient a segment either way).
     std::vector<double> ends;
     for (const FusedFeature& f : walls) {
-      const Vec2& e = std::abs(f.segment.a.y()) < std::abs(f.segment.b.y()) ? f.segment.a : f.segment.b;
+      const Vec2& e =
+          std::abs(f.segment.a.y()) < std::abs(f.segment.b.y()) ? f.segment.a : f.segment.b;
       EXPECT_NEAR(e.y(), 0.0, 1e-9);
       ends.push_back(e.x());
     }
@@ -261,8 +264,9 @@ void AddArc(FusionEngine* engine, int scans, FeatureId* next_id) {
   for (int s = 0; s < scans; ++s) {
     std::vector<GroundFeature> features;
     for (double angle = kStepRad * s / scans; angle + kStepRad <= 1.5707963; angle += kStepRad) {
-      features.push_back(Wall((*next_id)++, kRadiusM * Vec2(std::cos(angle), std::sin(angle)),
-                              kRadiusM * Vec2(std::cos(angle + kStepRad), std::sin(angle + kStepRad))));
+      features.push_back(
+          Wall((*next_id)++, kRadiusM * Vec2(std::cos(angle), std::sin(angle)),
+               kRadiusM * Vec2(std::cos(angle + kStepRad), std::sin(angle + kStepRad))));
     }
     ASSERT_TRUE(engine->Add(100 + s, 0, features).ok());
   }
@@ -366,8 +370,7 @@ TEST(FusionEngineTest, ChainGuardFeedFollowsTheNamesOfPieces) {
   EXPECT_THAT(feed.added, ElementsAre(3u));
   EXPECT_THAT(feed.removed, IsEmpty());
   ASSERT_TRUE(engine.Add(3, 0, {Wall(1, {0.5, 0.02}, {4.5, 0.02})}, &feed).ok());
-  EXPECT_EQ(EngineInspector::Partition(engine),
-            (std::vector<std::vector<FeatureId>>{{1, 5}, {3}}));
+  EXPECT_EQ(EngineInspector::Partition(engine), (std::vector<std::vector<FeatureId>>{{1, 5}, {3}}));
   EXPECT_THAT(feed.added, ElementsAre(1u));
   EXPECT_THAT(feed.removed, ElementsAre(5u));
   EXPECT_THAT(feed.updated, IsEmpty());

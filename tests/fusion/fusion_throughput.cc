@@ -23,8 +23,8 @@ using mapd::geometry::Vec2;
 int main(int argc, char** argv) {
   const int feature_target = argc > 1 ? std::atoi(argv[1]) : 200000;
   constexpr int kPerObservation = 20;
-  constexpr int kBlocks = 24;        // kBlocks x kBlocks buildings
-  constexpr double kSpacingM = 25.0; // block pitch
+  constexpr int kBlocks = 24;         // kBlocks x kBlocks buildings
+  constexpr double kSpacingM = 25.0;  // block pitch
 
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -78,9 +78,8 @@ int main(int argc, char** argv) {
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("%zu features in %zu observations: %.3f s, %.0f features/s\n",
-              engine.feature_count(), observations.size(), seconds,
-              static_cast<double>(engine.feature_count()) / seconds);
+  std::printf("%zu features in %zu observations: %.3f s, %.0f features/s\n", engine.feature_count(),
+              observations.size(), seconds, static_cast<double>(engine.feature_count()) / seconds);
   std::printf("%zu clusters, %zu published (%zu walls)\n", engine.cluster_count(),
               engine.published_count(), walls.size());
   return 0;

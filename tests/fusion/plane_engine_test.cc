@@ -1,15 +1,16 @@
 // PlaneFusionEngine: the three criteria, publication, order independence on a
 // small set, bad input, folding on a revisited floor, snapshots.
+#include "fusion/plane_engine.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
-
-#include "fusion/plane_engine.h"
 #include "fusion/plane_geometry.h"
 
 namespace mapd::fusion {
@@ -21,7 +22,8 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // A rectangle [x0, x1] x [y0, y1] at height z, optionally tilted about the
 // x axis by `tilt_rad` around its centre.
-MapPlane Rect(FeatureId id, double x0, double y0, double x1, double y1, double z, double tilt_rad = 0.0) {
+MapPlane Rect(FeatureId id, double x0, double y0, double x1, double y1, double z,
+              double tilt_rad = 0.0) {
   MapPlane p;
   p.id = id;
   const double cy = 0.5 * (y0 + y1);
@@ -34,7 +36,8 @@ MapPlane Rect(FeatureId id, double x0, double y0, double x1, double y1, double z
   return p;
 }
 
-// Fuses observation by observation (one plane each) and reports whether a and b ended in one cluster.
+// Fuses observation by observation (one plane each) and reports whether a and b ended in one
+// cluster.
 bool Linked(const PlaneFusionParams& params, const MapPlane& a, const MapPlane& b) {
   PlaneFusionEngine engine(params);
   EXPECT_TRUE(engine.Add(1, 1, {a}).ok());
@@ -81,9 +84,9 @@ TEST(PlaneCriteriaTest, GapAndOverlap) {
   EXPECT_FALSE(Linked({}, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 4.35, 0, 8, 4, 0.0)));  // 0.35 m gap
   PlaneFusionParams p;
   p.min_overlap = 0.5;  // of the smaller patch
-  EXPECT_TRUE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 1, 1, 3, 3, 0.0)));   // contained
-  EXPECT_TRUE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 2, 0, 6, 4, 0.0)));   // half
-  EXPECT_FALSE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 3, 0, 7, 4, 0.0)));  // a quarter
+  EXPECT_TRUE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 1, 1, 3, 3, 0.0)));     // contained
+  EXPECT_TRUE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 2, 0, 6, 4, 0.0)));     // half
+  EXPECT_FALSE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 3, 0, 7, 4, 0.0)));    // a quarter
   EXPECT_FALSE(Linked(p, Rect(1, 0, 0, 4, 4, 0.0), Rect(2, 4.1, 0, 8, 4, 0.0)));  // gap, no overlap
 }
 
@@ -152,7 +155,8 @@ std::vector<std::vector<MapPlane>> SmallSite() {
     const double h = 0.01 * static_cast<double>(o % 2);
     const FeatureId base = o << 8;
     obs.push_back({Rect(base + 1, d, d, 5 + d, 4, h), Rect(base + 2, 8 + d, 0, 12, 4 - d, 1.0 + h),
-                   Rect(base + 3, 5.2, 0.5 + d, 7.8, 3.5, 0.5 + h, 8 * kDeg), Rect(base + 4, 0, 0, 5 - d, 4, 2.6 - h)});
+                   Rect(base + 3, 5.2, 0.5 + d, 7.8, 3.5, 0.5 + h, 8 * kDeg),
+                   Rect(base + 4, 0, 0, 5 - d, 4, 2.6 - h)});
   }
   return obs;
 }
@@ -197,10 +201,12 @@ TEST(PlaneFusionEngineTest, BadInputIsRefusedAndChangesNothing) {
   EXPECT_NE(s.message().find("planes[1].boundary[2]"), std::string::npos) << s.message();
   bad[1] = Rect(11, 0, 0, 4, 4, 0);
   bad[1].normal *= 2;
-  EXPECT_NE(engine.Add(2, 1, bad).message().find("planes[1]: normal is not unit"), std::string::npos);
+  EXPECT_NE(engine.Add(2, 1, bad).message().find("planes[1]: normal is not unit"),
+            std::string::npos);
   bad[1] = Rect(11, 0, 0, 4, 4, 0);
   bad[1].boundary.resize(2);
-  EXPECT_NE(engine.Add(2, 1, bad).message().find("planes[1]: boundary has 2 points"), std::string::npos);
+  EXPECT_NE(engine.Add(2, 1, bad).message().find("planes[1]: boundary has 2 points"),
+            std::string::npos);
   bad[1] = Rect(10, 0, 0, 4, 4, 0);
   EXPECT_NE(engine.Add(2, 1, bad).message().find("used twice"), std::string::npos);
   bad[1] = Rect(11, 0, 0, 4, 4, 0);
@@ -213,7 +219,8 @@ TEST(PlaneFusionEngineTest, BadInputIsRefusedAndChangesNothing) {
 // A floor seen again and again with a little noise.
 MapPlane NoisyFloor(FeatureId id, std::mt19937_64* rng) {
   std::normal_distribution<double> edge(0.0, 0.03), height(0.0, 0.005);
-  return Rect(id, 0.1 + edge(*rng), 0.1 + edge(*rng), 9.9 + edge(*rng), 5.9 + edge(*rng), height(*rng));
+  return Rect(id, 0.1 + edge(*rng), 0.1 + edge(*rng), 9.9 + edge(*rng), 5.9 + edge(*rng),
+              height(*rng));
 }
 
 TEST(PlaneFusionEngineTest, RevisitedFloorKeepsBoundedNodes) {
@@ -222,7 +229,8 @@ TEST(PlaneFusionEngineTest, RevisitedFloorKeepsBoundedNodes) {
   // First the whole room, then many partial views inside it.
   for (ObservationId o = 1; o <= 400; ++o) {
     MapPlane p = NoisyFloor(o << 8, &rng);
-    if (o > 40) p = Rect(o << 8, 1 + static_cast<double>(o % 5), 1, 4 + static_cast<double>(o % 5), 4, 0.002);
+    if (o > 40)
+      p = Rect(o << 8, 1 + static_cast<double>(o % 5), 1, 4 + static_cast<double>(o % 5), 4, 0.002);
     ASSERT_TRUE(engine.Add(o, o % 3, {p}).ok());
   }
   EXPECT_EQ(engine.plane_count(), 400u);
@@ -254,7 +262,8 @@ TEST(PlaneFusionEngineTest, SnapshotRoundTripContinuesBitForBit) {
   std::mt19937_64 rng(5);
   const auto obs = SmallSite();
   for (size_t i = 0; i < obs.size(); ++i) ASSERT_TRUE(live.Add(i + 1, i % 2, obs[i]).ok());
-  for (ObservationId o = 100; o < 150; ++o) ASSERT_TRUE(live.Add(o, 1, {NoisyFloor(o << 8, &rng)}).ok());
+  for (ObservationId o = 100; o < 150; ++o)
+    ASSERT_TRUE(live.Add(o, 1, {NoisyFloor(o << 8, &rng)}).ok());
   std::string state;
   ASSERT_TRUE(live.SaveState(&state).ok());
   StatusOr<std::unique_ptr<PlaneFusionEngine>> loaded = PlaneFusionEngine::LoadState({}, state);
@@ -281,11 +290,13 @@ TEST(PlaneFusionEngineTest, SnapshotRoundTripContinuesBitForBit) {
 
   std::string corrupt = state;
   corrupt[corrupt.size() / 2] ^= 0x40;
-  EXPECT_NE(PlaneFusionEngine::LoadState({}, corrupt).status().message().find("checksum"), std::string::npos);
+  EXPECT_NE(PlaneFusionEngine::LoadState({}, corrupt).status().message().find("checksum"),
+            std::string::npos);
   EXPECT_FALSE(PlaneFusionEngine::LoadState({}, state.substr(0, 20)).ok());
   PlaneFusionParams other;
   other.max_gap_m = 0.5;
-  EXPECT_EQ(PlaneFusionEngine::LoadState(other, state).status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(PlaneFusionEngine::LoadState(other, state).status().code(),
+            StatusCode::kFailedPrecondition);
 }
 
 TEST(PlaneGeometryTest, ConvexIntersectionAndGap) {

@@ -1,10 +1,10 @@
 #include "fusion/projection.h"
 
-#include <cmath>
-#include <limits>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
 
 namespace mapd::fusion {
 namespace {

@@ -2,6 +2,9 @@
 // on seeded random scenes, in shuffled arrival orders (docs/algorithms.md A.4,
 // "The incremental engine"), with the chain guard off and on, on scenes of rooms and
 // on scenes that add curved walls seen as arcs of short chords.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -9,9 +12,6 @@
 #include <set>
 #include <string>
 #include <tuple>
-
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
 
 #include "fusion/batch_reference.h"
 #include "fusion/engine.h"
@@ -28,8 +28,8 @@ using geometry::Segment2;
 using geometry::Vec2;
 using testing::BatchCluster;
 using testing::BatchFuse;
-using testing::BatchResult;
 using testing::BatchObservation;
+using testing::BatchResult;
 
 constexpr double kToleranceM = 1e-9;
 constexpr double kPi = 3.14159265358979323846;
@@ -135,7 +135,8 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
       if (unit(rng) > 0.3) continue;
       const double step = 0.5 / arc.radius_m;  // chord angle, rad
       const double from = arc.start_rad + uniform(0, 0.5) * arc.span_rad;
-      const double to = std::min(arc.start_rad + arc.span_rad, from + uniform(0.3, 0.7) * arc.span_rad);
+      const double to =
+          std::min(arc.start_rad + arc.span_rad, from + uniform(0.3, 0.7) * arc.span_rad);
       const auto on_arc = [&](double angle) -> Vec2 {
         return arc.centre + arc.radius_m * Vec2(std::cos(angle), std::sin(angle)) +
                Vec2(noise(rng), noise(rng)) / 2.0;
@@ -229,7 +230,8 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
 
     FusionEngine engine(scene.params);
     for (const BatchObservation& obs : arrival) {
-      const std::vector<FusedFeature> before = order == 0 ? engine.Published() : std::vector<FusedFeature>();
+      const std::vector<FusedFeature> before =
+          order == 0 ? engine.Published() : std::vector<FusedFeature>();
       ChangeFeed feed;
       const Status added = engine.Add(obs.id, obs.robot, obs.features, &feed);
       ASSERT_TRUE(added.ok()) << added.ToString();
@@ -265,7 +267,8 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
     for (const BatchCluster& c : reference.clusters) {
       if (!c.published) {
         expect_same(c);
-      } else if (!std::binary_search(reference_published.begin(), reference_published.end(), c.id)) {
+      } else if (!std::binary_search(reference_published.begin(), reference_published.end(),
+                                     c.id)) {
         EXPECT_FALSE(engine.Get(c.id).has_value()) << c.id << " is part of a wall";
       }
     }
@@ -276,7 +279,8 @@ TEST_P(PropertyTest, IncrementalEqualsBatchInEveryOrder) {
 TEST(PropertyScenes, ConsolidationJoinsClustersInSomeScenes) {
   size_t joined = 0;
   for (uint32_t seed = 1; seed < 25; ++seed) {
-    const BatchResult r = BatchFuse(MakeScene(seed, false, true).observations, MakeScene(seed, false, true).params);
+    const BatchResult r =
+        BatchFuse(MakeScene(seed, false, true).observations, MakeScene(seed, false, true).params);
     size_t published = 0;
     for (const BatchCluster& c : r.clusters) published += c.published;
     joined += published - r.walls.size();

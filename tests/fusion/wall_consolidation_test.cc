@@ -110,19 +110,21 @@ TEST(CornerSnapTest, FeaturesPairedAtBothEndsAreNotSnappedOntoEachOther) {
 TEST(OnOneWallTest, StatesTheRelation) {
   FusionParams p;  // delta 5 deg, wall_offset_m 0.1 m, wall_gap_m 0.3 m
   const Segment2 long_wall{Vec2(0, 0), Vec2(10, 0)};
-  EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(9, 0.05), Vec2(14, 0.05)}, 2, p));   // overlap
-  EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(10.25, 0), Vec2(14, 0)}, 2, p));     // gap 0.25
-  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(10.5, 0), Vec2(14, 0)}, 2, p));     // gap 0.5
-  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(5, 0.2), Vec2(14, 0.2)}, 2, p));    // 0.2 m off: a shelf
-  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(9, 0), Vec2(12, 0.5)}, 2, p));      // 9.5 deg
+  EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(9, 0.05), Vec2(14, 0.05)}, 2, p));  // overlap
+  EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(10.25, 0), Vec2(14, 0)}, 2, p));    // gap 0.25
+  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(10.5, 0), Vec2(14, 0)}, 2, p));    // gap 0.5
+  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(5, 0.2), Vec2(14, 0.2)}, 2, p));  // 0.2 m off: a shelf
+  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(9, 0), Vec2(12, 0.5)}, 2, p));    // 9.5 deg
   // Symmetric, whichever is passed first.
   EXPECT_TRUE(OnOneWall({Vec2(9, 0.05), Vec2(14, 0.05)}, 2, long_wall, 1, p));
   // A short piece wholly inside the eta band along L is one with it, whatever
   // its direction (a corner fragment: 0.78 m, 6 deg off the wall).
   EXPECT_TRUE(OnOneWall(long_wall, 1, {Vec2(0.04, 0.04), Vec2(0.81, -0.04)}, 2, p));
-  EXPECT_FALSE(OnOneWall(long_wall, 1, {Vec2(-0.5, 0.04), Vec2(0.3, -0.04)}, 2, p));  // sticks out, 6 deg
+  EXPECT_FALSE(
+      OnOneWall(long_wall, 1, {Vec2(-0.5, 0.04), Vec2(0.3, -0.04)}, 2, p));  // sticks out, 6 deg
   // Near-identical short features are one, whatever their directions.
-  EXPECT_TRUE(OnOneWall({Vec2(0, 0), Vec2(0.4, 0)}, 1, {Vec2(0.05, 0.05), Vec2(0.35, -0.05)}, 2, p));
+  EXPECT_TRUE(
+      OnOneWall({Vec2(0, 0), Vec2(0.4, 0)}, 1, {Vec2(0.05, 0.05), Vec2(0.35, -0.05)}, 2, p));
 }
 
 }  // namespace

@@ -54,8 +54,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string line = text.substr(0, text.find('\n'));
   const std::size_t eq = line.find('=');
   ServerConfig config;
-  mapd::Status s = eq == std::string::npos ? ApplySetting(line, "", &config)
-                                           : ApplySetting(line.substr(0, eq), line.substr(eq + 1), &config);
+  mapd::Status s = eq == std::string::npos
+                       ? ApplySetting(line, "", &config)
+                       : ApplySetting(line.substr(0, eq), line.substr(eq + 1), &config);
   if (!s.ok() && s.message().empty()) std::abort();
   return 0;
 }

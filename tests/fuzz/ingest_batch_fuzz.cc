@@ -6,14 +6,14 @@
 // Beyond crashes and sanitizer reports, a bug is: an accepted batch with
 // non-finite or out-of-limit values, or one whose stored encoding does not
 // decode to exactly what was accepted.
+#include <google/protobuf/stubs/logging.h>
+
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
 #include <string_view>
-
-#include <google/protobuf/stubs/logging.h>
 
 #include "mapserver/v1/map_service.pb.h"
 #include "service/ingest_batch.h"
@@ -80,7 +80,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   mapserver::v1::ObservationBatch batch;
   if (!batch.ParseFromArray(data, static_cast<int>(size))) return 0;  // gRPC refuses it first
-  const mapd::service::IngestLimits limits;  // mapd's defaults
+  const mapd::service::IngestLimits limits;                           // mapd's defaults
   mapd::StatusOr<mapd::service::IngestBatch> accepted = mapd::service::ValidateBatch(batch, limits);
   if (accepted.ok()) {
     CheckAccepted(*accepted, limits);

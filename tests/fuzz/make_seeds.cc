@@ -55,11 +55,12 @@ int main(int argc, char** argv) {
   std::mt19937_64 rng(7);
   ok &= WriteFile(ing + "room_lines.pb",
                   mapd::testing::RoomBatch("r1", "s1", 1, 3.0, 2.0, 0.3, &rng).SerializeAsString());
-  mapserver::v1::ObservationBatch local = mapd::testing::RoomBatch("robot-2", "2024.a_b", 42, 5.0, 4.0,
-                                                                   -1.2, &rng);
+  mapserver::v1::ObservationBatch local =
+      mapd::testing::RoomBatch("robot-2", "2024.a_b", 42, 5.0, 4.0, -1.2, &rng);
   local.set_session_frame(mapserver::v1::SESSION_FRAME_LOCAL);
   ok &= WriteFile(ing + "room_lines_local.pb", local.SerializeAsString());
-  mapserver::v1::ObservationBatch planes = mapd::testing::RoomBatch("r3", "s1", 7, 1.0, 1.0, 0.0, &rng);
+  mapserver::v1::ObservationBatch planes =
+      mapd::testing::RoomBatch("r3", "s1", 7, 1.0, 1.0, 0.0, &rng);
   planes.clear_lines();
   auto* p = planes.add_planes();  // the wall x = 2 m in the sensor frame, 2 m x 2.5 m
   mapd::testing::SetVec3(Eigen::Vector3d(-1, 0, 0), p->mutable_normal());

@@ -4,12 +4,12 @@
 // Beyond crashes and sanitizer reports, a bug is: OctoMap refusing or misreading
 // a tree that the validator passed (ReadOctree's Internal errors), or a small
 // limit not being enforced.
+#include <octomap/OcTree.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <string_view>
-
-#include <octomap/OcTree.h>
 
 #include "voxel/octree_reader.h"
 

@@ -1,8 +1,8 @@
 #include "geometry/convex_hull2.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace mapd::geometry {
 namespace {

@@ -1,10 +1,10 @@
 #include "geometry/line_fit.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace mapd::geometry {
 namespace {
@@ -13,7 +13,8 @@ namespace {
 double AngleToAxis(const Line2& line, const Vec2& expected) {
   // asin of the cross product: accurate near 0, where acos of the dot is not.
   const Vec2 e = expected.normalized();
-  return std::asin(std::min(1.0, std::abs(line.direction.x() * e.y() - line.direction.y() * e.x())));
+  return std::asin(
+      std::min(1.0, std::abs(line.direction.x() * e.y() - line.direction.y() * e.x())));
 }
 
 TEST(LineFitTest, FitsVerticalWall) {

@@ -1,8 +1,8 @@
 #include "geometry/rigid3.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace mapd::geometry {
 namespace {

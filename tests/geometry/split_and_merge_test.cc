@@ -1,11 +1,11 @@
 #include "geometry/split_and_merge.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 #include <utility>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace mapd::geometry {
 namespace {

@@ -18,9 +18,12 @@ TEST(AuthorizeTest, RoleTableMatchesTheDocs) {
     bool reader, robot_own, op, admin;
   };
   const Row rows[] = {
-      {Permission::kReadMap, true, true, true, true},       {Permission::kReadSubmaps, true, true, true, true},
-      {Permission::kWrite, false, true, true, true},        {Permission::kDelete, false, true, true, true},
-      {Permission::kMerge, false, false, true, true},       {Permission::kReadAudit, false, false, true, true},
+      {Permission::kReadMap, true, true, true, true},
+      {Permission::kReadSubmaps, true, true, true, true},
+      {Permission::kWrite, false, true, true, true},
+      {Permission::kDelete, false, true, true, true},
+      {Permission::kMerge, false, false, true, true},
+      {Permission::kReadAudit, false, false, true, true},
       {Permission::kManageTokens, false, false, false, true},
   };
   for (const Row& r : rows) {
@@ -44,7 +47,8 @@ TEST(AuthorizeTest, RobotIsConfinedToItsOwnRobotId) {
 }
 
 TEST(AuthorizeTest, DenialNamesRoleAndPermission) {
-  const Status s = Authorize({"dash", Role::kReader, "", false}, Permission::kMerge, "MergeSubmaps");
+  const Status s =
+      Authorize({"dash", Role::kReader, "", false}, Permission::kMerge, "MergeSubmaps");
   EXPECT_EQ(s.code(), StatusCode::kPermissionDenied);
   EXPECT_THAT(s.message(), HasSubstr("'dash' (role reader)"));
   EXPECT_THAT(s.message(), HasSubstr("permission merge (granted to operator, admin)"));
@@ -53,7 +57,8 @@ TEST(AuthorizeTest, DenialNamesRoleAndPermission) {
 TEST(AuthorizeTest, AnonymousMayDoAllButManageTokens) {
   Principal anon{"anonymous", Role::kOperator, "", true};
   EXPECT_TRUE(Authorize(anon, Permission::kWrite, "Ingest", "anything").ok());
-  EXPECT_EQ(Authorize(anon, Permission::kManageTokens, "CreateToken").code(), StatusCode::kPermissionDenied);
+  EXPECT_EQ(Authorize(anon, Permission::kManageTokens, "CreateToken").code(),
+            StatusCode::kPermissionDenied);
 }
 
 TEST(TokenTest, ParsesTheWireFormatAndRefusesOthers) {

@@ -4,8 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "service/support/auth_fixture.h"
 #include "common/octomap_scenes.h"
+#include "service/support/auth_fixture.h"
 
 namespace mapd::testing {
 namespace {
@@ -81,7 +81,8 @@ TEST_F(AuthSubmapTest, RobotsOwnTheirSubmaps) {
   EXPECT_EQ(Delete(r1, info.id()), grpc::StatusCode::OK) << "a robot deletes its own";
 
   std::vector<std::string> seen;
-  for (const pb::AuditEntry& e : Audit(admin_)) seen.push_back(e.who() + " " + e.action() + " " + e.result().substr(0, 6));
+  for (const pb::AuditEntry& e : Audit(admin_))
+    seen.push_back(e.who() + " " + e.action() + " " + e.result().substr(0, 6));
   EXPECT_THAT(seen, ::testing::IsSupersetOf({"r1-key UploadSubmap ok", "r2-key UploadSubmap denied",
                                              "r2-key DeleteSubmap denied", "alice DeleteSubmap ok",
                                              "r1-key DeleteSubmap ok"}));

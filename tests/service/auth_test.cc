@@ -1,8 +1,8 @@
 // Identities, roles and the audit log through the real server (docs/security.md).
-#include <fstream>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <fstream>
 
 #include "client/robot_client.h"
 #include "common/health.h"
@@ -12,8 +12,8 @@
 namespace mapd::testing {
 namespace {
 
-using ::testing::HasSubstr;
 using service::Role;
+using ::testing::HasSubstr;
 
 class AuthTest : public AuthFixture {
  protected:
@@ -81,7 +81,8 @@ TEST_F(AuthTest, MalformedUnknownAndForgedTokensAreUnauthenticated) {
 
 TEST_F(AuthTest, EachRoleGetsExactlyItsPermissions) {
   MakeTokens();
-  for (const std::string* t : {&reader_, &robot_, &operator_, &admin_}) EXPECT_TRUE(StatsAs(*t).ok());
+  for (const std::string* t : {&reader_, &robot_, &operator_, &admin_})
+    EXPECT_TRUE(StatsAs(*t).ok());
 
   auto list_tokens = [&](const std::string& t) {
     auto ctx = As(t);

@@ -1,14 +1,14 @@
 #include "service/config.h"
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
 #include "mapd/command_line.h"
@@ -47,7 +47,8 @@ TEST(ConfigTest, DefaultsAreValidAndLoopback) {
 
 TEST(ConfigTest, FlagsOverrideTheConfigFileWhateverTheirOrder) {
   mapd::testing::TempDir dir;
-  std::ofstream(dir.File("mapd.conf")) << "# comment\nfusion.gamma = 0.5\nfusion.eta_m=0.2\nsync = full\n";
+  std::ofstream(dir.File("mapd.conf"))
+      << "# comment\nfusion.gamma = 0.5\nfusion.eta_m=0.2\nsync = full\n";
   ServerConfig c;
   ASSERT_TRUE(Parse({"--fusion.gamma=0.4", "--config", dir.File("mapd.conf")}, &c).ok());
   EXPECT_DOUBLE_EQ(c.fusion.gamma, 0.4);
@@ -73,8 +74,8 @@ TEST(ConfigTest, BadValuesAreNamed) {
 // merge.min_matched_corners) and took " -1" as 2^32 - 1.
 TEST(ConfigTest, IntegersThatDoNotFitOrAreNotPlainDigitsAreRefused) {
   for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
-           {"merge.min_matched_corners", "4294967300"},         // int
-           {"limits.max_features_per_batch", "4294967297"},     // uint32
+           {"merge.min_matched_corners", "4294967300"},          // int
+           {"limits.max_features_per_batch", "4294967297"},      // uint32
            {"limits.max_in_flight", "99999999999999999999999"},  // beyond 64 bits
            {"busy_timeout_ms", "2147483648"},
            {"limits.max_in_flight", " -1"},
@@ -101,19 +102,25 @@ TEST(ConfigTest, RemoteListenNeedsTlsOrAnExplicitOptOut) {
   ServerConfig c;
   EXPECT_THAT(Parse({"--listen", "0.0.0.0:50051"}, &c).message(), HasSubstr("tls_cert"));
   ServerConfig d;
-  EXPECT_TRUE(
-      Parse({"--listen", "0.0.0.0:50051", "--allow_insecure_remote", "true", "--auth.required", "true"}, &d).ok());
+  EXPECT_TRUE(Parse({"--listen", "0.0.0.0:50051", "--allow_insecure_remote", "true",
+                     "--auth.required", "true"},
+                    &d)
+                  .ok());
 }
 
 TEST(ConfigTest, RemoteListenNeedsAuth) {
   ServerConfig c;
-  const Status s = Parse({"--listen", "0.0.0.0:50051", "--tls_cert", "c.pem", "--tls_key", "k.pem"}, &c);
+  const Status s =
+      Parse({"--listen", "0.0.0.0:50051", "--tls_cert", "c.pem", "--tls_key", "k.pem"}, &c);
   EXPECT_THAT(s.message(), HasSubstr("auth.required"));
   ServerConfig d;
   EXPECT_TRUE(Parse({"--listen", "0.0.0.0:50051", "--tls_cert", "c.pem", "--tls_key", "k.pem",
-                     "--tls_client_ca", "ca.pem"}, &d).ok());
+                     "--tls_client_ca", "ca.pem"},
+                    &d)
+                  .ok());
   ServerConfig e;
-  EXPECT_THAT(Parse({"--tls_client_ca", "ca.pem"}, &e).message(), HasSubstr("tls_client_ca needs tls_cert"));
+  EXPECT_THAT(Parse({"--tls_client_ca", "ca.pem"}, &e).message(),
+              HasSubstr("tls_client_ca needs tls_cert"));
   ServerConfig f;
   EXPECT_THAT(Parse({"--auth.required", "maybe"}, &f).message(), HasSubstr("auth.required"));
 }
@@ -122,8 +129,9 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   ServerConfig c;
   ASSERT_TRUE(Parse({"--limits.max_submap_bytes", "1048576", "--limits.max_concurrent_merges=2",
                      "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
-                     "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5", "--merge.max_seconds=10",
-                     "--merge.resolution_policy=resample", "--merge.fusion_rule=log_odds"},
+                     "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
+                     "--merge.max_seconds=10", "--merge.resolution_policy=resample",
+                     "--merge.fusion_rule=log_odds"},
                     &c)
                   .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -156,10 +164,11 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
 
 TEST(ConfigTest, LongRunningSettingsParseAndAreValidated) {
   ServerConfig c;
-  ASSERT_TRUE(Parse({"--fusion.mode=exact", "--fusion.cover_m=0.05", "--snapshot.every_observations=0",
-                     "--snapshot.max_age_s=5", "--storage.raw_retention_days=30"},
-                    &c)
-                  .ok());
+  ASSERT_TRUE(
+      Parse({"--fusion.mode=exact", "--fusion.cover_m=0.05", "--snapshot.every_observations=0",
+             "--snapshot.max_age_s=5", "--storage.raw_retention_days=30"},
+            &c)
+          .ok());
   EXPECT_EQ(c.fusion.mode, fusion::FusionMode::kExact);
   EXPECT_EQ(c.fusion.cover_m, 0.05);
   EXPECT_EQ(c.snapshot_every_observations, 0u);

@@ -2,15 +2,15 @@
 // with SIGKILL mid-stream, restarted on the same database; every batch that
 // was acknowledged is there, and the served map is exactly a batch
 // recomputation from the stored raw observations.
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <map>
 #include <mutex>
 #include <random>
 #include <set>
 #include <thread>
-
-#include <grpcpp/grpcpp.h>
-#include <gtest/gtest.h>
 
 #include "common/batches.h"
 #include "common/process.h"
@@ -49,22 +49,27 @@ struct StreamResult {
 // Streams all batches (pipelined) and collects acks until the stream ends.
 StreamResult Stream(const std::string& address, const std::vector<pb::ObservationBatch>& batches,
                     std::atomic<int>* acked_total = nullptr) {
-  auto stub = pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  auto stub =
+      pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
   grpc::ClientContext ctx;
   auto stream = stub->Ingest(&ctx);
   StreamResult result;
   std::thread reader([&] {
     pb::IngestAck ack;
     while (stream->Read(&ack)) {
-      if (ack.result() == pb::IngestAck::STORED) result.stored.insert(ack.seq());
-      else if (ack.result() == pb::IngestAck::DUPLICATE) result.duplicate.insert(ack.seq());
-      else ++result.rejected;
+      if (ack.result() == pb::IngestAck::STORED)
+        result.stored.insert(ack.seq());
+      else if (ack.result() == pb::IngestAck::DUPLICATE)
+        result.duplicate.insert(ack.seq());
+      else
+        ++result.rejected;
       if (acked_total) ++*acked_total;
     }
   });
   for (const auto& b : batches) {
     if (!stream->Write(b)) break;
-    if (acked_total) std::this_thread::sleep_for(std::chrono::microseconds(200));  // keep it mid-stream
+    if (acked_total)
+      std::this_thread::sleep_for(std::chrono::microseconds(200));  // keep it mid-stream
   }
   stream->WritesDone();
   reader.join();
@@ -75,7 +80,8 @@ StreamResult Stream(const std::string& address, const std::vector<pb::Observatio
 // The map once the fuser has caught up with every acknowledged batch (a query
 // waits for it only up to a bound, which a sanitizer build on a busy machine exceeds).
 std::vector<pb::FusedFeature> FetchMap(const std::string& address) {
-  auto stub = pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  auto stub =
+      pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
   for (int i = 0; i < 1200; ++i) {
     grpc::ClientContext stats_ctx;
     pb::Stats stats;
@@ -107,14 +113,18 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   std::vector<StreamResult> first(kRobots);
   std::vector<std::thread> robots;
   for (int r = 0; r < kRobots; ++r) {
-    robots.emplace_back([&, r] { first[static_cast<size_t>(r)] = Stream(mapd.address, batches[static_cast<size_t>(r)], &acked); });
+    robots.emplace_back([&, r] {
+      first[static_cast<size_t>(r)] = Stream(mapd.address, batches[static_cast<size_t>(r)], &acked);
+    });
   }
-  while (acked < kRobots * kBatchesPerRobot / 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  while (acked < kRobots * kBatchesPerRobot / 3)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   EXPECT_EQ(Stop(mapd.pid, SIGKILL), 128 + SIGKILL);
   for (auto& t : robots) t.join();
   size_t acked_stored = 0;
   for (const auto& f : first) acked_stored += f.stored.size();
-  ASSERT_LT(acked_stored, static_cast<size_t>(kRobots * kBatchesPerRobot)) << "the kill came too late";
+  ASSERT_LT(acked_stored, static_cast<size_t>(kRobots * kBatchesPerRobot))
+      << "the kill came too late";
 
   // 2. Restart on the same database and resend everything, as robots do.
   //    A snapshot written before the kill is used (a slow build may not have
@@ -123,7 +133,8 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   mapd = StartMapd(db, args);
   ASSERT_GT(mapd.port, 0) << mapd.log();
   if (snapshot_written) {
-    EXPECT_NE(mapd.log().find("event=map_recovered from=snapshot"), std::string::npos) << mapd.log();
+    EXPECT_NE(mapd.log().find("event=map_recovered from=snapshot"), std::string::npos)
+        << mapd.log();
   }
   for (int r = 0; r < kRobots; ++r) {
     const StreamResult again = Stream(mapd.address, batches[static_cast<size_t>(r)]);
@@ -144,19 +155,23 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   auto store = storage::Store::Open(db, {});
   ASSERT_TRUE(store.ok()) << store.status().ToString();
   std::vector<storage::StoredObservation> observations;
-  ASSERT_TRUE((*store)->ForEachObservation([&](const storage::StoredObservation& o) {
-                        observations.push_back(o);
-                        return Status::Ok();
-                      }).ok());
+  ASSERT_TRUE((*store)
+                  ->ForEachObservation([&](const storage::StoredObservation& o) {
+                    observations.push_back(o);
+                    return Status::Ok();
+                  })
+                  .ok());
   EXPECT_EQ(observations.size(), static_cast<size_t>(kRobots * kBatchesPerRobot));
   fusion::FusionEngine engine{fusion::FusionParams{}};
   for (const auto& o : observations) {
-    auto projected = fusion::ProjectToGround(o.features, geometry::Rigid3::Identity(),
-                                             static_cast<fusion::FeatureId>(o.id) << service::kFeatureIdBits,
-                                             engine.params());
+    auto projected = fusion::ProjectToGround(
+        o.features, geometry::Rigid3::Identity(),
+        static_cast<fusion::FeatureId>(o.id) << service::kFeatureIdBits, engine.params());
     ASSERT_TRUE(projected.ok());
-    ASSERT_TRUE(engine.Add(static_cast<fusion::ObservationId>(o.id), static_cast<fusion::RobotId>(o.robot_id),
-                           projected->ground).ok());
+    ASSERT_TRUE(engine
+                    .Add(static_cast<fusion::ObservationId>(o.id),
+                         static_cast<fusion::RobotId>(o.robot_id), projected->ground)
+                    .ok());
   }
   const std::vector<fusion::FusedFeature> expected = engine.Published();
   ASSERT_EQ(served.size(), expected.size());

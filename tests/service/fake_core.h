@@ -6,12 +6,12 @@
 #ifndef MAPD_TESTS_SERVICE_FAKE_CORE_H_
 #define MAPD_TESTS_SERVICE_FAKE_CORE_H_
 
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <mutex>
 #include <utility>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
 #include "service/core.h"

@@ -1,16 +1,17 @@
 // The gRPC handlers on a fake Core (fake_core.h): what they answer when the
 // core is recovering, refuses a batch, or lags behind, without making a real
 // core do so.
-#include <memory>
-#include <random>
-#include <string>
+#include "fake_core.h"
 
 #include <gmock/gmock.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <memory>
+#include <random>
+#include <string>
+
 #include "common/batches.h"
-#include "fake_core.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/map_service.h"
 
@@ -30,8 +31,8 @@ class FakeCoreTest : public ::testing::Test {
     builder.RegisterService(service_.get());
     server_ = builder.BuildAndStart();
     ASSERT_NE(server_, nullptr);
-    stub_ = pb::MapService::NewStub(
-        grpc::CreateChannel("127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials()));
+    stub_ = pb::MapService::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
+                                                        grpc::InsecureChannelCredentials()));
   }
   void TearDown() override {
     service_->StartDraining();

@@ -1,11 +1,11 @@
 #include "service/ingest_batch.h"
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "common/batches.h"
 
@@ -16,8 +16,12 @@ using ::testing::HasSubstr;
 
 class ValidateBatchTest : public ::testing::Test {
  protected:
-  mapserver::v1::ObservationBatch Good() { return mapd::testing::RoomBatch("r1", "s1", 1, 2, 3, 0.5, &rng_); }
-  Status Check(const mapserver::v1::ObservationBatch& b) { return ValidateBatch(b, limits_).status(); }
+  mapserver::v1::ObservationBatch Good() {
+    return mapd::testing::RoomBatch("r1", "s1", 1, 2, 3, 0.5, &rng_);
+  }
+  Status Check(const mapserver::v1::ObservationBatch& b) {
+    return ValidateBatch(b, limits_).status();
+  }
 
   std::mt19937_64 rng_{7};
   IngestLimits limits_;

@@ -4,6 +4,7 @@
 // expiry, and a malformed Ingest message (INVALID_ARGUMENT naming its index).
 // No timing thresholds: only generous deadlines.
 #include <gmock/gmock.h>
+#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -11,8 +12,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <grpcpp/generic/generic_stub.h>
 
 #include "common/health.h"
 #include "server_fixture.h"
@@ -23,7 +22,8 @@ namespace {
 using ::testing::HasSubstr;
 
 std::chrono::system_clock::time_point In(double seconds) {
-  return std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
+  return std::chrono::system_clock::now() +
+         std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
 }
 
 grpc::ByteBuffer Serialized(const std::string& bytes) {
@@ -56,7 +56,8 @@ TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
     flood.emplace_back([&, t] {
       grpc::ChannelArguments args;
       args.SetInt("mapd.test.connection", t);  // a connection of its own
-      auto channel = grpc::CreateCustomChannel(server_->address(), grpc::InsecureChannelCredentials(), args);
+      auto channel =
+          grpc::CreateCustomChannel(server_->address(), grpc::InsecureChannelCredentials(), args);
       auto stub = pb::MapService::NewStub(channel);
       for (int i = 0; i < 5000; ++i) {
         grpc::ClientContext ctx;
@@ -131,7 +132,8 @@ TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
 
 TEST_F(LimitsTest, StreamsBeyondTheServerWideCapAreRefusedAtOnce) {
   std::vector<std::unique_ptr<grpc::ClientContext>> ctx;
-  std::vector<std::unique_ptr<grpc::ClientReaderWriter<pb::ObservationBatch, pb::IngestAck>>> streams;
+  std::vector<std::unique_ptr<grpc::ClientReaderWriter<pb::ObservationBatch, pb::IngestAck>>>
+      streams;
   // Opening is asynchronous: a Write completes once the stream is admitted.
   for (size_t i = 0; i < config_.streams.max_streams; ++i) {
     ctx.push_back(std::make_unique<grpc::ClientContext>());
@@ -195,7 +197,10 @@ TEST_F(LimitsTest, MalformedIngestMessageEndsTheStreamWithInvalidArgument) {
   call->Write(Serialized(good.SerializeAsString()), reinterpret_cast<void*>(2));
   ASSERT_TRUE(wait(2));
   // Field 1 (robot_id) claims 5 bytes, 2 follow: truncated.
-  call->Write(Serialized(std::string("\x0a\x05" "ab", 4)), reinterpret_cast<void*>(3));
+  call->Write(Serialized(std::string("\x0a\x05"
+                                     "ab",
+                                     4)),
+              reinterpret_cast<void*>(3));
   wait(3);
   call->WritesDone(reinterpret_cast<void*>(4));
   wait(4);
@@ -208,7 +213,8 @@ TEST_F(LimitsTest, MalformedIngestMessageEndsTheStreamWithInvalidArgument) {
     std::vector<grpc::Slice> slices;
     ASSERT_TRUE(buffer.Dump(&slices).ok());
     std::string bytes;
-    for (const auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+    for (const auto& sl : slices)
+      bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
     ASSERT_TRUE(ack.ParseFromString(bytes));
     acks.push_back(ack);
   }

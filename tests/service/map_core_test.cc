@@ -3,18 +3,19 @@
 // plus a replay of what came after it, in the live order, ties included)
 // serves exactly the map served before, and so does a replay from scratch;
 // raw retention keeps the map; batches are refused while recovering.
+#include "service/map_core.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
 #include <atomic>
 #include <future>
 #include <random>
 #include <thread>
 
-#include <gtest/gtest.h>
-#include <sqlite3.h>
-
 #include "common/batches.h"
 #include "common/temp_dir.h"
 #include "service/ingest_batch.h"
-#include "service/map_core.h"
 
 namespace mapd::service {
 namespace {
@@ -60,7 +61,8 @@ class MapCoreTest : public ::testing::Test {
     std::mt19937_64 rng(seed);
     for (int k = 0; k < count; ++k) {
       const uint64_t seq = first_seq + static_cast<uint64_t>(k);
-      pb::ObservationBatch b = RoomBatch(robot, "s", seq, 5, 4, 0.1 * static_cast<double>(seq), &rng);
+      pb::ObservationBatch b =
+          RoomBatch(robot, "s", seq, 5, 4, 0.1 * static_cast<double>(seq), &rng);
       if (local) {
         b.set_session_frame(pb::SESSION_FRAME_LOCAL);
         b.mutable_t_frame_sensor()->mutable_translation()->set_x(5 + dx);
@@ -74,9 +76,11 @@ class MapCoreTest : public ::testing::Test {
     ASSERT_TRUE(session.ok());
     geometry::Rigid3 T = geometry::Rigid3::Identity();
     T.translation = Eigen::Vector3d(-dx, 0.0, 0.0);
-    ASSERT_TRUE(core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
-                   return txn->TieSession(session->session_id, T);
-                 }).ok());
+    ASSERT_TRUE(core_
+                    ->ExecuteWrite([&](storage::WriteTransaction* txn) {
+                      return txn->TieSession(session->session_id, T);
+                    })
+                    .ok());
   }
 
   std::vector<FusedView> Map() {
@@ -115,7 +119,8 @@ class MapCoreTest : public ::testing::Test {
   void DeleteSnapshots() {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open(options_.db_path.c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "DELETE FROM fusion_snapshots", nullptr, nullptr, nullptr), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, "DELETE FROM fusion_snapshots", nullptr, nullptr, nullptr),
+              SQLITE_OK);
     sqlite3_close(db);
   }
 
@@ -157,9 +162,9 @@ TEST_F(MapCoreTest, RestartServesTheSameMapFromASnapshotAndFromScratch) {
   Open();
   // Enough revisits that clusters are established and fold (bounded mode).
   Stream("r1", false, 0.0, 1, 60, 1);
-  Stream("r2", true, 2.0, 1, 25, 2);   // stored, not fused: r2 is not tied yet
+  Stream("r2", true, 2.0, 1, 25, 2);  // stored, not fused: r2 is not tied yet
   Stream("r1", false, 0.0, 61, 9, 3);
-  Tie("r2", 2.0);                      // r2's 25 stored batches join here
+  Tie("r2", 2.0);  // r2's 25 stored batches join here
   Stream("r2", true, 2.0, 26, 20, 4);
   Stream("r3", true, -1.0, 1, 10, 5);  // never tied
   Stream("r1", false, 0.0, 70, 11, 6);
@@ -222,7 +227,8 @@ TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
       "JOIN robots r ON r.id = s.robot_id WHERE r.name = ";
   // Retention runs after each snapshot and drops what both kept snapshots
   // reflect: wait until none of r1's rows up to the older one is left.
-  const std::string droppable = r1_rows + "'r1' AND o.id <= (SELECT min(through_observation) FROM fusion_snapshots)";
+  const std::string droppable =
+      r1_rows + "'r1' AND o.id <= (SELECT min(through_observation) FROM fusion_snapshots)";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (Query(droppable) != 0 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -252,10 +258,11 @@ TEST_F(MapCoreTest, StopDoesNotWaitForTheFusionBacklog) {
     StatusOr<IngestBatch> batch = ValidateBatch(
         RoomBatch("r1", "s", static_cast<uint64_t>(k), 5, 4, 0.01 * k, &rng), IngestLimits());
     ASSERT_TRUE(batch.ok());
-    core_->Submit(*batch, [&](const BatchOutcome& o) { stored += o.kind == BatchOutcome::Kind::kStored; });
+    core_->Submit(*batch,
+                  [&](const BatchOutcome& o) { stored += o.kind == BatchOutcome::Kind::kStored; });
   }
   if (core_->Stats().fusion_backlog == 0) GTEST_SKIP() << "the fuser kept up: nothing to leave";
-  core_->Stop();  // returns without fusing the backlog
+  core_->Stop();                       // returns without fusing the backlog
   EXPECT_EQ(stored.load(), kBatches);  // every batch committed and acknowledged
   EXPECT_GT(core_->Stats().fusion_backlog, 0u);
   EXPECT_EQ(Query("SELECT count(*) FROM observations"), kBatches);

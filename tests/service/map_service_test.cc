@@ -1,14 +1,13 @@
 // The service end to end, in process: ingest, duplicates, bad input, queries,
 // restart. (The SIGKILL crash test with the real binary is crash_restart_test.cc.)
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <sqlite3.h>
 
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "common/health.h"
 #include "server_fixture.h"
@@ -52,7 +51,8 @@ TEST_F(ServerFixture, CornersOfTheFusedRoomLandOnTheTrueCorners) {
   for (const auto& f : Features()) {
     for (const auto& p : {f.a(), f.b()}) {
       double best = 1e9;
-      for (const auto& c : corners) best = std::min(best, (Eigen::Vector2d(p.x(), p.y()) - c).norm());
+      for (const auto& c : corners)
+        best = std::min(best, (Eigen::Vector2d(p.x(), p.y()) - c).norm());
       EXPECT_LT(best, 0.05) << "endpoint (" << p.x() << ", " << p.y() << ") far from every corner";
     }
   }
@@ -106,7 +106,8 @@ TEST_F(ServerFixture, BadInputFromOneRobotDoesNotDisturbAnother) {
   Stream(bad);
   const auto after = Features();
   ASSERT_EQ(after.size(), before.size());
-  for (size_t i = 0; i < after.size(); ++i) EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
+  for (size_t i = 0; i < after.size(); ++i)
+    EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
   EXPECT_EQ(Stats().robots(), 1u);
 }
 
@@ -198,7 +199,8 @@ TEST_F(ServerFixture, ARestartedServerServesTheSameMap) {
   Restart();
   const auto after = Features();
   ASSERT_EQ(after.size(), before.size());
-  for (size_t i = 0; i < after.size(); ++i) EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
+  for (size_t i = 0; i < after.size(); ++i)
+    EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
   EXPECT_EQ(Stats().batches(), stats_before.batches());
   // A robot resending after the restart is recognised: (robot, session, seq) is the key.
   EXPECT_EQ(Count(Stream(Walk("r1", 3)), pb::IngestAck::DUPLICATE), 3);

@@ -1,9 +1,8 @@
 // Non-vertical planes end to end: batches with floors and ceilings through
 // Ingest, fused planes served by GetFeatureMap (filters included), and kept
 // across a restart (from the snapshot, not a replay).
-#include <sqlite3.h>
-
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include "server_fixture.h"
 #include "storage/store.h"
@@ -100,7 +99,8 @@ TEST_F(PlaneServiceTest, ARestartKeepsTheFusedPlanesWithoutAReplay) {
   EXPECT_EQ(Stats().replay_length(), 0u) << "the stop's snapshot holds the plane engine too";
   const auto after = Planes();
   ASSERT_EQ(after.size(), before.size());
-  for (size_t i = 0; i < after.size(); ++i) EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
+  for (size_t i = 0; i < after.size(); ++i)
+    EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
   // And the restored engine goes on fusing.
   Stream({FloorAndCeiling("r2", 4)});
   const auto more = Planes();
@@ -130,12 +130,15 @@ TEST_F(PlaneServiceTest, FusedPlanesArePersistedAndASnapshotWithoutPlanesIsRepla
   // As if the snapshots predated plane fusion (schema 4).
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(config_.db_path.c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "UPDATE fusion_snapshots SET plane_state = NULL", nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(db, "UPDATE fusion_snapshots SET plane_state = NULL", nullptr, nullptr, nullptr),
+      SQLITE_OK);
   sqlite3_close(db);
   StartServer();
   const auto after = Planes();
   ASSERT_EQ(after.size(), before.size());
-  for (size_t i = 0; i < after.size(); ++i) EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
+  for (size_t i = 0; i < after.size(); ++i)
+    EXPECT_EQ(after[i].DebugString(), before[i].DebugString());
 }
 
 }  // namespace

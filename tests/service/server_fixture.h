@@ -3,12 +3,12 @@
 #ifndef MAPD_TESTS_SERVICE_SERVER_FIXTURE_H_
 #define MAPD_TESTS_SERVICE_SERVER_FIXTURE_H_
 
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <random>
 #include <vector>
-
-#include <grpcpp/grpcpp.h>
-#include <gtest/gtest.h>
 
 #include "common/batches.h"
 #include "common/temp_dir.h"
@@ -75,7 +75,8 @@ class ServerFixture : public ::testing::Test {
     auto reader = stub_->GetFeatureMap(&ctx, request);
     std::vector<pb::FusedFeature> out;
     pb::FeatureMapPage page;
-    while (reader->Read(&page)) out.insert(out.end(), page.features().begin(), page.features().end());
+    while (reader->Read(&page))
+      out.insert(out.end(), page.features().begin(), page.features().end());
     last_status_ = reader->Finish();
     return out;
   }

@@ -9,10 +9,10 @@
 #include <thread>
 #include <vector>
 
+#include "common/octomap_scenes.h"
 #include "server_fixture.h"
 #include "storage/sqlite.h"
 #include "voxel/merge.h"
-#include "common/octomap_scenes.h"
 
 namespace mapd::testing {
 namespace {

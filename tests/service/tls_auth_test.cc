@@ -1,11 +1,9 @@
 // TLS and mutual TLS with certificates made at test time by the openssl CLI
 // (skipped without it): a client certificate's CN is a robot id, one from an
 // unknown CA is refused, and tokens work over TLS.
-#include <unistd.h>
-
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "common/process.h"
 #include "common/temp_dir.h"
@@ -50,17 +48,30 @@ class TlsAuthTest : public AuthFixture {
     return r.exit_code == 0;
   }
   bool MakeCa(const std::string& name) {
-    return Run({"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-                dir_.File(name + ".key"), "-out", dir_.File(name + ".pem"), "-days", "2", "-subj", "/CN=" + name});
+    return Run({"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+                "-nodes", "-keyout", dir_.File(name + ".key"), "-out", dir_.File(name + ".pem"),
+                "-days", "2", "-subj", "/CN=" + name});
   }
-  bool MakeCert(const std::string& name, const std::string& cn, const std::string& ca, bool server) {
-    if (!Run({"req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-              dir_.File(name + ".key"), "-out", dir_.File(name + ".csr"), "-subj", "/CN=" + cn})) {
+  bool MakeCert(const std::string& name, const std::string& cn, const std::string& ca,
+                bool server) {
+    if (!Run({"req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes",
+              "-keyout", dir_.File(name + ".key"), "-out", dir_.File(name + ".csr"), "-subj",
+              "/CN=" + cn})) {
       return false;
     }
-    std::vector<std::string> sign = {"x509", "-req", "-in", dir_.File(name + ".csr"), "-CA", dir_.File(ca + ".pem"),
-                                     "-CAkey", dir_.File(ca + ".key"), "-CAcreateserial", "-out",
-                                     dir_.File(name + ".pem"), "-days", "2"};
+    std::vector<std::string> sign = {"x509",
+                                     "-req",
+                                     "-in",
+                                     dir_.File(name + ".csr"),
+                                     "-CA",
+                                     dir_.File(ca + ".pem"),
+                                     "-CAkey",
+                                     dir_.File(ca + ".key"),
+                                     "-CAcreateserial",
+                                     "-out",
+                                     dir_.File(name + ".pem"),
+                                     "-days",
+                                     "2"};
     if (server) sign.insert(sign.end(), {"-extfile", dir_.File("san.ext")});
     return Run(sign);
   }
@@ -73,10 +84,12 @@ class TlsAuthTest : public AuthFixture {
       ssl.pem_cert_chain = ReadFileBytes(dir_.File(client + ".pem"));
       ssl.pem_private_key = ReadFileBytes(dir_.File(client + ".key"));
     }
-    return pb::MapService::NewStub(grpc::CreateChannel(server_->address(), grpc::SslCredentials(ssl)));
+    return pb::MapService::NewStub(
+        grpc::CreateChannel(server_->address(), grpc::SslCredentials(ssl)));
   }
 
-  static grpc::Status WhoAmI(pb::MapService::Stub* stub, const std::string& token, pb::WhoAmIResponse* me) {
+  static grpc::Status WhoAmI(pb::MapService::Stub* stub, const std::string& token,
+                             pb::WhoAmIResponse* me) {
     auto ctx = As(token);
     ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
     return stub->WhoAmI(ctx.get(), {}, me);
@@ -146,7 +159,8 @@ TEST_F(MutualTlsTest, UnknownCaOrNoCertificateIsRefused) {
   auto none = TlsStub();
   EXPECT_EQ(WhoAmI(none.get(), "", &me).error_code(), grpc::StatusCode::UNAVAILABLE);
   // Plaintext does not get in either.
-  auto plain = pb::MapService::NewStub(grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials()));
+  auto plain = pb::MapService::NewStub(
+      grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials()));
   EXPECT_FALSE(WhoAmI(plain.get(), "", &me).ok());
 }
 

@@ -51,7 +51,8 @@ Vec2 Rotate(const Vec2& p, double yaw) {
 
 void AddRectangle(const Vec2& centre, double half_w, double half_h, double yaw, const Vec2& pivot,
                   World* world) {
-  std::vector<Vec2> c = {{-half_w, -half_h}, {half_w, -half_h}, {half_w, half_h}, {-half_w, half_h}};
+  std::vector<Vec2> c = {
+      {-half_w, -half_h}, {half_w, -half_h}, {half_w, half_h}, {-half_w, half_h}};
   for (Vec2& p : c) p = pivot + Rotate(centre + p - pivot, yaw);
   world->buildings.push_back(c);
 }
@@ -151,7 +152,8 @@ World GenerateWorld(const ScenarioParams& p) {
     const int first = static_cast<int>(world.structures.size());
     for (int k = 0; k < 4; ++k) {
       world.structures.push_back({{c[static_cast<size_t>(k)], c[static_cast<size_t>((k + 1) % 4)]},
-                                  StructureKind::kWall, static_cast<int>(b)});
+                                  StructureKind::kWall,
+                                  static_cast<int>(b)});
     }
     for (int k = 0; k < 4; ++k) {
       world.corners.push_back({c[static_cast<size_t>(k)], first + (k + 3) % 4, first + k});
@@ -188,7 +190,8 @@ ScanSimulator::ScanSimulator(const ScenarioParams& params, const World& world)
   }
 }
 
-void ScanSimulator::Ranges(size_t index, std::vector<double>* ranges, std::vector<int>* hits) const {
+void ScanSimulator::Ranges(size_t index, std::vector<double>* ranges,
+                           std::vector<int>* hits) const {
   const Pose2& pose = world_.route[index];
   hits->assign(static_cast<size_t>(params_.beams), -1);
   // Candidate structures: those filed in the cells that the range square meets.
@@ -229,7 +232,8 @@ Scan ScanSimulator::Simulate(size_t index) const {
   scan.true_pose = world_.route[index];
   Rng rng(params_.seed * 0xD1B54A32D192ED03ULL + 0x2000003ULL * (index + 1));
   scan.estimated_pose = scan.true_pose;
-  scan.estimated_pose.t += Vec2(rng.Normal(params_.pose_sigma_xy_m), rng.Normal(params_.pose_sigma_xy_m));
+  scan.estimated_pose.t +=
+      Vec2(rng.Normal(params_.pose_sigma_xy_m), rng.Normal(params_.pose_sigma_xy_m));
   scan.estimated_pose.yaw_rad += rng.Normal(params_.pose_sigma_yaw_rad);
 
   // Beam order; a beam without a return is NaN, which ends a run.

@@ -27,28 +27,28 @@ struct ScenarioParams {
   // World.
   int blocks_x = 8;
   int blocks_y = 6;
-  double block_m = 40.0;           // block side
-  double road_m = 12.0;            // road width (roads also run round the edge)
-  double setback_m = 3.0;          // buildings keep this far from the block edge
-  double close_pair_prob = 0.4;    // share of blocks holding two buildings side by side
-  double close_gap_min_m = 1.0;    // gap between the buildings of a pair
+  double block_m = 40.0;         // block side
+  double road_m = 12.0;          // road width (roads also run round the edge)
+  double setback_m = 3.0;        // buildings keep this far from the block edge
+  double close_pair_prob = 0.4;  // share of blocks holding two buildings side by side
+  double close_gap_min_m = 1.0;  // gap between the buildings of a pair
   double close_gap_max_m = 2.0;
-  double aligned_prob = 0.5;       // share of blocks aligned with the road grid
-  double max_yaw_rad = 0.12;       // the other blocks are turned by up to this
-  int fences_per_block = 2;        // 1.5-3 m fences, 1.5 m inside the block edge
-  int poles_per_block = 2;         // 0.3 m square poles, 0.5 m inside the block edge
+  double aligned_prob = 0.5;  // share of blocks aligned with the road grid
+  double max_yaw_rad = 0.12;  // the other blocks are turned by up to this
+  int fences_per_block = 2;   // 1.5-3 m fences, 1.5 m inside the block edge
+  int poles_per_block = 2;    // 0.3 m square poles, 0.5 m inside the block edge
   // Vehicle and sensor.
-  double scan_spacing_m = 1.0;     // route distance between scans
-  int beams = 720;                 // over 360 degrees
+  double scan_spacing_m = 1.0;  // route distance between scans
+  int beams = 720;              // over 360 degrees
   double max_range_m = 40.0;
-  double range_sigma_m = 0.02;     // Gaussian range noise
-  double pose_sigma_xy_m = 0.0;    // per-scan pose error (GNSS/INS-like, independent)
+  double range_sigma_m = 0.02;   // Gaussian range noise
+  double pose_sigma_xy_m = 0.0;  // per-scan pose error (GNSS/INS-like, independent)
   double pose_sigma_yaw_rad = 0.0;
   // Line extraction (geometry/split_and_merge.h; the variant set in city_scenario.cc).
-  double split_m = 0.08;           // split-and-merge: max point-to-chord distance
-  double break_base_m = 0.3;       // consecutive points farther apart than
-  double break_factor = 4.0;       //   base + factor * r * beam_angle start a new run
-  int min_points = 8;             // >= 2
+  double split_m = 0.08;      // split-and-merge: max point-to-chord distance
+  double break_base_m = 0.3;  // consecutive points farther apart than
+  double break_factor = 4.0;  //   base + factor * r * beam_angle start a new run
+  int min_points = 8;         // >= 2
   double min_length_m = 0.5;
 };
 
@@ -59,34 +59,34 @@ enum class StructureKind { kWall, kTrivial };
 struct Structure {
   geometry::Segment2 segment;  // map frame
   StructureKind kind = StructureKind::kWall;
-  int building = -1;           // walls: index into World::buildings
+  int building = -1;  // walls: index into World::buildings
 };
 
 // A building corner: wall `in` ends here and wall `out` starts here.
 struct Corner {
   geometry::Vec2 point = geometry::Vec2::Zero();
-  int in = -1;   // structure indices
+  int in = -1;  // structure indices
   int out = -1;
 };
 
 struct World {
-  std::vector<Structure> structures;          // walls first, then trivial structures
-  size_t wall_count = 0;                      // structures[0, wall_count) are walls
+  std::vector<Structure> structures;                   // walls first, then trivial structures
+  size_t wall_count = 0;                               // structures[0, wall_count) are walls
   std::vector<std::vector<geometry::Vec2>> buildings;  // 4 corners each, counter-clockwise
   std::vector<Corner> corners;
   std::vector<std::pair<int, int>> close_pairs;  // building indices, gap 1-2 m
-  std::vector<Pose2> route;                   // one true pose per scan
-  geometry::Vec2 min = geometry::Vec2::Zero();  // bounding box, metres
+  std::vector<Pose2> route;                      // one true pose per scan
+  geometry::Vec2 min = geometry::Vec2::Zero();   // bounding box, metres
   geometry::Vec2 max = geometry::Vec2::Zero();
 };
 
 struct Scan {
-  ObservationId observation = 0;   // index + 1
+  ObservationId observation = 0;  // index + 1
   RobotId robot = 0;
   Pose2 true_pose;
-  Pose2 estimated_pose;            // what the features were placed with
+  Pose2 estimated_pose;                 // what the features were placed with
   std::vector<GroundFeature> features;  // map frame (estimated pose); ids (index << 10) | k
-  std::vector<int> truth;          // per feature: the structure most of its points hit
+  std::vector<int> truth;               // per feature: the structure most of its points hit
 };
 
 World GenerateWorld(const ScenarioParams& params);

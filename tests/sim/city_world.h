@@ -13,9 +13,9 @@
 namespace mapd::sim {
 
 struct CityHeights {
-  double wall_min_m = 6.0;   // building heights are drawn per building in [min, max]
+  double wall_min_m = 6.0;  // building heights are drawn per building in [min, max]
   double wall_max_m = 20.0;
-  double trivial_m = 2.0;    // fences and poles
+  double trivial_m = 2.0;  // fences and poles
   uint64_t seed = 1;
 };
 

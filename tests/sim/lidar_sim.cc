@@ -13,8 +13,8 @@ constexpr double kPi = 3.14159265358979323846;
 Status CheckRange(const char* name, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) {
     return Status::InvalidArgument(std::string("lidar params: ") + name + " = " +
-                                   std::to_string(v) + " is outside [" + std::to_string(lo) +
-                                   ", " + std::to_string(hi) + "]");
+                                   std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
+                                   std::to_string(hi) + "]");
   }
   return Status::Ok();
 }
@@ -35,7 +35,9 @@ Status LidarParams::Validate() const {
   return Status::Ok();
 }
 
-int LidarParams::columns() const { return static_cast<int>(std::lround(360.0 / horizontal_res_deg)); }
+int LidarParams::columns() const {
+  return static_cast<int>(std::lround(360.0 / horizontal_res_deg));
+}
 
 size_t LidarScan::valid_count() const {
   size_t n = 0;
@@ -71,7 +73,8 @@ LidarScan LidarSimulator::Scan(const LidarWorld& world, const geometry::Rigid3& 
   std::normal_distribution<double> noise(0.0, params_.range_sigma_m);
   const Eigen::Matrix3d R = T_world_sensor.rotation.toRotationMatrix();
   for (size_t i = 0; i < directions_.size(); ++i) {
-    const RayHit hit = world.Cast(T_world_sensor.translation, R * directions_[i], params_.max_range_m);
+    const RayHit hit =
+        world.Cast(T_world_sensor.translation, R * directions_[i], params_.max_range_m);
     const double r = hit.range_m + (params_.range_sigma_m > 0 ? noise(rng) : 0.0);
     if (hit.label == -2 || r < params_.min_range_m || r > params_.max_range_m) continue;
     scan.points[i] = (directions_[i] * r).cast<float>();

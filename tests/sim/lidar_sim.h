@@ -8,10 +8,9 @@
 #ifndef MAPD_TESTS_SIM_LIDAR_SIM_H_
 #define MAPD_TESTS_SIM_LIDAR_SIM_H_
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 #include "geometry/rigid3.h"
@@ -19,13 +18,13 @@
 namespace mapd::sim {
 
 struct LidarParams {
-  int beams = 16;                  // evenly spaced over [-vertical_half_fov, +vertical_half_fov]
+  int beams = 16;  // evenly spaced over [-vertical_half_fov, +vertical_half_fov]
   double vertical_half_fov_deg = 15.0;
   double horizontal_res_deg = 0.3;  // columns = round(360 / horizontal_res_deg)
-  double rate_hz = 10.0;           // scans per second (sets the time between route poses)
-  double min_range_m = 0.5;        // closer returns are dropped (the sensor housing)
+  double rate_hz = 10.0;            // scans per second (sets the time between route poses)
+  double min_range_m = 0.5;         // closer returns are dropped (the sensor housing)
   double max_range_m = 40.0;
-  double range_sigma_m = 0.02;     // Gaussian range noise
+  double range_sigma_m = 0.02;  // Gaussian range noise
   uint64_t seed = 1;
   // InvalidArgument naming the field when a value is out of range.
   Status Validate() const;

@@ -1,13 +1,13 @@
 // The simulated LiDAR and the plane extraction on worlds whose planes are known.
 #include "sim/lidar_sim.h"
 
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <octomap/OcTree.h>
 
 #include "sim/city_world.h"
 #include "sim/octomap_world.h"
@@ -26,9 +26,9 @@ octomap::OcTree BoxRoom() {
     for (double y = -2.025; y <= 2.03; y += kRes) {
       for (double z = -0.025; z <= 3.03; z += kRes) {
         const bool wall = std::abs(x) > 3.0 || std::abs(y) > 2.0 || z < 0.0 || z > 3.0;
-        tree.updateNode(octomap::point3d(static_cast<float>(x), static_cast<float>(y),
-                                         static_cast<float>(z)),
-                        wall);
+        tree.updateNode(
+            octomap::point3d(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)),
+            wall);
       }
     }
   }
@@ -69,8 +69,10 @@ TEST(LidarSimTest, BoxRoomGivesItsFourWalls) {
   ASSERT_TRUE(planes.ok()) << planes.status().message();
   ASSERT_EQ(planes->size(), 4u);
   // Sensor-frame offsets: distance from (0.3, -0.2) to each inner face.
-  const struct { Eigen::Vector3d normal; double offset; } expected[] = {
-      {{-1, 0, 0}, 2.7}, {{1, 0, 0}, 3.3}, {{0, -1, 0}, 2.2}, {{0, 1, 0}, 1.8}};
+  const struct {
+    Eigen::Vector3d normal;
+    double offset;
+  } expected[] = {{{-1, 0, 0}, 2.7}, {{1, 0, 0}, 3.3}, {{0, -1, 0}, 2.2}, {{0, 1, 0}, 1.8}};
   for (const auto& e : expected) {
     int found = 0;
     for (const auto& p : planes.value()) {
@@ -136,8 +138,7 @@ TEST(PlaneExtractionTest, NothingFromNothingAndMalformedScansRefused) {
 // The real maps (the shared data folder, via MAPD_SHARED_DIR); skipped without them.
 TEST(LidarSimTest, RealMapScanHasPlanes) {
   const char* shared = std::getenv("MAPD_SHARED_DIR");
-  const std::string path =
-      std::string(shared != nullptr ? shared : "") + "/data/octomap/geb079.bt";
+  const std::string path = std::string(shared != nullptr ? shared : "") + "/data/octomap/geb079.bt";
   if (shared == nullptr || !std::ifstream(path).good()) GTEST_SKIP() << "no " << path;
   octomap::OcTree tree(0.1);
   ASSERT_TRUE(tree.readBinary(path));

@@ -31,11 +31,13 @@ double EstimateFloorZ(const octomap::OcTree& tree) {
     const double size = it.getSize();
     const double weight = (size / res) * (size / res);
     for (double z = it.getZ() - 0.5 * size + 0.5 * res; z < it.getZ() + 0.5 * size; z += res) {
-      const size_t layer = std::min(layers.size() - 1, static_cast<size_t>(std::max(0.0, (z - z0) / res)));
+      const size_t layer =
+          std::min(layers.size() - 1, static_cast<size_t>(std::max(0.0, (z - z0) / res)));
       layers[layer] += static_cast<size_t>(weight);
     }
   }
-  const size_t best = static_cast<size_t>(std::max_element(layers.begin(), layers.end()) - layers.begin());
+  const size_t best =
+      static_cast<size_t>(std::max_element(layers.begin(), layers.end()) - layers.begin());
   return z0 + (static_cast<double>(best) + 0.5) * res;
 }
 
@@ -63,8 +65,8 @@ std::vector<geometry::Rigid3> SampleFreePoses(const octomap::OcTree& tree,
   std::shuffle(free.begin(), free.end(), rng);
   std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
   const float c = static_cast<float>(params.clearance_m);
-  const octomap::point3d offsets[] = {{c, 0, 0}, {-c, 0, 0}, {0, c, 0},
-                                      {0, -c, 0}, {0, 0, c}, {0, 0, -c}};
+  const octomap::point3d offsets[] = {{c, 0, 0},  {-c, 0, 0}, {0, c, 0},
+                                      {0, -c, 0}, {0, 0, c},  {0, 0, -c}};
   std::vector<octomap::point3d> accepted;
   for (const octomap::point3d& p : free) {
     if (accepted.size() >= params.count) break;
@@ -72,20 +74,23 @@ std::vector<geometry::Rigid3> SampleFreePoses(const octomap::OcTree& tree,
     for (const auto& off : offsets) clear = clear && KnownFree(tree, p + off);
     if (!clear) continue;
     octomap::point3d floor;
-    if (!tree.castRay(p, {0, 0, -1}, floor, /*ignoreUnknownCells=*/false, params.max_height_m + 1.0)) {
+    if (!tree.castRay(p, {0, 0, -1}, floor, /*ignoreUnknownCells=*/false,
+                      params.max_height_m + 1.0)) {
       continue;  // unknown below, or no floor within reach
     }
     const double height = p.z() - floor_z;
-    if (std::abs(floor.z() - floor_z) > params.floor_tolerance_m ||
-        height < params.min_height_m || height > params.max_height_m) {
+    if (std::abs(floor.z() - floor_z) > params.floor_tolerance_m || height < params.min_height_m ||
+        height > params.max_height_m) {
       continue;
     }
     int enclosing = 0;
     for (int k = 0; k < 8; ++k) {
       const double a = k * M_PI / 4.0;
       octomap::point3d end;
-      enclosing += tree.castRay(p, octomap::point3d(static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 0.0f),
-                                end, /*ignoreUnknownCells=*/true, 20.0);
+      enclosing += tree.castRay(
+          p,
+          octomap::point3d(static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 0.0f),
+          end, /*ignoreUnknownCells=*/true, 20.0);
     }
     if (enclosing < params.min_enclosing_rays) continue;
     bool spaced = true;

@@ -4,10 +4,10 @@
 #ifndef MAPD_TESTS_SIM_OCTOMAP_WORLD_H_
 #define MAPD_TESTS_SIM_OCTOMAP_WORLD_H_
 
+#include <octomap/OcTree.h>
+
 #include <cstdint>
 #include <vector>
-
-#include <octomap/OcTree.h>
 
 #include "geometry/rigid3.h"
 #include "sim/lidar_sim.h"
@@ -36,8 +36,8 @@ struct PoseSamplingParams {
   double floor_tolerance_m = 0.2;
   // Inside the building: of 8 horizontal rays at least this many hit within 20 m.
   int min_enclosing_rays = 6;
-  double clearance_m = 0.4;      // no occupied or unknown voxel this close (6 directions)
-  double min_spacing_m = 1.0;    // between accepted poses
+  double clearance_m = 0.4;    // no occupied or unknown voxel this close (6 directions)
+  double min_spacing_m = 1.0;  // between accepted poses
   uint64_t seed = 1;
 };
 

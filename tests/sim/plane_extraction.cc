@@ -1,17 +1,17 @@
 #include "sim/plane_extraction.h"
 
-#include <algorithm>
-#include <cmath>
-#include <map>
-#include <string>
-
-#include <Eigen/Eigenvalues>
 #include <pcl/ModelCoefficients.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
 #include <pcl/segmentation/sac_segmentation.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
 
 #include "geometry/convex_hull2.h"
 
@@ -86,7 +86,7 @@ bool MakePlane(const LidarScan& scan, const std::vector<int>& comp,
     return false;
   }
   Eigen::Vector3d n = eig.eigenvectors().col(0);
-  if (n.dot(mean) > 0) n = -n;  // towards the sensor at the origin
+  if (n.dot(mean) > 0) n = -n;                          // towards the sensor at the origin
   const Eigen::Vector3d u = eig.eigenvectors().col(2);  // longest in-plane direction
   const Eigen::Vector3d v = n.cross(u);
   std::vector<geometry::Vec2> in_plane;

@@ -20,14 +20,14 @@
 namespace mapd::sim {
 
 struct PlaneExtractionParams {
-  double distance_m = 0.06;       // RANSAC inlier threshold
-  int max_iterations = 300;       // RANSAC iterations per plane
-  size_t min_inliers = 120;       // per kept component (and to keep looking)
-  double min_extent_m = 1.0;      // longest in-plane side of the component
-  double min_width_m = 0.3;       // shortest in-plane side (a single scan line has none)
-  int min_beams = 3;              // distinct beams (rows) in a component
-  double max_rms_m = 0.05;        // least-squares residual of the refit
-  int max_planes = 24;            // RANSAC rounds per scan
+  double distance_m = 0.06;   // RANSAC inlier threshold
+  int max_iterations = 300;   // RANSAC iterations per plane
+  size_t min_inliers = 120;   // per kept component (and to keep looking)
+  double min_extent_m = 1.0;  // longest in-plane side of the component
+  double min_width_m = 0.3;   // shortest in-plane side (a single scan line has none)
+  int min_beams = 3;          // distinct beams (rows) in a component
+  double max_rms_m = 0.05;    // least-squares residual of the refit
+  int max_planes = 24;        // RANSAC rounds per scan
   // Neighbours on one beam are connected if closer than base + factor * range.
   double jump_base_m = 0.3;
   double jump_factor = 0.03;
@@ -37,16 +37,16 @@ struct PlaneExtractionParams {
 struct ExtractedPlane {
   geometry::PlaneFeature feature;  // normal points towards the sensor
   size_t inliers = 0;
-  int label = -2;                  // the most common world label among the inliers
+  int label = -2;  // the most common world label among the inliers
   double rms_m = 0.0;
 };
 
 struct ExtractionStats {
   size_t ransac_rounds = 0;
   // Components of min_inliers points or more that failed a gate, by gate.
-  size_t rejected_beams = 0;   // fewer than min_beams rows
-  size_t rejected_rough = 0;   // refit RMS above max_rms_m
-  size_t rejected_small = 0;   // extent or width below the minimum
+  size_t rejected_beams = 0;  // fewer than min_beams rows
+  size_t rejected_rough = 0;  // refit RMS above max_rms_m
+  size_t rejected_small = 0;  // extent or width below the minimum
 };
 
 // REQUIRES: params.Validate().ok(); InvalidArgument for a malformed scan.

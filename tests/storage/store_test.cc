@@ -105,10 +105,12 @@ TEST_F(StoreTest, EverythingSurvivesAReopen) {
   }
   Reopen();
   std::vector<StoredObservation> seen;
-  ASSERT_TRUE(store_->ForEachObservation([&](const StoredObservation& o) {
-                      seen.push_back(o);
-                      return Status::Ok();
-                    }).ok());
+  ASSERT_TRUE(store_
+                  ->ForEachObservation([&](const StoredObservation& o) {
+                    seen.push_back(o);
+                    return Status::Ok();
+                  })
+                  .ok());
   ASSERT_EQ(seen.size(), 2u);
   EXPECT_EQ(seen[1].seq, 2u);
   EXPECT_EQ(seen[0].features.lines.size(), 2u);
@@ -161,14 +163,17 @@ class StoreIdentityTest : public ::testing::Test {
 };
 
 TEST_F(StoreIdentityTest, RefusesAnotherApplicationsDatabaseAndLeavesItAlone) {
-  const std::string path = ForeignDatabase("crm.db", "CREATE TABLE customers (id INTEGER); INSERT INTO customers VALUES (7)");
+  const std::string path = ForeignDatabase(
+      "crm.db", "CREATE TABLE customers (id INTEGER); INSERT INTO customers VALUES (7)");
   auto opened = Store::Open(path, StoreOptions{});
   ASSERT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(opened.status().message().find("tables of another application (customers)"), std::string::npos)
+  EXPECT_NE(opened.status().message().find("tables of another application (customers)"),
+            std::string::npos)
       << opened.status().message();
   auto db = OpenDatabase(path, true);
   ASSERT_TRUE(db.ok());
-  StatusOr<Statement> q = Statement::Prepare(db->get(), "SELECT count(*) FROM sqlite_master WHERE type = 'table'");
+  StatusOr<Statement> q =
+      Statement::Prepare(db->get(), "SELECT count(*) FROM sqlite_master WHERE type = 'table'");
   ASSERT_TRUE(q.ok());
   ASSERT_TRUE(*q->Step());
   EXPECT_EQ(q->ColumnInt(0), 1) << "mapd added tables to a database it refused";
@@ -231,10 +236,12 @@ TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted
   auto reopened = Store::Open(dir_.File("map.db"), StoreOptions{});
   ASSERT_TRUE(reopened.ok());
   uint64_t kept = 0;
-  ASSERT_TRUE((*reopened)->ForEachObservation([&](const StoredObservation&) {
-                ++kept;
-                return Status::Ok();
-              }).ok());
+  ASSERT_TRUE((*reopened)
+                  ->ForEachObservation([&](const StoredObservation&) {
+                    ++kept;
+                    return Status::Ok();
+                  })
+                  .ok());
   EXPECT_EQ(kept, committed);
   EXPECT_TRUE((*reopened)->ProbeWrite().ok());
 }

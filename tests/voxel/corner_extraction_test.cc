@@ -1,10 +1,10 @@
 #include "voxel/corner_extraction.h"
 
-#include <cmath>
-#include <vector>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <vector>
 
 #include "voxel/voxel_grid.h"
 
@@ -33,8 +33,8 @@ Scene AxisAlignedBox(const VoxelKey& size, const VoxelKey& origin) {
   for (int x = 0; x < size.x(); ++x) {
     for (int y = 0; y < size.y(); ++y) {
       for (int z = 0; z < size.z(); ++z) {
-        const bool shell = x == 0 || y == 0 || z == 0 || x == size.x() - 1 ||
-                           y == size.y() - 1 || z == size.z() - 1;
+        const bool shell = x == 0 || y == 0 || z == 0 || x == size.x() - 1 || y == size.y() - 1 ||
+                           z == size.z() - 1;
         if (shell) scene.occupied.push_back(origin + VoxelKey(x, y, z));
       }
     }
@@ -42,7 +42,8 @@ Scene AxisAlignedBox(const VoxelKey& size, const VoxelKey& origin) {
   for (int c = 0; c < 8; ++c) {
     const Eigen::Vector3d lo = origin.cast<double>() + Eigen::Vector3d::Constant(0.5);
     const Eigen::Vector3d hi = (origin + size).cast<double>() - Eigen::Vector3d::Constant(0.5);
-    scene.corners.emplace_back(((c & 1) ? hi.x() : lo.x()) * kRes, ((c & 2) ? hi.y() : lo.y()) * kRes,
+    scene.corners.emplace_back(((c & 1) ? hi.x() : lo.x()) * kRes,
+                               ((c & 2) ? hi.y() : lo.y()) * kRes,
                                ((c & 4) ? hi.z() : lo.z()) * kRes);
   }
   return scene;
@@ -102,15 +103,16 @@ Scene LRoom() {
   const double xs[] = {-0.5, a + 0.5, a + 0.5, b + 0.5, b + 0.5, -0.5};
   const double ys[] = {-0.5, -0.5, b + 0.5, b + 0.5, a + 0.5, a + 0.5};
   for (int i = 0; i < 6; ++i) {
-    for (double z : {-0.5, h + 0.5}) scene.corners.emplace_back(xs[i] * kRes, ys[i] * kRes, z * kRes);
+    for (double z : {-0.5, h + 0.5})
+      scene.corners.emplace_back(xs[i] * kRes, ys[i] * kRes, z * kRes);
   }
   return scene;
 }
 
 struct Score {
-  int found = 0;         // true corners with a detected corner within 1 voxel
+  int found = 0;          // true corners with a detected corner within 1 voxel
   int false_corners = 0;  // detected corners not within 1.5 voxels of a true one
-  double max_error = 0;  // voxels, over the found corners
+  double max_error = 0;   // voxels, over the found corners
 };
 
 Score Evaluate(const CornerSet& detected, const std::vector<Eigen::Vector3d>& truth) {
@@ -158,7 +160,8 @@ TEST(CornerExtractionTest, BoxNormalsAreUnitPairwiseOrthogonalAndOutward) {
       EXPECT_NEAR(corner.normals[i].norm(), 1.0, 1e-9);
       // No free space known: normals point away from the other faces (outward here).
       EXPECT_GT(corner.normals[i].dot(corner.position - centre), 0.0);
-      for (int j = i + 1; j < 3; ++j) EXPECT_LT(std::abs(corner.normals[i].dot(corner.normals[j])), 0.05);
+      for (int j = i + 1; j < 3; ++j)
+        EXPECT_LT(std::abs(corner.normals[i].dot(corner.normals[j])), 0.05);
     }
     EXPECT_GT(corner.support, 0);
   }
@@ -172,7 +175,8 @@ TEST(CornerExtractionTest, FindsTheCornersOfRotatedBoxes) {
       Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix()};
   const Eigen::Vector3d half_extents[] = {Eigen::Vector3d(12, 9, 7), Eigen::Vector3d(15, 10, 8)};
   for (int i = 0; i < 2; ++i) {
-    const Scene box = RotatedBox(rotations[i], Eigen::Vector3d(3.2, -1.7, 5.4), half_extents[i], 0.6);
+    const Scene box =
+        RotatedBox(rotations[i], Eigen::Vector3d(3.2, -1.7, 5.4), half_extents[i], 0.6);
     const CornerExtractionResult result = Extract(box);
     const Score score = Evaluate(result.corners, box.corners);
     EXPECT_EQ(score.found, 8) << i;

@@ -1,11 +1,11 @@
 #include "voxel/icp.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
 
 #include "voxel/octree_reader.h"
 #include "voxel/support/corner_scene.h"
@@ -49,7 +49,8 @@ TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
   const Eigen::Isometry3d T_a_b = Pose(23, 6, -4, Eigen::Vector3d(0.7, -1.2, 0.3));
   const auto a = Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(-0.5, 5.6),
                                                   Eigen::Isometry3d::Identity(), kRes));
-  const auto b = Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(2.2, 9.5), T_a_b, kRes));
+  const auto b =
+      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(2.2, 9.5), T_a_b, kRes));
   const Eigen::Isometry3d start =
       Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b;  // 1 deg, ~1 voxel at the origin
   IcpParams params;

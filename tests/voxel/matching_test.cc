@@ -1,19 +1,18 @@
 // Corner matching (docs/algorithms.md B.4): generated corner sets with known
 // transforms, and TEASER++'s correspondence benchmarks with outliers.
-#include "voxel/corner_matching.h"
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdlib>
-#include <map>
-#include <random>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
 #include "eval/backtracking_mcs.h"
+#include "voxel/corner_matching.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/ply_reader.h"
 
@@ -85,7 +84,8 @@ void PrintTo(const SceneCase& c, std::ostream* out) {
 std::string SceneCaseName(const ::testing::TestParamInfo<SceneCase>& param) {
   const SceneCase& c = param.param;
   return "seed" + std::to_string(c.seed) + "_corners" + std::to_string(c.num_a) + "_manhattan" +
-         std::to_string(static_cast<int>(c.manhattan_fraction * 100)) + (c.use_normals ? "" : "_no_normals");
+         std::to_string(static_cast<int>(c.manhattan_fraction * 100)) +
+         (c.use_normals ? "" : "_no_normals");
 }
 
 class GeneratedSceneTest : public ::testing::TestWithParam<SceneCase> {};
@@ -179,10 +179,13 @@ TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
   const StatusOr<CornerMatchResult> second = MatchCorners(scene.a, scene.b, params);
   ASSERT_TRUE(second.ok()) << second.status().ToString();
   for (const CornerPair& p : second->correspondences) {
-    EXPECT_EQ(std::count(params.excluded_pairs.begin(), params.excluded_pairs.end(), std::make_pair(p.a, p.b)), 0)
+    EXPECT_EQ(std::count(params.excluded_pairs.begin(), params.excluded_pairs.end(),
+                         std::make_pair(p.a, p.b)),
+              0)
         << p.a << "," << p.b;
   }
-  EXPECT_GE(second->matched_count, first->matched_count - static_cast<int>(params.excluded_pairs.size()));
+  EXPECT_GE(second->matched_count,
+            first->matched_count - static_cast<int>(params.excluded_pairs.size()));
   EXPECT_LT(second->matched_count, first->matched_count);
 }
 
@@ -260,7 +263,8 @@ TEST(CornerMatchingTest, TiesGoToTheBestScore) {
   for (int i = 0; i < 8; ++i) {
     Corner c;
     c.position = {u(rng), u(rng), u(rng)};
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(u(rng), Eigen::Vector3d(1, 2, u(rng)).normalized()).matrix();
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(u(rng), Eigen::Vector3d(1, 2, u(rng)).normalized()).matrix();
     c.normals = {R.col(0), R.col(1), R.col(2)};
     Corner d = c;
     d.position = half_turn * c.position;
@@ -273,7 +277,9 @@ TEST(CornerMatchingTest, TiesGoToTheBestScore) {
     CornerMatchingParams params;
     params.search = method.search;
     for (const Eigen::Isometry3d& wanted : {Eigen::Isometry3d::Identity(), half_turn}) {
-      const auto score = [&](const Eigen::Isometry3d& T) { return -(T.matrix() - wanted.matrix()).norm(); };
+      const auto score = [&](const Eigen::Isometry3d& T) {
+        return -(T.matrix() - wanted.matrix()).norm();
+      };
       const StatusOr<CornerMatchResult> r = MatchCorners(a, a, params, score);
       ASSERT_TRUE(r.ok());
       EXPECT_EQ(r->matched_count, 16);

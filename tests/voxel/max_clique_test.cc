@@ -1,9 +1,9 @@
 #include "voxel/max_clique.h"
 
+#include <gtest/gtest.h>
+
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace mapd::voxel {
 namespace {

@@ -1,17 +1,17 @@
 #include "voxel/merge.h"
-#include "voxel/merge_graph.h"
-#include "voxel/merge_overlap.h"
-#include "voxel/voxel_grid.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
-
+#include "voxel/merge_graph.h"
+#include "voxel/merge_overlap.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/voxel_scene.h"
+#include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
 namespace {
@@ -64,11 +64,13 @@ class MergeKnownTransformTest : public ::testing::TestWithParam<PoseCase> {};
 
 TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
   const PoseCase& p = GetParam();
-  const Eigen::Isometry3d T_a_b = Pose(p.yaw_deg, p.pitch_deg, p.roll_deg, Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
+  const Eigen::Isometry3d T_a_b =
+      Pose(p.yaw_deg, p.pitch_deg, p.roll_deg, Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
   const Pair pair = MakePair(T_a_b);
   std::vector<std::pair<std::string, double>> progress;
-  auto outcome = MergeSubmaps({{11, pair.a}, {12, pair.b}}, MergeParams{},
-                              [&](const std::string& stage, double f) { progress.emplace_back(stage, f); });
+  auto outcome =
+      MergeSubmaps({{11, pair.a}, {12, pair.b}}, MergeParams{},
+                   [&](const std::string& stage, double f) { progress.emplace_back(stage, f); });
   ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
   ASSERT_EQ(outcome->alignments.size(), 2u);
   EXPECT_EQ(outcome->alignments[0].id, 11u);
@@ -83,21 +85,25 @@ TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
   ExpectFusedMapCoversBoth(*outcome, pair.a);
 
   ASSERT_FALSE(progress.empty());
-  for (std::size_t i = 1; i < progress.size(); ++i) EXPECT_GE(progress[i].second, progress[i - 1].second);
+  for (std::size_t i = 1; i < progress.size(); ++i)
+    EXPECT_GE(progress[i].second, progress[i - 1].second);
   EXPECT_EQ(progress.back().first, "fusion");
   EXPECT_EQ(progress.back().second, 1.0);
   EXPECT_GT(outcome->times.total_s, 0.0);
 }
 
-std::string PoseCaseName(const ::testing::TestParamInfo<PoseCase>& param) { return param.param.name; }
+std::string PoseCaseName(const ::testing::TestParamInfo<PoseCase>& param) {
+  return param.param.name;
+}
 
 // Poses (yaw, pitch, roll up to 10 deg) where corner matching finds the true
 // clique on this scene.
-INSTANTIATE_TEST_SUITE_P(Poses, MergeKnownTransformTest,
-                         ::testing::Values(PoseCase{"identity", 0, 0, 0, 0, 0, 0},
-                                           PoseCase{"yaw37_pitch4_rollm6", 37, 4, -6, 1.3, -2.1, 0.4},
-                                           PoseCase{"yawm128_pitchm10_roll8", -128, -10, 8, -4.0, 3.3, -0.7}),
-                         PoseCaseName);
+INSTANTIATE_TEST_SUITE_P(
+    Poses, MergeKnownTransformTest,
+    ::testing::Values(PoseCase{"identity", 0, 0, 0, 0, 0, 0},
+                      PoseCase{"yaw37_pitch4_rollm6", 37, 4, -6, 1.3, -2.1, 0.4},
+                      PoseCase{"yawm128_pitchm10_roll8", -128, -10, 8, -4.0, 3.3, -0.7}),
+    PoseCaseName);
 
 // The room is nearly symmetric under a half turn, and for some poses the
 // largest consistent corner set is a wrong one (the room flipped, walls on
@@ -105,19 +111,22 @@ INSTANTIATE_TEST_SUITE_P(Poses, MergeKnownTransformTest,
 // refused: a wrong merge is worse than none (docs/algorithms.md B.5).
 TEST(MergeTest, NeverAcceptsAWrongTransform) {
   int right = 0, refused = 0;
-  for (const Eigen::Isometry3d& T_a_b :
-       {Pose(172, 9, 10, Eigen::Vector3d(12.0, 0.5, 2.0)), Pose(172, 9, 10, Eigen::Vector3d(-4.0, 3.3, -0.7)),
-        Pose(64, 3, -5, Eigen::Vector3d(2.0, 1.0, 0.3)), Pose(-97, -7, 2, Eigen::Vector3d(-1.5, 6.0, -0.2)),
-        Pose(90, 0, 0, Eigen::Vector3d(0.3, 0.2, 0.1))}) {
+  for (const Eigen::Isometry3d& T_a_b : {Pose(172, 9, 10, Eigen::Vector3d(12.0, 0.5, 2.0)),
+                                         Pose(172, 9, 10, Eigen::Vector3d(-4.0, 3.3, -0.7)),
+                                         Pose(64, 3, -5, Eigen::Vector3d(2.0, 1.0, 0.3)),
+                                         Pose(-97, -7, 2, Eigen::Vector3d(-1.5, 6.0, -0.2)),
+                                         Pose(90, 0, 0, Eigen::Vector3d(0.3, 0.2, 0.1))}) {
     const Pair pair = MakePair(T_a_b);
     auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, MergeParams{});
     if (!outcome.ok()) {
-      EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition) << outcome.status().ToString();
+      EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition)
+          << outcome.status().ToString();
       ++refused;
       continue;
     }
     EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_a_b), 1.0);
-    EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_a_b), 2 * kRes);
+    EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_a_b),
+              2 * kRes);
     ++right;
   }
   std::printf("[ info ] NeverAcceptsAWrongTransform: %d right, %d refused\n", right, refused);
@@ -130,7 +139,8 @@ TEST(MergeTest, NeverAcceptsAWrongTransform) {
 TEST(MergeTest, PlacesThreeSubmapsInTheFirstFrame) {
   const Eigen::Isometry3d T_scene_b = Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4));
   const Eigen::Isometry3d T_scene_c = Pose(-128, -10, 8, Eigen::Vector3d(-4.0, 3.3, -0.7));
-  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes);
+  const std::string a =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes);
   const std::string b = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_b, kRes);
   const std::string c = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_c, kRes);
   auto outcome = MergeSubmaps({{1, a}, {2, b}, {3, c}}, MergeParams{});
@@ -138,9 +148,11 @@ TEST(MergeTest, PlacesThreeSubmapsInTheFirstFrame) {
   ASSERT_EQ(outcome->alignments.size(), 3u);
   EXPECT_EQ(outcome->pairs.size(), 3u);
   EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_scene_b), 1.0);
-  EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_scene_b), 2 * kRes);
+  EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_scene_b),
+            2 * kRes);
   EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[2].T_reference_submap, T_scene_c), 1.0);
-  EXPECT_LT(testing::TranslationError(outcome->alignments[2].T_reference_submap, T_scene_c), 2 * kRes);
+  EXPECT_LT(testing::TranslationError(outcome->alignments[2].T_reference_submap, T_scene_c),
+            2 * kRes);
   ExpectFusedMapCoversBoth(*outcome, a);
 }
 
@@ -163,10 +175,11 @@ TEST(MergeGraphTest, PlacesAChainAndLeavesTheUnconnectedOut) {
 }
 
 TEST(MergeTest, RefusesAMapWithoutCorners) {
-  const std::string room = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
-  const std::string wall = RasteriseSubmap(testing::FlatWall(),
-                                           Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(6, 1, 3)),
-                                           Eigen::Isometry3d::Identity(), kRes);
+  const std::string room =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string wall = RasteriseSubmap(
+      testing::FlatWall(), Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(6, 1, 3)),
+      Eigen::Isometry3d::Identity(), kRes);
   auto outcome = MergeSubmaps({{1, room}, {7, wall}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
@@ -174,14 +187,17 @@ TEST(MergeTest, RefusesAMapWithoutCorners) {
 }
 
 TEST(MergeTest, RefusesMapsThatDoNotOverlap) {
-  const std::string room = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string room =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
   const std::string other =
-      RasteriseSubmap(testing::OtherRoom(), Eigen::AlignedBox3d(Eigen::Vector3d(19, 19, -1), Eigen::Vector3d(28, 27, 4)),
+      RasteriseSubmap(testing::OtherRoom(),
+                      Eigen::AlignedBox3d(Eigen::Vector3d(19, 19, -1), Eigen::Vector3d(28, 27, 4)),
                       Pose(30, 0, 0, Eigen::Vector3d(-20, -10, 0)), kRes);
   auto outcome = MergeSubmaps({{1, room}, {2, other}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(outcome.status().message().find("submap 1 and submap 2 not merged: "), std::string::npos)
+  EXPECT_NE(outcome.status().message().find("submap 1 and submap 2 not merged: "),
+            std::string::npos)
       << outcome.status().message();
 }
 
@@ -192,7 +208,8 @@ TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
   auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(outcome.status().message().find("corners found in submap 1, need 1000"), std::string::npos)
+  EXPECT_NE(outcome.status().message().find("corners found in submap 1, need 1000"),
+            std::string::npos)
       << outcome.status().message();
 
   params = MergeParams{};
@@ -211,23 +228,29 @@ TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
   outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(outcome.status().message().find("ICP did not converge in 1 iterations"), std::string::npos)
+  EXPECT_NE(outcome.status().message().find("ICP did not converge in 1 iterations"),
+            std::string::npos)
       << outcome.status().message();
 }
 
 TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
-  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
-  const std::string b = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), Eigen::Isometry3d::Identity(), 0.2);
+  const std::string a =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string b =
+      RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), Eigen::Isometry3d::Identity(), 0.2);
   auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_EQ(outcome.status().message(),
-            "submap 1 has resolution 0.1 m, submap 2 has 0.2 m; resolution_policy kRefuse does not resample");
+            "submap 1 has resolution 0.1 m, submap 2 has 0.2 m; resolution_policy kRefuse does not "
+            "resample");
 }
 
 TEST(MergeTest, RefusesMalformedInputAndFewerThanTwoMaps) {
-  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
-  auto outcome = MergeSubmaps({{1, a}, {9, "# Octomap OcTree binary file\nid OcTree\nsize 3\n"}}, MergeParams{});
+  const std::string a =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  auto outcome = MergeSubmaps({{1, a}, {9, "# Octomap OcTree binary file\nid OcTree\nsize 3\n"}},
+                              MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(outcome.status().message().rfind("submap 9: ", 0), 0u) << outcome.status().message();
@@ -263,7 +286,8 @@ TEST(MergeTest, ValidateNamesTheBadField) {
   EXPECT_NE(params.Validate().message().find("icp_screen_residual_factor"), std::string::npos);
   params = MergeParams{};
   params.matching.max_candidate_pairs = -5;
-  EXPECT_NE(params.Validate().message().find("max_candidate_pairs must be >= 0"), std::string::npos);
+  EXPECT_NE(params.Validate().message().find("max_candidate_pairs must be >= 0"),
+            std::string::npos);
   EXPECT_TRUE(MergeParams{}.Validate().ok());
 }
 
@@ -286,10 +310,10 @@ TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
     for (int y = 1; y <= 3; ++y) a_free.emplace_back(x, y, 0);
   }
   const std::vector<VoxelKey> b_occupied = {
-      {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0},  // on A's wall
-      {5, 1, 0},                                   // next to it: one voxel of tolerance
-      {0, 3, 0}, {1, 3, 0},                        // in A's free space
-      {50, 0, 0}, {51, 0, 0}, {52, 0, 0}};         // in A's unknown space: not counted
+      {0, 0, 0},  {1, 0, 0},  {2, 0, 0}, {3, 0, 0},  // on A's wall
+      {5, 1, 0},                                     // next to it: one voxel of tolerance
+      {0, 3, 0},  {1, 3, 0},                         // in A's free space
+      {50, 0, 0}, {51, 0, 0}, {52, 0, 0}};           // in A's unknown space: not counted
   auto a = VoxelGrid::FromKeys(kRes, a_occupied, a_free);
   auto b = VoxelGrid::FromKeys(kRes, b_occupied);
   ASSERT_TRUE(a.ok() && b.ok());
@@ -304,7 +328,8 @@ TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
 }
 
 TEST(InspectSubmapTest, SummarisesAValidMap) {
-  const std::string a = RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string a =
+      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
   auto summary = InspectSubmap(a);
   ASSERT_TRUE(summary.ok()) << summary.status().ToString();
   EXPECT_EQ(summary->resolution, kRes);

@@ -1,11 +1,11 @@
 #include "voxel/occupancy_fusion.h"
 
-#include <string>
-#include <vector>
-
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
 
 #include "voxel/octree_reader.h"
 
@@ -18,14 +18,15 @@ enum class S { kUnknown, kFree, kOccupied };
 
 // Voxel (x, 0, 0) of a tree at kRes, keys as in VoxelGrid (OctoMap's - 32768).
 octomap::OcTreeKey Key(int x, int y = 0, int z = 0) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(x + 32768), static_cast<octomap::key_type>(y + 32768),
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(x + 32768),
+                            static_cast<octomap::key_type>(y + 32768),
                             static_cast<octomap::key_type>(z + 32768));
 }
 
 void Set(octomap::OcTree* tree, int x, S state, int y = 0, int z = 0) {
   if (state == S::kUnknown) return;
-  tree->setNodeValue(Key(x, y, z),
-                     state == S::kOccupied ? tree->getClampingThresMaxLog() : tree->getClampingThresMinLog());
+  tree->setNodeValue(Key(x, y, z), state == S::kOccupied ? tree->getClampingThresMaxLog()
+                                                         : tree->getClampingThresMinLog());
 }
 
 S StateOf(const octomap::OcTree& tree, int x, int y = 0, int z = 0) {
@@ -53,9 +54,9 @@ Row MakeRow() {
   row.B(5, S::kFree);
   row.A(6, S::kFree);  // free + free -> free
   row.B(6, S::kFree);
-  row.A(7, S::kFree);      // free + unknown (inside B's box) -> unknown
-  row.B(8, S::kFree);      // unknown + free (inside A's box) -> unknown
-  row.B(9, S::kOccupied);  // unknown + occupied -> occupied
+  row.A(7, S::kFree);       // free + unknown (inside B's box) -> unknown
+  row.B(8, S::kFree);       // unknown + free (inside A's box) -> unknown
+  row.B(9, S::kOccupied);   // unknown + occupied -> occupied
   row.A(10, S::kOccupied);  // A's box ends here
   row.B(12, S::kFree);      // outside the overlap: B's own cell
   row.B(14, S::kOccupied);  // B's box ends here
@@ -158,7 +159,8 @@ TEST(OccupancyFusionTest, RotatedSubmapLandsOnTheRightVoxels) {
 
 TEST(OccupancyFusionTest, ResamplesACoarserMapToTheFinerGrid) {
   octomap::OcTree coarse(2 * kRes);
-  coarse.setNodeValue(coarse.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f)), coarse.getClampingThresMaxLog());
+  coarse.setNodeValue(coarse.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f)),
+                      coarse.getClampingThresMaxLog());
   FusionParams params;
   auto merged = StartMergedMap(coarse, kRes, params);
   ASSERT_TRUE(merged.ok());

@@ -1,5 +1,9 @@
 #include "voxel/octree_reader.h"
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -7,10 +11,6 @@
 #include <limits>
 #include <sstream>
 #include <string>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-#include <octomap/OcTree.h>
 
 #include "voxel/support/hostile_bt.h"
 #include "voxel/voxel_grid.h"
@@ -115,8 +115,8 @@ TEST(OctreeReaderTest, RefusesTruncatedInput) {
   octomap::OcTree tree = MakeTree();
   for (const std::string& bytes : {WriteBt(tree), WriteOt(tree)}) {
     const std::size_t data = ValidateOctree(bytes)->data_offset;
-    for (std::size_t keep : {data - 3, data, data + 1, data + 2, data + 7, (data + bytes.size()) / 2,
-                             bytes.size() - 1}) {
+    for (std::size_t keep : {data - 3, data, data + 1, data + 2, data + 7,
+                             (data + bytes.size()) / 2, bytes.size() - 1}) {
       const Status status = ErrorOf(bytes.substr(0, keep));
       EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << keep;
       if (keep >= data) {
@@ -155,8 +155,8 @@ TEST(OctreeReaderTest, AcceptsSixteenLevelsRefusesSeventeen) {
 
   // The same in the .ot format: 17 nodes on a chain are fine, 18 are not.
   auto ot_chain = [](int nodes) {
-    std::string bytes = "# Octomap OcTree file\nid OcTree\nsize " + std::to_string(nodes) +
-                        "\nres 0.1\ndata\n";
+    std::string bytes =
+        "# Octomap OcTree file\nid OcTree\nsize " + std::to_string(nodes) + "\nres 0.1\ndata\n";
     const float log_odds = 1.0f;
     for (int i = 0; i < nodes; ++i) {
       bytes.append(reinterpret_cast<const char*>(&log_odds), sizeof(log_odds));
@@ -256,7 +256,8 @@ void ExpectWalkMatchesTree(const std::string& bytes, const std::string& what) {
   EXPECT_EQ(walk->occupied_voxels, grid->num_occupied()) << what;
   uint64_t free_voxels = 0;
   for (auto it = (*tree)->begin_leafs(); it != (*tree)->end_leafs(); ++it) {
-    if (!(*tree)->isNodeOccupied(*it)) free_voxels += uint64_t{1} << (3 * (16 - static_cast<int>(it.getDepth())));
+    if (!(*tree)->isNodeOccupied(*it))
+      free_voxels += uint64_t{1} << (3 * (16 - static_cast<int>(it.getDepth())));
   }
   EXPECT_EQ(walk->free_voxels, free_voxels) << what;
   if (!grid->empty()) {

@@ -1,8 +1,8 @@
 #include "voxel/rigid_fit.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace mapd::voxel {
 namespace {

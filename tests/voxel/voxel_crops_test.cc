@@ -3,9 +3,9 @@
 // voxels back onto the map, determinism.
 #include "bench/voxel_crops.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
@@ -22,7 +22,8 @@ voxel::VoxelGrid Corridor() {
     for (int y = 0; y < ny; ++y) {
       for (int z = 0; z < nz; ++z) {
         const bool wall = x == 0 || x == nx - 1 || y == 0 || y == ny - 1 || z == 0 || z == nz - 1;
-        const bool pillar = (x % 37 == 5 && y >= 3 && y <= 5) || (x % 53 == 9 && y >= 20 && y <= 25);
+        const bool pillar =
+            (x % 37 == 5 && y >= 3 && y <= 5) || (x % 53 == 9 && y >= 20 && y <= 25);
         (wall || pillar ? occupied : free).emplace_back(x, y, z);
       }
     }

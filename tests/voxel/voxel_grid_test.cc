@@ -9,13 +9,16 @@ namespace {
 TEST(VoxelGridTest, MatchesOctoMapOccupiedFreeAndUnknown) {
   octomap::OcTree tree(0.1);
   for (int x = -10; x < 10; ++x)
-    for (int y = -5; y < 5; ++y) tree.updateNode(octomap::point3d(0.1f * x + 0.05f, 0.1f * y + 0.05f, 0.35f), true);
+    for (int y = -5; y < 5; ++y)
+      tree.updateNode(octomap::point3d(0.1f * x + 0.05f, 0.1f * y + 0.05f, 0.35f), true);
   // A free 8^3 block that prunes to one coarse leaf.
   for (int x = 0; x < 8; ++x)
     for (int y = 0; y < 8; ++y)
       for (int z = 0; z < 8; ++z)
         for (int i = 0; i < 3; ++i)
-          tree.updateNode(octomap::point3d(0.1f * x + 0.05f, 0.1f * y + 0.05f, -0.8f + 0.1f * z + 0.05f), false);
+          tree.updateNode(
+              octomap::point3d(0.1f * x + 0.05f, 0.1f * y + 0.05f, -0.8f + 0.1f * z + 0.05f),
+              false);
   tree.prune();
   StatusOr<VoxelGrid> grid = VoxelGrid::FromOcTree(tree);
   ASSERT_TRUE(grid.ok()) << grid.status().ToString();
@@ -32,7 +35,7 @@ TEST(VoxelGridTest, MatchesOctoMapOccupiedFreeAndUnknown) {
         const Eigen::Vector3d c = grid->KeyToCentre(key);
         EXPECT_EQ(grid->PointToKey(c), key);
         const octomap::OcTreeNode* node = tree.search(c.x(), c.y(), c.z());
-        const VoxelState expected = node == nullptr ? VoxelState::kUnknown
+        const VoxelState expected = node == nullptr             ? VoxelState::kUnknown
                                     : tree.isNodeOccupied(node) ? VoxelState::kOccupied
                                                                 : VoxelState::kFree;
         ASSERT_EQ(grid->State(key), expected) << key.transpose();
@@ -46,7 +49,9 @@ TEST(VoxelGridTest, ExpandsCoarseOccupiedLeavesAndRefusesHugeOnes) {
   octomap::OcTree tree(0.5);
   for (int x = 0; x < 4; ++x)
     for (int y = 0; y < 4; ++y)
-      for (int z = 0; z < 4; ++z) tree.updateNode(octomap::point3d(0.5f * x + 0.25f, 0.5f * y + 0.25f, 0.5f * z + 0.25f), true);
+      for (int z = 0; z < 4; ++z)
+        tree.updateNode(octomap::point3d(0.5f * x + 0.25f, 0.5f * y + 0.25f, 0.5f * z + 0.25f),
+                        true);
   tree.toMaxLikelihood();
   tree.prune();
   ASSERT_LT(tree.getNumLeafNodes(), 64u);  // pruned to a coarse leaf

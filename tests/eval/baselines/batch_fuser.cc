@@ -39,7 +39,8 @@ Status BatchFuser::Add(ObservationId observation, RobotId robot,
         s.b.cwiseAbs().maxCoeff() > kMaxAbsCoordinateM) {
       return Status::InvalidArgument(name + " is not finite or beyond 1e6 m");
     }
-    if (!(s.length() >= kMinSegmentLengthM)) return Status::InvalidArgument(name + " has zero length");
+    if (!(s.length() >= kMinSegmentLengthM))
+      return Status::InvalidArgument(name + " has zero length");
     if (feature_ids_.count(features[i].id) != 0 || !batch.insert(features[i].id).second) {
       return Status::InvalidArgument(name + ": feature id " + std::to_string(features[i].id) +
                                      " is not unique");

@@ -27,7 +27,7 @@ struct PostParams {
   // observations. The competing methods do not count appearances (the paper
   // names that as one of their weaknesses), so the default 1 publishes all.
   uint32_t min_support = 1;
-  double snap_m = 0.5;                            // as FusionParams::snap_m
+  double snap_m = 0.5;                                 // as FusionParams::snap_m
   CornerMode corner_mode = CornerMode::kIntersection;  // as FusionParams::corner_mode
 };
 

@@ -32,8 +32,8 @@ struct DensityFuserParams {
 };
 
 // Step 2's neighbour test, symmetric in (f, g).
-bool DensityNeighbours(const geometry::Segment2& f, const geometry::Segment2& g,
-                       double lateral_m, double min_overlap_m);
+bool DensityNeighbours(const geometry::Segment2& f, const geometry::Segment2& g, double lateral_m,
+                       double min_overlap_m);
 
 class DensityFuser : public BatchFuser {
  public:

@@ -26,8 +26,8 @@ struct OrientationShiftParams {
 };
 
 struct Modes {
-  std::vector<double> mode;       // one value per mode (radians, or unused for 2D)
-  std::vector<uint32_t> label;    // per input: index into mode
+  std::vector<double> mode;     // one value per mode (radians, or unused for 2D)
+  std::vector<uint32_t> label;  // per input: index into mode
 };
 
 // Mean shift on orientations theta in [0, pi) (wrapped, period pi), weighted.

@@ -36,7 +36,6 @@ class MeanShiftFuser : public BatchFuser {
   MeanShiftFuserParams params_;
 };
 
-
 }  // namespace mapd::fusion::baselines
 
 #endif  // MAPD_EVAL_BASELINES_MEAN_SHIFT_FUSER_H_

@@ -18,7 +18,8 @@ namespace mapd::testing {
 class AuthFixture : public ServerFixture {
  protected:
   // A token written straight into the database (the server may run).
-  std::string OfflineToken(service::Role role, const std::string& name, const std::string& robot = "") {
+  std::string OfflineToken(service::Role role, const std::string& name,
+                           const std::string& robot = "") {
     auto store = storage::Store::Open(config_.db_path, storage::StoreOptions{});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (!store.ok()) return "";
@@ -58,7 +59,8 @@ class AuthFixture : public ServerFixture {
   }
 
   // One Ingest stream with `token`: every ack, and the stream's status in *status.
-  std::vector<pb::IngestAck> StreamAs(const std::string& token, const std::vector<pb::ObservationBatch>& batches,
+  std::vector<pb::IngestAck> StreamAs(const std::string& token,
+                                      const std::vector<pb::ObservationBatch>& batches,
                                       grpc::Status* status) {
     auto ctx = As(token);
     auto stream = stub_->Ingest(ctx.get());

@@ -2,10 +2,10 @@
 #ifndef MAPD_TESTS_STORAGE_SUPPORT_STORE_FIXTURE_H_
 #define MAPD_TESTS_STORAGE_SUPPORT_STORE_FIXTURE_H_
 
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <utility>
-
-#include <gtest/gtest.h>
 
 #include "common/temp_dir.h"
 #include "storage/store.h"

@@ -76,7 +76,8 @@ CornerScene MakeCornerScene(const CornerSceneOptions& o) {
     const voxel::Corner& ca = scene.a[k];
     voxel::Corner& cb = scene.b[slots[k]];
     cb.position = T_b_a * ca.position + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-    for (int j = 0; j < 3; ++j) cb.normals[j] = Tilt(T_b_a.linear() * ca.normals[j], tilt(rng), rng);
+    for (int j = 0; j < 3; ++j)
+      cb.normals[j] = Tilt(T_b_a.linear() * ca.normals[j], tilt(rng), rng);
     cb.support = 10;
     scene.truth.push_back({k, slots[k]});
   }

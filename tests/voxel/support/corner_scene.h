@@ -5,10 +5,9 @@
 #ifndef MAPD_TESTS_VOXEL_SUPPORT_CORNER_SCENE_H_
 #define MAPD_TESTS_VOXEL_SUPPORT_CORNER_SCENE_H_
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "voxel/corner.h"
 #include "voxel/corner_matching.h"
@@ -17,12 +16,12 @@ namespace mapd::testing {
 
 struct CornerSceneOptions {
   int num_a = 60;
-  double box_m = 30.0;             // corners uniform in [0, box]^3
-  double overlap = 0.5;            // fraction of A's corners also in B
-  double outlier_fraction = 0.5;   // fraction of B's corners that are not in A
-  double noise_m = 0.015;          // position noise (std dev per axis) in B
+  double box_m = 30.0;                           // corners uniform in [0, box]^3
+  double overlap = 0.5;                          // fraction of A's corners also in B
+  double outlier_fraction = 0.5;                 // fraction of B's corners that are not in A
+  double noise_m = 0.015;                        // position noise (std dev per axis) in B
   double normal_noise_rad = 1.0 * M_PI / 180.0;  // tilt of B's normals
-  double manhattan_fraction = 0.5;  // corners with three orthogonal planes
+  double manhattan_fraction = 0.5;               // corners with three orthogonal planes
   uint32_t seed = 1;
 };
 

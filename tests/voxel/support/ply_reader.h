@@ -4,10 +4,9 @@
 #ifndef MAPD_TESTS_VOXEL_SUPPORT_PLY_READER_H_
 #define MAPD_TESTS_VOXEL_SUPPORT_PLY_READER_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/status.h"
 

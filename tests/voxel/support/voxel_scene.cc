@@ -1,10 +1,10 @@
 #include "voxel/support/voxel_scene.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-
-#include <octomap/OcTree.h>
 
 namespace mapd::testing {
 namespace {
@@ -44,13 +44,12 @@ SceneState StateAt(const VoxelScene& scene, const Eigen::Vector3d& p, double res
 VoxelScene FurnishedRoom() {
   VoxelScene scene;
   scene.boxes = {
-      Box(0.0, 0.0, 0.0, 9.0, 4.5, 2.5, true),
-      Box(0.6, 0.5, 0.0, 1.8, 1.3, 0.9),    // table
-      Box(2.4, 3.1, 0.0, 3.1, 4.5, 1.9),    // cupboard against the wall
-      Box(3.7, 1.0, 0.0, 4.6, 1.6, 0.7),    // low chest
-      Box(5.2, 2.3, 0.0, 6.4, 3.4, 1.2),    // desk
-      Box(7.0, 0.0, 0.0, 8.1, 0.9, 1.5),    // shelf against the wall
-      Box(7.6, 3.0, 0.0, 8.4, 3.8, 0.6),    // box
+      Box(0.0, 0.0, 0.0, 9.0, 4.5, 2.5, true), Box(0.6, 0.5, 0.0, 1.8, 1.3, 0.9),  // table
+      Box(2.4, 3.1, 0.0, 3.1, 4.5, 1.9),  // cupboard against the wall
+      Box(3.7, 1.0, 0.0, 4.6, 1.6, 0.7),  // low chest
+      Box(5.2, 2.3, 0.0, 6.4, 3.4, 1.2),  // desk
+      Box(7.0, 0.0, 0.0, 8.1, 0.9, 1.5),  // shelf against the wall
+      Box(7.6, 3.0, 0.0, 8.4, 3.8, 0.6),  // box
   };
   return scene;
 }
@@ -79,22 +78,25 @@ std::string RasteriseSubmap(const VoxelScene& scene, const Eigen::AlignedBox3d& 
   const Eigen::Isometry3d T_submap_scene = T_scene_submap.inverse();
   Eigen::AlignedBox3d bounds;
   for (int c = 0; c < 8; ++c) {
-    bounds.extend(T_submap_scene * crop_scene.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+    bounds.extend(T_submap_scene *
+                  crop_scene.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
   }
   const Eigen::Vector3i lo = (bounds.min() / resolution_m).array().floor().cast<int>();
   const Eigen::Vector3i hi = (bounds.max() / resolution_m).array().floor().cast<int>();
   for (int x = lo.x(); x <= hi.x(); ++x) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
       for (int z = lo.z(); z <= hi.z(); ++z) {
-        const Eigen::Vector3d c = (Eigen::Vector3d(x, y, z) + Eigen::Vector3d::Constant(0.5)) * resolution_m;
+        const Eigen::Vector3d c =
+            (Eigen::Vector3d(x, y, z) + Eigen::Vector3d::Constant(0.5)) * resolution_m;
         const Eigen::Vector3d p = T_scene_submap * c;
         if (!crop_scene.contains(p)) continue;
         const SceneState state = StateAt(scene, p, resolution_m);
         if (state == SceneState::kUnknown) continue;
         const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(
             static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())));
-        tree.setNodeValue(key, state == SceneState::kOccupied ? tree.getClampingThresMaxLog()
-                                                              : tree.getClampingThresMinLog(),
+        tree.setNodeValue(key,
+                          state == SceneState::kOccupied ? tree.getClampingThresMaxLog()
+                                                         : tree.getClampingThresMinLog(),
                           true);
       }
     }
@@ -106,7 +108,8 @@ std::string RasteriseSubmap(const VoxelScene& scene, const Eigen::AlignedBox3d& 
   return out.str();
 }
 
-Eigen::Isometry3d Pose(double yaw_deg, double pitch_deg, double roll_deg, const Eigen::Vector3d& t) {
+Eigen::Isometry3d Pose(double yaw_deg, double pitch_deg, double roll_deg,
+                       const Eigen::Vector3d& t) {
   const double k = M_PI / 180.0;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = (Eigen::AngleAxisd(yaw_deg * k, Eigen::Vector3d::UnitZ()) *

@@ -7,10 +7,9 @@
 #ifndef MAPD_TESTS_VOXEL_SUPPORT_VOXEL_SCENE_H_
 #define MAPD_TESTS_VOXEL_SUPPORT_VOXEL_SCENE_H_
 
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 namespace mapd::testing {
 
