@@ -171,21 +171,11 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   if (params.mode != FusionMode::kBounded) {
     return Status::Unimplemented("snapshots are for fusion.mode = bounded");
   }
-  if (state.size() < sizeof(kMagic) + 12 ||
-      std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
-    return Corrupt("not a fusion snapshot");
-  }
-  const std::string_view body = state.substr(0, state.size() - 8);
-  uint64_t stored_hash;
-  std::memcpy(&stored_hash, state.data() + body.size(), 8);
-  if (Fnv1a(body) != stored_hash) return Corrupt("checksum mismatch");
-  Reader r(body.substr(sizeof(kMagic)));
-  if (r.U32() != kVersion) return Corrupt("unknown format version");
-  const std::string key = r.Str();
-  if (key != FusionParamsKey(params)) {
-    return Status::FailedPrecondition("fusion snapshot was taken with other fusion parameters (" +
-                                      key + ")");
-  }
+  StatusOr<std::string_view> payload =
+      OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), kVersion,
+                   FusionParamsKey(params), "fusion snapshot");
+  if (!payload.ok()) return payload.status();
+  Reader r(*payload);
   auto engine = std::make_unique<FusionEngine>(params);
   Impl& e = *engine->impl_;
   const uint64_t n = r.Count(4 + 4 + 49 + 1);

@@ -93,21 +93,11 @@ Status PlaneFusionEngine::SaveState(std::string* out) const {
 StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
     const PlaneFusionParams& params, std::string_view state) {
   MAPD_RETURN_IF_ERROR(params.Validate());
-  if (state.size() < sizeof(kMagic) + 12 ||
-      std::memcmp(state.data(), kMagic, sizeof(kMagic)) != 0) {
-    return Corrupt("not a plane fusion snapshot");
-  }
-  const std::string_view body = state.substr(0, state.size() - 8);
-  uint64_t stored_hash;
-  std::memcpy(&stored_hash, state.data() + body.size(), 8);
-  if (Fnv1a(body) != stored_hash) return Corrupt("checksum mismatch");
-  Reader r(body.substr(sizeof(kMagic)));
-  if (r.U32() != kVersion) return Corrupt("unknown format version");
-  const std::string key = r.Str();
-  if (key != PlaneFusionParamsKey(params)) {
-    return Status::FailedPrecondition("plane fusion snapshot was taken with other parameters (" +
-                                      key + ")");
-  }
+  StatusOr<std::string_view> payload =
+      OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), kVersion,
+                   PlaneFusionParamsKey(params), "plane fusion snapshot");
+  if (!payload.ok()) return payload.status();
+  Reader r(*payload);
   auto engine = std::make_unique<PlaneFusionEngine>(params);
   Impl& e = *engine->impl_;
   e.cluster_count_ = r.U64();

@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+#include "common/status.h"
+
 namespace mapd::fusion {
 
 inline uint64_t Fnv1a(std::string_view bytes) {
@@ -88,12 +90,42 @@ class StateReader {
     for (uint64_t& id : ids) id = U64();
     return ids;
   }
+  std::string_view rest() const { return in_.substr(pos_); }
 
  private:
   std::string_view in_;
   size_t pos_ = 0;
   bool ok_ = true;
 };
+
+// Every snapshot is framed alike: magic, format version, the parameters key
+// (a snapshot is valid only for the parameters it was taken with), the
+// engine's payload, then the FNV-1a of all before it. Checks the frame and
+// returns the payload. `what` names the snapshot in errors ("fusion
+// snapshot"): InvalidArgument when corrupt, FailedPrecondition when taken
+// with other parameters.
+inline StatusOr<std::string_view> OpenSnapshot(std::string_view state, std::string_view magic,
+                                               uint32_t version, const std::string& params_key,
+                                               const std::string& what) {
+  const auto corrupt = [&what](const std::string& why) {
+    return Status::InvalidArgument(what + " is corrupt: " + why);
+  };
+  if (state.size() < magic.size() + 12 || state.substr(0, magic.size()) != magic) {
+    return corrupt("not a " + what);
+  }
+  const std::string_view body = state.substr(0, state.size() - 8);
+  uint64_t stored_hash;
+  std::memcpy(&stored_hash, state.data() + body.size(), 8);
+  if (Fnv1a(body) != stored_hash) return corrupt("checksum mismatch");
+  StateReader r(body.substr(magic.size()));
+  if (r.U32() != version) return corrupt("unknown format version");
+  const std::string key = r.Str();
+  if (!r.ok()) return corrupt("truncated header");
+  if (key != params_key) {
+    return Status::FailedPrecondition(what + " was taken with other parameters (" + key + ")");
+  }
+  return r.rest();
+}
 
 }  // namespace mapd::fusion
 

@@ -184,7 +184,8 @@ TEST(SnapshotStateTest, RefusesCorruptOrForeignState) {
   other.eta_m = 0.4;
   const Status foreign = FusionEngine::LoadState(other, good).status();
   EXPECT_EQ(foreign.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(foreign.message().find("other fusion parameters"), std::string::npos);
+  EXPECT_NE(foreign.message().find("fusion snapshot was taken with other parameters"),
+            std::string::npos);
 
   std::string unused;
   FusionEngine exact(Mode(FusionMode::kExact));
