@@ -94,16 +94,20 @@ Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& p
         MergeName(other.id) + ", accepted since " + MergeName(proposal.id) + " was proposed, ";
     const std::string advice = "; its frames are fixed now: reject this one and merge again";
     for (const storage::MergeInputRecord& in : other.inputs) {
+      std::string shared;
       if (submaps.count(in.submap_id) != 0) {
-        return Status::FailedPrecondition(prefix + "also aligns submap " +
-                                          std::to_string(in.submap_id) + advice);
+        shared = "also aligns submap " + std::to_string(in.submap_id);
+      } else if (StatusOr<storage::SubmapMeta> meta = store.GetSubmap(in.submap_id);
+                 meta.ok() && meta->session_id != 0 && sessions.count(meta->session_id) != 0) {
+        // (An accepted merge pins its inputs; a missing one would share nothing.)
+        shared = "also places the session frame of robot '" + sessions[meta->session_id] +
+                 "' (through submap " + std::to_string(in.submap_id) + ")";
       }
-      StatusOr<storage::SubmapMeta> meta = store.GetSubmap(in.submap_id);
-      if (!meta.ok()) continue;  // an accepted merge pins its inputs; a missing one shares nothing
-      if (auto s = sessions.find(meta->session_id); meta->session_id != 0 && s != sessions.end()) {
-        return Status::FailedPrecondition(prefix + "also places the session frame of robot '" +
-                                          s->second + "' (through submap " +
-                                          std::to_string(in.submap_id) + ")" + advice);
+      if (!shared.empty()) {
+        std::string why = prefix;
+        why += shared;
+        why += advice;
+        return Status::FailedPrecondition(why);
       }
     }
   }
