@@ -163,7 +163,7 @@ const std::vector<const char*>& Migrations() {
       );
       ALTER TABLE fusion_snapshots ADD COLUMN plane_state BLOB;
       )sql",
-      // 5 -> 6: merge review (docs/voxel-merge.md, "Review"). merges.status
+      // 5 -> 6: merge review (docs/operations.md, "Merges: records and review"). merges.status
       // gains 'proposed' (accepted by the gates, waiting for an operator) and
       // 'rejected' (by an operator); who asked, who decided and when. Older
       // merges keep 'accepted' / 'refused'; an accepted one counts as decided
