@@ -17,11 +17,11 @@ namespace mapd::service {
 enum class Role { kReader, kRobot, kOperator, kAdmin };
 
 enum class Permission {
-  kReadMap,       // GetFeatureMap, GetGlobalMap, ListRobots, GetStats
+  kReadMap,       // GetFeatureMap, GetGlobalMap, ListRobots, GetStats, ListMerges, GetMerge
   kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
   kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
   kDelete,        // DeleteSubmap (a robot: its own submaps only)
-  kMerge,         // MergeSubmaps
+  kMerge,         // MergeSubmaps, ApproveMerge, RejectMerge
   kReadAudit,     // ListAudit
   kManageTokens,  // CreateToken, ListTokens, RevokeToken
 };
