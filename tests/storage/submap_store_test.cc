@@ -249,7 +249,8 @@ TEST_F(SubmapStoreTest, LatestAcceptedMergeIsTheGlobalMap) {
 TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
-  NewMerge proposal = Accepted(a, b, "PROPOSED");
+  const std::string merged_bytes = "PROPOSED";  // NewSubmap::data views it
+  NewMerge proposal = Accepted(a, b, merged_bytes);
   proposal.record.state = MergeState::kProposed;
   proposal.record.requested_by = "ops";
   auto ids = Record(proposal);
@@ -286,7 +287,8 @@ TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
 TEST_F(SubmapStoreTest, RejectedProposalPinsNothingAndKeepsTheReason) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
-  NewMerge proposal = Accepted(a, b, "P");
+  const std::string merged_bytes = "P";  // NewSubmap::data views it
+  NewMerge proposal = Accepted(a, b, merged_bytes);
   proposal.record.state = MergeState::kProposed;
   auto ids = Record(proposal);
   ASSERT_TRUE(ids.ok());
