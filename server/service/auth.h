@@ -17,7 +17,7 @@ namespace mapd::service {
 enum class Role { kReader, kRobot, kOperator, kAdmin };
 
 enum class Permission {
-  kReadMap,       // GetFeatureMap, GetGlobalMap, ListRobots, GetStats
+  kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats
   kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
   kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
   kDelete,        // DeleteSubmap (a robot: its own submaps only)

@@ -334,6 +334,14 @@ const std::vector<Setting>& Settings() {
       Real("limits.max_read_wait_s", "the longest wait a GetFeatureMap request may ask for (max_wait_ms), "
            "seconds",
            [](C& c) -> auto& { return c.streams.max_read_wait_s; }, {0, 3600}),
+      Count("limits.watch_history", "changes of the fused map kept in memory for WatchFeatureMap clients "
+            "that reconnect (one per fuser round); an older since_map_version gets a resync (the full map)",
+            [](C& c) -> auto& { return c.watch.history; }, 0, 1000000),
+      Count("limits.watch_queue", "changes queued per WatchFeatureMap stream; a slower reader is marked "
+            "behind and gets a resync when it reads again (ingest never waits for it)",
+            [](C& c) -> auto& { return c.watch.queue; }, 1, 1000000),
+      Count("limits.max_watchers", "WatchFeatureMap streams open at once; one more gets RESOURCE_EXHAUSTED",
+            [](C& c) -> auto& { return c.watch.max_watchers; }, 1, 100000),
       Count("limits.log_lines_per_s", "log lines per event and second; the rest is counted in one "
             "event=log_suppressed line",
             [](C& c) -> auto& { return c.streams.log_lines_per_s; }, 1, 1000000),

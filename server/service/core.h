@@ -29,6 +29,8 @@
 
 namespace mapd::service {
 
+class WatchHub;  // watch_hub.h
+
 struct BatchOutcome {
   enum class Kind { kStored, kDuplicate, kRejected };
   Kind kind = Kind::kRejected;
@@ -108,6 +110,9 @@ class Core {
   virtual CoreStats Stats() const = 0;
   // Stored rows, read-only use by the handlers (writes go through ExecuteWrite).
   virtual storage::Store& store() = 0;
+  // The change feed of the published map (WatchFeatureMap); the fuser
+  // publishes into it, a watch subscribes.
+  virtual WatchHub& watch_hub() = 0;
 };
 
 }  // namespace mapd::service

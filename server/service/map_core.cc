@@ -6,6 +6,7 @@
 
 #include "common/clock.h"
 #include "fusion/projection.h"
+#include "service/feature_filter.h"
 #include "service/log.h"
 
 namespace mapd::service {
@@ -18,28 +19,6 @@ void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::Clust
   for (const auto* ids : {&feed.added, &feed.updated, &feed.removed}) {
     delta->insert(ids->begin(), ids->end());
   }
-}
-
-// Whether the closed polygon (ground projection of a plane's boundary) meets
-// the box: an edge crosses it, or the box lies inside the polygon.
-bool PolygonMeetsBox(const std::vector<Eigen::Vector3d>& boundary, const geometry::Box2& box) {
-  const size_t n = boundary.size();
-  if (n == 0) return false;
-  for (size_t i = 0; i < n; ++i) {
-    const geometry::Segment2 edge{boundary[i].head<2>(), boundary[(i + 1) % n].head<2>()};
-    if (geometry::Intersects(edge, box)) return true;
-  }
-  // No edge meets the box: either the box is inside the polygon or apart.
-  const geometry::Vec2 p = box.min;
-  bool inside = false;  // even-odd rule, either orientation
-  for (size_t i = 0, j = n - 1; i < n; j = i++) {
-    const geometry::Vec2 a = boundary[i].head<2>(), b = boundary[j].head<2>();
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      inside = !inside;
-    }
-  }
-  return inside;
 }
 
 }  // namespace
@@ -199,6 +178,7 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
 
 void MapCore::Stop() {
   cancel_recovery_ = true;
+  watch_hub_.Close();  // watches end at once (MapServer closes them earlier)
   {
     // Lifts the writer's backpressure: what is queued gets committed now.
     std::lock_guard<std::mutex> lock(fuse_mu_);
@@ -467,6 +447,7 @@ void MapCore::FuserLoop() {
       fused_through_id_ = std::max(fused_through_id_, t.observation_id);
       ++fused_since_snapshot_;
     }
+    if (done > 0) PublishChange(delta);
     if (!delta.empty()) {
       std::lock_guard<std::mutex> lock(queue_mu_);
       fused_pending_.Absorb(delta);
@@ -480,6 +461,49 @@ void MapCore::FuserLoop() {
     work.clear();
     MaybeSnapshot(false);
   }
+}
+
+void MapCore::PublishChange(const FusedDelta& delta) {
+  auto change = std::make_shared<MapChange>();
+  // Only this thread changes the engines and the version: both are as of now.
+  change->to_version = map_version_.load();
+  if (!delta.empty() && watch_hub_.wanted()) {
+    std::vector<fusion::FusedFeature> lines;
+    std::vector<fusion::FusedPlane> planes;
+    {
+      std::shared_lock<std::shared_mutex> lock(engine_mu_);
+      for (fusion::ClusterId id : delta.lines) {
+        std::optional<fusion::FusedFeature> f = engine_->Get(id);
+        if (f && f->support >= options_.fusion.min_support) {
+          lines.push_back(std::move(*f));
+        } else {
+          change->lines_gone.push_back(id);
+        }
+      }
+      for (fusion::ClusterId id : delta.planes) {
+        std::optional<fusion::FusedPlane> p = plane_engine_->Get(id);
+        if (p && p->id == id && p->support >= options_.planes.min_support) {
+          planes.push_back(std::move(*p));
+        } else {
+          change->planes_gone.push_back(id);
+        }
+      }
+    }
+    for (fusion::FusedFeature& f : lines) {
+      FusedView v;
+      v.kind = f.plane_members > 0 ? KindFilter::kPlane : KindFilter::kLine;
+      v.robots = RobotNames(f.robots);
+      v.feature = std::move(f);
+      change->lines.push_back(std::move(v));
+    }
+    for (fusion::FusedPlane& p : planes) {
+      PlaneView v;
+      v.robots = RobotNames(p.robots);
+      v.plane = std::move(p);
+      change->planes.push_back(std::move(v));
+    }
+  }
+  watch_hub_.Publish(std::move(change));
 }
 
 Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn) {

@@ -48,6 +48,7 @@
 #include "geometry/box2.h"
 #include "service/core.h"
 #include "service/ingest_batch.h"
+#include "service/watch_hub.h"
 #include "service/write_health.h"
 #include "storage/store.h"
 
@@ -74,6 +75,7 @@ struct MapCoreOptions {
   // retrying what is queued before it gives up (those batches were never
   // acknowledged; the fused rows are recomputed at the next start), seconds.
   double stop_flush_s = 5.0;
+  WatchOptions watch;  // the change feed (watch_hub.h)
 };
 
 class MapCore final : public Core {
@@ -131,6 +133,7 @@ class MapCore final : public Core {
   // listens to it.
   WriteHealth& write_health() { return write_health_; }
   storage::Store& store() override { return *store_; }
+  WatchHub& watch_hub() override { return watch_hub_; }
   const MapCoreOptions& options() const { return options_; }
 
  private:
@@ -179,6 +182,10 @@ class MapCore final : public Core {
   void AbandonQueuedWrites(std::unique_lock<std::mutex>& lock);
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
   void FuserLoop();
+  // Fuser thread, after each round: what `delta` changed, read from the
+  // engines, to the watchers (watch_hub.h); the version moves on even if
+  // nothing published changed.
+  void PublishChange(const FusedDelta& delta);
   // Writes the fused rows of `delta` (read from the engine) into `txn`.
   Status WriteFusedDelta(const FusedDelta& delta, storage::WriteTransaction* txn);
   // Waits until every observation committed so far is fused (or the timeout).
@@ -203,6 +210,7 @@ class MapCore final : public Core {
   std::unique_ptr<fusion::FusionEngine> engine_;
   std::unique_ptr<fusion::PlaneFusionEngine> plane_engine_;  // same lock and thread as engine_
   std::atomic<uint64_t> map_version_{0};                     // observations reflected in the map
+  WatchHub watch_hub_{options_.watch};  // the change feed; the fuser publishes into it
 
   mutable std::mutex names_mu_;
   std::unordered_map<int64_t, std::string> robot_names_;

@@ -123,6 +123,9 @@ void MapCore::Recover() {
     recovery_status_ =
         s.ok() ? Status::Ok()
                : Status::Internal("mapd could not recover its fused map: " + s.message());
+    // The change feed starts here: the history begins at the recovered
+    // version, so a watch from before the restart gets a resync.
+    if (s.ok()) watch_hub_.Start(map_version_.load());
     ready_ = true;
     callbacks.swap(on_ready_);
   }

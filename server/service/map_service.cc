@@ -8,6 +8,7 @@
 #include "service/proto_convert.h"
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
+#include "service/watch_service.h"
 
 namespace mapd::service {
 namespace {
@@ -22,35 +23,6 @@ namespace pb = mapserver::v1;
 
 constexpr int kFeaturesPerPage = 4096;
 const char* const kVersion = MAPD_VERSION;
-
-void ToProto(const FusedView& v, pb::FusedFeature* out) {
-  const fusion::FusedFeature& f = v.feature;
-  out->set_id(f.id);
-  out->set_kind(v.kind == KindFilter::kPlane ? pb::FEATURE_KIND_PLANE : pb::FEATURE_KIND_LINE);
-  out->mutable_a()->set_x(f.segment.a.x());
-  out->mutable_a()->set_y(f.segment.a.y());
-  out->mutable_b()->set_x(f.segment.b.x());
-  out->mutable_b()->set_y(f.segment.b.y());
-  out->set_z_min(f.z_min_m);
-  out->set_z_max(f.z_max_m);
-  out->set_support(f.support);
-  out->set_member_count(f.member_count);
-  for (const std::string& r : v.robots) out->add_robots(r);
-}
-
-void ToProto(const PlaneView& v, pb::FusedPlane* out) {
-  const fusion::FusedPlane& p = v.plane;
-  out->set_id(p.id);
-  ToProto(p.normal, out->mutable_normal());
-  out->set_offset(p.offset_m);
-  for (const Eigen::Vector3d& x : p.boundary) ToProto(x, out->add_boundary());
-  out->set_area(p.area_m2);
-  out->set_z_min(p.z_min_m);
-  out->set_z_max(p.z_max_m);
-  out->set_support(p.support);
-  out->set_member_count(p.member_count);
-  for (const std::string& r : v.robots) out->add_robots(r);
-}
 
 Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
   if (in.has_bbox()) {
@@ -159,6 +131,18 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   }
   if (page.features_size() > 0 || features.empty()) writer->Write(page);
   return grpc::Status::OK;
+}
+
+grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
+                                             const pb::WatchFeatureMapRequest* request,
+                                             grpc::ServerWriter<pb::FeatureMapDelta>* writer) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "WatchFeatureMap"); !p.ok())
+    return ToGrpcStatus(p.status());
+  if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
+  FeatureFilter filter;
+  Status s = ParseWatchRequest(*request, core_->Stats().map_version, &filter);
+  if (!s.ok()) return ToGrpcStatus(s);
+  return ServeWatch(core_, context, *request, filter, writer);
 }
 
 grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,

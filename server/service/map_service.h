@@ -18,6 +18,7 @@
 #include "service/ingest_reactor.h"
 #include "service/stream_limiter.h"
 #include "service/submap_service.h"
+#include "service/watch_hub.h"
 
 namespace mapd::service {
 
@@ -34,9 +35,11 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
   // and merges in flight are abandoned (shutdown).
+  // Open watches end with UNAVAILABLE and new ones are refused.
   void StartDraining() {
     draining_ = true;
     submaps_.StartDraining();
+    core_->watch_hub().Close();
   }
 
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Ingest(
@@ -45,6 +48,10 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   grpc::Status GetFeatureMap(grpc::ServerContext* context,
                              const mapserver::v1::FeatureMapRequest* request,
                              grpc::ServerWriter<mapserver::v1::FeatureMapPage>* writer) override;
+  // The change feed (watch_service.h); holds a synchronous thread while open.
+  grpc::Status WatchFeatureMap(grpc::ServerContext* context,
+                               const mapserver::v1::WatchFeatureMapRequest* request,
+                               grpc::ServerWriter<mapserver::v1::FeatureMapDelta>* writer) override;
   grpc::Status ListRobots(grpc::ServerContext* context,
                           const mapserver::v1::ListRobotsRequest* request,
                           mapserver::v1::ListRobotsResponse* response) override;

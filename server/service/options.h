@@ -56,6 +56,18 @@ struct StreamLimits {
   uint32_t log_lines_per_s = 20;  // per event; the rest is counted in one `log_suppressed` line
 };
 
+// The change feed (WatchFeatureMap, watch_hub.h). Memory: at most
+// history + max_watchers x queue changes (each the changed features only).
+struct WatchOptions {
+  // Changes kept for resuming watches (one per round of the fuser, however
+  // many observations it fused); older since_map_versions get a resync.
+  size_t history = 1024;
+  // Changes queued per watcher; a watcher further behind is marked behind and
+  // gets a resync (the full filtered map) once it reads again.
+  size_t queue = 256;
+  size_t max_watchers = 64;  // one more watch is RESOURCE_EXHAUSTED at once
+};
+
 // Voxel submaps and merges. The merge thresholds are voxel::MergeParams's
 // (server/voxel/merge.h); they live here as plain values so that the config
 // builds without the voxel library (MAPD_WITH_VOXEL=OFF).

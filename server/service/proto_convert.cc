@@ -33,4 +33,33 @@ void ToProto(const storage::SubmapMeta& m, pb::SubmapInfo* out) {
   out->set_created_ns(m.created_ns);
 }
 
+void ToProto(const FusedView& v, pb::FusedFeature* out) {
+  const fusion::FusedFeature& f = v.feature;
+  out->set_id(f.id);
+  out->set_kind(v.kind == KindFilter::kPlane ? pb::FEATURE_KIND_PLANE : pb::FEATURE_KIND_LINE);
+  out->mutable_a()->set_x(f.segment.a.x());
+  out->mutable_a()->set_y(f.segment.a.y());
+  out->mutable_b()->set_x(f.segment.b.x());
+  out->mutable_b()->set_y(f.segment.b.y());
+  out->set_z_min(f.z_min_m);
+  out->set_z_max(f.z_max_m);
+  out->set_support(f.support);
+  out->set_member_count(f.member_count);
+  for (const std::string& r : v.robots) out->add_robots(r);
+}
+
+void ToProto(const PlaneView& v, pb::FusedPlane* out) {
+  const fusion::FusedPlane& p = v.plane;
+  out->set_id(p.id);
+  ToProto(p.normal, out->mutable_normal());
+  out->set_offset(p.offset_m);
+  for (const Eigen::Vector3d& x : p.boundary) ToProto(x, out->add_boundary());
+  out->set_area(p.area_m2);
+  out->set_z_min(p.z_min_m);
+  out->set_z_max(p.z_max_m);
+  out->set_support(p.support);
+  out->set_member_count(p.member_count);
+  for (const std::string& r : v.robots) out->add_robots(r);
+}
+
 }  // namespace mapd::service

@@ -8,6 +8,7 @@
 
 #include "geometry/rigid3.h"
 #include "mapserver/v1/map_service.pb.h"
+#include "service/core.h"
 #include "storage/store.h"
 
 namespace mapd::service {
@@ -15,6 +16,9 @@ namespace mapd::service {
 void ToProto(const Eigen::Vector3d& v, mapserver::v1::Vec3* out);
 void ToProto(const geometry::Rigid3& T, mapserver::v1::Rigid3* out);
 void ToProto(const storage::SubmapMeta& m, mapserver::v1::SubmapInfo* out);
+// GetFeatureMap and WatchFeatureMap.
+void ToProto(const FusedView& v, mapserver::v1::FusedFeature* out);
+void ToProto(const PlaneView& v, mapserver::v1::FusedPlane* out);
 
 }  // namespace mapd::service
 

@@ -49,6 +49,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.snapshot_every_observations = config.snapshot_every_observations;
   core_options.snapshot_max_age_s = config.snapshot_max_age_s;
   core_options.raw_retention_days = config.raw_retention_days;
+  core_options.watch = config.watch;
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();

@@ -15,6 +15,7 @@
 
 #include "common/temp_dir.h"
 #include "service/core.h"
+#include "service/watch_hub.h"
 
 namespace mapd::testing {
 
@@ -24,6 +25,7 @@ class FakeCore final : public service::Core {
     auto store = storage::Store::Open(dir_.File("map.db"), {});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (store.ok()) store_ = std::move(store).value();
+    hub_.Start(map_version);
   }
 
   // What the test sets (before the handlers run).
@@ -72,6 +74,8 @@ class FakeCore final : public service::Core {
     return stats;
   }
   storage::Store& store() override { return *store_; }
+  // A test publishes changes into it as the fuser would.
+  service::WatchHub& watch_hub() override { return hub_; }
 
  private:
   TempDir dir_;
@@ -79,6 +83,7 @@ class FakeCore final : public service::Core {
   mutable std::mutex mu_;
   std::mutex write_mu_;
   size_t submitted_ = 0;
+  service::WatchHub hub_{service::WatchOptions{}};
 };
 
 }  // namespace mapd::testing
