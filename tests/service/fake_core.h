@@ -21,7 +21,7 @@ namespace mapd::testing {
 
 class FakeCore final : public service::Core {
  public:
-  FakeCore() {
+  explicit FakeCore(service::WatchOptions watch = {}) : hub_(watch) {
     auto store = storage::Store::Open(dir_.File("map.db"), {});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (store.ok()) store_ = std::move(store).value();
@@ -83,7 +83,7 @@ class FakeCore final : public service::Core {
   mutable std::mutex mu_;
   std::mutex write_mu_;
   size_t submitted_ = 0;
-  service::WatchHub hub_{service::WatchOptions{}};
+  service::WatchHub hub_;
 };
 
 }  // namespace mapd::testing
