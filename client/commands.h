@@ -20,12 +20,19 @@ namespace mapd::client {
 void AddMapCommands(CLI::App* app, Action* action);
 // commands_ingest.cc: ingest, simulate (writing observations)
 void AddIngestCommands(CLI::App* app, Action* action);
-// commands_submap.cc: submaps, submap upload, merge, global-map (voxel submaps)
+// commands_submap.cc: submaps, submap upload|get|delete, global-map (voxel submaps)
 void AddSubmapCommands(CLI::App* app, Action* action);
+// commands_merge.cc: merge, merge show|approve|reject, merges
+void AddMergeCommands(CLI::App* app, Action* action);
 // commands_auth.cc: token create|list|revoke, audit, whoami
 void AddAuthCommands(CLI::App* app, Action* action);
 // commands_render.cc: render (top-down renderings of OctoMap files)
 void AddRenderCommand(CLI::App* app, Action* action);
+
+// Reads a DataChunk stream (GetSubmap, GetGlobalMap) to its end: the file's
+// bytes, and the info of the first message.
+grpc::Status ReadChunks(grpc::ClientReader<mapserver::v1::DataChunk>* reader, std::string* data,
+                        mapserver::v1::SubmapInfo* info);
 
 // Shared by render, `merge --render` and `global-map --render`. Each returns
 // kContinue to go on, or the exit code to end with (the error printed).

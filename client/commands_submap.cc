@@ -1,4 +1,4 @@
-// mapctl submaps | submap upload | merge | global-map
+// mapctl submaps | submap upload|get|delete | global-map
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -32,10 +32,13 @@ struct UploadOptions {
   std::string session;
 };
 
-struct MergeOptions {
-  std::vector<uint64_t> ids;
-  bool wait = false;
-  std::string render;
+struct GetOptions {
+  uint64_t id = 0;
+  std::string output;
+};
+
+struct DeleteOptions {
+  uint64_t id = 0;
 };
 
 struct GlobalMapOptions {
@@ -59,46 +62,6 @@ std::string DescribeSubmap(const pb::SubmapInfo& m) {
       static_cast<unsigned long long>(m.free_voxels()), m.bounds_min().x(), m.bounds_min().y(),
       m.bounds_min().z(), m.bounds_max().x(), m.bounds_max().y(), m.bounds_max().z(),
       static_cast<unsigned long long>(m.size_bytes()));
-}
-
-// Reads a DataChunk stream to its end: the file's bytes, and the info of the first message.
-grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data,
-                        pb::SubmapInfo* info) {
-  pb::DataChunk chunk;
-  while (reader->Read(&chunk)) {
-    if (chunk.has_info()) *info = chunk.info();
-    data->append(chunk.data());
-  }
-  return reader->Finish();
-}
-
-RigidTransform ToRigidTransform(const pb::Rigid3& T) {
-  return RigidTransform::FromQuaternion(
-      T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z(),
-      {T.translation().x(), T.translation().y(), T.translation().z()});
-}
-
-std::string FormatMergeProgress(const pb::MergeProgress& p) {
-  const double percent = std::floor(100 * std::clamp(p.fraction(), 0.0, 1.0));
-  return Printf("merge: %-10s %3.0f%%", p.stage().c_str(), percent);
-}
-
-// Per submap: where it sits in the reference (first) submap's frame and the evidence for it.
-std::string FormatMergeResult(const pb::MergeResult& result) {
-  std::string out = Printf("merge %llu accepted: merged submap %llu\n",
-                           static_cast<unsigned long long>(result.merge_id()),
-                           static_cast<unsigned long long>(result.merged_submap_id()));
-  for (const pb::SubmapAlignment& a : result.alignments()) {
-    const RigidTransform T = ToRigidTransform(a.t_reference_submap());
-    double yaw = 0, pitch = 0, roll = 0;
-    T.YawPitchRollDeg(&yaw, &pitch, &roll);
-    out += Printf(
-        "  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
-        "%u matched corners, residual %.3f m, overlap %.2f\n",
-        static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
-        a.matched_corners(), a.residual_m(), a.overlap_score());
-  }
-  return out;
 }
 
 int RunSubmaps(const Context& ctx, const SubmapsOptions& flags) {
@@ -156,88 +119,39 @@ int RunUpload(const Context& ctx, const UploadOptions& flags) {
   return kExitOk;
 }
 
-int RunMerge(const Context& ctx, const MergeOptions& flags) {
-  pb::MergeSubmapsRequest request;
-  for (uint64_t id : flags.ids) request.add_submap_ids(id);
-  if (request.submap_ids_size() < 2) return UsageError("merge", "wants two or more submap ids");
-  const std::string& render_path = flags.render;
-  ImageFormat render_format = ImageFormat::kPng;
-  if (!render_path.empty()) {
-    if (int rc = CheckRenderOutput("merge", render_path, &render_format); rc != kContinue)
-      return rc;
-  }
-
-  auto call = ctx.NewStreamContext();  // no deadline: a merge takes as long as it takes
-  std::unique_ptr<grpc::ClientReader<pb::MergeProgress>> reader =
-      ctx.stub->MergeSubmaps(call.get(), request);
-  pb::MergeProgress progress;
-  bool have_result = false;
-  pb::MergeResult result;
-  std::string last_line;
-  while (reader->Read(&progress)) {
-    if (progress.has_result()) {
-      result = progress.result();
-      have_result = true;
-    }
-    if (!flags.wait) continue;
-    // One line per change of stage or whole percent, flushed so that a pipe
-    // shows it as it arrives.
-    const std::string line = FormatMergeProgress(progress);
-    if (line != last_line) {
-      std::printf("%s\n", line.c_str());
-      std::fflush(stdout);
-      last_line = line;
-    }
-  }
-  const grpc::Status status = reader->Finish();
-  if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
-    // The evidence was too weak: the server says why, nothing was written.
-    return ReportRpcError(ctx, "merge refused", status);
-  }
-  if (!status.ok()) return ReportRpcError(ctx, "merge", status);
-  if (!have_result) {
-    PrintError("merge: the server ended the merge without a result");
+int RunGet(const Context& ctx, const GetOptions& flags) {
+  const std::string what = Printf("submap get %llu", static_cast<unsigned long long>(flags.id));
+  pb::GetSubmapRequest request;
+  request.set_id(flags.id);
+  auto call = ctx.NewStreamContext();  // no deadline: large files take their time
+  std::string data;
+  pb::SubmapInfo info;
+  const grpc::Status status =
+      ReadChunks(ctx.stub->GetSubmap(call.get(), request).get(), &data, &info);
+  if (!status.ok()) return ReportRpcError(ctx, what, status);
+  std::string error;
+  if (!WriteOutput(flags.output, data, &error)) {
+    PrintError(what + ": " + error);
     return kExitFailed;
   }
-  std::printf("%s", FormatMergeResult(result).c_str());
-  std::fflush(stdout);
-  if (render_path.empty()) return kExitOk;
+  // With -o - the file is on stdout: the description goes to stderr.
+  std::fprintf(flags.output == "-" ? stderr : stdout, "wrote %zu bytes to %s (%s)\n", data.size(),
+               flags.output.c_str(), DescribeSubmap(info).c_str());
+  return kExitOk;
+}
 
-  // Each input in its own colour, moved by the transform the merge found:
-  // walls that line up show the merge is right.
-  std::vector<VoxelLayer> layers;
-  for (int i = 0; i < request.submap_ids_size(); ++i) {
-    const uint64_t id = request.submap_ids(i);
-    const pb::SubmapAlignment* alignment = nullptr;
-    for (const pb::SubmapAlignment& a : result.alignments()) {
-      if (a.submap_id() == id) alignment = &a;
-    }
-    RigidTransform T_reference_submap;  // the first input is the reference frame
-    if (alignment != nullptr) {
-      T_reference_submap = ToRigidTransform(alignment->t_reference_submap());
-    } else if (i > 0) {
-      PrintError(Printf("merge: no transform for submap %llu in the result; not drawn",
-                        static_cast<unsigned long long>(id)));
-      continue;
-    }
-    std::string data;
-    pb::SubmapInfo info;
-    auto get_call = ctx.NewStreamContext();
-    pb::GetSubmapRequest get_request;
-    get_request.set_id(id);
-    const grpc::Status get_status =
-        ReadChunks(ctx.stub->GetSubmap(get_call.get(), get_request).get(), &data, &info);
-    if (!get_status.ok()) {
-      return ReportRpcError(
-          ctx, Printf("merge: GetSubmap %llu", static_cast<unsigned long long>(id)), get_status);
-    }
-    const std::string what =
-        Printf("submap %llu (robot %s, %s)", static_cast<unsigned long long>(id),
-               info.robot_id().c_str(), info.name().c_str());
-    if (int rc = AddRenderLayer("merge", what, data, T_reference_submap, &layers); rc != kContinue)
-      return rc;
+int RunDelete(const Context& ctx, const DeleteOptions& flags) {
+  pb::DeleteSubmapRequest request;
+  request.set_id(flags.id);
+  pb::DeleteSubmapResponse response;
+  auto call = ctx.NewCallContext();
+  const grpc::Status status = ctx.stub->DeleteSubmap(call.get(), request, &response);
+  if (!status.ok()) {
+    return ReportRpcError(
+        ctx, Printf("submap delete %llu", static_cast<unsigned long long>(flags.id)), status);
   }
-  return WriteRendering("merge", layers, render_path, render_format);
+  std::printf("deleted submap %llu\n", static_cast<unsigned long long>(flags.id));
+  return kExitOk;
 }
 
 int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
@@ -273,6 +187,16 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
 
 }  // namespace
 
+grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data,
+                        pb::SubmapInfo* info) {
+  pb::DataChunk chunk;
+  while (reader->Read(&chunk)) {
+    if (chunk.has_info()) *info = chunk.info();
+    data->append(chunk.data());
+  }
+  return reader->Finish();
+}
+
 void AddSubmapCommands(CLI::App* app, Action* action) {
   CLI::App* submaps = app->add_subcommand("submaps", "list stored voxel submaps");
   submaps->footer(
@@ -281,8 +205,8 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
   submaps->add_option("--robot", list->robot, "only this robot's submaps");
   submaps->add_flag("--json", list->json, "the ListSubmapsResponse in protobuf JSON");
 
-  CLI::App* submap =
-      app->add_subcommand("submap", "submap upload FILE --robot R: upload an OctoMap file");
+  CLI::App* submap = app->add_subcommand(
+      "submap", "submap upload FILE --robot R | get ID -o FILE | delete ID: one submap");
   submap->require_subcommand(1);
   CLI::App* upload = submap->add_subcommand("upload", "upload an OctoMap file (.bt or .ot)");
   upload->footer("Uploads the file in 1 MiB chunks and prints the stored submap.");
@@ -298,27 +222,21 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
       ->check(CLI::NonNegativeNumber);
   upload->add_option("--session", u->session, "the session frame the submap was built in");
 
-  CLI::App* merge = app->add_subcommand(
-      "merge", "merge two or more submaps (--wait: progress, --render: picture)");
-  merge->footer(
-      "Merges two or more submaps without a prior pose and prints, per submap, where it sits\n"
-      "in the first submap's frame (xyz in metres, yaw/pitch/roll in degrees, Z-Y-X), the\n"
-      "matched corners, the residual and the overlap score, and the id of the merged map.\n"
-      "A merge refused for weak evidence prints the server's reason and exits 1.");
-  auto m = BindCommand(merge, action, RunMerge);
-  merge->add_option("ID", m->ids, "submap ids (the first is the reference frame)")
+  CLI::App* get = submap->add_subcommand("get", "download a stored submap (-o FILE.bt|.ot)");
+  get->footer("Downloads the submap's file, byte for byte as uploaded (merged maps: .bt).");
+  auto gs = BindCommand(get, action, RunGet);
+  get->add_option("ID", gs->id, "the submap id (see 'mapctl submaps')")
       ->required()
-      ->expected(2, 1 << 20)
       ->check(PositiveId());
-  merge->add_flag(
-      "--wait", m->wait,
-      "show the progress (stage and percent) while the merge runs (the call always lasts until "
-      "the merge ends)");
-  merge->add_option(
-      "--render", m->render,
-      "OUT.png|OUT.svg: after an accepted merge, draw the input submaps from above, each in its "
-      "own colour, moved by its transform: walls that line up show the merge is right "
-      "(see 'mapctl render --help')");
+  get->add_option("-o,--output", gs->output, "the file to write ('-': stdout)")->required();
+
+  CLI::App* del = submap->add_subcommand("delete", "delete a stored submap");
+  del->footer(
+      "Refused (exit 1) while an accepted merge uses the submap as an input or produced it.");
+  auto d = BindCommand(del, action, RunDelete);
+  del->add_option("ID", d->id, "the submap id (see 'mapctl submaps')")
+      ->required()
+      ->check(PositiveId());
 
   CLI::App* global =
       app->add_subcommand("global-map", "download the merged global map (-o FILE.bt, --render)");

@@ -51,16 +51,6 @@ std::string HumanDuration(double seconds) {
   return Printf("%ldd %02ldh", s / 86400, (s / 3600) % 24);
 }
 
-std::string IsoTime(int64_t ns) {
-  if (ns <= 0) return "-";
-  const std::time_t secs = static_cast<std::time_t>(ns / 1000000000);
-  std::tm tm{};
-  gmtime_r(&secs, &tm);
-  char out[32];
-  std::strftime(out, sizeof(out), "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return out;
-}
-
 }  // namespace
 
 bool ParseOutputFormat(const std::string& name, OutputFormat* out) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "client/rigid_transform.h"
 #include "mapserver/v1/map_service.pb.h"
 
 namespace mapd::client {
@@ -51,6 +52,30 @@ std::string FormatStats(const mapserver::v1::Stats& stats, const std::string& se
 std::string FormatRobots(const mapserver::v1::ListRobotsResponse& robots, int64_t now_ns);
 // `mapctl submaps` table.
 std::string FormatSubmaps(const mapserver::v1::ListSubmapsResponse& submaps);
+
+// Stored merges (client/format_merges.cc). "proposed", "accepted",
+// "rejected", "refused" ("unknown" otherwise).
+std::string MergeStateName(mapserver::v1::MergeState state);
+// `mapctl merges`: one line per merge (inputs, merged map, the weakest
+// input's corners / residual / overlap, who asked, when, who decided, reason).
+std::string FormatMerges(const mapserver::v1::ListMergesResponse& merges);
+// The same as JSON (nlohmann-json, snake_case keys, 64-bit ids as numbers):
+// {"merges": [{"id", "state", "inputs": [{"submap_id", "aligned",
+// "t_reference_submap": {"translation", "rotation_wxyz"}, "yaw_pitch_roll_deg",
+// "matched_corners", "residual_m", "overlap_score"}], "merged_submap_id",
+// "reason", "requested_by", "created_ns", "decided_by", "decided_ns"}]}.
+std::string FormatMergesJson(const mapserver::v1::ListMergesResponse& merges);
+// One merge as above (`mapctl merge show --json`).
+std::string FormatMergeRecordJson(const mapserver::v1::MergeRecord& merge);
+// `mapctl merge show`: state, who and when, reason, per input its transform
+// (xyz, yaw/pitch/roll in degrees) and evidence.
+std::string FormatMergeRecord(const mapserver::v1::MergeRecord& merge);
+// One line (newline-ended): where an input sits in the reference frame (xyz
+// in metres, yaw/pitch/roll in degrees) and its matched corners, residual
+// and overlap; "not aligned" for an input of a refused merge.
+std::string FormatAlignment(const mapserver::v1::SubmapAlignment& alignment);
+// The API's transform as the client's (for renderings and yaw/pitch/roll).
+RigidTransform ToRigidTransform(const mapserver::v1::Rigid3& T);
 
 // "line", "plane" or "any".
 std::string KindName(mapserver::v1::FeatureKind kind);

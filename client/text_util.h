@@ -3,7 +3,9 @@
 #define MAPD_CLIENT_TEXT_UTIL_H_
 
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
+#include <ctime>
 #include <string>
 
 namespace mapd::client {
@@ -20,6 +22,17 @@ inline std::string Printf(const char* format, ...) {
   std::string out(n > 0 ? static_cast<size_t>(n) : 0, '\0');
   if (n > 0) std::vsnprintf(&out[0], out.size() + 1, format, args);
   va_end(args);
+  return out;
+}
+
+// A server time (ns since the Unix epoch) as UTC ISO 8601; "-" for 0 (unset).
+inline std::string IsoTime(int64_t ns) {
+  if (ns <= 0) return "-";
+  const auto secs = static_cast<std::time_t>(ns / 1000000000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char out[32];
+  std::strftime(out, sizeof(out), "%Y-%m-%dT%H:%M:%SZ", &tm);
   return out;
 }
 

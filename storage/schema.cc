@@ -163,6 +163,17 @@ const std::vector<const char*>& Migrations() {
       );
       ALTER TABLE fusion_snapshots ADD COLUMN plane_state BLOB;
       )sql",
+      // 5 -> 6: merge review (docs/operations.md, "Merges: records and review"). merges.status
+      // gains 'proposed' (accepted by the gates, waiting for an operator) and
+      // 'rejected' (by an operator); who asked, who decided and when. Older
+      // merges keep 'accepted' / 'refused'; an accepted one counts as decided
+      // when it was made, so the global map stays the one it was.
+      R"sql(
+      ALTER TABLE merges ADD COLUMN requested_by TEXT NOT NULL DEFAULT '';
+      ALTER TABLE merges ADD COLUMN decided_by TEXT NOT NULL DEFAULT '';
+      ALTER TABLE merges ADD COLUMN decided_ns INTEGER NOT NULL DEFAULT 0;
+      UPDATE merges SET decided_ns = created_ns WHERE status = 'accepted';
+      )sql",
   };
   return kMigrations;
 }

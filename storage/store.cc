@@ -42,7 +42,29 @@ Status PrepareInto(sqlite3* db, const char* sql, Statement* out) {
   return Status::Ok();
 }
 
+// Unknown text (a newer mapd's state) reads as refused: never in effect.
+MergeState ParseMergeState(const std::string& text) {
+  for (MergeState s : {MergeState::kProposed, MergeState::kAccepted, MergeState::kRejected}) {
+    if (text == MergeStateName(s)) return s;
+  }
+  return MergeState::kRefused;
+}
+
 }  // namespace
+
+const char* MergeStateName(MergeState state) {
+  switch (state) {
+    case MergeState::kProposed:
+      return "proposed";
+    case MergeState::kAccepted:
+      return "accepted";
+    case MergeState::kRejected:
+      return "rejected";
+    case MergeState::kRefused:
+      return "refused";
+  }
+  return "refused";
+}
 
 StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const StoreOptions& options) {
   std::unique_ptr<Store> store(new Store());
@@ -466,13 +488,17 @@ Status WriteTransaction::DeleteSubmap(int64_t id) {
 StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   const MergeRecord& r = merge.record;
   sqlite3* w = store_->writer_.get();
-  StatusOr<Statement> q = Statement::Prepare(w,
-                                             "INSERT INTO merges (created_ns, status, reason, "
-                                             "merged_submap_id) VALUES (?1, ?2, ?3, NULL)");
+  StatusOr<Statement> q = Statement::Prepare(
+      w,
+      "INSERT INTO merges (created_ns, status, reason, merged_submap_id, "
+      "requested_by, decided_by, decided_ns) VALUES (?1, ?2, ?3, NULL, ?4, ?5, ?6)");
   if (!q.ok()) return q.status();
   q->Bind(1, r.created_ns)
-      .Bind(2, std::string_view(r.accepted ? "accepted" : "refused"))
-      .Bind(3, r.reason);
+      .Bind(2, std::string_view(MergeStateName(r.state)))
+      .Bind(3, r.reason)
+      .Bind(4, r.requested_by)
+      .Bind(5, r.decided_by)
+      .Bind(6, r.decided_ns);
   MAPD_RETURN_IF_ERROR(q->Run());
   MergeIds ids;
   ids.merge_id = sqlite3_last_insert_rowid(w);
@@ -492,7 +518,7 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
     }
     MAPD_RETURN_IF_ERROR(in->Run());
   }
-  if (!r.accepted) return ids;
+  if (r.state != MergeState::kAccepted && r.state != MergeState::kProposed) return ids;
 
   NewSubmap merged = merge.merged;
   merged.meta.robot = kMergedRobot;
@@ -507,6 +533,35 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   link->Bind(1, ids.merge_id).Bind(2, ids.merged_submap_id);
   MAPD_RETURN_IF_ERROR(link->Run());
   return ids;
+}
+
+Status WriteTransaction::DecideMerge(int64_t id, MergeState state, const std::string& who,
+                                     int64_t now_ns, const std::string& reason) {
+  if (state != MergeState::kAccepted && state != MergeState::kRejected) {
+    return Status::InvalidArgument("a merge is decided as accepted or rejected only");
+  }
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> current = Statement::Prepare(w, "SELECT status FROM merges WHERE id = ?1");
+  if (!current.ok()) return current.status();
+  current->Bind(1, id);
+  StatusOr<bool> row = current->Step();
+  if (!row.ok()) return row.status();
+  if (!*row) return Status::NotFound("no merge with id " + std::to_string(id));
+  const std::string status = current->ColumnText(0);
+  if (status != MergeStateName(MergeState::kProposed)) {
+    return Status::FailedPrecondition("merge " + std::to_string(id) + " is " + status +
+                                      "; only a proposed merge can be approved or rejected");
+  }
+  StatusOr<Statement> q = Statement::Prepare(
+      w,
+      "UPDATE merges SET status = ?2, decided_by = ?3, decided_ns = ?4, reason = ?5 WHERE id = ?1");
+  if (!q.ok()) return q.status();
+  q->Bind(1, id)
+      .Bind(2, std::string_view(MergeStateName(state)))
+      .Bind(3, who)
+      .Bind(4, now_ns)
+      .Bind(5, reason);
+  return q->Run();
 }
 
 Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
@@ -750,7 +805,7 @@ StatusOr<SubmapMeta> Store::LatestGlobalMap() {
     StatusOr<Statement> q = Statement::Prepare(reader_.get(),
                                                "SELECT merged_submap_id FROM merges WHERE status = "
                                                "'accepted' AND merged_submap_id IS NOT NULL "
-                                               "ORDER BY id DESC LIMIT 1");
+                                               "ORDER BY decided_ns DESC, id DESC LIMIT 1");
     if (!q.ok()) return q.status();
     StatusOr<bool> row = q->Step();
     if (!row.ok()) return row.status();
@@ -765,8 +820,8 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(),
-                         "SELECT id, created_ns, status, reason, coalesce(merged_submap_id, 0) "
-                         "FROM merges ORDER BY id");
+                         "SELECT id, created_ns, status, reason, coalesce(merged_submap_id, 0), "
+                         "requested_by, decided_by, decided_ns FROM merges ORDER BY id");
   if (!q.ok()) return q.status();
   std::vector<MergeRecord> out;
   for (;;) {
@@ -776,9 +831,12 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
     MergeRecord r;
     r.id = q->ColumnInt(0);
     r.created_ns = q->ColumnInt(1);
-    r.accepted = q->ColumnText(2) == "accepted";
+    r.state = ParseMergeState(q->ColumnText(2));
     r.reason = q->ColumnText(3);
     r.merged_submap_id = q->ColumnInt(4);
+    r.requested_by = q->ColumnText(5);
+    r.decided_by = q->ColumnText(6);
+    r.decided_ns = q->ColumnInt(7);
     out.push_back(std::move(r));
   }
   StatusOr<Statement> in = Statement::Prepare(

@@ -180,13 +180,20 @@ struct MergeInputRecord {
   double overlap_score = 0;
 };
 
+// = mapserver.v1.MergeState. Stored as text ('proposed', ...; MergeStateName).
+enum class MergeState : int { kProposed = 1, kAccepted = 2, kRejected = 3, kRefused = 4 };
+const char* MergeStateName(MergeState state);  // "proposed", "accepted", ...
+
 struct MergeRecord {
   int64_t id = 0;
   int64_t created_ns = 0;
-  bool accepted = false;
-  std::string reason;            // why it was refused (empty when accepted)
-  int64_t merged_submap_id = 0;  // 0 unless accepted
+  MergeState state = MergeState::kRefused;
+  std::string reason;            // refused: the gates' reason; rejected: the operator's
+  int64_t merged_submap_id = 0;  // 0 when refused
   std::vector<MergeInputRecord> inputs;
+  std::string requested_by;  // who asked for it (empty in databases before schema 6)
+  std::string decided_by;    // who approved or rejected it (accepted at once: requested_by)
+  int64_t decided_ns = 0;    // 0 while proposed and when refused
 };
 
 struct NewMerge {
@@ -251,9 +258,15 @@ class WriteTransaction {
   // frames it tied derive from those bytes, so they stay. Refused merges do
   // not pin their inputs.
   Status DeleteSubmap(int64_t id);
-  // Records a merge. An accepted one also stores `merged` as a submap of robot
-  // kMergedRobot named "merge-<merge id>".
+  // Records a merge. An accepted or proposed one also stores `merged` as a
+  // submap of robot kMergedRobot named "merge-<merge id>".
   StatusOr<MergeIds> RecordMerge(const NewMerge& merge);
+  // Ends a proposed merge: kAccepted or kRejected, by `who` at `now_ns`
+  // (`reason` for a rejection). NotFound if there is no such merge,
+  // FailedPrecondition naming its state if it is not proposed. Ties nothing:
+  // the caller ties the sessions in the same transaction.
+  Status DecideMerge(int64_t id, MergeState state, const std::string& who, int64_t now_ns,
+                     const std::string& reason);
   // Ties a session frame to the map frame (T_map_frame). FailedPrecondition
   // if it is tied already: a tie is never moved, so the map stays consistent.
   // The tie is recorded at set_tie_point()'s position in the commit order.
@@ -348,7 +361,8 @@ class Store {
   StatusOr<std::vector<SubmapMeta>> ListSubmaps(const std::string& robot);
   StatusOr<SubmapMeta> GetSubmap(int64_t id);       // NotFound
   StatusOr<std::string> GetSubmapData(int64_t id);  // the stored file; NotFound
-  // The merged map of the latest accepted merge; NotFound before the first.
+  // The merged map of the merge accepted last (by decision time, then id);
+  // NotFound before the first.
   StatusOr<SubmapMeta> LatestGlobalMap();
   StatusOr<MergeRecord> GetMerge(int64_t id);       // NotFound
   StatusOr<std::vector<MergeRecord>> ListMerges();  // by id

@@ -7,6 +7,7 @@
 
 namespace mapd::fusion {
 
+using geometry::Cross;
 using geometry::Line2;
 using geometry::Segment2;
 using geometry::Vec2;
@@ -17,8 +18,6 @@ namespace {
 // queries probe 3 x 3 cells at most; but no smaller than this, so that a tiny
 // snap distance does not blow up the cell indices. Queries filter by distance.
 constexpr double kMinCellM = 1e-3;
-
-double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
 
 }  // namespace
 

@@ -19,8 +19,6 @@ namespace {
 
 constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'F', 'U', 'S', '1'};
 constexpr uint32_t kVersion = 2;  // 2: the consolidator's pieces
-// Union by size keeps trees at most log2(nodes) deep; deeper means corrupt.
-constexpr int kMaxTreeDepth = 64;
 
 class Writer : public StateWriter {
  public:
@@ -255,7 +253,7 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     roots += root;
     uint32_t x = static_cast<uint32_t>(i);
     for (int depth = 0; e.parent_[x] != x; ++depth) {
-      if (depth > kMaxTreeDepth) return Corrupt("a cycle in the cluster forest");
+      if (depth > kMaxForestDepth) return Corrupt("a cycle in the cluster forest");
       x = e.parent_[x];
     }
   }

@@ -15,11 +15,10 @@
 namespace mapd::fusion {
 namespace {
 
-constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'P', 'L', 'N', '1'};
-constexpr uint32_t kVersion = 1;
-constexpr int kMaxTreeDepth = 64;  // union by size: at most log2(nodes) deep
+constexpr char kPlaneMagic[8] = {'M', 'A', 'P', 'D', 'P', 'L', 'N', '1'};
+constexpr uint32_t kPlaneVersion = 1;
 
-class Writer : public StateWriter {
+class PlaneWriter : public StateWriter {
  public:
   using StateWriter::StateWriter;
   void V3(const Eigen::Vector3d& v) {
@@ -31,7 +30,7 @@ class Writer : public StateWriter {
   }
 };
 
-class Reader : public StateReader {
+class PlaneReader : public StateReader {
  public:
   using StateReader::StateReader;
   Eigen::Vector3d V3() {
@@ -46,7 +45,7 @@ class Reader : public StateReader {
   }
 };
 
-Status Corrupt(const std::string& what) {
+Status PlaneCorrupt(const std::string& what) {
   return Status::InvalidArgument("plane fusion snapshot is corrupt: " + what);
 }
 
@@ -55,9 +54,9 @@ Status Corrupt(const std::string& what) {
 Status PlaneFusionEngine::SaveState(std::string* out) const {
   const Impl& e = *impl_;
   out->clear();
-  out->append(kMagic, sizeof(kMagic));
-  Writer w(out);
-  w.U32(kVersion);
+  out->append(kPlaneMagic, sizeof(kPlaneMagic));
+  PlaneWriter w(out);
+  w.U32(kPlaneVersion);
   w.Str(PlaneFusionParamsKey(e.params_));
   w.U64(e.cluster_count_);
   w.U64(e.plane_count_);
@@ -94,10 +93,10 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
     const PlaneFusionParams& params, std::string_view state) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   StatusOr<std::string_view> payload =
-      OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), kVersion,
+      OpenSnapshot(state, std::string_view(kPlaneMagic, sizeof(kPlaneMagic)), kPlaneVersion,
                    PlaneFusionParamsKey(params), "plane fusion snapshot");
   if (!payload.ok()) return payload.status();
-  Reader r(*payload);
+  PlaneReader r(*payload);
   auto engine = std::make_unique<PlaneFusionEngine>(params);
   Impl& e = *engine->impl_;
   e.cluster_count_ = r.U64();
@@ -118,7 +117,7 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
     e.parent_[i] = r.U32();
     e.size_[i] = r.U32();
     if (!r.ok() || node.boundary.size() < 3)
-      return Corrupt("node " + std::to_string(i) + " is malformed");
+      return PlaneCorrupt("node " + std::to_string(i) + " is malformed");
     node.Prepare();
     if (r.U8() == 0) continue;
     auto s = std::make_unique<PlaneStats>();
@@ -136,21 +135,21 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
     s->robots = r.Ids();
     e.stats_[i] = std::move(s);
   }
-  if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
+  if (!r.ok() || !r.at_end()) return PlaneCorrupt("truncated or trailing bytes");
   size_t roots = 0;
   for (uint64_t i = 0; i < n; ++i) {
     if (e.parent_[i] >= n)
-      return Corrupt("node " + std::to_string(i) + " points outside the snapshot");
+      return PlaneCorrupt("node " + std::to_string(i) + " points outside the snapshot");
     const bool root = e.parent_[i] == i;
-    if (root != (e.stats_[i] != nullptr)) return Corrupt("cluster statistics off the roots");
+    if (root != (e.stats_[i] != nullptr)) return PlaneCorrupt("cluster statistics off the roots");
     roots += root;
     uint32_t x = static_cast<uint32_t>(i);
     for (int depth = 0; e.parent_[x] != x; ++depth) {
-      if (depth > kMaxTreeDepth) return Corrupt("a cycle in the cluster forest");
+      if (depth > kMaxForestDepth) return PlaneCorrupt("a cycle in the cluster forest");
       x = e.parent_[x];
     }
   }
-  if (roots != e.cluster_count_) return Corrupt("cluster count disagrees with the forest");
+  if (roots != e.cluster_count_) return PlaneCorrupt("cluster count disagrees with the forest");
   for (uint32_t i = 0; i < n; ++i) e.FileInGrid(i);
   e.RebuildDerived();
   return engine;

@@ -9,12 +9,9 @@
 namespace mapd::fusion {
 namespace {
 
+using geometry::Cross;
 using geometry::Segment2;
 using geometry::Vec2;
-
-double Cross(const Vec2& o, const Vec2& a, const Vec2& b) {
-  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-}
 
 // The polygon's edges; a point is one zero-length edge, a segment one edge.
 std::vector<Segment2> Edges(const std::vector<Vec2>& p) {

@@ -16,6 +16,10 @@
 
 namespace mapd::fusion {
 
+// Both engines keep clusters as a union-find forest joined by size, so a tree
+// is at most log2(nodes) deep; a snapshot whose forest is deeper is corrupt.
+inline constexpr int kMaxForestDepth = 64;
+
 inline uint64_t Fnv1a(std::string_view bytes) {
   uint64_t h = 1469598103934665603ULL;
   for (unsigned char c : bytes) {

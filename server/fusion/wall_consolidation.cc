@@ -8,6 +8,7 @@
 
 namespace mapd::fusion {
 
+using geometry::Cross;
 using geometry::Segment2;
 using geometry::Vec2;
 
@@ -18,8 +19,6 @@ namespace {
 // is then within half of it from a filed point.
 constexpr double kPieceStepM = 2.0;
 constexpr double kSlackM = 1e-6;
-
-double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
 
 std::vector<Vec2> FiledPoints(const Segment2& s) {
   const double length = s.length();

@@ -3,15 +3,6 @@
 #include <algorithm>
 
 namespace mapd::geometry {
-namespace {
-
-// > 0 when o -> a -> b turns left.
-double Cross(const Vec2& o, const Vec2& a, const Vec2& b) {
-  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-}
-
-}  // namespace
-
 std::vector<Vec2> ConvexHull(std::vector<Vec2> points) {
   const auto less = [](const Vec2& p, const Vec2& q) {
     return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y());

@@ -17,6 +17,11 @@ struct Segment2 {
   double length() const { return (b - a).norm(); }
 };
 
+// The z component of u x v: |u||v| sin(angle from u to v), > 0 for a left turn.
+inline double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
+// The same for o -> a -> b: > 0 when it turns left.
+inline double Cross(const Vec2& o, const Vec2& a, const Vec2& b) { return Cross(a - o, b - o); }
+
 // Distance from point p to the closed segment s (clamped to the endpoints), metres.
 double PointSegmentDistance(const Vec2& p, const Segment2& s);
 

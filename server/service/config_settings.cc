@@ -359,6 +359,9 @@ const std::vector<Setting>& Settings() {
              [](C& c) -> auto& { return c.submaps.resample_resolutions; }, "refuse", "resample"),
       Choice("merge.fusion_rule", "occupancy fusion: overlap (the paper's rule) or log_odds",
              [](C& c) -> auto& { return c.submaps.log_odds_fusion; }, "overlap", "log_odds"),
+      Flag("merge.review", "every merge the gates accept waits for an operator's ApproveMerge (stored "
+           "PROPOSED: no frame tied, global map unchanged), as if each request set review",
+           [](C& c) -> auto& { return c.submaps.merge_review; }),
   };
   // clang-format on
   return kSettings;

@@ -273,6 +273,35 @@ grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
   return submaps_.GetGlobalMap(context, writer);
 }
 
+grpc::Status MapServiceImpl::ListMerges(grpc::ServerContext* context,
+                                        const pb::ListMergesRequest* request,
+                                        pb::ListMergesResponse* response) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListMerges"); !p.ok())
+    return ToGrpcStatus(p.status());
+  return submaps_.ListMerges(*request, response);
+}
+grpc::Status MapServiceImpl::GetMerge(grpc::ServerContext* context,
+                                      const pb::GetMergeRequest* request,
+                                      pb::MergeRecord* response) {
+  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetMerge"); !p.ok())
+    return ToGrpcStatus(p.status());
+  return submaps_.GetMerge(*request, response);
+}
+grpc::Status MapServiceImpl::ApproveMerge(grpc::ServerContext* context,
+                                          const pb::ApproveMergeRequest* request,
+                                          pb::MergeRecord* response) {
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "ApproveMerge");
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  return submaps_.ApproveMerge(*request, *p, response);
+}
+grpc::Status MapServiceImpl::RejectMerge(grpc::ServerContext* context,
+                                         const pb::RejectMergeRequest* request,
+                                         pb::MergeRecord* response) {
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "RejectMerge");
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  return submaps_.RejectMerge(*request, *p, response);
+}
+
 grpc::Status MapServiceImpl::CreateToken(grpc::ServerContext* context,
                                          const pb::CreateTokenRequest* request,
                                          pb::CreateTokenResponse* response) {

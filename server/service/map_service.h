@@ -76,6 +76,17 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   grpc::Status GetGlobalMap(grpc::ServerContext* context,
                             const mapserver::v1::GetGlobalMapRequest* request,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
+  grpc::Status ListMerges(grpc::ServerContext* context,
+                          const mapserver::v1::ListMergesRequest* request,
+                          mapserver::v1::ListMergesResponse* response) override;
+  grpc::Status GetMerge(grpc::ServerContext* context, const mapserver::v1::GetMergeRequest* request,
+                        mapserver::v1::MergeRecord* response) override;
+  grpc::Status ApproveMerge(grpc::ServerContext* context,
+                            const mapserver::v1::ApproveMergeRequest* request,
+                            mapserver::v1::MergeRecord* response) override;
+  grpc::Status RejectMerge(grpc::ServerContext* context,
+                           const mapserver::v1::RejectMergeRequest* request,
+                           mapserver::v1::MergeRecord* response) override;
 
   // Identities and the audit log: delegated to AuthService (auth_service.h).
   grpc::Status CreateToken(grpc::ServerContext* context,

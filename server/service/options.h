@@ -85,6 +85,9 @@ struct SubmapOptions {
   double max_merge_seconds = 60.0;    // budget of one merge, seconds
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule
+  // Every merge the gates accept waits for ApproveMerge (PROPOSED), as if
+  // each request set MergeSubmapsRequest.review.
+  bool merge_review = false;
   // Occupied voxels one uploaded submap may expand to at the finest
   // resolution (counted from the tree structure before anything is built).
   uint64_t max_submap_voxels = 8'000'000;

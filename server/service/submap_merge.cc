@@ -2,7 +2,6 @@
 // submap_service.h.
 #include <algorithm>
 #include <chrono>
-#include <optional>
 #include <string>
 #include <unordered_set>
 #include <utility>
@@ -10,6 +9,7 @@
 
 #include "common/clock.h"
 #include "service/log.h"
+#include "service/merge_review.h"
 #include "service/merge_runner.h"
 #include "service/proto_convert.h"
 #include "service/status_mapping.h"
@@ -79,34 +79,6 @@ Status CheckEvidence(const voxel::MergeOutcome& outcome,
   return Status::Ok();
 }
 
-// The session ties an accepted merge implies (see the header comment).
-// T_ref_input[i] maps input i into the reference's frame.
-StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
-    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
-    const std::vector<geometry::Rigid3>& T_ref_input) {
-  std::vector<std::optional<storage::SessionFrame>> frames(inputs.size());
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    if (inputs[i].session_id == 0) continue;
-    StatusOr<storage::SessionFrame> f = store.GetSession(inputs[i].session_id);
-    if (!f.ok()) return f.status();
-    frames[i] = *f;
-  }
-  geometry::Rigid3 T_map_ref = geometry::Rigid3::Identity();
-  for (size_t k = 0; k < inputs.size(); ++k) {
-    if (frames[k] && frames[k]->tied) {
-      T_map_ref = frames[k]->T_map_frame * T_ref_input[k].inverse();
-      break;
-    }
-  }
-  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;
-  std::unordered_set<int64_t> seen;
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    if (!frames[i] || frames[i]->tied || !seen.insert(frames[i]->session_id).second) continue;
-    ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
-  }
-  return ties;
-}
-
 grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
   if (request.submap_ids_size() < 2)
     return InvalidArgument("submap_ids: give two or more submap ids");
@@ -122,11 +94,19 @@ grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
 // The merge record of an accepted outcome (alignments in input order) and the
 // pose of every input in the reference frame.
 StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
-                                          const std::vector<uint64_t>& ids,
+                                          const std::vector<uint64_t>& ids, bool review,
+                                          const Principal& caller,
                                           std::vector<geometry::Rigid3>* T_ref_input) {
   storage::NewMerge merge;
   merge.record.created_ns = UnixNowNs();
-  merge.record.accepted = true;
+  merge.record.requested_by = caller.name;
+  if (review) {
+    merge.record.state = storage::MergeState::kProposed;
+  } else {
+    merge.record.state = storage::MergeState::kAccepted;
+    merge.record.decided_by = caller.name;
+    merge.record.decided_ns = merge.record.created_ns;
+  }
   T_ref_input->assign(ids.size(), geometry::Rigid3::Identity());
   for (size_t i = 0; i < ids.size(); ++i) {
     const auto it = std::find_if(outcome.alignments.begin(), outcome.alignments.end(),
@@ -162,7 +142,7 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
   return merge;
 }
 
-// The last message of an accepted merge.
+// The last message of an accepted (or proposed) merge.
 pb::MergeProgress ResultMessage(const storage::MergeIds& stored,
                                 const storage::MergeRecord& record) {
   pb::MergeProgress last;
@@ -171,6 +151,8 @@ pb::MergeProgress ResultMessage(const storage::MergeIds& stored,
   pb::MergeResult* result = last.mutable_result();
   result->set_merge_id(static_cast<uint64_t>(stored.merge_id));
   result->set_merged_submap_id(static_cast<uint64_t>(stored.merged_submap_id));
+  result->set_state(record.state == storage::MergeState::kProposed ? pb::MERGE_STATE_PROPOSED
+                                                                   : pb::MERGE_STATE_ACCEPTED);
   for (const storage::MergeInputRecord& in : record.inputs) {
     pb::SubmapAlignment* a = result->add_alignments();
     a->set_submap_id(static_cast<uint64_t>(in.submap_id));
@@ -229,8 +211,9 @@ grpc::Status SubmapService::RecordRefusedMerge(const std::vector<uint64_t>& ids,
                                                double seconds, const Principal& caller) {
   storage::NewMerge merge;
   merge.record.created_ns = UnixNowNs();
-  merge.record.accepted = false;
+  merge.record.state = storage::MergeState::kRefused;
   merge.record.reason = why.ToString();
+  merge.record.requested_by = caller.name;
   for (uint64_t id : ids) {
     storage::MergeInputRecord in;
     in.submap_id = static_cast<int64_t>(id);
@@ -268,14 +251,18 @@ Status SubmapService::StoreAcceptedMerge(const storage::NewMerge& merge, const M
                                           " was deleted while the merge ran; nothing was stored");
       }
     }
+    const bool proposed = merge.record.state == storage::MergeState::kProposed;
+    // A proposal ties nothing until it is approved (ApproveMerge).
     StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> ties =
-        FrameTies(core_->store(), inputs.metas, T_ref_input);
+        std::vector<std::pair<int64_t, geometry::Rigid3>>();
+    if (!proposed) ties = FrameTies(core_->store(), inputs.metas, T_ref_input);
     if (!ties.ok()) return ties.status();
     StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
     if (!r.ok()) return r.status();
     *stored = *r;
     MAPD_RETURN_IF_ERROR(txn->AppendAudit(
-        AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, inputs.ids), "ok")));
+        AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, inputs.ids),
+                             proposed ? "proposed: waits for ApproveMerge" : "ok")));
     for (const auto& [session_id, T_map_frame] : *ties)
       MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
     *tied = ties->size();
@@ -312,13 +299,15 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
   }
 
   std::vector<geometry::Rigid3> T_ref_input;
-  StatusOr<storage::NewMerge> merge = AcceptedMerge(*outcome, inputs.ids, &T_ref_input);
+  const bool review = request.review() || options_.merge_review;
+  StatusOr<storage::NewMerge> merge =
+      AcceptedMerge(*outcome, inputs.ids, review, caller, &T_ref_input);
   if (!merge.ok()) return ToGrpcStatus(merge.status());
   storage::MergeIds stored;
   size_t tied = 0;
   MAPD_RETURN_IF_ERROR_GRPC(
       StoreAcceptedMerge(*merge, inputs, T_ref_input, caller, &stored, &tied));
-  Log(LogLevel::kInfo, "merge_accepted",
+  Log(LogLevel::kInfo, review ? "merge_proposed" : "merge_accepted",
       {{"merge", std::to_string(stored.merge_id)},
        {"merged_submap", std::to_string(stored.merged_submap_id)},
        {"inputs", std::to_string(inputs.ids.size())},

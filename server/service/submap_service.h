@@ -34,8 +34,18 @@
 //   ties are never moved later. Submaps uploaded without a session tie
 //   nothing. The fuser then re-projects every stored observation with the new
 //   frames, so the robots' walls fuse into one feature map.
-// - GetGlobalMap: the merged map of the latest accepted merge (NOT_FOUND
-//   before the first).
+// - GetGlobalMap: the merged map of the merge accepted last (by decision
+//   time; NOT_FOUND before the first).
+// - Review (merge_review.cc): with MergeSubmapsRequest.review or
+//   merge.review, a merge the gates accept is stored PROPOSED with its merged
+//   map and its audit row, and ties nothing. ApproveMerge, on the writer
+//   thread in one transaction, checks that it is still PROPOSED, that its
+//   inputs and merged map are still stored and that no merge accepted since
+//   it was proposed shares an input submap or a session frame with it
+//   (FAILED_PRECONDITION naming which), then marks it ACCEPTED and ties the
+//   frames by the rules below, with the frames as they are then.
+//   RejectMerge (a reason required) marks it REJECTED. Both are audited, a
+//   refused decision too. Every merge records who asked (MergeRecord).
 // Built with MAPD_WITH_VOXEL=OFF (no PCL), MergeSubmaps answers
 // UNIMPLEMENTED (service/voxel_merge.h); uploads, listing, fetching and
 // deleting work in every build (they need only voxel_io).
@@ -115,8 +125,21 @@ class SubmapService {
                      const Principal& caller);
   grpc::Status GetGlobalMap(grpc::ServerContext* context,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
+  // Merge records and their review (merge_review.cc); the caller's role was checked.
+  grpc::Status ListMerges(const mapserver::v1::ListMergesRequest& request,
+                          mapserver::v1::ListMergesResponse* response);
+  grpc::Status GetMerge(const mapserver::v1::GetMergeRequest& request,
+                        mapserver::v1::MergeRecord* response);
+  grpc::Status ApproveMerge(const mapserver::v1::ApproveMergeRequest& request,
+                            const Principal& caller, mapserver::v1::MergeRecord* response);
+  grpc::Status RejectMerge(const mapserver::v1::RejectMergeRequest& request,
+                           const Principal& caller, mapserver::v1::MergeRecord* response);
 
  private:
+  // Approve/Reject's end: audits a refused decision (its own transaction
+  // rolled back), or fills `response` with the record as now stored.
+  grpc::Status FinishDecision(const std::string& action, int64_t id, const Status& outcome,
+                              const Principal& caller, mapserver::v1::MergeRecord* response);
   // Merge's steps (submap_merge.cc).
   struct MergeInputs {
     std::vector<storage::SubmapMeta> metas;
@@ -132,7 +155,8 @@ class SubmapService {
   // Records the refusal and its reason, audited; returns the library's code.
   grpc::Status RecordRefusedMerge(const std::vector<uint64_t>& ids, const Status& why,
                                   double seconds, const Principal& caller);
-  // The merge, its audit row and the session ties, in one transaction.
+  // The merge (accepted or proposed), its audit row and, when accepted, the
+  // session ties, in one transaction.
   Status StoreAcceptedMerge(const storage::NewMerge& merge, const MergeInputs& inputs,
                             const std::vector<geometry::Rigid3>& T_ref_input,
                             const Principal& caller, storage::MergeIds* stored, size_t* tied);

@@ -1,12 +1,12 @@
 // Fused non-vertical planes in mapctl's output formats.
 #include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "client/format.h"
 #include "client/format_svg.h"
+#include "client/support/parse_json.h"
 #include "client/support/svg_facts.h"
 
 namespace mapd::client {
@@ -41,13 +41,6 @@ pb::FusedFeature Wall() {
   f.mutable_b()->set_x(10);
   f.set_support(4);
   return f;
-}
-
-google::protobuf::Struct ParseJson(const std::string& text) {
-  google::protobuf::Struct s;
-  const auto status = google::protobuf::util::JsonStringToMessage(text, &s);
-  EXPECT_TRUE(status.ok()) << status.message() << "\n" << text;
-  return s;
 }
 
 TEST(FormatPlanesTest, GeoJsonDrawsAPlaneAsAClosedPolygonWithItsProperties) {

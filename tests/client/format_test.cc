@@ -1,12 +1,12 @@
 #include "client/format.h"
 
 #include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "client/format_svg.h"
+#include "client/support/parse_json.h"
 #include "client/support/svg_facts.h"
 
 namespace mapd::client {
@@ -35,14 +35,6 @@ FeatureList ThreeFeatures() {
   return {Feature(7, pb::FEATURE_KIND_LINE, 0, 0, 10, 0, 12, {"r1", "r2"}),
           Feature(42, pb::FEATURE_KIND_PLANE, 10, 0, 10, 8, 3, {"r1"}),
           Feature(4096, pb::FEATURE_KIND_LINE, 10, 8, 0, 8.5, 1, {"robot \"quoted\""})};
-}
-
-// Parses JSON text into a Struct (fails the test on invalid JSON).
-google::protobuf::Struct ParseJson(const std::string& text) {
-  google::protobuf::Struct s;
-  const auto status = google::protobuf::util::JsonStringToMessage(text, &s);
-  EXPECT_TRUE(status.ok()) << status.message() << "\n" << text;
-  return s;
 }
 
 TEST(FormatGeoJsonTest, IsAFeatureCollectionWithOneLineStringPerFeature) {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -267,6 +268,101 @@ TEST_F(MapctlSubmapE2eTest, MergeWithoutEvidenceIsRefusedWithTheReason) {
   EXPECT_THAT(r.err, HasSubstr("FAILED_PRECONDITION"));
   EXPECT_THAT(r.out, Not(HasSubstr("accepted")));
   EXPECT_FALSE(std::filesystem::exists(png));
+}
+
+// The id in "merge 3 proposed (waits for review): ...", or "" if absent.
+std::string MergeId(const std::string& out) {
+  std::smatch m;
+  return std::regex_search(out, m, std::regex(R"(merge (\d+) (proposed|accepted))")) ? m[1].str()
+                                                                                     : "";
+}
+
+TEST_F(MapctlSubmapE2eTest, ReviewShowApproveRejectAndListMerges) {
+  const std::string id_a = Upload(a_bt_, "r1");
+  const std::string id_b = Upload(b_bt_, "r2");
+  ASSERT_FALSE(id_b.empty());
+
+  CommandResult r = Mapctl({"merge", id_a, id_b, "--review"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("proposed (waits for review)"));
+  const std::string first = MergeId(r.out);
+  ASSERT_FALSE(first.empty()) << r.out;
+  r = Mapctl({"global-map", "-o", dir_.File("none.bt")});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+
+  // Shown and drawn while it waits.
+  const std::string png = dir_.File("proposal.png");
+  r = Mapctl({"merge", "show", first, "--render", png});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("merge " + first + ": proposed"));
+  EXPECT_THAT(r.out, HasSubstr("requested by anonymous"));
+  EXPECT_TRUE(ParseAlignment(r.out, id_b).found) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("rendered 2 layers"));
+  EXPECT_TRUE(IsValidPng(png));
+
+  r = Mapctl({"merge", "approve", first});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("merge " + first + ": accepted"));
+  r = Mapctl({"merge", "approve", first});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("FAILED_PRECONDITION"));
+  EXPECT_THAT(r.err, HasSubstr("is accepted"));
+  EXPECT_EQ(Mapctl({"global-map", "-o", dir_.File("world.bt")}).exit_code, 0);
+
+  // A second proposal, rejected (a reason is required).
+  r = Mapctl({"merge", id_a, id_b, "--review"});
+  const std::string second = MergeId(r.out);
+  ASSERT_FALSE(second.empty()) << r.out << r.err;
+  r = Mapctl({"merge", "reject", second});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--reason"));
+  r = Mapctl({"merge", "reject", second, "--reason", "duplicate of " + first});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("rejected"));
+
+  r = Mapctl({"merges"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("accepted"));
+  EXPECT_THAT(r.out, HasSubstr("duplicate of " + first));
+  EXPECT_THAT(r.out, HasSubstr("2 merges"));
+  r = Mapctl({"merges", "--state", "rejected", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc["merges"].size(), 1u) << r.out;
+  const nlohmann::json& m = doc["merges"][0];
+  EXPECT_EQ(m["id"].get<uint64_t>(), std::stoull(second));
+  EXPECT_EQ(m["state"], "rejected");
+  EXPECT_EQ(m["requested_by"], "anonymous");
+  EXPECT_EQ(m["decided_by"], "anonymous");
+  ASSERT_EQ(m["inputs"].size(), 2u);
+  EXPECT_EQ(m["inputs"][1]["submap_id"].get<uint64_t>(), std::stoull(id_b));
+  EXPECT_GE(m["inputs"][1]["matched_corners"].get<int>(), 4);
+  EXPECT_EQ(m["inputs"][1]["t_reference_submap"]["translation"].size(), 3u);
+  EXPECT_EQ(Mapctl({"merge", "show", "999"}).exit_code, 1);
+  EXPECT_EQ(Mapctl({"merges", "--state", "maybe"}).exit_code, 2);
+}
+
+TEST_F(MapctlSubmapE2eTest, SubmapGetRoundTripsAndDeleteRemoves) {
+  const std::string id_a = Upload(a_bt_, "r1");
+  ASSERT_FALSE(id_a.empty());
+  const std::string out = dir_.File("copy.bt");
+  CommandResult r = Mapctl({"submap", "get", id_a, "-o", out});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("robot r1"));
+  EXPECT_EQ(ReadAll(out), maps_->a_bt);
+
+  r = Mapctl({"submap", "delete", id_a});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("deleted submap " + id_a));
+  r = Mapctl({"submap", "get", id_a, "-o", dir_.File("gone.bt")});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("gone.bt")));
+  r = Mapctl({"submap", "delete", id_a});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+  EXPECT_EQ(Mapctl({"submap", "delete", "abc"}).exit_code, 2);
 }
 
 TEST_F(MapctlSubmapE2eTest, RenderUsageErrors) {

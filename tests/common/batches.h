@@ -60,6 +60,29 @@ inline mapserver::v1::ObservationBatch RoomBatch(const std::string& robot,
   return batch;
 }
 
+// Batches re-expressed in a robot's own session frame (SESSION_FRAME_LOCAL) whose pose in
+// the map frame is T_map_b: the same walls seen from the same places, another frame.
+inline std::vector<mapserver::v1::ObservationBatch> InFrame(
+    std::vector<mapserver::v1::ObservationBatch> batches, const Eigen::Isometry3d& T_map_b) {
+  const Eigen::Isometry3d T_b_map = T_map_b.inverse();
+  for (mapserver::v1::ObservationBatch& batch : batches) {
+    auto* pose = batch.mutable_t_frame_sensor();
+    const Eigen::Quaterniond q(pose->rotation().w(), pose->rotation().x(), pose->rotation().y(),
+                               pose->rotation().z());
+    const Eigen::Vector3d t(pose->translation().x(), pose->translation().y(),
+                            pose->translation().z());
+    const Eigen::Quaterniond q_b(T_b_map.rotation() * q.toRotationMatrix());
+    const Eigen::Vector3d t_b = T_b_map * t;
+    SetVec3(t_b, pose->mutable_translation());
+    pose->mutable_rotation()->set_w(q_b.w());
+    pose->mutable_rotation()->set_x(q_b.x());
+    pose->mutable_rotation()->set_y(q_b.y());
+    pose->mutable_rotation()->set_z(q_b.z());
+    batch.set_session_frame(mapserver::v1::SESSION_FRAME_LOCAL);
+  }
+  return batches;
+}
+
 }  // namespace mapd::testing
 
 #endif  // MAPD_TESTS_COMMON_BATCHES_H_

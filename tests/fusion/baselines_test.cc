@@ -19,8 +19,6 @@ namespace {
 using geometry::Segment2;
 using geometry::Vec2;
 
-constexpr double kPi = 3.14159265358979323846;
-
 GroundFeature Wall(FeatureId id, Vec2 a, Vec2 b) {
   GroundFeature f;
   f.id = id;
@@ -146,7 +144,7 @@ TEST(FuserRegistryTest, InvalidBaselineParametersAreRefused) {
 
 TEST(MeanShiftTest, OrientationModesWrapAroundPi) {
   // 1 deg and 179 deg are 2 deg apart on the axial circle; 90 deg is its own mode.
-  const double deg = kPi / 180.0;
+  const double deg = M_PI / 180.0;
   const std::vector<double> theta = {1 * deg, 179 * deg, 0.5 * deg, 90 * deg, 91 * deg};
   const baselines::Modes modes =
       baselines::OrientationModes(theta, std::vector<double>(theta.size(), 1.0), {});

@@ -10,13 +10,11 @@ namespace {
 
 using geometry::Segment2;
 
-constexpr double kPi = 3.14159265358979323846;
-
 TEST(IncludedAngleTest, PerpendicularAntiparallelAndSkew) {
   const Segment2 x{{0, 0}, {2, 0}};
-  EXPECT_NEAR(IncludedAngle(x, {{1, 1}, {1, 5}}), kPi / 2, 1e-15);
+  EXPECT_NEAR(IncludedAngle(x, {{1, 1}, {1, 5}}), M_PI / 2, 1e-15);
   EXPECT_EQ(IncludedAngle(x, {{3, 0}, {-1, 0}}), 0.0);  // antiparallel: |u.v| makes it 0
-  EXPECT_NEAR(IncludedAngle(x, {{0, 0}, {-1, 1}}), kPi / 4, 1e-15);  // 135 deg -> 45 deg
+  EXPECT_NEAR(IncludedAngle(x, {{0, 0}, {-1, 1}}), M_PI / 4, 1e-15);  // 135 deg -> 45 deg
 }
 
 TEST(OverlapRatioTest, DisjointCirclesDoNotOverlap) {
@@ -37,10 +35,10 @@ TEST(OverlapRatioTest, TwoUnitCirclesOneApart) {
   // D = 1, R_f = R_g = 1: alpha = acos((1 + 1 - 1) / 2) = pi/3 for both, so
   // lens = pi/3 + pi/3 - 1 * 1 * sin(pi/3) = 2 pi/3 - sqrt(3)/2 = 1.228369699...
   // and eps = lens / pi = 0.391002218...
-  const double lens = 2.0 * kPi / 3.0 - std::sqrt(3.0) / 2.0;
-  EXPECT_NEAR(OverlapRatio(CircleOf({{-1, 0}, {1, 0}}), CircleOf({{0, 0}, {2, 0}})), lens / kPi,
+  const double lens = 2.0 * M_PI / 3.0 - std::sqrt(3.0) / 2.0;
+  EXPECT_NEAR(OverlapRatio(CircleOf({{-1, 0}, {1, 0}}), CircleOf({{0, 0}, {2, 0}})), lens / M_PI,
               1e-14);
-  EXPECT_NEAR(lens / kPi, 0.391002218, 1e-9);
+  EXPECT_NEAR(lens / M_PI, 0.391002218, 1e-9);
 }
 
 TEST(OverlapRatioTest, UnequalCircles) {
@@ -49,8 +47,8 @@ TEST(OverlapRatioTest, UnequalCircles) {
   // lens = 4 acos(7/8) + acos(1/4) - 2 * 2 * sin(acos(7/8)) = 2.021442 + 1.318116 - 1.936492
   //      = 1.403066 (sin(acos(7/8)) = sqrt(15)/8); eps = lens / (pi * 1^2) = 0.446610.
   const double lens = 4.0 * std::acos(7.0 / 8.0) + std::acos(0.25) - 4.0 * std::sqrt(15.0) / 8.0;
-  EXPECT_NEAR(OverlapRatio({{0, 0}, 2.0}, {{2, 0}, 1.0}), lens / kPi, 1e-14);
-  EXPECT_NEAR(lens / kPi, 0.446610, 1e-6);
+  EXPECT_NEAR(OverlapRatio({{0, 0}, 2.0}, {{2, 0}, 1.0}), lens / M_PI, 1e-14);
+  EXPECT_NEAR(lens / M_PI, 0.446610, 1e-6);
 }
 
 TEST(MaxCentreDistanceTest, UsesClampedSegmentDistance) {

@@ -15,8 +15,6 @@ using geometry::Rigid3;
 using geometry::SensorObservation;
 using geometry::Vec2;
 
-constexpr double kPi = 3.14159265358979323846;
-
 Rigid3 Yaw(double yaw_rad, const Eigen::Vector3d& t) {
   return {Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ())), t};
 }
@@ -27,7 +25,7 @@ void ExpectNear(const Vec2& actual, const Vec2& expected) {
 
 TEST(ProjectToGroundTest, LineUnderYawAndTranslation) {
   SensorObservation obs;
-  obs.T_frame_sensor = Yaw(kPi / 2, Eigen::Vector3d::Zero());
+  obs.T_frame_sensor = Yaw(M_PI / 2, Eigen::Vector3d::Zero());
   obs.lines.push_back({{1, 0, 0}, {3, 0, 1}});
   // T_map_sensor = T_map_frame * T_frame_sensor: rotate by 90 deg, then shift.
   const auto out = ProjectToGround(obs, Yaw(0.0, {1, 2, 0.5}), 7, FusionParams());
@@ -72,7 +70,7 @@ TEST(ProjectToGroundTest, RotatedVerticalPlaneKeepsItsTrace) {
   wall.offset = -2.0;
   wall.boundary = {{2, -1, 0}, {2, 4, 0}, {2, 4, 2}};
   obs.planes.push_back(wall);
-  const auto out = ProjectToGround(obs, Yaw(kPi / 2, {0, 0, 0}), 1, FusionParams());
+  const auto out = ProjectToGround(obs, Yaw(M_PI / 2, {0, 0, 0}), 1, FusionParams());
   ASSERT_TRUE(out.ok());
   ASSERT_EQ(out->ground.size(), 1u);
   // Map frame: (x, y) -> (-y, x), so the wall is y = 2 with x in [-4, 1].

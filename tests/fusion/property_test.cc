@@ -32,7 +32,6 @@ using testing::BatchObservation;
 using testing::BatchResult;
 
 constexpr double kToleranceM = 1e-9;
-constexpr double kPi = 3.14159265358979323846;
 
 struct Scene {
   FusionParams params;
@@ -61,7 +60,7 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
   std::vector<Segment2> walls;
   for (int room = 0; room < 3; ++room) {
     const Vec2 origin(uniform(-30, 30), uniform(-30, 30));
-    const double yaw = uniform(0, kPi);
+    const double yaw = uniform(0, M_PI);
     const Vec2 ex(std::cos(yaw), std::sin(yaw));
     const Vec2 ey(-ex.y(), ex.x());
     const double w = uniform(4, 12), h = uniform(4, 12);
@@ -80,13 +79,13 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
   }
   for (int k = 0; k < 8; ++k) {
     const Vec2 a(uniform(-35, 35), uniform(-35, 35));
-    const double yaw = uniform(0, 2 * kPi);
+    const double yaw = uniform(0, 2 * M_PI);
     walls.push_back({a, a + uniform(1, 8) * Vec2(std::cos(yaw), std::sin(yaw))});
   }
   std::vector<Arc> arcs;
   for (int k = 0; curved && k < 3; ++k) {
-    arcs.push_back({Vec2(uniform(-35, 35), uniform(-35, 35)), uniform(3, 10), uniform(0, 2 * kPi),
-                    uniform(kPi / 3, kPi)});
+    arcs.push_back({Vec2(uniform(-35, 35), uniform(-35, 35)), uniform(3, 10), uniform(0, 2 * M_PI),
+                    uniform(M_PI / 3, M_PI)});
   }
 
   Scene scene;
@@ -148,7 +147,7 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
     const int clutter = static_cast<int>(rng() % 4);  // small things, mostly seen once
     for (int k = 0; k < clutter; ++k) {
       const Vec2 a(uniform(-35, 35), uniform(-35, 35));
-      const double yaw = uniform(0, 2 * kPi);
+      const double yaw = uniform(0, 2 * M_PI);
       add(a, a + uniform(0.3, 2.0) * Vec2(std::cos(yaw), std::sin(yaw)));
     }
     scene.observations.push_back(obs);

@@ -416,29 +416,6 @@ TEST_F(SubmapServiceTest, RefusesMalformedMergeRequests) {
 
 // --- Frames: an accepted merge ties robot r2's session to the map frame.
 
-// r2's batches: the room walls seen from the same places as r1's, but with
-// poses in r2's own session frame, whose pose in the map frame is T_map_b.
-std::vector<pb::ObservationBatch> InFrame(std::vector<pb::ObservationBatch> batches,
-                                          const Eigen::Isometry3d& T_map_b) {
-  const Eigen::Isometry3d T_b_map = T_map_b.inverse();
-  for (pb::ObservationBatch& batch : batches) {
-    auto* pose = batch.mutable_t_frame_sensor();
-    const Eigen::Quaterniond q(pose->rotation().w(), pose->rotation().x(), pose->rotation().y(),
-                               pose->rotation().z());
-    const Eigen::Vector3d t(pose->translation().x(), pose->translation().y(),
-                            pose->translation().z());
-    const Eigen::Quaterniond q_b(T_b_map.rotation() * q.toRotationMatrix());
-    const Eigen::Vector3d t_b = T_b_map * t;
-    SetVec3(t_b, pose->mutable_translation());
-    pose->mutable_rotation()->set_w(q_b.w());
-    pose->mutable_rotation()->set_x(q_b.x());
-    pose->mutable_rotation()->set_y(q_b.y());
-    pose->mutable_rotation()->set_z(q_b.z());
-    batch.set_session_frame(pb::SESSION_FRAME_LOCAL);
-  }
-  return batches;
-}
-
 TEST_F(SubmapServiceTest, AcceptedMergeTiesTheSecondRobotsFrameAndFusesItsWalls) {
   // r1 is localised (map frame); r2 sees the same four walls in its own frame.
   Stream(Walk("r1", 6));

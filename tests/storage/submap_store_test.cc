@@ -63,7 +63,7 @@ class SubmapStoreTest : public testing::StoreFixture {
 
   NewMerge Accepted(int64_t a, int64_t b, const std::string& merged_bytes) {
     NewMerge m;
-    m.record.accepted = true;
+    m.record.state = MergeState::kAccepted;
     m.record.created_ns = 99;
     MergeInputRecord ia;
     ia.submap_id = a;
@@ -185,7 +185,7 @@ TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) 
   Reopen();
   auto record = store_->GetMerge(ids->merge_id);
   ASSERT_TRUE(record.ok()) << record.status().ToString();
-  EXPECT_TRUE(record->accepted);
+  EXPECT_EQ(record->state, MergeState::kAccepted);
   EXPECT_EQ(record->merged_submap_id, ids->merged_submap_id);
   ASSERT_EQ(record->inputs.size(), 2u);
   EXPECT_EQ(record->inputs[1].submap_id, b);
@@ -215,7 +215,7 @@ TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   NewMerge m;
-  m.record.accepted = false;
+  m.record.state = MergeState::kRefused;
   m.record.reason = "FAILED_PRECONDITION: no corners in submap 2";
   m.record.inputs = {Input(a), Input(b)};
   auto ids = Record(m);
@@ -225,7 +225,7 @@ TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
   EXPECT_EQ(store_->ListSubmaps("")->size(), 2u);
   auto record = store_->GetMerge(ids->merge_id);
   ASSERT_TRUE(record.ok());
-  EXPECT_FALSE(record->accepted);
+  EXPECT_EQ(record->state, MergeState::kRefused);
   EXPECT_EQ(record->reason, m.record.reason);
   ASSERT_EQ(record->inputs.size(), 2u);
   EXPECT_FALSE(record->inputs[0].aligned);
@@ -244,6 +244,95 @@ TEST_F(SubmapStoreTest, LatestAcceptedMergeIsTheGlobalMap) {
   ASSERT_TRUE(Record(refused).ok());
   EXPECT_EQ(store_->LatestGlobalMap()->id, second->merged_submap_id);
   EXPECT_EQ(store_->ListMerges()->size(), 3u);
+}
+
+TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  NewMerge proposal = Accepted(a, b, "PROPOSED");
+  proposal.record.state = MergeState::kProposed;
+  proposal.record.requested_by = "ops";
+  auto ids = Record(proposal);
+  ASSERT_TRUE(ids.ok()) << ids.status().ToString();
+  EXPECT_GT(ids->merged_submap_id, 0);
+  EXPECT_EQ(*store_->GetSubmapData(ids->merged_submap_id), "PROPOSED");
+  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
+  auto record = store_->GetMerge(ids->merge_id);
+  ASSERT_TRUE(record.ok());
+  EXPECT_EQ(record->state, MergeState::kProposed);
+  EXPECT_EQ(record->requested_by, "ops");
+  EXPECT_EQ(record->decided_ns, 0);
+
+  auto decide = [&](int64_t id, MergeState state) {
+    return Write([&](WriteTransaction* t) { return t->DecideMerge(id, state, "boss", 500, ""); });
+  };
+  EXPECT_EQ(decide(ids->merge_id + 7, MergeState::kAccepted).code(), StatusCode::kNotFound);
+  EXPECT_EQ(decide(ids->merge_id, MergeState::kRefused).code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(decide(ids->merge_id, MergeState::kAccepted).ok());
+  Reopen();
+  record = store_->GetMerge(ids->merge_id);
+  EXPECT_EQ(record->state, MergeState::kAccepted);
+  EXPECT_EQ(record->decided_by, "boss");
+  EXPECT_EQ(record->decided_ns, 500);
+  EXPECT_EQ(store_->LatestGlobalMap()->id, ids->merged_submap_id);
+  const Status again = decide(ids->merge_id, MergeState::kRejected);
+  EXPECT_EQ(again.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(again.message().find("is accepted"), std::string::npos) << again.ToString();
+  // Approved, it pins its inputs like any accepted merge.
+  EXPECT_EQ(Write([&](WriteTransaction* t) { return t->DeleteSubmap(a); }).code(),
+            StatusCode::kFailedPrecondition);
+}
+
+TEST_F(SubmapStoreTest, RejectedProposalPinsNothingAndKeepsTheReason) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  NewMerge proposal = Accepted(a, b, "P");
+  proposal.record.state = MergeState::kProposed;
+  auto ids = Record(proposal);
+  ASSERT_TRUE(ids.ok());
+  ASSERT_TRUE(Write([&](WriteTransaction* t) {
+                return t->DecideMerge(ids->merge_id, MergeState::kRejected, "boss", 9, "askew");
+              }).ok());
+  auto record = store_->GetMerge(ids->merge_id);
+  EXPECT_EQ(record->state, MergeState::kRejected);
+  EXPECT_EQ(record->reason, "askew");
+  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
+  for (int64_t id : {a, ids->merged_submap_id})
+    EXPECT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(id); }).ok()) << id;
+}
+
+// A database of schema 5 (before review): its merges read as accepted /
+// refused, and the accepted one stays the global map.
+TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  auto accepted = Record(Accepted(a, b, "OLD"));
+  ASSERT_TRUE(accepted.ok());
+  NewMerge refused;
+  refused.record.reason = "no overlap";
+  refused.record.inputs = {Input(a), Input(b)};
+  ASSERT_TRUE(Record(refused).ok());
+  store_.reset();
+  {
+    auto db = OpenDatabase(dir_.File("map.db"), false);
+    ASSERT_TRUE(db.ok());
+    ASSERT_TRUE(Exec(db->get(),
+                     "ALTER TABLE merges DROP COLUMN requested_by; "
+                     "ALTER TABLE merges DROP COLUMN decided_by; "
+                     "ALTER TABLE merges DROP COLUMN decided_ns; "
+                     "DELETE FROM schema_version WHERE version = 6")
+                    .ok());
+  }
+  Reopen();
+  auto merges = store_->ListMerges();
+  ASSERT_TRUE(merges.ok()) << merges.status().ToString();
+  ASSERT_EQ(merges->size(), 2u);
+  EXPECT_EQ((*merges)[0].state, MergeState::kAccepted);
+  EXPECT_EQ((*merges)[0].decided_ns, (*merges)[0].created_ns);
+  EXPECT_EQ((*merges)[0].requested_by, "");
+  EXPECT_EQ((*merges)[1].state, MergeState::kRefused);
+  EXPECT_EQ((*merges)[1].reason, "no overlap");
+  EXPECT_EQ(store_->LatestGlobalMap()->id, accepted->merged_submap_id);
 }
 
 TEST_F(SubmapStoreTest, TiedSessionFramePersistsAndIsNeverMoved) {

@@ -1,0 +1,247 @@
+// Merge records and their review: SubmapService::ListMerges, GetMerge,
+// ApproveMerge, RejectMerge (rules in submap_service.h, "Review").
+#include "service/merge_review.h"
+
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "common/clock.h"
+#include "service/log.h"
+#include "service/proto_convert.h"
+#include "service/status_mapping.h"
+#include "service/submap_service.h"
+
+namespace mapd::service {
+namespace {
+
+namespace pb = mapserver::v1;
+
+constexpr size_t kMaxReasonChars = 1000;
+
+std::string MergeName(int64_t id) { return "merge " + std::to_string(id); }
+
+// The inputs of `record` as stored now; FailedPrecondition naming the first
+// one (or the merged map) that was deleted.
+StatusOr<std::vector<storage::SubmapMeta>> StoredInputs(storage::Store& store,
+                                                        const storage::MergeRecord& record) {
+  std::vector<storage::SubmapMeta> metas;
+  for (const storage::MergeInputRecord& in : record.inputs) {
+    StatusOr<storage::SubmapMeta> meta = store.GetSubmap(in.submap_id);
+    if (meta.status().code() == StatusCode::kNotFound) {
+      return Status::FailedPrecondition(
+          "input submap " + std::to_string(in.submap_id) + " of " + MergeName(record.id) +
+          " was deleted since it was proposed; reject it, or upload and merge again");
+    }
+    if (!meta.ok()) return meta.status();
+    metas.push_back(*std::move(meta));
+  }
+  StatusOr<storage::SubmapMeta> merged = store.GetSubmap(record.merged_submap_id);
+  if (merged.status().code() == StatusCode::kNotFound) {
+    return Status::FailedPrecondition("the merged map of " + MergeName(record.id) + " (submap " +
+                                      std::to_string(record.merged_submap_id) +
+                                      ") was deleted; reject it, or merge again");
+  }
+  if (!merged.ok()) return merged.status();
+  return metas;
+}
+
+}  // namespace
+
+StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
+    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
+    const std::vector<geometry::Rigid3>& T_ref_input) {
+  std::vector<std::optional<storage::SessionFrame>> frames(inputs.size());
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    if (inputs[i].session_id == 0) continue;
+    StatusOr<storage::SessionFrame> f = store.GetSession(inputs[i].session_id);
+    if (!f.ok()) return f.status();
+    frames[i] = *f;
+  }
+  geometry::Rigid3 T_map_ref = geometry::Rigid3::Identity();
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    if (frames[k] && frames[k]->tied) {
+      T_map_ref = frames[k]->T_map_frame * T_ref_input[k].inverse();
+      break;
+    }
+  }
+  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;
+  std::unordered_set<int64_t> seen;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    if (!frames[i] || frames[i]->tied || !seen.insert(frames[i]->session_id).second) continue;
+    ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
+  }
+  return ties;
+}
+
+Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& proposal,
+                            const std::vector<storage::SubmapMeta>& metas) {
+  std::unordered_set<int64_t> submaps;
+  std::unordered_map<int64_t, std::string> sessions;  // session id -> robot
+  for (const storage::SubmapMeta& m : metas) {
+    submaps.insert(m.id);
+    if (m.session_id != 0) sessions.emplace(m.session_id, m.robot);
+  }
+  StatusOr<std::vector<storage::MergeRecord>> all = store.ListMerges();
+  if (!all.ok()) return all.status();
+  for (const storage::MergeRecord& other : *all) {
+    // Accepted after this one was proposed: made later, or approved later.
+    const bool since = other.id > proposal.id || other.decided_ns >= proposal.created_ns;
+    if (other.id == proposal.id || other.state != storage::MergeState::kAccepted || !since)
+      continue;
+    const std::string prefix =
+        MergeName(other.id) + ", accepted since " + MergeName(proposal.id) + " was proposed, ";
+    const std::string advice = "; its frames are fixed now: reject this one and merge again";
+    for (const storage::MergeInputRecord& in : other.inputs) {
+      std::string shared;
+      if (submaps.count(in.submap_id) != 0) {
+        shared = "also aligns submap " + std::to_string(in.submap_id);
+      } else if (StatusOr<storage::SubmapMeta> meta = store.GetSubmap(in.submap_id);
+                 meta.ok() && meta->session_id != 0 && sessions.count(meta->session_id) != 0) {
+        // (An accepted merge pins its inputs; a missing one would share nothing.)
+        shared = "also places the session frame of robot '" + sessions[meta->session_id] +
+                 "' (through submap " + std::to_string(in.submap_id) + ")";
+      }
+      if (!shared.empty()) {
+        std::string why = prefix;
+        why += shared;
+        why += advice;
+        return Status::FailedPrecondition(why);
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+void ToProto(const storage::MergeRecord& r, pb::MergeRecord* out) {
+  out->set_id(static_cast<uint64_t>(r.id));
+  out->set_state(static_cast<pb::MergeState>(static_cast<int>(r.state)));
+  for (const storage::MergeInputRecord& in : r.inputs) {
+    pb::SubmapAlignment* a = out->add_inputs();
+    a->set_submap_id(static_cast<uint64_t>(in.submap_id));
+    if (!in.aligned) continue;
+    ToProto(in.T_reference_submap, a->mutable_t_reference_submap());
+    a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
+    a->set_residual_m(in.residual_m);
+    a->set_overlap_score(in.overlap_score);
+  }
+  out->set_reason(r.reason);
+  out->set_merged_submap_id(static_cast<uint64_t>(r.merged_submap_id));
+  out->set_requested_by(r.requested_by);
+  out->set_created_ns(r.created_ns);
+  out->set_decided_by(r.decided_by);
+  out->set_decided_ns(r.decided_ns);
+}
+
+grpc::Status SubmapService::ListMerges(const pb::ListMergesRequest& request,
+                                       pb::ListMergesResponse* response) {
+  if (!pb::MergeState_IsValid(request.state()))
+    return InvalidArgument("state: " + std::to_string(request.state()) + " is not a MergeState");
+  StatusOr<std::vector<storage::MergeRecord>> all = core_->store().ListMerges();
+  if (!all.ok()) return ToGrpcStatus(all.status());
+  for (const storage::MergeRecord& r : *all) {
+    if (request.state() != pb::MERGE_STATE_UNSPECIFIED &&
+        static_cast<int>(r.state) != static_cast<int>(request.state()))
+      continue;
+    ToProto(r, response->add_merges());
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::GetMerge(const pb::GetMergeRequest& request,
+                                     pb::MergeRecord* response) {
+  if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
+  StatusOr<storage::MergeRecord> r = core_->store().GetMerge(static_cast<int64_t>(request.id()));
+  if (!r.ok()) return ToGrpcStatus(r.status());
+  ToProto(*r, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::FinishDecision(const std::string& action, int64_t id,
+                                           const Status& outcome, const Principal& caller,
+                                           pb::MergeRecord* response) {
+  if (!outcome.ok()) {
+    // The decision's transaction rolled back with its audit row: the refusal gets its own.
+    const Status audited = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
+      return txn->AppendAudit(
+          AccessControl::Entry(caller, action, MergeName(id), outcome.ToString()));
+    });
+    if (!audited.ok())
+      Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", audited.ToString()}});
+    return ToGrpcStatus(outcome);
+  }
+  StatusOr<storage::MergeRecord> r = core_->store().GetMerge(id);
+  if (!r.ok()) return ToGrpcStatus(r.status());
+  ToProto(*r, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
+                                         const Principal& caller, pb::MergeRecord* response) {
+  if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
+  if (draining_) return ShuttingDown();
+  const auto id = static_cast<int64_t>(request.id());
+  size_t tied = 0;
+  const Status outcome = core_->ExecuteWrite([&](storage::WriteTransaction* txn) -> Status {
+    // On the writer thread: no delete, tie or other decision can come
+    // between these checks and the commit.
+    storage::Store& store = core_->store();
+    StatusOr<storage::MergeRecord> merge = store.GetMerge(id);
+    if (!merge.ok()) return merge.status();
+    if (merge->state != storage::MergeState::kProposed) {
+      return Status::FailedPrecondition(MergeName(id) + " is " +
+                                        storage::MergeStateName(merge->state) +
+                                        "; only a proposed merge can be approved");
+    }
+    StatusOr<std::vector<storage::SubmapMeta>> metas = StoredInputs(store, *merge);
+    if (!metas.ok()) return metas.status();
+    MAPD_RETURN_IF_ERROR(CheckNoLaterConflict(store, *merge, *metas));
+    std::vector<geometry::Rigid3> T_ref_input;
+    for (const storage::MergeInputRecord& in : merge->inputs)
+      T_ref_input.push_back(in.T_reference_submap);
+    StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> ties =
+        FrameTies(store, *metas, T_ref_input);
+    if (!ties.ok()) return ties.status();
+    MAPD_RETURN_IF_ERROR(
+        txn->DecideMerge(id, storage::MergeState::kAccepted, caller.name, UnixNowNs(), ""));
+    MAPD_RETURN_IF_ERROR(
+        txn->AppendAudit(AccessControl::Entry(caller, "ApproveMerge", MergeName(id), "ok")));
+    for (const auto& [session_id, T_map_frame] : *ties)
+      MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
+    tied = ties->size();
+    return Status::Ok();
+  });
+  Log(LogLevel::kInfo, outcome.ok() ? "merge_approved" : "merge_approve_refused",
+      {{"merge", std::to_string(id)},
+       {"by", caller.name},
+       {"sessions_tied", std::to_string(tied)},
+       {"result", outcome.ok() ? "ok" : outcome.ToString()}});
+  return FinishDecision("ApproveMerge", id, outcome, caller, response);
+}
+
+grpc::Status SubmapService::RejectMerge(const pb::RejectMergeRequest& request,
+                                        const Principal& caller, pb::MergeRecord* response) {
+  if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
+  if (request.reason().empty())
+    return InvalidArgument("reason: required (why the merge is rejected, for the record)");
+  if (request.reason().size() > kMaxReasonChars) {
+    return InvalidArgument("reason: " + std::to_string(request.reason().size()) +
+                           " characters, at most " + std::to_string(kMaxReasonChars));
+  }
+  if (draining_) return ShuttingDown();
+  const auto id = static_cast<int64_t>(request.id());
+  const Status outcome = core_->ExecuteWrite([&](storage::WriteTransaction* txn) -> Status {
+    MAPD_RETURN_IF_ERROR(txn->DecideMerge(id, storage::MergeState::kRejected, caller.name,
+                                          UnixNowNs(), request.reason()));
+    return txn->AppendAudit(
+        AccessControl::Entry(caller, "RejectMerge", MergeName(id), "ok: " + request.reason()));
+  });
+  Log(LogLevel::kInfo, outcome.ok() ? "merge_rejected" : "merge_reject_refused",
+      {{"merge", std::to_string(id)},
+       {"by", caller.name},
+       {"result", outcome.ok() ? "ok" : outcome.ToString()}});
+  return FinishDecision("RejectMerge", id, outcome, caller, response);
+}
+
+}  // namespace mapd::service

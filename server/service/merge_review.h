@@ -1,0 +1,36 @@
+// What an accepted merge does to the frames, and the review of proposed
+// merges (ListMerges, GetMerge, ApproveMerge, RejectMerge; the handlers are
+// SubmapService's, in merge_review.cc). No voxel library: review works in
+// every build, though only a build with it makes proposals.
+#ifndef MAPD_SERVICE_MERGE_REVIEW_H_
+#define MAPD_SERVICE_MERGE_REVIEW_H_
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "common/status.h"
+#include "geometry/rigid3.h"
+#include "mapserver/v1/map_service.pb.h"
+#include "storage/store.h"
+
+namespace mapd::service {
+
+// The session ties an accepted merge implies (rules in submap_service.h,
+// "Frames"), with the frames as they are now. T_ref_input[i] maps input i
+// into the reference's (first input's) frame. Call on the writer thread.
+StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
+    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
+    const std::vector<geometry::Rigid3>& T_ref_input);
+
+// Why `proposal` (with its inputs' `metas`) can no longer be approved
+// because of a merge accepted since it was proposed: FailedPrecondition
+// naming that merge and the submap or session they share; Ok otherwise.
+Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& proposal,
+                            const std::vector<storage::SubmapMeta>& metas);
+
+void ToProto(const storage::MergeRecord& record, mapserver::v1::MergeRecord* out);
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MERGE_REVIEW_H_
