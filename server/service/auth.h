@@ -17,11 +17,8 @@ namespace mapd::service {
 enum class Role { kReader, kRobot, kOperator, kAdmin };
 
 enum class Permission {
-<<<<<<< HEAD
-  kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats
-=======
-  kReadMap,       // GetFeatureMap, GetGlobalMap, ListRobots, GetStats, ListMerges, GetMerge
->>>>>>> db2daea65024c1b10e7bc99a27836a52c959ae0e
+  kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats,
+                  // ListMerges, GetMerge
   kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
   kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
   kDelete,        // DeleteSubmap (a robot: its own submaps only)
