@@ -1,7 +1,8 @@
 // The page in a real headless Chromium against a real mapd process: the
-// ingested walls are drawn (SVG lines with data-id), and a wall ingested
-// later arrives on the page, over the event stream (the page stays open) and
-// on a reload. Skipped with a message when Chromium is not installed
+// ingested walls are drawn (SVG lines with data-id), once without the event
+// stream (?live=0) and, after a wall is ingested, with it (the stream's
+// resync replaces what the page drew; changes on an open stream are checked
+// in web_server_test). Skipped with a message when Chromium is not installed
 // (Debian: apt-get install chromium; deploy/install-deps.sh installs it).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -84,9 +85,8 @@ class WebBrowserTest : public ::testing::Test {
     EXPECT_TRUE(r && r->status == 200);
     std::set<std::string> ids;
     if (!r) return ids;
-    std::cerr << "DEBUG " << r->body << "\n";
-    for (const json& f : json::parse(r->body)["features"])
-      ids.insert(std::to_string(f["id"].get<uint64_t>()));
+    const json doc = json::parse(r->body);
+    for (const json& f : doc["features"]) ids.insert(std::to_string(f["id"].get<uint64_t>()));
     return ids;
   }
 
@@ -120,7 +120,33 @@ TEST_F(WebBrowserTest, ThePageDrawsTheFusedMapAndItsUpdates) {
   Ingest(FarWallBatches("r2", 4));
   const std::set<std::string> all = FeatureIds();
   ASSERT_EQ(all.size(), 5u);
-  EXPECT_EQ(DataIds(DumpDom("?live=0")), all);
+  // Live (the default): the page also opens the event stream, whose resync
+  // replaces what it drew; the status line says so.
+  const std::string live = DumpDom("");
+  EXPECT_EQ(DataIds(live), all);
+  EXPECT_THAT(live, ::testing::HasSubstr("5 features · 0 planes · live"));
+}
+
+// mapd itself (no browser needed): a taken http.port stops it at start with
+// the port named, after closing its database cleanly.
+TEST(MapdWebPort, APortInUseIsAClearStartupError) {
+  TempDir dir;
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(listen(fd, 1), 0);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  const std::string port = std::to_string(ntohs(a.sin_port));
+  const CommandResult r = RunCommand({kDefaultMapdBinary, "--db", dir.File("map.db"), "--listen",
+                                      "127.0.0.1:0", "--http.port", port});
+  close(fd);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, ::testing::HasSubstr("mapd: UNAVAILABLE: http.port " + port +
+                                          ": the web view cannot listen on 127.0.0.1:" + port));
+  EXPECT_THAT(r.err, ::testing::HasSubstr("event=stopped"));
 }
 
 }  // namespace
