@@ -18,6 +18,8 @@ namespace mapd::client {
 //
 // commands_map.cc: status, robots, features (reading the map)
 void AddMapCommands(CLI::App* app, Action* action);
+// commands_watch.cc: watch (the live change feed of the map)
+void AddWatchCommand(CLI::App* app, Action* action);
 // commands_ingest.cc: ingest, simulate (writing observations)
 void AddIngestCommands(CLI::App* app, Action* action);
 // commands_submap.cc: submaps, submap upload|get|delete, global-map (voxel submaps)
@@ -33,6 +35,10 @@ void AddRenderCommand(CLI::App* app, Action* action);
 // bytes, and the info of the first message.
 grpc::Status ReadChunks(grpc::ClientReader<mapserver::v1::DataChunk>* reader, std::string* data,
                         mapserver::v1::SubmapInfo* info);
+
+// "XMIN,YMIN,XMAX,YMAX" -> bbox (features, watch); false with `*error` set
+// (naming --bbox) otherwise.
+bool ParseBbox(const std::string& text, mapserver::v1::BoundingBox2* out, std::string* error);
 
 // Shared by render, `merge --render` and `global-map --render`. Each returns
 // kContinue to go on, or the exit code to end with (the error printed).

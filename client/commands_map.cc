@@ -25,31 +25,6 @@ struct FeaturesOptions {
   std::string output = "-";
 };
 
-// "xmin,ymin,xmax,ymax" -> bbox; false with `*error` set otherwise.
-bool ParseBbox(const std::string& text, pb::BoundingBox2* out, std::string* error) {
-  const std::vector<std::string> parts = Split(text, ',');
-  double v[4];
-  if (parts.size() != 4) {
-    *error = "--bbox wants XMIN,YMIN,XMAX,YMAX (4 numbers, metres), got '" + text + "'";
-    return false;
-  }
-  for (size_t i = 0; i < 4; ++i) {
-    if (!ParseDouble(parts[i], &v[i])) {
-      *error = "--bbox: '" + parts[i] + "' is not a number";
-      return false;
-    }
-  }
-  if (v[0] > v[2] || v[1] > v[3]) {
-    *error = "--bbox: XMIN must not exceed XMAX, nor YMIN YMAX, got '" + text + "'";
-    return false;
-  }
-  out->mutable_min()->set_x(v[0]);
-  out->mutable_min()->set_y(v[1]);
-  out->mutable_max()->set_x(v[2]);
-  out->mutable_max()->set_y(v[3]);
-  return true;
-}
-
 int RunStatus(const Context& ctx, const JsonOptions& flags) {
   pb::Stats stats;
   auto call = ctx.NewCallContext();
@@ -129,6 +104,30 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
 }
 
 }  // namespace
+
+bool ParseBbox(const std::string& text, mapserver::v1::BoundingBox2* out, std::string* error) {
+  const std::vector<std::string> parts = Split(text, ',');
+  double v[4];
+  if (parts.size() != 4) {
+    *error = "--bbox wants XMIN,YMIN,XMAX,YMAX (4 numbers, metres), got '" + text + "'";
+    return false;
+  }
+  for (size_t i = 0; i < 4; ++i) {
+    if (!ParseDouble(parts[i], &v[i])) {
+      *error = "--bbox: '" + parts[i] + "' is not a number";
+      return false;
+    }
+  }
+  if (v[0] > v[2] || v[1] > v[3]) {
+    *error = "--bbox: XMIN must not exceed XMAX, nor YMIN YMAX, got '" + text + "'";
+    return false;
+  }
+  out->mutable_min()->set_x(v[0]);
+  out->mutable_min()->set_y(v[1]);
+  out->mutable_max()->set_x(v[2]);
+  out->mutable_max()->set_y(v[3]);
+  return true;
+}
 
 void AddMapCommands(CLI::App* app, Action* action) {
   CLI::App* status = app->add_subcommand("status", "server statistics");

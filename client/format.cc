@@ -264,4 +264,97 @@ std::string FormatSubmaps(const pb::ListSubmapsResponse& submaps) {
   return out;
 }
 
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json Vec2Json(const pb::Vec2& v) {
+  return Json{{"x", JsonNumber(v.x())}, {"y", JsonNumber(v.y())}};
+}
+
+Json FeatureJson(const pb::FusedFeature& f) {
+  return Json{{"id", f.id()},
+              {"kind", KindName(f.kind())},
+              {"a", Vec2Json(f.a())},
+              {"b", Vec2Json(f.b())},
+              {"z_min", JsonNumber(f.z_min())},
+              {"z_max", JsonNumber(f.z_max())},
+              {"support", f.support()},
+              {"member_count", f.member_count()},
+              {"robots", std::vector<std::string>(f.robots().begin(), f.robots().end())}};
+}
+
+Json PlaneJson(const pb::FusedPlane& p) {
+  Json boundary = Json::array();
+  for (const pb::Vec3& v : p.boundary()) {
+    boundary.push_back({JsonNumber(v.x()), JsonNumber(v.y()), JsonNumber(v.z())});
+  }
+  return Json{
+      {"id", p.id()},
+      {"normal",
+       {JsonNumber(p.normal().x()), JsonNumber(p.normal().y()), JsonNumber(p.normal().z())}},
+      {"offset_m", JsonNumber(p.offset())},
+      {"area_m2", JsonNumber(p.area())},
+      {"z_min", JsonNumber(p.z_min())},
+      {"z_max", JsonNumber(p.z_max())},
+      {"support", p.support()},
+      {"member_count", p.member_count()},
+      {"robots", std::vector<std::string>(p.robots().begin(), p.robots().end())},
+      {"boundary", boundary}};
+}
+
+std::string FeatureText(const pb::FusedFeature& f) {
+  return Printf("%s (%.2f, %.2f)-(%.2f, %.2f) support %u robots %s", KindName(f.kind()).c_str(),
+                f.a().x(), f.a().y(), f.b().x(), f.b().y(), f.support(),
+                Join(f.robots(), ",").c_str());
+}
+
+std::string PlaneText(const pb::FusedPlane& p) {
+  return Printf("normal (%.3f, %.3f, %.3f) offset %.3f area %.2f m2 support %u robots %s",
+                p.normal().x(), p.normal().y(), p.normal().z(), p.offset(), p.area(), p.support(),
+                Join(p.robots(), ",").c_str());
+}
+
+}  // namespace
+
+std::string FormatDeltaLines(const pb::FeatureMapDelta& delta, bool json) {
+  const uint64_t v = delta.map_version();
+  std::string out;
+  auto line = [&](const char* change, const char* type, uint64_t id, const Json* body,
+                  const std::string& text) {
+    if (json) {
+      Json j{{"map_version", v}, {"change", change}};
+      if (type != nullptr) {
+        j["type"] = type;
+        j["id"] = id;
+      }
+      if (body != nullptr) j[type] = *body;
+      out += j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+    } else {
+      out += Printf("v=%llu %s", static_cast<unsigned long long>(v), change);
+      if (type != nullptr) out += Printf(" %s %llu", type, static_cast<unsigned long long>(id));
+      if (!text.empty()) out += " " + text;
+      out += "\n";
+    }
+  };
+  if (delta.resync()) line("resync", nullptr, 0, nullptr, "(the full map follows)");
+  for (const auto* list : {&delta.added(), &delta.updated()}) {
+    const char* change = list == &delta.added() ? "added" : "updated";
+    for (const pb::FusedFeature& f : *list) {
+      const Json body = FeatureJson(f);
+      line(change, "feature", f.id(), &body, FeatureText(f));
+    }
+  }
+  for (uint64_t id : delta.removed()) line("removed", "feature", id, nullptr, "");
+  for (const auto* list : {&delta.added_planes(), &delta.updated_planes()}) {
+    const char* change = list == &delta.added_planes() ? "added" : "updated";
+    for (const pb::FusedPlane& p : *list) {
+      const Json body = PlaneJson(p);
+      line(change, "plane", p.id(), &body, PlaneText(p));
+    }
+  }
+  for (uint64_t id : delta.removed_planes()) line("removed", "plane", id, nullptr, "");
+  return out;
+}
+
 }  // namespace mapd::client

@@ -77,6 +77,13 @@ std::string FormatAlignment(const mapserver::v1::SubmapAlignment& alignment);
 // The API's transform as the client's (for renderings and yaw/pitch/roll).
 RigidTransform ToRigidTransform(const mapserver::v1::Rigid3& T);
 
+// `mapctl watch`: one line per change of a FeatureMapDelta (a resync first
+// gets its own line, "resync"). Text: `v=<map_version> <added|updated|removed>
+// feature|plane <id> ...`. JSON lines (json = true): {"map_version", "change":
+// "resync"|"added"|"updated"|"removed", "type": "feature"|"plane", "id", and
+// for added/updated the feature's or plane's fields in snake_case}.
+std::string FormatDeltaLines(const mapserver::v1::FeatureMapDelta& delta, bool json);
+
 // "line", "plane" or "any".
 std::string KindName(mapserver::v1::FeatureKind kind);
 

@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
 
   Action action;
   mapd::client::AddMapCommands(&app, &action);
+  mapd::client::AddWatchCommand(&app, &action);
   mapd::client::AddIngestCommands(&app, &action);
   mapd::client::AddSubmapCommands(&app, &action);
   mapd::client::AddMergeCommands(&app, &action);

@@ -1,8 +1,12 @@
-// A rigid transform for the client (no Eigen needed): p_target = R p_source + t,
-// built from the API's Rigid3 (translation in metres, Hamilton unit quaternion).
+// A rigid transform for the client, built from the API's Rigid3 (translation
+// in metres, Hamilton unit quaternion): p_target = R p_source + t. Eigen does
+// the quaternion maths; this adds the client's tolerant construction and the
+// Euler angles its tables print.
 #ifndef MAPD_CLIENT_RIGID_TRANSFORM_H_
 #define MAPD_CLIENT_RIGID_TRANSFORM_H_
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 namespace mapd::client {
@@ -12,40 +16,34 @@ struct Point3 {
 };
 
 struct RigidTransform {
-  double R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Point3 t;  // metres
 
-  // From a quaternion (w, x, y, z), normalised here; a zero quaternion gives the identity rotation.
+  // From a quaternion (w, x, y, z), normalised here; a zero or non-finite
+  // quaternion gives the identity rotation (the server refuses those, so this
+  // only guards against a malformed file or answer).
   static RigidTransform FromQuaternion(double w, double x, double y, double z, Point3 translation) {
     RigidTransform T;
     T.t = translation;
-    const double n = std::sqrt(w * w + x * x + y * y + z * z);
-    if (!(n > 0) || !std::isfinite(n)) return T;
-    w /= n, x /= n, y /= n, z /= n;
-    T.R[0][0] = 1 - 2 * (y * y + z * z);
-    T.R[0][1] = 2 * (x * y - w * z);
-    T.R[0][2] = 2 * (x * z + w * y);
-    T.R[1][0] = 2 * (x * y + w * z);
-    T.R[1][1] = 1 - 2 * (x * x + z * z);
-    T.R[1][2] = 2 * (y * z - w * x);
-    T.R[2][0] = 2 * (x * z - w * y);
-    T.R[2][1] = 2 * (y * z + w * x);
-    T.R[2][2] = 1 - 2 * (x * x + y * y);
+    const Eigen::Quaterniond q(w, x, y, z);
+    const double n = q.norm();
+    if (n > 0 && std::isfinite(n)) T.R = q.normalized().toRotationMatrix();
     return T;
   }
 
   Point3 Apply(const Point3& p) const {
-    return {R[0][0] * p.x + R[0][1] * p.y + R[0][2] * p.z + t.x,
-            R[1][0] * p.x + R[1][1] * p.y + R[1][2] * p.z + t.y,
-            R[2][0] * p.x + R[2][1] * p.y + R[2][2] * p.z + t.z};
+    const Eigen::Vector3d v = R * Eigen::Vector3d(p.x, p.y, p.z);
+    return {v.x() + t.x, v.y() + t.y, v.z() + t.z};
   }
 
-  // Z-Y-X Euler angles in degrees: R = Rz(yaw) Ry(pitch) Rx(roll).
+  // Z-Y-X Euler angles in degrees: R = Rz(yaw) Ry(pitch) Rx(roll), yaw and
+  // roll in (-180, 180], pitch in [-90, 90] (Eigen's eulerAngles() would put
+  // yaw in [0, 180] instead, which reads badly in a table).
   void YawPitchRollDeg(double* yaw, double* pitch, double* roll) const {
     constexpr double kDeg = 180.0 / M_PI;
-    *yaw = std::atan2(R[1][0], R[0][0]) * kDeg;
-    *pitch = std::asin(std::fmax(-1.0, std::fmin(1.0, -R[2][0]))) * kDeg;
-    *roll = std::atan2(R[2][1], R[2][2]) * kDeg;
+    *yaw = std::atan2(R(1, 0), R(0, 0)) * kDeg;
+    *pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0)) * kDeg;
+    *roll = std::atan2(R(2, 1), R(2, 2)) * kDeg;
   }
 };
 

@@ -17,8 +17,8 @@ namespace mapd::service {
 enum class Role { kReader, kRobot, kOperator, kAdmin };
 
 enum class Permission {
-  kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats,
-                  // ListMerges, GetMerge
+  kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats, ListMerges,
+                  // GetMerge
   kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
   kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
   kDelete,        // DeleteSubmap (a robot: its own submaps only)

@@ -13,8 +13,6 @@
 namespace mapd::service {
 namespace {
 
-using service::ToProto;  // proto_convert.h, beside the overloads below
-
 // An Ingest stream refused at once (the map is still being recovered, or a
 // stream limit): the robot reconnects and resends, as after any UNAVAILABLE.
 using RefusedIngest = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;

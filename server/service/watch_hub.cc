@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string>
+#include <thread>
 
 namespace mapd::service {
 
@@ -115,13 +116,35 @@ void WatchHub::Unsubscribe(const std::shared_ptr<Watcher>& watcher) {
 }
 
 void WatchHub::Close() {
+  bool writing = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    closed_ = true;
+    for (const std::shared_ptr<Watcher>& w : watchers_) {
+      std::lock_guard<std::mutex> wlock(w->mu_);
+      w->closed_ = true;
+      w->queue_.clear();
+      w->cv_.notify_one();
+      writing = writing || w->writing_;
+    }
+  }
+  // A write to a client that reads ends within microseconds; one still in
+  // progress after kWriteGrace is blocked on a client that does not read,
+  // and would hold the shutdown up: cancel it (that client gets CANCELLED,
+  // the others UNAVAILABLE with the version to resume from).
+  constexpr auto kWriteGrace = std::chrono::milliseconds(100);
+  const auto deadline = std::chrono::steady_clock::now() + kWriteGrace;
+  while (writing && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::lock_guard<std::mutex> lock(mu_);
+    writing = std::any_of(watchers_.begin(), watchers_.end(), [](const auto& w) {
+      std::lock_guard<std::mutex> wlock(w->mu_);
+      return w->writing_;
+    });
+  }
   std::lock_guard<std::mutex> lock(mu_);
-  closed_ = true;
   for (const std::shared_ptr<Watcher>& w : watchers_) {
     std::lock_guard<std::mutex> wlock(w->mu_);
-    w->closed_ = true;
-    w->queue_.clear();
-    w->cv_.notify_one();
     if (w->writing_ && w->cancel_) w->cancel_();
   }
 }

@@ -109,8 +109,9 @@ class WatchHub {
   // max_watchers, Unavailable before Start or after Close.
   StatusOr<Subscription> Subscribe(uint64_t since_version, std::function<void()> cancel);
   void Unsubscribe(const std::shared_ptr<Watcher>& watcher);
-  // Shutdown: every watcher gets kClosed (a write in progress is cancelled),
-  // new watches are refused.
+  // Shutdown: every watcher gets kClosed, new watches are refused; a write
+  // still in progress 100 ms later (a client that does not read) is
+  // cancelled. Returns after that.
   void Close();
   size_t watchers() const;
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "client/format_svg.h"
 #include "client/support/parse_json.h"
@@ -117,6 +118,37 @@ TEST(FormatJsonTest, RoundTripsThroughFeatureMapPage) {
   EXPECT_EQ(page.total(), 3u);
   EXPECT_EQ(page.map_version(), 9u);
   EXPECT_EQ(page.features(1).SerializeAsString(), features[1].SerializeAsString());
+}
+
+TEST(FormatDeltaTest, OneLinePerChangeInTextAndJson) {
+  pb::FeatureMapDelta d;
+  d.set_map_version(42);
+  d.set_resync(true);
+  pb::FusedFeature* f = d.add_added();
+  f->set_id(7);
+  f->set_kind(pb::FEATURE_KIND_LINE);
+  f->mutable_b()->set_x(2.5);
+  f->set_member_count(3);
+  f->add_robots("r1");
+  d.add_removed(9);
+  d.add_removed_planes(11);
+  const std::string text = FormatDeltaLines(d, false);
+  EXPECT_EQ(text,
+            "v=42 resync (the full map follows)\n"
+            "v=42 added feature 7 line (0.00, 0.00)-(2.50, 0.00) support 0 robots r1\n"
+            "v=42 removed feature 9\n"
+            "v=42 removed plane 11\n");
+  const std::string json = FormatDeltaLines(d, true);
+  std::vector<std::string> lines;
+  for (size_t at = 0, end; (end = json.find('\n', at)) != std::string::npos; at = end + 1)
+    lines.push_back(json.substr(at, end - at));
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "{\"map_version\":42,\"change\":\"resync\"}");
+  EXPECT_NE(lines[1].find("\"change\":\"added\",\"type\":\"feature\",\"id\":7,\"feature\":{"),
+            std::string::npos)
+      << lines[1];
+  EXPECT_NE(lines[1].find("\"member_count\":3"), std::string::npos);
+  EXPECT_EQ(lines[3], "{\"map_version\":42,\"change\":\"removed\",\"type\":\"plane\",\"id\":11}");
 }
 
 TEST(OutputFormatTest, GuessedFromExtension) {

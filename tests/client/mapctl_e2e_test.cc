@@ -1,12 +1,17 @@
 // mapctl against the real mapd: a server on a free loopback port with a
 // temporary database, driven through the command line as a script would.
+#include <fcntl.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "client/support/svg_facts.h"
@@ -234,6 +239,64 @@ TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
   EXPECT_THAT(r.out, HasSubstr("r1-key"));
   EXPECT_THAT(r.out, HasSubstr("denied"));
   EXPECT_THAT(r.out, HasSubstr("mapd token (offline)"));
+}
+
+// Reads `path` until `pred` holds on its text (bounded: a bug fails, never hangs).
+bool WaitForText(const std::string& path, const std::function<bool(const std::string&)>& pred) {
+  for (int i = 0; i < 600; ++i) {
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (pred(text)) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
+TEST_F(MapctlE2eTest, WatchPrintsChangesLiveReconnectsAndEndsCleanlyOnCtrlC) {
+  const std::string out = dir_.File("watch.jsonl"), err = dir_.File("watch.err");
+  const int out_fd = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  const int err_fd = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  const pid_t watch = internal::Spawn({MAPCTL_BINARY, "--server", mapd_.address, "watch", "--json"},
+                                      -1, out_fd, err_fd);
+  close(out_fd);
+  close(err_fd);
+  ASSERT_GT(watch, 0);
+  ASSERT_TRUE(WaitForText(out, [](const std::string& t) { return !t.empty(); }));
+  CommandResult r = Mapctl({"simulate", "--robots", "1", "--scans", "30", "--session", "w"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(WaitForText(out, [](const std::string& t) {
+    return t.find("\"change\":\"added\"") != std::string::npos;
+  })) << internal::ReadFile(err);
+  // A second pass over the same walls updates them.
+  r = Mapctl({"simulate", "--robots", "1", "--scans", "10", "--session", "w2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(WaitForText(out, [](const std::string& t) {
+    return t.find("\"change\":\"updated\"") != std::string::npos;
+  })) << internal::ReadFile(err);
+
+  // The server stops: the watch says so and keeps trying.
+  EXPECT_EQ(Stop(mapd_.pid, SIGTERM), 0) << mapd_.log();
+  mapd_.pid = -1;
+  EXPECT_TRUE(WaitForText(
+      err, [](const std::string& t) { return t.find("reconnecting") != std::string::npos; }));
+  EXPECT_EQ(Stop(watch, SIGINT), 0) << "Ctrl-C ends the watch cleanly";
+
+  std::ifstream in(out);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_GT(lines.size(), 2u);
+  EXPECT_THAT(lines[0], HasSubstr("\"change\":\"resync\""));
+  size_t added = 0;
+  for (const std::string& line : lines) {
+    EXPECT_EQ(line.rfind("{\"map_version\":", 0), 0u) << line;
+    if (line.find("\"change\":\"added\"") != std::string::npos) {
+      ++added;
+      EXPECT_THAT(line, HasSubstr("\"member_count\":"));
+      EXPECT_THAT(line, HasSubstr("\"robots\":[\"sim-robot-1\"]"));
+    }
+  }
+  EXPECT_GT(added, 3u);
+  EXPECT_THAT(internal::ReadFile(err), HasSubstr("since_map_version="));
 }
 
 }  // namespace

@@ -374,12 +374,16 @@ TEST_F(WatchFakeCoreTest, ChangesOfNoInterestToTheFilterSendNothing) {
 TEST_F(WatchFakeCoreTest, AWatcherWhoseQueueOverflowsGetsAResyncAndPublishingNeverWaits) {
   service::WatchOptions options;
   options.queue = 2;
+  options.history = 4;
   Start(options);
   WatchClient watch(stub_.get(), {}, /*read=*/false);
   // Large changes fill the transport's buffers, then the handler's write
   // blocks and the queue overflows: Publish goes on regardless.
+  // About 100 kB per change, 40 MB in all: more than any transport window.
+  std::vector<std::string> robots;
+  for (int r = 0; r < 8; ++r) robots.push_back("a-robot-with-a-long-name-" + std::to_string(r));
   std::vector<service::FusedView> many;
-  for (uint64_t id = 1; id <= 500; ++id) many.push_back(Line(id, 0, 0, 1, 1.0 * id));
+  for (uint64_t id = 1; id <= 400; ++id) many.push_back(Line(id, 0, 0, 1, 1.0 * id, robots));
   core_->features = many;
   for (uint64_t v = 2; v < 402; ++v) Publish(v, many);
   EXPECT_EQ(core_->watch_hub().version(), 401u);
@@ -390,7 +394,7 @@ TEST_F(WatchFakeCoreTest, AWatcherWhoseQueueOverflowsGetsAResyncAndPublishingNev
   for (const auto& msg : m) resyncs += msg.resync();
   EXPECT_GE(resyncs, 2) << "the first message and at least one after the overflow";
   EXPECT_LT(m.size(), 400u) << "dropped changes are not sent";
-  EXPECT_EQ(watch.Features().size(), 500u);
+  EXPECT_EQ(watch.Features().size(), 400u);
 }
 
 TEST_F(WatchFakeCoreTest, ARecoveringCoreRefusesWatches) {
