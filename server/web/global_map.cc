@@ -24,7 +24,8 @@ cairo_status_t Append(void* closure, const unsigned char* data, unsigned int len
 }
 
 StatusOr<std::string> TopView(const voxel::VoxelGrid& grid) {
-  const voxel::VoxelKey lo = grid.min_key(), hi = grid.max_key();
+  const voxel::VoxelKey& lo = grid.min_key();
+  const voxel::VoxelKey& hi = grid.max_key();
   const int nx = hi.x() - lo.x() + 1, ny = hi.y() - lo.y() + 1;
   const int bin = std::max(1, (std::max(nx, ny) + kMaxPixels - 1) / kMaxPixels);
   const int w = (nx + bin - 1) / bin, h = (ny + bin - 1) / bin;
