@@ -22,31 +22,14 @@ namespace pb = mapserver::v1;
 constexpr int kFeaturesPerPage = 4096;
 const char* const kVersion = MAPD_VERSION;
 
-Status FromProto(const pb::FeatureMapRequest& in, FeatureQuery* out) {
+Status ParseFeatureMapRequest(const pb::FeatureMapRequest& in, FeatureQuery* out) {
   if (in.has_bbox()) {
-    const auto& b = in.bbox();
-    for (double v : {b.min().x(), b.min().y(), b.max().x(), b.max().y()}) {
-      if (!std::isfinite(v)) return Status::InvalidArgument("bbox has a non-finite coordinate");
-    }
-    if (b.min().x() > b.max().x() || b.min().y() > b.max().y()) {
-      return Status::InvalidArgument("bbox.min must not exceed bbox.max on either axis");
-    }
-    out->bbox = geometry::Box2{{b.min().x(), b.min().y()}, {b.max().x(), b.max().y()}};
+    geometry::Box2 box;
+    MAPD_RETURN_IF_ERROR(FromProto(in.bbox(), &box));
+    out->bbox = box;
   }
   out->min_support = in.min_support();
-  switch (in.kind()) {
-    case pb::FEATURE_KIND_UNSPECIFIED:
-      out->kind = KindFilter::kAny;
-      break;
-    case pb::FEATURE_KIND_LINE:
-      out->kind = KindFilter::kLine;
-      break;
-    case pb::FEATURE_KIND_PLANE:
-      out->kind = KindFilter::kPlane;
-      break;
-    default:
-      return Status::InvalidArgument("kind has unknown value " + std::to_string(in.kind()));
-  }
+  MAPD_RETURN_IF_ERROR(FromProto(in.kind(), &out->kind));
   return Status::Ok();
 }
 
@@ -95,7 +78,7 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
   if (auto p = access_.Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
     return ToGrpcStatus(p.status());
   FeatureQuery query;
-  Status s = FromProto(*request, &query);
+  Status s = ParseFeatureMapRequest(*request, &query);
   if (!s.ok()) return ToGrpcStatus(s);
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   // Bounded wait for the fuser (see FeatureMapRequest.max_wait_ms): never

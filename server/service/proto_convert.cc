@@ -1,5 +1,8 @@
 #include "service/proto_convert.h"
 
+#include <cmath>
+#include <string>
+
 namespace mapd::service {
 
 namespace pb = mapserver::v1;
@@ -60,6 +63,33 @@ void ToProto(const PlaneView& v, pb::FusedPlane* out) {
   out->set_support(p.support);
   out->set_member_count(p.member_count);
   for (const std::string& r : v.robots) out->add_robots(r);
+}
+
+Status FromProto(const pb::BoundingBox2& in, geometry::Box2* out) {
+  for (double v : {in.min().x(), in.min().y(), in.max().x(), in.max().y()}) {
+    if (!std::isfinite(v)) return Status::InvalidArgument("bbox has a non-finite coordinate");
+  }
+  if (in.min().x() > in.max().x() || in.min().y() > in.max().y()) {
+    return Status::InvalidArgument("bbox.min must not exceed bbox.max on either axis");
+  }
+  *out = geometry::Box2{{in.min().x(), in.min().y()}, {in.max().x(), in.max().y()}};
+  return Status::Ok();
+}
+
+Status FromProto(pb::FeatureKind in, KindFilter* out) {
+  switch (in) {
+    case pb::FEATURE_KIND_UNSPECIFIED:
+      *out = KindFilter::kAny;
+      return Status::Ok();
+    case pb::FEATURE_KIND_LINE:
+      *out = KindFilter::kLine;
+      return Status::Ok();
+    case pb::FEATURE_KIND_PLANE:
+      *out = KindFilter::kPlane;
+      return Status::Ok();
+    default:
+      return Status::InvalidArgument("kind has unknown value " + std::to_string(in));
+  }
 }
 
 }  // namespace mapd::service

@@ -1,6 +1,7 @@
-// Conversions from the libraries' types to the API's messages that more than
-// one handler needs. (Requests are checked and converted where they arrive:
-// ingest_batch.h, map_service.cc.)
+// Conversions between the libraries' types and the API's messages that more
+// than one handler needs. (Requests are checked and converted where they
+// arrive, ingest_batch.h, map_service.cc, watch_service.cc, from the pieces
+// below.)
 #ifndef MAPD_SERVICE_PROTO_CONVERT_H_
 #define MAPD_SERVICE_PROTO_CONVERT_H_
 
@@ -19,6 +20,11 @@ void ToProto(const storage::SubmapMeta& m, mapserver::v1::SubmapInfo* out);
 // GetFeatureMap and WatchFeatureMap.
 void ToProto(const FusedView& v, mapserver::v1::FusedFeature* out);
 void ToProto(const PlaneView& v, mapserver::v1::FusedPlane* out);
+
+// The filters GetFeatureMap and WatchFeatureMap share. InvalidArgument naming
+// the field: a non-finite or inverted box, an unknown kind.
+Status FromProto(const mapserver::v1::BoundingBox2& in, geometry::Box2* out);
+Status FromProto(mapserver::v1::FeatureKind in, KindFilter* out);
 
 }  // namespace mapd::service
 

@@ -170,28 +170,11 @@ class WatchStream {
 Status ParseWatchRequest(const pb::WatchFeatureMapRequest& in, uint64_t map_version,
                          FeatureFilter* out) {
   if (in.has_bbox()) {
-    const auto& b = in.bbox();
-    for (double v : {b.min().x(), b.min().y(), b.max().x(), b.max().y()}) {
-      if (!std::isfinite(v)) return Status::InvalidArgument("bbox has a non-finite coordinate");
-    }
-    if (b.min().x() > b.max().x() || b.min().y() > b.max().y()) {
-      return Status::InvalidArgument("bbox.min must not exceed bbox.max on either axis");
-    }
-    out->bbox = geometry::Box2{{b.min().x(), b.min().y()}, {b.max().x(), b.max().y()}};
+    geometry::Box2 box;
+    MAPD_RETURN_IF_ERROR(FromProto(in.bbox(), &box));
+    out->bbox = box;
   }
-  switch (in.kind()) {
-    case pb::FEATURE_KIND_UNSPECIFIED:
-      out->kind = KindFilter::kAny;
-      break;
-    case pb::FEATURE_KIND_LINE:
-      out->kind = KindFilter::kLine;
-      break;
-    case pb::FEATURE_KIND_PLANE:
-      out->kind = KindFilter::kPlane;
-      break;
-    default:
-      return Status::InvalidArgument("kind has unknown value " + std::to_string(in.kind()));
-  }
+  MAPD_RETURN_IF_ERROR(FromProto(in.kind(), &out->kind));
   if (!in.robot_id().empty() && !ValidId(in.robot_id())) {
     return Status::InvalidArgument("robot_id is not a robot id ([A-Za-z0-9_.-], 1-128 characters)");
   }

@@ -6,15 +6,19 @@
 #ifndef MAPD_TESTS_SERVICE_FAKE_CORE_H_
 #define MAPD_TESTS_SERVICE_FAKE_CORE_H_
 
+#include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <mutex>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "common/temp_dir.h"
+#include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/core.h"
+#include "service/map_service.h"
 #include "service/watch_hub.h"
 
 namespace mapd::testing {
@@ -84,6 +88,34 @@ class FakeCore final : public service::Core {
   std::mutex write_mu_;
   size_t submitted_ = 0;
   service::WatchHub hub_;
+};
+
+// The gRPC handlers (MapServiceImpl) on a core, served on a loopback port,
+// and a stub to call them; drained and shut down when destroyed.
+class ServedCore {
+ public:
+  explicit ServedCore(service::Core* core)
+      : service_(std::make_unique<service::MapServiceImpl>(core, service::IngestOptions{})) {
+    grpc::ServerBuilder builder;
+    int port = 0;
+    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+    builder.RegisterService(service_.get());
+    server_ = builder.BuildAndStart();
+    EXPECT_NE(server_, nullptr) << "cannot serve the handlers on a loopback port";
+    stub_ = mapserver::v1::MapService::NewStub(grpc::CreateChannel(
+        "127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials()));
+  }
+  ~ServedCore() {
+    service_->StartDraining();
+    if (server_) server_->Shutdown();
+  }
+
+  mapserver::v1::MapService::Stub* stub() const { return stub_.get(); }
+
+ private:
+  std::unique_ptr<service::MapServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<mapserver::v1::MapService::Stub> stub_;
 };
 
 }  // namespace mapd::testing

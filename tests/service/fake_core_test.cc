@@ -23,25 +23,12 @@ using ::testing::HasSubstr;
 
 class FakeCoreTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    service_ = std::make_unique<service::MapServiceImpl>(&core_, service::IngestOptions{});
-    grpc::ServerBuilder builder;
-    int port = 0;
-    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
-    builder.RegisterService(service_.get());
-    server_ = builder.BuildAndStart();
-    ASSERT_NE(server_, nullptr);
-    stub_ = pb::MapService::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
-                                                        grpc::InsecureChannelCredentials()));
-  }
-  void TearDown() override {
-    service_->StartDraining();
-    server_->Shutdown();
-  }
+  void SetUp() override { served_ = std::make_unique<ServedCore>(&core_); }
+  void TearDown() override { served_.reset(); }
 
   grpc::Status ReadMap(pb::FeatureMapPage* page) {
     grpc::ClientContext ctx;
-    auto reader = stub_->GetFeatureMap(&ctx, pb::FeatureMapRequest{});
+    auto reader = stub()->GetFeatureMap(&ctx, pb::FeatureMapRequest{});
     while (reader->Read(page)) {
     }
     return reader->Finish();
@@ -51,7 +38,7 @@ class FakeCoreTest : public ::testing::Test {
   grpc::Status SendOne(pb::IngestAck* ack) {
     std::mt19937_64 rng(1);
     grpc::ClientContext ctx;
-    auto stream = stub_->Ingest(&ctx);
+    auto stream = stub()->Ingest(&ctx);
     stream->Write(RoomBatch("r1", "s1", 1, 0, 0, 0, &rng));
     stream->WritesDone();
     while (stream->Read(ack)) {
@@ -59,10 +46,10 @@ class FakeCoreTest : public ::testing::Test {
     return stream->Finish();
   }
 
+  pb::MapService::Stub* stub() const { return served_->stub(); }
+
   FakeCore core_;
-  std::unique_ptr<service::MapServiceImpl> service_;
-  std::unique_ptr<grpc::Server> server_;
-  std::unique_ptr<pb::MapService::Stub> stub_;
+  std::unique_ptr<ServedCore> served_;
 };
 
 TEST_F(FakeCoreTest, RecoveringCoreRefusesReadsAndBatchesWithUnavailable) {

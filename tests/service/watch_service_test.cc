@@ -204,7 +204,9 @@ TEST_F(WatchTest, FiltersByBboxKindAndRobot) {
   ASSERT_TRUE(by_robot.WaitForVersion(version));
   EXPECT_EQ(by_robot.Features().size(), 4u);
   for (const auto& m : by_robot.Messages()) {
-    if (m.added_size() > 0) EXPECT_GT(m.map_version(), only_r1);
+    if (m.added_size() > 0) {
+      EXPECT_GT(m.map_version(), only_r1);
+    }
     for (const auto& f : m.added()) EXPECT_THAT(f.robots(), ::testing::Contains("r2"));
   }
 }
@@ -299,21 +301,9 @@ class WatchFakeCoreTest : public ::testing::Test {
  protected:
   void Start(service::WatchOptions options = {}) {
     core_ = std::make_unique<FakeCore>(options);
-    service_ = std::make_unique<service::MapServiceImpl>(core_.get(), service::IngestOptions{});
-    grpc::ServerBuilder builder;
-    int port = 0;
-    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
-    builder.RegisterService(service_.get());
-    server_ = builder.BuildAndStart();
-    ASSERT_NE(server_, nullptr);
-    stub_ = pb::MapService::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
-                                                        grpc::InsecureChannelCredentials()));
+    served_ = std::make_unique<ServedCore>(core_.get());
   }
-  void TearDown() override {
-    if (!service_) return;
-    service_->StartDraining();
-    server_->Shutdown();
-  }
+  void TearDown() override { served_.reset(); }
   // The fuser's part: a change to `to`, the core's version moving with it.
   void Publish(uint64_t to, std::vector<service::FusedView> lines,
                std::vector<fusion::ClusterId> gone = {}) {
@@ -326,10 +316,10 @@ class WatchFakeCoreTest : public ::testing::Test {
     core_->watch_hub().Publish(c);
   }
 
+  pb::MapService::Stub* stub() const { return served_->stub(); }
+
   std::unique_ptr<FakeCore> core_;
-  std::unique_ptr<service::MapServiceImpl> service_;
-  std::unique_ptr<grpc::Server> server_;
-  std::unique_ptr<pb::MapService::Stub> stub_;
+  std::unique_ptr<ServedCore> served_;  // destroyed first
 };
 
 TEST_F(WatchFakeCoreTest, AFeatureLeavingTheBboxIsRemovedAndOneEnteringIsAdded) {
@@ -339,7 +329,7 @@ TEST_F(WatchFakeCoreTest, AFeatureLeavingTheBboxIsRemovedAndOneEnteringIsAdded) 
   request.mutable_bbox()->mutable_min()->set_y(0);
   request.mutable_bbox()->mutable_max()->set_x(5);
   request.mutable_bbox()->mutable_max()->set_y(5);
-  WatchClient watch(stub_.get(), request);
+  WatchClient watch(stub(), request);
   ASSERT_TRUE(watch.WaitForVersion(1));
   Publish(2, {Line(10, 1, 1, 2, 1), Line(20, 8, 8, 9, 8)});  // 10 inside, 20 outside
   Publish(3, {Line(10, 7, 7, 8, 7), Line(20, 2, 2, 3, 2)});  // they swap
@@ -360,7 +350,7 @@ TEST_F(WatchFakeCoreTest, ChangesOfNoInterestToTheFilterSendNothing) {
   Start();
   pb::WatchFeatureMapRequest request;
   request.set_robot_id("r2");
-  WatchClient watch(stub_.get(), request);
+  WatchClient watch(stub(), request);
   ASSERT_TRUE(watch.WaitForVersion(1));
   Publish(2, {Line(10, 1, 1, 2, 1)});                // r1 only: nothing
   Publish(3, {Line(10, 1, 1, 2, 1, {"r1", "r2"})});  // r2 joins: added
@@ -376,7 +366,7 @@ TEST_F(WatchFakeCoreTest, AWatcherWhoseQueueOverflowsGetsAResyncAndPublishingNev
   options.queue = 2;
   options.history = 4;
   Start(options);
-  WatchClient watch(stub_.get(), {}, /*read=*/false);
+  WatchClient watch(stub(), {}, /*read=*/false);
   // Large changes fill the transport's buffers, then the handler's write
   // blocks and the queue overflows: Publish goes on regardless.
   // About 100 kB per change, 40 MB in all: more than any transport window.
@@ -400,7 +390,7 @@ TEST_F(WatchFakeCoreTest, AWatcherWhoseQueueOverflowsGetsAResyncAndPublishingNev
 TEST_F(WatchFakeCoreTest, ARecoveringCoreRefusesWatches) {
   Start();
   core_->ready = Status::Unavailable("recovering");
-  WatchClient watch(stub_.get(), {});
+  WatchClient watch(stub(), {});
   EXPECT_EQ(watch.Finish().error_code(), grpc::StatusCode::UNAVAILABLE);
 }
 
