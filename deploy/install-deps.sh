@@ -3,15 +3,20 @@
 # runs apt-get only when something is missing. --ci adds what .ci/run needs
 # beyond that: clang and its libFuzzer runtime (fuzz job), clang-format and
 # clang-tidy (lint job), systemd (systemd-analyze verify of deploy/mapd.service).
+# --build-only (the container's build stage) leaves out what only the tests
+# use: Chromium, which runs the web view's page in tests/web.
 set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
-  libcairo2-dev nlohmann-json3-dev libcli11-dev
+  libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev
 )
+if [ "${1:-}" != "--build-only" ]; then
+  PACKAGES+=(chromium)
+fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev clang-format-14 clang-tidy-14 systemd)
 fi

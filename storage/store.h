@@ -128,6 +128,12 @@ struct FusedPlaneRow {
   std::string robots;  // comma-separated robot names
 };
 
+struct StampedPose {
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  geometry::Rigid3 T_frame_sensor;
+};
+
 struct RobotSummary {
   int64_t id = 0;
   std::string name;
@@ -369,6 +375,9 @@ class Store {
   StatusOr<std::vector<FusedRow>> LoadFused();
   StatusOr<std::vector<FusedPlaneRow>> LoadFusedPlanes();  // by id
   StatusOr<std::vector<RobotSummary>> ListRobots();
+  // The sensor poses of a session's newest `limit` observations, newest
+  // first, in the session's frame (pose_store.cc; one index range read).
+  StatusOr<std::vector<StampedPose>> RecentPoses(int64_t session_id, int limit);
   StatusOr<StoreCounts> Counts();
   // Tokens: by id (NotFound), all of them by id, and whether any was ever made.
   StatusOr<TokenRecord> GetToken(int64_t id);

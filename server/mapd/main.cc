@@ -12,6 +12,7 @@
 #include "service/config.h"
 #include "service/log.h"
 #include "service/server.h"
+#include "web/web_server.h"
 
 namespace {
 
@@ -75,14 +76,33 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mapd: %s\n", server.status().ToString().c_str());
     return 1;
   }
-  std::thread waiter([&signals, srv = server->get()] {
+  // The web view (http.port; off by default) beside the gRPC server.
+  std::unique_ptr<mapd::web::WebServer> web;
+  if (config.web.port != 0) {
+    mapd::web::WebServerOptions options;
+    options.address = config.web.address;
+    options.port = config.web.port;
+    options.auth = {config.auth_required, !config.tls_client_ca.empty()};
+    mapd::StatusOr<std::unique_ptr<mapd::web::WebServer>> started =
+        mapd::web::WebServer::Start((*server)->core(), options);
+    if (!started.ok()) {
+      std::fprintf(stderr, "mapd: %s\n", started.status().ToString().c_str());
+      (*server)->Shutdown();
+      (*server)->Wait();
+      return 1;
+    }
+    web = std::move(started).value();
+  }
+  std::thread waiter([&signals, &web, srv = server->get()] {
     int sig = 0;
     sigwait(&signals, &sig);
     Log(LogLevel::kInfo, "signal", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}});
+    if (web) web->Stop();  // event streams end, no new requests
     srv->Shutdown();
   });
   (*server)->Wait();
   waiter.join();
+  web.reset();
   server->reset();
   return 0;
 }

@@ -94,6 +94,24 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       std::string(options_.client_certs ? " or a client certificate signed by tls_client_ca" : ""));
 }
 
+StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authorization) {
+  if (authorization != nullptr) {
+    const std::string_view value = *authorization;
+    if (value.substr(0, sizeof(kBearer) - 1) != kBearer)
+      return Status::Unauthenticated("the Authorization header must be 'Bearer <token>'");
+    return FromToken(value.substr(sizeof(kBearer) - 1));
+  }
+  if (!Required()) {
+    Principal p;
+    p.name = "anonymous";
+    p.role = Role::kOperator;
+    p.anonymous = true;
+    return p;
+  }
+  return Status::Unauthenticated(
+      "authentication required: send an 'Authorization: Bearer <token>' header");
+}
+
 StatusOr<Principal> AccessControl::Admit(const grpc::ServerContextBase& context,
                                          Permission permission, const std::string& action,
                                          const std::string& robot) {

@@ -42,6 +42,11 @@ class AccessControl {
   // Who is calling (see above): UNAUTHENTICATED naming what is missing or wrong.
   StatusOr<Principal> Authenticate(const grpc::ServerContextBase& context);
 
+  // The same for a caller that is not a gRPC call (the web view): an HTTP
+  // `Authorization` header's value (null: none sent), then the open mode.
+  // No client certificates there.
+  StatusOr<Principal> AuthenticateHeader(const std::string* authorization);
+
   // Authenticate, then Authorize(permission, robot). A refused write
   // (permission write, delete, merge, manage_tokens) is audited.
   StatusOr<Principal> Admit(const grpc::ServerContextBase& context, Permission permission,

@@ -105,6 +105,14 @@ Status ServerConfig::Validate() const {
         "' is not loopback; set auth.required = true (create tokens with "
         "`mapd token create`) or tls_client_ca");
   }
+  // Plain HTTP: off loopback tokens and the map would cross the network in the clear.
+  if (web.port != 0 && !allow_insecure_remote &&
+      !ListenIsLoopback(web.address + ":" + std::to_string(web.port))) {
+    return Status::InvalidArgument("http.address: '" + web.address +
+                                   "' is not loopback; the web view is plain HTTP: put a TLS "
+                                   "proxy in front, or allow_insecure_remote=true on a trusted "
+                                   "network");
+  }
   return Status::Ok();
 }
 

@@ -29,6 +29,7 @@ struct ServerConfig {
   SubmapOptions submaps;
   StreamLimits streams;
   WatchOptions watch;  // WatchFeatureMap: history, per-watcher queue, watchers at once
+  WebOptions web;      // the web view's HTTP port (off by default)
   size_t max_message_bytes = 16u << 20;          // largest gRPC message accepted
   size_t max_group_batches = 4096;               // batches per group commit at most
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)

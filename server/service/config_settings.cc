@@ -346,6 +346,13 @@ const std::vector<Setting>& Settings() {
             "event=log_suppressed line",
             [](C& c) -> auto& { return c.streams.log_lines_per_s; }, 1, 1000000),
 
+      Count("http.port", "the web view (a page, JSON, server-sent events, /metrics) on this TCP port; "
+            "0 = off. GETs follow the read rule, approving or rejecting merges needs an operator token "
+            "when tokens are in use (docs/operations.md, \"Web view\")",
+            [](C& c) -> auto& { return c.web.port; }, 0, 65535),
+      Text("http.address", "address the web view listens on; off loopback also needs allow_insecure_remote "
+           "(plain HTTP)", [](C& c) -> auto& { return c.web.address; }),
+
       Count("merge.min_matched_corners", "matched corners a pairwise merge needs to be accepted (a rigid "
             "transform needs 3)",
             [](C& c) -> auto& { return c.submaps.min_matched_corners; }, 3, 100000),

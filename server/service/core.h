@@ -25,6 +25,7 @@
 #include "fusion/plane_engine.h"
 #include "geometry/box2.h"
 #include "service/ingest_batch.h"
+#include "service/latency_histogram.h"
 #include "storage/store.h"
 
 namespace mapd::service {
@@ -81,6 +82,7 @@ struct CoreStats {
   uint64_t fused_planes = 0;        // published non-vertical planes
   uint64_t plane_nodes = 0;         // the plane engine's nodes
   std::string write_failure;        // why the database refuses writes now; empty: it takes them
+  HistogramSnapshot ack_latency;    // Submit to acknowledgement of stored batches, seconds
 };
 
 using WriteFunction = std::function<Status(storage::WriteTransaction*)>;

@@ -167,7 +167,7 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     if (!stopping_) {
-      queue_.push_back({std::move(batch), std::move(done)});
+      queue_.push_back({std::move(batch), std::move(done), Clock::now()});
       queue_cv_.notify_one();
       return;
     }
@@ -410,7 +410,12 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
       fuse_cv_.notify_all();
     }
   }
-  for (size_t i = 0; i < group.size(); ++i) group[i].done(outcomes[i]);
+  const auto acked = Clock::now();
+  for (size_t i = 0; i < group.size(); ++i) {
+    if (outcomes[i].kind == BatchOutcome::Kind::kStored)
+      ack_latency_.Record(std::chrono::duration<double>(acked - group[i].queued).count());
+    group[i].done(outcomes[i]);
+  }
 }
 
 void MapCore::FuserLoop() {
@@ -721,6 +726,7 @@ CoreStats MapCore::Stats() const {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     s.fusion_backlog = committed_count_ - fused_count_;
   }
+  s.ack_latency = ack_latency_.Snapshot();
   s.recovering = !ready_.load();
   if (Status w = write_health_.status(); !w.ok()) s.write_failure = w.message();
   s.replay_length = fused_since_snapshot_.load();

@@ -48,6 +48,7 @@
 #include "geometry/box2.h"
 #include "service/core.h"
 #include "service/ingest_batch.h"
+#include "service/latency_histogram.h"
 #include "service/watch_hub.h"
 #include "service/write_health.h"
 #include "storage/store.h"
@@ -140,6 +141,7 @@ class MapCore final : public Core {
   struct Pending {
     IngestBatch batch;
     DoneCallback done;
+    std::chrono::steady_clock::time_point queued;  // for ack_latency_
   };
   // Clusters whose published state changed (added, updated or removed); the
   // writer reads their current state from the engines when it writes them.
@@ -279,6 +281,7 @@ class MapCore final : public Core {
     uint64_t batches, features;
   };
   std::deque<RateSample> rate_samples_;  // GUARDED_BY(rate_mu_), one per 250 ms, 10 s deep
+  LatencyHistogram ack_latency_;         // stored batches: queued to acknowledged
 };
 
 }  // namespace mapd::service

@@ -158,35 +158,21 @@ grpc::Status SubmapService::GetMerge(const pb::GetMergeRequest& request,
   return grpc::Status::OK;
 }
 
-grpc::Status SubmapService::FinishDecision(const std::string& action, int64_t id,
-                                           const Status& outcome, const Principal& caller,
-                                           pb::MergeRecord* response) {
-  if (!outcome.ok()) {
-    // The decision's transaction rolled back with its audit row: the refusal gets its own.
-    const Status audited = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
-      return txn->AppendAudit(
-          AccessControl::Entry(caller, action, MergeName(id), outcome.ToString()));
-    });
-    if (!audited.ok())
-      Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", audited.ToString()}});
-    return ToGrpcStatus(outcome);
-  }
-  StatusOr<storage::MergeRecord> r = core_->store().GetMerge(id);
-  if (!r.ok()) return ToGrpcStatus(r.status());
-  ToProto(*r, response);
-  return grpc::Status::OK;
-}
-
-grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
-                                         const Principal& caller, pb::MergeRecord* response) {
-  if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
-  if (draining_) return ShuttingDown();
-  const auto id = static_cast<int64_t>(request.id());
+Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
+                   const Principal& caller) {
+  const bool approve = reject_reason.empty();
+  const std::string action = approve ? "ApproveMerge" : "RejectMerge";
   size_t tied = 0;
-  const Status outcome = core_->ExecuteWrite([&](storage::WriteTransaction* txn) -> Status {
+  const Status outcome = core->ExecuteWrite([&](storage::WriteTransaction* txn) -> Status {
+    if (!approve) {
+      MAPD_RETURN_IF_ERROR(txn->DecideMerge(id, storage::MergeState::kRejected, caller.name,
+                                            UnixNowNs(), reject_reason));
+      return txn->AppendAudit(
+          AccessControl::Entry(caller, action, MergeName(id), "ok: " + reject_reason));
+    }
     // On the writer thread: no delete, tie or other decision can come
     // between these checks and the commit.
-    storage::Store& store = core_->store();
+    storage::Store& store = core->store();
     StatusOr<storage::MergeRecord> merge = store.GetMerge(id);
     if (!merge.ok()) return merge.status();
     if (merge->state != storage::MergeState::kProposed) {
@@ -206,42 +192,69 @@ grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
     MAPD_RETURN_IF_ERROR(
         txn->DecideMerge(id, storage::MergeState::kAccepted, caller.name, UnixNowNs(), ""));
     MAPD_RETURN_IF_ERROR(
-        txn->AppendAudit(AccessControl::Entry(caller, "ApproveMerge", MergeName(id), "ok")));
+        txn->AppendAudit(AccessControl::Entry(caller, action, MergeName(id), "ok")));
     for (const auto& [session_id, T_map_frame] : *ties)
       MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
     tied = ties->size();
     return Status::Ok();
   });
-  Log(LogLevel::kInfo, outcome.ok() ? "merge_approved" : "merge_approve_refused",
-      {{"merge", std::to_string(id)},
-       {"by", caller.name},
-       {"sessions_tied", std::to_string(tied)},
-       {"result", outcome.ok() ? "ok" : outcome.ToString()}});
-  return FinishDecision("ApproveMerge", id, outcome, caller, response);
+  const std::string result = outcome.ok() ? "ok" : outcome.ToString();
+  if (approve) {
+    Log(LogLevel::kInfo, outcome.ok() ? "merge_approved" : "merge_approve_refused",
+        {{"merge", std::to_string(id)},
+         {"by", caller.name},
+         {"sessions_tied", std::to_string(tied)},
+         {"result", result}});
+  } else {
+    Log(LogLevel::kInfo, outcome.ok() ? "merge_rejected" : "merge_reject_refused",
+        {{"merge", std::to_string(id)}, {"by", caller.name}, {"result", result}});
+  }
+  if (!outcome.ok()) {
+    // The decision's transaction rolled back with its audit row: the refusal gets its own.
+    const Status audited = core->ExecuteWrite([&](storage::WriteTransaction* txn) {
+      return txn->AppendAudit(
+          AccessControl::Entry(caller, action, MergeName(id), outcome.ToString()));
+    });
+    if (!audited.ok())
+      Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", audited.ToString()}});
+  }
+  return outcome;
+}
+
+Status CheckRejectReason(const std::string& reason) {
+  if (reason.empty())
+    return Status::InvalidArgument("reason: required (why the merge is rejected, for the record)");
+  if (reason.size() > kMaxReasonChars) {
+    return Status::InvalidArgument("reason: " + std::to_string(reason.size()) +
+                                   " characters, at most " + std::to_string(kMaxReasonChars));
+  }
+  return Status::Ok();
+}
+
+grpc::Status SubmapService::FinishDecision(int64_t id, const Status& outcome,
+                                           pb::MergeRecord* response) {
+  if (!outcome.ok()) return ToGrpcStatus(outcome);
+  StatusOr<storage::MergeRecord> r = core_->store().GetMerge(id);
+  if (!r.ok()) return ToGrpcStatus(r.status());
+  ToProto(*r, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
+                                         const Principal& caller, pb::MergeRecord* response) {
+  if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
+  if (draining_) return ShuttingDown();
+  const auto id = static_cast<int64_t>(request.id());
+  return FinishDecision(id, DecideMerge(core_, id, "", caller), response);
 }
 
 grpc::Status SubmapService::RejectMerge(const pb::RejectMergeRequest& request,
                                         const Principal& caller, pb::MergeRecord* response) {
   if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
-  if (request.reason().empty())
-    return InvalidArgument("reason: required (why the merge is rejected, for the record)");
-  if (request.reason().size() > kMaxReasonChars) {
-    return InvalidArgument("reason: " + std::to_string(request.reason().size()) +
-                           " characters, at most " + std::to_string(kMaxReasonChars));
-  }
+  if (Status s = CheckRejectReason(request.reason()); !s.ok()) return ToGrpcStatus(s);
   if (draining_) return ShuttingDown();
   const auto id = static_cast<int64_t>(request.id());
-  const Status outcome = core_->ExecuteWrite([&](storage::WriteTransaction* txn) -> Status {
-    MAPD_RETURN_IF_ERROR(txn->DecideMerge(id, storage::MergeState::kRejected, caller.name,
-                                          UnixNowNs(), request.reason()));
-    return txn->AppendAudit(
-        AccessControl::Entry(caller, "RejectMerge", MergeName(id), "ok: " + request.reason()));
-  });
-  Log(LogLevel::kInfo, outcome.ok() ? "merge_rejected" : "merge_reject_refused",
-      {{"merge", std::to_string(id)},
-       {"by", caller.name},
-       {"result", outcome.ok() ? "ok" : outcome.ToString()}});
-  return FinishDecision("RejectMerge", id, outcome, caller, response);
+  return FinishDecision(id, DecideMerge(core_, id, request.reason(), caller), response);
 }
 
 }  // namespace mapd::service

@@ -12,6 +12,8 @@
 #include "common/status.h"
 #include "geometry/rigid3.h"
 #include "mapserver/v1/map_service.pb.h"
+#include "service/auth.h"
+#include "service/core.h"
 #include "storage/store.h"
 
 namespace mapd::service {
@@ -30,6 +32,16 @@ Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& p
                             const std::vector<storage::SubmapMeta>& metas);
 
 void ToProto(const storage::MergeRecord& record, mapserver::v1::MergeRecord* out);
+
+// A decision on proposed merge `id` by `caller` (authorized already):
+// approve when `reject_reason` is empty (ties its frames), else reject. On
+// the writer thread, audited and logged, a refusal too (NotFound,
+// FailedPrecondition naming the state or the conflict). For ApproveMerge,
+// RejectMerge and the web view's POSTs.
+Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
+                   const Principal& caller);
+// InvalidArgument unless `reason` is a valid rejection reason (1-1000 characters).
+Status CheckRejectReason(const std::string& reason);
 
 }  // namespace mapd::service
 

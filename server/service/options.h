@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include "common/status.h"
 
@@ -66,6 +67,12 @@ struct WatchOptions {
   // gets a resync (the full filtered map) once it reads again.
   size_t queue = 256;
   size_t max_watchers = 64;  // one more watch is RESOURCE_EXHAUSTED at once
+};
+
+// The web view (server/web): an HTTP port, off unless port is set.
+struct WebOptions {
+  int port = 0;  // 0: off
+  std::string address = "127.0.0.1";
 };
 
 // Voxel submaps and merges. The merge thresholds are voxel::MergeParams's

@@ -32,6 +32,8 @@ class MapServer {
   // The port actually bound (useful with port 0).
   int port() const { return port_; }
   std::string address() const;
+  // The core, for what runs beside the gRPC server (the web view).
+  Core* core() const { return core_.get(); }
 
   // Graceful stop: new batches are refused, streams get shutdown_grace_s to
   // finish, everything accepted is committed, the WAL is checkpointed.

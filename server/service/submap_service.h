@@ -138,8 +138,8 @@ class SubmapService {
  private:
   // Approve/Reject's end: audits a refused decision (its own transaction
   // rolled back), or fills `response` with the record as now stored.
-  grpc::Status FinishDecision(const std::string& action, int64_t id, const Status& outcome,
-                              const Principal& caller, mapserver::v1::MergeRecord* response);
+  grpc::Status FinishDecision(int64_t id, const Status& outcome,
+                              mapserver::v1::MergeRecord* response);
   // Merge's steps (submap_merge.cc).
   struct MergeInputs {
     std::vector<storage::SubmapMeta> metas;

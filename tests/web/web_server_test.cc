@@ -1,0 +1,271 @@
+// The web view's endpoints on a real MapServer: JSON shapes, the event
+// stream (resync, changes, resume), robots, metrics, merges and who may
+// decide them, bad requests, and a port that is taken.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "web/sse_client.h"
+#include "web/web_fixture.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST_F(WebFixture, FeaturesAreTheFusedMapWithTheProtosNames) {
+  Start();
+  Ingest(RoomBatches("r1", 8));
+  const json doc = GetJson("/api/features");
+  EXPECT_GT(doc["map_version"].get<uint64_t>(), 0u);
+  ASSERT_EQ(doc["features"].size(), 4u) << doc.dump();  // the room's four walls
+  EXPECT_TRUE(doc["planes"].is_array());
+  for (const json& f : doc["features"]) {
+    EXPECT_TRUE(f["id"].is_number_unsigned());
+    EXPECT_EQ(f["kind"], "line");
+    EXPECT_TRUE(f["a"]["x"].is_number() && f["b"]["y"].is_number()) << f.dump();
+    EXPECT_TRUE(f["z_min"].is_number() && f["z_max"].is_number());
+    EXPECT_GE(f["support"].get<int>(), 3);
+    EXPECT_GE(f["member_count"].get<int>(), 3);
+    EXPECT_EQ(f["robots"], json::array({"r1"}));
+  }
+}
+
+TEST_F(WebFixture, ThePageIsServedWithItsScript) {
+  Start();
+  httplib::Result r = Client().Get("/");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_THAT(r->get_header_value("Content-Type"), HasSubstr("text/html"));
+  EXPECT_THAT(r->body, HasSubstr("/api/events"));
+  EXPECT_THAT(r->body, ::testing::Not(HasSubstr("https://")));  // nothing fetched from elsewhere
+  EXPECT_EQ(Client().Get("/nope")->status, 404);
+}
+
+TEST_F(WebFixture, EventsStartWithAResyncThenCarryChanges) {
+  Start();
+  Ingest(RoomBatches("r1", 8));
+  SseClient events(web_->port(), {});
+  std::optional<SseEvent> e = events.Next();
+  ASSERT_TRUE(e);
+  EXPECT_EQ(events.status(), 200);
+  ASSERT_EQ(e->type, "resync");
+  const json resync = json::parse(e->data);
+  EXPECT_EQ(resync["features"].size(), 4u);
+  EXPECT_EQ(e->id, std::to_string(resync["map_version"].get<uint64_t>()));
+
+  // A new wall: its feature arrives in a change, once published (min_support 3).
+  Ingest(FarWallBatches("r2", 4));
+  std::set<uint64_t> added;
+  while (added.empty()) {
+    e = events.Next();
+    ASSERT_TRUE(e) << "no change event with the new wall";
+    ASSERT_EQ(e->type, "change");
+    const json c = json::parse(e->data);
+    EXPECT_EQ(e->id, std::to_string(c["map_version"].get<uint64_t>()));
+    EXPECT_TRUE(c["removed"].is_array() && c["removed_planes"].is_array());
+    for (const json& f : c["features"]) {
+      if (f["robots"] == json::array({"r2"})) added.insert(f["id"].get<uint64_t>());
+    }
+  }
+  const json doc = GetJson("/api/features");
+  std::set<uint64_t> now;
+  for (const json& f : doc["features"]) now.insert(f["id"].get<uint64_t>());
+  for (uint64_t id : added) EXPECT_TRUE(now.count(id)) << id;
+}
+
+TEST_F(WebFixture, LastEventIdResumesWithChangesOrResyncs) {
+  Start();
+  Ingest(RoomBatches("r1", 8));
+  const uint64_t v = GetJson("/api/features")["map_version"];
+  Ingest(FarWallBatches("r2", 4));
+  {
+    SseClient events(web_->port(), {{"Last-Event-ID", std::to_string(v)}});
+    std::optional<SseEvent> e = events.Next();
+    ASSERT_TRUE(e);
+    EXPECT_EQ(e->type, "change") << "a resume within the history gets the changes after it";
+    EXPECT_GT(std::stoull(e->id), v);
+  }
+  {
+    // Newer than the map (another database): the whole map.
+    SseClient events(web_->port(), {{"Last-Event-ID", "999999999"}});
+    std::optional<SseEvent> e = events.Next();
+    ASSERT_TRUE(e);
+    EXPECT_EQ(e->type, "resync");
+  }
+  const json bad = GetJson("/api/events?since=abc", 400);
+  EXPECT_THAT(bad["error"].get<std::string>(),
+              HasSubstr("'abc' is not a positive decimal integer"));
+}
+
+TEST_F(WebFixture, RobotsHaveTheirLastPoseAndATrail) {
+  Start();
+  Ingest(RoomBatches("r1", 5, 3.0, 2.0));
+  const json doc = GetJson("/api/robots");
+  ASSERT_EQ(doc["robots"].size(), 1u);
+  const json& r = doc["robots"][0];
+  EXPECT_EQ(r["robot_id"], "r1");
+  EXPECT_EQ(r["batches"], 5);
+  EXPECT_EQ(r["frame"], "map");
+  EXPECT_NEAR(r["pose"]["x"].get<double>(), 3.4, 1e-9);  // the fifth batch's
+  EXPECT_NEAR(r["pose"]["y"].get<double>(), 2.0, 1e-9);
+  EXPECT_NEAR(r["pose"]["yaw"].get<double>(), 0.8, 1e-9);
+  EXPECT_EQ(r["pose"]["seq"], 5);
+  EXPECT_EQ(r["trail"].size(), 5u);
+}
+
+// Every sample line is `name{labels} value`, every family has HELP and TYPE.
+TEST_F(WebFixture, MetricsAreValidPrometheusText) {
+  Start();
+  Ingest(RoomBatches("r1", 6));
+  httplib::Result r = Client().Get("/metrics");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_THAT(r->get_header_value("Content-Type"), HasSubstr("text/plain; version=0.0.4"));
+  std::map<std::string, std::string> types;
+  std::map<std::string, double> values;
+  const std::regex sample(R"(^([a-zA-Z_:][a-zA-Z0-9_:]*)(\{[^}]*\})? (\S+)$)");
+  std::istringstream in(r->body);
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (line.rfind("# TYPE ", 0) == 0) {
+      std::istringstream t(line.substr(7));
+      std::string name, type;
+      t >> name >> type;
+      types[name] = type;
+    } else if (line.rfind("# HELP ", 0) != 0) {
+      ASSERT_TRUE(std::regex_match(line, m, sample)) << "not a sample: " << line;
+      values[m[1].str() + m[2].str()] = std::stod(m[3].str());
+    }
+  }
+  EXPECT_EQ(types["mapd_ingest_batches_total"], "counter");
+  EXPECT_EQ(types["mapd_ack_latency_seconds"], "histogram");
+  for (const char* g : {"mapd_fusion_backlog", "mapd_db_size_bytes", "mapd_merges", "mapd_watchers",
+                        "mapd_ingest_batches_per_second"})
+    EXPECT_EQ(types[g], "gauge") << g;
+  EXPECT_EQ(values["mapd_ingest_batches_total"], 6);
+  EXPECT_EQ(values["mapd_ack_latency_seconds_count"], 6);
+  EXPECT_EQ(values["mapd_ack_latency_seconds_bucket{le=\"+Inf\"}"], 6);
+  EXPECT_GT(values["mapd_db_size_bytes"], 0);
+  EXPECT_EQ(values["mapd_merges{state=\"proposed\"}"], 0);
+  EXPECT_EQ(values["mapd_watchers"], 0);
+}
+
+// A proposed merge recorded directly (proposals need the voxel library).
+int64_t RecordProposal(service::Core* core) {
+  int64_t id = 0;
+  const Status s = core->ExecuteWrite([&](storage::WriteTransaction* txn) {
+    storage::NewMerge m;
+    m.record.state = storage::MergeState::kProposed;
+    m.record.created_ns = 1;
+    m.record.requested_by = "test";
+    m.merged.meta.robot = storage::kMergedRobot;
+    m.merged.meta.name = "proposal";
+    m.merged.meta.resolution_m = 0.1;
+    m.merged.data = "not a map: never read";
+    StatusOr<storage::MergeIds> ids = txn->RecordMerge(m);
+    if (ids.ok()) id = ids->merge_id;
+    return ids.status();
+  });
+  EXPECT_TRUE(s.ok()) << s.ToString();
+  return id;
+}
+
+httplib::Result Post(httplib::Client c, const std::string& path, const std::string& body,
+                     const std::string& token = "") {
+  httplib::Headers headers;
+  if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
+  return c.Post(path.c_str(), headers, body, "application/json");
+}
+
+TEST_F(WebFixture, MergesAreListedAndDecidedOnlyWhenProposed) {
+  Start();
+  const int64_t id = RecordProposal(server_->core());
+  json doc = GetJson("/api/merges?state=proposed");
+  ASSERT_EQ(doc["merges"].size(), 1u);
+  EXPECT_EQ(doc["merges"][0]["id"], id);
+  EXPECT_EQ(doc["merges"][0]["state"], "proposed");
+  const std::string base = "/api/merges/" + std::to_string(id);
+
+  httplib::Result r = Post(Client(), base + "/reject", "{}");
+  EXPECT_EQ(r->status, 400);
+  EXPECT_THAT(r->body, HasSubstr("reason: required"));
+  r = Post(Client(), base + "/reject", R"({"reason": "walls do not line up"})");
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(json::parse(r->body)["state"], "rejected");
+  EXPECT_EQ(json::parse(r->body)["reason"], "walls do not line up");
+
+  r = Post(Client(), base + "/approve", "");
+  EXPECT_EQ(r->status, 409);
+  EXPECT_THAT(r->body, HasSubstr("is rejected; only a proposed merge can be approved"));
+  EXPECT_EQ(GetJson("/api/merges?state=proposed")["merges"].size(), 0u);
+}
+
+TEST_F(WebFixture, BadMergeRequestsGetAClear4xx) {
+  Start();
+  httplib::Result r = Post(Client(), "/api/merges/77/approve", "");
+  EXPECT_EQ(r->status, 404);
+  EXPECT_THAT(json::parse(r->body)["error"].get<std::string>(), HasSubstr("77"));
+  r = Post(Client(), "/api/merges/seven/approve", "");
+  EXPECT_EQ(r->status, 400);
+  EXPECT_THAT(json::parse(r->body)["error"].get<std::string>(),
+              HasSubstr("merge id 'seven' is not a positive decimal integer"));
+  r = Post(Client(), "/api/merges/-1/reject", R"({"reason": "x"})");
+  EXPECT_EQ(r->status, 400);
+  const json bad = GetJson("/api/merges?state=maybe", 400);
+  EXPECT_THAT(bad["error"].get<std::string>(), HasSubstr("'maybe' is not proposed"));
+  EXPECT_EQ(GetJson("/api/global-map.png", 404)["error"], "no global map yet (no merge accepted)");
+}
+
+TEST_F(WebFixture, WithTokensReadsNeedAReaderAndDecisionsAnOperator) {
+  Start();
+  const int64_t id = RecordProposal(server_->core());
+  const std::string reader = MakeToken(service::Role::kReader, "dashboard");
+  const std::string op = MakeToken(service::Role::kOperator, "alice");
+  const std::string reject = "/api/merges/" + std::to_string(id) + "/reject";
+  const std::string reason = R"({"reason": "wrong floor"})";
+
+  EXPECT_THAT(GetJson("/api/features", 401)["error"].get<std::string>(),
+              HasSubstr("Authorization: Bearer"));
+  EXPECT_EQ(Client().Get("/metrics")->status, 401);
+  EXPECT_EQ(Client().Get("/")->status, 200);  // the page holds no data
+  GetJson("/api/features", 200, reader);
+  GetJson("/api/events?since=bad", 400, reader);  // admitted, then the request is checked
+  EXPECT_EQ(GetJson("/api/robots", 401, "1.forged")["code"], "UNAUTHENTICATED");
+
+  httplib::Result r = Post(Client(), reject, reason);
+  EXPECT_EQ(r->status, 401);
+  r = Post(Client(), reject, reason, reader);
+  EXPECT_EQ(r->status, 403);
+  EXPECT_THAT(r->body, HasSubstr("operator, admin"));
+  r = Post(Client(), reject, reason, op);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(json::parse(r->body)["decided_by"], "alice");
+}
+
+TEST_F(WebFixture, AnOpenEventStreamDoesNotHoldUpTheStop) {
+  Start();
+  SseClient events(web_->port(), {});
+  ASSERT_TRUE(events.Next());
+  EXPECT_EQ(Client().Get("/metrics")->status, 200);  // other requests go on beside it
+  web_->Stop();  // returns once the stream has ended (within its 250 ms poll)
+  EXPECT_FALSE(events.Next(std::chrono::seconds(10)));
+}
+
+TEST_F(WebFixture, APortInUseIsAClearStartupError) {
+  Start();
+  web::WebServerOptions options;
+  options.port = web_->port();
+  auto second = web::WebServer::Start(server_->core(), options);
+  ASSERT_FALSE(second.ok());
+  EXPECT_EQ(second.status().code(), StatusCode::kUnavailable);
+  EXPECT_THAT(second.status().message(), HasSubstr("http.port " + std::to_string(web_->port()) +
+                                                   ": the web view cannot listen on 127.0.0.1:" +
+                                                   std::to_string(web_->port())));
+}
+
+}  // namespace
+}  // namespace mapd::testing
