@@ -11,6 +11,7 @@ PACKAGES=(
   libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
   libcairo2-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
+  python3-grpcio python3-protobuf python3-pytest
 )
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev clang-format-14 clang-tidy-14 systemd)
