@@ -1,6 +1,8 @@
 """mapd_client against a real mapd (conftest.py starts one per test)."""
 
 import math
+import subprocess
+import time
 
 import grpc
 import pytest
@@ -164,3 +166,29 @@ def test_submaps_upload_list_fetch_and_merge(mapd, tmp_path, with_voxel):
     assert aligned_b.T_reference_submap.translation.y == pytest.approx(-0.5, abs=0.15)
     info, data = client.global_map()
     assert info.id == result.merged_submap_id and data.startswith(b"# Octomap OcTree binary")
+
+
+def test_a_refused_token_gives_up_at_once_and_a_good_one_streams(mapd):
+    assert mapd.stop() == 0
+    made = subprocess.run([mapd.binary, "token", "create", "--db", mapd.db, "--role", "robot",
+                           "--name", "r1-key", "--robot", "r1"],
+                          capture_output=True, text=True, check=True)
+    token = made.stdout.strip().splitlines()[-1]
+    assert token.startswith("mapd_")
+    mapd.start(listen=mapd.address)
+    channel = connect(mapd.address)
+
+    robot = RobotClient(channel, give_up_after_s=60)  # no token
+    robot.send(room_batch("r1", "s1", 1, 1.0, 1.0))
+    started = time.monotonic()
+    with pytest.raises(IngestError) as error:
+        robot.finish(timeout_s=60)
+    assert error.value.code == grpc.StatusCode.UNAUTHENTICATED
+    assert time.monotonic() - started < 10  # not retried for a minute
+
+    with RobotClient(channel, token=token) as robot:
+        robot.send(room_batch("r1", "s1", 1, 1.0, 1.0))
+    assert robot.counts().stored == 1
+    with pytest.raises(grpc.RpcError) as denied:
+        MapClient(channel, token=token).merge([1, 2])
+    assert denied.value.code() == grpc.StatusCode.PERMISSION_DENIED
