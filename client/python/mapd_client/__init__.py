@@ -8,8 +8,7 @@
     walls = MapClient(channel).feature_map().features
 
 The stubs (mapserver.v1.map_service_pb2, _pb2_grpc) are generated at build
-time into <build>/client/python; see client/python/README section in the
-project README.
+time into <build>/client/python; see the "Python" section of the project README.
 """
 
 from mapd_client._proto import pb, pb_grpc

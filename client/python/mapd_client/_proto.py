@@ -5,10 +5,12 @@ tree, never committed: put <build>/client/python on PYTHONPATH.
 """
 
 try:
-    from mapserver.v1 import map_service_pb2 as pb  # noqa: F401
-    from mapserver.v1 import map_service_pb2_grpc as pb_grpc  # noqa: F401
+    from mapserver.v1 import map_service_pb2 as pb
+    from mapserver.v1 import map_service_pb2_grpc as pb_grpc
 except ImportError as error:  # pragma: no cover - depends on the environment
     raise ImportError(
         "mapd_client: the generated stubs mapserver.v1.map_service_pb2(_grpc) were not found "
         "(" + str(error) + "). Build the project (cmake --build build) and put "
         "build/client/python on PYTHONPATH beside client/python.") from error
+
+__all__ = ["pb", "pb_grpc"]

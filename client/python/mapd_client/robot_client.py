@@ -282,17 +282,21 @@ class RobotClient:
             self._cv.notify_all()
 
     def _wait_for_channel(self, deadline: float) -> None:
-        # In slices, so that close() is noticed.
-        while time.monotonic() < deadline:
-            with self._mu:
-                if self._stopping:
+        # One future (it asks the channel to connect), waited on in slices so
+        # that close() is noticed; cancelled after, so no subscription is left.
+        ready = grpc.channel_ready_future(self._channel)
+        try:
+            while time.monotonic() < deadline:
+                with self._mu:
+                    if self._stopping:
+                        return
+                try:
+                    ready.result(timeout=min(0.2, max(0.0, deadline - time.monotonic())))
                     return
-            try:
-                grpc.channel_ready_future(self._channel).result(
-                    timeout=min(0.2, max(0.0, deadline - time.monotonic())))
-                return
-            except grpc.FutureTimeoutError:
-                continue
+                except grpc.FutureTimeoutError:
+                    continue
+        finally:
+            ready.cancel()
 
     def _handle_ack(self, ack: pb.IngestAck) -> None:
         with self._cv:
