@@ -121,14 +121,16 @@ class MapClient:
                                 metadata=self._metadata)
 
     def merge(self, submap_ids: Sequence[int],
-              progress: Optional[Callable[[str, float], None]] = None) -> pb.MergeResult:
+              progress: Optional[Callable[[str, float], None]] = None,
+              review: bool = False) -> pb.MergeResult:
         """Merges two or more submaps (the first is the reference frame).
         progress(stage, fraction) is called as the server reports. A merge with
         too little evidence raises grpc.RpcError FAILED_PRECONDITION with the
-        figure that failed."""
+        figure that failed. review: only propose it (result.state
+        MERGE_STATE_PROPOSED) until approve_merge()."""
+        request = pb.MergeSubmapsRequest(submap_ids=submap_ids, review=review)
         result = None
-        for message in self._stub.MergeSubmaps(pb.MergeSubmapsRequest(submap_ids=submap_ids),
-                                               metadata=self._metadata):
+        for message in self._stub.MergeSubmaps(request, metadata=self._metadata):
             if progress is not None and message.stage:
                 progress(message.stage, message.fraction)
             if message.HasField("result"):
@@ -136,6 +138,23 @@ class MapClient:
         if result is None:
             raise RuntimeError("the server ended the merge without a result")
         return result
+
+    def list_merges(self, state: int = pb.MERGE_STATE_UNSPECIFIED) -> List[pb.MergeRecord]:
+        return list(self._stub.ListMerges(pb.ListMergesRequest(state=state),
+                                          timeout=self._timeout_s,
+                                          metadata=self._metadata).merges)
+
+    def get_merge(self, merge_id: int) -> pb.MergeRecord:
+        return self._stub.GetMerge(pb.GetMergeRequest(id=merge_id), timeout=self._timeout_s,
+                                   metadata=self._metadata)
+
+    def approve_merge(self, merge_id: int) -> pb.MergeRecord:
+        return self._stub.ApproveMerge(pb.ApproveMergeRequest(id=merge_id),
+                                       timeout=self._timeout_s, metadata=self._metadata)
+
+    def reject_merge(self, merge_id: int, reason: str) -> pb.MergeRecord:
+        return self._stub.RejectMerge(pb.RejectMergeRequest(id=merge_id, reason=reason),
+                                      timeout=self._timeout_s, metadata=self._metadata)
 
     @staticmethod
     def _read_chunks(stream) -> Tuple[pb.SubmapInfo, bytes]:

@@ -158,8 +158,17 @@ def test_submaps_upload_list_fetch_and_merge(mapd, tmp_path, with_voxel):
             client.merge([a.id, b.id])
         assert error.value.code() == grpc.StatusCode.UNIMPLEMENTED
         return
-    result = client.merge([a.id, b.id], progress=lambda stage, f: stages.append(stage))
+    # Proposed first: no global map until approved.
+    result = client.merge([a.id, b.id], progress=lambda stage, f: stages.append(stage),
+                          review=True)
     assert "corners" in stages and "fusion" in stages
+    assert result.state == pb.MERGE_STATE_PROPOSED
+    assert [m.id for m in client.list_merges(pb.MERGE_STATE_PROPOSED)] == [result.merge_id]
+    with pytest.raises(grpc.RpcError) as error:
+        client.global_map()
+    assert error.value.code() == grpc.StatusCode.NOT_FOUND
+    assert client.approve_merge(result.merge_id).state == pb.MERGE_STATE_ACCEPTED
+    assert client.get_merge(result.merge_id).state == pb.MERGE_STATE_ACCEPTED
     [aligned_b] = [x for x in result.alignments if x.submap_id == b.id]
     # B's frame is A's moved by (-2.0, +0.5) m: B maps into A by the opposite.
     assert aligned_b.T_reference_submap.translation.x == pytest.approx(2.0, abs=0.15)
