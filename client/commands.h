@@ -26,6 +26,8 @@ void AddIngestCommands(CLI::App* app, Action* action);
 void AddSubmapCommands(CLI::App* app, Action* action);
 // commands_merge.cc: merge, merge show|approve|reject, merges
 void AddMergeCommands(CLI::App* app, Action* action);
+// commands_export.cc: occupancy-grid (ROS map_server files), trails (GeoJSON)
+void AddExportCommands(CLI::App* app, Action* action);
 // commands_auth.cc: token create|list|revoke, audit, whoami
 void AddAuthCommands(CLI::App* app, Action* action);
 // commands_render.cc: render (top-down renderings of OctoMap files)

@@ -195,6 +195,42 @@ std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes) 
   return doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
+std::string FormatTrailsGeoJson(const std::vector<pb::SessionTrail>& trails) {
+  using Json = nlohmann::ordered_json;
+  Json items = Json::array();
+  for (const pb::SessionTrail& t : trails) {
+    if (t.poses().empty()) continue;
+    Json coordinates = Json::array();
+    for (const pb::TrailPose& p : t.poses()) {
+      coordinates.push_back(
+          Json::array({JsonNumber(p.position().x()), JsonNumber(p.position().y())}));
+    }
+    // A LineString needs two positions: one pose is a Point.
+    const bool single = coordinates.size() == 1;
+    items.push_back({{"type", "Feature"},
+                     {"geometry",
+                      {{"type", single ? "Point" : "LineString"},
+                       {"coordinates", single ? coordinates[0] : coordinates}}},
+                     {"properties",
+                      {{"robot_id", t.robot_id()},
+                       {"session_id", t.session_id()},
+                       {"frame", t.frame_tied() ? "map" : "session"},
+                       {"poses", t.poses_size()},
+                       {"stored_poses", t.stored_poses()},
+                       {"first_stamp_ns", t.poses(0).stamp_ns()},
+                       {"last_stamp_ns", t.poses(t.poses_size() - 1).stamp_ns()}}}});
+  }
+  const Json doc = {
+      {"type", "FeatureCollection"},
+      {"properties",
+       {{"units", "m"},
+        {"note",
+         "coordinates are metres (x, y) in the map frame, or in the session's own frame where "
+         "a feature's frame is \"session\" (not yet tied by a merge); not longitude/latitude"}}},
+      {"features", std::move(items)}};
+  return doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
 std::string FormatStats(const pb::Stats& s, const std::string& server) {
   std::string out = Printf("mapd %s at %s\n", s.version().c_str(), server.c_str());
   auto row = [&out](const char* name, const std::string& value) {

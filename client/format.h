@@ -46,6 +46,13 @@ std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
 // area_m2, z_min, z_max, support, member_count, robots.
 std::string FormatGeoJson(const FeatureList& features, const PlaneList& planes = {});
 
+// `mapctl trails`: a GeoJSON FeatureCollection, one LineString per robot
+// session through its sensor positions (x, y; a Point for a single pose);
+// properties robot_id, session_id, frame ("map" where the session is tied,
+// else "session": its own frame), poses (in the line), stored_poses,
+// first_stamp_ns, last_stamp_ns. Sessions without a pose are left out.
+std::string FormatTrailsGeoJson(const std::vector<mapserver::v1::SessionTrail>& trails);
+
 // `mapctl status` for people.
 std::string FormatStats(const mapserver::v1::Stats& stats, const std::string& server);
 // `mapctl robots` table; `now_ns` (server clock) makes "last seen 3 s ago".

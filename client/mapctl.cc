@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
   mapd::client::AddIngestCommands(&app, &action);
   mapd::client::AddSubmapCommands(&app, &action);
   mapd::client::AddMergeCommands(&app, &action);
+  mapd::client::AddExportCommands(&app, &action);
   mapd::client::AddRenderCommand(&app, &action);
   mapd::client::AddAuthCommands(&app, &action);
   if (int rc = mapd::client::ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;

@@ -4,7 +4,6 @@
 #include <streambuf>
 
 #include "voxel/octree_reader.h"
-#include "voxel/voxel_grid.h"
 
 namespace mapd::client {
 namespace {
@@ -30,13 +29,17 @@ class SilenceCerr {
 
 }  // namespace
 
-StatusOr<LoadedVoxels> LoadOccupiedVoxels(std::string_view bytes) {
+StatusOr<voxel::VoxelGrid> LoadVoxelGrid(std::string_view bytes) {
   StatusOr<voxel::OcTreePtr> tree = [&] {
     SilenceCerr quiet;
     return voxel::ReadOctree(bytes);
   }();
   if (!tree.ok()) return tree.status();
-  StatusOr<voxel::VoxelGrid> grid = voxel::VoxelGrid::FromOcTree(**tree);
+  return voxel::VoxelGrid::FromOcTree(**tree);
+}
+
+StatusOr<LoadedVoxels> LoadOccupiedVoxels(std::string_view bytes) {
+  StatusOr<voxel::VoxelGrid> grid = LoadVoxelGrid(bytes);
   if (!grid.ok()) return grid.status();
   LoadedVoxels out;
   out.resolution_m = grid->resolution();

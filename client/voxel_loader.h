@@ -10,6 +10,7 @@
 
 #include "client/rigid_transform.h"
 #include "common/status.h"
+#include "voxel/voxel_grid.h"
 
 namespace mapd::client {
 
@@ -21,6 +22,8 @@ struct LoadedVoxels {
 // InvalidArgument for a malformed file, ResourceExhausted beyond the reader's
 // limits (the server's defaults).
 StatusOr<LoadedVoxels> LoadOccupiedVoxels(std::string_view bytes);
+// The whole grid view (occupied, free and unknown), with the same checks.
+StatusOr<voxel::VoxelGrid> LoadVoxelGrid(std::string_view bytes);
 
 }  // namespace mapd::client
 

@@ -13,6 +13,7 @@ PACKAGES=(
   libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
   libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev
+  python3-grpcio python3-protobuf python3-pytest
 )
 if [ "${1:-}" != "--build-only" ]; then
   PACKAGES+=(chromium)

@@ -145,6 +145,20 @@ struct RobotSummary {
   bool all_sessions_tied = false;
 };
 
+// One robot session's sensor positions (Store::ListTrails), session frame.
+struct TrailPoint {
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // T_frame_sensor's translation
+};
+struct SessionTrailRows {
+  std::string robot;
+  std::string session;
+  int64_t session_id = 0;
+  uint64_t stored = 0;             // observations stored for the session, before thinning
+  std::vector<TrailPoint> points;  // by seq
+};
+
 // --- Voxel submaps and merges.
 
 // Robot name under which merged maps are stored. '@' is outside the API's
@@ -378,6 +392,10 @@ class Store {
   // The sensor poses of a session's newest `limit` observations, newest
   // first, in the session's frame (pose_store.cc; one index range read).
   StatusOr<std::vector<StampedPose>> RecentPoses(int64_t session_id, int limit);
+  // Every session's stored sensor positions (of `robot`, or of all robots if
+  // empty), by robot and session name; a session with more than
+  // `max_points` (>= 2) observations is thinned evenly, first and last kept.
+  StatusOr<std::vector<SessionTrailRows>> ListTrails(const std::string& robot, uint32_t max_points);
   StatusOr<StoreCounts> Counts();
   // Tokens: by id (NotFound), all of them by id, and whether any was ever made.
   StatusOr<TokenRecord> GetToken(int64_t id);

@@ -18,7 +18,7 @@ enum class Role { kReader, kRobot, kOperator, kAdmin };
 
 enum class Permission {
   kReadMap,       // GetFeatureMap, WatchFeatureMap, GetGlobalMap, ListRobots, GetStats, ListMerges,
-                  // GetMerge
+                  // GetMerge, GetTrails
   kReadSubmaps,   // ListSubmaps, GetSubmap (a robot: its own submaps only)
   kWrite,         // Ingest, UploadSubmap (a robot: its own robot id only)
   kDelete,        // DeleteSubmap (a robot: its own submaps only)

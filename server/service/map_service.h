@@ -57,6 +57,10 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
                           mapserver::v1::ListRobotsResponse* response) override;
   grpc::Status GetStats(grpc::ServerContext* context, const mapserver::v1::GetStatsRequest* request,
                         mapserver::v1::Stats* response) override;
+  // map_service_trails.cc
+  grpc::Status GetTrails(grpc::ServerContext* context,
+                         const mapserver::v1::GetTrailsRequest* request,
+                         grpc::ServerWriter<mapserver::v1::SessionTrail>* writer) override;
 
   // Voxel submaps: delegated to SubmapService (submap_service.h).
   grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(

@@ -23,6 +23,14 @@ std::uint64_t Pack(const VoxelKey& key, int level) {
   return x | (y << 16) | (z << 32);
 }
 
+// The inverse of Pack: the cube's minimum key.
+VoxelKey Unpack(std::uint64_t packed, int level) {
+  const auto axis = [&](int shift) {
+    return (static_cast<int>((packed >> shift) & 0xffff) << level) - kKeyOffset;
+  };
+  return VoxelKey(axis(0), axis(16), axis(32));
+}
+
 bool KeyLess(const VoxelKey& a, const VoxelKey& b) {
   return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
 }
@@ -128,6 +136,14 @@ VoxelState VoxelGrid::State(const VoxelKey& key) const {
     if (!cubes.empty() && cubes.count(Pack(key, level)) > 0) return VoxelState::kFree;
   }
   return VoxelState::kUnknown;
+}
+
+void VoxelGrid::ForEachFreeCube(
+    const std::function<void(const VoxelKey& min_key, int edge)>& fn) const {
+  for (int level = 0; level < kLevels; ++level) {
+    for (std::uint64_t packed : free_[static_cast<std::size_t>(level)])
+      fn(Unpack(packed, level), 1 << level);
+  }
 }
 
 VoxelKey VoxelGrid::PointToKey(const Eigen::Vector3d& point) const {

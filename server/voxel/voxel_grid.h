@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <unordered_set>
 #include <vector>
 
@@ -80,6 +81,11 @@ class VoxelGrid {
   }
   // The voxel containing `point` (metres).
   VoxelKey PointToKey(const Eigen::Vector3d& point) const;
+
+  // Calls fn(min_key, edge) for every free cube: the voxels min_key + [0, edge)
+  // per axis (edge = 2^level voxels). Order unspecified. For views that need
+  // free space per region (mapctl occupancy-grid) without probing key by key.
+  void ForEachFreeCube(const std::function<void(const VoxelKey& min_key, int edge)>& fn) const;
 
  private:
   static constexpr int kLevels = 17;  // cube edge 2^level voxels, level 0 = finest

@@ -100,6 +100,34 @@ TEST_F(MapctlE2eTest, ScriptedSession) {
   mapd_.pid = -1;
 }
 
+TEST_F(MapctlE2eTest, TrailsAsGeoJson) {
+  CommandResult r = Mapctl({"simulate", "--robots", "2", "--scans", "30", "--session", "walk"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string path = dir_.File("trails.geojson");
+  r = Mapctl({"trails", "-o", path});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("wrote 2 session trails (0 not tied"));
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(text, HasSubstr("\"FeatureCollection\""));
+  EXPECT_EQ(Count(text, "\"LineString\""), 2u) << text.substr(0, 2000);
+  EXPECT_THAT(text, HasSubstr("\"robot_id\": \"sim-robot-1\""));
+  EXPECT_THAT(text, HasSubstr("\"robot_id\": \"sim-robot-2\""));
+  EXPECT_THAT(text, HasSubstr("\"session_id\": \"walk\""));
+  EXPECT_THAT(text, HasSubstr("\"frame\": \"map\""));
+  EXPECT_THAT(text, HasSubstr("\"poses\": 30"));
+
+  // One robot, thinned, on stdout.
+  r = Mapctl({"trails", "--robot", "sim-robot-2", "--max-poses", "5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Count(r.out, "\"LineString\""), 1u);
+  EXPECT_THAT(r.out, HasSubstr("\"poses\": 5"));
+  EXPECT_THAT(r.out, HasSubstr("\"stored_poses\": 30"));
+  r = Mapctl({"trails", "--robot", "bad robot"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("INVALID_ARGUMENT"));
+}
+
 TEST_F(MapctlE2eTest, IngestReportsTheRejectedLine) {
   // Three batches as JSON lines; the second gets a NaN coordinate.
   const std::string jsonl = dir_.File("batches.jsonl");

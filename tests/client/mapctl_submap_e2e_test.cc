@@ -221,6 +221,109 @@ TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
   EXPECT_TRUE(IsValidPng(both_png));
 }
 
+struct Pgm {
+  int width = 0, height = 0;
+  std::string pixels;  // row 0 first (the top of the map)
+  unsigned char at(int col, int row) const {
+    return static_cast<unsigned char>(pixels[static_cast<size_t>(row) * width + col]);
+  }
+};
+
+// A binary PGM as mapctl writes it ("P5\nW H\n255\n" then W x H bytes).
+bool ParsePgm(const std::string& data, Pgm* out) {
+  std::istringstream in(data);
+  std::string magic;
+  int max = 0;
+  if (!(in >> magic >> out->width >> out->height >> max) || magic != "P5" || max != 255)
+    return false;
+  in.get();  // the one whitespace after the header
+  out->pixels = data.substr(static_cast<size_t>(in.tellg()));
+  return out->pixels.size() == static_cast<size_t>(out->width) * out->height;
+}
+
+TEST_F(MapctlSubmapE2eTest, OccupancyGridOfTheGlobalMapAndOfASubmap) {
+  const std::string grid = dir_.File("grid");
+  // Before any merge there is no global map: said so, nothing written.
+  CommandResult r = Mapctl({"occupancy-grid", "-o", grid});
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("no global map yet"));
+  EXPECT_FALSE(std::filesystem::exists(grid + ".pgm"));
+  // A reversed band is a usage error, before anything is asked of the server.
+  r = Mapctl({"occupancy-grid", "-o", grid, "--z-min", "2", "--z-max", "1"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--z-min"));
+
+  const std::string id_a = Upload(a_bt_, "r1");
+  const std::string id_b = Upload(b_bt_, "r2");
+  ASSERT_FALSE(id_a.empty());
+  ASSERT_FALSE(id_b.empty());
+  r = Mapctl({"merge", id_a, id_b});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err << mapd_.log();
+
+  // The merged room in A's frame (the map frame): 10 m x 8 m, walls on all sides.
+  r = Mapctl({"occupancy-grid", "-o", grid + ".yaml"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("grid.pgm"));
+  const std::string yaml = ReadAll(grid + ".yaml");
+  EXPECT_THAT(yaml, HasSubstr("image: grid.pgm\n"));
+  EXPECT_THAT(yaml, HasSubstr("mode: trinary\n"));
+  EXPECT_THAT(yaml, HasSubstr("resolution: 0.1\n"));
+  EXPECT_THAT(yaml, HasSubstr("negate: 0\n"));
+  EXPECT_THAT(yaml, HasSubstr("occupied_thresh: 0.65\n"));
+  EXPECT_THAT(yaml, HasSubstr("free_thresh: 0.196\n"));
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(yaml, m, std::regex(R"(origin: \[(\S+), (\S+), 0\.0\])"))) << yaml;
+  const double ox = std::stod(m[1]), oy = std::stod(m[2]);
+  EXPECT_NEAR(ox, 0.0, 0.15);  // within the merge's accuracy of the room's corner
+  EXPECT_NEAR(oy, 0.0, 0.15);
+  Pgm pgm;
+  ASSERT_TRUE(ParsePgm(ReadAll(grid + ".pgm"), &pgm));
+  EXPECT_NEAR(pgm.width, 100, 2);
+  EXPECT_NEAR(pgm.height, 80, 2);
+  // Pixel of map point (x, y): row 0 is the largest y.
+  const auto pixel = [&](double x, double y) {
+    const int col = static_cast<int>(std::floor((x - ox) / 0.1));
+    const int row = pgm.height - 1 - static_cast<int>(std::floor((y - oy) / 0.1));
+    return pgm.at(col, row);
+  };
+  EXPECT_EQ(pixel(5.05, 7.95), 0);  // the wall at y = 8: the top rows
+  EXPECT_EQ(pixel(5.05, 0.05), 0);  // the wall at y = 0
+  EXPECT_EQ(pixel(0.05, 4.05), 0);
+  EXPECT_EQ(pixel(7.05, 1.05), 254);  // open floor
+  EXPECT_EQ(pixel(5.25, 5.85), 0);    // a tall box's side in the upper half ...
+  EXPECT_EQ(pixel(5.25, 2.15), 254);  // ... not mirrored into the lower half
+  size_t black_top = 0;
+  for (int col = 0; col < pgm.width; ++col) black_top += pgm.at(col, 0) == 0 ? 1 : 0;
+  EXPECT_GT(black_top, static_cast<size_t>(pgm.width) * 8 / 10);
+
+  // No occupied voxel above the room: said so with the heights that exist.
+  r = Mapctl({"occupancy-grid", "-o", grid, "--z-min", "5", "--z-max", "6"});
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("no occupied voxel between z 5 and 6 m"));
+
+  // One submap, in its own frame, at a coarser resolution.
+  const std::string sub = dir_.File("sub");
+  r = Mapctl({"occupancy-grid", "-o", sub, "--source", "submap", id_b, "--resolution", "0.2"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(ReadAll(sub + ".yaml"), HasSubstr("resolution: 0.2\n"));
+  ASSERT_TRUE(ParsePgm(ReadAll(sub + ".pgm"), &pgm));
+  EXPECT_NEAR(pgm.width, 40, 1);  // B: 8 m of the room, a quarter turn away
+  EXPECT_NEAR(pgm.height, 40, 1);
+  r = Mapctl({"occupancy-grid", "-o", sub, "--source", "submap", "999"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+  r = Mapctl({"occupancy-grid", "-o", sub, "--source", "moon"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+
+  // --lines: the fused walls of a simulated robot drawn in, growing the grid.
+  r = Mapctl({"simulate", "--robots", "1", "--scans", "40"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  r = Mapctl({"occupancy-grid", "-o", grid, "--lines"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"((\d+) fused lines drawn)"))) << r.out;
+  EXPECT_GT(std::stoi(m[1]), 3);
+}
+
 TEST_F(MapctlSubmapE2eTest, CorruptUploadIsRefusedAndTheServerKeepsServing) {
   // Half a file: the octree stream ends early.
   const std::string truncated = dir_.File("truncated.bt");

@@ -83,6 +83,18 @@ TEST_F(AuthTest, EachRoleGetsExactlyItsPermissions) {
   MakeTokens();
   for (const std::string* t : {&reader_, &robot_, &operator_, &admin_})
     EXPECT_TRUE(StatsAs(*t).ok());
+  // Trails are a read of the map: every role, and not without a token.
+  auto trails = [&](const std::string& t) {
+    auto ctx = As(t);
+    auto reader = stub_->GetTrails(ctx.get(), {});
+    pb::SessionTrail trail;
+    while (reader->Read(&trail)) {
+    }
+    return reader->Finish().error_code();
+  };
+  for (const std::string* t : {&reader_, &robot_, &operator_, &admin_})
+    EXPECT_EQ(trails(*t), grpc::StatusCode::OK);
+  EXPECT_EQ(trails(""), grpc::StatusCode::UNAUTHENTICATED);
 
   auto list_tokens = [&](const std::string& t) {
     auto ctx = As(t);

@@ -43,6 +43,16 @@ TEST(VoxelGridTest, MatchesOctoMapOccupiedFreeAndUnknown) {
       }
     }
   }
+  // The pruned free block comes back as one cube of edge 8 at its minimum key.
+  int cubes = 0, free_voxels = 0;
+  grid->ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
+    ++cubes;
+    free_voxels += edge * edge * edge;
+    EXPECT_EQ(grid->State(min_key), VoxelState::kFree);
+    if (edge == 8) EXPECT_EQ(min_key, VoxelKey(0, 0, -8));
+  });
+  EXPECT_EQ(cubes, 1);
+  EXPECT_EQ(free_voxels, 512);
 }
 
 TEST(VoxelGridTest, ExpandsCoarseOccupiedLeavesAndRefusesHugeOnes) {

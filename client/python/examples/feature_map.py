@@ -1,0 +1,34 @@
+#!/usr/bin/env python3
+"""Prints the fused map (walls and planes) and the server's statistics.
+
+    PYTHONPATH=client/python:build/client/python \
+        python3 client/python/examples/feature_map.py --server 127.0.0.1:50051
+"""
+import argparse
+
+from mapd_client import MapClient, connect
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--server", default="127.0.0.1:50051")
+    parser.add_argument("--token", default="")
+    parser.add_argument("--bbox", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"))
+    args = parser.parse_args()
+
+    client = MapClient(connect(args.server), token=args.token)
+    stats = client.stats()
+    print(f"mapd {stats.version}: {stats.robots} robots, {stats.batches} batches, "
+          f"{stats.fused_features} fused features, {stats.submaps} submaps")
+    fused = client.feature_map(bbox=args.bbox)
+    print(f"map version {fused.map_version} ({fused.fusion_pending} observations pending)")
+    for f in fused.features:
+        print(f"  wall {f.id}: ({f.a.x:.2f}, {f.a.y:.2f}) -> ({f.b.x:.2f}, {f.b.y:.2f}) m, "
+              f"support {f.support}, robots {','.join(f.robots)}")
+    for p in fused.planes:
+        print(f"  plane {p.id}: normal ({p.normal.x:.2f}, {p.normal.y:.2f}, {p.normal.z:.2f}), "
+              f"{p.area:.1f} m^2, z {p.z_min:.2f}..{p.z_max:.2f} m")
+
+
+if __name__ == "__main__":
+    main()

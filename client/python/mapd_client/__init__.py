@@ -1,0 +1,19 @@
+"""mapd_client: a Python client of mapd (the mapserver.v1 gRPC API).
+
+    from mapd_client import connect, MapClient, RobotClient, pb
+
+    channel = connect("127.0.0.1:50051")
+    with RobotClient(channel) as robot:    # resends what is unacknowledged after a reconnect
+        robot.send(batch)                  # a pb.ObservationBatch
+    walls = MapClient(channel).feature_map().features
+
+The stubs (mapserver.v1.map_service_pb2, _pb2_grpc) are generated at build
+time into <build>/client/python; see the "Python" section of the project README.
+"""
+
+from mapd_client._proto import pb, pb_grpc
+from mapd_client.map_client import FeatureMap, MapClient, connect
+from mapd_client.robot_client import IngestCounts, IngestError, Rejection, RobotClient
+
+__all__ = ["pb", "pb_grpc", "connect", "MapClient", "FeatureMap", "RobotClient", "IngestCounts",
+           "IngestError", "Rejection"]

@@ -1,0 +1,167 @@
+"""MapClient: the read and operator side of the API, one call per method.
+
+Every method returns the protobuf messages of mapserver.v1 (mapd_client.pb)
+or plain lists of them, and raises grpc.RpcError with the server's status
+(INVALID_ARGUMENT naming the field, FAILED_PRECONDITION for a refused merge,
+NOT_FOUND, PERMISSION_DENIED ...) as any gRPC call does.
+"""
+
+import os
+from typing import Callable, Iterator, List, NamedTuple, Optional, Sequence, Tuple
+
+import grpc
+
+from mapd_client._proto import pb, pb_grpc
+
+CHUNK_BYTES = 1 << 20  # the API's largest chunk
+
+
+class FeatureMap(NamedTuple):
+    features: List[pb.FusedFeature]  # fused walls, map frame
+    planes: List[pb.FusedPlane]      # fused floors, ceilings, ramps
+    map_version: int                 # observations the map reflects
+    fusion_pending: int              # acknowledged observations not reflected yet
+
+
+def connect(address: str = "127.0.0.1:50051", root_certificates: Optional[bytes] = None,
+            private_key: Optional[bytes] = None,
+            certificate_chain: Optional[bytes] = None) -> grpc.Channel:
+    """A channel to mapd: plain on loopback, TLS when a CA is given (and mTLS
+    with a client key and certificate). Reconnects quickly after a restart."""
+    options = [("grpc.initial_reconnect_backoff_ms", 200), ("grpc.max_reconnect_backoff_ms", 2000)]
+    if root_certificates is None:
+        return grpc.insecure_channel(address, options=options)
+    credentials = grpc.ssl_channel_credentials(root_certificates, private_key, certificate_chain)
+    return grpc.secure_channel(address, credentials, options=options)
+
+
+class MapClient:
+    def __init__(self, channel: grpc.Channel, token: str = "", timeout_s: float = 30.0):
+        self._stub = pb_grpc.MapServiceStub(channel)
+        self._metadata = [("authorization", "Bearer " + token)] if token else []
+        self._timeout_s = timeout_s
+
+    # -- the fused map
+
+    def feature_map(self, bbox: Optional[Sequence[float]] = None, min_support: int = 0,
+                    kind: int = pb.FEATURE_KIND_UNSPECIFIED, max_wait_ms: int = 0) -> FeatureMap:
+        """Every page of GetFeatureMap in one FeatureMap. bbox: (xmin, ymin,
+        xmax, ymax), map frame, metres."""
+        request = pb.FeatureMapRequest(min_support=min_support, kind=kind, max_wait_ms=max_wait_ms)
+        if bbox is not None:
+            xmin, ymin, xmax, ymax = bbox
+            request.bbox.min.x, request.bbox.min.y = xmin, ymin
+            request.bbox.max.x, request.bbox.max.y = xmax, ymax
+        features: List[pb.FusedFeature] = []
+        planes: List[pb.FusedPlane] = []
+        version = pending = 0
+        for page in self._stub.GetFeatureMap(request, timeout=self._timeout_s,
+                                             metadata=self._metadata):
+            features.extend(page.features)
+            planes.extend(page.planes)
+            version, pending = page.map_version, page.fusion_pending
+        return FeatureMap(features, planes, version, pending)
+
+    def stats(self) -> pb.Stats:
+        return self._stub.GetStats(pb.GetStatsRequest(), timeout=self._timeout_s,
+                                   metadata=self._metadata)
+
+    def robots(self) -> List[pb.RobotInfo]:
+        return list(self._stub.ListRobots(pb.ListRobotsRequest(), timeout=self._timeout_s,
+                                          metadata=self._metadata).robots)
+
+    def trails(self, robot_id: str = "", max_poses_per_session: int = 0) -> List[pb.SessionTrail]:
+        """Each robot session's sensor positions (map frame where frame_tied)."""
+        request = pb.GetTrailsRequest(robot_id=robot_id,
+                                      max_poses_per_session=max_poses_per_session)
+        return list(self._stub.GetTrails(request, timeout=self._timeout_s,
+                                         metadata=self._metadata))
+
+    # -- voxel submaps
+
+    def upload_submap(self, path: str, robot_id: str, name: str = "", session_id: str = "",
+                      resolution: float = 0.0) -> pb.SubmapInfo:
+        """Uploads an OctoMap file (.bt or .ot, from the extension) in 1 MiB chunks."""
+        extension = os.path.splitext(path)[1].lower()
+        formats = {".bt": pb.SUBMAP_FORMAT_OCTOMAP_BT, ".ot": pb.SUBMAP_FORMAT_OCTOMAP_OT}
+        if extension not in formats:
+            raise ValueError(f"cannot tell the format of '{path}': want a .bt or .ot file")
+        with open(path, "rb") as file:
+            data = file.read()
+        header = pb.SubmapHeader(robot_id=robot_id,
+                                 name=name or os.path.splitext(os.path.basename(path))[0],
+                                 format=formats[extension], resolution=resolution,
+                                 session_id=session_id)
+        return self.upload_submap_bytes(header, data)
+
+    def upload_submap_bytes(self, header: pb.SubmapHeader, data: bytes) -> pb.SubmapInfo:
+        def requests() -> Iterator[pb.UploadSubmapRequest]:
+            yield pb.UploadSubmapRequest(header=header)
+            for at in range(0, len(data), CHUNK_BYTES):
+                yield pb.UploadSubmapRequest(chunk=data[at:at + CHUNK_BYTES])
+        return self._stub.UploadSubmap(requests(), metadata=self._metadata)
+
+    def list_submaps(self, robot_id: str = "") -> List[pb.SubmapInfo]:
+        return list(self._stub.ListSubmaps(pb.ListSubmapsRequest(robot_id=robot_id),
+                                           timeout=self._timeout_s,
+                                           metadata=self._metadata).submaps)
+
+    def get_submap(self, submap_id: int) -> Tuple[pb.SubmapInfo, bytes]:
+        """The stored file and its info."""
+        return self._read_chunks(self._stub.GetSubmap(pb.GetSubmapRequest(id=submap_id),
+                                                      metadata=self._metadata))
+
+    def global_map(self) -> Tuple[pb.SubmapInfo, bytes]:
+        """The merged global map (OctoMap binary); NOT_FOUND before the first merge."""
+        return self._read_chunks(self._stub.GetGlobalMap(pb.GetGlobalMapRequest(),
+                                                         metadata=self._metadata))
+
+    def delete_submap(self, submap_id: int) -> None:
+        self._stub.DeleteSubmap(pb.DeleteSubmapRequest(id=submap_id), timeout=self._timeout_s,
+                                metadata=self._metadata)
+
+    def merge(self, submap_ids: Sequence[int],
+              progress: Optional[Callable[[str, float], None]] = None,
+              review: bool = False) -> pb.MergeResult:
+        """Merges two or more submaps (the first is the reference frame).
+        progress(stage, fraction) is called as the server reports. A merge with
+        too little evidence raises grpc.RpcError FAILED_PRECONDITION with the
+        figure that failed. review: only propose it (result.state
+        MERGE_STATE_PROPOSED) until approve_merge()."""
+        request = pb.MergeSubmapsRequest(submap_ids=submap_ids, review=review)
+        result = None
+        for message in self._stub.MergeSubmaps(request, metadata=self._metadata):
+            if progress is not None and message.stage:
+                progress(message.stage, message.fraction)
+            if message.HasField("result"):
+                result = message.result
+        if result is None:
+            raise RuntimeError("the server ended the merge without a result")
+        return result
+
+    def list_merges(self, state: int = pb.MERGE_STATE_UNSPECIFIED) -> List[pb.MergeRecord]:
+        return list(self._stub.ListMerges(pb.ListMergesRequest(state=state),
+                                          timeout=self._timeout_s,
+                                          metadata=self._metadata).merges)
+
+    def get_merge(self, merge_id: int) -> pb.MergeRecord:
+        return self._stub.GetMerge(pb.GetMergeRequest(id=merge_id), timeout=self._timeout_s,
+                                   metadata=self._metadata)
+
+    def approve_merge(self, merge_id: int) -> pb.MergeRecord:
+        return self._stub.ApproveMerge(pb.ApproveMergeRequest(id=merge_id),
+                                       timeout=self._timeout_s, metadata=self._metadata)
+
+    def reject_merge(self, merge_id: int, reason: str) -> pb.MergeRecord:
+        return self._stub.RejectMerge(pb.RejectMergeRequest(id=merge_id, reason=reason),
+                                      timeout=self._timeout_s, metadata=self._metadata)
+
+    @staticmethod
+    def _read_chunks(stream) -> Tuple[pb.SubmapInfo, bytes]:
+        info = pb.SubmapInfo()
+        parts = []
+        for chunk in stream:
+            if chunk.HasField("info"):
+                info = chunk.info
+            parts.append(chunk.data)
+        return info, b"".join(parts)
