@@ -49,7 +49,9 @@ TEST(VoxelGridTest, MatchesOctoMapOccupiedFreeAndUnknown) {
     ++cubes;
     free_voxels += edge * edge * edge;
     EXPECT_EQ(grid->State(min_key), VoxelState::kFree);
-    if (edge == 8) EXPECT_EQ(min_key, VoxelKey(0, 0, -8));
+    if (edge == 8) {
+      EXPECT_EQ(min_key, VoxelKey(0, 0, -8));
+    }
   });
   EXPECT_EQ(cubes, 1);
   EXPECT_EQ(free_voxels, 512);
