@@ -6,6 +6,8 @@
     with RobotClient(channel) as robot:    # resends what is unacknowledged after a reconnect
         robot.send(batch)                  # a pb.ObservationBatch
     walls = MapClient(channel).feature_map().features
+    with MapClient(channel).watch() as feed:   # the change feed; LiveFeatureMap applies it
+        for delta in feed: ...
 
 The stubs (mapserver.v1.map_service_pb2, _pb2_grpc) are generated at build
 time into <build>/client/python; see the "Python" section of the project README.
@@ -14,6 +16,7 @@ time into <build>/client/python; see the "Python" section of the project README.
 from mapd_client._proto import pb, pb_grpc
 from mapd_client.map_client import FeatureMap, MapClient, connect
 from mapd_client.robot_client import IngestCounts, IngestError, Rejection, RobotClient
+from mapd_client.watch import FeatureWatch, LiveFeatureMap
 
 __all__ = ["pb", "pb_grpc", "connect", "MapClient", "FeatureMap", "RobotClient", "IngestCounts",
-           "IngestError", "Rejection"]
+           "IngestError", "Rejection", "FeatureWatch", "LiveFeatureMap"]

@@ -12,6 +12,7 @@ from typing import Callable, Iterator, List, NamedTuple, Optional, Sequence, Tup
 import grpc
 
 from mapd_client._proto import pb, pb_grpc
+from mapd_client.watch import FeatureWatch, watch_request
 
 CHUNK_BYTES = 1 << 20  # the API's largest chunk
 
@@ -61,6 +62,16 @@ class MapClient:
             planes.extend(page.planes)
             version, pending = page.map_version, page.fusion_pending
         return FeatureMap(features, planes, version, pending)
+
+    def watch(self, bbox: Optional[Sequence[float]] = None, kind: Optional[int] = None,
+              robot_id: Optional[str] = None, since_map_version: int = 0,
+              reconnect: bool = True) -> FeatureWatch:
+        """The WatchFeatureMap change feed: iterate it for FeatureMapDelta
+        messages (LiveFeatureMap applies them); it reconnects from the last
+        complete map_version when mapd restarts. close() or `with` ends it.
+        A bad filter raises grpc.RpcError INVALID_ARGUMENT naming the field."""
+        return FeatureWatch(self._stub, self._metadata, watch_request(bbox, kind, robot_id),
+                            since_map_version=since_map_version, reconnect=reconnect)
 
     def stats(self) -> pb.Stats:
         return self._stub.GetStats(pb.GetStatsRequest(), timeout=self._timeout_s,
