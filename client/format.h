@@ -69,13 +69,15 @@ std::string FormatMerges(const mapserver::v1::ListMergesResponse& merges);
 // The same as JSON (nlohmann-json, snake_case keys, 64-bit ids as numbers):
 // {"merges": [{"id", "state", "inputs": [{"submap_id", "aligned",
 // "t_reference_submap": {"translation", "rotation_wxyz"}, "yaw_pitch_roll_deg",
-// "matched_corners", "residual_m", "overlap_score"}], "merged_submap_id",
+// "matched_corners", "residual_m", "overlap_score", "matched": [{"in_submap":
+// [x, y, z], "in_reference": [x, y, z]}] (empty from ListMerges)}], "merged_submap_id",
 // "reason", "requested_by", "created_ns", "decided_by", "decided_ns"}]}.
 std::string FormatMergesJson(const mapserver::v1::ListMergesResponse& merges);
 // One merge as above (`mapctl merge show --json`).
 std::string FormatMergeRecordJson(const mapserver::v1::MergeRecord& merge);
 // `mapctl merge show`: state, who and when, reason, per input its transform
-// (xyz, yaw/pitch/roll in degrees) and evidence.
+// (xyz, yaw/pitch/roll in degrees), evidence and the first 5 matched corner
+// pairs (with their count).
 std::string FormatMergeRecord(const mapserver::v1::MergeRecord& merge);
 // One line (newline-ended): where an input sits in the reference frame (xyz
 // in metres, yaw/pitch/roll in degrees) and its matched corners, residual

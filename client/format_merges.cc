@@ -44,6 +44,22 @@ std::string Inputs(const pb::MergeRecord& m) {
 
 std::string OrDash(const std::string& s) { return s.empty() ? "-" : s; }
 
+// The first kShownCorners matched corner pairs of an input (all in --json).
+constexpr int kShownCorners = 5;
+std::string MatchedCorners(const pb::SubmapAlignment& a) {
+  if (a.matched_size() == 0) return "";
+  std::string out =
+      Printf("    %d matched corner pair%s (in submap -> in reference, m)%s\n", a.matched_size(),
+             a.matched_size() == 1 ? "" : "s", a.matched_size() > kShownCorners ? ", first 5" : "");
+  for (int i = 0; i < std::min(a.matched_size(), kShownCorners); ++i) {
+    const pb::Vec3& s = a.matched(i).in_submap();
+    const pb::Vec3& r = a.matched(i).in_reference();
+    out += Printf("      (%.3f, %.3f, %.3f) -> (%.3f, %.3f, %.3f)\n", s.x(), s.y(), s.z(), r.x(),
+                  r.y(), r.z());
+  }
+  return out;
+}
+
 nlohmann::ordered_json AlignmentJson(const pb::SubmapAlignment& a) {
   nlohmann::ordered_json j;
   j["submap_id"] = a.submap_id();
@@ -59,6 +75,12 @@ nlohmann::ordered_json AlignmentJson(const pb::SubmapAlignment& a) {
   j["matched_corners"] = a.matched_corners();
   j["residual_m"] = a.residual_m();
   j["overlap_score"] = a.overlap_score();
+  j["matched"] = nlohmann::ordered_json::array();
+  for (const pb::MatchedCorner& c : a.matched()) {
+    j["matched"].push_back(
+        {{"in_submap", {c.in_submap().x(), c.in_submap().y(), c.in_submap().z()}},
+         {"in_reference", {c.in_reference().x(), c.in_reference().y(), c.in_reference().z()}}});
+  }
   return j;
 }
 
@@ -157,7 +179,7 @@ std::string FormatMergeRecord(const pb::MergeRecord& m) {
                OrDash(m.decided_by()).c_str(), IsoTime(m.decided_ns()).c_str());
   }
   if (!m.reason().empty()) out += "  reason: " + m.reason() + "\n";
-  for (const pb::SubmapAlignment& a : m.inputs()) out += FormatAlignment(a);
+  for (const pb::SubmapAlignment& a : m.inputs()) out += FormatAlignment(a) + MatchedCorners(a);
   if (m.state() == pb::MERGE_STATE_PROPOSED) {
     out += Printf(
         "  waits for review: mapctl merge approve %llu | mapctl merge reject %llu "

@@ -174,6 +174,13 @@ const std::vector<const char*>& Migrations() {
       ALTER TABLE merges ADD COLUMN decided_ns INTEGER NOT NULL DEFAULT 0;
       UPDATE merges SET decided_ns = created_ns WHERE status = 'accepted';
       )sql",
+      // 6 -> 7: the matched corner pairs behind merge_inputs.matched_corners, for
+      // operators reviewing a merge: 6 doubles per pair (in_submap x, y, z, then
+      // in_reference x, y, z; machine byte order, little-endian). NULL in
+      // merges recorded before this version: they read as no pairs.
+      R"sql(
+      ALTER TABLE merge_inputs ADD COLUMN matched_points BLOB;
+      )sql",
   };
   return kMigrations;
 }

@@ -4,6 +4,7 @@
 #include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cstring>
 
 #include "storage/observation_codec.h"
 #include "storage/schema.h"
@@ -485,6 +486,39 @@ Status WriteTransaction::DeleteSubmap(int64_t id) {
   return Status::Ok();
 }
 
+namespace {
+
+// merge_inputs.matched_points (schema.cc, 6 -> 7).
+constexpr size_t kMatchedPointBytes = 6 * sizeof(double);
+
+std::string EncodeMatched(const std::vector<MatchedCornerRecord>& matched) {
+  std::string out(matched.size() * kMatchedPointBytes, '\0');
+  char* p = out.data();
+  for (const MatchedCornerRecord& m : matched) {
+    std::memcpy(p, m.in_submap.data(), 3 * sizeof(double));
+    std::memcpy(p + 3 * sizeof(double), m.in_reference.data(), 3 * sizeof(double));
+    p += kMatchedPointBytes;
+  }
+  return out;
+}
+
+Status DecodeMatched(std::string_view blob, int64_t merge_id,
+                     std::vector<MatchedCornerRecord>* out) {
+  if (blob.size() % kMatchedPointBytes != 0) {
+    return Status::Internal("merge " + std::to_string(merge_id) + ": matched_points blob of " +
+                            std::to_string(blob.size()) + " bytes is not whole corner pairs");
+  }
+  out->resize(blob.size() / kMatchedPointBytes);
+  for (size_t i = 0; i < out->size(); ++i) {
+    const char* p = blob.data() + i * kMatchedPointBytes;
+    std::memcpy((*out)[i].in_submap.data(), p, 3 * sizeof(double));
+    std::memcpy((*out)[i].in_reference.data(), p + 3 * sizeof(double), 3 * sizeof(double));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   const MergeRecord& r = merge.record;
   sqlite3* w = store_->writer_.get();
@@ -506,15 +540,18 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   StatusOr<Statement> in = Statement::Prepare(
       w,
       "INSERT INTO merge_inputs (merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, matched_corners, "
-      "residual_m, overlap_score) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
+      "residual_m, overlap_score, matched_points) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
   if (!in.ok()) return in.status();
   for (const MergeInputRecord& i : r.inputs) {
     in->Bind(1, ids.merge_id).Bind(2, i.submap_id);
+    const std::string matched = EncodeMatched(i.matched);
     if (i.aligned) {
       BindPose(*in, 3, i.T_reference_submap);
       in->Bind(10, static_cast<int64_t>(i.matched_corners))
           .Bind(11, i.residual_m)
           .Bind(12, i.overlap_score);
+      if (!matched.empty()) in->BindBlob(13, matched.data(), matched.size());
     }
     MAPD_RETURN_IF_ERROR(in->Run());
   }
@@ -842,7 +879,8 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
   StatusOr<Statement> in = Statement::Prepare(
       reader_.get(),
       "SELECT merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, coalesce(matched_corners, 0), "
-      "coalesce(residual_m, 0), coalesce(overlap_score, 0), qw IS NOT NULL FROM merge_inputs "
+      "coalesce(residual_m, 0), coalesce(overlap_score, 0), qw IS NOT NULL, matched_points "
+      "FROM merge_inputs "
       "ORDER BY merge_id, rowid");
   if (!in.ok()) return in.status();
   std::unordered_map<int64_t, size_t> index;
@@ -860,7 +898,8 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
     i.matched_corners = static_cast<int>(in->ColumnInt(9));
     i.residual_m = in->ColumnDouble(10);
     i.overlap_score = in->ColumnDouble(11);
-    out[it->second].inputs.push_back(i);
+    MAPD_RETURN_IF_ERROR(DecodeMatched(in->ColumnBlob(13), out[it->second].id, &i.matched));
+    out[it->second].inputs.push_back(std::move(i));
   }
 }
 

@@ -190,6 +190,12 @@ struct NewSubmap {
   std::string_view data;  // the validated file; must outlive InsertSubmap()
 };
 
+// A matched corner pair of a merge input (voxel::MatchedCorner), metres.
+struct MatchedCornerRecord {
+  Eigen::Vector3d in_submap = Eigen::Vector3d::Zero();
+  Eigen::Vector3d in_reference = Eigen::Vector3d::Zero();
+};
+
 // One input of a merge as recorded. For a refused merge only submap_id is meaningful.
 struct MergeInputRecord {
   int64_t submap_id = 0;
@@ -198,6 +204,9 @@ struct MergeInputRecord {
   int matched_corners = 0;
   double residual_m = 0;
   double overlap_score = 0;
+  // The corner pairs behind matched_corners (empty for the first input, and
+  // for merges recorded before schema 7).
+  std::vector<MatchedCornerRecord> matched;
 };
 
 // = mapserver.v1.MergeState. Stored as text ('proposed', ...; MergeStateName).

@@ -114,7 +114,8 @@ Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& p
   return Status::Ok();
 }
 
-void ToProto(const storage::MergeRecord& r, pb::MergeRecord* out) {
+// with_matched: the corner pairs (GetMerge only; see SubmapAlignment.matched).
+void ToProto(const storage::MergeRecord& r, bool with_matched, pb::MergeRecord* out) {
   out->set_id(static_cast<uint64_t>(r.id));
   out->set_state(static_cast<pb::MergeState>(static_cast<int>(r.state)));
   for (const storage::MergeInputRecord& in : r.inputs) {
@@ -125,6 +126,12 @@ void ToProto(const storage::MergeRecord& r, pb::MergeRecord* out) {
     a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
     a->set_residual_m(in.residual_m);
     a->set_overlap_score(in.overlap_score);
+    if (!with_matched) continue;
+    for (const storage::MatchedCornerRecord& m : in.matched) {
+      pb::MatchedCorner* c = a->add_matched();
+      ToProto(m.in_submap, c->mutable_in_submap());
+      ToProto(m.in_reference, c->mutable_in_reference());
+    }
   }
   out->set_reason(r.reason);
   out->set_merged_submap_id(static_cast<uint64_t>(r.merged_submap_id));
@@ -144,7 +151,7 @@ grpc::Status SubmapService::ListMerges(const pb::ListMergesRequest& request,
     if (request.state() != pb::MERGE_STATE_UNSPECIFIED &&
         static_cast<int>(r.state) != static_cast<int>(request.state()))
       continue;
-    ToProto(r, response->add_merges());
+    ToProto(r, /*with_matched=*/false, response->add_merges());
   }
   return grpc::Status::OK;
 }
@@ -154,7 +161,7 @@ grpc::Status SubmapService::GetMerge(const pb::GetMergeRequest& request,
   if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
   StatusOr<storage::MergeRecord> r = core_->store().GetMerge(static_cast<int64_t>(request.id()));
   if (!r.ok()) return ToGrpcStatus(r.status());
-  ToProto(*r, response);
+  ToProto(*r, /*with_matched=*/true, response);
   return grpc::Status::OK;
 }
 
@@ -236,7 +243,7 @@ grpc::Status SubmapService::FinishDecision(int64_t id, const Status& outcome,
   if (!outcome.ok()) return ToGrpcStatus(outcome);
   StatusOr<storage::MergeRecord> r = core_->store().GetMerge(id);
   if (!r.ok()) return ToGrpcStatus(r.status());
-  ToProto(*r, response);
+  ToProto(*r, /*with_matched=*/true, response);
   return grpc::Status::OK;
 }
 

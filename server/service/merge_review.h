@@ -31,7 +31,10 @@ StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
 Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& proposal,
                             const std::vector<storage::SubmapMeta>& metas);
 
-void ToProto(const storage::MergeRecord& record, mapserver::v1::MergeRecord* out);
+// with_matched: include the inputs' matched corner pairs (GetMerge and the
+// decisions; ListMerges leaves them out, see SubmapAlignment.matched).
+void ToProto(const storage::MergeRecord& record, bool with_matched,
+             mapserver::v1::MergeRecord* out);
 
 // A decision on proposed merge `id` by `caller` (authorized already):
 // approve when `reject_reason` is empty (ties its frames), else reject. On

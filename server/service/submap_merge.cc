@@ -123,7 +123,10 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
     in.matched_corners = it->matched_corners;
     in.residual_m = it->residual_m;
     in.overlap_score = it->overlap_score;
-    merge.record.inputs.push_back(in);
+    for (const voxel::MatchedCorner& m : it->matched) {
+      in.matched.push_back({m.in_submap, m.in_reference});
+    }
+    merge.record.inputs.push_back(std::move(in));
   }
   StatusOr<voxel::SubmapSummary> merged = voxel::InspectSubmap(outcome.merged_bt);
   if (!merged.ok()) {

@@ -195,6 +195,16 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
         alignment.matched_corners = pair.matched_corners;
         alignment.residual_m = pair.residual_m;
         alignment.overlap_score = pair.overlap_score;
+        // The parent's corner goes into the reference frame by the parent's placement.
+        const Eigen::Isometry3d& T_root_parent =
+            placement.T_root_node[static_cast<std::size_t>(parent)];
+        const bool parent_is_a = pair.id_a == pid;
+        for (const auto& [in_a, in_b] : pair.matched_a_b) {
+          MatchedCorner m;
+          m.in_submap = parent_is_a ? in_b : in_a;
+          m.in_reference = T_root_parent * (parent_is_a ? in_a : in_b);
+          alignment.matched.push_back(m);
+        }
       }
     }
     outcome.alignments.push_back(alignment);

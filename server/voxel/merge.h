@@ -20,6 +20,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/status.h"
@@ -128,6 +129,14 @@ struct SubmapInput {
   std::string_view bytes;
 };
 
+// One corner pair of the evidence that placed a submap: the same physical
+// corner seen in the submap and in the submap it was matched against, the
+// latter carried into the reference frame. Metres.
+struct MatchedCorner {
+  Eigen::Vector3d in_submap = Eigen::Vector3d::Zero();
+  Eigen::Vector3d in_reference = Eigen::Vector3d::Zero();
+};
+
 // Where submap `id` sits in the merged map's frame (= the first input's frame).
 struct Alignment {
   uint64_t id = 0;
@@ -135,6 +144,10 @@ struct Alignment {
   int matched_corners = 0;
   double residual_m = 0.0;     // RMS after refinement, metres
   double overlap_score = 0.0;  // [0, 1]
+  // The corner pairs of the tree edge that placed it (matched_corners of
+  // them); empty for the first input. T_reference_submap maps in_submap onto
+  // in_reference up to the corners' own error (ICP refined past them).
+  std::vector<MatchedCorner> matched;
 };
 
 // Wall-clock seconds. alignment_s = ICP + overlap scores; fusion_s includes
@@ -154,6 +167,9 @@ struct PairReport {
   double residual_m = 0.0;
   double overlap_score = 0.0;
   int icp_iterations = 0;
+  // The matched corners (positions in A's and in B's frame, metres), set
+  // whenever matched_corners is.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> matched_a_b;
 };
 
 struct MergeOutcome {

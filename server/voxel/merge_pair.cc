@@ -56,6 +56,10 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
     return report;
   }
   *correspondences = match->correspondences;
+  for (const CornerPair& p : match->correspondences) {
+    report.matched_a_b.emplace_back((*a.corners)[static_cast<std::size_t>(p.a)].position,
+                                    (*b.corners)[static_cast<std::size_t>(p.b)].position);
+  }
   report.T_a_b = match->T_a_b;
 
   // B.5: ICP on the occupied voxel centres of the overlap, then acceptance.

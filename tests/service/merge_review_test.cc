@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -196,6 +198,47 @@ TEST_F(MergeReviewTest, ReviewedMergeChangesNothingUntilApproved) {
   EXPECT_EQ(r.state(), pb::MERGE_STATE_ACCEPTED);
   EXPECT_EQ(r.decided_ns(), approved.decided_ns());
   EXPECT_THAT(WallRobots(), ElementsAre(kBoth, kBoth, kBoth, kBoth));
+}
+
+// The matched corners behind a merge are served by GetMerge (not ListMerges),
+// survive a restart, and the stored transform maps each input's corners onto
+// their partners in the reference frame: their RMS distance is within the
+// residual gate (merge.max_residual_voxels of the finer map).
+TEST_F(MergeReviewTest, GetMergeServesMatchedCornersThatTheTransformMapsOntoEachOther) {
+  TwoRobotsAndTheirSubmaps();
+  const pb::MergeResult proposed = Merge({a_, b_}, /*review=*/true);
+  ASSERT_NE(proposed.merge_id(), 0u);
+  EXPECT_EQ(proposed.alignments(1).matched_size(), 0);  // MergeResult leaves them out
+
+  auto check = [&](const pb::MergeRecord& r) {
+    ASSERT_EQ(r.inputs_size(), 2);
+    EXPECT_EQ(r.inputs(0).matched_size(), 0);  // the reference
+    const pb::SubmapAlignment& b = r.inputs(1);
+    ASSERT_GE(b.matched_corners(), 4u);
+    ASSERT_EQ(static_cast<uint32_t>(b.matched_size()), b.matched_corners());
+    const pb::Rigid3& T = b.t_reference_submap();
+    const Eigen::Isometry3d T_ref_b =
+        Eigen::Translation3d(T.translation().x(), T.translation().y(), T.translation().z()) *
+        Eigen::Quaterniond(T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z());
+    double sum_sq = 0;
+    for (const pb::MatchedCorner& c : b.matched()) {
+      const Eigen::Vector3d in_b(c.in_submap().x(), c.in_submap().y(), c.in_submap().z());
+      const Eigen::Vector3d in_ref(c.in_reference().x(), c.in_reference().y(),
+                                   c.in_reference().z());
+      // The submap's corners lie in the room (map frame) after T_map_b_.
+      EXPECT_LT((T_ref_b * in_b - T_map_b_ * in_b).norm(), scene_.resolution_m);
+      sum_sq += (T_ref_b * in_b - in_ref).squaredNorm();
+    }
+    const double rms = std::sqrt(sum_sq / b.matched_size());
+    EXPECT_LE(rms, 0.75 * scene_.resolution_m);  // merge.max_residual_voxels' default
+  };
+  check(GetOk(proposed.merge_id()));
+  const std::vector<pb::MergeRecord> listed = List();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].inputs(1).matched_size(), 0);  // ListMerges stays small
+  EXPECT_GE(listed[0].inputs(1).matched_corners(), 4u);
+  Restart();
+  check(GetOk(proposed.merge_id()));
 }
 
 TEST_F(MergeReviewTest, ServerSettingMakesReviewTheDefaultAndRejectionHasNoEffect) {

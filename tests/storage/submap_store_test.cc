@@ -77,6 +77,7 @@ class SubmapStoreTest : public testing::StoreFixture {
     ib.matched_corners = 9;
     ib.residual_m = 0.04;
     ib.overlap_score = 0.8;
+    ib.matched = {{{0.5, 1, 2}, {1.25, -0.5, 2.25}}, {{-3, 4.5, 0.125}, {-7, 8, 0.375}}};
     m.record.inputs = {ia, ib};
     m.merged = Submap("", "", merged_bytes);
     return m;
@@ -192,6 +193,12 @@ TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) 
   EXPECT_TRUE(record->inputs[1].aligned);
   EXPECT_EQ(record->inputs[1].matched_corners, 9);
   EXPECT_DOUBLE_EQ(record->inputs[1].overlap_score, 0.8);
+  EXPECT_TRUE(record->inputs[0].matched.empty());
+  ASSERT_EQ(record->inputs[1].matched.size(), 2u);
+  EXPECT_EQ(record->inputs[1].matched[0].in_submap, Eigen::Vector3d(0.5, 1, 2));
+  EXPECT_EQ(record->inputs[1].matched[0].in_reference, Eigen::Vector3d(1.25, -0.5, 2.25));
+  EXPECT_EQ(record->inputs[1].matched[1].in_submap, Eigen::Vector3d(-3, 4.5, 0.125));
+  EXPECT_EQ(record->inputs[1].matched[1].in_reference, Eigen::Vector3d(-7, 8, 0.375));
   EXPECT_NEAR(record->inputs[1].T_reference_submap.translation.x(), 1.5, 1e-12);
   EXPECT_NEAR(record->inputs[1].T_reference_submap.rotation.angularDistance(
                   Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))),
@@ -322,7 +329,8 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
                      "ALTER TABLE merges DROP COLUMN requested_by; "
                      "ALTER TABLE merges DROP COLUMN decided_by; "
                      "ALTER TABLE merges DROP COLUMN decided_ns; "
-                     "DELETE FROM schema_version WHERE version = 6")
+                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; "
+                     "DELETE FROM schema_version WHERE version >= 6")
                     .ok());
   }
   Reopen();
@@ -335,6 +343,61 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   EXPECT_EQ((*merges)[1].state, MergeState::kRefused);
   EXPECT_EQ((*merges)[1].reason, "no overlap");
   EXPECT_EQ(store_->LatestGlobalMap()->id, accepted->merged_submap_id);
+}
+
+// A database of schema 6 (merges without their matched corner pairs) opens,
+// its merges keep their evidence counts and read as no pairs, and new merges
+// store their pairs.
+TEST_F(SubmapStoreTest, MergesBeforeMatchedCornersOpenWithoutPairs) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  auto old_merge = Record(Accepted(a, b, "OLD"));
+  ASSERT_TRUE(old_merge.ok());
+  store_.reset();
+  {
+    auto db = OpenDatabase(dir_.File("map.db"), false);
+    ASSERT_TRUE(db.ok());
+    ASSERT_TRUE(Exec(db->get(),
+                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; "
+                     "DELETE FROM schema_version WHERE version >= 7")
+                    .ok());
+  }
+  Reopen();
+  auto old_record = store_->GetMerge(old_merge->merge_id);
+  ASSERT_TRUE(old_record.ok()) << old_record.status().ToString();
+  ASSERT_EQ(old_record->inputs.size(), 2u);
+  EXPECT_EQ(old_record->inputs[1].matched_corners, 9);
+  EXPECT_TRUE(old_record->inputs[1].matched.empty());
+  EXPECT_EQ(*store_->GetSubmapData(old_record->merged_submap_id), "OLD");
+
+  auto new_merge = Record(Accepted(a, b, "NEW"));
+  ASSERT_TRUE(new_merge.ok()) << new_merge.status().ToString();
+  auto new_record = store_->GetMerge(new_merge->merge_id);
+  ASSERT_TRUE(new_record.ok());
+  ASSERT_EQ(new_record->inputs[1].matched.size(), 2u);
+  EXPECT_EQ(new_record->inputs[1].matched[1].in_reference, Eigen::Vector3d(-7, 8, 0.375));
+}
+
+// A matched_points blob that is not whole pairs is reported, not misread.
+TEST_F(SubmapStoreTest, TruncatedMatchedCornersAreAnError) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  auto ids = Record(Accepted(a, b, "M"));
+  ASSERT_TRUE(ids.ok());
+  store_.reset();
+  {
+    auto db = OpenDatabase(dir_.File("map.db"), false);
+    ASSERT_TRUE(db.ok());
+    ASSERT_TRUE(
+        Exec(db->get(), "UPDATE merge_inputs SET matched_points = x'0102' WHERE submap_id = " +
+                            std::to_string(b))
+            .ok());
+  }
+  Reopen();
+  auto record = store_->GetMerge(ids->merge_id);
+  ASSERT_FALSE(record.ok());
+  EXPECT_EQ(record.status().code(), StatusCode::kInternal);
+  EXPECT_NE(record.status().message().find("matched_points"), std::string::npos);
 }
 
 TEST_F(SubmapStoreTest, TiedSessionFramePersistsAndIsNeverMoved) {
