@@ -102,6 +102,11 @@ int RunOccupancyGrid(const Context& ctx, const GridOptions& flags) {
     }
     global = false;
     id = static_cast<uint64_t>(v);
+    if (flags.lines) {
+      // A submap is in its robot's session frame, the fused walls in the map frame.
+      return UsageError("occupancy-grid",
+                        "--lines draws the map-frame walls: use it with --source global only");
+    }
   } else if (!(source.size() == 1 && source[0] == "global")) {
     return UsageError("occupancy-grid", "--source wants 'global' or 'submap ID'");
   }

@@ -53,6 +53,7 @@ void Fill(const Box2& b, Cell value, OccupancyGrid* g) {
 void DrawLine(const GridLine& line, OccupancyGrid* g) {
   // Samples a quarter cell apart: every cell the segment crosses gets one.
   const double length = std::hypot(line.bx - line.ax, line.by - line.ay);
+  if (!std::isfinite(length)) return;  // the server never serves such a wall
   const int steps = static_cast<int>(std::ceil(length / (g->resolution_m / 4))) + 1;
   for (int i = 0; i <= steps; ++i) {
     const double t = static_cast<double>(i) / steps;

@@ -18,7 +18,11 @@ StatusOr<std::vector<SessionTrailRows>> Store::ListTrails(const std::string& rob
       "SELECT r.name, s.name, s.id, o.seq, o.stamp_ns, o.tx, o.ty, o.tz, o.n FROM "
       "(SELECT session_id, seq, stamp_ns, tx, ty, tz, "
       "row_number() OVER (PARTITION BY session_id ORDER BY seq) AS rn, "
-      "count(*) OVER (PARTITION BY session_id) AS n FROM observations) o "
+      "count(*) OVER (PARTITION BY session_id) AS n FROM observations "
+      // The robot filter inside the window: SQLite does not push the outer
+      // WHERE into it, and a full scan would hold the reader lock.
+      "WHERE session_id IN (SELECT s2.id FROM sessions s2 JOIN robots r2 ON r2.id = "
+      "s2.robot_id WHERE r2.name NOT GLOB '@*' AND (?1 = '' OR r2.name = ?1))) o "
       "JOIN sessions s ON s.id = o.session_id JOIN robots r ON r.id = s.robot_id "
       "WHERE r.name NOT GLOB '@*' AND (?1 = '' OR r.name = ?1) AND "
       "(o.n <= ?2 OR o.rn = o.n OR (o.rn - 1) % ((o.n + ?2 - 2) / (?2 - 1)) = 0) "

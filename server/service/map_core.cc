@@ -472,6 +472,9 @@ void MapCore::PublishChange(const FusedDelta& delta) {
   auto change = std::make_shared<MapChange>();
   // Only this thread changes the engines and the version: both are as of now.
   change->to_version = map_version_.load();
+  // Consecutive changes are contiguous: a resumed watch tells from
+  // from_version whether a change predates what its client holds.
+  change->from_version = published_version_.exchange(change->to_version);
   if (!delta.empty() && watch_hub_.wanted()) {
     std::vector<fusion::FusedFeature> lines;
     std::vector<fusion::FusedPlane> planes;

@@ -212,7 +212,8 @@ class MapCore final : public Core {
   std::unique_ptr<fusion::FusionEngine> engine_;
   std::unique_ptr<fusion::PlaneFusionEngine> plane_engine_;  // same lock and thread as engine_
   std::atomic<uint64_t> map_version_{0};                     // observations reflected in the map
-  WatchHub watch_hub_{options_.watch};  // the change feed; the fuser publishes into it
+  std::atomic<uint64_t> published_version_{0};  // of the last change given to watch_hub_
+  WatchHub watch_hub_{options_.watch};          // the change feed; the fuser publishes into it
 
   mutable std::mutex names_mu_;
   std::unordered_map<int64_t, std::string> robot_names_;

@@ -125,7 +125,10 @@ void MapCore::Recover() {
                : Status::Internal("mapd could not recover its fused map: " + s.message());
     // The change feed starts here: the history begins at the recovered
     // version, so a watch from before the restart gets a resync.
-    if (s.ok()) watch_hub_.Start(map_version_.load());
+    if (s.ok()) {
+      published_version_ = map_version_.load();
+      watch_hub_.Start(published_version_);
+    }
     ready_ = true;
     callbacks.swap(on_ready_);
   }

@@ -5,6 +5,17 @@
 #include <thread>
 
 namespace mapd::service {
+namespace {
+
+// About 50 MB of features at most (a FusedView with its robots is a few
+// hundred bytes); a client behind more than this gets a resync.
+constexpr size_t kMaxHistoryEntries = 256 * 1024;
+
+size_t Entries(const MapChange& c) {
+  return c.lines.size() + c.lines_gone.size() + c.planes.size() + c.planes_gone.size();
+}
+
+}  // namespace
 
 Watcher::Next Watcher::Take(std::chrono::duration<double> timeout, ChangePtr* change) {
   std::unique_lock<std::mutex> lock(mu_);
@@ -41,6 +52,7 @@ void WatchHub::Start(uint64_t version) {
   version_ = version;
   floor_ = version;
   history_.clear();
+  history_entries_ = 0;
 }
 
 bool WatchHub::wanted() const {
@@ -66,8 +78,14 @@ void WatchHub::Publish(ChangePtr change) {
   version_ = change->to_version;
   if (options_.history > 0) {
     history_.push_back(change);
-    while (history_.size() > options_.history) {
+    history_entries_ += Entries(*change);
+    // At most `history` changes, and at most kMaxHistoryEntries features,
+    // planes and ids in all: a round that touched the whole map (a merge
+    // approved, a rebuild) must not let history hold many copies of it.
+    while (history_.size() > options_.history ||
+           (history_.size() > 1 && history_entries_ > kMaxHistoryEntries)) {
       floor_ = history_.front()->to_version;
+      history_entries_ -= Entries(*history_.front());
       history_.pop_front();
     }
   } else {

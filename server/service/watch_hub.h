@@ -123,6 +123,7 @@ class WatchHub {
   uint64_t version_ = 0;           // GUARDED_BY(mu_)
   uint64_t floor_ = 0;             // GUARDED_BY(mu_): history holds every change after this
   std::deque<ChangePtr> history_;  // GUARDED_BY(mu_)
+  size_t history_entries_ = 0;     // GUARDED_BY(mu_): features, planes and ids in history_
   std::vector<std::shared_ptr<Watcher>> watchers_;  // GUARDED_BY(mu_)
 };
 

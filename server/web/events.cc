@@ -56,6 +56,37 @@ struct EventStream {
     if (c.empty()) return true;
     return Event(sink, "change", c.to_version, ChangeJson(c));
   }
+  // The next event, a ping, or nothing within kPoll; false ends the stream.
+  bool Next(httplib::DataSink& sink, const std::atomic<bool>& stopping) {
+    if (stopping.load()) return false;
+    if (resync) {
+      resync = false;
+      return SendResync(sink);
+    }
+    if (!replay.empty()) {
+      for (const service::ChangePtr& c : replay) {
+        if (!SendChange(sink, *c)) return false;
+      }
+      replay.clear();
+      return true;
+    }
+    service::ChangePtr change;
+    switch (watcher->Take(kPoll, &change)) {
+      case service::Watcher::Next::kClosed:
+        return false;
+      case service::Watcher::Next::kBehind:
+        service::Log(service::LogLevel::kInfo, "web_events_behind",
+                     {{"action", "the queue (limits.watch_queue) overflowed; resync"}});
+        return SendResync(sink);
+      case service::Watcher::Next::kChange:
+        return SendChange(sink, *change);
+      case service::Watcher::Next::kTimeout:
+        break;
+    }
+    if (std::chrono::steady_clock::now() - last_write < kPing) return true;
+    last_write = std::chrono::steady_clock::now();
+    return Write(sink, ": ping\n\n");
+  }
 };
 
 }  // namespace
@@ -95,34 +126,14 @@ void ServeEvents(service::Core* core, const httplib::Request& req, httplib::Resp
   res.set_chunked_content_provider(
       "text/event-stream",
       [stream, stopping](size_t /*offset*/, httplib::DataSink& sink) {
-        if (stopping->load()) return false;
-        if (stream->resync) {
-          stream->resync = false;
-          return stream->SendResync(sink);
+        // httplib calls this outside its handlers' try/catch: an exception
+        // (bad_alloc on a huge map) must end this stream, not mapd.
+        try {
+          return stream->Next(sink, *stopping);
+        } catch (const std::exception& e) {
+          service::Log(service::LogLevel::kError, "web_events_failed", {{"error", e.what()}});
+          return false;
         }
-        if (!stream->replay.empty()) {
-          for (const service::ChangePtr& c : stream->replay) {
-            if (!stream->SendChange(sink, *c)) return false;
-          }
-          stream->replay.clear();
-          return true;
-        }
-        service::ChangePtr change;
-        switch (stream->watcher->Take(kPoll, &change)) {
-          case service::Watcher::Next::kClosed:
-            return false;
-          case service::Watcher::Next::kBehind:
-            service::Log(service::LogLevel::kInfo, "web_events_behind",
-                         {{"action", "the queue (limits.watch_queue) overflowed; resync"}});
-            return stream->SendResync(sink);
-          case service::Watcher::Next::kChange:
-            return stream->SendChange(sink, *change);
-          case service::Watcher::Next::kTimeout:
-            break;
-        }
-        if (std::chrono::steady_clock::now() - stream->last_write < kPing) return true;
-        stream->last_write = std::chrono::steady_clock::now();
-        return EventStream::Write(sink, ": ping\n\n");
       },
       [streams](bool /*success*/) { streams->fetch_sub(1); });
 }

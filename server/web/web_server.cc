@@ -68,7 +68,11 @@ StatusOr<uint64_t> ParseId(const std::string& text, const std::string& what) {
 }
 
 WebServer::WebServer(service::Core* core, const WebServerOptions& options)
-    : core_(core), access_(core, options.auth), http_(std::make_unique<httplib::Server>()) {}
+    : core_(core),
+      loopback_(options.address == "127.0.0.1" || options.address == "localhost" ||
+                options.address == "::1"),
+      access_(core, options.auth),
+      http_(std::make_unique<httplib::Server>()) {}
 
 WebServer::~WebServer() { Stop(); }
 
@@ -81,7 +85,8 @@ StatusOr<std::unique_ptr<WebServer>> WebServer::Start(service::Core* core,
   // keeps Stop() prompt.
   http.set_keep_alive_timeout(1);
   http.set_read_timeout(10);
-  http.set_write_timeout(10);
+  // A client that stops reading holds a thread, and Stop(), this long at most.
+  http.set_write_timeout(2);
   // httplib's default adds SO_REUSEPORT: a second server on a taken port
   // would then start and share its connections. Only SO_REUSEADDR (a restart
   // binds at once while old connections linger in TIME_WAIT).
@@ -118,6 +123,31 @@ void WebServer::Stop() {
 void WebServer::Route() {
   using httplib::Request;
   using httplib::Response;
+  // Requests a web page elsewhere could make the operator's browser send:
+  // - a POST is refused unless it is JSON: a cross-site form can only send
+  //   form or text bodies, and a cross-site script sending JSON must first
+  //   pass a CORS preflight, which this server never grants;
+  // - on a loopback port, a Host other than loopback is refused: a site whose
+  //   name was rebound to 127.0.0.1 reads nothing (DNS rebinding).
+  http_->set_pre_routing_handler([this](const Request& req, Response& res) {
+    if (loopback_) {
+      std::string host = req.get_header_value("Host");
+      host = host.substr(0, host.rfind(':') == std::string::npos ? host.size() : host.rfind(':'));
+      if (host != "127.0.0.1" && host != "localhost" && host != "[::1]") {
+        SendError(res, Status::PermissionDenied("Host '" + host.substr(0, 100) +
+                                                "' is not this loopback web view; open it as "
+                                                "http://127.0.0.1:<http.port>/"));
+        return httplib::Server::HandlerResponse::Handled;
+      }
+    }
+    if (req.method == "POST" &&
+        req.get_header_value("Content-Type").rfind("application/json", 0) != 0) {
+      SendError(res, Status::InvalidArgument("a POST must be sent as Content-Type: "
+                                             "application/json (cross-site forms are refused)"));
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
   // Every route but the page checks the caller first (the page holds no data).
   auto admit = [this](const Request& req, Response& res, service::Permission permission,
                       const std::string& action) -> StatusOr<service::Principal> {

@@ -61,6 +61,7 @@ class WebServer {
   void Route();
 
   service::Core* const core_;
+  const bool loopback_;  // bound to a loopback address: only loopback Host headers
   service::AccessControl access_;
   std::unique_ptr<httplib::Server> http_;
   std::thread thread_;

@@ -314,6 +314,10 @@ TEST_F(MapctlSubmapE2eTest, OccupancyGridOfTheGlobalMapAndOfASubmap) {
   EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
   r = Mapctl({"occupancy-grid", "-o", sub, "--source", "moon"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
+  // The fused walls are in the map frame, a submap in its own: not mixed.
+  r = Mapctl({"occupancy-grid", "-o", sub, "--source", "submap", id_b, "--lines"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--source global only"));
 
   // --lines: the fused walls of a simulated robot drawn in, growing the grid.
   r = Mapctl({"simulate", "--robots", "1", "--scans", "40"});

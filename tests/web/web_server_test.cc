@@ -204,6 +204,24 @@ TEST_F(WebFixture, MergesAreListedAndDecidedOnlyWhenProposed) {
   EXPECT_EQ(GetJson("/api/merges?state=proposed")["merges"].size(), 0u);
 }
 
+TEST_F(WebFixture, RequestsAnotherSiteCouldForgeAreRefused) {
+  Start();
+  const int64_t id = RecordProposal(server_->core());
+  const std::string approve = "/api/merges/" + std::to_string(id) + "/approve";
+  // A cross-site form: not JSON.
+  httplib::Result r = Client().Post(approve.c_str(), "x=1", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  EXPECT_THAT(r->body, HasSubstr("Content-Type: application/json"));
+  // A name rebound to 127.0.0.1 (DNS rebinding): its Host is not loopback.
+  httplib::Headers rebound = {{"Host", "evil.example:80"}};
+  r = Client().Get("/api/features", rebound);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 403);
+  EXPECT_THAT(r->body, HasSubstr("evil.example"));
+  EXPECT_EQ(GetJson("/api/merges?state=proposed")["merges"].size(), 1u);  // still proposed
+}
+
 TEST_F(WebFixture, BadMergeRequestsGetAClear4xx) {
   Start();
   httplib::Result r = Post(Client(), "/api/merges/77/approve", "");
