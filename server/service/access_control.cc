@@ -16,6 +16,15 @@ bool IsWrite(Permission p) {
 
 std::string_view View(const grpc::string_ref& s) { return std::string_view(s.data(), s.size()); }
 
+// Who a caller without a credential is in the open mode (gRPC and web alike).
+Principal AnonymousOperator() {
+  Principal p;
+  p.name = "anonymous";
+  p.role = Role::kOperator;
+  p.anonymous = true;
+  return p;
+}
+
 }  // namespace
 
 bool AccessControl::Required() {
@@ -81,13 +90,7 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       }
     }
   }
-  if (!Required()) {
-    Principal p;
-    p.name = "anonymous";
-    p.role = Role::kOperator;
-    p.anonymous = true;
-    return p;
-  }
+  if (!Required()) return AnonymousOperator();
   return Status::Unauthenticated(
       "authentication required: send 'authorization: Bearer <token>' metadata (mapctl --token or "
       "$MAPD_TOKEN)" +
@@ -101,13 +104,7 @@ StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authori
       return Status::Unauthenticated("the Authorization header must be 'Bearer <token>'");
     return FromToken(value.substr(sizeof(kBearer) - 1));
   }
-  if (!Required()) {
-    Principal p;
-    p.name = "anonymous";
-    p.role = Role::kOperator;
-    p.anonymous = true;
-    return p;
-  }
+  if (!Required()) return AnonymousOperator();
   return Status::Unauthenticated(
       "authentication required: send an 'Authorization: Bearer <token>' header");
 }
