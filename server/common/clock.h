@@ -23,6 +23,11 @@ inline int64_t SteadyNowNs() {
       .count();
 }
 
+// Seconds of std::chrono::steady_clock since `start` (stage times, budgets).
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace mapd
 
 #endif  // MAPD_COMMON_CLOCK_H_

@@ -12,6 +12,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/clock.h"
 #include "voxel/corner_faces.h"
 #include "voxel/corner_voxel_index.h"
 #include "voxel/corner_window.h"
@@ -21,14 +22,9 @@
 namespace mapd::voxel {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 using Clock = std::chrono::steady_clock;
 using internal::FittedPlane;
 using PlaneTriple = std::array<int, 3>;  // ascending plane indices
-
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Voxel units: the centre of voxel `key` is key + 0.5, so metres = units * res.
 Eigen::Vector3d Centre(const VoxelKey& key) {
@@ -264,7 +260,7 @@ StatusOr<CornerExtractionResult> ExtractCorners(const VoxelGrid& original,
   start = Clock::now();
   const int cell_edge = static_cast<int>(std::ceil(params.plane_search_radius));
   const auto cells = PlanesByCell(keys, regions.label, cell_edge);
-  const double min_cos = std::cos(params.min_plane_angle_deg * kPi / 180.0);
+  const double min_cos = std::cos(params.min_plane_angle_deg * M_PI / 180.0);
   std::map<PlaneTriple, std::vector<int>> members_of_triple;
   std::vector<PlaneTriple> triples;
   for (std::size_t c = 0; c < window->keys.size(); ++c) {

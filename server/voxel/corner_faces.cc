@@ -6,8 +6,6 @@
 namespace mapd::voxel::internal {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // The voxels of each face within the support radius of `x`.
 std::array<std::vector<Eigen::Vector3d>, 3> FaceVoxels(const std::vector<VoxelKey>& keys,
                                                        const VoxelIndex& index,
@@ -54,7 +52,7 @@ bool FacesMeet(const std::vector<VoxelKey>& keys, const VoxelIndex& index,
   std::array<FittedPlane, 3> current = planes;
   Eigen::Vector3d x;
   if (!IntersectPlanes(current, params.min_determinant, &x)) return false;
-  const double min_cos_tilt = std::cos(params.max_refine_tilt_deg * kPi / 180.0);
+  const double min_cos_tilt = std::cos(params.max_refine_tilt_deg * M_PI / 180.0);
   for (int iteration = 0;; ++iteration) {
     const std::array<std::vector<Eigen::Vector3d>, 3> voxels =
         FaceVoxels(keys, index, current, x, params);

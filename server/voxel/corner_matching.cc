@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "common/clock.h"
 #include "voxel/corner_directions.h"
 #include "voxel/rigid_fit.h"
 
@@ -13,10 +14,6 @@ namespace mapd::voxel {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // The default step 3: the exact maximum clique.
 PairSetSearchResult MaxCliqueSearch(const BitGraph& graph, const CornerMatchingParams& params,

@@ -12,6 +12,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "voxel/aligned_box.h"
+
 namespace mapd::voxel {
 namespace {
 
@@ -21,15 +23,6 @@ Box BoundsOf(const std::vector<Eigen::Vector3d>& points) {
   Box box;
   for (const auto& p : points) box.extend(p);
   return box;
-}
-
-// The axis-aligned box of `box` moved by T.
-Box Transformed(const Box& box, const Eigen::Isometry3d& T) {
-  Box out;
-  for (int corner = 0; corner < 8; ++corner) {
-    out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
-  }
-  return out;
 }
 
 Box Grown(Box box, double margin) {
@@ -236,7 +229,7 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
   // the cut end of a wall, source points would pair with the target's last
   // column of voxels and pull the fit along the wall.
   const Box target_box = Grown(BoundsOf(target), 0.5 * voxel_size_m);
-  const Box source_box = Grown(Transformed(BoundsOf(source), T_init), max_distance_m);
+  const Box source_box = Grown(TransformedBox(BoundsOf(source), T_init), max_distance_m);
   std::vector<Eigen::Vector3d> src;
   for (const auto& p : source) {
     if (target_box.contains(T_init * p)) src.push_back(p);

@@ -9,6 +9,7 @@
 #include <string>
 #include <utility>
 
+#include "common/clock.h"
 #include "voxel/merge_graph.h"
 #include "voxel/merge_pair.h"
 #include "voxel/octree_reader.h"
@@ -18,10 +19,6 @@ namespace mapd::voxel {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::string Metres(double value) {
   char buffer[64];

@@ -7,15 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "voxel/icp.h"
 #include "voxel/merge_overlap.h"
 
 namespace mapd::voxel {
 namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 std::string Fixed(double value, int digits) {
   char buffer[64];

@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "voxel/aligned_box.h"
+
 namespace mapd::voxel {
 namespace {
 
@@ -53,14 +55,6 @@ Box BoundsOf(const std::vector<Leaf>& leaves) {
   return box;
 }
 
-Box Transformed(const Box& box, const Eigen::Isometry3d& T) {
-  Box out;
-  if (box.isEmpty()) return out;
-  for (int corner = 0; corner < 8; ++corner)
-    out.extend(T * box.corner(static_cast<Box::CornerType>(corner)));
-  return out;
-}
-
 // Keys of `out` whose centre lies in box_out (axis-aligned, out's frame),
 // clipped to the key range. False when nothing is left.
 bool KeyRange(const octomap::OcTree& out, const Box& box_out, octomap::OcTreeKey* lo,
@@ -95,7 +89,7 @@ bool Rasterise(const Leaf& leaf, const Eigen::Isometry3d& T_out_src,
                std::uint64_t* budget, Visit&& visit) {
   const Box cube(leaf.min_m, leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
   octomap::OcTreeKey lo, hi;
-  if (!KeyRange(out, Transformed(cube, T_out_src), &lo, &hi)) return true;
+  if (!KeyRange(out, TransformedBox(cube, T_out_src), &lo, &hi)) return true;
   if (budget != nullptr) {
     const std::uint64_t volume = RangeVolume(lo, hi);
     if (volume > *budget) return false;
@@ -228,7 +222,7 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
   const std::vector<Leaf> merged_leaves = CollectLeaves(*merged);
   const Box merged_box = BoundsOf(merged_leaves);
   const Box submap_box = BoundsOf(submap_leaves);
-  const Box submap_box_in_merged = Transformed(submap_box, T_merged_submap);
+  const Box submap_box_in_merged = TransformedBox(submap_box, T_merged_submap);
   const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
 
   // 1. Free in the merged map, unknown in the submap, inside the overlap: unknown.

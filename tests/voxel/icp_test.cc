@@ -21,9 +21,8 @@ void PrintTo(NeighbourSearch search, std::ostream* out) {
 
 namespace {
 
+using testing::kRoomResolutionM;
 using testing::Pose;
-
-constexpr double kRes = 0.1;
 
 std::vector<Eigen::Vector3d> Centres(const std::string& bytes) {
   auto tree = ReadOctree(bytes);
@@ -31,10 +30,6 @@ std::vector<Eigen::Vector3d> Centres(const std::string& bytes) {
   auto grid = VoxelGrid::FromOcTree(**tree);
   EXPECT_TRUE(grid.ok());
   return grid->occupied_centres();
-}
-
-Eigen::AlignedBox3d CropX(double x0, double x1) {
-  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.0, -1.0), Eigen::Vector3d(x1, 5.5, 3.5));
 }
 
 class IcpSearchTest : public ::testing::TestWithParam<NeighbourSearch> {};
@@ -47,20 +42,21 @@ std::string SearchName(const ::testing::TestParamInfo<NeighbourSearch>& param) {
 // from a start 1 deg and ~1 voxel off lands within a fraction of a voxel.
 TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
   const Eigen::Isometry3d T_a_b = Pose(23, 6, -4, Eigen::Vector3d(0.7, -1.2, 0.3));
-  const auto a = Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(-0.5, 5.6),
-                                                  Eigen::Isometry3d::Identity(), kRes));
-  const auto b =
-      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), CropX(2.2, 9.5), T_a_b, kRes));
+  const auto a =
+      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(-0.5, 5.6),
+                                       Eigen::Isometry3d::Identity(), kRoomResolutionM));
+  const auto b = Centres(testing::RasteriseSubmap(
+      testing::FurnishedRoom(), testing::RoomCropX(2.2, 9.5), T_a_b, kRoomResolutionM));
   const Eigen::Isometry3d start =
       Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b;  // 1 deg, ~1 voxel at the origin
   IcpParams params;
   params.search = GetParam();
-  auto result = RefineIcp(a, b, start, kRes, params);
+  auto result = RefineIcp(a, b, start, kRoomResolutionM, params);
   ASSERT_TRUE(result.ok()) << result.status().ToString();
   EXPECT_LT(testing::RotationErrorDeg(result->T_target_source, T_a_b), 0.3);
-  EXPECT_LT(testing::TranslationError(result->T_target_source, T_a_b), 0.5 * kRes);
+  EXPECT_LT(testing::TranslationError(result->T_target_source, T_a_b), 0.5 * kRoomResolutionM);
   EXPECT_GT(testing::RotationErrorDeg(start, T_a_b), 0.9);  // the test starts off, really
-  EXPECT_LT(result->rms_residual_m, 0.8 * kRes);
+  EXPECT_LT(result->rms_residual_m, 0.8 * kRoomResolutionM);
   EXPECT_GT(result->inliers, 1000);
   EXPECT_GT(result->iterations, 1);
   EXPECT_TRUE(result->converged);
@@ -91,11 +87,12 @@ TEST(IcpTest, RecoversAnExactTransformAndItsInverse) {
   params.convergence_rotation_rad = 1e-10;
   params.convergence_translation_voxels = 1e-8;
   params.max_iterations = 100;
-  auto forward = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRes, params);
+  auto forward = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
   ASSERT_TRUE(forward.ok()) << forward.status().ToString();
   EXPECT_LT(testing::RotationErrorDeg(forward->T_target_source, T_t_s), 1e-3);
   EXPECT_LT(testing::TranslationError(forward->T_target_source, T_t_s), 1e-4);
-  auto backward = RefineIcp(source, target, Eigen::Isometry3d::Identity(), kRes, params);
+  auto backward =
+      RefineIcp(source, target, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
   ASSERT_TRUE(backward.ok());
   EXPECT_LT(testing::RotationErrorDeg(backward->T_target_source, T_t_s.inverse()), 1e-3);
   EXPECT_LT(testing::TranslationError(backward->T_target_source, T_t_s.inverse()), 1e-4);
@@ -105,7 +102,7 @@ TEST(IcpTest, NoOverlapIsAFailedPrecondition) {
   const std::vector<Eigen::Vector3d> target(50, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> source;
   for (int i = 0; i < 50; ++i) source.emplace_back(100.0 + i * 0.1, 0.0, 0.0);
-  auto result = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRes);
+  auto result = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM);
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.status().code(), StatusCode::kFailedPrecondition);
 }
@@ -114,14 +111,14 @@ TEST(IcpTest, RejectsBadParametersAndInput) {
   const std::vector<Eigen::Vector3d> points(20, Eigen::Vector3d::Ones());
   IcpParams params;
   params.max_correspondence_voxels = 0.0;
-  auto result = RefineIcp(points, points, Eigen::Isometry3d::Identity(), kRes, params);
+  auto result = RefineIcp(points, points, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
   ASSERT_FALSE(result.ok());
   EXPECT_NE(result.status().message().find("icp.max_correspondence_voxels"), std::string::npos);
   result = RefineIcp(points, points, Eigen::Isometry3d::Identity(), 0.0);
   EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
   std::vector<Eigen::Vector3d> bad = points;
   bad[3].x() = std::nan("");
-  result = RefineIcp(points, bad, Eigen::Isometry3d::Identity(), kRes);
+  result = RefineIcp(points, bad, Eigen::Isometry3d::Identity(), kRoomResolutionM);
   EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
 }
 

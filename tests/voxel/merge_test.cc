@@ -17,15 +17,10 @@ namespace mapd::voxel {
 namespace {
 
 using testing::FurnishedRoom;
+using testing::kRoomResolutionM;
 using testing::Pose;
 using testing::RasteriseSubmap;
-
-constexpr double kRes = 0.1;
-
-// The room cut along x (scene frame), all of y and z.
-Eigen::AlignedBox3d CropX(double x0, double x1) {
-  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.0, -1.0), Eigen::Vector3d(x1, 5.5, 3.5));
-}
+using testing::RoomCropX;
 
 // Submap A is in the scene frame; B in the frame T_scene_b.
 struct Pair {
@@ -33,14 +28,15 @@ struct Pair {
 };
 
 Pair MakePair(const Eigen::Isometry3d& T_scene_b) {
-  return {RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes),
-          RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_b, kRes)};
+  return {RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 6.8), Eigen::Isometry3d::Identity(),
+                          kRoomResolutionM),
+          RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), T_scene_b, kRoomResolutionM)};
 }
 
 void ExpectFusedMapCoversBoth(const MergeOutcome& outcome, const std::string& a_bytes) {
   auto merged = InspectSubmap(outcome.merged_bt);
   ASSERT_TRUE(merged.ok()) << merged.status().ToString();
-  EXPECT_EQ(merged->resolution, kRes);
+  EXPECT_EQ(merged->resolution, kRoomResolutionM);
   EXPECT_EQ(merged->occupied_voxels, outcome.occupied_voxels);
   EXPECT_LT(merged->bounds_min.x(), 0.05);  // A's wall at x = 0.05 m
   EXPECT_GT(merged->bounds_max.x(), 8.9);   // B's far wall at x = 9.05 m, in A's frame
@@ -78,10 +74,10 @@ TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
   const Alignment& b = outcome->alignments[1];
   EXPECT_EQ(b.id, 12u);
   EXPECT_LT(testing::RotationErrorDeg(b.T_reference_submap, T_a_b), 1.0);
-  EXPECT_LT(testing::TranslationError(b.T_reference_submap, T_a_b), 2 * kRes);
+  EXPECT_LT(testing::TranslationError(b.T_reference_submap, T_a_b), 2 * kRoomResolutionM);
   EXPECT_GE(b.matched_corners, 4);
   EXPECT_GE(b.overlap_score, 0.9);
-  EXPECT_LE(b.residual_m, kRes);
+  EXPECT_LE(b.residual_m, kRoomResolutionM);
   ExpectFusedMapCoversBoth(*outcome, pair.a);
 
   ASSERT_FALSE(progress.empty());
@@ -126,7 +122,7 @@ TEST(MergeTest, NeverAcceptsAWrongTransform) {
     }
     EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_a_b), 1.0);
     EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_a_b),
-              2 * kRes);
+              2 * kRoomResolutionM);
     ++right;
   }
   std::printf("[ info ] NeverAcceptsAWrongTransform: %d right, %d refused\n", right, refused);
@@ -139,20 +135,22 @@ TEST(MergeTest, NeverAcceptsAWrongTransform) {
 TEST(MergeTest, PlacesThreeSubmapsInTheFirstFrame) {
   const Eigen::Isometry3d T_scene_b = Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4));
   const Eigen::Isometry3d T_scene_c = Pose(-128, -10, 8, Eigen::Vector3d(-4.0, 3.3, -0.7));
-  const std::string a =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kRes);
-  const std::string b = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_b, kRes);
-  const std::string c = RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), T_scene_c, kRes);
+  const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 6.8),
+                                        Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::string b =
+      RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), T_scene_b, kRoomResolutionM);
+  const std::string c =
+      RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), T_scene_c, kRoomResolutionM);
   auto outcome = MergeSubmaps({{1, a}, {2, b}, {3, c}}, MergeParams{});
   ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
   ASSERT_EQ(outcome->alignments.size(), 3u);
   EXPECT_EQ(outcome->pairs.size(), 3u);
   EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, T_scene_b), 1.0);
   EXPECT_LT(testing::TranslationError(outcome->alignments[1].T_reference_submap, T_scene_b),
-            2 * kRes);
+            2 * kRoomResolutionM);
   EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[2].T_reference_submap, T_scene_c), 1.0);
   EXPECT_LT(testing::TranslationError(outcome->alignments[2].T_reference_submap, T_scene_c),
-            2 * kRes);
+            2 * kRoomResolutionM);
   ExpectFusedMapCoversBoth(*outcome, a);
 }
 
@@ -175,11 +173,11 @@ TEST(MergeGraphTest, PlacesAChainAndLeavesTheUnconnectedOut) {
 }
 
 TEST(MergeTest, RefusesAMapWithoutCorners) {
-  const std::string room =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string room = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
   const std::string wall = RasteriseSubmap(
       testing::FlatWall(), Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(6, 1, 3)),
-      Eigen::Isometry3d::Identity(), kRes);
+      Eigen::Isometry3d::Identity(), kRoomResolutionM);
   auto outcome = MergeSubmaps({{1, room}, {7, wall}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
@@ -187,12 +185,12 @@ TEST(MergeTest, RefusesAMapWithoutCorners) {
 }
 
 TEST(MergeTest, RefusesMapsThatDoNotOverlap) {
-  const std::string room =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string room = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
   const std::string other =
       RasteriseSubmap(testing::OtherRoom(),
                       Eigen::AlignedBox3d(Eigen::Vector3d(19, 19, -1), Eigen::Vector3d(28, 27, 4)),
-                      Pose(30, 0, 0, Eigen::Vector3d(-20, -10, 0)), kRes);
+                      Pose(30, 0, 0, Eigen::Vector3d(-20, -10, 0)), kRoomResolutionM);
   auto outcome = MergeSubmaps({{1, room}, {2, other}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
@@ -234,10 +232,10 @@ TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
 }
 
 TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
-  const std::string a =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                        Eigen::Isometry3d::Identity(), kRoomResolutionM);
   const std::string b =
-      RasteriseSubmap(FurnishedRoom(), CropX(2.2, 9.5), Eigen::Isometry3d::Identity(), 0.2);
+      RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), Eigen::Isometry3d::Identity(), 0.2);
   auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
@@ -247,8 +245,8 @@ TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
 }
 
 TEST(MergeTest, RefusesMalformedInputAndFewerThanTwoMaps) {
-  const std::string a =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                        Eigen::Isometry3d::Identity(), kRoomResolutionM);
   auto outcome = MergeSubmaps({{1, a}, {9, "# Octomap OcTree binary file\nid OcTree\nsize 3\n"}},
                               MergeParams{});
   ASSERT_FALSE(outcome.ok());
@@ -314,25 +312,25 @@ TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
       {5, 1, 0},                                     // next to it: one voxel of tolerance
       {0, 3, 0},  {1, 3, 0},                         // in A's free space
       {50, 0, 0}, {51, 0, 0}, {52, 0, 0}};           // in A's unknown space: not counted
-  auto a = VoxelGrid::FromKeys(kRes, a_occupied, a_free);
-  auto b = VoxelGrid::FromKeys(kRes, b_occupied);
+  auto a = VoxelGrid::FromKeys(kRoomResolutionM, a_occupied, a_free);
+  auto b = VoxelGrid::FromKeys(kRoomResolutionM, b_occupied);
   ASSERT_TRUE(a.ok() && b.ok());
   const OverlapScore score = ComputeOverlapScore(*a, *b, Eigen::Isometry3d::Identity());
   EXPECT_EQ(score.observed, 7u);
   EXPECT_EQ(score.coinciding, 5u);
   EXPECT_DOUBLE_EQ(score.score, 5.0 / 7.0);
   // Moved 3 voxels along y, B's wall lies in A's free space.
-  const OverlapScore moved =
-      ComputeOverlapScore(*a, *b, Eigen::Isometry3d(Eigen::Translation3d(0.0, 3 * kRes, 0.0)));
+  const OverlapScore moved = ComputeOverlapScore(
+      *a, *b, Eigen::Isometry3d(Eigen::Translation3d(0.0, 3 * kRoomResolutionM, 0.0)));
   EXPECT_LT(moved.score, 0.2);
 }
 
 TEST(InspectSubmapTest, SummarisesAValidMap) {
-  const std::string a =
-      RasteriseSubmap(FurnishedRoom(), CropX(-0.5, 5.6), Eigen::Isometry3d::Identity(), kRes);
+  const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                        Eigen::Isometry3d::Identity(), kRoomResolutionM);
   auto summary = InspectSubmap(a);
   ASSERT_TRUE(summary.ok()) << summary.status().ToString();
-  EXPECT_EQ(summary->resolution, kRes);
+  EXPECT_EQ(summary->resolution, kRoomResolutionM);
   EXPECT_GT(summary->occupied_voxels, 10000u);
   EXPECT_GT(summary->free_voxels, 40000u);
   // The wall x = 0.05 m is the voxel [0, 0.1), the ceiling z = 2.55 m [2.5, 2.6).

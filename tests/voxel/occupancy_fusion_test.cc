@@ -12,11 +12,11 @@
 namespace mapd::voxel {
 namespace {
 
-constexpr double kRes = 0.1;
+constexpr double kTreeRes = 0.1;  // metres
 
 enum class S { kUnknown, kFree, kOccupied };
 
-// Voxel (x, 0, 0) of a tree at kRes, keys as in VoxelGrid (OctoMap's - 32768).
+// Voxel (x, 0, 0) of a tree at kTreeRes, keys as in VoxelGrid (OctoMap's - 32768).
 octomap::OcTreeKey Key(int x, int y = 0, int z = 0) {
   return octomap::OcTreeKey(static_cast<octomap::key_type>(x + 32768),
                             static_cast<octomap::key_type>(y + 32768),
@@ -39,7 +39,7 @@ S StateOf(const octomap::OcTree& tree, int x, int y = 0, int z = 0) {
 // is x in [5, 10]. B is given in its own frame, where x' = x - 5, so T_a_b is
 // a translation of +0.5 m along x.
 struct Row {
-  octomap::OcTree a{kRes}, b{kRes};
+  octomap::OcTree a{kTreeRes}, b{kTreeRes};
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d(Eigen::Translation3d(0.5, 0.0, 0.0));
   void A(int x, S s) { Set(&a, x, s); }
   void B(int x, S s) { Set(&b, x - 5, s); }  // x in A's frame
@@ -66,7 +66,7 @@ Row MakeRow() {
 OcTreePtr Fuse(const Row& row, FusionRule rule, FusionStats* stats = nullptr) {
   FusionParams params;
   params.rule = rule;
-  auto merged = StartMergedMap(row.a, kRes, params);
+  auto merged = StartMergedMap(row.a, kTreeRes, params);
   EXPECT_TRUE(merged.ok());
   EXPECT_TRUE(FuseInto(row.b, row.T_a_b, params, merged->get(), stats).ok());
   return std::move(merged).value();
@@ -112,7 +112,7 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
   // nothing of the upper half: the upper half becomes unknown (overlap rule),
   // voxel by voxel, through OctoMap's pruned nodes (the path that crashes
   // OctoMap 1.9.7's own deleteNode).
-  octomap::OcTree a(kRes), b(kRes);
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
   for (int x = 0; x < 4; ++x)
     for (int y = 0; y < 4; ++y)
       for (int z = 0; z < 4; ++z) Set(&a, x, S::kFree, y, z);
@@ -124,7 +124,7 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
     }
   Set(&b, 0, S::kOccupied, 0, 3);  // stretches B's box over the whole block
   FusionParams params;
-  auto merged = StartMergedMap(a, kRes, params);
+  auto merged = StartMergedMap(a, kTreeRes, params);
   ASSERT_TRUE(merged.ok());
   FusionStats stats;
   ASSERT_TRUE(FuseInto(b, Eigen::Isometry3d::Identity(), params, merged->get(), &stats).ok());
@@ -144,13 +144,13 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
 }
 
 TEST(OccupancyFusionTest, RotatedSubmapLandsOnTheRightVoxels) {
-  octomap::OcTree a(kRes), b(kRes);
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
   Set(&a, 0, S::kOccupied);
   Set(&b, 3, S::kOccupied);  // (0.35, 0.05, 0.05) in B
   // 90 deg about z through B's origin: (x, y) -> (-y, x); voxel 3 -> centre (-0.05, 0.35).
   Eigen::Isometry3d T_a_b(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
   FusionParams params;
-  auto merged = StartMergedMap(a, kRes, params);
+  auto merged = StartMergedMap(a, kTreeRes, params);
   ASSERT_TRUE(merged.ok());
   ASSERT_TRUE(FuseInto(b, T_a_b, params, merged->get()).ok());
   EXPECT_EQ(StateOf(**merged, -1, 3), S::kOccupied);
@@ -158,28 +158,28 @@ TEST(OccupancyFusionTest, RotatedSubmapLandsOnTheRightVoxels) {
 }
 
 TEST(OccupancyFusionTest, ResamplesACoarserMapToTheFinerGrid) {
-  octomap::OcTree coarse(2 * kRes);
+  octomap::OcTree coarse(2 * kTreeRes);
   coarse.setNodeValue(coarse.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f)),
                       coarse.getClampingThresMaxLog());
   FusionParams params;
-  auto merged = StartMergedMap(coarse, kRes, params);
+  auto merged = StartMergedMap(coarse, kTreeRes, params);
   ASSERT_TRUE(merged.ok());
-  EXPECT_EQ((*merged)->getResolution(), kRes);
+  EXPECT_EQ((*merged)->getResolution(), kTreeRes);
   EXPECT_EQ(CountOccupiedVoxels(**merged), 8u);  // one 0.2 m voxel = eight 0.1 m voxels
   for (int x = 0; x < 2; ++x)
     for (int y = 0; y < 2; ++y)
       for (int z = 0; z < 2; ++z) EXPECT_EQ(StateOf(**merged, x, y, z), S::kOccupied);
   // And fused into a fine map.
-  octomap::OcTree fine(kRes);
+  octomap::OcTree fine(kTreeRes);
   Set(&fine, 5, S::kOccupied);
-  auto target = StartMergedMap(fine, kRes, params);
+  auto target = StartMergedMap(fine, kTreeRes, params);
   ASSERT_TRUE(target.ok());
   ASSERT_TRUE(FuseInto(coarse, Eigen::Isometry3d::Identity(), params, target->get()).ok());
   EXPECT_EQ(CountOccupiedVoxels(**target), 9u);
 }
 
 TEST(OccupancyFusionTest, FreeSpaceBeyondTheCapIsLeftUnknownAndCounted) {
-  octomap::OcTree a(kRes), b(kRes);
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
   Set(&a, 0, S::kOccupied);
   for (int x = 16; x < 24; ++x)  // an aligned 8^3 block
     for (int y = 0; y < 8; ++y)
@@ -187,7 +187,7 @@ TEST(OccupancyFusionTest, FreeSpaceBeyondTheCapIsLeftUnknownAndCounted) {
   b.prune();  // one free leaf of 512 voxels
   FusionParams params;
   params.max_free_voxels = 100;
-  auto merged = StartMergedMap(a, kRes, params);
+  auto merged = StartMergedMap(a, kTreeRes, params);
   ASSERT_TRUE(merged.ok());
   FusionStats stats;
   ASSERT_TRUE(FuseInto(b, Eigen::Isometry3d::Identity(), params, merged->get(), &stats).ok());

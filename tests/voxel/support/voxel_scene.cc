@@ -120,4 +120,8 @@ Eigen::Isometry3d Pose(double yaw_deg, double pitch_deg, double roll_deg,
   return T;
 }
 
+Eigen::AlignedBox3d RoomCropX(double x0, double x1) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.0, -1.0), Eigen::Vector3d(x1, 5.5, 3.5));
+}
+
 }  // namespace mapd::testing

@@ -36,6 +36,10 @@ SceneState StateAt(const VoxelScene& scene, const Eigen::Vector3d& p_scene, doub
 // A room of 9 x 4.5 x 2.5 m with six pieces of furniture of different sizes
 // at irregular places (no symmetry that would give two good matches).
 VoxelScene FurnishedRoom();
+// The resolution the tests rasterise FurnishedRoom at (metres).
+constexpr double kRoomResolutionM = 0.1;
+// FurnishedRoom cut along x (scene frame, metres): all of its y and z.
+Eigen::AlignedBox3d RoomCropX(double x0, double x1);
 // Another room (7.2 x 5.6 x 3.1 m) with different furniture.
 VoxelScene OtherRoom();
 // A single flat wall (no corners).
