@@ -1,65 +1,92 @@
+// WriteSvg, drawn by cairo on an SVG surface (client/cairo_canvas.h): one
+// panel per map, each clipped to its window, y up.
 #include "eval/svg.h"
 
 #include <algorithm>
-#include <cstdio>
+#include <cmath>
 #include <fstream>
-#include <sstream>
+
+#include "client/cairo_canvas.h"
 
 namespace mapd::fusion::scenario {
 
 using geometry::Segment2;
 using geometry::Vec2;
 
+namespace {
+
+constexpr double kTitlePx = 24.0, kGapPx = 10.0;
+
+// How a segment is drawn: colour "#rrggbb", width in px.
+struct Stroke {
+  const char* hex;
+  double width_px;
+  double alpha = 1.0;
+};
+
+}  // namespace
+
 Status WriteSvg(const std::string& path, const World& world, const std::vector<SvgPanel>& panels,
                 const Vec2& lo, const Vec2& hi, double px_per_m) {
   const double w = (hi.x() - lo.x()) * px_per_m, h = (hi.y() - lo.y()) * px_per_m;
-  constexpr double kTitle = 24.0, kGap = 10.0;
-  std::ostringstream svg;
-  const double total_w = panels.size() * (w + kGap);
-  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << total_w << "\" height=\""
-      << h + kTitle << "\" font-family=\"sans-serif\" font-size=\"14\">\n";
-  char buf[256];
+  client::Canvas canvas = client::Canvas::Svg(panels.size() * (w + kGapPx), h + kTitlePx);
+  cairo_t* cr = canvas.cr();
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 14.0);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+
   const auto outside = [&](const Segment2& s) {
     return std::max(s.a.x(), s.b.x()) < lo.x() || std::min(s.a.x(), s.b.x()) > hi.x() ||
            std::max(s.a.y(), s.b.y()) < lo.y() || std::min(s.a.y(), s.b.y()) > hi.y();
   };
-  const auto line = [&](double ox, const Segment2& s, const char* style) {
-    if (outside(s)) return;
+  for (std::size_t k = 0; k < panels.size(); ++k) {
+    const double ox = k * (w + kGapPx);
     const auto X = [&](const Vec2& p) { return ox + (p.x() - lo.x()) * px_per_m; };
-    const auto Y = [&](const Vec2& p) { return kTitle + (hi.y() - p.y()) * px_per_m; };
-    std::snprintf(buf, sizeof(buf), "<line x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\" %s/>\n",
-                  X(s.a), Y(s.a), X(s.b), Y(s.b), style);
-    svg << buf;
-  };
-  for (size_t k = 0; k < panels.size(); ++k) {
-    const double ox = k * (w + kGap);
-    svg << "<rect x=\"" << ox << "\" y=\"" << kTitle << "\" width=\"" << w << "\" height=\"" << h
-        << "\" fill=\"white\" stroke=\"#888\"/>\n";
-    svg << "<text x=\"" << ox + 4 << "\" y=\"17\">" << panels[k].title << "</text>\n";
-    svg << "<clipPath id=\"panel" << k << "\"><rect x=\"" << ox << "\" y=\"" << kTitle
-        << "\" width=\"" << w << "\" height=\"" << h << "\"/></clipPath>\n<g clip-path=\"url(#panel"
-        << k << ")\">\n";
-    for (const Segment2& s : panels[k].raw) line(ox, s, "stroke=\"#f4b183\" stroke-width=\"0.5\"");
-    for (size_t i = 0; i < world.structures.size(); ++i) {
-      const bool wall = world.structures[i].kind == StructureKind::kWall;
-      line(ox, world.structures[i].segment,
-           wall ? "stroke=\"#bbb\" stroke-width=\"5\"" : "stroke=\"#ddd\" stroke-width=\"3\"");
+    const auto Y = [&](const Vec2& p) { return kTitlePx + (hi.y() - p.y()) * px_per_m; };
+    const auto line = [&](const Segment2& s, const Stroke& stroke) {
+      if (outside(s)) return;
+      client::SetColour(cr, client::ParseHexColour(stroke.hex), stroke.alpha);
+      cairo_set_line_width(cr, stroke.width_px);
+      cairo_move_to(cr, X(s.a), Y(s.a));
+      cairo_line_to(cr, X(s.b), Y(s.b));
+      cairo_stroke(cr);
+    };
+
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_move_to(cr, ox + 4, 17);
+    cairo_show_text(cr, panels[k].title.c_str());
+    cairo_rectangle(cr, ox, kTitlePx, w, h);
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    cairo_fill_preserve(cr);
+    client::SetColour(cr, client::ParseHexColour("#888888"));
+    cairo_set_line_width(cr, 1.0);
+    cairo_stroke(cr);
+
+    cairo_save(cr);
+    cairo_rectangle(cr, ox, kTitlePx, w, h);
+    cairo_clip(cr);
+    for (const Segment2& s : panels[k].raw) line(s, {"#f4b183", 0.5});
+    for (const Structure& structure : world.structures) {
+      const bool wall = structure.kind == StructureKind::kWall;
+      line(structure.segment, wall ? Stroke{"#bbbbbb", 5.0} : Stroke{"#dddddd", 3.0});
     }
     for (const Segment2& s : panels[k].segments) {
-      line(ox, s, "stroke=\"#1f4e9c\" stroke-width=\"1.5\"");
+      line(s, {"#1f4e9c", 1.5});
       if (outside(s)) continue;
+      client::SetColour(cr, client::ParseHexColour("#cc0000"));
       for (const Vec2& p : {s.a, s.b}) {
-        std::snprintf(buf, sizeof(buf), "<circle cx=\"%.2f\" cy=\"%.2f\" r=\"2\" fill=\"#c00\"/>\n",
-                      ox + (p.x() - lo.x()) * px_per_m, kTitle + (hi.y() - p.y()) * px_per_m);
-        svg << buf;
+        cairo_new_sub_path(cr);
+        cairo_arc(cr, X(p), Y(p), 2.0, 0.0, 2 * M_PI);
       }
+      cairo_fill(cr);
     }
-    svg << "</g>\n";
+    cairo_restore(cr);
   }
-  svg << "</svg>\n";
-  std::ofstream out(path);
+  auto svg = canvas.FinishSvg();
+  if (!svg.ok()) return svg.status();
+  std::ofstream out(path, std::ios::binary);
   if (!out) return Status::Internal("cannot write " + path);
-  out << svg.str();
+  out << *svg;
   if (!out) return Status::Internal("write failed: " + path);
   return Status::Ok();
 }
