@@ -6,7 +6,6 @@
 #include <cmath>
 #include <random>
 #include <sstream>
-#include <unordered_set>
 #include <vector>
 
 namespace mapd::bench {
@@ -14,18 +13,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kKeyOffset = 32768;  // VoxelGrid keys = OctoMap keys - 32768
-
-std::uint64_t Pack(const voxel::VoxelKey& k) {
-  return (static_cast<std::uint64_t>(k.x() + kKeyOffset) << 32) |
-         (static_cast<std::uint64_t>(k.y() + kKeyOffset) << 16) |
-         static_cast<std::uint64_t>(k.z() + kKeyOffset);
-}
-
-voxel::VoxelKey Unpack(std::uint64_t p) {
-  return voxel::VoxelKey(static_cast<int>((p >> 32) & 0xffff) - kKeyOffset,
-                         static_cast<int>((p >> 16) & 0xffff) - kKeyOffset,
-                         static_cast<int>(p & 0xffff) - kKeyOffset);
-}
 
 bool InKeyRange(const voxel::VoxelKey& k) {
   return (k.array() >= -kKeyOffset).all() && (k.array() < kKeyOffset).all();
@@ -38,6 +25,69 @@ struct Slab {
   bool Contains(const voxel::VoxelKey& k) const { return k[axis] >= lo && k[axis] <= hi; }
 };
 
+// The source map's states inside a slab, dense over the box of the slab's
+// occupied voxels and free cubes: the resampling probes every target voxel,
+// and VoxelGrid::State walks up to 17 hash sets per probe.
+class SlabStates {
+ public:
+  enum : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
+
+  SlabStates(const voxel::VoxelGrid& map, const Slab& slab) {
+    lo_ = voxel::VoxelKey::Constant(kKeyOffset);
+    hi_ = voxel::VoxelKey::Constant(-kKeyOffset);
+    const auto clip = [&](voxel::VoxelKey* min_key, voxel::VoxelKey* max_key) {
+      (*min_key)[slab.axis] = std::max((*min_key)[slab.axis], slab.lo);
+      (*max_key)[slab.axis] = std::min((*max_key)[slab.axis], slab.hi);
+      return ((*min_key).array() <= (*max_key).array()).all();
+    };
+    // Two passes over the free cubes: the box, then the fill.
+    map.ForEachFreeCube([&](const voxel::VoxelKey& min_key, int edge) {
+      voxel::VoxelKey a = min_key, b = min_key + voxel::VoxelKey::Constant(edge - 1);
+      if (!clip(&a, &b)) return;
+      lo_ = lo_.cwiseMin(a);
+      hi_ = hi_.cwiseMax(b);
+    });
+    for (const voxel::VoxelKey& k : map.occupied_keys()) {
+      if (!slab.Contains(k)) continue;
+      lo_ = lo_.cwiseMin(k);
+      hi_ = hi_.cwiseMax(k);
+    }
+    if ((lo_.array() > hi_.array()).any()) return;  // empty
+    size_ = hi_ - lo_ + voxel::VoxelKey::Ones();
+    state_.assign(static_cast<std::size_t>(size_.x()) * size_.y() * size_.z(), kUnknown);
+    map.ForEachFreeCube([&](const voxel::VoxelKey& min_key, int edge) {
+      voxel::VoxelKey a = min_key, b = min_key + voxel::VoxelKey::Constant(edge - 1);
+      if (!clip(&a, &b)) return;
+      for (int z = a.z(); z <= b.z(); ++z) {
+        for (int y = a.y(); y <= b.y(); ++y) {
+          for (int x = a.x(); x <= b.x(); ++x) state_[Index(voxel::VoxelKey(x, y, z))] = kFree;
+        }
+      }
+    });
+    for (const voxel::VoxelKey& k : map.occupied_keys()) {
+      if (slab.Contains(k)) state_[Index(k)] = kOccupied;
+    }
+  }
+
+  bool empty() const { return state_.empty(); }
+  const voxel::VoxelKey& lo() const { return lo_; }
+  const voxel::VoxelKey& hi() const { return hi_; }
+
+  std::uint8_t At(const voxel::VoxelKey& k) const {
+    if ((k.array() < lo_.array()).any() || (k.array() > hi_.array()).any()) return kUnknown;
+    return state_[Index(k)];
+  }
+
+ private:
+  std::size_t Index(const voxel::VoxelKey& k) const {
+    const voxel::VoxelKey d = k - lo_;
+    return (static_cast<std::size_t>(d.z()) * size_.y() + d.y()) * size_.x() + d.x();
+  }
+
+  voxel::VoxelKey lo_, hi_, size_ = voxel::VoxelKey::Zero();
+  std::vector<std::uint8_t> state_;
+};
+
 struct Resampled {
   std::string bt;
   std::size_t occupied = 0, free = 0;
@@ -45,50 +95,55 @@ struct Resampled {
 
 // Nearest-neighbour resampling of the slab of `map` under T_out_src (see the
 // header): a target voxel takes the state of the source voxel containing
-// T_out_src^-1 * (its centre). Only targets near a forward-mapped occupied voxel
-// are visited, which bounds both the work and the free space kept.
+// T_out_src^-1 * (its centre). Every target voxel in the bounding box of the
+// moved slab box is probed, so all of the slab's free space is carried over.
 StatusOr<Resampled> Resample(const voxel::VoxelGrid& map, const Slab& slab,
-                             const Eigen::Isometry3d& T_out_src, int band_voxels) {
+                             const Eigen::Isometry3d& T_out_src) {
   const double res = map.resolution();
-  const int r = std::max(1, band_voxels);
-  std::unordered_set<std::uint64_t> candidates;
-  for (const voxel::VoxelKey& k : map.occupied_keys()) {
-    if (!slab.Contains(k)) continue;
-    const Eigen::Vector3d q = T_out_src * map.KeyToCentre(k);
-    const voxel::VoxelKey t = map.PointToKey(q);
-    for (int dx = -r; dx <= r; ++dx) {
-      for (int dy = -r; dy <= r; ++dy) {
-        for (int dz = -r; dz <= r; ++dz) {
-          const voxel::VoxelKey c = t + voxel::VoxelKey(dx, dy, dz);
-          if (!InKeyRange(c)) {
-            return Status::FailedPrecondition("moved crop leaves OctoMap's key range");
-          }
-          candidates.insert(Pack(c));
+  const SlabStates states(map, slab);
+  octomap::OcTree out(res);
+  Resampled result;
+  if (!states.empty()) {
+    // The target box: the moved corners of the source box, one voxel of margin.
+    Eigen::Vector3d tmin = Eigen::Vector3d::Constant(1e300), tmax = -tmin;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d corner((c & 1 ? states.hi().x() + 1 : states.lo().x()) * res,
+                                   (c & 2 ? states.hi().y() + 1 : states.lo().y()) * res,
+                                   (c & 4 ? states.hi().z() + 1 : states.lo().z()) * res);
+      const Eigen::Vector3d q = T_out_src * corner;
+      tmin = tmin.cwiseMin(q);
+      tmax = tmax.cwiseMax(q);
+    }
+    const voxel::VoxelKey tlo = map.PointToKey(tmin) - voxel::VoxelKey::Ones();
+    const voxel::VoxelKey thi = map.PointToKey(tmax) + voxel::VoxelKey::Ones();
+    if (!InKeyRange(tlo) || !InKeyRange(thi)) {
+      return Status::FailedPrecondition("moved crop leaves OctoMap's key range");
+    }
+    const Eigen::Isometry3d T_src_out = T_out_src.inverse();
+    const Eigen::Vector3d step = T_src_out.linear().col(0) * res;
+    const float occ = out.getClampingThresMaxLog();
+    const float fre = out.getClampingThresMinLog();
+    // Key order (z, y, x): the tree is built the same way on every run.
+    for (int z = tlo.z(); z <= thi.z(); ++z) {
+      for (int y = tlo.y(); y <= thi.y(); ++y) {
+        // Source position of each target centre along the row, in voxels.
+        Eigen::Vector3d p = T_src_out * map.KeyToCentre(voxel::VoxelKey(tlo.x(), y, z));
+        for (int x = tlo.x(); x <= thi.x(); ++x, p += step) {
+          const Eigen::Vector3d v = p / res;
+          const voxel::VoxelKey s(static_cast<int>(std::floor(v.x())),
+                                  static_cast<int>(std::floor(v.y())),
+                                  static_cast<int>(std::floor(v.z())));
+          const std::uint8_t state = states.At(s);
+          if (state == SlabStates::kUnknown) continue;
+          const octomap::OcTreeKey key(static_cast<octomap::key_type>(x + kKeyOffset),
+                                       static_cast<octomap::key_type>(y + kKeyOffset),
+                                       static_cast<octomap::key_type>(z + kKeyOffset));
+          const bool occupied = state == SlabStates::kOccupied;
+          out.setNodeValue(key, occupied ? occ : fre, /*lazy_eval=*/true);
+          ++(occupied ? result.occupied : result.free);
         }
       }
     }
-  }
-  // Visit the candidates in key order so that the tree is built the same way
-  // on every run (unordered_set order is an implementation detail).
-  std::vector<std::uint64_t> sorted(candidates.begin(), candidates.end());
-  std::sort(sorted.begin(), sorted.end());
-  const Eigen::Isometry3d T_src_out = T_out_src.inverse();
-  octomap::OcTree out(res);
-  const float occ = out.getClampingThresMaxLog();
-  const float fre = out.getClampingThresMinLog();
-  Resampled result;
-  for (std::uint64_t p : sorted) {
-    const voxel::VoxelKey t = Unpack(p);
-    const voxel::VoxelKey s = map.PointToKey(T_src_out * map.KeyToCentre(t));
-    if (!slab.Contains(s)) continue;
-    const voxel::VoxelState state = map.State(s);
-    if (state == voxel::VoxelState::kUnknown) continue;
-    const octomap::OcTreeKey key(static_cast<octomap::key_type>(t.x() + kKeyOffset),
-                                 static_cast<octomap::key_type>(t.y() + kKeyOffset),
-                                 static_cast<octomap::key_type>(t.z() + kKeyOffset));
-    const bool occupied = state == voxel::VoxelState::kOccupied;
-    out.setNodeValue(key, occupied ? occ : fre, /*lazy_eval=*/true);
-    ++(occupied ? result.occupied : result.free);
   }
   out.updateInnerOccupancy();
   out.prune();
@@ -101,8 +156,11 @@ StatusOr<Resampled> Resample(const voxel::VoxelGrid& map, const Slab& slab,
 }  // namespace
 
 Status CropParams::Validate() const {
-  if (!(overlap > 0.0 && overlap < 1.0)) {
+  if (!disjoint && !(overlap > 0.0 && overlap < 1.0)) {
     return Status::InvalidArgument("overlap must be in (0, 1)");
+  }
+  if (!(gap_m >= 0.0 && gap_m <= 1000.0)) {
+    return Status::InvalidArgument("gap_m must be in [0, 1000]");
   }
   if (max_occupied_per_crop < 500) {
     return Status::InvalidArgument("max_occupied_per_crop must be >= 500");
@@ -112,9 +170,6 @@ Status CropParams::Validate() const {
   }
   if (!(max_translation_m >= 0.0 && max_translation_m <= 1000.0)) {
     return Status::InvalidArgument("max_translation_m must be in [0, 1000]");
-  }
-  if (free_band_voxels < 0 || free_band_voxels > 8) {
-    return Status::InvalidArgument("free_band_voxels must be in [0, 8]");
   }
   return Status::Ok();
 }
@@ -135,17 +190,40 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   for (const voxel::VoxelKey& k : keys) u.push_back(k[pair.axis]);
   std::sort(u.begin(), u.end());
 
-  // Ranks along the axis: A = [s, s + n), B = [s + n - m, s + 2n - m), m = overlap * n.
-  const double f = params.overlap;
-  const std::size_t n = std::min(params.max_occupied_per_crop,
-                                 static_cast<std::size_t>(std::floor(total / (2.0 - f))));
-  const std::size_t m = static_cast<std::size_t>(std::llround(f * n));
-  const std::size_t span = 2 * n - m;
   std::mt19937_64 rng(params.seed);
-  std::uniform_int_distribution<std::size_t> start_dist(0, total - span);
-  const std::size_t s = start_dist(rng);
-  const Slab slab_a{pair.axis, u[s], u[s + n - 1]};
-  const Slab slab_b{pair.axis, u[s + n - m], u[s + span - 1]};
+  Slab slab_a{pair.axis, 0, 0}, slab_b{pair.axis, 0, 0};
+  if (!params.disjoint) {
+    // Ranks along the axis: A = [s, s + n), B = [s + n - m, s + 2n - m), m = overlap * n.
+    const double f = params.overlap;
+    const std::size_t n = std::min(params.max_occupied_per_crop,
+                                   static_cast<std::size_t>(std::floor(total / (2.0 - f))));
+    const std::size_t m = static_cast<std::size_t>(std::llround(f * n));
+    const std::size_t span = 2 * n - m;
+    std::uniform_int_distribution<std::size_t> start_dist(0, total - span);
+    const std::size_t s = start_dist(rng);
+    slab_a = {pair.axis, u[s], u[s + n - 1]};
+    slab_b = {pair.axis, u[s + n - m], u[s + span - 1]};
+  } else {
+    // A = ranks [s, s + n); B = the n ranks from the first key gap voxels past
+    // A's last layer. Draw s, then move it down until B fits.
+    const int gap = static_cast<int>(std::ceil(params.gap_m / map.resolution()));
+    const std::size_t n = std::min(params.max_occupied_per_crop, total * 2 / 5);
+    std::uniform_int_distribution<std::size_t> start_dist(0, total - 2 * n);
+    bool found = false;
+    for (std::size_t s = start_dist(rng) + 1; s-- > 0 && !found;) {
+      const int a_hi = u[s + n - 1];
+      const std::size_t b_start = static_cast<std::size_t>(
+          std::lower_bound(u.begin(), u.end(), a_hi + 1 + gap) - u.begin());
+      if (b_start + n > total) continue;
+      slab_a = {pair.axis, u[s], a_hi};
+      slab_b = {pair.axis, u[b_start], u[b_start + n - 1]};
+      found = true;
+    }
+    if (!found) {
+      return Status::FailedPrecondition("map too short along its axis for two disjoint crops " +
+                                        std::to_string(params.gap_m) + " m apart");
+    }
+  }
 
   Eigen::Vector3d sum_b = Eigen::Vector3d::Zero();
   for (const voxel::VoxelKey& k : keys) {
@@ -182,10 +260,9 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   pair.T_a_b = T_b_map.inverse();
   pair.centroid_b = c + t;
 
-  StatusOr<Resampled> a =
-      Resample(map, slab_a, Eigen::Isometry3d::Identity(), params.free_band_voxels);
+  StatusOr<Resampled> a = Resample(map, slab_a, Eigen::Isometry3d::Identity());
   if (!a.ok()) return a.status();
-  StatusOr<Resampled> b = Resample(map, slab_b, T_b_map, params.free_band_voxels);
+  StatusOr<Resampled> b = Resample(map, slab_b, T_b_map);
   if (!b.ok()) return b.status();
   pair.a_bt = std::move(a->bt);
   pair.b_bt = std::move(b->bt);

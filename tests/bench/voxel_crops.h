@@ -12,14 +12,18 @@
 // seed. Slab edges fall between key layers, so the achieved overlap is within a
 // layer of the requested one: it is measured and reported.
 //
+// Negative pairs (disjoint = true): two slabs of n = min(max_occupied_per_crop,
+// 0.4 N) occupied voxels each with no key layer in common and at least gap_m
+// between them along the axis, so no merge of them is right.
+//
 // Re-voxelisation (both crops, A with the identity, so that they are treated
 // alike): nearest-neighbour resampling. A target voxel takes the state of the
 // source voxel that contains T^-1(target centre), restricted to the crop's slab;
-// candidate target voxels are the 3^3 neighbourhood of every forward-mapped
-// occupied voxel, dilated by free_band_voxels. So occupied surfaces have no
-// holes from the rotation, and free space is kept only in a band of
-// free_band_voxels around the occupied voxels (bounded memory; the rest of the
-// crop's free space becomes unknown, which the fusion rule treats as neutral).
+// every target voxel in the box that the moved slab can reach is visited. So
+// occupied surfaces have no holes from the rotation, and the crop carries ALL of
+// the source map's free space inside the slab (its ray-cast free leaves, not
+// only free voxels next to surfaces), as a real submap's OctoMap would: the
+// overlap score's "B lands on space A saw as free" needs it.
 //
 // Deterministic: the same map, parameters and seed give the same bytes.
 #ifndef MAPD_TESTS_BENCH_VOXEL_CROPS_H_
@@ -36,11 +40,12 @@
 namespace mapd::bench {
 
 struct CropParams {
-  double overlap = 0.5;  // requested |A n B| / min(|A|, |B|), in (0, 1)
+  double overlap = 0.5;   // requested |A n B| / min(|A|, |B|), in (0, 1); unused if disjoint
+  bool disjoint = false;  // a negative pair: no shared voxel, gap_m apart (see above)
+  double gap_m = 2.0;     // smallest distance between disjoint slabs, metres
   std::size_t max_occupied_per_crop = 150'000;
   double max_tilt_deg = 10.0;       // roll and pitch uniform in [-max, max]
   double max_translation_m = 20.0;  // translation uniform in a ball of this radius
-  int free_band_voxels = 1;         // free space kept within this many voxels of occupied
   std::uint64_t seed = 1;
 
   Status Validate() const;

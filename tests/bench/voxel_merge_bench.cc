@@ -8,13 +8,16 @@
 // so that the peak RSS reported (getrusage ru_maxrss of the child) is that of
 // one merge of two .bt files, not of the benchmark.
 //
-//   voxel_merge_bench [--dir=DIR] [--maps=geb079.bt,...] [--overlaps=0.3,0.5,0.7]
-//                     [--trials=20] [--trials-other=N] [--methods=ours,fpfh]
-//                     [--seed=1] [--max-voxels=150000] [--threads=1] [--out=FILE]
+//   voxel_merge_bench [--dir=DIR] [--maps=geb079.bt,...] [--overlaps=0.1,0.2,0.3,0.5]
+//                     [--trials=20] [--trials-other=N] [--negatives=N] [--gap-m=2]
+//                     [--methods=ours,fpfh] [--seed=1] [--max-voxels=150000]
+//                     [--threads=1] [--out=FILE]
 //
 // --trials applies to overlap 0.5, --trials-other (default = --trials) to the
-// others. DIR defaults to $MAPD_SHARED_DIR/data/octomap, else
-// /work/shared/data/octomap; missing maps are skipped.
+// others. --negatives (default = --trials-other) pairs per map of two DISJOINT
+// crops, --gap-m apart (voxel_crops.h): no merge of them is right, so every
+// accepted one counts as wrong. DIR defaults to $MAPD_SHARED_DIR/data/octomap,
+// else /work/shared/data/octomap; missing maps are skipped.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -81,10 +84,30 @@ std::vector<std::string> Split(const std::string& s, char sep) {
   return out;
 }
 
+// Figures of the accepted pair's voxel::PairReport, one table column each
+// (median over the accepted merges of a row; refusals return no report). A
+// new PairReport figure is one more line here.
+struct PairColumn {
+  const char* header;
+  const char* format;
+  double (*value)(const mapd::voxel::PairReport& pair, double resolution_m);
+};
+const PairColumn kPairColumns[] = {
+    {"median matched corners", "%.0f",
+     [](const mapd::voxel::PairReport& p, double) {
+       return static_cast<double>(p.matched_corners);
+     }},
+    {"median residual (voxels)", "%.2f",
+     [](const mapd::voxel::PairReport& p, double res) { return p.residual_m / res; }},
+    {"median overlap score", "%.2f",
+     [](const mapd::voxel::PairReport& p, double) { return p.overlap_score; }},
+};
+constexpr std::size_t kNumPairColumns = sizeof(kPairColumns) / sizeof(kPairColumns[0]);
+
 // ---------------------------------------------------------------------------
 // Worker side: one merge, one line of results on stdout.
 //   RESULT <code> <accepted> <T 16 numbers, row-major> <n stages> <stage_s>... <total_s> <rss_kb>
-//   <cpu_s> STAGES <name>... MESSAGE <text>
+//   <cpu_s> STAGES <name>... PAIR <kPairColumns values> MESSAGE <text>
 struct WorkerOutput {
   StatusCode code = StatusCode::kOk;
   bool accepted = false;
@@ -92,7 +115,8 @@ struct WorkerOutput {
   std::vector<std::string> stage_names;
   std::vector<double> stage_s;
   double total_s = 0;
-  double cpu_s = 0;  // the whole worker process, reading the files included
+  double cpu_s = 0;                 // the whole worker process, reading the files included
+  std::vector<double> pair_values;  // kPairColumns of the accepted pair; empty otherwise
   std::string message;
 };
 
@@ -105,6 +129,8 @@ void PrintWorkerOutput(const WorkerOutput& out) {
   for (double s : out.stage_s) std::printf(" %.6f", s);
   std::printf(" %.6f %ld %.3f\nSTAGES", out.total_s, PeakRssKb(), CpuSeconds());
   for (const std::string& n : out.stage_names) std::printf(" %s", n.c_str());
+  std::printf("\nPAIR");
+  for (double v : out.pair_values) std::printf(" %.6g", v);
   std::string msg = out.message;
   std::replace(msg.begin(), msg.end(), '\n', ' ');
   std::printf("\nMESSAGE %s\n", msg.c_str());
@@ -143,6 +169,12 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
         out.message = "matched=" + std::to_string(al.matched_corners) +
                       " residual_m=" + std::to_string(al.residual_m) +
                       " overlap=" + std::to_string(al.overlap_score);
+      }
+    }
+    for (const auto& pair : r->pairs) {
+      if (!pair.accepted) continue;
+      for (const PairColumn& column : kPairColumns) {
+        out.pair_values.push_back(column.value(pair, r->resolution));
       }
     }
     if (!out.accepted) {
@@ -217,10 +249,12 @@ int WorkerMain(const std::string& method, const std::string& path_a, const std::
 struct Options {
   std::string dir;
   std::vector<std::string> maps = {"geb079.bt", "fr_078_tidyup.bt", "new_college.bt"};
-  std::vector<double> overlaps = {0.3, 0.5, 0.7};
+  std::vector<double> overlaps = {0.1, 0.2, 0.3, 0.5};
   std::vector<std::string> methods = {"ours", "fpfh"};
   int trials = 20;
   int trials_other = -1;
+  int negatives = -1;
+  double gap_m = 2.0;
   unsigned seed = 1;
   std::size_t max_voxels = 150'000;
   int threads = 1;
@@ -270,6 +304,9 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
     } else if (tag == "STAGES") {
       std::string name;
       while (ls >> name) out.stage_names.push_back(name);
+    } else if (tag == "PAIR") {
+      double v = 0;
+      while (ls >> v) out.pair_values.push_back(v);
     } else if (tag == "MESSAGE") {
       std::getline(ls, out.message);
     }
@@ -292,8 +329,11 @@ double Median(std::vector<double> v) {
 struct Row {
   std::string map, method;
   double resolution = 0, overlap = 0;
+  bool negative = false;  // disjoint crops: every accepted merge is wrong
   int trials = 0, success = 0, wrong = 0, refused = 0, errors = 0;
-  std::vector<double> rot_deg, trans_vox, total_s, cpu_s, achieved, crop_a, crop_b;
+  std::vector<double> rot_deg, trans_vox, total_s, cpu_s, cpu_refused_s, achieved, crop_a, crop_b;
+  std::vector<double> free_a, free_b;
+  std::vector<std::vector<double>> pair_values;  // per kPairColumns
   std::vector<std::string> stage_names;
   std::vector<std::vector<double>> stage_s;
   long peak_rss_kb = 0;
@@ -318,14 +358,25 @@ std::string RowToMarkdown(const Row& row) {
     if (!stages.empty()) stages += ", ";
     stages += row.stage_names[i] + " " + Fmt("%.2f", Median(v));
   }
-  s << "| " << row.map << " | " << row.resolution << " | " << Fmt("%.1f", row.overlap) << " / "
-    << Fmt("%.2f", Median(row.achieved)) << " | " << Fmt("%.0f", Median(row.crop_a)) << " / "
-    << Fmt("%.0f", Median(row.crop_b)) << " | " << row.method << " | " << row.success << "/"
-    << row.trials << " (" << Fmt("%.0f", 100.0 * row.success / std::max(1, row.trials)) << " %) | "
-    << row.wrong << " | " << row.refused << " | " << row.errors << " | "
-    << Fmt("%.2f", Median(row.rot_deg)) << " | " << Fmt("%.2f", Median(row.trans_vox)) << " | "
-    << stages << " | " << Fmt("%.2f", Median(row.total_s)) << " | "
-    << Fmt("%.2f", Median(row.cpu_s)) << " | " << Fmt("%.0f", row.peak_rss_kb / 1024.0) << " |\n";
+  const double max_cpu =
+      row.cpu_s.empty() ? std::nan("") : *std::max_element(row.cpu_s.begin(), row.cpu_s.end());
+  s << "| " << row.map << " | " << row.resolution << " | "
+    << (row.negative ? std::string("none (disjoint)")
+                     : Fmt("%.1f", row.overlap) + " / " + Fmt("%.2f", Median(row.achieved)))
+    << " | " << Fmt("%.0f", Median(row.crop_a)) << " / " << Fmt("%.0f", Median(row.crop_b)) << " | "
+    << Fmt("%.0f", Median(row.free_a)) << " / " << Fmt("%.0f", Median(row.free_b)) << " | "
+    << row.method << " | " << row.success << "/" << row.trials << " ("
+    << Fmt("%.0f", 100.0 * row.success / std::max(1, row.trials)) << " %) | " << row.wrong << " | "
+    << row.refused << " | " << row.errors << " | " << Fmt("%.2f", Median(row.rot_deg)) << " | "
+    << Fmt("%.2f", Median(row.trans_vox)) << " | " << stages << " | "
+    << Fmt("%.2f", Median(row.total_s)) << " | " << Fmt("%.2f", Median(row.cpu_s)) << " | "
+    << Fmt("%.2f", Median(row.cpu_refused_s)) << " | " << Fmt("%.2f", max_cpu) << " | ";
+  for (std::size_t i = 0; i < kNumPairColumns; ++i) {
+    s << Fmt(kPairColumns[i].format,
+             i < row.pair_values.size() ? Median(row.pair_values[i]) : std::nan(""))
+      << " | ";
+  }
+  s << Fmt("%.0f", row.peak_rss_kb / 1024.0) << " |\n";
   return s.str();
 }
 
@@ -333,10 +384,14 @@ std::string RowToMarkdown(const Row& row) {
 // after every trial so that an interrupted run still leaves its table.
 void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool final) {
   std::ostringstream table;
-  table << "| map | res (m) | overlap req / achieved | occupied voxels A / B | method | success | "
-           "wrong | refused | errors | median rot err (deg) | median trans err (voxels) | "
-           "median stage times (s) | median total (s) | median CPU (s) | peak RSS (MiB) |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  table << "| map | res (m) | overlap req / achieved | occupied voxels A / B | free voxels A / B | "
+           "method | right | wrong | refused | errors | median rot err (deg) | median trans err "
+           "(voxels) | median stage times (s) | median total (s) | median CPU (s) | median CPU "
+           "of refusals (s) | max CPU (s) | ";
+  for (const PairColumn& column : kPairColumns) table << column.header << " | ";
+  table << "peak RSS (MiB) |\n|";
+  for (std::size_t i = 0; i < 18 + kNumPairColumns; ++i) table << "---|";
+  table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
   std::ostringstream notes;
   for (const Row& r : rows) {
@@ -376,6 +431,10 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->trials = std::atoi(val.c_str());
     } else if (key == "--trials-other") {
       o->trials_other = std::atoi(val.c_str());
+    } else if (key == "--negatives") {
+      o->negatives = std::atoi(val.c_str());
+    } else if (key == "--gap-m") {
+      o->gap_m = std::atof(val.c_str());
     } else if (key == "--seed") {
       o->seed = static_cast<unsigned>(std::strtoul(val.c_str(), nullptr, 10));
     } else if (key == "--max-voxels") {
@@ -396,7 +455,14 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       return false;
     }
   }
+  for (double f : o->overlaps) {
+    if (!(f > 0 && f < 1)) {
+      std::fprintf(stderr, "--overlaps: %g is not in (0, 1)\n", f);
+      return false;
+    }
+  }
   if (o->trials_other < 0) o->trials_other = o->trials;
+  if (o->negatives < 0) o->negatives = o->trials_other;
   return o->trials >= 0 && o->threads >= 1;
 }
 
@@ -443,19 +509,28 @@ int main(int argc, char** argv) {
       continue;
     }
     tree->reset();  // release the octree: the grid is all we need
-    for (std::size_t oi = 0; oi < opt.overlaps.size(); ++oi) {
-      const double overlap = opt.overlaps[oi];
-      const int trials = std::abs(overlap - 0.5) < 1e-9 ? opt.trials : opt.trials_other;
+    // The overlaps, then the negative pairs (overlap 0: disjoint crops).
+    std::vector<double> cases = opt.overlaps;
+    if (opt.negatives > 0) cases.push_back(0.0);
+    for (const double overlap : cases) {
+      const bool negative = overlap == 0.0;
+      const int trials = negative                         ? opt.negatives
+                         : std::abs(overlap - 0.5) < 1e-9 ? opt.trials
+                                                          : opt.trials_other;
       std::vector<Row> method_rows(opt.methods.size());
       for (std::size_t k = 0; k < opt.methods.size(); ++k) {
         method_rows[k].map = opt.maps[mi];
         method_rows[k].method = opt.methods[k];
         method_rows[k].resolution = grid->resolution();
         method_rows[k].overlap = overlap;
+        method_rows[k].negative = negative;
+        method_rows[k].pair_values.resize(kNumPairColumns);
       }
       for (int trial = 0; trial < trials; ++trial) {
         mapd::bench::CropParams cp;
-        cp.overlap = overlap;
+        cp.disjoint = negative;
+        if (!negative) cp.overlap = overlap;
+        cp.gap_m = opt.gap_m;
         cp.max_occupied_per_crop = opt.max_voxels;
         cp.seed = mapd::bench::TrialSeed(opt.seed, opt.maps[mi], overlap, trial);
         const auto gen_start = std::chrono::steady_clock::now();
@@ -484,6 +559,8 @@ int main(int argc, char** argv) {
           row.achieved.push_back(pair->achieved_overlap);
           row.crop_a.push_back(static_cast<double>(pair->out_occupied_a));
           row.crop_b.push_back(static_cast<double>(pair->out_occupied_b));
+          row.free_a.push_back(static_cast<double>(pair->out_free_a));
+          row.free_b.push_back(static_cast<double>(pair->out_free_b));
           row.peak_rss_kb = std::max(row.peak_rss_kb, rss_kb);
           if (row.stage_names.empty()) row.stage_names = w.stage_names;
           if (w.code != StatusCode::kInternal) {
@@ -493,6 +570,14 @@ int main(int argc, char** argv) {
           }
           std::string verdict;
           if (w.accepted && w.code == StatusCode::kOk) {
+            for (std::size_t i = 0; i < kNumPairColumns && i < w.pair_values.size(); ++i) {
+              row.pair_values[i].push_back(w.pair_values[i]);
+            }
+          }
+          if (w.accepted && w.code == StatusCode::kOk && negative) {
+            ++row.wrong;  // disjoint crops: nothing to merge
+            verdict = "WRONG (disjoint crops merged)";
+          } else if (w.accepted && w.code == StatusCode::kOk) {
             const double rot = mapd::bench::RotationErrorDeg(w.T, pair->T_a_b);
             const double trans_m =
                 mapd::bench::TranslationErrorAt(w.T, pair->T_a_b, pair->centroid_b);
@@ -507,6 +592,7 @@ int main(int argc, char** argv) {
             verdict = buf;
           } else if (w.code == StatusCode::kFailedPrecondition) {
             ++row.refused;
+            row.cpu_refused_s.push_back(w.cpu_s);
             verdict = "REFUSED";
           } else {
             ++row.errors;

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
@@ -37,9 +39,10 @@ TEST(VoxelCropsTest, ValidateNamesTheBadField) {
   CropParams p;
   p.overlap = 1.0;
   EXPECT_NE(p.Validate().message().find("overlap"), std::string::npos);
-  p = CropParams();
-  p.free_band_voxels = -1;
-  EXPECT_NE(p.Validate().message().find("free_band_voxels"), std::string::npos);
+  p.disjoint = true;  // a negative pair has no overlap to check
+  EXPECT_TRUE(p.Validate().ok());
+  p.gap_m = -1;
+  EXPECT_NE(p.Validate().message().find("gap_m"), std::string::npos);
   EXPECT_TRUE(CropParams().Validate().ok());
 }
 
@@ -106,6 +109,83 @@ TEST(VoxelCropsTest, CropsAreCappedAndOverlapFollowsTheRequest) {
     EXPECT_LT(pair->occupied_a, 5600u);
     EXPECT_LT(pair->occupied_b, 5600u);
   }
+}
+
+// The free voxels of `map` whose key along `axis` lies in [lo, hi].
+std::size_t FreeInSlab(const voxel::VoxelGrid& map, int axis, int lo, int hi) {
+  std::size_t n = 0;
+  map.ForEachFreeCube([&](const voxel::VoxelKey& min_key, int edge) {
+    for (int i = 0; i < edge; ++i) {
+      const int k = min_key[axis] + i;
+      if (k >= lo && k <= hi) n += static_cast<std::size_t>(edge) * edge;
+    }
+  });
+  return n;
+}
+
+StatusOr<voxel::VoxelGrid> GridOf(const std::string& bt) {
+  StatusOr<voxel::OcTreePtr> tree = voxel::ReadOctree(bt);
+  if (!tree.ok()) return tree.status();
+  return voxel::VoxelGrid::FromOcTree(**tree);
+}
+
+// A real submap keeps its ray-cast free space: crop A (the identity) carries
+// every free voxel of the map inside its slab, including the corridor's
+// interior far from any wall, and B the same number up to resampling.
+TEST(VoxelCropsTest, CropsCarryAllFreeSpaceOfTheirSlab) {
+  const voxel::VoxelGrid map = Corridor();
+  CropParams p;
+  p.overlap = 0.5;
+  p.seed = 3;
+  StatusOr<CropPair> pair = MakeCropPair(map, p);
+  ASSERT_TRUE(pair.ok()) << pair.status().ToString();
+  StatusOr<voxel::VoxelGrid> a = GridOf(pair->a_bt);
+  ASSERT_TRUE(a.ok()) << a.status().ToString();
+  const int lo = a->min_key()[pair->axis], hi = a->max_key()[pair->axis];
+  const std::size_t expected = FreeInSlab(map, pair->axis, lo, hi);
+  EXPECT_GT(expected, 10'000u);
+  EXPECT_EQ(pair->out_free_a, expected);
+  EXPECT_EQ(FreeInSlab(*a, pair->axis, lo, hi), expected);
+  // The corridor's centre line (8+ voxels from the walls) is free in A.
+  EXPECT_EQ(a->State(voxel::VoxelKey((lo + hi) / 2, 15, 10)), voxel::VoxelState::kFree);
+  // B: the free space of its own slab (found by moving B's occupied voxels
+  // back), resampled under a rotation: nearest neighbour duplicates or drops
+  // a few voxels.
+  StatusOr<voxel::VoxelGrid> b = GridOf(pair->b_bt);
+  ASSERT_TRUE(b.ok()) << b.status().ToString();
+  int b_lo = 1 << 20, b_hi = -(1 << 20);
+  for (const Eigen::Vector3d& c : b->occupied_centres()) {
+    const int k = map.PointToKey(pair->T_a_b * c)[pair->axis];
+    b_lo = std::min(b_lo, k);
+    b_hi = std::max(b_hi, k);
+  }
+  const double expected_b = static_cast<double>(FreeInSlab(map, pair->axis, b_lo, b_hi));
+  EXPECT_NEAR(static_cast<double>(pair->out_free_b), expected_b, 0.15 * expected_b);
+}
+
+TEST(VoxelCropsTest, DisjointCropsShareNothingAndKeepTheGap) {
+  const voxel::VoxelGrid map = Corridor();
+  CropParams p;
+  p.disjoint = true;
+  p.gap_m = 1.0;  // 10 voxels
+  p.seed = 5;
+  StatusOr<CropPair> pair = MakeCropPair(map, p);
+  ASSERT_TRUE(pair.ok()) << pair.status().ToString();
+  EXPECT_EQ(pair->shared, 0u);
+  EXPECT_EQ(pair->achieved_overlap, 0.0);
+  EXPECT_GT(pair->occupied_a, 1000u);
+  EXPECT_GT(pair->occupied_b, 1000u);
+  // B moved back by the ground truth lies beyond A's last layer plus the gap.
+  StatusOr<voxel::VoxelGrid> a = GridOf(pair->a_bt), b = GridOf(pair->b_bt);
+  ASSERT_TRUE(a.ok() && b.ok());
+  int b_min = 1 << 20;
+  for (const Eigen::Vector3d& c : b->occupied_centres()) {
+    b_min = std::min(b_min, map.PointToKey(pair->T_a_b * c)[pair->axis]);
+  }
+  EXPECT_GE(b_min, a->max_key()[pair->axis] + 10);
+  // A map too short for the gap is refused.
+  p.gap_m = 30.0;
+  EXPECT_EQ(MakeCropPair(map, p).status().code(), StatusCode::kFailedPrecondition);
 }
 
 TEST(VoxelCropsTest, RefusesATinyMap) {
