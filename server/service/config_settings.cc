@@ -356,7 +356,8 @@ const std::vector<Setting>& Settings() {
       Count("merge.min_matched_corners", "matched corners a pairwise merge needs to be accepted (a rigid "
             "transform needs 3)",
             [](C& c) -> auto& { return c.submaps.min_matched_corners; }, 3, 100000),
-      Real("merge.max_residual_voxels", "largest accepted RMS residual after ICP, voxels of the finer map",
+      Real("merge.max_residual_voxels", "largest accepted RMS residual after ICP, voxels of the coarser "
+           "map of the pair",
            [](C& c) -> auto& { return c.submaps.max_residual_voxels; }, {0, 100, true}),
       Real("merge.min_overlap_score", "smallest accepted overlap score (0.7 let a 90-degree-wrong merge through)",
            [](C& c) -> auto& { return c.submaps.min_overlap_score; }, {0, 1}),

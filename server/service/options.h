@@ -86,7 +86,7 @@ struct SubmapOptions {
   size_t max_queued_merges = 4;
   int min_matched_corners = 4;  // evidence to accept a pairwise merge
   double max_residual_voxels =
-      0.75;  // RMS after ICP, voxels of the finer map (= voxel::MergeParams)
+      0.75;  // RMS after ICP, voxels of the coarser map (= voxel::MergeParams)
   double min_overlap_score =
       0.9;  // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
   double max_merge_seconds = 60.0;    // budget of one merge, seconds

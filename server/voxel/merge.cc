@@ -104,10 +104,12 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
     const double resolution = submap.grid.resolution();
     if (resolution != submaps[0].grid.resolution() &&
         params.resolution_policy == ResolutionPolicy::kRefuse) {
-      return Status::FailedPrecondition(Name(submaps[0].id) + " has resolution " +
-                                        Metres(submaps[0].grid.resolution()) + ", " +
-                                        Name(submap.id) + " has " + Metres(resolution) +
-                                        "; resolution_policy kRefuse does not resample");
+      // Named by the service's setting: this is the message an operator sees.
+      return Status::FailedPrecondition(
+          Name(submaps[0].id) + " has resolution " + Metres(submaps[0].grid.resolution()) + ", " +
+          Name(submap.id) + " has " + Metres(resolution) +
+          "; merge.resolution_policy is refuse (allowed: refuse, resample); set it to resample "
+          "to merge them at the finest resolution");
     }
     finest = std::min(finest, resolution);
   }

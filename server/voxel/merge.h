@@ -42,7 +42,9 @@ struct MergeParams {
   // Evidence needed to accept a pairwise merge; below it the merge is refused
   // with FailedPrecondition and a reason, and nothing is written.
   int min_matched_corners = 4;
-  // RMS after ICP, in voxels of the finer map. Two rasterisations of one
+  // RMS after ICP, in voxels of the COARSER map of the pair (the same unit
+  // when both have one resolution): a right 5 cm / 8 cm merge ends near 0.5
+  // coarse voxels, 0.9 fine ones (merge_pair.cc). Two rasterisations of one
   // surface in rotated grids leave ~0.5 voxel (geb079.bt: 0.04 m at 8 cm); a
   // 180 deg flip of a furnished room that still put walls on walls left 1.5.
   // On the real-map benchmark (docs/voxel-merge.md) 151 right merges ended at

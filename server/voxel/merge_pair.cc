@@ -34,6 +34,16 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   PairReport report;
   report.id_a = a.id;
   report.id_b = b.id;
+  // The residual gate's unit: a voxel of the COARSER map of the pair. The RMS
+  // of a right alignment is set by how coarsely the surfaces were rasterised:
+  // a 5 cm map on an 8 cm one ends near 0.5 coarse voxels (0.92 fine voxels:
+  // refused by a gate in fine voxels), as two 8 cm maps do. Metres would need
+  // a setting per resolution. Equal resolutions: the same unit as before.
+  const double gate_voxel_m = std::max(a.grid->resolution(), b.grid->resolution());
+  const std::string gate_unit =
+      a.grid->resolution() == b.grid->resolution()
+          ? ""
+          : " (voxels of the coarser map, " + Fixed(gate_voxel_m, 3) + " m)";
 
   // B.4: corners, the maximum clique, Umeyama; ties go to the transform that
   // makes the most occupied voxels coincide (the paper, section IV.C).
@@ -71,7 +81,7 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
     auto screen = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), match->T_a_b,
                             finest_resolution_m, screen_params);
     if (screen.ok()) {
-      const double screen_voxels = screen->rms_residual_m / finest_resolution_m;
+      const double screen_voxels = screen->rms_residual_m / gate_voxel_m;
       if (screen_voxels > params.icp_screen_residual_factor * params.max_residual_voxels) {
         times->alignment_s += SecondsSince(start);
         report.T_a_b = screen->T_target_source;
@@ -79,7 +89,7 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
         report.icp_iterations = screen->iterations;
         report.reason =
             ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
-            " (on " + std::to_string(screen->source_points) + " points)";
+            gate_unit + " (on " + std::to_string(screen->source_points) + " points)";
         return report;
       }
       T_start = screen->T_target_source;
@@ -101,18 +111,19 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   report.overlap_score = overlap.score;
   times->alignment_s += SecondsSince(start);
 
-  const double residual_voxels = report.residual_m / finest_resolution_m;
+  const double residual_voxels = report.residual_m / gate_voxel_m;
   // A refinement still moving when it ran out of iterations has not shown
   // where it ends: new_college 0.7 trial 3 was accepted at 0.98 voxels while
   // still 0.65 deg / 3 voxels off after 50 iterations, and converged to the
   // right transform (0.53 voxel) after 85.
   if (!icp->converged) {
     report.reason = "ICP did not converge in " + std::to_string(icp->iterations) +
-                    " iterations (residual " + Fixed(residual_voxels, 2) + " voxels)";
+                    " iterations (residual " + Fixed(residual_voxels, 2) + " voxels)" + gate_unit;
     return report;
   }
   if (residual_voxels > params.max_residual_voxels) {
-    report.reason = ResidualReason(report.residual_m, residual_voxels, params.max_residual_voxels);
+    report.reason =
+        ResidualReason(report.residual_m, residual_voxels, params.max_residual_voxels) + gate_unit;
     return report;
   }
   if (report.overlap_score < params.min_overlap_score) {

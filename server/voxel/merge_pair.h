@@ -24,7 +24,8 @@ struct PairSide {
 // "overlap score 0.12 below 0.30", "residual 0.25 m (2.5 voxels) above 2.0
 // voxels". Errors only for bad parameters or input. Adds its seconds to
 // times->matching_s and times->alignment_s. `finest_resolution_m` sets the
-// voxel unit of the thresholds; `seconds_left` caps the corner search.
+// voxel unit of the corner and ICP distances; the residual gate is in voxels
+// of the coarser of the two maps (merge.h). `seconds_left` caps the corner search.
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times);
 

@@ -203,7 +203,7 @@ TEST_F(MergeReviewTest, ReviewedMergeChangesNothingUntilApproved) {
 // The matched corners behind a merge are served by GetMerge (not ListMerges),
 // survive a restart, and the stored transform maps each input's corners onto
 // their partners in the reference frame: their RMS distance is within the
-// residual gate (merge.max_residual_voxels of the finer map).
+// residual gate (merge.max_residual_voxels of the coarser map).
 TEST_F(MergeReviewTest, GetMergeServesMatchedCornersThatTheTransformMapsOntoEachOther) {
   TwoRobotsAndTheirSubmaps();
   const pb::MergeResult proposed = Merge({a_, b_}, /*review=*/true);

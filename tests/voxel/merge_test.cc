@@ -239,9 +239,51 @@ TEST(MergeTest, RefusesMismatchedResolutionsUnderRefuse) {
   auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  // Names the service's setting and its values: what the operator can change.
   EXPECT_EQ(outcome.status().message(),
-            "submap 1 has resolution 0.1 m, submap 2 has 0.2 m; resolution_policy kRefuse does not "
-            "resample");
+            "submap 1 has resolution 0.1 m, submap 2 has 0.2 m; merge.resolution_policy is refuse "
+            "(allowed: refuse, resample); set it to resample to merge them at the finest "
+            "resolution");
+}
+
+// Part 5 of issue 14: the residual gate is in voxels of the COARSER map. A
+// right merge of a coarse (0.1 m) and a fine (0.05 m) rasterisation of one
+// room ends near half a coarse voxel (0.043 m: 0.43 coarse, 0.87 fine voxels),
+// above the 0.75 gate in fine voxels: the former finer-map unit refused it.
+// Resampled to the finest, it must be accepted.
+TEST(MergeTest, AcceptsARightCrossResolutionMergeUnderResample) {
+  constexpr double kFine = 0.05, kCoarse = 0.1;
+  const Eigen::Isometry3d T_a_b = Pose(35.0, 2.0, -1.0, Eigen::Vector3d(0.7, -0.4, 0.1));
+  const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 6.8),
+                                        Eigen::Isometry3d::Identity(), kCoarse);
+  const std::string b = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), T_a_b, kFine);
+  MergeParams params;
+  params.resolution_policy = ResolutionPolicy::kResampleToFinest;
+  auto outcome = MergeSubmaps({{1, a}, {2, b}}, params);
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  EXPECT_EQ(outcome->resolution, kFine);
+  const Alignment& placed = outcome->alignments[1];
+  EXPECT_LT(testing::RotationErrorDeg(placed.T_reference_submap, T_a_b), 1.0);
+  EXPECT_LT(testing::TranslationError(placed.T_reference_submap, T_a_b), 2 * kFine);
+  // Within the gate in coarse voxels, above it in fine ones (the old unit).
+  EXPECT_LE(placed.residual_m / kCoarse, params.max_residual_voxels);
+  EXPECT_GT(placed.residual_m / kFine, params.max_residual_voxels);
+
+  // A residual refusal of such a pair says which voxel it counts in.
+  params.max_residual_voxels = 0.2;
+  outcome = MergeSubmaps({{1, a}, {2, b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_NE(outcome.status().message().find("voxels of the coarser map, 0.100 m"),
+            std::string::npos)
+      << outcome.status().message();
+
+  // Under refuse, the same pair is refused before any work, naming the setting.
+  params.resolution_policy = ResolutionPolicy::kRefuse;
+  outcome = MergeSubmaps({{1, a}, {2, b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("merge.resolution_policy"), std::string::npos)
+      << outcome.status().message();
 }
 
 TEST(MergeTest, RefusesMalformedInputAndFewerThanTwoMaps) {
