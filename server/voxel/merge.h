@@ -43,8 +43,8 @@ struct MergeParams {
   // with FailedPrecondition and a reason, and nothing is written.
   int min_matched_corners = 4;
   // RMS after ICP, in voxels of the COARSER map of the pair (the same unit
-  // when both have one resolution): a right 5 cm / 8 cm merge ends near 0.5
-  // coarse voxels, 0.9 fine ones (merge_pair.cc). Two rasterisations of one
+  // when both have one resolution): a right 10 cm / 5 cm merge ended at 0.43
+  // coarse voxels, 0.87 fine ones (merge_pair.cc). Two rasterisations of one
   // surface in rotated grids leave ~0.5 voxel (geb079.bt: 0.04 m at 8 cm); a
   // 180 deg flip of a furnished room that still put walls on walls left 1.5.
   // On the real-map benchmark (docs/voxel-merge.md) 151 right merges ended at

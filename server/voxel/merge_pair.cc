@@ -36,9 +36,10 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   report.id_b = b.id;
   // The residual gate's unit: a voxel of the COARSER map of the pair. The RMS
   // of a right alignment is set by how coarsely the surfaces were rasterised:
-  // a 5 cm map on an 8 cm one ends near 0.5 coarse voxels (0.92 fine voxels:
-  // refused by a gate in fine voxels), as two 8 cm maps do. Metres would need
-  // a setting per resolution. Equal resolutions: the same unit as before.
+  // a 10 cm room map on a 5 cm one ends at 0.43 coarse voxels, 0.87 fine ones
+  // (merge_test.cc: refused by a gate in fine voxels), near the ~0.5 voxel of
+  // two maps of one resolution. Metres would need a setting per resolution.
+  // Equal resolutions: the same unit as before.
   const double gate_voxel_m = std::max(a.grid->resolution(), b.grid->resolution());
   const std::string gate_unit =
       a.grid->resolution() == b.grid->resolution()
