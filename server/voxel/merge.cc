@@ -127,8 +127,12 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
     submaps[i].corners = std::move(corners->corners);
     const std::size_t found = submaps[i].corners.size();
     outcome.corners.push_back(found);
-    if (found == 0) return Status::FailedPrecondition("no corners found in " + Name(submaps[i].id));
-    if (static_cast<int>(found) < params.min_matched_corners) {
+    // With the correlation generator, too few corners is for AlignPair to
+    // report: corridors and doorways have few corners but walls and floor.
+    if (found == 0 && !params.correlation.enabled) {
+      return Status::FailedPrecondition("no corners found in " + Name(submaps[i].id));
+    }
+    if (static_cast<int>(found) < params.min_matched_corners && !params.correlation.enabled) {
       return Status::FailedPrecondition("only " + std::to_string(found) + " corners found in " +
                                         Name(submaps[i].id) + ", need " +
                                         std::to_string(params.min_matched_corners));

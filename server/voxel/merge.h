@@ -26,6 +26,8 @@
 #include "common/status.h"
 #include "voxel/corner_extraction.h"
 #include "voxel/corner_matching.h"
+#include "voxel/correlation_search.h"
+#include "voxel/gravity_alignment.h"
 #include "voxel/icp.h"
 #include "voxel/occupancy_fusion.h"  // FusionRule, ResolutionPolicy (exact rules there)
 #include "voxel/octree_reader.h"
@@ -61,6 +63,13 @@ struct MergeParams {
   // itself score 1.0; that copy 0.5 m off scores 0.66; wrong cliques that
   // flip the room by ~180 deg so that its walls coincide scored 0.48-0.88.
   double min_overlap_score = 0.9;
+  // Support: B's occupied voxels that coincide with A's (the overlap score's
+  // numerator), as a share of B's evaluated voxels. The overlap score alone
+  // accepts a placement that touches A only at a wall or a room corner (a
+  // few hundred voxels, all coinciding): the correlation generator proposed
+  // such placements of the test rooms at 2-4 % support while the true ones
+  // had 40-100 %. The benchmark's 10 % overlap crops have ~10 %.
+  double min_support_fraction = 0.05;
   FusionRule fusion_rule = FusionRule::kOverlapRule;
   ResolutionPolicy resolution_policy = ResolutionPolicy::kRefuse;
   // Budget for one merge, checked between stages and pairs (ResourceExhausted
@@ -122,6 +131,28 @@ struct MergeParams {
   // Voxel-level work on free space per fused submap (occupancy_fusion.h).
   std::uint64_t max_fusion_free_voxels = 8'000'000;
 
+  // The second hypothesis generator (docs/algorithms.md B.9): levelling and
+  // yaw from floor and wall planes, translations by FFT correlation. Its
+  // hypotheses go through the same ICP screen, ICP and gates.
+  GravityParams gravity;
+  CorrelationParams correlation;
+  // Uniqueness gate: two hypotheses that both pass every gate and differ by
+  // more than distinct_rotation_deg or distinct_translation_voxels (at B's
+  // centroid) make the pair ambiguous, and it is refused naming both. Two
+  // ICPs of one right answer end within 0.1 deg / 1 voxel of each other on
+  // the benchmark; wrong answers on symmetric buildings are 90 or 180 deg
+  // off, or a corridor bay (metres) along.
+  double distinct_rotation_deg = 3.0;
+  double distinct_translation_voxels = 4.0;
+  // A distinct second hypothesis makes the pair ambiguous only when its
+  // support is at least this share of the best one's (the best = the most
+  // support): a symmetric building's twin has the same support, a placement
+  // that shares one room corner with A has a fraction of it.
+  double ambiguous_support_ratio = 0.5;
+  // Corner solutions tried after an accepted one (its pairs excluded) to look
+  // for a distinct second one. Each costs a clique search and an ICP screen.
+  int uniqueness_corner_attempts = 1;
+
   Status Validate() const;
 };
 
@@ -154,8 +185,10 @@ struct Alignment {
 
 // Wall-clock seconds. alignment_s = ICP + overlap scores; fusion_s includes
 // writing the .bt bytes; reading_s = parsing the inputs (ReadOctree + grid).
+// correlation_s = levelling, yaw and FFT translation search (their ICPs count
+// in alignment_s).
 struct StageTimes {
-  double corners_s = 0, matching_s = 0, alignment_s = 0, fusion_s = 0;
+  double corners_s = 0, matching_s = 0, alignment_s = 0, fusion_s = 0, correlation_s = 0;
   double reading_s = 0, total_s = 0;
 };
 
@@ -168,7 +201,20 @@ struct PairReport {
   int matched_corners = 0;
   double residual_m = 0.0;
   double overlap_score = 0.0;
+  double support_fraction = 0.0;  // see MergeParams::min_support_fraction
   int icp_iterations = 0;
+  // Which generator gave T_a_b: "corner solution N" or "correlation ...".
+  std::string source;
+  // The best hypothesis distinct from T_a_b (uniqueness gate thresholds) that
+  // reached ICP: its residual, overlap score and support, -1 / 0 / 0 when
+  // there was none.
+  // The margin of the answer: a second hypothesis near the gates is a warning.
+  double second_residual_m = -1.0;
+  double second_overlap_score = 0.0;
+  double second_support_fraction = 0.0;
+  int hypotheses_tried = 0;        // corner solutions + correlation hypotheses refined
+  int corner_solutions_tried = 0;  // clique searches run
+  int correlation_hypotheses = 0;  // correlation peaks generated (0 = not run)
   // The matched corners (positions in A's and in B's frame, metres), set
   // whenever matched_corners is.
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> matched_a_b;

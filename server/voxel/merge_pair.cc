@@ -9,6 +9,7 @@
 
 #include "common/clock.h"
 #include "voxel/icp.h"
+#include "voxel/merge_hypotheses.h"
 #include "voxel/merge_overlap.h"
 
 namespace mapd::voxel {
@@ -26,14 +27,12 @@ std::string ResidualReason(double residual_m, double residual_voxels, double max
          " voxels) above " + Fixed(max_voxels, 2) + " voxels";
 }
 
-// One corner solution: the maximum clique (minus `matching.excluded_pairs`),
-// Umeyama, ICP, the acceptance gates. `correspondences` gets the clique used.
-StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const MergeParams& params,
-                                 const CornerMatchingParams& matching, double finest_resolution_m,
-                                 StageTimes* times, std::vector<CornerPair>* correspondences) {
-  PairReport report;
-  report.id_a = a.id;
-  report.id_b = b.id;
+}  // namespace
+
+Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& params,
+                     const Eigen::Isometry3d& T_initial, double finest_resolution_m,
+                     StageTimes* times, PairReport* report) {
+  report->T_a_b = T_initial;
   // The residual gate's unit: a voxel of the COARSER map of the pair. The RMS
   // of a right alignment is set by how coarsely the surfaces were rasterised:
   // a 10 cm room map on a 5 cm one ends at 0.43 coarse voxels, 0.87 fine ones
@@ -45,6 +44,94 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
       a.grid->resolution() == b.grid->resolution()
           ? ""
           : " (voxels of the coarser map, " + Fixed(gate_voxel_m, 3) + " m)";
+  auto start = std::chrono::steady_clock::now();
+  // B.5: ICP on the occupied voxel centres of the overlap, then acceptance.
+  // First on a small subsample (icp_screen_points): a wrong solution drifts
+  // for up to max_iterations, at a fifth of the cost; only a screen ending
+  // within icp_screen_residual_factor of the gate is refined on all points.
+  Eigen::Isometry3d T_start = T_initial;
+  if (params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points) {
+    IcpParams screen_params = params.icp;
+    screen_params.max_source_points = params.icp_screen_points;
+    auto screen = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_initial,
+                            finest_resolution_m, screen_params);
+    if (screen.ok()) {
+      const double screen_voxels = screen->rms_residual_m / gate_voxel_m;
+      if (screen_voxels > params.icp_screen_residual_factor * params.max_residual_voxels) {
+        times->alignment_s += SecondsSince(start);
+        report->T_a_b = screen->T_target_source;
+        report->residual_m = screen->rms_residual_m;
+        report->icp_iterations = screen->iterations;
+        report->reason =
+            ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
+            gate_unit + " (on " + std::to_string(screen->source_points) + " points)";
+        return Status::Ok();
+      }
+      T_start = screen->T_target_source;
+    }
+  }
+  auto icp = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_start,
+                       finest_resolution_m, params.icp);
+  if (!icp.ok()) {
+    times->alignment_s += SecondsSince(start);
+    if (icp.status().code() != StatusCode::kFailedPrecondition) return icp.status();
+    report->reason = icp.status().message();
+    return Status::Ok();
+  }
+  report->T_a_b = icp->T_target_source;
+  report->residual_m = icp->rms_residual_m;
+  report->icp_iterations = icp->iterations;
+  const OverlapScore overlap =
+      ComputeOverlapScore(*a.grid, *b.grid, report->T_a_b, params.overlap_points);
+  report->overlap_score = overlap.score;
+  const std::size_t n = b.grid->num_occupied();
+  const std::size_t step = params.overlap_points > 0 && n > params.overlap_points
+                               ? (n + params.overlap_points - 1) / params.overlap_points
+                               : 1;
+  const std::size_t evaluated = (n + step - 1) / step;
+  report->support_fraction =
+      evaluated > 0 ? static_cast<double>(overlap.coinciding) / static_cast<double>(evaluated) : 0;
+  times->alignment_s += SecondsSince(start);
+
+  const double residual_voxels = report->residual_m / gate_voxel_m;
+  // A refinement still moving when it ran out of iterations has not shown
+  // where it ends: new_college 0.7 trial 3 was accepted at 0.98 voxels while
+  // still 0.65 deg / 3 voxels off after 50 iterations, and converged to the
+  // right transform (0.53 voxel) after 85.
+  if (!icp->converged) {
+    report->reason = "ICP did not converge in " + std::to_string(icp->iterations) +
+                     " iterations (residual " + Fixed(residual_voxels, 2) + " voxels)" + gate_unit;
+    return Status::Ok();
+  }
+  if (residual_voxels > params.max_residual_voxels) {
+    report->reason =
+        ResidualReason(report->residual_m, residual_voxels, params.max_residual_voxels) + gate_unit;
+    return Status::Ok();
+  }
+  if (report->overlap_score < params.min_overlap_score) {
+    report->reason = "overlap score " + Fixed(report->overlap_score, 2) + " below " +
+                     Fixed(params.min_overlap_score, 2);
+    return Status::Ok();
+  }
+  if (report->support_fraction < params.min_support_fraction) {
+    report->reason = "support " + Fixed(report->support_fraction, 3) + " below " +
+                     Fixed(params.min_support_fraction, 3) + " (B's voxels coinciding with A's)";
+    return Status::Ok();
+  }
+  report->accepted = true;
+  return Status::Ok();
+}
+
+namespace {
+
+// One corner solution: the maximum clique (minus `matching.excluded_pairs`),
+// Umeyama, ICP, the acceptance gates. `correspondences` gets the clique used.
+StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const MergeParams& params,
+                                 const CornerMatchingParams& matching, double finest_resolution_m,
+                                 StageTimes* times, std::vector<CornerPair>* correspondences) {
+  PairReport report;
+  report.id_a = a.id;
+  report.id_b = b.id;
 
   // B.4: corners, the maximum clique, Umeyama; ties go to the transform that
   // makes the most occupied voxels coincide (the paper, section IV.C).
@@ -70,69 +157,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   }
   report.T_a_b = match->T_a_b;
 
-  // B.5: ICP on the occupied voxel centres of the overlap, then acceptance.
-  // First on a small subsample (icp_screen_points): a wrong solution drifts
-  // for up to max_iterations, at a fifth of the cost; only a screen ending
-  // within icp_screen_residual_factor of the gate is refined on all points.
-  start = std::chrono::steady_clock::now();
-  Eigen::Isometry3d T_start = match->T_a_b;
-  if (params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points) {
-    IcpParams screen_params = params.icp;
-    screen_params.max_source_points = params.icp_screen_points;
-    auto screen = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), match->T_a_b,
-                            finest_resolution_m, screen_params);
-    if (screen.ok()) {
-      const double screen_voxels = screen->rms_residual_m / gate_voxel_m;
-      if (screen_voxels > params.icp_screen_residual_factor * params.max_residual_voxels) {
-        times->alignment_s += SecondsSince(start);
-        report.T_a_b = screen->T_target_source;
-        report.residual_m = screen->rms_residual_m;
-        report.icp_iterations = screen->iterations;
-        report.reason =
-            ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
-            gate_unit + " (on " + std::to_string(screen->source_points) + " points)";
-        return report;
-      }
-      T_start = screen->T_target_source;
-    }
-  }
-  auto icp = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_start,
-                       finest_resolution_m, params.icp);
-  if (!icp.ok()) {
-    times->alignment_s += SecondsSince(start);
-    if (icp.status().code() != StatusCode::kFailedPrecondition) return icp.status();
-    report.reason = icp.status().message();
-    return report;
-  }
-  report.T_a_b = icp->T_target_source;
-  report.residual_m = icp->rms_residual_m;
-  report.icp_iterations = icp->iterations;
-  const OverlapScore overlap =
-      ComputeOverlapScore(*a.grid, *b.grid, report.T_a_b, params.overlap_points);
-  report.overlap_score = overlap.score;
-  times->alignment_s += SecondsSince(start);
-
-  const double residual_voxels = report.residual_m / gate_voxel_m;
-  // A refinement still moving when it ran out of iterations has not shown
-  // where it ends: new_college 0.7 trial 3 was accepted at 0.98 voxels while
-  // still 0.65 deg / 3 voxels off after 50 iterations, and converged to the
-  // right transform (0.53 voxel) after 85.
-  if (!icp->converged) {
-    report.reason = "ICP did not converge in " + std::to_string(icp->iterations) +
-                    " iterations (residual " + Fixed(residual_voxels, 2) + " voxels)" + gate_unit;
-    return report;
-  }
-  if (residual_voxels > params.max_residual_voxels) {
-    report.reason =
-        ResidualReason(report.residual_m, residual_voxels, params.max_residual_voxels) + gate_unit;
-    return report;
-  }
-  if (report.overlap_score < params.min_overlap_score) {
-    report.reason = "overlap score " + Fixed(report.overlap_score, 2) + " below " +
-                    Fixed(params.min_overlap_score, 2);
-    return report;
-  }
-  report.accepted = true;
+  MAPD_RETURN_IF_ERROR(
+      RefineAndGate(a, b, params, match->T_a_b, finest_resolution_m, times, &report));
   return report;
 }
 
@@ -144,8 +170,21 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   std::vector<MatchTolerances> stages = {{params.matching.signature_tolerance_rad * 180.0 / M_PI,
                                           params.matching.normal_tolerance_rad * 180.0 / M_PI}};
   stages.insert(stages.end(), params.looser_tolerances.begin(), params.looser_tolerances.end());
-  StatusOr<PairReport> first = Status::Internal("no attempt");
-  int tried = 0;
+  PairReport first;
+  first.id_a = a.id;
+  first.id_b = b.id;
+  std::vector<TriedHypothesis> tried;  // every hypothesis that reached ICP, in order
+  int corner_tried = 0;
+  int accepted_index = -1;  // into tried
+  int extra_left = params.uniqueness_corner_attempts;
+  const int min_corners = params.min_matched_corners;
+  if (static_cast<int>(std::min(a.corners->size(), b.corners->size())) < min_corners) {
+    first.reason = "only " + std::to_string(std::min(a.corners->size(), b.corners->size())) +
+                   " corners found in submap " +
+                   std::to_string(a.corners->size() < b.corners->size() ? a.id : b.id) + ", need " +
+                   std::to_string(min_corners);
+    stages.clear();
+  }
   for (std::size_t stage = 0; stage < stages.size(); ++stage) {
     CornerMatchingParams matching = params.matching;
     matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
@@ -153,28 +192,133 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     matching.normal_tolerance_rad = stages[stage].normal_deg * M_PI / 180.0;
     for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
       const double left = seconds_left - SecondsSince(start);
-      if (tried > 0 && left <= 0) break;
+      if ((corner_tried > 0 && left <= 0) || (accepted_index >= 0 && extra_left-- <= 0)) break;
       if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
         matching.max_search_seconds = std::max(left, 1e-3);
       }
       std::vector<CornerPair> used;
       StatusOr<PairReport> report =
           TrySolution(a, b, params, matching, finest_resolution_m, times, &used);
-      ++tried;
-      if (!report.ok() || report->accepted) return report;
-      if (tried == 1) first = report;
-      // Too few corners ends the stage; a solution that alignment refused is
-      // excluded and the search rerun.
+      ++corner_tried;
+      if (!report.ok()) return report.status();
+      if (corner_tried == 1) first = *report;
+      if (!used.empty()) {
+        tried.push_back({"corner solution " + std::to_string(corner_tried), *report});
+        if (report->accepted && accepted_index < 0) {
+          accepted_index = static_cast<int>(tried.size()) - 1;
+        }
+      }
+      // Too few corners ends the stage; a solution's pairs are excluded and
+      // the search rerun (for a better one, or a distinct second one).
       if (used.empty()) break;
       for (const CornerPair& p : used) matching.excluded_pairs.emplace_back(p.a, p.b);
     }
+    if (accepted_index >= 0 && extra_left < 0) break;
   }
-  // Refused: report the strict graph's maximum clique (the first solution).
-  if (first.ok() && tried > 1) {
-    first->reason +=
-        " (first of " + std::to_string(tried) + " corner solutions tried, all refused)";
+  const int corner_hypotheses = static_cast<int>(tried.size());
+
+  CorrelationRun correlation;
+  const bool run_correlation = params.correlation.enabled &&
+                               (accepted_index < 0 || params.correlation.check_corner_solutions) &&
+                               seconds_left - SecondsSince(start) > 0;
+  if (run_correlation) {
+    std::vector<Eigen::Isometry3d> accepted;
+    for (const TriedHypothesis& h : tried) {
+      if (h.report.accepted) accepted.push_back(h.report.T_a_b);
+    }
+    auto run = RunCorrelation(a, b, params, finest_resolution_m, accepted, times);
+    if (!run.ok()) return run.status();
+    correlation = std::move(run).value();
+    for (TriedHypothesis& h : correlation.tried) tried.push_back(std::move(h));
+    correlation.tried.clear();
   }
-  return first;
+  // The best accepted hypothesis: the most support (most voxels coincide).
+  accepted_index = -1;
+  for (std::size_t i = 0; i < tried.size(); ++i) {
+    if (!tried[i].report.accepted) continue;
+    if (accepted_index < 0 ||
+        tried[i].report.support_fraction >
+            tried[static_cast<std::size_t>(accepted_index)].report.support_fraction) {
+      accepted_index = static_cast<int>(i);
+    }
+  }
+
+  // The uniqueness gate, and the margin to the best distinct hypothesis.
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
+  centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
+  const auto distinct = [&](const PairReport& x, const PairReport& y) {
+    return DistinctTransforms(x.T_a_b, y.T_a_b, centroid_b, params, finest_resolution_m);
+  };
+  if (accepted_index >= 0) {
+    const TriedHypothesis& best = tried[static_cast<std::size_t>(accepted_index)];
+    PairReport report = best.report;
+    report.source = best.label;
+    report.hypotheses_tried = static_cast<int>(tried.size());
+    report.corner_solutions_tried = corner_tried;
+    report.correlation_hypotheses = correlation.generated;
+    const TriedHypothesis* second = nullptr;
+    const TriedHypothesis* rival = nullptr;
+    for (const TriedHypothesis& h : tried) {
+      if (&h == &best || h.report.residual_m <= 0 || !distinct(h.report, best.report)) continue;
+      if (h.report.accepted && rival == nullptr &&
+          h.report.support_fraction >=
+              params.ambiguous_support_ratio * best.report.support_fraction) {
+        rival = &h;
+      }
+      if (second == nullptr || h.report.residual_m < second->report.residual_m) second = &h;
+    }
+    if (second != nullptr) {
+      report.second_residual_m = second->report.residual_m;
+      report.second_overlap_score = second->report.overlap_score;
+      report.second_support_fraction = second->report.support_fraction;
+    }
+    if (rival != nullptr) {
+      report.accepted = false;
+      report.reason = "ambiguous: two distinct alignments pass every gate: " +
+                      DescribeHypothesis(best, finest_resolution_m) + " and " +
+                      DescribeHypothesis(*rival, finest_resolution_m);
+    }
+    return report;
+  }
+
+  // Refused: what every stage found.
+  PairReport report = first;
+  report.hypotheses_tried = static_cast<int>(tried.size());
+  report.corner_solutions_tried = corner_tried;
+  report.correlation_hypotheses = correlation.generated;
+  std::string reason = "corner matching: " + first.reason + " (" + std::to_string(corner_tried) +
+                       " corner solution" + (corner_tried == 1 ? "" : "s") + " tried, " +
+                       std::to_string(corner_hypotheses) + " reached ICP)";
+  if (!params.correlation.enabled) {
+    reason += "; correlation: disabled";
+  } else if (!run_correlation) {
+    reason += "; correlation: not run (time budget spent)";
+  } else if (!correlation.not_run.empty()) {
+    reason += "; correlation: not run (" + correlation.not_run + ")";
+  } else {
+    const TriedHypothesis* best = nullptr;
+    for (std::size_t i = static_cast<std::size_t>(corner_hypotheses); i < tried.size(); ++i) {
+      if (best == nullptr || (tried[i].report.residual_m > 0 &&
+                              tried[i].report.residual_m < best->report.residual_m)) {
+        best = &tried[i];
+      }
+    }
+    reason += "; correlation: " + std::to_string(correlation.generated) + " hypotheses from " +
+              std::to_string(correlation.yaws) + " yaws";
+    if (best != nullptr) {
+      reason += ", best " + DescribeHypothesis(*best, finest_resolution_m) +
+                " refused: " + best->report.reason;
+      if (first.matched_corners == 0) {
+        report.T_a_b = best->report.T_a_b;
+        report.residual_m = best->report.residual_m;
+        report.overlap_score = best->report.overlap_score;
+        report.icp_iterations = best->report.icp_iterations;
+      }
+    }
+  }
+  report.reason = reason;
+  return report;
 }
 
 }  // namespace mapd::voxel

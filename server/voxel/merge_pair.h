@@ -4,6 +4,7 @@
 #ifndef MAPD_VOXEL_MERGE_PAIR_H_
 #define MAPD_VOXEL_MERGE_PAIR_H_
 
+#include <Eigen/Geometry>
 #include <cstdint>
 
 #include "common/status.h"
@@ -26,6 +27,18 @@ struct PairSide {
 // times->matching_s and times->alignment_s. `finest_resolution_m` sets the
 // voxel unit of the corner and ICP distances; the residual gate is in voxels
 // of the coarser of the two maps (merge.h). `seconds_left` caps the corner search.
+// B.5, shared by both hypothesis generators: the ICP screen, ICP from
+// T_initial and the acceptance gates. Sets report's T_a_b, residual_m,
+// overlap_score, icp_iterations and accepted or reason; adds its seconds to
+// times->alignment_s. Errors only for bad input.
+Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& params,
+                     const Eigen::Isometry3d& T_initial, double finest_resolution_m,
+                     StageTimes* times, PairReport* report);
+
+// Every generator's hypotheses pass the uniqueness gate too: two distinct
+// accepted hypotheses refuse the pair naming both. When corner matching
+// accepts nothing (or always, with correlation.check_corner_solutions) the
+// correlation generator runs; a refusal names what every stage found.
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times);
 

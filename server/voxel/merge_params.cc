@@ -15,6 +15,11 @@ Status MergeParams::Validate() const {
   if (!(min_overlap_score >= 0 && min_overlap_score <= 1)) {
     return Status::InvalidArgument("min_overlap_score must be in [0, 1]");
   }
+  if (!(min_support_fraction >= 0 && min_support_fraction <= 1) ||
+      !(ambiguous_support_ratio >= 0 && ambiguous_support_ratio <= 1)) {
+    return Status::InvalidArgument(
+        "min_support_fraction and ambiguous_support_ratio must be in [0, 1]");
+  }
   if (fusion_rule != FusionRule::kOverlapRule && fusion_rule != FusionRule::kLogOdds) {
     return Status::InvalidArgument("fusion_rule is not a known rule");
   }
@@ -42,7 +47,19 @@ Status MergeParams::Validate() const {
                                      "]: angles must be in [0, 180] degrees");
     }
   }
-  Status status = corners.Validate();
+  if (!(distinct_rotation_deg > 0 && distinct_rotation_deg <= 180) ||
+      !(distinct_translation_voxels > 0) || !std::isfinite(distinct_translation_voxels)) {
+    return Status::InvalidArgument(
+        "distinct_rotation_deg must be in (0, 180] and distinct_translation_voxels finite and > 0");
+  }
+  if (uniqueness_corner_attempts < 0) {
+    return Status::InvalidArgument("uniqueness_corner_attempts must be >= 0");
+  }
+  Status status = gravity.Validate();
+  if (!status.ok()) return status;
+  status = correlation.Validate();
+  if (!status.ok()) return status;
+  status = corners.Validate();
   if (!status.ok()) return Status::InvalidArgument("corners." + status.message());
   status = matching.Validate();
   if (!status.ok()) return Status::InvalidArgument("matching." + status.message());

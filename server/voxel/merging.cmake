@@ -5,6 +5,9 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/merge_overlap.cc
   ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc
+  ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment.cc
+  ${CMAKE_CURRENT_LIST_DIR}/correlation_search.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_hypotheses.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_pair.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_params.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge.cc

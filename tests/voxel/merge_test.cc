@@ -178,10 +178,21 @@ TEST(MergeTest, RefusesAMapWithoutCorners) {
   const std::string wall = RasteriseSubmap(
       testing::FlatWall(), Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(6, 1, 3)),
       Eigen::Isometry3d::Identity(), kRoomResolutionM);
-  auto outcome = MergeSubmaps({{1, room}, {7, wall}}, MergeParams{});
+  MergeParams corners_only;
+  corners_only.correlation.enabled = false;
+  auto outcome = MergeSubmaps({{1, room}, {7, wall}}, corners_only);
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_EQ(outcome.status().message(), "no corners found in submap 7");
+  // With the correlation generator, every stage says why.
+  outcome = MergeSubmaps({{1, room}, {7, wall}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(outcome.status().message().find("only 0 corners found in submap 7"), std::string::npos)
+      << outcome.status().message();
+  EXPECT_NE(outcome.status().message().find("correlation: not run (submap 7: no floor"),
+            std::string::npos)
+      << outcome.status().message();
 }
 
 TEST(MergeTest, RefusesMapsThatDoNotOverlap) {
@@ -203,6 +214,7 @@ TEST(MergeTest, RefusalsNameTheFigureAndTheThreshold) {
   const Pair pair = MakePair(Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4)));
   MergeParams params;
   params.min_matched_corners = 1000;
+  params.correlation.enabled = false;  // corners only: the up-front corner count
   auto outcome = MergeSubmaps({{1, pair.a}, {2, pair.b}}, params);
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);

@@ -3,6 +3,10 @@ mapd_add_test(voxel_merging_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/merge_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/icp_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/correlation_search_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/merge_hypotheses_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/support/corridor_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/voxel_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corner_scene.cc
   LIBS voxel ${OCTOMAP_LIBRARIES})

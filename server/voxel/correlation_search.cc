@@ -1,0 +1,356 @@
+#include "voxel/correlation_search.h"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+
+namespace mapd::voxel {
+namespace {
+
+// FFTW's planner is not thread-safe; execution is.
+std::mutex& PlannerMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+struct FftwFree {
+  void operator()(void* p) const { fftw_free(p); }
+};
+using RealBuffer = std::unique_ptr<double[], FftwFree>;
+using ComplexBuffer = std::unique_ptr<fftw_complex[], FftwFree>;
+
+// A point sample of a map: an occupied voxel centre (occupied = 1) or a piece
+// of a free cube (free = its volume, in coarse cells).
+struct Sample {
+  Eigen::Vector3d p;
+  bool occupied = false;
+  double free_volume = 0.0;
+};
+
+// The occupied centres and the free cubes cut into pieces of at most half a
+// coarse cell, so that a rotated cube spreads over the right cells.
+std::vector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
+  std::vector<Sample> samples;
+  samples.reserve(grid.num_occupied());
+  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples.push_back({c, true, 0.0});
+  const double res = grid.resolution();
+  const int piece = std::max(1, static_cast<int>(std::floor(0.5 * cell_m / res)));
+  const double cell_volume = std::pow(cell_m / res, 3);
+  grid.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
+    const int step = std::min(edge, piece);
+    const double volume = std::pow(step, 3) / cell_volume;
+    for (int x = 0; x < edge; x += step) {
+      for (int y = 0; y < edge; y += step) {
+        for (int z = 0; z < edge; z += step) {
+          const Eigen::Vector3d corner = (min_key + VoxelKey(x, y, z)).cast<double>() * res;
+          samples.push_back({corner + Eigen::Vector3d::Constant(0.5 * step * res), false, volume});
+        }
+      }
+    }
+  });
+  return samples;
+}
+
+struct Box {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300);
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-1e300);
+};
+
+// Occupancy (0/1) and free share (0..1, 0 where occupied) on a padded grid.
+class CoarseGrid {
+ public:
+  CoarseGrid(const std::array<int, 3>& n, const Eigen::Vector3d& origin, double cell)
+      : n_(n), origin_(origin), cell_(cell) {
+    const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+    occ_.assign(size, 0.0);
+    free_.assign(size, 0.0);
+  }
+  void Add(const Eigen::Vector3d& p, const Sample& s) {
+    const Eigen::Vector3d f = (p - origin_) / cell_;
+    const int x = static_cast<int>(std::floor(f.x()));
+    const int y = static_cast<int>(std::floor(f.y()));
+    const int z = static_cast<int>(std::floor(f.z()));
+    if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) return;
+    const std::size_t i = (static_cast<std::size_t>(x) * n_[1] + y) * n_[2] + z;
+    if (s.occupied) {
+      occ_[i] = 1.0;
+    } else {
+      free_[i] += s.free_volume;
+    }
+  }
+  // A wall rasterised in two grids offset by a fraction of a cell lands in
+  // the same or a neighbouring cell: free space within one cell of an
+  // occupied cell does not count (else half the true wall cells would be
+  // penalised), and dilated_occ() is what the other map's walls may hit.
+  void Finish() {
+    dilated_ = occ_;
+    const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
+                                               static_cast<std::size_t>(n_[2]), 1};
+    std::vector<double> pass;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      pass = dilated_;
+      const std::size_t step = stride[axis];
+      const auto extent = static_cast<std::size_t>(n_[axis]);
+      for (std::size_t i = 0; i < pass.size(); ++i) {
+        const std::size_t coordinate = (i / step) % extent;
+        double v = pass[i];
+        if (coordinate > 0) v = std::max(v, pass[i - step]);
+        if (coordinate + 1 < extent) v = std::max(v, pass[i + step]);
+        dilated_[i] = v;
+      }
+    }
+    for (std::size_t i = 0; i < occ_.size(); ++i) {
+      free_[i] = dilated_[i] > 0 ? 0.0 : std::min(1.0, free_[i]);
+    }
+  }
+  const std::vector<double>& occ() const { return occ_; }
+  const std::vector<double>& dilated_occ() const { return dilated_; }
+  const std::vector<double>& free() const { return free_; }
+
+ private:
+  std::array<int, 3> n_;
+  Eigen::Vector3d origin_;
+  double cell_;
+  std::vector<double> occ_, free_, dilated_;
+};
+
+// A size with only the factors 2, 3, 5 (FFTW is fastest on those).
+int FftSize(int n) {
+  for (int m = std::max(n, 1);; ++m) {
+    int r = m;
+    for (int f : {2, 3, 5}) {
+      while (r % f == 0) r /= f;
+    }
+    if (r == 1) return m;
+  }
+}
+
+class Fft {
+ public:
+  explicit Fft(const std::array<int, 3>& n) : n_(n) {
+    real_size_ = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+    complex_size_ = static_cast<std::size_t>(n[0]) * n[1] * (n[2] / 2 + 1);
+    real_.reset(fftw_alloc_real(real_size_));
+    spectrum_.reset(fftw_alloc_complex(complex_size_));
+    const std::lock_guard<std::mutex> lock(PlannerMutex());
+    forward_ = fftw_plan_dft_r2c_3d(n[0], n[1], n[2], real_.get(), spectrum_.get(), FFTW_ESTIMATE);
+    inverse_ = fftw_plan_dft_c2r_3d(n[0], n[1], n[2], spectrum_.get(), real_.get(), FFTW_ESTIMATE);
+  }
+  ~Fft() {
+    const std::lock_guard<std::mutex> lock(PlannerMutex());
+    fftw_destroy_plan(forward_);
+    fftw_destroy_plan(inverse_);
+  }
+  Fft(const Fft&) = delete;
+  Fft& operator=(const Fft&) = delete;
+
+  // The spectrum of `values` (real_size_ of them).
+  std::vector<std::complex<double>> Forward(const std::vector<double>& values) {
+    std::copy(values.begin(), values.end(), real_.get());
+    fftw_execute(forward_);
+    std::vector<std::complex<double>> out(complex_size_);
+    for (std::size_t i = 0; i < complex_size_; ++i) {
+      out[i] = {spectrum_[i][0], spectrum_[i][1]};
+    }
+    return out;
+  }
+  // The (unnormalised) inverse of `spectrum`; valid until the next call.
+  const double* Inverse(const std::vector<std::complex<double>>& spectrum) {
+    for (std::size_t i = 0; i < complex_size_; ++i) {
+      spectrum_[i][0] = spectrum[i].real();
+      spectrum_[i][1] = spectrum[i].imag();
+    }
+    fftw_execute(inverse_);
+    return real_.get();
+  }
+  std::size_t real_size() const { return real_size_; }
+  std::size_t complex_size() const { return complex_size_; }
+
+ private:
+  std::array<int, 3> n_;
+  std::size_t real_size_ = 0, complex_size_ = 0;
+  RealBuffer real_;
+  ComplexBuffer spectrum_;
+  fftw_plan forward_ = nullptr;
+  fftw_plan inverse_ = nullptr;
+};
+
+struct Peak {
+  double score;
+  std::array<int, 3> shift;
+};
+
+// The best `count` local maxima (score > 0) at least `separation` cells apart
+// (circular distance on the padded grid).
+std::vector<Peak> TopPeaks(const double* s, const std::array<int, 3>& n, int count,
+                           double separation) {
+  const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+  std::vector<std::pair<double, std::size_t>> order;
+  for (std::size_t i = 0; i < size; ++i) {
+    if (s[i] > 0) order.emplace_back(s[i], i);
+  }
+  const std::size_t keep = std::min<std::size_t>(order.size(), 4096);
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
+                    [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::vector<Peak> peaks;
+  for (std::size_t k = 0; k < keep && static_cast<int>(peaks.size()) < count; ++k) {
+    const std::size_t i = order[k].second;
+    const std::array<int, 3> idx = {static_cast<int>(i / (static_cast<std::size_t>(n[1]) * n[2])),
+                                    static_cast<int>((i / n[2]) % n[1]),
+                                    static_cast<int>(i % n[2])};
+    bool near = false;
+    for (const Peak& p : peaks) {
+      double d2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        int d = std::abs(idx[a] - p.shift[a]);
+        d = std::min(d, n[a] - d);
+        d2 += static_cast<double>(d) * d;
+      }
+      near = near || d2 < separation * separation;
+    }
+    if (!near) peaks.push_back({order[k].first, idx});
+  }
+  return peaks;
+}
+
+}  // namespace
+
+Status CorrelationParams::Validate() const {
+  if (!(cell_voxels >= 1 && cell_voxels <= 64)) {
+    return Status::InvalidArgument("correlation.cell_voxels must be in [1, 64]");
+  }
+  if (max_cells < 1000 || max_cells > 200'000'000) {
+    return Status::InvalidArgument("correlation.max_cells must be in [1000, 200000000]");
+  }
+  if (!(free_weight >= 0 && free_weight <= 100)) {
+    return Status::InvalidArgument("correlation.free_weight must be in [0, 100]");
+  }
+  if (peaks_per_yaw < 1 || max_hypotheses < 1 || max_hypotheses > 1000) {
+    return Status::InvalidArgument(
+        "correlation.peaks_per_yaw must be >= 1 and max_hypotheses in [1, 1000]");
+  }
+  if (!(min_peak_separation_cells >= 0 && min_peak_separation_cells <= 1000)) {
+    return Status::InvalidArgument("correlation.min_peak_separation_cells must be in [0, 1000]");
+  }
+  return Status::Ok();
+}
+
+StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
+    const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b, const Eigen::Matrix3d& R_b,
+    const std::vector<double>& yaws, double finest_resolution_m, const CorrelationParams& params,
+    CorrelationStats* stats) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
+  if (a.empty() || b.empty() || yaws.empty()) return std::vector<CorrelationHypothesis>{};
+
+  // Extents: a levelled; b levelled and turned by any yaw stays within a
+  // cylinder about its occupied voxels' centroid.
+  Box box_a;
+  for (const Eigen::Vector3d& c : a.occupied_centres()) {
+    const Eigen::Vector3d p = R_a * c;
+    box_a.lo = box_a.lo.cwiseMin(p);
+    box_a.hi = box_a.hi.cwiseMax(p);
+  }
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : b.occupied_centres()) centroid_b += R_b * c;
+  centroid_b /= static_cast<double>(b.num_occupied());
+  double radius_b = 0, z_lo = 1e300, z_hi = -1e300;
+  for (const Eigen::Vector3d& c : b.occupied_centres()) {
+    const Eigen::Vector3d p = R_b * c - centroid_b;
+    radius_b = std::max(radius_b, std::hypot(p.x(), p.y()));
+    z_lo = std::min(z_lo, p.z());
+    z_hi = std::max(z_hi, p.z());
+  }
+  const Eigen::Vector3d extent_a = box_a.hi - box_a.lo;
+  const Eigen::Vector3d extent_b(2 * radius_b, 2 * radius_b, z_hi - z_lo);
+
+  double cell = params.cell_voxels * finest_resolution_m;
+  std::array<int, 3> na{}, nb{}, n{};
+  for (int attempt = 0;; ++attempt) {
+    std::size_t total = 1;
+    for (int k = 0; k < 3; ++k) {
+      na[static_cast<std::size_t>(k)] = static_cast<int>(std::ceil(extent_a[k] / cell)) + 2;
+      nb[static_cast<std::size_t>(k)] = static_cast<int>(std::ceil(extent_b[k] / cell)) + 2;
+      n[static_cast<std::size_t>(k)] =
+          FftSize(na[static_cast<std::size_t>(k)] + nb[static_cast<std::size_t>(k)]);
+      total *= static_cast<std::size_t>(n[static_cast<std::size_t>(k)]);
+    }
+    if (total <= params.max_cells) break;
+    if (attempt >= 64) {
+      return Status::ResourceExhausted("correlation grid above max_cells = " +
+                                       std::to_string(params.max_cells));
+    }
+    cell *= std::max(1.05, std::cbrt(static_cast<double>(total) / params.max_cells));
+  }
+  if (stats != nullptr) {
+    stats->yaws = static_cast<int>(yaws.size());
+    stats->cell_m = cell;
+    stats->grid_cells = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+  }
+
+  const Eigen::Vector3d origin_a = box_a.lo - Eigen::Vector3d::Constant(cell);
+  // b's grid origin relative to its (turned) centroid: one cell of margin.
+  const Eigen::Vector3d offset_b(-radius_b - cell, -radius_b - cell, z_lo - cell);
+  Fft fft(n);
+  CoarseGrid grid_a(n, origin_a, cell);
+  for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
+  grid_a.Finish();
+  const auto occ_a = fft.Forward(grid_a.occ());
+  const auto dilated_a = fft.Forward(grid_a.dilated_occ());
+  const auto free_a = fft.Forward(grid_a.free());
+  const std::vector<Sample> samples_b = Samples(b, cell);
+
+  std::vector<CorrelationHypothesis> out;
+  std::vector<std::complex<double>> product(fft.complex_size());
+  const double norm = 1.0 / static_cast<double>(fft.real_size());
+  for (double yaw : yaws) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
+    const Eigen::Vector3d turned_centroid =
+        Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * centroid_b;
+    // b's grid origin follows its turned centroid so that b stays inside it.
+    const Eigen::Vector3d origin = turned_centroid + offset_b;
+    CoarseGrid grid_b(n, origin, cell);
+    for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
+    grid_b.Finish();
+    const auto occ_b = fft.Forward(grid_b.occ());
+    const auto free_b = fft.Forward(grid_b.free());
+    // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s).
+    for (std::size_t i = 0; i < product.size(); ++i) {
+      product[i] = (dilated_a[i] - params.free_weight * free_a[i]) * std::conj(occ_b[i]) -
+                   params.free_weight * occ_a[i] * std::conj(free_b[i]);
+    }
+    const double* score = fft.Inverse(product);
+    for (const Peak& peak :
+         TopPeaks(score, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+      Eigen::Vector3d shift;
+      for (int k = 0; k < 3; ++k) {
+        const int s = peak.shift[static_cast<std::size_t>(k)];
+        shift[k] = s < na[static_cast<std::size_t>(k)] ? s : s - n[static_cast<std::size_t>(k)];
+      }
+      // b's cell j lands on a's cell j + shift: x_a' = R x_b + t.
+      const Eigen::Vector3d t = origin_a - origin + shift * cell;
+      CorrelationHypothesis h;
+      h.yaw_rad = yaw;
+      h.score = peak.score * norm;
+      h.T_a_b.linear() = R_a.transpose() * R;
+      h.T_a_b.translation() = R_a.transpose() * t;
+      out.push_back(h);
+    }
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& x, const auto& y) { return x.score > y.score; });
+  if (static_cast<int>(out.size()) > params.max_hypotheses) {
+    out.resize(static_cast<std::size_t>(params.max_hypotheses));
+  }
+  return out;
+}
+
+}  // namespace mapd::voxel

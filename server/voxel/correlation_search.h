@@ -1,0 +1,84 @@
+// The second hypothesis generator's second half (docs/algorithms.md B.9): for
+// each yaw candidate, the translations that best put b's levelled map into
+// a's, by a 3D correlation on a coarse grid computed with FFTs (FFTW3).
+//
+// The score of a translation t rewards b's occupied cells on a's occupied
+// cells and penalises them on a's free cells (and a's occupied cells on b's
+// free cells):
+//   S(t) = corr(occA, occB)(t) - w * (corr(freeA, occB)(t) + corr(occA, freeB)(t)).
+// Plain occupancy correlation prefers the 180 deg flip of a symmetric
+// corridor (its walls coincide as well as the true ones); the flip puts
+// furniture and side rooms into the other map's observed free space, which
+// the penalty counts. Space either map never observed counts neither way.
+//
+// Thread safety: reentrant (FFTW's planner, which is not, is serialised
+// inside).
+#ifndef MAPD_VOXEL_CORRELATION_SEARCH_H_
+#define MAPD_VOXEL_CORRELATION_SEARCH_H_
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <vector>
+
+#include "common/status.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel {
+
+struct CorrelationParams {
+  // Run the generator when corner matching accepts nothing.
+  bool enabled = true;
+  // Also run it after corner matching accepted a solution, so that the
+  // uniqueness gate sees the best translations of the other yaws too
+  // (docs/voxel-merge.md gives its cost).
+  bool check_corner_solutions = true;
+  // Coarse cell edge in voxels of the finer map: coarse enough that a wall
+  // rasterised in two rotated grids lands in the same or a neighbouring cell
+  // and the FFTs stay small, fine enough that a peak starts ICP within its
+  // basin (ICP converges from a few voxels).
+  double cell_voxels = 3.0;
+  // Cap on the padded FFT grid; larger maps get coarser cells. 2M cells take
+  // ~100 MiB (five complex spectra) and 0.1-0.3 s per FFT here.
+  std::size_t max_cells = 2'000'000;
+  // w in S(t) above. A conflict (a wall where the other map saw through) is
+  // strong evidence and rare: free space within a cell of either map's
+  // walls does not count, so few cells are left to conflict. In the
+  // corridor test fixture (tests/voxel/support/corridor_scene.h) the true
+  // placement ranks 1st at w = 10, 23rd at 5 and below 60th at 1, where
+  // sliding b along the corridor (more wall on wall) wins.
+  double free_weight = 10.0;
+  // Translation peaks per yaw and hypotheses kept over all yaws (best S
+  // first); every kept hypothesis goes through the ICP screen and gates.
+  int peaks_per_yaw = 3;
+  int max_hypotheses = 12;
+  // Peaks closer than this (coarse cells) are one.
+  double min_peak_separation_cells = 3.0;
+
+  Status Validate() const;
+};
+
+// One initial transform for ICP.
+struct CorrelationHypothesis {
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
+  double yaw_rad = 0.0;  // the yaw candidate it came from
+  double score = 0.0;    // S(t), in coarse cells
+};
+
+struct CorrelationStats {
+  int yaws = 0;
+  double cell_m = 0.0;
+  std::size_t grid_cells = 0;  // padded FFT grid
+};
+
+// R_a, R_b level each map (R * up = +z); every yaw turns levelled b about +z.
+// Hypotheses best first, at most max_hypotheses. InvalidArgument for bad
+// params; ResourceExhausted if even the coarsest allowed cell exceeds
+// max_cells (never for maps within VoxelGrid's key range and max_cells >= 1000).
+StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
+    const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b, const Eigen::Matrix3d& R_b,
+    const std::vector<double>& yaws, double finest_resolution_m, const CorrelationParams& params,
+    CorrelationStats* stats);
+
+}  // namespace mapd::voxel
+
+#endif  // MAPD_VOXEL_CORRELATION_SEARCH_H_

@@ -1,0 +1,96 @@
+#include "voxel/merge_hypotheses.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "voxel/correlation_search.h"
+#include "voxel/gravity_alignment.h"
+
+namespace mapd::voxel {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string Format(const char* format, double x, double y, double z) {
+  char buffer[128];
+  std::snprintf(buffer, sizeof(buffer), format, x, y, z);
+  return buffer;
+}
+
+}  // namespace
+
+bool DistinctTransforms(const Eigen::Isometry3d& x, const Eigen::Isometry3d& y,
+                        const Eigen::Vector3d& centroid_b, const MergeParams& params,
+                        double finest_resolution_m) {
+  const double angle =
+      Eigen::AngleAxisd(x.linear().transpose() * y.linear()).angle() * 180.0 / M_PI;
+  const double offset = (x * centroid_b - y * centroid_b).norm() / finest_resolution_m;
+  return angle > params.distinct_rotation_deg || offset > params.distinct_translation_voxels;
+}
+
+std::string DescribeHypothesis(const TriedHypothesis& h, double finest_resolution_m) {
+  const PairReport& r = h.report;
+  const double angle = Eigen::AngleAxisd(r.T_a_b.linear()).angle() * 180.0 / M_PI;
+  const Eigen::Vector3d t = r.T_a_b.translation();
+  return h.label + " (rotation " + Format("%.1f", angle, 0, 0) + " deg, translation " +
+         Format("(%.2f, %.2f, %.2f)", t.x(), t.y(), t.z()) + " m, residual " +
+         Format("%.2f", r.residual_m / finest_resolution_m, 0, 0) + " voxels, overlap " +
+         Format("%.2f", r.overlap_score, 0, 0) + ", support " +
+         Format("%.3f", r.support_fraction, 0, 0) + ")";
+}
+
+StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
+                                        const MergeParams& params, double finest_resolution_m,
+                                        const std::vector<Eigen::Isometry3d>& accepted,
+                                        StageTimes* times) {
+  CorrelationRun run;
+  const auto start = std::chrono::steady_clock::now();
+  auto frame_a = EstimateGravityFrame(*a.grid, params.gravity);
+  auto frame_b = EstimateGravityFrame(*b.grid, params.gravity);
+  if (!frame_a.ok() || !frame_b.ok()) {
+    times->correlation_s += SecondsSince(start);
+    const Status& bad = frame_a.ok() ? frame_b.status() : frame_a.status();
+    if (bad.code() != StatusCode::kFailedPrecondition) return bad;
+    run.not_run = "submap " + std::to_string(frame_a.ok() ? b.id : a.id) + ": " + bad.message();
+    return run;
+  }
+  const std::vector<double> yaws = YawCandidates(*frame_a, *frame_b, params.gravity);
+  run.yaws = static_cast<int>(yaws.size());
+  CorrelationStats stats;
+  auto hypotheses = SearchTranslations(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, yaws,
+                                       finest_resolution_m, params.correlation, &stats);
+  times->correlation_s += SecondsSince(start);
+  if (!hypotheses.ok()) return hypotheses.status();
+  run.generated = static_cast<int>(hypotheses->size());
+
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
+  centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
+  std::vector<Eigen::Isometry3d> known = accepted;
+  for (std::size_t i = 0; i < hypotheses->size(); ++i) {
+    const CorrelationHypothesis& h = (*hypotheses)[i];
+    bool near = false;
+    for (const Eigen::Isometry3d& T : known) {
+      near = near || !DistinctTransforms(T, h.T_a_b, centroid_b, params, finest_resolution_m);
+    }
+    if (near) {
+      ++run.agreeing;
+      continue;
+    }
+    TriedHypothesis tried;
+    tried.label = "correlation yaw " + Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) +
+                  " deg, peak " + std::to_string(i + 1);
+    tried.report.id_a = a.id;
+    tried.report.id_b = b.id;
+    MAPD_RETURN_IF_ERROR(
+        RefineAndGate(a, b, params, h.T_a_b, finest_resolution_m, times, &tried.report));
+    if (tried.report.accepted) known.push_back(tried.report.T_a_b);
+    run.tried.push_back(std::move(tried));
+  }
+  return run;
+}
+
+}  // namespace mapd::voxel

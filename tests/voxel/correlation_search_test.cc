@@ -1,0 +1,77 @@
+#include "voxel/correlation_search.h"
+
+#include <gtest/gtest.h>
+
+#include "voxel/support/corner_scene.h"
+#include "voxel/support/corridor_scene.h"
+#include "voxel/support/voxel_scene.h"
+
+namespace mapd::voxel {
+namespace {
+
+using testing::GridOf;
+using testing::Pose;
+using testing::RasteriseSubmap;
+
+constexpr double kRes = 0.1;
+const Eigen::Matrix3d kLevel = Eigen::Matrix3d::Identity();
+
+TEST(CorrelationSearchTest, FindsAKnownShift) {
+  const Eigen::AlignedBox3d crop(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(10, 6, 3.5));
+  const Eigen::Isometry3d T_a_b = Pose(0, 0, 0, Eigen::Vector3d(0.7, -0.4, 0.2));
+  const VoxelGrid a =
+      GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop, Eigen::Isometry3d::Identity(), kRes));
+  const VoxelGrid b = GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop, T_a_b, kRes));
+  CorrelationStats stats;
+  auto hypotheses =
+      SearchTranslations(a, kLevel, b, kLevel, {0.0}, kRes, CorrelationParams{}, &stats);
+  ASSERT_TRUE(hypotheses.ok()) << hypotheses.status().ToString();
+  ASSERT_FALSE(hypotheses->empty());
+  // Within one coarse cell (3 voxels) per axis.
+  EXPECT_LT((hypotheses->front().T_a_b.translation() - T_a_b.translation()).norm(),
+            stats.cell_m * 1.8);
+  EXPECT_EQ(stats.yaws, 1);
+}
+
+// The corridor's walls coincide under the 180 deg flip and at any shift
+// along it; only the boxes seen against the other map's free space tell.
+TEST(CorrelationSearchTest, FreeSpacePenaltyRejectsTheFlippedCorridor) {
+  const Eigen::Isometry3d T_a_b = Pose(0, 0, 0, Eigen::Vector3d(-0.4, 0.3, 0.0));
+  const VoxelGrid a = GridOf(RasteriseSubmap(testing::Corridor(), testing::CorridorCropA(),
+                                             Eigen::Isometry3d::Identity(), kRes));
+  const VoxelGrid b =
+      GridOf(RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRes));
+  const std::vector<double> yaws = {0.0, M_PI};                   // the truth and its flip
+  const Eigen::Vector3d centroid_b = Eigen::Vector3d(8, 1.5, 1);  // scene frame
+  const auto error_m = [&](const CorrelationHypothesis& h) {
+    return (h.T_a_b * (T_a_b.inverse() * centroid_b) - centroid_b).norm();
+  };
+
+  CorrelationParams occupied_only;
+  occupied_only.free_weight = 0;
+  auto plain = SearchTranslations(a, kLevel, b, kLevel, yaws, kRes, occupied_only, nullptr);
+  ASSERT_TRUE(plain.ok() && !plain->empty());
+  EXPECT_GT(error_m(plain->front()), 1.0) << "plain correlation should prefer a wrong placement";
+
+  CorrelationStats stats;
+  auto penalised =
+      SearchTranslations(a, kLevel, b, kLevel, yaws, kRes, CorrelationParams{}, &stats);
+  ASSERT_TRUE(penalised.ok() && !penalised->empty());
+  EXPECT_EQ(penalised->front().yaw_rad, 0.0);
+  EXPECT_LT(error_m(penalised->front()), 2 * stats.cell_m);
+}
+
+TEST(CorrelationSearchTest, BadParamsAreNamed) {
+  CorrelationParams p;
+  p.cell_voxels = 0;
+  EXPECT_NE(p.Validate().message().find("cell_voxels"), std::string::npos);
+  p = CorrelationParams{};
+  p.max_cells = 10;
+  EXPECT_NE(p.Validate().message().find("max_cells"), std::string::npos);
+  p = CorrelationParams{};
+  p.free_weight = -1;
+  EXPECT_NE(p.Validate().message().find("free_weight"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mapd::voxel

@@ -1,0 +1,99 @@
+// The correlation generator and the uniqueness gate inside MergeSubmaps.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "voxel/merge.h"
+#include "voxel/support/corner_scene.h"
+#include "voxel/support/corridor_scene.h"
+#include "voxel/support/voxel_scene.h"
+
+namespace mapd::voxel {
+namespace {
+
+using testing::Pose;
+using testing::RasteriseSubmap;
+
+constexpr double kRes = 0.1;
+
+struct Corridors {
+  std::string a, b;
+  Eigen::Isometry3d T_a_b;
+};
+
+Corridors MakeCorridors() {
+  const Eigen::Isometry3d T_a_b = Pose(63, 3, -2, Eigen::Vector3d(1.1, -0.6, 0.2));
+  return {RasteriseSubmap(testing::Corridor(), testing::CorridorCropA(),
+                          Eigen::Isometry3d::Identity(), kRes),
+          RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRes), T_a_b};
+}
+
+TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
+  const Corridors c = MakeCorridors();
+  // The corridor's ends give corner matching enough corners; demanding more
+  // than it has stands for a strip whose few corners do not repeat.
+  MergeParams params;
+  params.min_matched_corners = 1000;
+  params.correlation.enabled = false;
+  auto refused = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), StatusCode::kFailedPrecondition);
+
+  params.correlation.enabled = true;
+  auto outcome = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  const Eigen::Isometry3d& T = outcome->alignments[1].T_reference_submap;
+  EXPECT_LT(testing::RotationErrorDeg(T, c.T_a_b), 1.0);
+  const Eigen::Vector3d centroid(6, 1, 1);  // scene frame, in the shared strip
+  EXPECT_LT((T * (c.T_a_b.inverse() * centroid) - centroid).norm(), 2 * kRes);
+  const PairReport& pair = outcome->pairs.front();
+  EXPECT_EQ(pair.source.rfind("correlation", 0), 0u) << pair.source;
+  EXPECT_GT(pair.correlation_hypotheses, 0);
+  EXPECT_GE(pair.hypotheses_tried, 1);
+}
+
+TEST(MergeHypothesesTest, UniquenessGateRefusesASymmetricRoomNamingBoth) {
+  const Eigen::AlignedBox3d whole(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(7, 4, 3.5));
+  const std::string a =
+      RasteriseSubmap(testing::EmptyRoom(), whole, Eigen::Isometry3d::Identity(), kRes);
+  const std::string b = RasteriseSubmap(testing::EmptyRoom(), whole,
+                                        Pose(30, 0, 0, Eigen::Vector3d(1.0, 2.0, 0.0)), kRes);
+  auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+  const std::string& message = outcome.status().message();
+  EXPECT_NE(message.find("ambiguous: two distinct alignments pass every gate"), std::string::npos)
+      << message;
+  // Both hypotheses are named with their transform, residual and overlap.
+  const std::size_t first = message.find("(rotation ");
+  ASSERT_NE(first, std::string::npos) << message;
+  EXPECT_NE(message.find("(rotation ", first + 1), std::string::npos) << message;
+  EXPECT_NE(message.find("residual"), std::string::npos);
+  EXPECT_NE(message.find("overlap"), std::string::npos);
+}
+
+TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
+  const Corridors c = MakeCorridors();
+  MergeParams params;
+  params.max_residual_voxels = 0.01;  // nothing can pass
+  auto outcome = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  const std::string& message = outcome.status().message();
+  EXPECT_NE(message.find("corner matching: "), std::string::npos) << message;
+  EXPECT_NE(message.find("corner solution"), std::string::npos) << message;
+  EXPECT_NE(message.find("; correlation: "), std::string::npos) << message;
+  EXPECT_NE(message.find("hypotheses from "), std::string::npos) << message;
+  EXPECT_NE(message.find("above 0.01 voxels"), std::string::npos) << message;
+}
+
+TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
+  MergeParams params;
+  params.distinct_rotation_deg = 0;
+  EXPECT_NE(params.Validate().message().find("distinct_rotation_deg"), std::string::npos);
+  params = MergeParams{};
+  params.correlation.peaks_per_yaw = 0;
+  EXPECT_NE(params.Validate().message().find("peaks_per_yaw"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mapd::voxel
