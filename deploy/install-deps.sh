@@ -10,7 +10,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev
+  libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev libfftw3-dev
   libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev
   python3-grpcio python3-protobuf python3-pytest
