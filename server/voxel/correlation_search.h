@@ -29,8 +29,10 @@ struct CorrelationParams {
   // Run the generator when corner matching accepts nothing.
   bool enabled = true;
   // Also run it after corner matching accepted a solution, so that the
-  // uniqueness gate sees the best translations of the other yaws too
-  // (docs/voxel-merge.md gives its cost).
+  // uniqueness gate sees the other yaws too; then only the best peak of each
+  // yaw that is distinct from the accepted answer is refined (every
+  // hypothesis refined cost ~4x the whole corner merge on geb079;
+  // docs/voxel-merge.md gives the cost of this check).
   bool check_corner_solutions = true;
   // Coarse cell edge in voxels of the finer map: coarse enough that a wall
   // rasterised in two rotated grids lands in the same or a neighbouring cell

@@ -1,5 +1,6 @@
 #include "voxel/merge_hypotheses.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -70,6 +71,9 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
   centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
   std::vector<Eigen::Isometry3d> known = accepted;
+  // Checking an accepted corner solution: only the best distinct peak of each
+  // yaw is refined (a wrong hypothesis costs a full ICP screen).
+  std::vector<double> yaws_refined;
   for (std::size_t i = 0; i < hypotheses->size(); ++i) {
     const CorrelationHypothesis& h = (*hypotheses)[i];
     bool near = false;
@@ -79,6 +83,12 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
     if (near) {
       ++run.agreeing;
       continue;
+    }
+    if (!accepted.empty()) {
+      if (std::find(yaws_refined.begin(), yaws_refined.end(), h.yaw_rad) != yaws_refined.end()) {
+        continue;
+      }
+      yaws_refined.push_back(h.yaw_rad);
     }
     TriedHypothesis tried;
     tried.label = "correlation yaw " + Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) +
