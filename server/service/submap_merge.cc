@@ -59,7 +59,10 @@ Status CheckEvidence(const voxel::MergeOutcome& outcome,
   for (size_t i = 1; i < outcome.alignments.size(); ++i) {
     const voxel::Alignment& a = outcome.alignments[i];
     const std::string which = "submap " + std::to_string(a.id);
-    if (a.matched_corners < o.min_matched_corners) {
+    // A correlation hypothesis (docs/algorithms.md B.9) has no corners; it
+    // passed the same residual and overlap gates, checked again below.
+    const bool by_corners = a.source.rfind("correlation", 0) != 0;
+    if (by_corners && a.matched_corners < o.min_matched_corners) {
       return Status::FailedPrecondition(which + ": " + std::to_string(a.matched_corners) +
                                         " matched corners, merge.min_matched_corners is " +
                                         std::to_string(o.min_matched_corners));

@@ -198,6 +198,7 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
         alignment.matched_corners = pair.matched_corners;
         alignment.residual_m = pair.residual_m;
         alignment.overlap_score = pair.overlap_score;
+        alignment.source = pair.source;
         // The parent's corner goes into the reference frame by the parent's placement.
         const Eigen::Isometry3d& T_root_parent =
             placement.T_root_node[static_cast<std::size_t>(parent)];

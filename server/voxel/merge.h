@@ -177,6 +177,9 @@ struct Alignment {
   int matched_corners = 0;
   double residual_m = 0.0;     // RMS after refinement, metres
   double overlap_score = 0.0;  // [0, 1]
+  // The generator of the tree edge that placed it: "corner solution N" or
+  // "correlation ..." (then matched_corners is 0); empty for the first input.
+  std::string source;
   // The corner pairs of the tree edge that placed it (matched_corners of
   // them); empty for the first input. T_reference_submap maps in_submap onto
   // in_reference up to the corners' own error (ICP refined past them).
