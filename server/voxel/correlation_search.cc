@@ -89,36 +89,51 @@ class CoarseGrid {
   // the same or a neighbouring cell: free space within one cell of an
   // occupied cell does not count (else half the true wall cells would be
   // penalised), and dilated_occ() is what the other map's walls may hit.
-  void Finish() {
-    dilated_ = occ_;
-    const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
-                                               static_cast<std::size_t>(n_[2]), 1};
-    std::vector<double> pass;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      pass = dilated_;
-      const std::size_t step = stride[axis];
-      const auto extent = static_cast<std::size_t>(n_[axis]);
-      for (std::size_t i = 0; i < pass.size(); ++i) {
-        const std::size_t coordinate = (i / step) % extent;
-        double v = pass[i];
-        if (coordinate > 0) v = std::max(v, pass[i - step]);
-        if (coordinate + 1 < extent) v = std::max(v, pass[i + step]);
-        dilated_[i] = v;
-      }
-    }
+  void Finish(int cover_radius) {
+    dilated_ = Dilate(occ_, 1);
+    cover_ = Dilate(occ_, cover_radius);
     for (std::size_t i = 0; i < occ_.size(); ++i) {
       free_[i] = dilated_[i] > 0 ? 0.0 : std::min(1.0, free_[i]);
+      if (free_[i] > 0) cover_[i] = 1.0;
     }
   }
   const std::vector<double>& occ() const { return occ_; }
   const std::vector<double>& dilated_occ() const { return dilated_; }
+  // Where this map has data: within cover_radius cells of an occupied cell,
+  // or free.
+  const std::vector<double>& cover() const { return cover_; }
   const std::vector<double>& free() const { return free_; }
 
  private:
+  // Separable max filter of `radius` cells.
+  std::vector<double> Dilate(const std::vector<double>& in, int radius) const {
+    std::vector<double> out = in;
+    const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
+                                               static_cast<std::size_t>(n_[2]), 1};
+    std::vector<double> pass;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      pass = out;
+      const std::size_t step = stride[axis];
+      const auto extent = static_cast<std::size_t>(n_[axis]);
+      for (std::size_t i = 0; i < pass.size(); ++i) {
+        const auto coordinate = static_cast<int>((i / step) % extent);
+        double v = pass[i];
+        for (int d = -radius; d <= radius && v <= 0; ++d) {
+          const int c = coordinate + d;
+          if (c < 0 || c >= n_[axis] || d == 0) continue;
+          v = std::max(v, pass[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i) +
+                                                        d * static_cast<std::ptrdiff_t>(step))]);
+        }
+        out[i] = v;
+      }
+    }
+    return out;
+  }
+
   std::array<int, 3> n_;
   Eigen::Vector3d origin_;
   double cell_;
-  std::vector<double> occ_, free_, dilated_;
+  std::vector<double> occ_, free_, dilated_, cover_;
 };
 
 // A size with only the factors 2, 3, 5 (FFTW is fastest on those).
@@ -236,6 +251,11 @@ Status CorrelationParams::Validate() const {
     return Status::InvalidArgument(
         "correlation.peaks_per_yaw must be >= 1 and max_hypotheses in [1, 1000]");
   }
+  if (!(coverage_radius_m > 0 && coverage_radius_m <= 100) ||
+      !(min_overlap_fraction >= 0 && min_overlap_fraction <= 1)) {
+    return Status::InvalidArgument(
+        "correlation.coverage_radius_m must be in (0, 100] and min_overlap_fraction in [0, 1]");
+  }
   if (!(min_peak_separation_cells >= 0 && min_peak_separation_cells <= 1000)) {
     return Status::InvalidArgument("correlation.min_peak_separation_cells must be in [0, 1000]");
   }
@@ -301,15 +321,19 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   Fft fft(n);
   CoarseGrid grid_a(n, origin_a, cell);
   for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
-  grid_a.Finish();
+  const int cover_radius =
+      std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
+  grid_a.Finish(cover_radius);
   const auto occ_a = fft.Forward(grid_a.occ());
   const auto dilated_a = fft.Forward(grid_a.dilated_occ());
   const auto free_a = fft.Forward(grid_a.free());
+  const auto cover_a = fft.Forward(grid_a.cover());
+  double cells_a = 0;
+  for (double v : grid_a.occ()) cells_a += v;
   const std::vector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
   std::vector<std::complex<double>> product(fft.complex_size());
-  const double norm = 1.0 / static_cast<double>(fft.real_size());
   for (double yaw : yaws) {
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
@@ -319,17 +343,38 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const Eigen::Vector3d origin = turned_centroid + offset_b;
     CoarseGrid grid_b(n, origin, cell);
     for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
-    grid_b.Finish();
+    grid_b.Finish(cover_radius);
     const auto occ_b = fft.Forward(grid_b.occ());
     const auto free_b = fft.Forward(grid_b.free());
+    const auto cover_b = fft.Forward(grid_b.cover());
+    double cells_b = 0;
+    for (double v : grid_b.occ()) cells_b += v;
     // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s).
     for (std::size_t i = 0; i < product.size(); ++i) {
       product[i] = (dilated_a[i] - params.free_weight * free_a[i]) * std::conj(occ_b[i]) -
                    params.free_weight * occ_a[i] * std::conj(free_b[i]);
     }
-    const double* score = fft.Inverse(product);
+    const double* inverse = fft.Inverse(product);
+    std::vector<double> score(inverse, inverse + fft.real_size());
+    for (std::size_t i = 0; i < product.size(); ++i) product[i] = cover_a[i] * std::conj(occ_b[i]);
+    inverse = fft.Inverse(product);
+    const std::vector<double> b_in_a(inverse, inverse + fft.real_size());
+    for (std::size_t i = 0; i < product.size(); ++i) product[i] = occ_a[i] * std::conj(cover_b[i]);
+    const double* a_in_b = fft.Inverse(product);
+    // Normalised by the occupied cells each map has where the other has
+    // data: sliding a corridor over more of the other map adds hits but adds
+    // as many cells that miss. Overlaps below min_overlap_fraction of the
+    // smaller map are no peak (a few cells can agree by chance).
+    const double min_cells = params.min_overlap_fraction * std::min(cells_a, cells_b) *
+                             static_cast<double>(fft.real_size());
+    for (std::size_t i = 0; i < score.size(); ++i) {
+      const double overlap = std::min(b_in_a[i], a_in_b[i]);
+      score[i] = overlap >= std::max(min_cells, 1.0)
+                     ? score[i] / std::sqrt(std::max(b_in_a[i], 1.0) * std::max(a_in_b[i], 1.0))
+                     : 0.0;
+    }
     for (const Peak& peak :
-         TopPeaks(score, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+         TopPeaks(score.data(), n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
       Eigen::Vector3d shift;
       for (int k = 0; k < 3; ++k) {
         const int s = peak.shift[static_cast<std::size_t>(k)];
@@ -339,7 +384,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       const Eigen::Vector3d t = origin_a - origin + shift * cell;
       CorrelationHypothesis h;
       h.yaw_rad = yaw;
-      h.score = peak.score * norm;
+      h.score = peak.score;
       h.T_a_b.linear() = R_a.transpose() * R;
       h.T_a_b.translation() = R_a.transpose() * t;
       out.push_back(h);

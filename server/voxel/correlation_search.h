@@ -5,7 +5,8 @@
 // The score of a translation t rewards b's occupied cells on a's occupied
 // cells and penalises them on a's free cells (and a's occupied cells on b's
 // free cells):
-//   S(t) = corr(occA, occB)(t) - w * (corr(freeA, occB)(t) + corr(occA, freeB)(t)).
+//   S(t) = corr(occA, occB)(t) - w * (corr(freeA, occB)(t) + corr(occA, freeB)(t)),
+// normalised by the occupied cells each map has inside the other's data.
 // Plain occupancy correlation prefers the 180 deg flip of a symmetric
 // corridor (its walls coincide as well as the true ones); the flip puts
 // furniture and side rooms into the other map's observed free space, which
@@ -49,6 +50,15 @@ struct CorrelationParams {
   // placement ranks 1st at w = 10, 23rd at 5 and below 60th at 1, where
   // sliding b along the corridor (more wall on wall) wins.
   double free_weight = 10.0;
+  // A map has data within this of its occupied voxels (or where it is
+  // free): the score is normalised by the occupied cells each map has inside
+  // the other's data (a cosine of the overlap), so sliding a corridor over
+  // more of the other map does not win by adding wall. 1 m: sensors see
+  // surfaces from the free space in front of them.
+  double coverage_radius_m = 1.0;
+  // Shifts where either map has fewer occupied cells than this share of the
+  // smaller map inside the other's data are not scored (chance agreement).
+  double min_overlap_fraction = 0.05;
   // Translation peaks per yaw and hypotheses kept over all yaws (best S
   // first); every kept hypothesis goes through the ICP screen and gates.
   int peaks_per_yaw = 3;
@@ -63,7 +73,7 @@ struct CorrelationParams {
 struct CorrelationHypothesis {
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
   double yaw_rad = 0.0;  // the yaw candidate it came from
-  double score = 0.0;    // S(t), in coarse cells
+  double score = 0.0;    // S(t) normalised (coverage_radius_m), about [-w, 1]
 };
 
 struct CorrelationStats {
