@@ -244,7 +244,11 @@ using ProgressCallback = std::function<void(const std::string& stage, double fra
 // ResourceExhausted (a map beyond the limits, or max_seconds exceeded).
 //
 // Every pair of inputs is matched (corners, max clique, Umeyama), refined by
-// ICP and checked against the thresholds. The accepted pairs are the edges of
+// ICP and checked against the thresholds. When no corner solution passes, the
+// correlation generator (levelling, wall yaw, FFT translation search;
+// docs/algorithms.md B.9) proposes more starts for the same ICP and gates;
+// two distinct accepted hypotheses of similar support refuse the pair as
+// ambiguous (the uniqueness gate). The accepted pairs are the edges of
 // a graph weighted by matched corners (overlap score breaks ties); every
 // submap is placed in the first input's frame along its maximum spanning tree
 // and fused in breadth-first order from the first. A submap not connected to
