@@ -5,15 +5,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "common/clock.h"
 #include "voxel/correlation_search.h"
 #include "voxel/gravity_alignment.h"
 
 namespace mapd::voxel {
 namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 std::string Format(const char* format, double x, double y, double z) {
   char buffer[128];
