@@ -20,13 +20,6 @@ struct PairSide {
   const CornerSet* corners = nullptr;
 };
 
-// Aligns b to a. A refusal (weak evidence) is an OK result with
-// accepted == false and the reason, e.g. "only 2 matched corners, need 4",
-// "overlap score 0.12 below 0.30", "residual 0.25 m (2.5 voxels) above 2.0
-// voxels". Errors only for bad parameters or input. Adds its seconds to
-// times->matching_s and times->alignment_s. `finest_resolution_m` sets the
-// voxel unit of the corner and ICP distances; the residual gate is in voxels
-// of the coarser of the two maps (merge.h). `seconds_left` caps the corner search.
 // B.5, shared by both hypothesis generators: the ICP screen, ICP from
 // T_initial and the acceptance gates. Sets report's T_a_b, residual_m,
 // overlap_score, icp_iterations and accepted or reason; adds its seconds to
@@ -35,6 +28,14 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
                      const Eigen::Isometry3d& T_initial, double finest_resolution_m,
                      StageTimes* times, PairReport* report);
 
+// Aligns b to a. A refusal (weak evidence) is an OK result with
+// accepted == false and the reason, e.g. "only 2 matched corners, need 4",
+// "overlap score 0.12 below 0.30", "residual 0.25 m (2.5 voxels) above 2.0
+// voxels". Errors only for bad parameters or input. Adds its seconds to
+// times->matching_s and times->alignment_s. `finest_resolution_m` sets the
+// voxel unit of the corner and ICP distances; the residual gate is in voxels
+// of the coarser of the two maps (merge.h). `seconds_left` caps the corner search.
+//
 // Every generator's hypotheses pass the uniqueness gate too: two distinct
 // accepted hypotheses refuse the pair naming both. When corner matching
 // accepts nothing (or always, with correlation.check_corner_solutions) the
