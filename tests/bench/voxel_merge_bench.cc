@@ -101,6 +101,16 @@ const PairColumn kPairColumns[] = {
      [](const mapd::voxel::PairReport& p, double res) { return p.residual_m / res; }},
     {"median overlap score", "%.2f",
      [](const mapd::voxel::PairReport& p, double) { return p.overlap_score; }},
+    // How much worse the best distinct rival that reached ICP ended; merges
+    // without a rival do not count (NaN).
+    {"median margin to 2nd (voxels)", "%.2f",
+     [](const mapd::voxel::PairReport& p, double res) {
+       return p.second_residual_m < 0 ? std::nan("") : (p.second_residual_m - p.residual_m) / res;
+     }},
+    {"median hypotheses tried", "%.0f",
+     [](const mapd::voxel::PairReport& p, double) {
+       return static_cast<double>(p.hypotheses_tried);
+     }},
 };
 constexpr std::size_t kNumPairColumns = sizeof(kPairColumns) / sizeof(kPairColumns[0]);
 
@@ -139,7 +149,7 @@ void PrintWorkerOutput(const WorkerOutput& out) {
 
 WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   WorkerOutput out;
-  out.stage_names = {"corners", "matching", "alignment", "fusion", "other"};
+  out.stage_names = {"corners", "matching", "correlation", "alignment", "fusion", "other"};
   const auto start = std::chrono::steady_clock::now();
   mapd::voxel::MergeParams params;
   // max_seconds is a wall-clock budget: on a shared machine it trips on load,
@@ -160,8 +170,13 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   out.message = r.status().message();
   if (r.ok()) {
     const auto& t = r->times;
-    out.stage_s = {t.corners_s, t.matching_s, t.alignment_s, t.fusion_s,
-                   out.total_s - t.corners_s - t.matching_s - t.alignment_s - t.fusion_s};
+    out.stage_s = {
+        t.corners_s,
+        t.matching_s,
+        t.correlation_s,
+        t.alignment_s,
+        t.fusion_s,
+        out.total_s - t.corners_s - t.matching_s - t.correlation_s - t.alignment_s - t.fusion_s};
     for (const auto& al : r->alignments) {
       if (al.id == 2) {
         out.accepted = true;
@@ -182,7 +197,7 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
       out.message = "no alignment for submap 2 in an OK outcome";
     }
   } else {
-    out.stage_s = {0, 0, 0, 0, out.total_s};
+    out.stage_s = {0, 0, 0, 0, 0, out.total_s};
   }
   return out;
 }
@@ -305,8 +320,9 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
       std::string name;
       while (ls >> name) out.stage_names.push_back(name);
     } else if (tag == "PAIR") {
-      double v = 0;
-      while (ls >> v) out.pair_values.push_back(v);
+      // strtod, not >>: a column may be "nan" (no value for this merge).
+      std::string v;
+      while (ls >> v) out.pair_values.push_back(std::strtod(v.c_str(), nullptr));
     } else if (tag == "MESSAGE") {
       std::getline(ls, out.message);
     }
@@ -571,7 +587,7 @@ int main(int argc, char** argv) {
           std::string verdict;
           if (w.accepted && w.code == StatusCode::kOk) {
             for (std::size_t i = 0; i < kNumPairColumns && i < w.pair_values.size(); ++i) {
-              row.pair_values[i].push_back(w.pair_values[i]);
+              if (!std::isnan(w.pair_values[i])) row.pair_values[i].push_back(w.pair_values[i]);
             }
           }
           if (w.accepted && w.code == StatusCode::kOk && negative) {

@@ -298,6 +298,24 @@ TEST(MergeTest, AcceptsARightCrossResolutionMergeUnderResample) {
       << outcome.status().message();
 }
 
+// The same pair with the coarse map second. Corner matching refuses this
+// order (measuring D in coarser voxels did not change that); the
+// correlation generator places it, within the same tolerances.
+TEST(MergeTest, AcceptsARightCrossResolutionMergeWithTheCoarseMapSecond) {
+  constexpr double kFine = 0.05, kCoarse = 0.1;
+  const Eigen::Isometry3d T_a_b = Pose(35.0, 2.0, -1.0, Eigen::Vector3d(0.7, -0.4, 0.1));
+  const std::string a =
+      RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 6.8), Eigen::Isometry3d::Identity(), kFine);
+  const std::string b = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.2, 9.5), T_a_b, kCoarse);
+  MergeParams params;
+  params.resolution_policy = ResolutionPolicy::kResampleToFinest;
+  auto outcome = MergeSubmaps({{1, a}, {2, b}}, params);
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  const Alignment& placed = outcome->alignments[1];
+  EXPECT_LT(testing::RotationErrorDeg(placed.T_reference_submap, T_a_b), 1.0);
+  EXPECT_LT(testing::TranslationError(placed.T_reference_submap, T_a_b), 2 * kFine);
+}
+
 TEST(MergeTest, RefusesMalformedInputAndFewerThanTwoMaps) {
   const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
                                         Eigen::Isometry3d::Identity(), kRoomResolutionM);
