@@ -58,7 +58,7 @@ std::vector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
   return samples;
 }
 
-struct Box {
+struct CellBox {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300);
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-1e300);
 };
@@ -272,7 +272,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
 
   // Extents: a levelled; b levelled and turned by any yaw stays within a
   // cylinder about its occupied voxels' centroid.
-  Box box_a;
+  CellBox box_a;
   for (const Eigen::Vector3d& c : a.occupied_centres()) {
     const Eigen::Vector3d p = R_a * c;
     box_a.lo = box_a.lo.cwiseMin(p);

@@ -13,18 +13,19 @@ using testing::GridOf;
 using testing::Pose;
 using testing::RasteriseSubmap;
 
-constexpr double kRes = 0.1;
+using testing::kRoomResolutionM;
 const Eigen::Matrix3d kLevel = Eigen::Matrix3d::Identity();
 
 TEST(CorrelationSearchTest, FindsAKnownShift) {
   const Eigen::AlignedBox3d crop(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(10, 6, 3.5));
   const Eigen::Isometry3d T_a_b = Pose(0, 0, 0, Eigen::Vector3d(0.7, -0.4, 0.2));
-  const VoxelGrid a =
-      GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop, Eigen::Isometry3d::Identity(), kRes));
-  const VoxelGrid b = GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop, T_a_b, kRes));
+  const VoxelGrid a = GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop,
+                                             Eigen::Isometry3d::Identity(), kRoomResolutionM));
+  const VoxelGrid b =
+      GridOf(RasteriseSubmap(testing::FurnishedRoom(), crop, T_a_b, kRoomResolutionM));
   CorrelationStats stats;
-  auto hypotheses =
-      SearchTranslations(a, kLevel, b, kLevel, {0.0}, kRes, CorrelationParams{}, &stats);
+  auto hypotheses = SearchTranslations(a, kLevel, b, kLevel, {0.0}, kRoomResolutionM,
+                                       CorrelationParams{}, &stats);
   ASSERT_TRUE(hypotheses.ok()) << hypotheses.status().ToString();
   ASSERT_FALSE(hypotheses->empty());
   // Within one coarse cell (3 voxels) per axis.
@@ -38,9 +39,9 @@ TEST(CorrelationSearchTest, FindsAKnownShift) {
 TEST(CorrelationSearchTest, FreeSpacePenaltyRejectsTheFlippedCorridor) {
   const Eigen::Isometry3d T_a_b = Pose(0, 0, 0, Eigen::Vector3d(-0.4, 0.3, 0.0));
   const VoxelGrid a = GridOf(RasteriseSubmap(testing::Corridor(), testing::CorridorCropA(),
-                                             Eigen::Isometry3d::Identity(), kRes));
-  const VoxelGrid b =
-      GridOf(RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRes));
+                                             Eigen::Isometry3d::Identity(), kRoomResolutionM));
+  const VoxelGrid b = GridOf(
+      RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRoomResolutionM));
   const std::vector<double> yaws = {0.0, M_PI};                   // the truth and its flip
   const Eigen::Vector3d centroid_b = Eigen::Vector3d(8, 1.5, 1);  // scene frame
   const auto error_m = [&](const CorrelationHypothesis& h) {
@@ -50,7 +51,8 @@ TEST(CorrelationSearchTest, FreeSpacePenaltyRejectsTheFlippedCorridor) {
   // Walls only: the flip wins (its walls coincide over more of the strip).
   CorrelationParams occupied_only;
   occupied_only.free_weight = 0;
-  auto plain = SearchTranslations(a, kLevel, b, kLevel, yaws, kRes, occupied_only, nullptr);
+  auto plain =
+      SearchTranslations(a, kLevel, b, kLevel, yaws, kRoomResolutionM, occupied_only, nullptr);
   ASSERT_TRUE(plain.ok() && !plain->empty());
   EXPECT_EQ(plain->front().yaw_rad, M_PI);
   EXPECT_GT(error_m(plain->front()), 1.0);
@@ -60,7 +62,7 @@ TEST(CorrelationSearchTest, FreeSpacePenaltyRejectsTheFlippedCorridor) {
   // the flip: tests/voxel/merge_hypotheses_test.cc).
   CorrelationStats stats;
   auto penalised =
-      SearchTranslations(a, kLevel, b, kLevel, yaws, kRes, CorrelationParams{}, &stats);
+      SearchTranslations(a, kLevel, b, kLevel, yaws, kRoomResolutionM, CorrelationParams{}, &stats);
   ASSERT_TRUE(penalised.ok() && !penalised->empty());
   EXPECT_LT(penalised->front().score, plain->front().score);
   int rank = 0;

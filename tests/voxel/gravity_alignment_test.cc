@@ -17,7 +17,7 @@ using testing::GridOf;
 using testing::Pose;
 using testing::RasteriseSubmap;
 
-constexpr double kRes = 0.1;
+using testing::kRoomResolutionM;
 
 Eigen::AlignedBox3d WholeRoom() {
   return Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(10, 6, 3.5));
@@ -29,7 +29,8 @@ double AngleDeg(const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
 
 TEST(GravityAlignmentTest, UpVectorOfATiltedRoom) {
   const Eigen::Isometry3d T_scene_b = Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4));
-  const VoxelGrid b = GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(), T_scene_b, kRes));
+  const VoxelGrid b =
+      GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(), T_scene_b, kRoomResolutionM));
   auto frame = EstimateGravityFrame(b, GravityParams{});
   ASSERT_TRUE(frame.ok()) << frame.status().ToString();
   // The scene's +z seen in b's frame.
@@ -42,9 +43,10 @@ TEST(GravityAlignmentTest, UpVectorOfATiltedRoom) {
 
 TEST(GravityAlignmentTest, YawCandidatesHoldTheTrueYaw) {
   const Eigen::Isometry3d T_a_b = Pose(37, 4, -6, Eigen::Vector3d(1.3, -2.1, 0.4));
-  const VoxelGrid a =
-      GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(), Eigen::Isometry3d::Identity(), kRes));
-  const VoxelGrid b = GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(), T_a_b, kRes));
+  const VoxelGrid a = GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(),
+                                             Eigen::Isometry3d::Identity(), kRoomResolutionM));
+  const VoxelGrid b =
+      GridOf(RasteriseSubmap(FurnishedRoom(), WholeRoom(), T_a_b, kRoomResolutionM));
   auto fa = EstimateGravityFrame(a, GravityParams{});
   auto fb = EstimateGravityFrame(b, GravityParams{});
   ASSERT_TRUE(fa.ok() && fb.ok());
@@ -67,7 +69,7 @@ TEST(GravityAlignmentTest, NoFloorIsAClearRefusal) {
   for (int y = 0; y < 40; ++y) {
     for (int z = 0; z < 30; ++z) keys.emplace_back(0, y, z);
   }
-  auto grid = VoxelGrid::FromKeys(kRes, keys);
+  auto grid = VoxelGrid::FromKeys(kRoomResolutionM, keys);
   ASSERT_TRUE(grid.ok());
   const VoxelGrid& wall = *grid;
   auto frame = EstimateGravityFrame(wall, GravityParams{});

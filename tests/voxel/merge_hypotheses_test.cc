@@ -14,7 +14,7 @@ namespace {
 using testing::Pose;
 using testing::RasteriseSubmap;
 
-constexpr double kRes = 0.1;
+using testing::kRoomResolutionM;
 
 struct Corridors {
   std::string a, b;
@@ -24,8 +24,9 @@ struct Corridors {
 Corridors MakeCorridors() {
   const Eigen::Isometry3d T_a_b = Pose(63, 3, -2, Eigen::Vector3d(1.1, -0.6, 0.2));
   return {RasteriseSubmap(testing::Corridor(), testing::CorridorCropA(),
-                          Eigen::Isometry3d::Identity(), kRes),
-          RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRes), T_a_b};
+                          Eigen::Isometry3d::Identity(), kRoomResolutionM),
+          RasteriseSubmap(testing::Corridor(), testing::CorridorCropB(), T_a_b, kRoomResolutionM),
+          T_a_b};
 }
 
 TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
@@ -47,7 +48,7 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
   // constrains ICP's rotation about its axis less than a room does.
   EXPECT_LT(testing::RotationErrorDeg(T, c.T_a_b), 2.0);
   const Eigen::Vector3d centroid(6, 1, 1);  // scene frame, in the shared strip
-  EXPECT_LT((T * (c.T_a_b.inverse() * centroid) - centroid).norm(), 2 * kRes);
+  EXPECT_LT((T * (c.T_a_b.inverse() * centroid) - centroid).norm(), 2 * kRoomResolutionM);
   const PairReport& pair = outcome->pairs.front();
   EXPECT_EQ(pair.source.rfind("correlation", 0), 0u) << pair.source;
   EXPECT_GT(pair.correlation_hypotheses, 0);
@@ -57,9 +58,10 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
 TEST(MergeHypothesesTest, UniquenessGateRefusesASymmetricRoomNamingBoth) {
   const Eigen::AlignedBox3d whole(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(7, 4, 3.5));
   const std::string a =
-      RasteriseSubmap(testing::EmptyRoom(), whole, Eigen::Isometry3d::Identity(), kRes);
-  const std::string b = RasteriseSubmap(testing::EmptyRoom(), whole,
-                                        Pose(30, 0, 0, Eigen::Vector3d(1.0, 2.0, 0.0)), kRes);
+      RasteriseSubmap(testing::EmptyRoom(), whole, Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::string b =
+      RasteriseSubmap(testing::EmptyRoom(), whole, Pose(30, 0, 0, Eigen::Vector3d(1.0, 2.0, 0.0)),
+                      kRoomResolutionM);
   auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
   ASSERT_FALSE(outcome.ok());
   EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
