@@ -367,6 +367,14 @@ const std::vector<Setting>& Settings() {
              [](C& c) -> auto& { return c.submaps.resample_resolutions; }, "refuse", "resample"),
       Choice("merge.fusion_rule", "occupancy fusion: overlap (the paper's rule) or log_odds",
              [](C& c) -> auto& { return c.submaps.log_odds_fusion; }, "overlap", "log_odds"),
+      Flag("merge.correlation", "when corner matching finds no accepted solution, try the correlation generator "
+           "(levelled maps, wall-normal yaws, FFT translation search with a free-space penalty); false = "
+           "corner matching only (the paper)",
+           [](C& c) -> auto& { return c.submaps.correlation; }),
+      Flag("merge.correlation_check_accepted", "also run the correlation generator after an accepted corner "
+           "solution, so that the uniqueness gate sees the other yaws (on geb079 it cost 2.6-3.9 s of CPU per "
+           "accepted merge)",
+           [](C& c) -> auto& { return c.submaps.correlation_check_accepted; }),
       Flag("merge.review", "every merge the gates accept waits for an operator's ApproveMerge (stored "
            "PROPOSED: no frame tied, global map unchanged), as if each request set review",
            [](C& c) -> auto& { return c.submaps.merge_review; }),

@@ -30,6 +30,8 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.resolution_policy = o.resample_resolutions ? voxel::ResolutionPolicy::kResampleToFinest
                                                : voxel::ResolutionPolicy::kRefuse;
   p.fusion_rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;
+  p.correlation.enabled = o.correlation;
+  p.correlation.check_corner_solutions = o.correlation_check_accepted;
   return p;
 }
 

@@ -131,7 +131,8 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
                      "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
                      "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
                      "--merge.max_seconds=10", "--merge.resolution_policy=resample",
-                     "--merge.fusion_rule=log_odds"},
+                     "--merge.fusion_rule=log_odds", "--merge.correlation=false",
+                     "--merge.correlation_check_accepted=no"},
                     &c)
                   .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -143,6 +144,10 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_EQ(c.submaps.max_merge_seconds, 10.0);
   EXPECT_TRUE(c.submaps.resample_resolutions);
   EXPECT_TRUE(c.submaps.log_odds_fusion);
+  EXPECT_FALSE(c.submaps.correlation);
+  EXPECT_FALSE(c.submaps.correlation_check_accepted);
+  const ServerConfig defaults;
+  EXPECT_TRUE(defaults.submaps.correlation);
 
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--limits.max_concurrent_merges=0", "limits.max_concurrent_merges"},
@@ -153,6 +158,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       {"--merge.max_seconds=-1", "merge.max_seconds"},
       {"--merge.resolution_policy=guess", "merge.resolution_policy"},
       {"--merge.fusion_rule=max", "merge.fusion_rule"},
+      {"--merge.correlation=maybe", "merge.correlation"},
   };
   for (const auto& [flag, name] : bad) {
     ServerConfig d;
