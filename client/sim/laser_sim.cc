@@ -12,8 +12,6 @@ using geometry::Vec2;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double Cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
 
 // Casts the beams [first, last] against one wall, keeping the nearest hit.
@@ -50,8 +48,8 @@ LaserScan CastLaser(const std::vector<Segment2>& walls, const Pose2& pose, const
   // Fractional beam index of a direction (map frame, relative to the sensor).
   const auto beam_of = [&](const Vec2& v) {
     double ang = std::atan2(v.y(), v.x()) - pose.yaw_rad - fan.start_rad;  // [0, 2 pi) after wrap
-    ang = std::fmod(ang, 2.0 * kPi);
-    if (ang < 0.0) ang += 2.0 * kPi;
+    ang = std::fmod(ang, 2.0 * M_PI);
+    if (ang < 0.0) ang += 2.0 * M_PI;
     return ang / fan.step_rad - fan.beam_offset;
   };
   for (size_t w = 0; w < walls.size(); ++w) {

@@ -10,8 +10,6 @@ using geometry::Vec2;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double ClampedAcos(double x) { return std::acos(std::clamp(x, -1.0, 1.0)); }
 
 // A total order on circles, so that OverlapRatio can put its arguments in a
@@ -48,7 +46,7 @@ double OverlapRatio(const FeatureCircle& f_in, const FeatureCircle& g_in) {
   const double lens = alpha_f * rf * rf + alpha_g * rg * rg - d * rf * std::sin(alpha_f);
   const double r_min = std::min(rf, rg);
   // Eq. (9); rounding can leave the ratio a hair outside [0, 1].
-  return std::clamp(lens / (kPi * r_min * r_min), 0.0, 1.0);
+  return std::clamp(lens / (M_PI * r_min * r_min), 0.0, 1.0);
 }
 
 double MaxCentreDistance(const Segment2& f, const Segment2& g) {

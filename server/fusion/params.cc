@@ -3,42 +3,31 @@
 #include <cmath>
 #include <cstdio>
 
+#include "common/param_check.h"
+
 namespace mapd::fusion {
-namespace {
-
-constexpr double kHalfPi = 1.57079632679489661923;
-
-Status CheckRange(const char* field, double value, double lo, double hi) {
-  if (!std::isfinite(value)) {
-    return Status::InvalidArgument(std::string("fusion params: ") + field + " must be finite");
-  }
-  if (value < lo || value > hi) {
-    return Status::InvalidArgument(std::string("fusion params: ") + field + " = " +
-                                   std::to_string(value) + " is outside [" + std::to_string(lo) +
-                                   ", " + std::to_string(hi) + "]");
-  }
-  return Status::Ok();
-}
-
-}  // namespace
 
 Status FusionParams::Validate() const {
   // The included angle beta lies in [0, pi/2], so delta above pi/2 means nothing.
-  MAPD_RETURN_IF_ERROR(CheckRange("delta_rad", delta_rad, 0.0, kHalfPi));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "delta_rad", delta_rad, 0.0, M_PI_2));
   // gamma = 0 is allowed: the engine's candidate search relies on criterion 3
   // (D <= min(R_f, R_g) + eta), not on criterion 2, so it stays exact.
-  MAPD_RETURN_IF_ERROR(CheckRange("gamma", gamma, 0.0, 1.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("eta_m", eta_m, 0.0, HUGE_VAL));
-  MAPD_RETURN_IF_ERROR(CheckRange("snap_m", snap_m, 0.0, HUGE_VAL));
-  MAPD_RETURN_IF_ERROR(CheckRange("max_plane_tilt_rad", max_plane_tilt_rad, 0.0, kHalfPi));
-  MAPD_RETURN_IF_ERROR(CheckRange("chain_max_rms_m", chain_max_rms_m, 0.0, HUGE_VAL));
-  MAPD_RETURN_IF_ERROR(CheckRange("cover_m", cover_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "gamma", gamma, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "eta_m", eta_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "snap_m", snap_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "max_plane_tilt_rad", max_plane_tilt_rad, 0.0, M_PI_2));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "chain_max_rms_m", chain_max_rms_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "cover_m", cover_m, 0.0, HUGE_VAL));
   if (mode != FusionMode::kExact && mode != FusionMode::kBounded) {
     return Status::InvalidArgument("fusion params: mode is not a known mode");
   }
-  MAPD_RETURN_IF_ERROR(CheckRange("chain_max_sse_ratio", chain_max_sse_ratio, 0.0, 1.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("wall_gap_m", wall_gap_m, 0.0, HUGE_VAL));
-  MAPD_RETURN_IF_ERROR(CheckRange("wall_offset_m", wall_offset_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "chain_max_sse_ratio", chain_max_sse_ratio, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "wall_gap_m", wall_gap_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "wall_offset_m", wall_offset_m, 0.0, HUGE_VAL));
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }

@@ -8,31 +8,25 @@
 #include <set>
 #include <unordered_set>
 
+#include "common/param_check.h"
 #include "fusion/plane_engine_impl.h"
 
 namespace mapd::fusion {
 namespace {
 
-constexpr double kHalfPi = 1.57079632679489661923;
 constexpr double kMaxCoordinateM = 1e6;  // as the line engine: beyond is a unit mix-up
-
-Status CheckRange(const char* field, double value, double lo, double hi) {
-  if (!std::isfinite(value) || value < lo || value > hi) {
-    return Status::InvalidArgument(std::string("plane fusion params: ") + field + " = " +
-                                   std::to_string(value) + " is outside [" + std::to_string(lo) +
-                                   ", " + std::to_string(hi) + "]");
-  }
-  return Status::Ok();
-}
 
 }  // namespace
 
 Status PlaneFusionParams::Validate() const {
-  MAPD_RETURN_IF_ERROR(CheckRange("max_normal_angle_rad", max_normal_angle_rad, 0.0, kHalfPi));
-  MAPD_RETURN_IF_ERROR(CheckRange("max_offset_m", max_offset_m, 0.0, 1e3));
-  MAPD_RETURN_IF_ERROR(CheckRange("min_overlap", min_overlap, 0.0, 1.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("max_gap_m", max_gap_m, 0.0, 1e3));
-  MAPD_RETURN_IF_ERROR(CheckRange("cover_m", cover_m, 0.0, 1e3));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("plane fusion params", "max_normal_angle_rad",
+                                       max_normal_angle_rad, 0.0, M_PI_2));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("plane fusion params", "max_offset_m", max_offset_m, 0.0, 1e3));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("plane fusion params", "min_overlap", min_overlap, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("plane fusion params", "max_gap_m", max_gap_m, 0.0, 1e3));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("plane fusion params", "cover_m", cover_m, 0.0, 1e3));
   if (min_support == 0) {
     return Status::InvalidArgument("plane fusion params: min_support must be at least 1");
   }

@@ -2,12 +2,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace mapd::voxel::internal {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Running first and second moments of a region (voxel units, relative to the
 // seed so that they stay small).
@@ -54,8 +53,8 @@ FittedPlane FitPlane(const std::vector<Eigen::Vector3d>& points) {
 PlaneRegions GrowPlaneRegions(const std::vector<VoxelKey>& keys, const VoxelIndex& index,
                               const GridNormals& normals, const PlaneRegionParams& params) {
   const std::size_t n = keys.size();
-  const float cos_smooth = static_cast<float>(std::cos(params.smoothness_deg * kPi / 180.0));
-  const float cos_region = static_cast<float>(std::cos(params.region_angle_deg * kPi / 180.0));
+  const float cos_smooth = static_cast<float>(std::cos(params.smoothness_deg * M_PI / 180.0));
+  const float cos_region = static_cast<float>(std::cos(params.region_angle_deg * M_PI / 180.0));
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
   // Stable: ties (common, curvature is exactly 0 on ideal planes) keep key order.

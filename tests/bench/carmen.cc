@@ -13,8 +13,6 @@
 namespace mapd::bench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 struct GzCloser {
   void operator()(gzFile f) const { gzclose(f); }
 };
@@ -84,7 +82,7 @@ StatusOr<std::vector<LaserScan>> ReadCarmenLaserLog(const std::string& path) {
 }
 
 double BeamAngle(size_t i, size_t n) {
-  return -kPi / 2.0 + static_cast<double>(i) * kPi / static_cast<double>(n);
+  return -M_PI / 2.0 + static_cast<double>(i) * M_PI / static_cast<double>(n);
 }
 
 geometry::Vec2 BeamPoint(const LaserScan& scan, size_t i) {

@@ -11,7 +11,6 @@
 namespace mapd::bench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kKeyOffset = 32768;  // VoxelGrid keys = OctoMap keys - 32768
 
 bool InKeyRange(const voxel::VoxelKey& k) {
@@ -250,9 +249,9 @@ StatusOr<CropPair> MakeCropPair(const voxel::VoxelGrid& map, const CropParams& p
   t *= params.max_translation_m;
   pair.translation_m = t.norm();
   const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(pair.yaw_deg * kPi / 180.0, Eigen::Vector3d::UnitZ()) *
-       Eigen::AngleAxisd(pair.pitch_deg * kPi / 180.0, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(pair.roll_deg * kPi / 180.0, Eigen::Vector3d::UnitX()))
+      (Eigen::AngleAxisd(pair.yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(pair.pitch_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(pair.roll_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()))
           .toRotationMatrix();
   Eigen::Isometry3d T_b_map = Eigen::Isometry3d::Identity();
   T_b_map.linear() = R;
@@ -284,7 +283,7 @@ std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_nam
 
 double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {
   const Eigen::AngleAxisd d(est.linear().transpose() * truth.linear());
-  return std::abs(d.angle()) * 180.0 / kPi;
+  return std::abs(d.angle()) * 180.0 / M_PI;
 }
 
 double TranslationErrorAt(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,

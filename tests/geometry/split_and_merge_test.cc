@@ -10,8 +10,6 @@
 namespace mapd::geometry {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // n points evenly spaced from a to b, both included.
 std::vector<Vec2> Sample(const Vec2& a, const Vec2& b, int n) {
   std::vector<Vec2> out;
@@ -113,7 +111,7 @@ TEST(SplitAndMergeTest, NoisyRoomFromAScanHasItsWalls) {
   std::normal_distribution<double> noise(0.0, 0.01);
   std::vector<Vec2> points;
   for (int i = 0; i < 360; ++i) {
-    const double angle = -kPi + 2.0 * kPi * i / 360.0;
+    const double angle = -M_PI + 2.0 * M_PI * i / 360.0;
     const Vec2 u(std::cos(angle), std::sin(angle));
     // Distance to the box |x| <= 3, |y| <= 2 along u.
     const double r = std::min(std::abs(u.x()) > 1e-12 ? 3.0 / std::abs(u.x()) : 1e9,
@@ -129,7 +127,7 @@ TEST(SplitAndMergeTest, NoisyRoomFromAScanHasItsWalls) {
     if (line.segment.length() < 1.0) continue;
     ++long_lines;
     const Vec2 d = line.segment.direction().normalized();
-    EXPECT_GT(std::max(std::abs(d.x()), std::abs(d.y())), std::cos(1.0 * kPi / 180.0));
+    EXPECT_GT(std::max(std::abs(d.x()), std::abs(d.y())), std::cos(1.0 * M_PI / 180.0));
   }
   EXPECT_EQ(long_lines, 5u);
   EXPECT_LE(lines.size(), 7u);

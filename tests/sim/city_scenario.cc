@@ -14,7 +14,6 @@ using geometry::Vec2;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kStructureCellM = 20.0;  // ray-casting grid
 constexpr double kFenceInsetM = 1.5;
 constexpr double kPoleInsetM = 0.5;
@@ -37,7 +36,7 @@ class Rng {
     if (sigma == 0.0) return 0.0;
     const double u1 = 1.0 - Uniform();  // (0, 1]
     const double u2 = Uniform();
-    return sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+    return sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
 
  private:
@@ -169,8 +168,8 @@ World GenerateWorld(const ScenarioParams& p) {
 
 ScanSimulator::ScanSimulator(const ScenarioParams& params, const World& world)
     : params_(params), world_(world), cell_m_(kStructureCellM) {
-  fan_.start_rad = -kPi;  // beam b at the centre of sector b of 2 pi / beams
-  fan_.step_rad = 2.0 * kPi / params.beams;
+  fan_.start_rad = -M_PI;  // beam b at the centre of sector b of 2 pi / beams
+  fan_.step_rad = 2.0 * M_PI / params.beams;
   fan_.beam_offset = 0.5;
   fan_.beams = params.beams;
   fan_.max_range_m = params.max_range_m;

@@ -5,33 +5,24 @@
 #include <random>
 #include <string>
 
+#include "common/param_check.h"
+
 namespace mapd::sim {
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-Status CheckRange(const char* name, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi)) {
-    return Status::InvalidArgument(std::string("lidar params: ") + name + " = " +
-                                   std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
-                                   std::to_string(hi) + "]");
-  }
-  return Status::Ok();
-}
-
-}  // namespace
 
 Status LidarParams::Validate() const {
   if (beams < 2 || beams > 256) {
     return Status::InvalidArgument("lidar params: beams = " + std::to_string(beams) +
                                    " is outside [2, 256]");
   }
-  MAPD_RETURN_IF_ERROR(CheckRange("vertical_half_fov_deg", vertical_half_fov_deg, 0.1, 89.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("horizontal_res_deg", horizontal_res_deg, 0.05, 10.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("rate_hz", rate_hz, 0.1, 100.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("min_range_m", min_range_m, 0.0, 10.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("max_range_m", max_range_m, min_range_m + 0.1, 1000.0));
-  MAPD_RETURN_IF_ERROR(CheckRange("range_sigma_m", range_sigma_m, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("lidar params", "vertical_half_fov_deg", vertical_half_fov_deg, 0.1, 89.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("lidar params", "horizontal_res_deg", horizontal_res_deg, 0.05, 10.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("lidar params", "rate_hz", rate_hz, 0.1, 100.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("lidar params", "min_range_m", min_range_m, 0.0, 10.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("lidar params", "max_range_m", max_range_m, min_range_m + 0.1, 1000.0));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("lidar params", "range_sigma_m", range_sigma_m, 0.0, 1.0));
   return Status::Ok();
 }
 
@@ -51,9 +42,9 @@ LidarSimulator::LidarSimulator(const LidarParams& params) : params_(params) {
   for (int b = 0; b < params_.beams; ++b) {
     const double elevation = (-params_.vertical_half_fov_deg +
                               2.0 * params_.vertical_half_fov_deg * b / (params_.beams - 1)) *
-                             kPi / 180.0;
+                             M_PI / 180.0;
     for (int c = 0; c < columns; ++c) {
-      const double azimuth = -kPi + (c + 0.5) * 2.0 * kPi / columns;
+      const double azimuth = -M_PI + (c + 0.5) * 2.0 * M_PI / columns;
       directions_.emplace_back(std::cos(elevation) * std::cos(azimuth),
                                std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
     }

@@ -12,14 +12,13 @@ using geometry::Vec2;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxIterations = 200;
 
 // Wraps an axial difference into [-pi/2, pi/2).
 double WrapAxial(double d) {
-  d = std::fmod(d + 0.5 * kPi, kPi);
-  if (d < 0.0) d += kPi;
-  return d - 0.5 * kPi;
+  d = std::fmod(d + 0.5 * M_PI, M_PI);
+  if (d < 0.0) d += M_PI;
+  return d - 0.5 * M_PI;
 }
 
 double Weight(Kernel kernel, double d, double h) {
@@ -35,8 +34,8 @@ double Cutoff(Kernel kernel, double h) { return kernel == Kernel::kFlat ? h : 3.
 double AxialAngle(const geometry::Segment2& s) {
   const Vec2 d = s.direction();
   double theta = std::atan2(d.y(), d.x());
-  if (theta < 0.0) theta += kPi;
-  if (theta >= kPi) theta -= kPi;
+  if (theta < 0.0) theta += M_PI;
+  if (theta >= M_PI) theta -= M_PI;
   return theta;
 }
 
@@ -53,8 +52,8 @@ Vec2 AxialMean::Direction() const {
 
 Modes OrientationModes(const std::vector<double>& theta_rad, const std::vector<double>& weights,
                        const OrientationShiftParams& params) {
-  const int bins = std::max(1, static_cast<int>(std::lround(kPi / params.bin_rad)));
-  const double bin_rad = kPi / bins;
+  const int bins = std::max(1, static_cast<int>(std::lround(M_PI / params.bin_rad)));
+  const double bin_rad = M_PI / bins;
   std::vector<double> mass(static_cast<size_t>(bins), 0.0);
   std::vector<int> bin_of(theta_rad.size());
   for (size_t i = 0; i < theta_rad.size(); ++i) {
@@ -84,7 +83,7 @@ Modes OrientationModes(const std::vector<double>& theta_rad, const std::vector<d
       }
       if (den == 0.0) break;
       const double step = num / den;
-      x = std::fmod(x + step + kPi, kPi);
+      x = std::fmod(x + step + M_PI, M_PI);
       if (std::abs(step) < 1e-4 * bin_rad) break;
     }
     converged[static_cast<size_t>(b)] = x;
