@@ -13,7 +13,7 @@ namespace pb = mapserver::v1;
 constexpr uint32_t kDefaultAuditLimit = 100;
 constexpr uint32_t kMaxAuditLimit = 10000;
 
-pb::Role ToProto(Role r) {
+pb::Role RoleToProto(Role r) {
   switch (r) {
     case Role::kReader:
       return pb::ROLE_READER;
@@ -27,7 +27,7 @@ pb::Role ToProto(Role r) {
   return pb::ROLE_UNSPECIFIED;
 }
 
-bool FromProto(pb::Role r, Role* out) {
+bool RoleFromProto(pb::Role r, Role* out) {
   switch (r) {
     case pb::ROLE_READER:
       *out = Role::kReader;
@@ -46,11 +46,11 @@ bool FromProto(pb::Role r, Role* out) {
   }
 }
 
-void ToProto(const storage::TokenRecord& t, pb::TokenInfo* out) {
+void TokenToProto(const storage::TokenRecord& t, pb::TokenInfo* out) {
   Role role = Role::kReader;
   out->set_id(static_cast<uint64_t>(t.id));
   out->set_name(t.name);
-  out->set_role(ParseRole(t.role, &role) ? ToProto(role) : pb::ROLE_UNSPECIFIED);
+  out->set_role(ParseRole(t.role, &role) ? RoleToProto(role) : pb::ROLE_UNSPECIFIED);
   out->set_robot_id(t.robot_id);
   out->set_created_ns(t.created_ns);
   out->set_created_by(t.created_by);
@@ -69,7 +69,7 @@ grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
   StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "CreateToken");
   if (!admin.ok()) return ToGrpcStatus(admin.status());
   NewToken t;
-  if (!FromProto(request.role(), &t.role)) {
+  if (!RoleFromProto(request.role(), &t.role)) {
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                         "role is required: ROLE_READER, ROLE_ROBOT, ROLE_OPERATOR or ROLE_ADMIN");
   }
@@ -93,7 +93,7 @@ grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
        {"name", t.name},
        {"role", RoleName(t.role)},
        {"by", admin->name}});
-  ToProto(issued.record, response->mutable_info());
+  TokenToProto(issued.record, response->mutable_info());
   response->set_token(issued.token);
   return grpc::Status::OK;
 }
@@ -104,7 +104,7 @@ grpc::Status AuthService::ListTokens(const grpc::ServerContextBase& context,
   if (!admin.ok()) return ToGrpcStatus(admin.status());
   StatusOr<std::vector<storage::TokenRecord>> tokens = core_->store().ListTokens();
   if (!tokens.ok()) return ToGrpcStatus(tokens.status());
-  for (const storage::TokenRecord& t : *tokens) ToProto(t, response->add_tokens());
+  for (const storage::TokenRecord& t : *tokens) TokenToProto(t, response->add_tokens());
   return grpc::Status::OK;
 }
 
@@ -127,7 +127,7 @@ grpc::Status AuthService::RevokeToken(const grpc::ServerContextBase& context,
       {{"id", std::to_string(id)}, {"name", before->name}, {"by", admin->name}});
   StatusOr<storage::TokenRecord> after = core_->store().GetToken(id);
   if (!after.ok()) return ToGrpcStatus(after.status());
-  ToProto(*after, response->mutable_info());
+  TokenToProto(*after, response->mutable_info());
   return grpc::Status::OK;
 }
 
@@ -163,7 +163,7 @@ grpc::Status AuthService::WhoAmI(const grpc::ServerContextBase& context,
   StatusOr<Principal> p = access_->Authenticate(context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   response->set_name(p->name);
-  response->set_role(ToProto(p->role));
+  response->set_role(RoleToProto(p->role));
   response->set_robot_id(p->robot_id);
   response->set_anonymous(p->anonymous);
   return grpc::Status::OK;
