@@ -240,8 +240,12 @@ bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const
   return found;
 }
 
-void FusionEngine::Impl::Add(ObservationId observation, RobotId robot,
+void FusionEngine::Impl::Add(ObservationId observation, RobotId robot, const Vec2* sensor_xy_m,
                              const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+  if (sensor_xy_m != nullptr) {
+    // Evidence first: the walls resolved below see this observation's views.
+    for (const GroundFeature& f : features) consolidator_.AddView(*sensor_xy_m, f.segment);
+  }
   if (!bounded_) observations_.insert(observation);
   last_observation_ = observation;
   has_last_observation_ = true;
@@ -444,7 +448,18 @@ Status FusionEngine::Add(ObservationId observation, RobotId robot,
   if (changes != nullptr) *changes = ChangeFeed();
   // Everything is checked before anything is touched: a refusal changes nothing.
   MAPD_RETURN_IF_ERROR(impl_->Validate(observation, features));
-  impl_->Add(observation, robot, features, changes);
+  impl_->Add(observation, robot, nullptr, features, changes);
+  return Status::Ok();
+}
+
+Status FusionEngine::AddFrom(ObservationId observation, RobotId robot, const Vec2& sensor_xy_m,
+                             const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+  if (changes != nullptr) *changes = ChangeFeed();
+  if (!sensor_xy_m.allFinite() || sensor_xy_m.cwiseAbs().maxCoeff() > kMaxAbsCoordinateM) {
+    return Status::InvalidArgument("sensor origin is not finite or beyond 1e6 m");
+  }
+  MAPD_RETURN_IF_ERROR(impl_->Validate(observation, features));
+  impl_->Add(observation, robot, &sensor_xy_m, features, changes);
   return Status::Ok();
 }
 

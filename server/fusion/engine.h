@@ -99,6 +99,12 @@ class FusionEngine {
   // `changes`, if not null, receives what changed in the published map.
   Status Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
              ChangeFeed* changes = nullptr);
+  // As Add, for an observation taken from sensor_xy_m (map frame, ground
+  // plane): with FusionParams::wall_occluded_gap_m > 0 the space between the
+  // sensor and each feature counts as observed free (free_space.h). A
+  // non-finite or absurd origin is refused like a feature coordinate.
+  Status AddFrom(ObservationId observation, RobotId robot, const geometry::Vec2& sensor_xy_m,
+                 const std::vector<GroundFeature>& features, ChangeFeed* changes = nullptr);
 
   // Snapshots (bounded mode; Unimplemented in exact mode, whose restarts
   // replay): the whole state as bytes, and an engine restored from them that

@@ -71,8 +71,9 @@ class FusionEngine::Impl {
         consolidator_(params, support_cap_) {}
 
   Status Validate(ObservationId observation, const std::vector<GroundFeature>& features) const;
-  void Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
-           ChangeFeed* changes);
+  // sensor_xy_m: null if unknown (no free-space evidence).
+  void Add(ObservationId observation, RobotId robot, const Vec2* sensor_xy_m,
+           const std::vector<GroundFeature>& features, ChangeFeed* changes);
   std::optional<FusedFeature> Get(ClusterId id) const;
 
   const FusionParams params_;

@@ -28,6 +28,11 @@ Status FusionParams::Validate() const {
   MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "wall_gap_m", wall_gap_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(
       CheckParamRange("fusion params", "wall_offset_m", wall_offset_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "wall_occluded_gap_m", wall_occluded_gap_m, 0.0, HUGE_VAL));
+  if (wall_free_min_count < 1 || wall_free_min_count > 255) {
+    return Status::InvalidArgument("fusion params: wall_free_min_count must be in [1, 255]");
+  }
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }
@@ -51,7 +56,14 @@ std::string FusionParamsKey(const FusionParams& p) {
                 p.snap_m, CornerModeName(p.corner_mode), CornerPairingName(p.corner_pairing),
                 p.max_plane_tilt_rad, p.chain_max_rms_m, p.chain_max_sse_ratio,
                 p.consolidate ? 1 : 0, p.wall_gap_m, p.wall_offset_m);
-  return text;
+  std::string key = text;
+  // Appended only when on, so that snapshots taken without it stay loadable.
+  if (p.wall_occluded_gap_m > 0.0) {
+    std::snprintf(text, sizeof(text), " wall_occluded_gap_m=%.17g wall_free_min_count=%u",
+                  p.wall_occluded_gap_m, p.wall_free_min_count);
+    key += text;
+  }
+  return key;
 }
 
 const char* FusionModeName(FusionMode mode) {

@@ -69,6 +69,16 @@ struct FusionParams {
   // decimetre or more apart (a shelf before a wall) are different features
   // (docs/fusion-real-data.md measures 0.05-0.3).
   double wall_offset_m = 0.1;
+  // Consolidation with free-space evidence (free_space.h): pieces separated by
+  // more than wall_gap_m and at most wall_occluded_gap_m join if no cell of the
+  // gap on the wall line was observed free (an occlusion, not a passage), and
+  // a piece whose own extent crosses an observed-free stretch (a grazing-angle
+  // segment spanning a passage) joins nothing. Only observations added with a
+  // sensor origin (FusionEngine::AddFrom) give evidence. 0 = off.
+  double wall_occluded_gap_m = 0.0;
+  // Visibility triangles that must cover a cell before it counts as observed
+  // free, in [1, 255].
+  uint32_t wall_free_min_count = 2;
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

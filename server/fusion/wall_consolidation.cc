@@ -19,6 +19,21 @@ namespace {
 // is then within half of it from a filed point.
 constexpr double kPieceStepM = 2.0;
 constexpr double kSlackM = 1e-6;
+// Piercing ignores this much of each end of a piece: its fitted end may
+// overshoot the wall's corner, past which the space is free.
+constexpr double kPierceTrimM = 0.5;
+// Evidence is sampled along lines at this step: every cell a line crosses.
+constexpr double kSampleStepM = 0.5 * FreeSpaceGrid::kCellM;
+
+// Points every kSampleStepM from p + t0 u to p + t1 u (both included).
+template <typename Fn>
+bool AnySample(const Vec2& p, const Vec2& u, double t0, double t1, Fn&& fn) {
+  const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / kSampleStepM)));
+  for (int i = 0; i <= steps; ++i) {
+    if (fn(p + (t0 + (t1 - t0) * static_cast<double>(i) / steps) * u)) return true;
+  }
+  return false;
+}
 
 std::vector<Vec2> FiledPoints(const Segment2& s) {
   const double length = s.length();
@@ -40,8 +55,17 @@ bool NearIdentical(const Segment2& p, const Segment2& q, double offset_m) {
   return same || swapped;
 }
 
+bool Pierced(const Segment2& s, const FreeSpaceGrid& free_space) {
+  const double length = s.length();
+  if (!(length > 2.0 * kPierceTrimM)) return false;
+  const Vec2 u = s.direction() / length;
+  return AnySample(s.a, u, kPierceTrimM, length - kPierceTrimM,
+                   [&](const Vec2& x) { return free_space.IsFree(x); });
+}
+
 bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
-               const FusionParams& params) {
+               const FusionParams& params, const FreeSpaceGrid* free_space,
+               std::vector<Vec2>* gap_samples) {
   const double offset_m = params.wall_offset_m;
   if (NearIdentical(p, q, offset_m)) return true;  // b.
   // a. Collinear within delta and the offset, overlapping or within the gap.
@@ -64,11 +88,29 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   // Included angle in [0, pi/2]: |sin| <= sin(delta) with |cos| >= cos(delta).
   if (std::abs(Cross(u, v)) > std::sin(params.delta_rad) + kSlackM) return false;
   const double gap = std::max({0.0, std::min(ta, tb) - l_length, -std::max(ta, tb)});
-  return gap <= params.wall_gap_m;
+  if (gap <= params.wall_gap_m) return true;
+  if (free_space == nullptr || gap > params.wall_occluded_gap_m) return false;
+  // An occlusion or a passage: join only if nothing on the gap was seen free.
+  const double t0 = std::max(ta, tb) < 0.0 ? std::max(ta, tb) : l_length;
+  const double t1 = std::max(ta, tb) < 0.0 ? 0.0 : std::min(ta, tb);
+  if (AnySample(l.a, u, t0, t1, [&](const Vec2& x) { return free_space->IsFree(x); })) {
+    return false;
+  }
+  if (gap_samples != nullptr) {
+    AnySample(l.a, u, t0, t1, [&](const Vec2& x) {
+      gap_samples->push_back(x);
+      return false;
+    });
+  }
+  return true;
 }
 
 WallConsolidator::WallConsolidator(const FusionParams& params, uint32_t support_cap)
-    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {}
+    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {
+  if (params.consolidate && params.wall_occluded_gap_m > 0.0) {
+    free_space_ = std::make_unique<FreeSpaceGrid>(params.wall_free_min_count);
+  }
+}
 
 void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
   for (const Vec2& p : FiledPoints(s)) {
@@ -92,8 +134,10 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
     if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
     it->second.fit = fit;
   } else {
-    pieces_[stats.id].fit = fit;
+    it = pieces_.emplace(stats.id, Piece()).first;
+    it->second.fit = fit;
   }
+  it->second.pierced = free_space_ != nullptr && Pierced(fit.segment, *free_space_);
   piece_stats_[stats.id] = stats;
   Index(stats.id, fit.segment, true);
   touched_pieces_.push_back(stats.id);
@@ -109,23 +153,73 @@ void WallConsolidator::Erase(ClusterId piece) {
   piece_stats_.erase(piece);
 }
 
-std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) const {
+std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
   std::vector<ClusterId> out;
   if (!params_.consolidate) return out;
-  const Segment2& s = pieces_.at(id).fit.segment;
-  const double radius = params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
+  const Piece& piece = pieces_.at(id);
+  if (piece.pierced) return out;
+  const Segment2& s = piece.fit.segment;
+  const double reach_m =
+      free_space_ ? std::max(params_.wall_gap_m, params_.wall_occluded_gap_m) : params_.wall_gap_m;
+  const double radius = params_.wall_offset_m + reach_m + 0.5 * kPieceStepM + kSlackM;
   index_.ForEachNearSegment(s, radius, [&](ClusterId other) {
     if (other != id) out.push_back(other);
   });
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
+  std::vector<Vec2> gap_samples;
   out.erase(std::remove_if(out.begin(), out.end(),
                            [&](ClusterId other) {
-                             return !OnOneWall(s, id, pieces_.at(other).fit.segment, other,
-                                               params_);
+                             const Piece& q = pieces_.at(other);
+                             if (q.pierced) return true;
+                             gap_samples.clear();
+                             if (!OnOneWall(s, id, q.fit.segment, other, params_, free_space_.get(),
+                                            &gap_samples)) {
+                               return true;
+                             }
+                             // Bridged an occluded gap: watch its cells.
+                             for (const Vec2& x : gap_samples) {
+                               std::vector<ClusterId>& ids =
+                                   gap_watch_[FreeSpaceGrid::CellKeyOf(x)];
+                               for (ClusterId z : {id, other}) {
+                                 if (std::find(ids.begin(), ids.end(), z) == ids.end()) {
+                                   ids.push_back(z);
+                                 }
+                               }
+                             }
+                             return false;
                            }),
             out.end());
   return out;
+}
+
+void WallConsolidator::TakeEvidence() {
+  if (!free_space_) return;
+  const std::vector<uint64_t> cells = free_space_->TakeNewlyFree();
+  if (cells.empty()) return;
+  // A sample of a piece lies within half a filing step of a filed point, and
+  // the centre of its cell within half a cell diagonal of the sample.
+  const double radius = 0.5 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + kSlackM;
+  std::vector<ClusterId> near;
+  for (uint64_t cell : cells) {
+    if (auto it = gap_watch_.find(cell); it != gap_watch_.end()) {
+      for (ClusterId id : it->second) {
+        if (pieces_.count(id) != 0) touched_pieces_.push_back(id);
+      }
+      gap_watch_.erase(it);
+    }
+    index_.ForEachNear(FreeSpaceGrid::CellCentre(cell), radius,
+                       [&](ClusterId id) { near.push_back(id); });
+  }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (ClusterId id : near) {
+    Piece& piece = pieces_.at(id);
+    const bool pierced = Pierced(piece.fit.segment, *free_space_);
+    if (pierced == piece.pierced) continue;
+    piece.pierced = pierced;
+    touched_pieces_.push_back(id);
+  }
 }
 
 bool WallConsolidator::Twins(const std::vector<ClusterId>& component,
@@ -176,6 +270,7 @@ void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
 void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall>* walls) {
   removed->clear();
   walls->clear();
+  TakeEvidence();
   std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
   std::vector<ClusterId> work;
   for (ClusterId id : touched_pieces_) {

@@ -28,16 +28,30 @@
 // deterministic and independent of arrival order, like the pieces themselves.
 // Off (FusionParams::consolidate false), every piece is its own wall.
 //
+// With free-space evidence (FusionParams::wall_occluded_gap_m > 0,
+// free_space.h), rule a also joins pieces whose gap exceeds wall_gap_m, up to
+// wall_occluded_gap_m, if no sample of the gap on L's line (every
+// FreeSpaceGrid::kCellM / 2) lies in an observed-free cell; and a piece
+// "pierced" by an observed-free cell (a sample of its fitted segment, the
+// last kPierceTrimM at each end aside) joins no other piece. Walls are then a
+// function of (pieces, evidence). Cells only ever become free, so evidence can
+// only part walls: a wall joined across an occluded gap is re-resolved when a
+// cell of that gap becomes free (the consolidator records the cells of the
+// gaps it bridged), and a piece near a newly free cell is re-checked for
+// piercing.
+//
 // Incremental: the engine reports pieces that appeared, changed or vanished;
 // Resolve() recomputes only the walls those pieces belonged to or now reach.
 #ifndef MAPD_FUSION_WALL_CONSOLIDATION_H_
 #define MAPD_FUSION_WALL_CONSOLIDATION_H_
 
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
 #include "fusion/cluster_stats.h"
+#include "fusion/free_space.h"
 #include "fusion/grid_index.h"
 #include "fusion/params.h"
 
@@ -47,8 +61,16 @@ namespace mapd::fusion {
 bool NearIdentical(const geometry::Segment2& p, const geometry::Segment2& q, double offset_m);
 
 // The relation above on two fitted segments named by their cluster ids.
+// `free_space` (null: no evidence) enables the occluded-gap join; when it
+// joins across such a gap, the gap's samples on L's line are appended to
+// `gap_samples` if not null.
 bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segment2& q,
-               ClusterId q_id, const FusionParams& params);
+               ClusterId q_id, const FusionParams& params,
+               const FreeSpaceGrid* free_space = nullptr,
+               std::vector<geometry::Vec2>* gap_samples = nullptr);
+
+// Whether an observed-free cell lies on `s` (its ends trimmed, see above).
+bool Pierced(const geometry::Segment2& s, const FreeSpaceGrid& free_space);
 
 class WallConsolidator {
  public:
@@ -60,6 +82,14 @@ class WallConsolidator {
   bool Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit);
   void Erase(ClusterId piece);
   bool HasPiece(ClusterId piece) const { return pieces_.count(piece) != 0; }
+  // Free-space evidence: the visibility triangle of `segment` seen from
+  // `origin`. A no-op unless wall_occluded_gap_m > 0.
+  void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment) {
+    if (free_space_) free_space_->AddView(origin, segment);
+  }
+  // Null unless wall_occluded_gap_m > 0 (snapshots).
+  FreeSpaceGrid* free_space() { return free_space_.get(); }
+  const FreeSpaceGrid* free_space() const { return free_space_.get(); }
   // All pieces, ascending id (snapshots).
   const std::map<ClusterId, ClusterStats>& pieces() const { return piece_stats_; }
 
@@ -78,10 +108,15 @@ class WallConsolidator {
     ClusterStats::Fit fit;
     ClusterId wall = 0;
     bool has_wall = false;
+    bool pierced = false;  // an observed-free cell on its fitted segment: joins nothing
   };
   void Index(ClusterId id, const geometry::Segment2& s, bool insert);
   // Pieces on one wall with `id`, ascending.
-  std::vector<ClusterId> Neighbours(ClusterId id) const;
+  // Records the cells of the occluded gaps it bridges (gap_watch_).
+  std::vector<ClusterId> Neighbours(ClusterId id);
+  // Cells that became free: touches the walls that bridged them and the
+  // pieces whose piercing they may change.
+  void TakeEvidence();
   // Whether the guard's cut of a component into head | tail (indices into
   // it) would separate two near-identical pieces (rule b).
   bool Twins(const std::vector<ClusterId>& component, const std::vector<uint32_t>& head,
@@ -95,8 +130,12 @@ class WallConsolidator {
   std::unordered_map<ClusterId, Piece> pieces_;
   std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending
   std::vector<ClusterId> touched_pieces_;
-  std::vector<ClusterId> touched_walls_;  // walls of pieces that changed or vanished
-  UniformGrid<ClusterId> index_;          // pieces filed at points along their fitted segment
+  std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
+  UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
+  std::unique_ptr<FreeSpaceGrid> free_space_;  // null unless wall_occluded_gap_m > 0
+  // Cells of bridged occluded gaps -> the two pieces bridged. Entries of pieces
+  // since gone or re-joined otherwise only cause a redundant re-resolve.
+  std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;
 };
 
 }  // namespace mapd::fusion

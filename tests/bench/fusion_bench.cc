@@ -4,7 +4,8 @@
 // side, with and without pose noise; and the speed targets of the fusion issue
 // (item 8). A benchmark, not a test: run it by hand, figures go to docs/.
 //
-//   fusion_bench [--repeats N] [--seed S] [--svg-dir DIR]   the comparison
+//   fusion_bench [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M]
+//                [--occluded-gap M] [--free-min-count N]   the comparison
 //   fusion_bench --million [--blocks-x X --blocks-y Y] [--bounded]   1M-feature world, streaming
 #include <sys/resource.h>
 #include <time.h>
@@ -68,10 +69,16 @@ struct Method {
 
 // --wall-gap M: the consolidation gap of the proposed method's rows (< 0: the default).
 double g_wall_gap_m = -1.0;
+// --occluded-gap M / --free-min-count N: free-space evidence (FusionParams::
+// wall_occluded_gap_m, wall_free_min_count) for every three_criteria row (< 0: the default).
+double g_occluded_gap_m = -1.0;
+int g_free_min_count = -1;
 
 std::vector<Method> Methods() {
   FuserOptions base;  // defaults; baselines post-process like the proposed method
   if (g_wall_gap_m >= 0.0) base.three_criteria.wall_gap_m = g_wall_gap_m;
+  if (g_occluded_gap_m >= 0.0) base.three_criteria.wall_occluded_gap_m = g_occluded_gap_m;
+  if (g_free_min_count > 0) base.three_criteria.wall_free_min_count = g_free_min_count;
   base.mean_shift.post.snap_m = base.three_criteria.snap_m;
   base.mean_shift.post.corner_mode = base.three_criteria.corner_mode;
   base.density.post.snap_m = base.three_criteria.snap_m;
@@ -111,7 +118,9 @@ Run Fuse(const Method& m, const std::vector<sc::Scan>& scans) {
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = CpuNow();
   for (const sc::Scan& s : scans) {
-    const mapd::Status st = (*fuser)->Add(s.observation, s.robot, s.features, nullptr);
+    // The sensor sits at the vehicle's (estimated) origin.
+    const mapd::Status st =
+        (*fuser)->AddFrom(s.observation, s.robot, s.estimated_pose.t, s.features, nullptr);
     if (!st.ok()) {
       std::fprintf(stderr, "%s\n", st.ToString().c_str());
       std::exit(1);
@@ -318,6 +327,8 @@ int Million(int blocks_x, int blocks_y, mapd::fusion::FusionMode mode) {
   const sc::ScanSimulator sim(params, world);
   mapd::fusion::FusionParams fusion;
   fusion.mode = mode;
+  if (g_occluded_gap_m >= 0.0) fusion.wall_occluded_gap_m = g_occluded_gap_m;
+  if (g_free_min_count > 0) fusion.wall_free_min_count = g_free_min_count;
   mapd::fusion::FusionEngine engine{fusion};
   double fuse_s = 0.0, fuse_cpu_s = 0.0;
   size_t raw = 0;
@@ -327,7 +338,8 @@ int Million(int blocks_x, int blocks_y, mapd::fusion::FusionMode mode) {
     raw += scan.features.size();
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = CpuNow();
-    const mapd::Status st = engine.Add(scan.observation, scan.robot, scan.features, nullptr);
+    const mapd::Status st =
+        engine.AddFrom(scan.observation, scan.robot, scan.estimated_pose.t, scan.features, nullptr);
     fuse_cpu_s += CpuNow() - c0;
     fuse_s += Seconds(t0);
     if (!st.ok()) {
@@ -367,6 +379,10 @@ int main(int argc, char** argv) {
       svg_dir = argv[++i];
     else if (a == "--wall-gap" && has_value)
       g_wall_gap_m = std::atof(argv[++i]);
+    else if (a == "--occluded-gap" && has_value)
+      g_occluded_gap_m = std::atof(argv[++i]);
+    else if (a == "--free-min-count" && has_value)
+      g_free_min_count = std::atoi(argv[++i]);
     else if (a == "--million")
       million = true;
     else if (a == "--bounded")
@@ -376,10 +392,12 @@ int main(int argc, char** argv) {
     else if (a == "--blocks-y" && has_value)
       blocks_y = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr,
-                   "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] | --million "
-                   "[--blocks-x X --blocks-y Y] [--bounded]\n",
-                   argv[0]);
+      std::fprintf(
+          stderr,
+          "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] [--occluded-gap M] "
+          "[--free-min-count N] | --million "
+          "[--blocks-x X --blocks-y Y] [--bounded]\n",
+          argv[0]);
       return 2;
     }
   }

@@ -28,6 +28,14 @@ class Fuser {
   virtual Status Add(ObservationId observation, RobotId robot,
                      const std::vector<GroundFeature>& features, ChangeFeed* changes) = 0;
 
+  // As Add, for an observation taken from sensor_xy_m (map frame). Strategies
+  // that use no free-space evidence ignore the origin.
+  virtual Status AddFrom(ObservationId observation, RobotId robot,
+                         const geometry::Vec2& /*sensor_xy_m*/,
+                         const std::vector<GroundFeature>& features, ChangeFeed* changes) {
+    return Add(observation, robot, features, changes);
+  }
+
   // The published fused features, ascending by id (the smallest member FeatureId).
   virtual std::vector<FusedFeature> Published() const = 0;
 
@@ -46,6 +54,10 @@ class EngineFuser : public Fuser {
   Status Add(ObservationId observation, RobotId robot, const std::vector<GroundFeature>& features,
              ChangeFeed* changes) override {
     return engine_.Add(observation, robot, features, changes);
+  }
+  Status AddFrom(ObservationId observation, RobotId robot, const geometry::Vec2& sensor_xy_m,
+                 const std::vector<GroundFeature>& features, ChangeFeed* changes) override {
+    return engine_.AddFrom(observation, robot, sensor_xy_m, features, changes);
   }
   std::vector<FusedFeature> Published() const override { return engine_.Published(); }
   const char* name() const override { return "three_criteria"; }

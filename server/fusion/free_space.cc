@@ -1,0 +1,123 @@
+#include "fusion/free_space.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mapd::fusion {
+
+using geometry::Segment2;
+using geometry::Vec2;
+
+namespace {
+
+// Triangles thinner than this (twice the area, m^2) mark nothing: the origin
+// lies on the segment's line, and no ray crossed anything.
+constexpr double kMinDoubleAreaM2 = 1e-9;
+
+int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+int64_t CellIndex(double x) { return static_cast<int64_t>(std::floor(x / FreeSpaceGrid::kCellM)); }
+
+// One eroded half-plane of the triangle: inside iff n . p >= c.
+struct HalfPlane {
+  Vec2 n;
+  double c;
+};
+
+HalfPlane Inward(const Vec2& p, const Vec2& q, double erosion_m) {
+  const Vec2 d = q - p;
+  const Vec2 n = Vec2(-d.y(), d.x()) / d.norm();  // left of p->q: inside for a ccw triangle
+  return {n, n.dot(p) + erosion_m};
+}
+
+}  // namespace
+
+uint64_t FreeSpaceGrid::TileKey(int64_t tx, int64_t ty) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(tx)) << 32) |
+         static_cast<uint64_t>(static_cast<uint32_t>(ty));
+}
+
+void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
+  Vec2 a = segment.a, b = segment.b;
+  const double twice_area = geometry::Cross(a - origin, b - origin);
+  if (std::abs(twice_area) < kMinDoubleAreaM2) return;
+  if (twice_area < 0.0) std::swap(a, b);  // (origin, a, b) counter-clockwise
+  const HalfPlane planes[3] = {Inward(origin, a, kSideErosionM), Inward(a, b, kSegmentMarginM),
+                               Inward(b, origin, kSideErosionM)};
+  const double y_lo = std::min({origin.y(), a.y(), b.y()});
+  const double y_hi = std::max({origin.y(), a.y(), b.y()});
+  const double x_lo = std::min({origin.x(), a.x(), b.x()});
+  const double x_hi = std::max({origin.x(), a.x(), b.x()});
+  for (int64_t cy = CellIndex(y_lo); cy <= CellIndex(y_hi); ++cy) {
+    const double y = (static_cast<double>(cy) + 0.5) * kCellM;
+    double lo = x_lo, hi = x_hi;
+    for (const HalfPlane& h : planes) {
+      const double rhs = h.c - h.n.y() * y;  // n.x * x >= rhs
+      if (std::abs(h.n.x()) < 1e-12) {
+        if (rhs > 0.0) hi = lo - 1.0;  // the row lies outside this edge
+      } else if (h.n.x() > 0.0) {
+        lo = std::max(lo, rhs / h.n.x());
+      } else {
+        hi = std::min(hi, rhs / h.n.x());
+      }
+    }
+    if (hi < lo) continue;
+    // Cells whose centre (cx + 0.5) * kCellM lies in [lo, hi].
+    const int64_t cx_first = static_cast<int64_t>(std::ceil(lo / kCellM - 0.5));
+    const int64_t cx_last = static_cast<int64_t>(std::floor(hi / kCellM - 0.5));
+    for (int64_t cx = cx_first; cx <= cx_last;) {
+      // One tile lookup per run of cells in the same tile.
+      const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
+      const int64_t run_end = std::min(cx_last, (tx + 1) * kTileCells - 1);
+      std::unique_ptr<Tile>& tile = tiles_[TileKey(tx, ty)];
+      if (!tile) tile = std::make_unique<Tile>(Tile{});
+      const int64_t row = (cy - ty * kTileCells) * kTileCells;
+      for (; cx <= run_end; ++cx) {
+        uint8_t& count = (*tile)[static_cast<size_t>(row + cx - tx * kTileCells)];
+        if (count == 255) continue;  // saturated: still a function of the triangle set
+        ++count;
+        if (count == min_count_) newly_free_.push_back(TileKey(cx, cy));
+      }
+    }
+  }
+}
+
+bool FreeSpaceGrid::IsFree(const Vec2& p) const {
+  const int64_t cx = CellIndex(p.x()), cy = CellIndex(p.y());
+  const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
+  auto it = tiles_.find(TileKey(tx, ty));
+  if (it == tiles_.end()) return false;
+  return (*it->second)[static_cast<size_t>((cy - ty * kTileCells) * kTileCells + cx -
+                                           tx * kTileCells)] >= min_count_;
+}
+
+std::vector<uint64_t> FreeSpaceGrid::TakeNewlyFree() {
+  std::vector<uint64_t> out;
+  out.swap(newly_free_);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+uint64_t FreeSpaceGrid::CellKeyOf(const Vec2& p) {
+  return TileKey(CellIndex(p.x()), CellIndex(p.y()));
+}
+
+Vec2 FreeSpaceGrid::CellCentre(uint64_t cell_key) {
+  const auto cx = static_cast<int32_t>(static_cast<uint32_t>(cell_key >> 32));
+  const auto cy = static_cast<int32_t>(static_cast<uint32_t>(cell_key & 0xffffffffu));
+  return Vec2((cx + 0.5) * kCellM, (cy + 0.5) * kCellM);
+}
+
+std::vector<std::pair<uint64_t, const FreeSpaceGrid::Tile*>> FreeSpaceGrid::SortedTiles() const {
+  std::vector<std::pair<uint64_t, const Tile*>> out;
+  out.reserve(tiles_.size());
+  for (const auto& [key, tile] : tiles_) out.emplace_back(key, tile.get());
+  std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  return out;
+}
+
+void FreeSpaceGrid::RestoreTile(uint64_t key, const Tile& tile) {
+  tiles_[key] = std::make_unique<Tile>(tile);
+}
+
+}  // namespace mapd::fusion

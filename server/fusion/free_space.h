@@ -1,0 +1,75 @@
+// Free-space evidence for wall consolidation (docs/algorithms.md A.11).
+//
+// Line features say where surfaces are, not where the sensor saw through:
+// a 5 m stretch of a wall line with no feature on it is either occluded (a
+// fence or another building stood in front) or open (a passage between two
+// buildings). Every observation has a sensor pose, though, and the rays that
+// reached an observed segment crossed the triangle (sensor origin, a, b)
+// unobstructed. FreeSpaceGrid counts, per cell of a sparse grid, how many
+// such visibility triangles covered it; a cell with at least min_count is
+// "observed free".
+//
+// A triangle marks a cell only if the cell's centre lies at least
+// kSideErosionM inside both rays (a ray grazing a building corner, misplaced
+// by pose noise, must not mark the corner's wall) and at least kSegmentMarginM
+// in front of the observed segment (a wall's own observations, noisy along
+// their normal, never mark its line). Cells are kCellM square, in tiles of
+// kTileCells x kTileCells created on first touch; counts saturate at 255, so
+// they, and which cells are free, are a function of the set of triangles
+// added, whatever their order.
+#ifndef MAPD_FUSION_FREE_SPACE_H_
+#define MAPD_FUSION_FREE_SPACE_H_
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "geometry/segment2.h"
+
+namespace mapd::fusion {
+
+class FreeSpaceGrid {
+ public:
+  static constexpr double kCellM = 0.25;
+  static constexpr double kSideErosionM = 0.3;
+  static constexpr double kSegmentMarginM = 0.4;
+  static constexpr int kTileCells = 32;
+  using Tile = std::array<uint8_t, kTileCells * kTileCells>;
+
+  // REQUIRES: 1 <= min_count <= 255.
+  explicit FreeSpaceGrid(uint32_t min_count) : min_count_(min_count) {}
+
+  // Adds the visibility triangle of `segment`, observed from `origin` (map frame).
+  void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment);
+
+  // Whether the cell that contains p is observed free.
+  bool IsFree(const geometry::Vec2& p) const;
+
+  // The cells (CellKeyOf) that became free (reached min_count) since the last
+  // call, ascending; clears the list.
+  std::vector<uint64_t> TakeNewlyFree();
+  static uint64_t CellKeyOf(const geometry::Vec2& p);
+  static geometry::Vec2 CellCentre(uint64_t cell_key);
+
+  size_t tile_count() const { return tiles_.size(); }
+  size_t memory_bytes() const { return tiles_.size() * (sizeof(Tile) + 48); }
+
+  // Snapshots: tiles by key, and restoring one (REQUIRES: key not present).
+  // A restored grid has no newly free cells.
+  std::vector<std::pair<uint64_t, const Tile*>> SortedTiles() const;
+  void RestoreTile(uint64_t key, const Tile& tile);
+
+ private:
+  static uint64_t TileKey(int64_t tx, int64_t ty);
+  void Increment(int64_t cx, int64_t cy);
+
+  const uint32_t min_count_;
+  std::unordered_map<uint64_t, std::unique_ptr<Tile>> tiles_;
+  std::vector<uint64_t> newly_free_;  // cell keys (TileKey packing of cell indices)
+};
+
+}  // namespace mapd::fusion
+
+#endif  // MAPD_FUSION_FREE_SPACE_H_
