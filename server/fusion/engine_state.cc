@@ -4,7 +4,9 @@
 // continues bit for bit:
 //   "MAPDFUS1" | u32 version | params key (string) | body | u64 FNV-1a of all before
 //   body: nodes (parent, size, anchor, next member, folded stats, root stats),
-//         counters, split records, published features, the snapper's lines.
+//         counters, split records, published features, the snapper's lines,
+//         the consolidator's pieces, and (wall_occluded_gap_m > 0) the
+//         free-space tiles.
 // The grid and the snapper's index are refiled from the nodes, in node order
 // (the order the live engine filed them), so candidate scans visit the same
 // items in the same order.
@@ -159,6 +161,16 @@ Status FusionEngine::SaveState(std::string* out) const {
   // The consolidator's pieces; its walls are a function of them (Resolve).
   w.U64(e.consolidator_.pieces().size());
   for (const auto& [id, stats] : e.consolidator_.pieces()) w.Stats(stats);
+  // Free-space evidence (only with wall_occluded_gap_m > 0, which the params
+  // key records): its tiles, ascending by key.
+  if (const FreeSpaceGrid* free_space = e.consolidator_.free_space()) {
+    const auto tiles = free_space->SortedTiles();
+    w.U64(tiles.size());
+    for (const auto& [key, tile] : tiles) {
+      w.U64(key);
+      w.Str(std::string_view(reinterpret_cast<const char*>(tile->data()), tile->size()));
+    }
+  }
   w.U64(Fnv1a(*out));
   return Status::Ok();
 }
@@ -233,14 +245,32 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     e.published_[f.id] = std::move(f);
   }
   const uint64_t pieces = r.Count(8);
+  std::vector<ClusterStats> piece_stats;
   for (uint64_t i = 0; i < pieces && r.ok(); ++i) {
-    const ClusterStats stats = r.Stats();
+    piece_stats.push_back(r.Stats());
     if (!r.ok()) break;
-    if (stats.hull.empty() || stats.moments.count == 0)
+    if (piece_stats.back().hull.empty() || piece_stats.back().moments.count == 0)
       return Corrupt("an empty published cluster");
-    e.consolidator_.Upsert(stats, stats.Refit());
+  }
+  // The evidence before the pieces: whether a piece is pierced depends on it.
+  if (FreeSpaceGrid* free_space = e.consolidator_.free_space()) {
+    const uint64_t tiles = r.Count(8 + 8 + sizeof(FreeSpaceGrid::Tile));
+    uint64_t previous_key = 0;
+    for (uint64_t i = 0; i < tiles && r.ok(); ++i) {
+      const uint64_t key = r.U64();
+      const std::string bytes = r.Str();
+      if (!r.ok()) break;
+      if (bytes.size() != sizeof(FreeSpaceGrid::Tile) || (i > 0 && key <= previous_key)) {
+        return Corrupt("a free-space tile");
+      }
+      previous_key = key;
+      FreeSpaceGrid::Tile tile;
+      std::memcpy(tile.data(), bytes.data(), tile.size());
+      free_space->RestoreTile(key, tile);
+    }
   }
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
+  for (const ClusterStats& stats : piece_stats) e.consolidator_.Upsert(stats, stats.Refit());
 
   // Structure: indices in range, stats exactly at roots, shallow trees.
   size_t roots = 0;

@@ -82,13 +82,19 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   }
 }
 
-bool FreeSpaceGrid::IsFree(const Vec2& p) const {
+bool FreeSpaceGrid::Probe::IsFree(const Vec2& p) {
   const int64_t cx = CellIndex(p.x()), cy = CellIndex(p.y());
   const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
-  auto it = tiles_.find(TileKey(tx, ty));
-  if (it == tiles_.end()) return false;
-  return (*it->second)[static_cast<size_t>((cy - ty * kTileCells) * kTileCells + cx -
-                                           tx * kTileCells)] >= min_count_;
+  const uint64_t key = TileKey(tx, ty);
+  if (!has_tile_ || key != tile_key_) {
+    auto it = grid_.tiles_.find(key);
+    tile_ = it == grid_.tiles_.end() ? nullptr : it->second.get();
+    tile_key_ = key;
+    has_tile_ = true;
+  }
+  if (tile_ == nullptr) return false;
+  return (*tile_)[static_cast<size_t>((cy - ty * kTileCells) * kTileCells + cx -
+                                      tx * kTileCells)] >= grid_.min_count_;
 }
 
 std::vector<uint64_t> FreeSpaceGrid::TakeNewlyFree() {

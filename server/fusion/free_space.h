@@ -45,7 +45,20 @@ class FreeSpaceGrid {
   void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment);
 
   // Whether the cell that contains p is observed free.
-  bool IsFree(const geometry::Vec2& p) const;
+  bool IsFree(const geometry::Vec2& p) const { return Probe(*this).IsFree(p); }
+
+  // IsFree for many nearby points (samples along a line): keeps the last tile.
+  class Probe {
+   public:
+    explicit Probe(const FreeSpaceGrid& grid) : grid_(grid) {}
+    bool IsFree(const geometry::Vec2& p);
+
+   private:
+    const FreeSpaceGrid& grid_;
+    bool has_tile_ = false;
+    uint64_t tile_key_ = 0;
+    const Tile* tile_ = nullptr;  // null: no tile there
+  };
 
   // The cells (CellKeyOf) that became free (reached min_count) since the last
   // call, ascending; clears the list.

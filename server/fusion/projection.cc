@@ -50,6 +50,7 @@ StatusOr<ProjectedObservation> ProjectToGround(const geometry::SensorObservation
   const Eigen::Vector3d& t = T_map_sensor.translation;
 
   ProjectedObservation out;
+  out.sensor_xy_m = t.head<2>();
   FeatureId id = first_id;
   for (const geometry::LineFeature3& line : obs.lines) {
     const FeatureId this_id = id++;  // a skipped feature still consumes its id

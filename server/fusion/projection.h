@@ -25,6 +25,9 @@ struct ProjectedObservation {
   std::vector<GroundFeature> ground;   // lines, and near-vertical planes as segments
   std::vector<MapPlane> other_planes;  // planes tilted more than max_plane_tilt_rad
   size_t skipped = 0;  // features whose ground projection degenerates (a vertical line)
+  // The sensor's origin in the map frame, on the ground plane: where the rays
+  // to every feature started (free-space evidence, FusionEngine::AddFrom).
+  geometry::Vec2 sensor_xy_m = geometry::Vec2::Zero();
 };
 
 // Transforms every feature of `obs` by T_map_sensor = T_map_frame * obs.T_frame_sensor

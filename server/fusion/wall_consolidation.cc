@@ -59,8 +59,9 @@ bool Pierced(const Segment2& s, const FreeSpaceGrid& free_space) {
   const double length = s.length();
   if (!(length > 2.0 * kPierceTrimM)) return false;
   const Vec2 u = s.direction() / length;
+  FreeSpaceGrid::Probe probe(free_space);
   return AnySample(s.a, u, kPierceTrimM, length - kPierceTrimM,
-                   [&](const Vec2& x) { return free_space.IsFree(x); });
+                   [&](const Vec2& x) { return probe.IsFree(x); });
 }
 
 bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
@@ -93,7 +94,8 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   // An occlusion or a passage: join only if nothing on the gap was seen free.
   const double t0 = std::max(ta, tb) < 0.0 ? std::max(ta, tb) : l_length;
   const double t1 = std::max(ta, tb) < 0.0 ? 0.0 : std::min(ta, tb);
-  if (AnySample(l.a, u, t0, t1, [&](const Vec2& x) { return free_space->IsFree(x); })) {
+  FreeSpaceGrid::Probe probe(*free_space);
+  if (AnySample(l.a, u, t0, t1, [&](const Vec2& x) { return probe.IsFree(x); })) {
     return false;
   }
   if (gap_samples != nullptr) {
@@ -159,12 +161,25 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
   const Piece& piece = pieces_.at(id);
   if (piece.pierced) return out;
   const Segment2& s = piece.fit.segment;
-  const double reach_m =
-      free_space_ ? std::max(params_.wall_gap_m, params_.wall_occluded_gap_m) : params_.wall_gap_m;
-  const double radius = params_.wall_offset_m + reach_m + 0.5 * kPieceStepM + kSlackM;
-  index_.ForEachNearSegment(s, radius, [&](ClusterId other) {
+  const double radius = params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
+  const auto add = [&](ClusterId other) {
     if (other != id) out.push_back(other);
-  });
+  };
+  index_.ForEachNearSegment(s, radius, add);
+  const double length = s.length();
+  if (free_space_ && params_.wall_occluded_gap_m > params_.wall_gap_m && length > 0.0) {
+    // Occluded-gap candidates lie along the line: the nearer end of the other
+    // (a filed point) within the gap of this one's extent, and off its line by
+    // at most the offset plus what delta_rad turns over the gap.
+    const double gap_m = params_.wall_occluded_gap_m;
+    const double tan_delta = std::tan(std::min(params_.delta_rad, 1.5));
+    const double along_m = (gap_m + params_.wall_offset_m) * (1.0 + tan_delta) + kSlackM;
+    const Vec2 u = s.direction() / length;
+    const Segment2 extended{s.a - along_m * u, s.b + along_m * u};
+    const double lateral_m =
+        2.0 * params_.wall_offset_m + (gap_m + kPieceStepM) * tan_delta + kSlackM;
+    index_.ForEachNearSegment(extended, lateral_m, add);
+  }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   std::vector<Vec2> gap_samples;
@@ -198,9 +213,13 @@ void WallConsolidator::TakeEvidence() {
   const std::vector<uint64_t> cells = free_space_->TakeNewlyFree();
   if (cells.empty()) return;
   // A sample of a piece lies within half a filing step of a filed point, and
-  // the centre of its cell within half a cell diagonal of the sample.
-  const double radius = 0.5 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + kSlackM;
+  // the centre of its cell within half a cell diagonal of the sample. Cells
+  // are taken by index cell (kPieceStepM square): one query each, from its
+  // centre, reaching half its diagonal further.
+  const double radius =
+      0.5 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + 0.71 * kPieceStepM + kSlackM;
   std::vector<ClusterId> near;
+  std::unordered_set<uint64_t> probed;  // index cells, packed as FreeSpaceGrid keys
   for (uint64_t cell : cells) {
     if (auto it = gap_watch_.find(cell); it != gap_watch_.end()) {
       for (ClusterId id : it->second) {
@@ -208,7 +227,13 @@ void WallConsolidator::TakeEvidence() {
       }
       gap_watch_.erase(it);
     }
-    index_.ForEachNear(FreeSpaceGrid::CellCentre(cell), radius,
+    const Vec2 centre = FreeSpaceGrid::CellCentre(cell);
+    const Vec2 index_cell(std::floor(centre.x() / kPieceStepM),
+                          std::floor(centre.y() / kPieceStepM));
+    if (!probed.insert(FreeSpaceGrid::CellKeyOf(index_cell * FreeSpaceGrid::kCellM)).second) {
+      continue;
+    }
+    index_.ForEachNear((index_cell + Vec2(0.5, 0.5)) * kPieceStepM, radius,
                        [&](ClusterId id) { near.push_back(id); });
   }
   std::sort(near.begin(), near.end());

@@ -254,6 +254,13 @@ const std::vector<Setting>& Settings() {
       Real("fusion.wall_offset_m", "wall consolidation: pieces join only if they lie within this of each other's "
            "line, metres",
            [](C& c) -> auto& { return c.fusion.wall_offset_m; }, {0, 100}),
+      Real("fusion.wall_occluded_gap_m", "wall consolidation with free-space evidence: pieces of one wall "
+           "farther apart than wall_gap_m, up to this, join if no ray was seen to pass through the gap (an "
+           "occlusion, not a passage), and a piece crossed by seen-free space joins nothing; metres, 0 = off",
+           [](C& c) -> auto& { return c.fusion.wall_occluded_gap_m; }, {0, 1000}),
+      Count("fusion.wall_free_min_count", "wall consolidation with free-space evidence: visibility triangles "
+            "(sensor to observed segment) that must cover a 0.25 m cell before it counts as seen free",
+            [](C& c) -> auto& { return c.fusion.wall_free_min_count; }, 1, 255),
 
       // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
       Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",

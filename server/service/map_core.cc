@@ -562,9 +562,9 @@ void MapCore::Fuse(const geometry::SensorObservation& features, int64_t observat
   fusion::ChangeFeed feed;
   fusion::PlaneChangeFeed plane_feed;
   if (s.ok() && !projected->ground.empty()) {
-    s = engine_->Add(static_cast<fusion::ObservationId>(observation_id),
-                     static_cast<fusion::RobotId>(robot_id), projected->ground,
-                     delta ? &feed : nullptr);
+    s = engine_->AddFrom(static_cast<fusion::ObservationId>(observation_id),
+                         static_cast<fusion::RobotId>(robot_id), projected->sensor_xy_m,
+                         projected->ground, delta ? &feed : nullptr);
   }
   // Lines and planes are separate engines: a refused plane set leaves the
   // lines fused (and the other way round); both are logged.

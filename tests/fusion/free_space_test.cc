@@ -1,0 +1,279 @@
+// Free-space evidence (fusion/free_space.h) and its use in wall consolidation
+// (wall_occluded_gap_m, docs/algorithms.md A.11).
+#include "fusion/free_space.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "fusion/engine.h"
+#include "fusion/params.h"
+
+namespace mapd::fusion {
+namespace {
+
+using geometry::Segment2;
+using geometry::Vec2;
+
+TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
+  FreeSpaceGrid grid(2);
+  const Vec2 origin(0.0, -10.0);
+  const Segment2 wall{Vec2(-5.0, 0.0), Vec2(5.0, 0.0)};
+  grid.AddView(origin, wall);
+  EXPECT_FALSE(grid.IsFree(Vec2(0.0, -5.0))) << "one view is below min_count 2";
+  EXPECT_EQ(grid.TakeNewlyFree().size(), 0u);
+  grid.AddView(origin, wall);
+  EXPECT_TRUE(grid.IsFree(Vec2(0.0, -5.0)));
+  EXPECT_TRUE(grid.IsFree(Vec2(-4.0, -1.0)));
+  EXPECT_FALSE(grid.IsFree(Vec2(0.0, 0.05))) << "the wall's own line";
+  EXPECT_FALSE(grid.IsFree(Vec2(0.0, -0.2))) << "within the segment margin";
+  EXPECT_FALSE(grid.IsFree(Vec2(0.0, 3.0))) << "behind the wall";
+  EXPECT_FALSE(grid.IsFree(Vec2(6.0, -5.0))) << "beside the triangle";
+  EXPECT_FALSE(grid.IsFree(Vec2(2.6, -5.0))) << "within the erosion of a ray";
+  const std::vector<uint64_t> newly = grid.TakeNewlyFree();
+  EXPECT_GT(newly.size(), 100u);
+  EXPECT_TRUE(std::is_sorted(newly.begin(), newly.end()));
+  for (uint64_t cell : newly) EXPECT_TRUE(grid.IsFree(FreeSpaceGrid::CellCentre(cell)));
+  EXPECT_TRUE(grid.TakeNewlyFree().empty());
+}
+
+TEST(FreeSpaceGridTest, AGrazingViewMarksNothingOnItsLine) {
+  FreeSpaceGrid grid(1);
+  // The sensor almost on the wall's line: the triangle is a sliver.
+  for (int k = 0; k < 5; ++k) grid.AddView(Vec2(40.0, 0.05), {Vec2(0.0, 0.0), Vec2(20.0, 0.0)});
+  for (double x = -5.0; x <= 45.0; x += 0.1) EXPECT_FALSE(grid.IsFree(Vec2(x, 0.0))) << x;
+}
+
+// A street scene: a wall y = 0 seen as two pieces, x in [0, 10] and [16, 26],
+// from sensors at y = -10; the 6 m between them either behind a fence
+// (y = -3, x in [11, 15]: no ray reaches it) or open (seen through to a back
+// wall at y = 10).
+struct Obs {
+  ObservationId id;
+  Vec2 origin;
+  std::vector<GroundFeature> features;
+};
+
+std::vector<Obs> Street(bool fence, bool open_gap) {
+  std::vector<Obs> out;
+  FeatureId next_id = 1;
+  ObservationId next_obs = 1;
+  const auto add = [&](Vec2 origin, std::vector<Segment2> segments) {
+    Obs o{next_obs++, origin, {}};
+    for (const Segment2& s : segments) {
+      GroundFeature f;
+      f.id = next_id++;
+      f.segment = s;
+      o.features.push_back(f);
+    }
+    out.push_back(std::move(o));
+  };
+  for (int k = 0; k < 4; ++k) {
+    const double jitter = 0.002 * k;
+    add(Vec2(5.0 + k, -10.0), {{Vec2(0.0, jitter), Vec2(10.0, jitter)}});
+    add(Vec2(21.0 - k, -10.0), {{Vec2(16.0, -jitter), Vec2(26.0, -jitter)}});
+    if (fence) add(Vec2(13.0 - k, -10.0), {{Vec2(11.0, -3.0 + jitter), Vec2(15.0, -3.0 + jitter)}});
+    if (open_gap)
+      add(Vec2(13.0 + k, -10.0), {{Vec2(8.0, 10.0 + jitter), Vec2(18.0, 10.0 + jitter)}});
+  }
+  return out;
+}
+
+FusionParams WithEvidence(double occluded_gap_m, FusionMode mode = FusionMode::kExact) {
+  FusionParams p;
+  p.mode = mode;
+  p.wall_occluded_gap_m = occluded_gap_m;
+  return p;
+}
+
+void Feed(FusionEngine* engine, const std::vector<Obs>& observations) {
+  for (const Obs& o : observations) {
+    ASSERT_TRUE(engine->AddFrom(o.id, 1, o.origin, o.features).ok());
+  }
+}
+
+// The published features on the line y = 0, as x extents, ascending.
+std::vector<std::pair<double, double>> OnWallLine(const FusionEngine& engine) {
+  std::vector<std::pair<double, double>> out;
+  for (const FusedFeature& f : engine.Published()) {
+    if (std::abs(f.fitted.a.y()) > 0.05 || std::abs(f.fitted.b.y()) > 0.05) continue;
+    out.push_back(
+        {std::min(f.fitted.a.x(), f.fitted.b.x()), std::max(f.fitted.a.x(), f.fitted.b.x())});
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(OccludedGapTest, AGapBehindAnOccluderJoins) {
+  FusionEngine off(WithEvidence(0.0));
+  Feed(&off, Street(/*fence=*/true, /*open_gap=*/false));
+  EXPECT_EQ(OnWallLine(off).size(), 2u) << "without evidence the 6 m gap keeps two pieces";
+
+  FusionEngine engine(WithEvidence(10.0));
+  Feed(&engine, Street(true, false));
+  const auto wall = OnWallLine(engine);
+  ASSERT_EQ(wall.size(), 1u);
+  EXPECT_NEAR(wall[0].first, 0.0, 0.05);
+  EXPECT_NEAR(wall[0].second, 26.0, 0.05);
+  EXPECT_EQ(engine.published_count(), 2u);  // the wall and the fence
+
+  FusionEngine short_reach(WithEvidence(5.0));  // less than the gap
+  Feed(&short_reach, Street(true, false));
+  EXPECT_EQ(OnWallLine(short_reach).size(), 2u);
+
+  // Without sensor origins there is no evidence at all: no join.
+  FusionEngine blind(WithEvidence(10.0));
+  for (const Obs& o : Street(true, false)) ASSERT_TRUE(blind.Add(o.id, 1, o.features).ok());
+  // Unseen is not free: the gap is taken for an occlusion.
+  EXPECT_EQ(OnWallLine(blind).size(), 1u);
+}
+
+TEST(OccludedGapTest, AGapSeenThroughDoesNotJoin) {
+  FusionEngine engine(WithEvidence(10.0));
+  Feed(&engine, Street(/*fence=*/false, /*open_gap=*/true));
+  const auto wall = OnWallLine(engine);
+  ASSERT_EQ(wall.size(), 2u);
+  EXPECT_NEAR(wall[0].second, 10.0, 0.05);
+  EXPECT_NEAR(wall[1].first, 16.0, 0.05);
+}
+
+TEST(OccludedGapTest, EvidenceArrivingLaterPartsAJoinedWall) {
+  FusionEngine engine(WithEvidence(10.0));
+  Feed(&engine, Street(/*fence=*/false, /*open_gap=*/false));
+  ASSERT_EQ(OnWallLine(engine).size(), 1u) << "nothing seen of the gap yet";
+  std::vector<Obs> through;
+  for (const Obs& o : Street(false, true)) {
+    if (o.features[0].segment.a.y() > 5.0) through.push_back(o);  // the back wall's
+  }
+  ASSERT_EQ(through.size(), 4u);
+  ChangeFeed feed;
+  ObservationId id = 100;
+  FeatureId fid = 1000;
+  for (Obs o : through) {
+    for (GroundFeature& f : o.features) f.id = fid++;
+    ASSERT_TRUE(engine.AddFrom(id++, 1, o.origin, o.features, &feed).ok());
+  }
+  EXPECT_EQ(OnWallLine(engine).size(), 2u);
+}
+
+TEST(OccludedGapTest, APieceSpanningASeenFreeStretchJoinsNothing) {
+  // The two pieces and the back wall, plus a raw segment seen at a grazing
+  // angle across the whole facade line (both pieces and the opening).
+  std::vector<Obs> observations = Street(false, true);
+  FeatureId id = 5000;
+  for (ObservationId k = 0; k < 3; ++k) {
+    GroundFeature f;
+    f.id = id++;
+    f.segment = {Vec2(0.0, 0.004), Vec2(26.0, 0.004)};
+    observations.push_back({200 + k, Vec2(-30.0, -1.0), {f}});
+  }
+  FusionEngine off(WithEvidence(0.0));
+  Feed(&off, observations);
+  EXPECT_EQ(OnWallLine(off).size(), 1u) << "the spanning piece joins both";
+  FusionEngine engine(WithEvidence(10.0));
+  Feed(&engine, observations);
+  EXPECT_EQ(OnWallLine(engine).size(), 3u) << "both pieces and the pierced one, apart";
+}
+
+// Ids, counts and endpoints to the micrometre (moment sums are rounded
+// differently in another order; the partition is what must not change).
+std::string Describe(const std::vector<FusedFeature>& fused) {
+  std::string out;
+  char line[256];
+  for (const FusedFeature& f : fused) {
+    std::snprintf(line, sizeof(line), "%llu %.6f %.6f %.6f %.6f %u %u\n",
+                  static_cast<unsigned long long>(f.id), f.segment.a.x(), f.segment.a.y(),
+                  f.segment.b.x(), f.segment.b.y(), f.support, f.member_count);
+    out += line;
+  }
+  return out;
+}
+
+TEST(OccludedGapTest, TheMapDoesNotDependOnArrivalOrder) {
+  std::vector<Obs> observations = Street(true, false);
+  for (Obs& o : Street(false, true)) {  // a second street, 40 m further on
+    for (GroundFeature& f : o.features) {
+      f.id += 10000;
+      f.segment.a.x() += 40.0;
+      f.segment.b.x() += 40.0;
+    }
+    o.id += 10000;
+    o.origin.x() += 40.0;
+    observations.push_back(std::move(o));
+  }
+  FusionEngine reference(WithEvidence(10.0));
+  Feed(&reference, observations);
+  const std::string expected = Describe(reference.Published());
+  ASSERT_EQ(OnWallLine(reference).size(), 3u);  // joined behind the fence, apart where open
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 10; ++trial) {
+    std::shuffle(observations.begin(), observations.end(), rng);
+    FusionEngine engine(WithEvidence(10.0));
+    Feed(&engine, observations);
+    EXPECT_EQ(Describe(engine.Published()), expected) << "trial " << trial;
+  }
+}
+
+TEST(OccludedGapTest, SnapshotRoundTripKeepsTheEvidence) {
+  std::vector<Obs> observations = Street(false, true);
+  std::vector<Obs> later;
+  // The back wall's views come after the snapshot: they must part the wall
+  // the restored engine joined, as they do in the live one.
+  for (auto it = observations.begin(); it != observations.end();) {
+    if (it->features[0].segment.a.y() > 5.0 && later.size() < 3) {
+      later.push_back(*it);
+      it = observations.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  const FusionParams params = WithEvidence(10.0, FusionMode::kBounded);
+  FusionEngine live(params);
+  Feed(&live, observations);
+  std::string state;
+  ASSERT_TRUE(live.SaveState(&state).ok());
+  auto restored = FusionEngine::LoadState(params, state);
+  ASSERT_TRUE(restored.ok()) << restored.status().ToString();
+  EXPECT_EQ(Describe((*restored)->Published()), Describe(live.Published()));
+  std::string again;
+  ASSERT_TRUE((*restored)->SaveState(&again).ok());
+  EXPECT_EQ(again, state);
+  const size_t before = OnWallLine(live).size();
+  Feed(&live, later);
+  Feed(restored->get(), later);
+  EXPECT_EQ(Describe((*restored)->Published()), Describe(live.Published()));
+  EXPECT_EQ(OnWallLine(live).size(), 2u);
+  EXPECT_EQ(before, 1u) << "one view of the opening is below min_count";
+  // Other evidence settings: refused (the params key records them).
+  FusionParams other = params;
+  other.wall_free_min_count = 3;
+  EXPECT_FALSE(FusionEngine::LoadState(other, state).ok());
+  // A corrupt tile is refused.
+  std::string corrupt = state;
+  corrupt[corrupt.size() - 20] ^= 0x5a;
+  EXPECT_FALSE(FusionEngine::LoadState(params, corrupt).ok());
+}
+
+TEST(OccludedGapTest, ParamsAreValidated) {
+  FusionParams p;
+  p.wall_occluded_gap_m = -1.0;
+  EXPECT_FALSE(p.Validate().ok());
+  p.wall_occluded_gap_m = 12.0;
+  EXPECT_TRUE(p.Validate().ok());
+  p.wall_free_min_count = 0;
+  EXPECT_FALSE(p.Validate().ok());
+  p.wall_free_min_count = 256;
+  EXPECT_FALSE(p.Validate().ok());
+  FusionEngine engine(WithEvidence(10.0));
+  GroundFeature f;
+  f.id = 1;
+  f.segment = {Vec2(0, 0), Vec2(1, 0)};
+  EXPECT_FALSE(engine.AddFrom(1, 1, Vec2(NAN, 0.0), {f}).ok());
+  EXPECT_EQ(engine.feature_count(), 0u);
+}
+
+}  // namespace
+}  // namespace mapd::fusion
