@@ -5,8 +5,8 @@
 //   "MAPDFUS1" | u32 version | params key (string) | body | u64 FNV-1a of all before
 //   body: nodes (parent, size, anchor, next member, folded stats, root stats),
 //         counters, split records, published features, the snapper's lines,
-//         the consolidator's pieces, and (wall_occluded_gap_m > 0) the
-//         free-space tiles.
+//         the consolidator's pieces, whether it has free-space evidence and
+//         its tiles.
 // The grid and the snapper's index are refiled from the nodes, in node order
 // (the order the live engine filed them), so candidate scans visit the same
 // items in the same order.
@@ -161,9 +161,13 @@ Status FusionEngine::SaveState(std::string* out) const {
   // The consolidator's pieces; its walls are a function of them (Resolve).
   w.U64(e.consolidator_.pieces().size());
   for (const auto& [id, stats] : e.consolidator_.pieces()) w.Stats(stats);
-  // Free-space evidence (only with wall_occluded_gap_m > 0, which the params
-  // key records): its tiles, ascending by key.
-  if (const FreeSpaceGrid* free_space = e.consolidator_.free_space()) {
+  // Free-space evidence: whether there is any, and its tiles ascending by key.
+  // Written only with the evidence on (the params key says so), so that
+  // snapshots without it keep their layout.
+  const bool evidence_on = e.params_.consolidate && e.params_.wall_occluded_gap_m > 0.0;
+  const FreeSpaceGrid* free_space = e.consolidator_.free_space();
+  if (evidence_on) w.U8(free_space != nullptr ? 1 : 0);
+  if (free_space != nullptr) {
     const auto tiles = free_space->SortedTiles();
     w.U64(tiles.size());
     for (const auto& [key, tile] : tiles) {
@@ -253,7 +257,10 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
       return Corrupt("an empty published cluster");
   }
   // The evidence before the pieces: whether a piece is pierced depends on it.
-  if (FreeSpaceGrid* free_space = e.consolidator_.free_space()) {
+  const bool evidence_on = params.consolidate && params.wall_occluded_gap_m > 0.0;
+  if (evidence_on && r.U8() != 0) {
+    FreeSpaceGrid* free_space = e.consolidator_.EnableFreeSpace();
+    if (free_space == nullptr) return Corrupt("free-space evidence with it off");
     const uint64_t tiles = r.Count(8 + 8 + sizeof(FreeSpaceGrid::Tile));
     uint64_t previous_key = 0;
     for (uint64_t i = 0; i < tiles && r.ok(); ++i) {

@@ -74,11 +74,13 @@ struct FusionParams {
   // gap on the wall line was observed free (an occlusion, not a passage), and
   // a piece whose own extent crosses an observed-free stretch (a grazing-angle
   // segment spanning a passage) joins nothing. Only observations added with a
-  // sensor origin (FusionEngine::AddFrom) give evidence. 0 = off.
-  double wall_occluded_gap_m = 0.0;
+  // sensor origin (FusionEngine::AddFrom) give evidence; an engine that has
+  // none behaves as with 0 = off. docs/fusion.md measures the defaults
+  // (occlusions of 4-13 m on the synthetic city).
+  double wall_occluded_gap_m = 15.0;
   // Visibility triangles that must cover a cell before it counts as observed
   // free, in [1, 255].
-  uint32_t wall_free_min_count = 2;
+  uint32_t wall_free_min_count = 5;
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

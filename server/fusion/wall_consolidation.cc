@@ -108,10 +108,15 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
 }
 
 WallConsolidator::WallConsolidator(const FusionParams& params, uint32_t support_cap)
-    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {
-  if (params.consolidate && params.wall_occluded_gap_m > 0.0) {
-    free_space_ = std::make_unique<FreeSpaceGrid>(params.wall_free_min_count);
+    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {}
+
+FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
+  if (!free_space_ && params_.consolidate && params_.wall_occluded_gap_m > 0.0) {
+    // Pieces filed so far were checked without evidence: none is pierced yet,
+    // and the grid starts empty, so that still holds.
+    free_space_ = std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count);
   }
+  return free_space_.get();
 }
 
 void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {

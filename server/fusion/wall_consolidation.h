@@ -83,12 +83,16 @@ class WallConsolidator {
   void Erase(ClusterId piece);
   bool HasPiece(ClusterId piece) const { return pieces_.count(piece) != 0; }
   // Free-space evidence: the visibility triangle of `segment` seen from
-  // `origin`. A no-op unless wall_occluded_gap_m > 0.
+  // `origin`. A no-op unless wall_occluded_gap_m > 0. The grid exists from the
+  // first view on: a consolidator never given one (observations without a
+  // sensor origin) has no evidence and joins no occluded gap, as before.
   void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment) {
-    if (free_space_) free_space_->AddView(origin, segment);
+    if (EnableFreeSpace() != nullptr) free_space_->AddView(origin, segment);
   }
-  // Null unless wall_occluded_gap_m > 0 (snapshots).
-  FreeSpaceGrid* free_space() { return free_space_.get(); }
+  // Creates the (empty) grid if wall_occluded_gap_m > 0 and returns it, else
+  // null. Snapshots restore a grid through it.
+  FreeSpaceGrid* EnableFreeSpace();
+  // Null before the first view, or with wall_occluded_gap_m = 0.
   const FreeSpaceGrid* free_space() const { return free_space_.get(); }
   // All pieces, ascending id (snapshots).
   const std::map<ClusterId, ClusterStats>& pieces() const { return piece_stats_; }
@@ -132,7 +136,7 @@ class WallConsolidator {
   std::vector<ClusterId> touched_pieces_;
   std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
   UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
-  std::unique_ptr<FreeSpaceGrid> free_space_;  // null unless wall_occluded_gap_m > 0
+  std::unique_ptr<FreeSpaceGrid> free_space_;  // see AddView
   // Cells of bridged occluded gaps -> the two pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;

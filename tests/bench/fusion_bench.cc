@@ -87,6 +87,9 @@ std::vector<Method> Methods() {
   midpoint.options.three_criteria.corner_mode = CornerMode::kMidpoint;
   Method paper{"three_criteria (no consolidation: the paper's output)", "three_criteria", base};
   paper.options.three_criteria.consolidate = false;
+  // Consolidation without free-space evidence (the occluded-gap join off).
+  Method blind{"three_criteria (no free-space evidence)", "three_criteria", base};
+  blind.options.three_criteria.wall_occluded_gap_m = 0.0;
   // The two corner pairings (docs/fusion.md, "Corner pairing"), the rest as the default.
   Method mutual{"three_criteria (mutual nearest pairing)", "three_criteria", base};
   mutual.options.three_criteria.corner_pairing = CornerPairing::kMutualNearest;
@@ -96,6 +99,7 @@ std::vector<Method> Methods() {
           {"density (competing 2)", "density", base},
           {"three_criteria (proposed, intersection)", "three_criteria", base},
           paper,
+          blind,
           midpoint,
           mutual,
           greedy};
