@@ -25,6 +25,14 @@ constexpr double kPierceTrimM = 0.5;
 // Evidence is sampled along lines at this step: every cell a line crosses.
 constexpr double kSampleStepM = 0.5 * FreeSpaceGrid::kCellM;
 
+// The index cell (kPieceStepM square) that contains p, packed as a
+// free-space cell key of its indices.
+uint64_t IndexCellKey(const Vec2& p) {
+  return FreeSpaceGrid::CellKeyOf(
+      Vec2(std::floor(p.x() / kPieceStepM), std::floor(p.y() / kPieceStepM)) *
+      FreeSpaceGrid::kCellM);
+}
+
 // Points every kSampleStepM from p + t0 u to p + t1 u (both included).
 template <typename Fn>
 bool AnySample(const Vec2& p, const Vec2& u, double t0, double t1, Fn&& fn) {
@@ -180,10 +188,11 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
     const double tan_delta = std::tan(std::min(params_.delta_rad, 1.5));
     const double along_m = (gap_m + params_.wall_offset_m) * (1.0 + tan_delta) + kSlackM;
     const Vec2 u = s.direction() / length;
-    const Segment2 extended{s.a - along_m * u, s.b + along_m * u};
     const double lateral_m =
         2.0 * params_.wall_offset_m + (gap_m + kPieceStepM) * tan_delta + kSlackM;
-    index_.ForEachNearSegment(extended, lateral_m, add);
+    // Beyond the two ends only: along the extent the band above finds them.
+    index_.ForEachNearSegment(Segment2{s.a - along_m * u, s.a}, lateral_m, add);
+    index_.ForEachNearSegment(Segment2{s.b, s.b + along_m * u}, lateral_m, add);
   }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
@@ -198,9 +207,12 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
                                return true;
                              }
                              // Bridged an occluded gap: watch its cells.
-                             for (const Vec2& x : gap_samples) {
-                               std::vector<ClusterId>& ids =
-                                   gap_watch_[FreeSpaceGrid::CellKeyOf(x)];
+                             uint64_t last_key = 0;
+                             for (size_t k = 0; k < gap_samples.size(); ++k) {
+                               const uint64_t key = IndexCellKey(gap_samples[k]);
+                               if (k > 0 && key == last_key) continue;
+                               last_key = key;
+                               std::vector<ClusterId>& ids = gap_watch_[key];
                                for (ClusterId z : {id, other}) {
                                  if (std::find(ids.begin(), ids.end(), z) == ids.end()) {
                                    ids.push_back(z);
@@ -217,37 +229,47 @@ void WallConsolidator::TakeEvidence() {
   if (!free_space_) return;
   const std::vector<uint64_t> cells = free_space_->TakeNewlyFree();
   if (cells.empty()) return;
-  // A sample of a piece lies within half a filing step of a filed point, and
-  // the centre of its cell within half a cell diagonal of the sample. Cells
-  // are taken by index cell (kPieceStepM square): one query each, from its
-  // centre, reaching half its diagonal further.
-  const double radius =
-      0.5 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + 0.71 * kPieceStepM + kSlackM;
-  std::vector<ClusterId> near;
-  std::unordered_set<uint64_t> probed;  // index cells, packed as FreeSpaceGrid keys
+  // The new free cells by index cell.
+  std::unordered_map<uint64_t, std::vector<Vec2>> by_index_cell;
   for (uint64_t cell : cells) {
-    if (auto it = gap_watch_.find(cell); it != gap_watch_.end()) {
+    const Vec2 centre = FreeSpaceGrid::CellCentre(cell);
+    by_index_cell[IndexCellKey(centre)].push_back(centre);
+  }
+  // A piece whose samples reach an index cell has a filed point within half
+  // a filing step and half a cell diagonal of it: one query from the index
+  // cell's centre, reaching half its diagonal further. A sample's cell centre
+  // lies within half a cell diagonal of the piece's segment.
+  const double radius =
+      0.5 * kPieceStepM + 0.71 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + kSlackM;
+  const double on_segment_m = 0.71 * FreeSpaceGrid::kCellM + kSlackM;
+  std::vector<ClusterId> recheck;
+  for (const auto& [key, centres] : by_index_cell) {
+    if (auto it = gap_watch_.find(key); it != gap_watch_.end()) {
       for (ClusterId id : it->second) {
         if (pieces_.count(id) != 0) touched_pieces_.push_back(id);
       }
       gap_watch_.erase(it);
     }
-    const Vec2 centre = FreeSpaceGrid::CellCentre(cell);
-    const Vec2 index_cell(std::floor(centre.x() / kPieceStepM),
-                          std::floor(centre.y() / kPieceStepM));
-    if (!probed.insert(FreeSpaceGrid::CellKeyOf(index_cell * FreeSpaceGrid::kCellM)).second) {
-      continue;
-    }
-    index_.ForEachNear((index_cell + Vec2(0.5, 0.5)) * kPieceStepM, radius,
-                       [&](ClusterId id) { near.push_back(id); });
+    const Vec2 corner = FreeSpaceGrid::CellCentre(key) - Vec2(0.5, 0.5) * FreeSpaceGrid::kCellM;
+    const Vec2 centre = (corner / FreeSpaceGrid::kCellM + Vec2(0.5, 0.5)) * kPieceStepM;
+    index_.ForEachNear(centre, radius, [&](ClusterId id) {
+      // Cells only become free: a pierced piece stays pierced until it changes.
+      const Piece& piece = pieces_.at(id);
+      if (piece.pierced) return;
+      for (const Vec2& c : centres) {
+        if (geometry::PointSegmentDistance(c, piece.fit.segment) <= on_segment_m) {
+          recheck.push_back(id);
+          return;
+        }
+      }
+    });
   }
-  std::sort(near.begin(), near.end());
-  near.erase(std::unique(near.begin(), near.end()), near.end());
-  for (ClusterId id : near) {
+  std::sort(recheck.begin(), recheck.end());
+  recheck.erase(std::unique(recheck.begin(), recheck.end()), recheck.end());
+  for (ClusterId id : recheck) {
     Piece& piece = pieces_.at(id);
-    const bool pierced = Pierced(piece.fit.segment, *free_space_);
-    if (pierced == piece.pierced) continue;
-    piece.pierced = pierced;
+    if (!Pierced(piece.fit.segment, *free_space_)) continue;
+    piece.pierced = true;
     touched_pieces_.push_back(id);
   }
 }

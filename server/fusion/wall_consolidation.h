@@ -137,7 +137,7 @@ class WallConsolidator {
   std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
   UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
   std::unique_ptr<FreeSpaceGrid> free_space_;  // see AddView
-  // Cells of bridged occluded gaps -> the two pieces bridged. Entries of pieces
+  // Index cells (kPieceStepM) of bridged occluded gaps -> the pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;
 };
