@@ -30,6 +30,11 @@ Status FusionParams::Validate() const {
       CheckParamRange("fusion params", "wall_offset_m", wall_offset_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(
       CheckParamRange("fusion params", "wall_occluded_gap_m", wall_occluded_gap_m, 0.0, HUGE_VAL));
+  MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "wall_occluded_gap_ratio",
+                                       wall_occluded_gap_ratio, 0.0, 1000.0));
+  if (wall_occluded_gap_ratio == 0.0) {
+    return Status::InvalidArgument("fusion params: wall_occluded_gap_ratio must be > 0");
+  }
   if (wall_free_min_count < 1 || wall_free_min_count > 255) {
     return Status::InvalidArgument("fusion params: wall_free_min_count must be in [1, 255]");
   }
@@ -59,8 +64,9 @@ std::string FusionParamsKey(const FusionParams& p) {
   std::string key = text;
   // Appended only when on, so that snapshots taken without it stay loadable.
   if (p.wall_occluded_gap_m > 0.0) {
-    std::snprintf(text, sizeof(text), " wall_occluded_gap_m=%.17g wall_free_min_count=%u",
-                  p.wall_occluded_gap_m, p.wall_free_min_count);
+    std::snprintf(text, sizeof(text),
+                  " wall_occluded_gap_m=%.17g wall_occluded_gap_ratio=%.17g wall_free_min_count=%u",
+                  p.wall_occluded_gap_m, p.wall_occluded_gap_ratio, p.wall_free_min_count);
     key += text;
   }
   return key;

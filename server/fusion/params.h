@@ -78,6 +78,11 @@ struct FusionParams {
   // none behaves as with 0 = off. docs/fusion.md measures the defaults
   // (occlusions of 4-13 m on the synthetic city).
   double wall_occluded_gap_m = 15.0;
+  // ... and only if that gap is at most this many times the shorter piece's
+  // length. An unseen stretch is not proof of a wall: on real indoor logs, a
+  // 3 m piece would otherwise be drawn 12 m across a room nobody looked into
+  // (docs/fusion-real-data.md); a long facade behind a fence keeps its join.
+  double wall_occluded_gap_ratio = 2.0;  // in (0, 1000]
   // Visibility triangles that must cover a cell before it counts as observed
   // free, in [1, 255].
   uint32_t wall_free_min_count = 5;

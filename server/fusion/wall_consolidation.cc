@@ -99,6 +99,7 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   const double gap = std::max({0.0, std::min(ta, tb) - l_length, -std::max(ta, tb)});
   if (gap <= params.wall_gap_m) return true;
   if (free_space == nullptr || gap > params.wall_occluded_gap_m) return false;
+  if (gap > params.wall_occluded_gap_ratio * s_length) return false;
   // An occlusion or a passage: join only if nothing on the gap was seen free.
   const double t0 = std::max(ta, tb) < 0.0 ? std::max(ta, tb) : l_length;
   const double t1 = std::max(ta, tb) < 0.0 ? 0.0 : std::min(ta, tb);

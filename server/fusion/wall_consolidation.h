@@ -30,12 +30,11 @@
 //
 // With free-space evidence (FusionParams::wall_occluded_gap_m > 0,
 // free_space.h), rule a also joins pieces whose gap exceeds wall_gap_m, up to
-// wall_occluded_gap_m, if no sample of the gap on L's line (every
-// FreeSpaceGrid::kCellM / 2) lies in an observed-free cell; and a piece
-// "pierced" by an observed-free cell (a sample of its fitted segment, the
-// last kPierceTrimM at each end aside) joins no other piece. Walls are then a
-// function of (pieces, evidence). Cells only ever become free, so evidence can
-// only part walls: a wall joined across an occluded gap is re-resolved when a
+// wall_occluded_gap_m and wall_occluded_gap_ratio times S's length, if no sample of the gap on L's
+// line (every FreeSpaceGrid::kCellM / 2) lies in an observed-free cell; and a piece "pierced" by an
+// observed-free cell (a sample of its fitted segment, the last kPierceTrimM at each end aside)
+// joins no other piece. Walls are then a function of (pieces, evidence). Cells only ever become
+// free, so evidence can only part walls: a wall joined across an occluded gap is re-resolved when a
 // cell of that gap becomes free (the consolidator records the cells of the
 // gaps it bridged), and a piece near a newly free cell is re-checked for
 // piercing.

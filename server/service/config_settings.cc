@@ -258,6 +258,10 @@ const std::vector<Setting>& Settings() {
            "farther apart than wall_gap_m, up to this, join if no ray was seen to pass through the gap (an "
            "occlusion, not a passage), and a piece crossed by seen-free space joins nothing; metres, 0 = off",
            [](C& c) -> auto& { return c.fusion.wall_occluded_gap_m; }, {0, 1000}),
+      Real("fusion.wall_occluded_gap_ratio", "wall consolidation with free-space evidence: an occluded gap "
+           "joins only if it is at most this many times the shorter piece's length (an unseen stretch is "
+           "not proof of a wall)",
+           [](C& c) -> auto& { return c.fusion.wall_occluded_gap_ratio; }, {0, 1000, true}),
       Count("fusion.wall_free_min_count", "wall consolidation with free-space evidence: visibility triangles "
             "(sensor to observed segment) that must cover a 0.25 m cell before it counts as seen free",
             [](C& c) -> auto& { return c.fusion.wall_free_min_count; }, 1, 255),

@@ -98,6 +98,7 @@ ScanLines ExtractLaserLines(const LaserScan& scan, double max_range_m) {
   params.min_length_m = 0.3;
   params.max_gap_m = 0.5;
   ScanLines out;
+  out.sensor_xy_m = geometry::Vec2(scan.x_m, scan.y_m);
   std::vector<geometry::Vec2> run;
   const auto flush = [&]() {
     for (const geometry::ExtractedLine& line : geometry::SplitAndMerge(run, params)) {

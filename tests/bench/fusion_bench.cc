@@ -5,7 +5,7 @@
 // (item 8). A benchmark, not a test: run it by hand, figures go to docs/.
 //
 //   fusion_bench [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M]
-//                [--occluded-gap M] [--free-min-count N]   the comparison
+//                [--occluded-gap M] [--occluded-ratio R] [--free-min-count N]   the comparison
 //   fusion_bench --million [--blocks-x X --blocks-y Y] [--bounded]   1M-feature world, streaming
 #include <sys/resource.h>
 #include <time.h>
@@ -69,15 +69,18 @@ struct Method {
 
 // --wall-gap M: the consolidation gap of the proposed method's rows (< 0: the default).
 double g_wall_gap_m = -1.0;
-// --occluded-gap M / --free-min-count N: free-space evidence (FusionParams::
-// wall_occluded_gap_m, wall_free_min_count) for every three_criteria row (< 0: the default).
+// --occluded-gap M / --occluded-ratio R / --free-min-count N: free-space evidence
+// (FusionParams::wall_occluded_gap_m, wall_occluded_gap_ratio, wall_free_min_count) for
+// every three_criteria row (<= 0: the default).
 double g_occluded_gap_m = -1.0;
+double g_occluded_ratio = -1.0;
 int g_free_min_count = -1;
 
 std::vector<Method> Methods() {
   FuserOptions base;  // defaults; baselines post-process like the proposed method
   if (g_wall_gap_m >= 0.0) base.three_criteria.wall_gap_m = g_wall_gap_m;
   if (g_occluded_gap_m >= 0.0) base.three_criteria.wall_occluded_gap_m = g_occluded_gap_m;
+  if (g_occluded_ratio > 0.0) base.three_criteria.wall_occluded_gap_ratio = g_occluded_ratio;
   if (g_free_min_count > 0) base.three_criteria.wall_free_min_count = g_free_min_count;
   base.mean_shift.post.snap_m = base.three_criteria.snap_m;
   base.mean_shift.post.corner_mode = base.three_criteria.corner_mode;
@@ -332,6 +335,7 @@ int Million(int blocks_x, int blocks_y, mapd::fusion::FusionMode mode) {
   mapd::fusion::FusionParams fusion;
   fusion.mode = mode;
   if (g_occluded_gap_m >= 0.0) fusion.wall_occluded_gap_m = g_occluded_gap_m;
+  if (g_occluded_ratio > 0.0) fusion.wall_occluded_gap_ratio = g_occluded_ratio;
   if (g_free_min_count > 0) fusion.wall_free_min_count = g_free_min_count;
   mapd::fusion::FusionEngine engine{fusion};
   double fuse_s = 0.0, fuse_cpu_s = 0.0;
@@ -385,6 +389,8 @@ int main(int argc, char** argv) {
       g_wall_gap_m = std::atof(argv[++i]);
     else if (a == "--occluded-gap" && has_value)
       g_occluded_gap_m = std::atof(argv[++i]);
+    else if (a == "--occluded-ratio" && has_value)
+      g_occluded_ratio = std::atof(argv[++i]);
     else if (a == "--free-min-count" && has_value)
       g_free_min_count = std::atoi(argv[++i]);
     else if (a == "--million")
@@ -399,7 +405,7 @@ int main(int argc, char** argv) {
       std::fprintf(
           stderr,
           "usage: %s [--repeats N] [--seed S] [--svg-dir DIR] [--wall-gap M] [--occluded-gap M] "
-          "[--free-min-count N] | --million "
+          "[--occluded-ratio R] [--free-min-count N] | --million "
           "[--blocks-x X --blocks-y Y] [--bounded]\n",
           argv[0]);
       return 2;

@@ -104,7 +104,10 @@ RunResult Fuse(const std::vector<ScanLines>& scans, const FusionParams& params) 
       f.segment = line;
       features.push_back(f);
     }
-    const Status status = engine.Add(s + 1, 0, features);
+    // The laser's position is the sensor origin, as mapd passes T_map_sensor's
+    // translation: with free-space evidence on, the default run counts what the
+    // rays crossed (fusion/free_space.h).
+    const Status status = engine.AddFrom(s + 1, 0, scans[s].sensor_xy_m, features);
     if (!status.ok()) {
       std::fprintf(stderr, "scan %zu: %s\n", s, status.ToString().c_str());
       std::exit(1);
@@ -259,10 +262,14 @@ int main(int argc, char** argv) {
       on.chain_max_sse_ratio = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--wall-offset") && i + 1 < argc) {
       on.wall_offset_m = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--occluded-gap") && i + 1 < argc) {
+      on.wall_occluded_gap_m = std::atof(argv[++i]);  // 0: no free-space evidence
+    } else if (!std::strcmp(argv[i], "--occluded-ratio") && i + 1 < argc) {
+      on.wall_occluded_gap_ratio = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: %s [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] "
-                   "[--guard-ratio R] [--wall-offset M]\n",
+                   "[--guard-ratio R] [--wall-offset M] [--occluded-gap M] [--occluded-ratio R]\n",
                    argv[0]);
       return 2;
     }
@@ -275,6 +282,7 @@ int main(int argc, char** argv) {
   mapd::fusion::FusionParams off = on;
   off.chain_max_rms_m = 0.0;
   off.consolidate = false;
+  off.wall_occluded_gap_m = 0.0;
 
   std::vector<Row> rows;
   for (const LaserLogSpec& spec : LaserLogs()) {

@@ -125,6 +125,18 @@ TEST(OccludedGapTest, AGapBehindAnOccluderJoins) {
   Feed(&short_reach, Street(true, false));
   EXPECT_EQ(OnWallLine(short_reach).size(), 2u);
 
+  // The 6 m gap is more than 0.5 times the 10 m pieces: an unseen stretch that
+  // long is not taken for a wall.
+  FusionParams strict = WithEvidence(10.0);
+  strict.wall_occluded_gap_ratio = 0.5;
+  FusionEngine strict_engine(strict);
+  Feed(&strict_engine, Street(true, false));
+  EXPECT_EQ(OnWallLine(strict_engine).size(), 2u);
+  strict.wall_occluded_gap_ratio = 0.7;  // 7 m >= 6 m: joins again
+  FusionEngine lenient_engine(strict);
+  Feed(&lenient_engine, Street(true, false));
+  EXPECT_EQ(OnWallLine(lenient_engine).size(), 1u);
+
   // Without sensor origins there is no evidence at all, and no occluded join:
   // the map is what it was before evidence existed.
   FusionEngine blind(WithEvidence(10.0));
@@ -267,6 +279,11 @@ TEST(OccludedGapTest, ParamsAreValidated) {
   p.wall_free_min_count = 0;
   EXPECT_FALSE(p.Validate().ok());
   p.wall_free_min_count = 256;
+  EXPECT_FALSE(p.Validate().ok());
+  p.wall_free_min_count = 5;
+  p.wall_occluded_gap_ratio = 0.0;
+  EXPECT_NE(p.Validate().ToString().find("wall_occluded_gap_ratio"), std::string::npos);
+  p.wall_occluded_gap_ratio = NAN;
   EXPECT_FALSE(p.Validate().ok());
   FusionEngine engine(WithEvidence(10.0));
   GroundFeature f;
