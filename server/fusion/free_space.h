@@ -76,7 +76,6 @@ class FreeSpaceGrid {
 
  private:
   static uint64_t TileKey(int64_t tx, int64_t ty);
-  void Increment(int64_t cx, int64_t cy);
 
   const uint32_t min_count_;
   std::unordered_map<uint64_t, std::unique_ptr<Tile>> tiles_;
