@@ -82,7 +82,7 @@ struct FusionParams {
   // length. An unseen stretch is not proof of a wall: on real indoor logs, a
   // 3 m piece would otherwise be drawn 12 m across a room nobody looked into
   // (docs/fusion-real-data.md); a long facade behind a fence keeps its join.
-  double wall_occluded_gap_ratio = 2.0;  // in (0, 1000]
+  double wall_occluded_gap_ratio = 3.0;  // in (0, 1000]
   // Visibility triangles that must cover a cell before it counts as observed
   // free, in [1, 255].
   uint32_t wall_free_min_count = 5;
