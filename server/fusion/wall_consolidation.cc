@@ -244,7 +244,10 @@ void WallConsolidator::TakeEvidence() {
       0.5 * kPieceStepM + 0.71 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + kSlackM;
   const double on_segment_m = 0.71 * FreeSpaceGrid::kCellM + kSlackM;
   std::vector<ClusterId> recheck;
-  for (const auto& [key, centres] : by_index_cell) {
+  for (const auto& entry : by_index_cell) {
+    // Not a structured binding: C++17 lambdas cannot capture those (clang refuses).
+    const uint64_t key = entry.first;
+    const std::vector<Vec2>& centres = entry.second;
     if (auto it = gap_watch_.find(key); it != gap_watch_.end()) {
       for (ClusterId id : it->second) {
         if (pieces_.count(id) != 0) touched_pieces_.push_back(id);
