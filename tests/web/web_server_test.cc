@@ -48,6 +48,9 @@ TEST_F(WebFixture, ThePageIsServedWithItsScript) {
 TEST_F(WebFixture, EventsStartWithAResyncThenCarryChanges) {
   Start();
   Ingest(RoomBatches("r1", 8));
+  // A resync is the map as fused so far, without waiting for the fuser; the
+  // features query waits, so after it the resync holds the room.
+  ASSERT_EQ(GetJson("/api/features")["features"].size(), 4u);
   SseClient events(web_->port(), {});
   std::optional<SseEvent> e = events.Next();
   ASSERT_TRUE(e);
