@@ -9,7 +9,7 @@ if(NOT MAPD_WITH_SERVICE)
   message(FATAL_ERROR "MAPD_BUILD_FUZZ needs MAPD_WITH_SERVICE=ON (the batch and config targets)")
 endif()
 add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
-                    -fno-omit-frame-pointer -g)
+                    -fno-omit-frame-pointer)
 add_link_options(-fsanitize=address,undefined)
 
 # mapd_add_fuzzer(NAME SOURCES a.cc LIBS lib1): one libFuzzer binary.
