@@ -15,6 +15,9 @@ echo "lint: ${#files[@]} files formatted"
 # of production sources is parsed once and its sources are reported through
 # .clang-tidy's HeaderFilterRegex; a file-by-file build (deploy/build.sh) gives
 # one unit per source. Largest units first, so the last to finish is short.
+# In a batch, a using-declaration that only a later source of the batch needs
+# is not reported as unused; the file-by-file run (deploy/lint.sh build, after
+# deploy/build.sh) reports it.
 root=$(pwd)
 mapfile -t units < <(python3 - "$build/compile_commands.json" "$root" <<'PY'
 import json, os, re, sys
