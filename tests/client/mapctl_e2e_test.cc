@@ -26,7 +26,10 @@ using ::testing::HasSubstr;
 class MapctlE2eTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    mapd_ = StartMapd(dir_.File("map.db"), {}, MAPD_BINARY);
+    // Each export below reads the map once, and they are compared with each
+    // other: a read must wait until the fuser holds every scan just sent. Under
+    // ASan that can take longer than the default limits.read_wait_s (5 s).
+    mapd_ = StartMapd(dir_.File("map.db"), {"--limits.read_wait_s", "120"}, MAPD_BINARY);
     ASSERT_GT(mapd_.port, 0) << "mapd did not come up:\n" << mapd_.log();
   }
   void TearDown() override {
