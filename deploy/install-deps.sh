@@ -2,8 +2,8 @@
 # Installs the Debian 12 packages mapd needs to build and test. Idempotent:
 # runs apt-get only when something is missing. --ci adds what .ci/run needs
 # beyond that: clang and its libFuzzer runtime (ASan and fuzz jobs), lld (links
-# every CI build), clang-format and clang-tidy (lint job), systemd
-# (systemd-analyze verify of deploy/mapd.service).
+# every CI build), Ninja (CI's generator), clang-format and clang-tidy (lint
+# job), systemd (systemd-analyze verify of deploy/mapd.service).
 # --build-only (the container's build stage) leaves out what only the tests
 # use: Chromium, which runs the web view's page in tests/web.
 set -euo pipefail
@@ -20,7 +20,7 @@ if [ "${1:-}" != "--build-only" ]; then
   PACKAGES+=(chromium)
 fi
 if [ "${1:-}" = "--ci" ]; then
-  PACKAGES+=(clang-14 libclang-rt-14-dev lld clang-format-14 clang-tidy-14 systemd)
+  PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)
 fi
 
 missing=()

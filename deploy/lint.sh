@@ -31,8 +31,9 @@ def sources(path):  # what a unit compiles: a unity batch's includes, or itself
 units = {}
 for entry in json.load(open(db, encoding="utf-8")):
     path = os.path.join(entry["directory"], entry["file"])
-    if any(production.match(s) for s in sources(path)):
-        units[path] = sum(os.path.getsize(s) for s in sources(path))
+    compiled = sources(path)
+    if any(production.match(s) for s in compiled):
+        units[path] = sum(os.path.getsize(s) for s in compiled)
 print("\n".join(sorted(units, key=units.get, reverse=True)))
 PY
 )
