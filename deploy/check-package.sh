@@ -44,12 +44,21 @@ while [ ${#queue[@]} -gt 0 ]; do
   done
 done
 libs="$(ldd "${bins[@]}" | awk '$2 == "=>" && $3 ~ /^\// {print $3}' | sort -u)"
+# A library's path as ldd, realpath and the merged /usr may spell it.
+spellings() { local real; real="$(realpath "$1")"; echo "$1" "$real" "/usr$1" "/usr$real" "${1#/usr}" "${real#/usr}"; }
+# One dpkg -S for every spelling of every library (one call per path took 20 s):
+# "pkg[:arch]: /path" for each path a package owns; the rest is not found.
+declare -A owner=()
+mapfile -t asked < <(for lib in $libs; do spellings "$lib" | tr ' ' '\n'; done | sort -u)
+while IFS= read -r line; do
+  path="${line#*: }"
+  [ -n "${owner[$path]:-}" ] || owner[$path]="${line%%:*}"
+done < <(dpkg -S "${asked[@]}" 2>/dev/null || true)
 checked=0
 for lib in $libs; do
-  real="$(realpath "$lib")"
   pkg=""
-  for path in "$lib" "$real" "/usr$lib" "/usr$real" "${lib#/usr}" "${real#/usr}"; do
-    pkg="$(dpkg -S "$path" 2>/dev/null | head -1 | cut -d: -f1)" && [ -n "$pkg" ] && break
+  for path in $(spellings "$lib"); do
+    pkg="${owner[$path]:-}" && [ -n "$pkg" ] && break
   done
   checked=$((checked + 1))
   if [ -z "$pkg" ]; then
