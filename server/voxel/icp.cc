@@ -11,6 +11,7 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "voxel/aligned_box.h"
 
@@ -50,8 +51,13 @@ class VoxelHashIndex {
       : points_(points), cell_m_(cell_m) {
     std::vector<std::pair<std::uint64_t, int>> keyed;
     keyed.reserve(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i)
-      keyed.push_back({Pack(Cell(points[i])), static_cast<int>(i)});
+    std::vector<Eigen::Vector3i> cells;
+    cells.reserve(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      cells.push_back(Cell(points[i]));
+      keyed.push_back({Pack(cells.back()), static_cast<int>(i)});
+    }
+    MarkOccupied(cells);
     std::sort(keyed.begin(), keyed.end());
     order_.reserve(keyed.size());
     cells_.reserve(keyed.size());
@@ -75,7 +81,9 @@ class VoxelHashIndex {
         for (int dy = -ring; dy <= ring; ++dy) {
           const bool face = std::abs(dx) == ring || std::abs(dy) == ring;
           for (int dz = -ring; dz <= ring; dz += (face ? 1 : 2 * std::max(ring, 1))) {
-            auto it = cells_.find(Pack(c + Eigen::Vector3i(dx, dy, dz)));
+            const Eigen::Vector3i cell = c + Eigen::Vector3i(dx, dy, dz);
+            if (!MaybeOccupied(cell)) continue;
+            auto it = cells_.find(Pack(cell));
             if (it == cells_.end()) continue;
             for (int k = it->second.first; k < it->second.first + it->second.second; ++k) {
               const int index = order_[static_cast<std::size_t>(k)];
@@ -97,6 +105,47 @@ class VoxelHashIndex {
   }
 
  private:
+  // Most cells a ring visits hold no point, and a hash lookup (a division and
+  // a chain of nodes) cost about 60 % of the correspondence search, which was
+  // a third of a merge's CPU. One bit per cell over the cells' bounding box
+  // answers "empty" first. A box of more than kMaxBits cells keeps no bits
+  // (every cell goes to the hash, as before).
+  static constexpr std::size_t kMaxBits = std::size_t{1} << 28;  // 32 MiB
+
+  void MarkOccupied(const std::vector<Eigen::Vector3i>& cells) {
+    if (cells.empty()) return;
+    lo_ = hi_ = cells.front();
+    for (const auto& c : cells) {
+      lo_ = lo_.cwiseMin(c);
+      hi_ = hi_.cwiseMax(c);
+    }
+    const Eigen::Vector3i size = hi_ - lo_ + Eigen::Vector3i::Ones();
+    const double count = static_cast<double>(size.x()) * size.y() * size.z();
+    if (count > static_cast<double>(kMaxBits)) return;
+    size_ = size;
+    bits_.assign(static_cast<std::size_t>(count) / 64 + 1, 0);
+    for (const auto& c : cells) {
+      const std::size_t i = BitIndex(c);
+      bits_[i >> 6] |= std::uint64_t{1} << (i & 63);
+    }
+  }
+
+  // False only when no point lies in the cell.
+  bool MaybeOccupied(const Eigen::Vector3i& c) const {
+    if (bits_.empty()) return true;
+    if ((c.array() < lo_.array()).any() || (c.array() > hi_.array()).any()) return false;
+    const std::size_t i = BitIndex(c);
+    return (bits_[i >> 6] >> (i & 63)) & 1;
+  }
+
+  std::size_t BitIndex(const Eigen::Vector3i& c) const {
+    const Eigen::Vector3i o = c - lo_;
+    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(o.y())) *
+               static_cast<std::size_t>(size_.x()) +
+           static_cast<std::size_t>(o.x());
+  }
+
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
     const Eigen::Vector3d s = (p / cell_m_).array().floor().cwiseMax(-1e6).cwiseMin(1e6);
     return s.cast<int>();
@@ -111,6 +160,9 @@ class VoxelHashIndex {
   double cell_m_;
   std::vector<int> order_;
   std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero(), hi_ = Eigen::Vector3i::Zero();
+  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
+  std::vector<std::uint64_t> bits_;  // empty: no bounding box, ask the hash
 };
 
 // The nearest target of a query point under either index.

@@ -98,6 +98,45 @@ TEST(IcpTest, RecoversAnExactTransformAndItsInverse) {
   EXPECT_LT(testing::TranslationError(backward->T_target_source, T_t_s.inverse()), 1e-4);
 }
 
+// The voxel hash answers as the k-d tree does: the same ICP, step for step,
+// on noisy patches. Once with the target's cells in a small box (empty cells
+// answered by the hash's bit set), once with one more point 2 km away in both
+// maps, which makes the box too large for the bit set (every cell goes to the
+// hash table).
+TEST(IcpTest, VoxelHashAndKdTreeFindTheSameNeighbours) {
+  for (const bool far_point : {false, true}) {
+    SCOPED_TRACE(far_point ? "box too large for the bit set" : "bit set");
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 3.0);
+    std::normal_distribution<double> noise(0.0, 0.2 * kRoomResolutionM);
+    const Eigen::Isometry3d T_t_s = Pose(2, -1, 1, Eigen::Vector3d(0.06, -0.04, 0.05));
+    std::vector<Eigen::Vector3d> target, source;
+    for (int i = 0; i < 3000; ++i) {
+      Eigen::Vector3d p(u(rng), u(rng), u(rng));
+      p[i % 3] = 0.0;
+      target.push_back(p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+      source.push_back(T_t_s.inverse() * p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    }
+    if (far_point) {
+      target.emplace_back(2000.0, 2000.0, 1.0);
+      source.push_back(T_t_s.inverse() * target.back());
+    }
+    IcpParams params;
+    params.search = NeighbourSearch::kVoxelHash;
+    auto hash = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
+    params.search = NeighbourSearch::kKdTree;
+    auto tree = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
+    ASSERT_TRUE(hash.ok()) << hash.status().ToString();
+    ASSERT_TRUE(tree.ok()) << tree.status().ToString();
+    EXPECT_EQ(hash->target_points, tree->target_points);
+    EXPECT_EQ(hash->inliers, tree->inliers);
+    EXPECT_EQ(hash->iterations, tree->iterations);
+    EXPECT_NEAR(hash->rms_residual_m, tree->rms_residual_m, 1e-6);
+    EXPECT_LT((hash->T_target_source.matrix() - tree->T_target_source.matrix()).norm(), 1e-6);
+    EXPECT_GT(hash->inliers, 2500);
+  }
+}
+
 TEST(IcpTest, NoOverlapIsAFailedPrecondition) {
   const std::vector<Eigen::Vector3d> target(50, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> source;
