@@ -45,6 +45,17 @@ struct Arc {
   double span_rad;
 };
 
+// Two draws for one point, y first: the order in which GCC evaluated the
+// unsequenced Vec2(draw(), draw()) these scenes were made with, spelled out
+// so that every compiler builds the same scene from a seed (clang evaluates
+// arguments left to right, and its seed-12 scene had no corner).
+template <typename Draw>
+Vec2 DrawVec2(Draw&& draw) {
+  const double y = draw();
+  const double x = draw();
+  return Vec2(x, y);
+}
+
 // Walls of a few rotated rectangular rooms (corners), some near-parallel walls
 // close to others, some free walls; each observation sees a random subset of
 // walls as partial, noisy segments. With `curved`, also a few curved walls:
@@ -56,10 +67,14 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, 0.02);
   const auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(rng); };
+  const auto in_square = [&](double half_m) {
+    return DrawVec2([&] { return uniform(-half_m, half_m); });
+  };
+  const auto noise_vec = [&] { return DrawVec2([&] { return noise(rng); }); };
 
   std::vector<Segment2> walls;
   for (int room = 0; room < 3; ++room) {
-    const Vec2 origin(uniform(-30, 30), uniform(-30, 30));
+    const Vec2 origin = in_square(30);
     const double yaw = uniform(0, M_PI);
     const Vec2 ex(std::cos(yaw), std::sin(yaw));
     const Vec2 ey(-ex.y(), ex.x());
@@ -78,14 +93,14 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
     walls.push_back({mid - half, mid + half});
   }
   for (int k = 0; k < 8; ++k) {
-    const Vec2 a(uniform(-35, 35), uniform(-35, 35));
+    const Vec2 a = in_square(35);
     const double yaw = uniform(0, 2 * M_PI);
     walls.push_back({a, a + uniform(1, 8) * Vec2(std::cos(yaw), std::sin(yaw))});
   }
   std::vector<Arc> arcs;
   for (int k = 0; curved && k < 3; ++k) {
-    arcs.push_back({Vec2(uniform(-35, 35), uniform(-35, 35)), uniform(3, 10), uniform(0, 2 * M_PI),
-                    uniform(M_PI / 3, M_PI)});
+    const Vec2 centre = in_square(35);  // a braced list is evaluated left to right
+    arcs.push_back({centre, uniform(3, 10), uniform(0, 2 * M_PI), uniform(M_PI / 3, M_PI)});
   }
 
   Scene scene;
@@ -127,8 +142,9 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
       const double t0 = uniform(-0.05, 0.7);
       const double t1 = std::min(1.05, t0 + uniform(0.15, 0.6));
       const double sigma = unit(rng) < 0.1 ? 5.0 : 1.0;
-      add(wall.a + t0 * wall.direction() + sigma * Vec2(noise(rng), noise(rng)),
-          wall.a + t1 * wall.direction() + sigma * Vec2(noise(rng), noise(rng)));
+      const Vec2 noise_b = sigma * noise_vec();  // the second argument's, first (as GCC)
+      const Vec2 noise_a = sigma * noise_vec();
+      add(wall.a + t0 * wall.direction() + noise_a, wall.a + t1 * wall.direction() + noise_b);
     }
     for (const Arc& arc : arcs) {
       if (unit(rng) > 0.3) continue;
@@ -138,15 +154,16 @@ Scene MakeScene(uint32_t seed, bool curved, bool guard,
           std::min(arc.start_rad + arc.span_rad, from + uniform(0.3, 0.7) * arc.span_rad);
       const auto on_arc = [&](double angle) -> Vec2 {
         return arc.centre + arc.radius_m * Vec2(std::cos(angle), std::sin(angle)) +
-               Vec2(noise(rng), noise(rng)) / 2.0;
+               noise_vec() / 2.0;
       };
       for (double angle = from + uniform(0, step); angle + step <= to; angle += step) {
-        add(on_arc(angle), on_arc(angle + step));
+        const Vec2 b = on_arc(angle + step);  // the second argument first (as GCC)
+        add(on_arc(angle), b);
       }
     }
     const int clutter = static_cast<int>(rng() % 4);  // small things, mostly seen once
     for (int k = 0; k < clutter; ++k) {
-      const Vec2 a(uniform(-35, 35), uniform(-35, 35));
+      const Vec2 a = in_square(35);
       const double yaw = uniform(0, 2 * M_PI);
       add(a, a + uniform(0.3, 2.0) * Vec2(std::cos(yaw), std::sin(yaw)));
     }
