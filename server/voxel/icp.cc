@@ -114,18 +114,19 @@ class VoxelHashIndex {
 
   void MarkOccupied(const std::vector<Eigen::Vector3i>& cells) {
     if (cells.empty()) return;
-    lo_ = hi_ = cells.front();
+    Eigen::Vector3i lo = cells.front(), hi = cells.front();
     for (const auto& c : cells) {
-      lo_ = lo_.cwiseMin(c);
-      hi_ = hi_.cwiseMax(c);
+      lo = lo.cwiseMin(c);
+      hi = hi.cwiseMax(c);
     }
-    const Eigen::Vector3i size = hi_ - lo_ + Eigen::Vector3i::Ones();
+    const Eigen::Vector3i size = hi - lo + Eigen::Vector3i::Ones();
     const double count = static_cast<double>(size.x()) * size.y() * size.z();
     if (count > static_cast<double>(kMaxBits)) return;
+    lo_ = lo;
     size_ = size;
     bits_.assign(static_cast<std::size_t>(count) / 64 + 1, 0);
     for (const auto& c : cells) {
-      const std::size_t i = BitIndex(c);
+      const std::size_t i = BitIndex(c - lo_);
       bits_[i >> 6] |= std::uint64_t{1} << (i & 63);
     }
   }
@@ -133,13 +134,14 @@ class VoxelHashIndex {
   // False only when no point lies in the cell.
   bool MaybeOccupied(const Eigen::Vector3i& c) const {
     if (bits_.empty()) return true;
-    if ((c.array() < lo_.array()).any() || (c.array() > hi_.array()).any()) return false;
-    const std::size_t i = BitIndex(c);
+    const Eigen::Vector3i o = c - lo_;
+    if ((o.array() < 0).any() || (o.array() >= size_.array()).any()) return false;
+    const std::size_t i = BitIndex(o);
     return (bits_[i >> 6] >> (i & 63)) & 1;
   }
 
-  std::size_t BitIndex(const Eigen::Vector3i& c) const {
-    const Eigen::Vector3i o = c - lo_;
+  // o: a cell's offset from lo_, inside the box.
+  std::size_t BitIndex(const Eigen::Vector3i& o) const {
     return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(size_.y()) +
             static_cast<std::size_t>(o.y())) *
                static_cast<std::size_t>(size_.x()) +
@@ -160,9 +162,9 @@ class VoxelHashIndex {
   double cell_m_;
   std::vector<int> order_;
   std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
-  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero(), hi_ = Eigen::Vector3i::Zero();
-  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
-  std::vector<std::uint64_t> bits_;  // empty: no bounding box, ask the hash
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();                  // the bit set's first cell
+  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();                // and its extent, in cells
+  std::vector<std::uint64_t> bits_;                               // empty: ask the hash
 };
 
 // The nearest target of a query point under either index.
