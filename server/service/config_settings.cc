@@ -378,10 +378,14 @@ const std::vector<Setting>& Settings() {
              [](C& c) -> auto& { return c.submaps.resample_resolutions; }, "refuse", "resample"),
       Choice("merge.fusion_rule", "occupancy fusion: overlap (the paper's rule) or log_odds",
              [](C& c) -> auto& { return c.submaps.log_odds_fusion; }, "overlap", "log_odds"),
-      Flag("merge.correlation", "when corner matching finds no accepted solution, try the correlation generator "
-           "(levelled maps, wall-normal yaws, FFT translation search with a free-space penalty); false = "
-           "corner matching only (the paper)",
+      Flag("merge.correlation", "use the correlation generator (levelled maps, wall-normal yaws, FFT "
+           "translation search with a free-space penalty) besides corner matching; false = corner matching "
+           "only (the paper)",
            [](C& c) -> auto& { return c.submaps.correlation; }),
+      Count("merge.correlation_after_corner_stages", "the correlation generator runs after this many corner-"
+            "matching tolerance stages (strict, then looser) accepted nothing; 0 = before corner matching, 3 = "
+            "after all of them",
+            [](C& c) -> auto& { return c.submaps.correlation_after_corner_stages; }, 0, 100),
       Flag("merge.correlation_check_accepted", "also run the correlation generator after an accepted corner "
            "solution, so that the uniqueness gate sees the other yaws (on geb079 it cost 2.6-3.9 s of CPU per "
            "accepted merge)",

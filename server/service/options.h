@@ -92,10 +92,12 @@ struct SubmapOptions {
   double max_merge_seconds = 60.0;    // budget of one merge, seconds
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule
-  // The correlation generator (voxel::CorrelationParams): run when corner
-  // matching finds no accepted solution, and also after an accepted one so
-  // that the uniqueness gate sees other yaws (costs CPU: docs/voxel-merge.md).
+  // The correlation generator (voxel::CorrelationParams): run after the
+  // first correlation_after_corner_stages corner-matching stages accepted
+  // nothing, and also after an accepted solution so that the uniqueness gate
+  // sees other yaws (correlation_check_accepted). CPU: docs/voxel-merge.md.
   bool correlation = true;
+  int correlation_after_corner_stages = 1;
   bool correlation_check_accepted = true;
   // Every merge the gates accept waits for ApproveMerge (PROPOSED), as if
   // each request set MergeSubmapsRequest.review.

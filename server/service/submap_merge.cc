@@ -31,6 +31,7 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
                                                : voxel::ResolutionPolicy::kRefuse;
   p.fusion_rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;
   p.correlation.enabled = o.correlation;
+  p.correlation.after_corner_stages = o.correlation_after_corner_stages;
   p.correlation.check_corner_solutions = o.correlation_check_accepted;
   return p;
 }

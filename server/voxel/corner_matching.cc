@@ -41,14 +41,13 @@ Status CheckPoints(const std::vector<Eigen::Vector3d>& points, const char* name)
   return Status::Ok();
 }
 
+// Steps 3-4 on the consistency graph of `pairs` (vertex v = pairs[v]).
 StatusOr<CornerMatchResult> Solve(const std::vector<Eigen::Vector3d>& points_a,
                                   const std::vector<Eigen::Vector3d>& points_b,
-                                  const std::vector<CornerPair>& pairs,
+                                  const std::vector<CornerPair>& pairs, const BitGraph& graph,
                                   const CornerMatchingParams& params, const TransformScore& score,
-                                  const PairConsistency& extra, Clock::time_point start) {
+                                  Clock::time_point start) {
   CornerMatchResult result;
-  const BitGraph graph =
-      BuildConsistencyGraph(points_a, points_b, pairs, params.consistency_distance_m, extra);
   result.candidate_pairs = graph.num_vertices();
   result.graph_edges = graph.num_edges();
   result.graph_density = graph.density();
@@ -153,19 +152,22 @@ StatusOr<CornerMatchResult> MatchCandidatePairs(const std::vector<Eigen::Vector3
       return Status::InvalidArgument("pairs[" + std::to_string(i) + "] indexes out of range");
     }
   }
-  return Solve(points_a, points_b, pairs, params, tie_score, nullptr, start);
+  const BitGraph graph =
+      BuildConsistencyGraph(points_a, points_b, pairs, params.consistency_distance_m);
+  return Solve(points_a, points_b, pairs, graph, params, tie_score, start);
 }
 
-StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const CornerSet& corners_b,
-                                         const CornerMatchingParams& params,
-                                         const TransformScore& tie_score) {
-  const Clock::time_point start = Clock::now();
+StatusOr<CornerMatcher> CornerMatcher::Create(const CornerSet& corners_a,
+                                              const CornerSet& corners_b,
+                                              const CornerMatchingParams& params) {
   MAPD_RETURN_IF_ERROR(params.Validate());
-  std::vector<Eigen::Vector3d> points_a, points_b;
-  for (const Corner& c : corners_a) points_a.push_back(c.position);
-  for (const Corner& c : corners_b) points_b.push_back(c.position);
-  MAPD_RETURN_IF_ERROR(CheckPoints(points_a, "corners_a.position"));
-  MAPD_RETURN_IF_ERROR(CheckPoints(points_b, "corners_b.position"));
+  CornerMatcher m;
+  m.params_ = params;
+  m.params_.excluded_pairs.clear();
+  for (const Corner& c : corners_a) m.points_a_.push_back(c.position);
+  for (const Corner& c : corners_b) m.points_b_.push_back(c.position);
+  MAPD_RETURN_IF_ERROR(CheckPoints(m.points_a_, "corners_a.position"));
+  MAPD_RETURN_IF_ERROR(CheckPoints(m.points_b_, "corners_b.position"));
   for (const CornerSet* set : {&corners_a, &corners_b}) {
     for (size_t i = 0; i < set->size(); ++i) {
       for (const Eigen::Vector3d& n : (*set)[i].normals) {
@@ -177,19 +179,12 @@ StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const Corne
       }
     }
   }
-  std::vector<CornerPair> pairs = SelectCandidatePairs(corners_a, corners_b, params);
-  if (!params.excluded_pairs.empty()) {
-    pairs.erase(std::remove_if(
-                    pairs.begin(), pairs.end(),
-                    [&](const CornerPair& p) {
-                      return std::find(params.excluded_pairs.begin(), params.excluded_pairs.end(),
-                                       std::make_pair(p.a, p.b)) != params.excluded_pairs.end();
-                    }),
-                pairs.end());
-  }
+  m.pairs_ = SelectCandidatePairs(corners_a, corners_b, params);
 
   PairConsistency normals_agree = nullptr;
   if (params.use_normals) {
+    const auto& points_a = m.points_a_;
+    const auto& points_b = m.points_b_;
     normals_agree = [&](const CornerPair& p, const CornerPair& q) {
       using internal::DirectionFeature;
       using internal::DirectionsAgree;
@@ -206,7 +201,60 @@ StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const Corne
                              DirectionFeature(corners_b[q.b], -db / lb), tol);
     };
   }
-  return Solve(points_a, points_b, pairs, params, tie_score, normals_agree, start);
+  m.graph_ = BuildConsistencyGraph(m.points_a_, m.points_b_, m.pairs_,
+                                   params.consistency_distance_m, normals_agree);
+  return m;
+}
+
+StatusOr<CornerMatchResult> CornerMatcher::Match(
+    const std::vector<std::pair<int, int>>& excluded_pairs, double max_search_seconds,
+    const TransformScore& tie_score) const {
+  const Clock::time_point start = Clock::now();
+  CornerMatchingParams params = params_;
+  params.max_search_seconds = max_search_seconds;
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (excluded_pairs.empty()) {
+    return Solve(points_a_, points_b_, pairs_, graph_, params, tie_score, start);
+  }
+  // The subgraph induced by the pairs not excluded, in their order: the
+  // graph BuildConsistencyGraph gives for those pairs (an edge depends only
+  // on its two pairs).
+  std::vector<int> new_index(pairs_.size(), -1);
+  std::vector<CornerPair> kept;
+  for (std::size_t v = 0; v < pairs_.size(); ++v) {
+    const CornerPair& p = pairs_[v];
+    if (std::find(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(p.a, p.b)) !=
+        excluded_pairs.end()) {
+      continue;
+    }
+    new_index[v] = static_cast<int>(kept.size());
+    kept.push_back(p);
+  }
+  BitGraph graph(static_cast<int>(kept.size()));
+  for (std::size_t u = 0; u < pairs_.size(); ++u) {
+    if (new_index[u] < 0) continue;
+    const uint64_t* row = graph_.Row(static_cast<int>(u));
+    for (int w = static_cast<int>(u >> 6); w < graph_.num_words(); ++w) {
+      for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
+        const int v = (w << 6) + __builtin_ctzll(bits);
+        if (v > static_cast<int>(u) && new_index[static_cast<std::size_t>(v)] >= 0) {
+          graph.AddEdge(new_index[u], new_index[static_cast<std::size_t>(v)]);
+        }
+      }
+    }
+  }
+  return Solve(points_a_, points_b_, kept, graph, params, tie_score, start);
+}
+
+StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const CornerSet& corners_b,
+                                         const CornerMatchingParams& params,
+                                         const TransformScore& tie_score) {
+  const Clock::time_point start = Clock::now();
+  auto matcher = CornerMatcher::Create(corners_a, corners_b, params);
+  if (!matcher.ok()) return matcher.status();
+  auto result = matcher->Match(params.excluded_pairs, params.max_search_seconds, tie_score);
+  if (result.ok()) result->total_seconds = SecondsSince(start);
+  return result;
 }
 
 }  // namespace mapd::voxel

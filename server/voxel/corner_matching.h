@@ -152,6 +152,33 @@ StatusOr<CornerMatchResult> MatchCorners(const CornerSet& corners_a, const Corne
                                          const CornerMatchingParams& params,
                                          const TransformScore& tie_score = nullptr);
 
+// The full pipeline run again and again with more candidate pairs excluded
+// (merge_pair.cc: a refused solution's pairs are excluded and the search
+// rerun). Steps 1-2 depend only on the corners and the params, so Create
+// runs them once; Match searches the subgraph the pairs not excluded induce,
+// which is the graph MatchCorners builds for them (same vertices in the same
+// order: an edge depends only on its two pairs), so Match(excluded, ...)
+// equals MatchCorners with params.excluded_pairs = excluded.
+class CornerMatcher {
+ public:
+  // InvalidArgument for bad params or non-finite input (MatchCorners's);
+  // params.excluded_pairs is ignored. Keeps copies: the sets may go.
+  static StatusOr<CornerMatcher> Create(const CornerSet& corners_a, const CornerSet& corners_b,
+                                        const CornerMatchingParams& params);
+  // Steps 3-4 without `excluded_pairs` (index into A, index into B), the
+  // search within max_search_seconds (0 = unlimited).
+  StatusOr<CornerMatchResult> Match(const std::vector<std::pair<int, int>>& excluded_pairs,
+                                    double max_search_seconds,
+                                    const TransformScore& tie_score = nullptr) const;
+
+ private:
+  CornerMatcher() = default;
+  CornerMatchingParams params_;
+  std::vector<Eigen::Vector3d> points_a_, points_b_;
+  std::vector<CornerPair> pairs_;  // step 1, sorted
+  BitGraph graph_;                 // step 2 over pairs_
+};
+
 // Steps 2-4 on given candidate pairs between two point sets (no signatures,
 // no normals; e.g. putative correspondences from descriptors).
 StatusOr<CornerMatchResult> MatchCandidatePairs(const std::vector<Eigen::Vector3d>& points_a,

@@ -105,26 +105,41 @@ class CoarseGrid {
   const std::vector<double>& free() const { return free_; }
 
  private:
-  // Separable max filter of `radius` cells.
+  // Binary dilation (1 where a cell > 0 lies within `radius` cells along
+  // each axis: a cube), one axis at a time. Each pass is two sweeps along
+  // the axis that remember the nearest set cell behind and ahead, so it
+  // costs O(cells) whatever the radius, and the innermost loop runs over
+  // contiguous memory on every axis.
   std::vector<double> Dilate(const std::vector<double>& in, int radius) const {
-    std::vector<double> out = in;
+    std::vector<double> out(in.size());
+    for (std::size_t i = 0; i < in.size(); ++i) out[i] = in[i] > 0 ? 1.0 : 0.0;
+    std::vector<double> pass;
     const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
                                                static_cast<std::size_t>(n_[2]), 1};
-    std::vector<double> pass;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      pass = out;
-      const std::size_t step = stride[axis];
-      const auto extent = static_cast<std::size_t>(n_[axis]);
-      for (std::size_t i = 0; i < pass.size(); ++i) {
-        const auto coordinate = static_cast<int>((i / step) % extent);
-        double v = pass[i];
-        for (int d = -radius; d <= radius && v <= 0; ++d) {
-          const int c = coordinate + d;
-          if (c < 0 || c >= n_[axis] || d == 0) continue;
-          v = std::max(v, pass[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i) +
-                                                        d * static_cast<std::ptrdiff_t>(step))]);
+      pass.swap(out);
+      out.assign(pass.size(), 0.0);
+      const std::size_t step = stride[axis];  // cells between neighbours on the axis
+      const auto extent = static_cast<int>(n_[axis]);
+      const std::size_t block = step * static_cast<std::size_t>(extent);
+      std::vector<int> nearest(step);
+      for (std::size_t base = 0; base < pass.size(); base += block) {
+        std::fill(nearest.begin(), nearest.end(), -radius - 1);  // last set cell behind
+        for (int k = 0; k < extent; ++k) {
+          const std::size_t row = base + static_cast<std::size_t>(k) * step;
+          for (std::size_t j = 0; j < step; ++j) {
+            if (pass[row + j] > 0) nearest[j] = k;
+            if (k - nearest[j] <= radius) out[row + j] = 1.0;
+          }
         }
-        out[i] = v;
+        std::fill(nearest.begin(), nearest.end(), extent + radius);  // next set cell ahead
+        for (int k = extent - 1; k >= 0; --k) {
+          const std::size_t row = base + static_cast<std::size_t>(k) * step;
+          for (std::size_t j = 0; j < step; ++j) {
+            if (pass[row + j] > 0) nearest[j] = k;
+            if (nearest[j] - k <= radius) out[row + j] = 1.0;
+          }
+        }
       }
     }
     return out;
@@ -238,6 +253,9 @@ std::vector<Peak> TopPeaks(const double* s, const std::array<int, 3>& n, int cou
 }  // namespace
 
 Status CorrelationParams::Validate() const {
+  if (after_corner_stages < 0 || after_corner_stages > 100) {
+    return Status::InvalidArgument("correlation.after_corner_stages must be in [0, 100]");
+  }
   if (!(cell_voxels >= 1 && cell_voxels <= 64)) {
     return Status::InvalidArgument("correlation.cell_voxels must be in [1, 64]");
   }

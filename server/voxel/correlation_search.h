@@ -27,13 +27,24 @@
 namespace mapd::voxel {
 
 struct CorrelationParams {
-  // Run the generator when corner matching accepts nothing.
+  // Run the generator at all.
   bool enabled = true;
-  // Also run it after corner matching accepted a solution, so that the
-  // uniqueness gate sees the other yaws too; then only the best peak of each
-  // yaw that is distinct from the accepted answer is refined (every
-  // hypothesis refined cost ~4x the whole corner merge on geb079;
-  // docs/voxel-merge.md gives the cost of this check).
+  // When it runs: after this many of corner matching's tolerance stages
+  // (MergeParams: the strict one, then looser_tolerances) have accepted
+  // nothing; the remaining stages run only when it accepts nothing too.
+  // 1 (the default): the strict stage's solutions are cheap and, where
+  // corners repeat, right; the looser stages' denser graphs and refused
+  // solutions were most of a low-overlap merge's CPU (docs/voxel-merge.md).
+  // 0: the generator first (corners are then extracted only when it accepts
+  // nothing); its peaks put a room's floor on the other room's ceiling in
+  // the test scenes, which the gates cannot tell from the truth when the
+  // maps carry little free space, so corner matching goes first by default.
+  // A large value (e.g. 100): after every stage, the order before.
+  int after_corner_stages = 1;
+  // Also run it after corner matching accepted a solution (in the stages
+  // before it), so that the uniqueness gate sees the other yaws too; then only the best peak of
+  // each yaw that is distinct from the accepted answer is refined (every hypothesis refined cost
+  // ~4x the whole corner merge on geb079; docs/voxel-merge.md gives the cost of this check).
   bool check_corner_solutions = true;
   // Coarse cell edge in voxels of the finer map: coarse enough that a wall
   // rasterised in two rotated grids lands in the same or a neighbouring cell

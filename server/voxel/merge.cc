@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -13,6 +14,7 @@
 #include "voxel/merge_graph.h"
 #include "voxel/merge_pair.h"
 #include "voxel/octree_reader.h"
+#include "voxel/submap_features.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
@@ -45,7 +47,7 @@ struct Submap {
   uint64_t id = 0;
   OcTreePtr tree;
   VoxelGrid grid;
-  CornerSet corners;
+  std::optional<SubmapFeatures> features;  // set once grid is
 };
 
 Status OverBudget(Clock::time_point start, const MergeParams& params, const char* stage) {
@@ -97,6 +99,7 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
       return Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
     submaps[i].tree = std::move(tree).value();
     submaps[i].grid = std::move(grid).value();
+    submaps[i].features.emplace(submaps[i].id, &submaps[i].grid, &params);
   }
   outcome.times.reading_s = SecondsSince(stage_start);
   double finest = submaps[0].grid.resolution();
@@ -115,18 +118,17 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   }
   outcome.resolution = finest;
 
-  // B.1-B.3: corners of every submap.
-  stage_start = Clock::now();
+  // B.1-B.3: corners of every submap, up front when corner matching runs
+  // first: a submap with too few of them fails the merge here. With the
+  // correlation generator first (after_corner_stages 0), AlignPair extracts
+  // them only for pairs the generator does not settle.
   progress.Report("corners", 0.0);
-  for (std::size_t i = 0; i < submaps.size(); ++i) {
-    auto corners = ExtractCorners(submaps[i].grid, params.corners);
-    if (!corners.ok()) {
-      return Status(corners.status().code(),
-                    Name(submaps[i].id) + ": " + corners.status().message());
-    }
-    submaps[i].corners = std::move(corners->corners);
-    const std::size_t found = submaps[i].corners.size();
-    outcome.corners.push_back(found);
+  const bool corners_first =
+      !params.correlation.enabled || params.correlation.after_corner_stages > 0;
+  for (std::size_t i = 0; i < submaps.size() && corners_first; ++i) {
+    auto corners = submaps[i].features->Corners(&outcome.times);
+    if (!corners.ok()) return corners.status();
+    const std::size_t found = (*corners)->size();
     // With the correlation generator, too few corners is for AlignPair to
     // report: corridors and doorways have few corners but walls and floor.
     if (found == 0 && !params.correlation.enabled) {
@@ -141,16 +143,14 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
                     0.4 * static_cast<double>(i + 1) / static_cast<double>(submaps.size()));
     MAPD_RETURN_IF_ERROR(OverBudget(start, params, "corner extraction"));
   }
-  outcome.times.corners_s = SecondsSince(stage_start);
-
   // B.4-B.5: every pair.
   const std::size_t num_pairs = submaps.size() * (submaps.size() - 1) / 2;
   std::vector<MergeEdge> edges;
   progress.Report("matching", 0.4);
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     for (std::size_t j = i + 1; j < submaps.size(); ++j) {
-      const PairSide a{submaps[i].id, &submaps[i].grid, &submaps[i].corners};
-      const PairSide b{submaps[j].id, &submaps[j].grid, &submaps[j].corners};
+      const PairSide a{submaps[i].id, &submaps[i].grid, &*submaps[i].features};
+      const PairSide b{submaps[j].id, &submaps[j].grid, &*submaps[j].features};
       const double seconds_left = params.max_seconds - SecondsSince(start);
       auto pair = AlignPair(a, b, params, finest, seconds_left, &outcome.times);
       if (!pair.ok()) return pair.status();
@@ -164,6 +164,12 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
                                              static_cast<double>(num_pairs));
       MAPD_RETURN_IF_ERROR(OverBudget(start, params, "matching and alignment"));
     }
+  }
+
+  for (auto& submap : submaps) {
+    const bool extracted = submap.features->corners_extracted();
+    outcome.corners.push_back(
+        extracted ? static_cast<int64_t>((*submap.features->Corners(&outcome.times))->size()) : -1);
   }
 
   // B.7: the maximum spanning tree from the first input.

@@ -229,8 +229,10 @@ struct MergeOutcome {
   uint64_t occupied_voxels = 0;
   StageTimes times;
   std::vector<PairReport> pairs;  // every pair tried, accepted or not
-  std::vector<uint64_t> corners;  // corners found per input, in input order
-  double resolution = 0.0;        // of the merged map, metres
+  // Corners found per input, in input order; -1 where none were extracted
+  // (the correlation generator placed every pair of that submap).
+  std::vector<int64_t> corners;
+  double resolution = 0.0;  // of the merged map, metres
   // Free voxels left out of the fusion by max_fusion_free_voxels (left unknown).
   uint64_t free_voxels_skipped = 0;
 };

@@ -8,6 +8,7 @@
 #include "common/clock.h"
 #include "voxel/correlation_search.h"
 #include "voxel/gravity_alignment.h"
+#include "voxel/submap_features.h"
 
 namespace mapd::voxel {
 namespace {
@@ -45,16 +46,15 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
                                         const std::vector<Eigen::Isometry3d>& accepted,
                                         StageTimes* times) {
   CorrelationRun run;
-  const auto start = std::chrono::steady_clock::now();
-  auto frame_a = EstimateGravityFrame(*a.grid, params.gravity);
-  auto frame_b = EstimateGravityFrame(*b.grid, params.gravity);
+  const StatusOr<GravityFrame>& frame_a = a.features->Gravity(times);
+  const StatusOr<GravityFrame>& frame_b = b.features->Gravity(times);
   if (!frame_a.ok() || !frame_b.ok()) {
-    times->correlation_s += SecondsSince(start);
     const Status& bad = frame_a.ok() ? frame_b.status() : frame_a.status();
     if (bad.code() != StatusCode::kFailedPrecondition) return bad;
     run.not_run = "submap " + std::to_string(frame_a.ok() ? b.id : a.id) + ": " + bad.message();
     return run;
   }
+  const auto start = std::chrono::steady_clock::now();
   const std::vector<double> yaws = YawCandidates(*frame_a, *frame_b, params.gravity);
   run.yaws = static_cast<int>(yaws.size());
   CorrelationStats stats;
@@ -68,8 +68,11 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
   centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
   std::vector<Eigen::Isometry3d> known = accepted;
-  // Checking an accepted corner solution: only the best distinct peak of each
-  // yaw is refined (a wrong hypothesis costs a full ICP screen).
+  // Hypotheses are refined best first. Once an answer is accepted (here or
+  // by corner matching) only the best distinct peak of each yaw not yet
+  // refined is: enough for the uniqueness gate to see the other yaws (a
+  // symmetric building's twin is another yaw), while every further peak
+  // would cost an ICP screen.
   std::vector<double> yaws_refined;
   for (std::size_t i = 0; i < hypotheses->size(); ++i) {
     const CorrelationHypothesis& h = (*hypotheses)[i];
@@ -81,12 +84,10 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
       ++run.agreeing;
       continue;
     }
-    if (!accepted.empty()) {
-      if (std::find(yaws_refined.begin(), yaws_refined.end(), h.yaw_rad) != yaws_refined.end()) {
-        continue;
-      }
-      yaws_refined.push_back(h.yaw_rad);
-    }
+    const bool yaw_refined =
+        std::find(yaws_refined.begin(), yaws_refined.end(), h.yaw_rad) != yaws_refined.end();
+    if (!known.empty() && yaw_refined) continue;
+    if (!yaw_refined) yaws_refined.push_back(h.yaw_rad);
     TriedHypothesis tried;
     tried.label = "correlation yaw " + Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) +
                   " deg, peak " + std::to_string(i + 1);

@@ -4,13 +4,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/clock.h"
 #include "voxel/icp.h"
 #include "voxel/merge_hypotheses.h"
 #include "voxel/merge_overlap.h"
+#include "voxel/submap_features.h"
 
 namespace mapd::voxel {
 namespace {
@@ -124,10 +127,13 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
 
 namespace {
 
-// One corner solution: the maximum clique (minus `matching.excluded_pairs`),
+// One corner solution: the maximum clique (without `excluded` pairs),
 // Umeyama, ICP, the acceptance gates. `correspondences` gets the clique used.
-StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const MergeParams& params,
-                                 const CornerMatchingParams& matching, double finest_resolution_m,
+StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const CornerSet& corners_a,
+                                 const CornerSet& corners_b, const MergeParams& params,
+                                 const CornerMatcher& matcher,
+                                 const std::vector<std::pair<int, int>>& excluded,
+                                 double max_search_seconds, double finest_resolution_m,
                                  StageTimes* times, std::vector<CornerPair>* correspondences) {
   PairReport report;
   report.id_a = a.id;
@@ -140,7 +146,7 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
     return static_cast<double>(
         ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
   };
-  auto match = MatchCorners(*a.corners, *b.corners, matching, tie_score);
+  auto match = matcher.Match(excluded, max_search_seconds, tie_score);
   times->matching_s += SecondsSince(start);
   if (!match.ok()) return match.status();
   correspondences->clear();
@@ -152,8 +158,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   }
   *correspondences = match->correspondences;
   for (const CornerPair& p : match->correspondences) {
-    report.matched_a_b.emplace_back((*a.corners)[static_cast<std::size_t>(p.a)].position,
-                                    (*b.corners)[static_cast<std::size_t>(p.b)].position);
+    report.matched_a_b.emplace_back(corners_a[static_cast<std::size_t>(p.a)].position,
+                                    corners_b[static_cast<std::size_t>(p.b)].position);
   }
   report.T_a_b = match->T_a_b;
 
@@ -162,78 +168,157 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Mer
   return report;
 }
 
+// Corner matching's tolerance stages: `matching`'s, then looser_tolerances.
+std::vector<MatchTolerances> ToleranceStages(const MergeParams& params) {
+  std::vector<MatchTolerances> stages = {{params.matching.signature_tolerance_rad * 180.0 / M_PI,
+                                          params.matching.normal_tolerance_rad * 180.0 / M_PI}};
+  stages.insert(stages.end(), params.looser_tolerances.begin(), params.looser_tolerances.end());
+  return stages;
+}
+
+// What the corner generator did for one pair.
+struct CornerRun {
+  std::vector<TriedHypothesis> tried;  // solutions that reached ICP, in order
+  PairReport first;                    // the first solution (its reason heads a refusal)
+  int solutions = 0;                   // clique searches run
+};
+
+// B.4: corner matching's tolerance stages [stage_begin, stage_end) (the
+// strict `matching` tolerances, then looser_tolerances), appended to `run`:
+// up to max_match_attempts solutions per stage, each one's pairs excluded
+// from the next search; after an accepted solution (or when
+// `accepted_before`), uniqueness_corner_attempts more look for a distinct
+// second one. Stops when `deadline_s` (seconds since `start`) has passed.
+Status RunCornerStages(const PairSide& a, const PairSide& b, const MergeParams& params,
+                       double finest_resolution_m, std::size_t stage_begin, std::size_t stage_end,
+                       bool accepted_before, std::chrono::steady_clock::time_point start,
+                       double deadline_s, StageTimes* times, CornerRun* run) {
+  if (run->solutions == 0) {
+    run->first.id_a = a.id;
+    run->first.id_b = b.id;
+  }
+  auto corners_a = a.features->Corners(times);
+  if (!corners_a.ok()) return corners_a.status();
+  auto corners_b = b.features->Corners(times);
+  if (!corners_b.ok()) return corners_b.status();
+  const CornerSet& set_a = **corners_a;
+  const CornerSet& set_b = **corners_b;
+  const std::vector<MatchTolerances> stages = ToleranceStages(params);
+  const int min_corners = params.min_matched_corners;
+  if (static_cast<int>(std::min(set_a.size(), set_b.size())) < min_corners) {
+    run->first.reason = "only " + std::to_string(std::min(set_a.size(), set_b.size())) +
+                        " corners found in submap " +
+                        std::to_string(set_a.size() < set_b.size() ? a.id : b.id) + ", need " +
+                        std::to_string(min_corners);
+    return Status::Ok();
+  }
+  bool accepted = accepted_before;
+  int extra_left = params.uniqueness_corner_attempts;
+  for (std::size_t stage = stage_begin; stage < std::min(stage_end, stages.size()); ++stage) {
+    CornerMatchingParams matching = params.matching;
+    matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
+    matching.signature_tolerance_rad = stages[stage].signature_deg * M_PI / 180.0;
+    matching.normal_tolerance_rad = stages[stage].normal_deg * M_PI / 180.0;
+    // Candidate pairs and the consistency graph once per stage; each attempt
+    // searches it without the pairs of the solutions before.
+    std::optional<CornerMatcher> matcher;
+    std::vector<std::pair<int, int>> excluded = params.matching.excluded_pairs;
+    for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
+      const double left = deadline_s - SecondsSince(start);
+      if ((run->solutions > 0 && left <= 0) || (accepted && extra_left-- <= 0)) break;
+      if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
+        matching.max_search_seconds = std::max(left, 1e-3);
+      }
+      if (!matcher.has_value()) {
+        const auto built = std::chrono::steady_clock::now();
+        auto created = CornerMatcher::Create(set_a, set_b, matching);
+        times->matching_s += SecondsSince(built);
+        if (!created.ok()) return created.status();
+        matcher.emplace(std::move(created).value());
+      }
+      std::vector<CornerPair> used;
+      StatusOr<PairReport> report =
+          TrySolution(a, b, set_a, set_b, params, *matcher, excluded, matching.max_search_seconds,
+                      finest_resolution_m, times, &used);
+      ++run->solutions;
+      if (!report.ok()) return report.status();
+      if (run->solutions == 1) run->first = *report;
+      if (!used.empty()) {
+        run->tried.push_back({"corner solution " + std::to_string(run->solutions), *report});
+        accepted = accepted || report->accepted;
+      }
+      // Too few corners ends the stage; a solution's pairs are excluded and
+      // the search rerun (for a better one, or a distinct second one).
+      if (used.empty()) break;
+      for (const CornerPair& p : used) excluded.emplace_back(p.a, p.b);
+    }
+    if (accepted && extra_left < 0) break;
+  }
+  return Status::Ok();
+}
+
+bool AnyAccepted(const std::vector<TriedHypothesis>& tried) {
+  for (const TriedHypothesis& h : tried) {
+    if (h.report.accepted) return true;
+  }
+  return false;
+}
+
+std::string DescribeCorners(const CornerRun& run, bool ran) {
+  if (!ran) return "corner matching: not run";
+  return "corner matching: " + run.first.reason + " (" + std::to_string(run.solutions) +
+         " corner solution" + (run.solutions == 1 ? "" : "s") + " tried, " +
+         std::to_string(run.tried.size()) + " reached ICP)";
+}
+
 }  // namespace
 
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times) {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<MatchTolerances> stages = {{params.matching.signature_tolerance_rad * 180.0 / M_PI,
-                                          params.matching.normal_tolerance_rad * 180.0 / M_PI}};
-  stages.insert(stages.end(), params.looser_tolerances.begin(), params.looser_tolerances.end());
-  PairReport first;
-  first.id_a = a.id;
-  first.id_b = b.id;
-  std::vector<TriedHypothesis> tried;  // every hypothesis that reached ICP, in order
-  int corner_tried = 0;
-  int accepted_index = -1;  // into tried
-  int extra_left = params.uniqueness_corner_attempts;
-  const int min_corners = params.min_matched_corners;
-  if (static_cast<int>(std::min(a.corners->size(), b.corners->size())) < min_corners) {
-    first.reason = "only " + std::to_string(std::min(a.corners->size(), b.corners->size())) +
-                   " corners found in submap " +
-                   std::to_string(a.corners->size() < b.corners->size() ? a.id : b.id) + ", need " +
-                   std::to_string(min_corners);
-    stages.clear();
-  }
-  for (std::size_t stage = 0; stage < stages.size(); ++stage) {
-    CornerMatchingParams matching = params.matching;
-    matching.consistency_distance_m = params.consistency_distance_voxels * finest_resolution_m;
-    matching.signature_tolerance_rad = stages[stage].signature_deg * M_PI / 180.0;
-    matching.normal_tolerance_rad = stages[stage].normal_deg * M_PI / 180.0;
-    for (int attempt = 0; attempt < params.max_match_attempts; ++attempt) {
-      const double left = seconds_left - SecondsSince(start);
-      if ((corner_tried > 0 && left <= 0) || (accepted_index >= 0 && extra_left-- <= 0)) break;
-      if (matching.max_search_seconds <= 0 || matching.max_search_seconds > left) {
-        matching.max_search_seconds = std::max(left, 1e-3);
-      }
-      std::vector<CornerPair> used;
-      StatusOr<PairReport> report =
-          TrySolution(a, b, params, matching, finest_resolution_m, times, &used);
-      ++corner_tried;
-      if (!report.ok()) return report.status();
-      if (corner_tried == 1) first = *report;
-      if (!used.empty()) {
-        tried.push_back({"corner solution " + std::to_string(corner_tried), *report});
-        if (report->accepted && accepted_index < 0) {
-          accepted_index = static_cast<int>(tried.size()) - 1;
-        }
-      }
-      // Too few corners ends the stage; a solution's pairs are excluded and
-      // the search rerun (for a better one, or a distinct second one).
-      if (used.empty()) break;
-      for (const CornerPair& p : used) matching.excluded_pairs.emplace_back(p.a, p.b);
-    }
-    if (accepted_index >= 0 && extra_left < 0) break;
-  }
-  const int corner_hypotheses = static_cast<int>(tried.size());
+  const CorrelationParams& cp = params.correlation;
+  const std::size_t num_stages = ToleranceStages(params).size();
+  // Corner stages before the correlation generator (all of them without it).
+  const std::size_t stages_before =
+      cp.enabled
+          ? std::min<std::size_t>(static_cast<std::size_t>(cp.after_corner_stages), num_stages)
+          : num_stages;
+  const auto time_left = [&] { return seconds_left - SecondsSince(start) > 0; };
 
+  CornerRun corners;
+  if (stages_before > 0) {
+    MAPD_RETURN_IF_ERROR(RunCornerStages(a, b, params, finest_resolution_m, 0, stages_before, false,
+                                         start, seconds_left, times, &corners));
+  }
+  // B.9: when those stages accepted nothing, or to check what they accepted.
   CorrelationRun correlation;
-  const bool run_correlation = params.correlation.enabled &&
-                               (accepted_index < 0 || params.correlation.check_corner_solutions) &&
-                               seconds_left - SecondsSince(start) > 0;
-  if (run_correlation) {
+  bool correlation_ran = false;
+  const bool corner_accepted = AnyAccepted(corners.tried);
+  if (cp.enabled && (!corner_accepted || cp.check_corner_solutions) &&
+      (stages_before == 0 || time_left())) {
     std::vector<Eigen::Isometry3d> accepted;
-    for (const TriedHypothesis& h : tried) {
+    for (const TriedHypothesis& h : corners.tried) {
       if (h.report.accepted) accepted.push_back(h.report.T_a_b);
     }
     auto run = RunCorrelation(a, b, params, finest_resolution_m, accepted, times);
     if (!run.ok()) return run.status();
     correlation = std::move(run).value();
-    for (TriedHypothesis& h : correlation.tried) tried.push_back(std::move(h));
-    correlation.tried.clear();
+    correlation_ran = true;
   }
+  // The remaining (looser) corner stages, when nothing was accepted yet.
+  if (stages_before < num_stages && !corner_accepted && !AnyAccepted(correlation.tried) &&
+      (corners.solutions == 0 || time_left())) {
+    MAPD_RETURN_IF_ERROR(RunCornerStages(a, b, params, finest_resolution_m, stages_before,
+                                         num_stages, false, start, seconds_left, times, &corners));
+  }
+  const bool corners_ran = corners.solutions > 0 || !corners.first.reason.empty();
+
+  // Every hypothesis that reached ICP: corner solutions, then correlation peaks.
+  std::vector<TriedHypothesis> tried = corners.tried;
+  const std::size_t corner_hypotheses = tried.size();
+  for (TriedHypothesis& h : correlation.tried) tried.push_back(std::move(h));
   // The best accepted hypothesis: the most support (most voxels coincide).
-  accepted_index = -1;
+  int accepted_index = -1;
   for (std::size_t i = 0; i < tried.size(); ++i) {
     if (!tried[i].report.accepted) continue;
     if (accepted_index < 0 ||
@@ -255,7 +340,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     PairReport report = best.report;
     report.source = best.label;
     report.hypotheses_tried = static_cast<int>(tried.size());
-    report.corner_solutions_tried = corner_tried;
+    report.corner_solutions_tried = corners.solutions;
     report.correlation_hypotheses = correlation.generated;
     const TriedHypothesis* second = nullptr;
     const TriedHypothesis* rival = nullptr;
@@ -282,34 +367,32 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     return report;
   }
 
-  // Refused: what every stage found.
-  PairReport report = first;
+  // Refused: what every stage found, in the order they ran.
+  PairReport report = corners.first;
   report.hypotheses_tried = static_cast<int>(tried.size());
-  report.corner_solutions_tried = corner_tried;
+  report.corner_solutions_tried = corners.solutions;
   report.correlation_hypotheses = correlation.generated;
-  std::string reason = "corner matching: " + first.reason + " (" + std::to_string(corner_tried) +
-                       " corner solution" + (corner_tried == 1 ? "" : "s") + " tried, " +
-                       std::to_string(corner_hypotheses) + " reached ICP)";
-  if (!params.correlation.enabled) {
-    reason += "; correlation: disabled";
-  } else if (!run_correlation) {
-    reason += "; correlation: not run (time budget spent)";
+  std::string about_correlation;
+  if (!cp.enabled) {
+    about_correlation = "correlation: disabled";
+  } else if (!correlation_ran) {
+    about_correlation = "correlation: not run (time budget spent)";
   } else if (!correlation.not_run.empty()) {
-    reason += "; correlation: not run (" + correlation.not_run + ")";
+    about_correlation = "correlation: not run (" + correlation.not_run + ")";
   } else {
     const TriedHypothesis* best = nullptr;
-    for (std::size_t i = static_cast<std::size_t>(corner_hypotheses); i < tried.size(); ++i) {
+    for (std::size_t i = corner_hypotheses; i < tried.size(); ++i) {
       if (best == nullptr || (tried[i].report.residual_m > 0 &&
                               tried[i].report.residual_m < best->report.residual_m)) {
         best = &tried[i];
       }
     }
-    reason += "; correlation: " + std::to_string(correlation.generated) + " hypotheses from " +
-              std::to_string(correlation.yaws) + " yaws";
+    about_correlation = "correlation: " + std::to_string(correlation.generated) +
+                        " hypotheses from " + std::to_string(correlation.yaws) + " yaws";
     if (best != nullptr) {
-      reason += ", best " + DescribeHypothesis(*best, finest_resolution_m) +
-                " refused: " + best->report.reason;
-      if (first.matched_corners == 0) {
+      about_correlation += ", best " + DescribeHypothesis(*best, finest_resolution_m) +
+                           " refused: " + best->report.reason;
+      if (corners.first.matched_corners == 0) {
         report.T_a_b = best->report.T_a_b;
         report.residual_m = best->report.residual_m;
         report.overlap_score = best->report.overlap_score;
@@ -317,7 +400,10 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
       }
     }
   }
-  report.reason = reason;
+  std::string about_corners = DescribeCorners(corners, corners_ran);
+  if (!corners_ran) about_corners += " (time budget spent)";
+  report.reason = stages_before == 0 ? about_correlation + "; " + about_corners
+                                     : about_corners + "; " + about_correlation;
   return report;
 }
 

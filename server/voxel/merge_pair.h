@@ -14,10 +14,14 @@
 
 namespace mapd::voxel {
 
+class SubmapFeatures;
+
+// One submap of the pair: its voxels, and its corners and gravity frame,
+// computed on first use (submap_features.h).
 struct PairSide {
   uint64_t id = 0;
   const VoxelGrid* grid = nullptr;
-  const CornerSet* corners = nullptr;
+  SubmapFeatures* features = nullptr;
 };
 
 // B.5, shared by both hypothesis generators: the ICP screen, ICP from
@@ -37,9 +41,11 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
 // of the coarser of the two maps (merge.h). `seconds_left` caps the corner search.
 //
 // Every generator's hypotheses pass the uniqueness gate too: two distinct
-// accepted hypotheses refuse the pair naming both. When corner matching
-// accepts nothing (or always, with correlation.check_corner_solutions) the
-// correlation generator runs; a refusal names what every stage found.
+// accepted hypotheses refuse the pair naming both. Corner matching's first
+// correlation.after_corner_stages tolerance stages run first; then the
+// correlation generator when they accepted nothing (or always, with
+// correlation.check_corner_solutions); then the remaining stages when nothing
+// was accepted yet. A refusal names what every stage found.
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times);
 

@@ -11,13 +11,15 @@
 //   voxel_merge_bench [--dir=DIR] [--maps=geb079.bt,...] [--overlaps=0.1,0.2,0.3,0.5]
 //                     [--trials=20] [--trials-other=N] [--negatives=N] [--gap-m=2]
 //                     [--methods=ours,fpfh] [--seed=1] [--max-voxels=150000]
-//                     [--threads=1] [--out=FILE]
+//                     [--threads=1] [--out=FILE] [--keep-crops=DIR]
 //
 // --trials applies to overlap 0.5, --trials-other (default = --trials) to the
 // others. --negatives (default = --trials-other) pairs per map of two DISJOINT
 // crops, --gap-m apart (voxel_crops.h): no merge of them is right, so every
 // accepted one counts as wrong. DIR defaults to $MAPD_SHARED_DIR/data/octomap,
-// else /work/shared/data/octomap; missing maps are skipped.
+// else /work/shared/data/octomap; missing maps are skipped. --keep-crops copies
+// every pair to DIR/<map>-<overlap>-<trial>-{a,b}.bt (overlap 0 = negative), to
+// profile one merge with `--worker=ours A.bt B.bt` under perf or callgrind.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -274,6 +276,7 @@ struct Options {
   std::size_t max_voxels = 150'000;
   int threads = 1;
   std::string out;
+  std::string keep_crops;  // --keep-crops: where to copy every crop pair
 };
 
 // Runs one worker process; FAILED status INTERNAL when it crashed or timed out.
@@ -459,6 +462,8 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->threads = std::atoi(val.c_str());
     } else if (key == "--out") {
       o->out = val;
+    } else if (key == "--keep-crops") {
+      o->keep_crops = val;
     } else {
       std::fprintf(stderr, "unknown flag %s (see the header of voxel_merge_bench.cc)\n",
                    arg.c_str());
@@ -559,6 +564,12 @@ int main(int argc, char** argv) {
         }
         std::ofstream(path_a, std::ios::binary) << pair->a_bt;
         std::ofstream(path_b, std::ios::binary) << pair->b_bt;
+        if (!opt.keep_crops.empty()) {
+          const std::string stem = opt.keep_crops + "/" + opt.maps[mi] + "-" +
+                                   Fmt("%.2f", overlap) + "-" + std::to_string(trial);
+          std::ofstream(stem + "-a.bt", std::ios::binary) << pair->a_bt;
+          std::ofstream(stem + "-b.bt", std::ios::binary) << pair->b_bt;
+        }
         std::fprintf(stderr,
                      "%s overlap %.1f trial %d: crops %zu/%zu (out %zu/%zu occ, %zu/%zu free), "
                      "achieved %.3f, yaw %.1f roll %.1f pitch %.1f t %.1f m, gen %.2f s\n",

@@ -127,14 +127,15 @@ TEST(ConfigTest, RemoteListenNeedsAuth) {
 
 TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   ServerConfig c;
-  ASSERT_TRUE(Parse({"--limits.max_submap_bytes", "1048576", "--limits.max_concurrent_merges=2",
-                     "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
-                     "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
-                     "--merge.max_seconds=10", "--merge.resolution_policy=resample",
-                     "--merge.fusion_rule=log_odds", "--merge.correlation=false",
-                     "--merge.correlation_check_accepted=no"},
-                    &c)
-                  .ok());
+  ASSERT_TRUE(
+      Parse({"--limits.max_submap_bytes", "1048576", "--limits.max_concurrent_merges=2",
+             "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
+             "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
+             "--merge.max_seconds=10", "--merge.resolution_policy=resample",
+             "--merge.fusion_rule=log_odds", "--merge.correlation=false",
+             "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0"},
+            &c)
+          .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
   EXPECT_EQ(c.submaps.max_concurrent_merges, 2u);
   EXPECT_EQ(c.submaps.max_queued_merges, 0u);
@@ -146,7 +147,9 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_TRUE(c.submaps.log_odds_fusion);
   EXPECT_FALSE(c.submaps.correlation);
   EXPECT_FALSE(c.submaps.correlation_check_accepted);
+  EXPECT_EQ(c.submaps.correlation_after_corner_stages, 0);
   const ServerConfig defaults;
+  EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 1);
   EXPECT_TRUE(defaults.submaps.correlation);
 
   const std::vector<std::pair<std::string, std::string>> bad = {
@@ -158,6 +161,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       {"--merge.max_seconds=-1", "merge.max_seconds"},
       {"--merge.resolution_policy=guess", "merge.resolution_policy"},
       {"--merge.fusion_rule=max", "merge.fusion_rule"},
+      {"--merge.correlation_after_corner_stages=101", "merge.correlation_after_corner_stages"},
       {"--merge.correlation=maybe", "merge.correlation"},
   };
   for (const auto& [flag, name] : bad) {

@@ -189,6 +189,40 @@ TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
   EXPECT_LT(second->matched_count, first->matched_count);
 }
 
+TEST(CornerMatchingTest, MatcherSearchesTheGraphARebuildWouldGive) {
+  CornerSceneOptions o;
+  o.num_a = 30;
+  o.seed = 7;
+  const CornerScene scene = MakeCornerScene(o);
+  CornerMatchingParams params;
+  params.use_normals = false;  // MatchCandidatePairs's graph has no normals test
+  auto matcher = CornerMatcher::Create(scene.a, scene.b, params);
+  ASSERT_TRUE(matcher.ok()) << matcher.status().ToString();
+  std::vector<Eigen::Vector3d> points_a, points_b;
+  for (const Corner& c : scene.a) points_a.push_back(c.position);
+  for (const Corner& c : scene.b) points_b.push_back(c.position);
+  const std::vector<CornerPair> all = SelectCandidatePairs(scene.a, scene.b, params);
+  std::vector<std::pair<int, int>> excluded;
+  for (int round = 0; round < 3; ++round) {
+    std::vector<CornerPair> kept;
+    for (const CornerPair& p : all) {
+      if (std::count(excluded.begin(), excluded.end(), std::make_pair(p.a, p.b)) == 0) {
+        kept.push_back(p);
+      }
+    }
+    const auto rebuilt = MatchCandidatePairs(points_a, points_b, kept, params);
+    const auto reused = matcher->Match(excluded, params.max_search_seconds);
+    ASSERT_TRUE(rebuilt.ok() && reused.ok());
+    EXPECT_EQ(reused->candidate_pairs, rebuilt->candidate_pairs);
+    EXPECT_EQ(reused->graph_edges, rebuilt->graph_edges);
+    EXPECT_EQ(reused->correspondences, rebuilt->correspondences);
+    EXPECT_TRUE(reused->T_a_b.isApprox(rebuilt->T_a_b)) << "round " << round;
+    ASSERT_GE(reused->matched_count, 3) << "round " << round;
+    // The next round excludes this solution, as the merge does.
+    for (const CornerPair& p : reused->correspondences) excluded.emplace_back(p.a, p.b);
+  }
+}
+
 TEST(CornerMatchingTest, CandidateCapLowersTopKForEveryCorner) {
   CornerSceneOptions o;
   o.num_a = 60;

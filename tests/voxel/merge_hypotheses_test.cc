@@ -1,7 +1,9 @@
 // The correlation generator and the uniqueness gate inside MergeSubmaps.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "voxel/merge.h"
 #include "voxel/support/corner_scene.h"
@@ -55,6 +57,21 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
   EXPECT_GE(pair.hypotheses_tried, 1);
 }
 
+TEST(MergeHypothesesTest, CorrelationFirstExtractsNoCornersForAPairItSettles) {
+  const Corridors c = MakeCorridors();
+  MergeParams params;
+  params.correlation.after_corner_stages = 0;
+  auto outcome = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  EXPECT_LT(testing::RotationErrorDeg(outcome->alignments[1].T_reference_submap, c.T_a_b), 2.0);
+  const PairReport& pair = outcome->pairs.front();
+  EXPECT_EQ(pair.source.rfind("correlation", 0), 0u) << pair.source;
+  EXPECT_EQ(pair.corner_solutions_tried, 0);
+  EXPECT_EQ(outcome->corners, (std::vector<int64_t>{-1, -1}));
+  EXPECT_EQ(outcome->times.corners_s, 0.0);
+  EXPECT_EQ(outcome->times.matching_s, 0.0);
+}
+
 TEST(MergeHypothesesTest, UniquenessGateRefusesASymmetricRoomNamingBoth) {
   const Eigen::AlignedBox3d whole(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(7, 4, 3.5));
   const std::string a =
@@ -88,6 +105,14 @@ TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   EXPECT_NE(message.find("; correlation: "), std::string::npos) << message;
   EXPECT_NE(message.find("hypotheses from "), std::string::npos) << message;
   EXPECT_NE(message.find("above 0.01 voxels"), std::string::npos) << message;
+
+  // The correlation first: the message keeps the order the stages ran in.
+  params.correlation.after_corner_stages = 0;
+  auto first = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_FALSE(first.ok());
+  const std::string& reordered = first.status().message();
+  EXPECT_NE(reordered.find("not merged: correlation: "), std::string::npos) << reordered;
+  EXPECT_NE(reordered.find("; corner matching: "), std::string::npos) << reordered;
 }
 
 TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
@@ -97,6 +122,9 @@ TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
   params = MergeParams{};
   params.correlation.peaks_per_yaw = 0;
   EXPECT_NE(params.Validate().message().find("peaks_per_yaw"), std::string::npos);
+  params = MergeParams{};
+  params.correlation.after_corner_stages = -1;
+  EXPECT_NE(params.Validate().message().find("after_corner_stages"), std::string::npos);
 }
 
 }  // namespace

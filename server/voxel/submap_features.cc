@@ -1,0 +1,36 @@
+#include "voxel/submap_features.h"
+
+#include <chrono>
+#include <string>
+#include <utility>
+
+#include "common/clock.h"
+#include "voxel/corner_extraction.h"
+#include "voxel/gravity_alignment.h"
+
+namespace mapd::voxel {
+
+StatusOr<const CornerSet*> SubmapFeatures::Corners(StageTimes* times) {
+  if (!corners_.has_value()) {
+    const auto start = std::chrono::steady_clock::now();
+    auto result = ExtractCorners(*grid_, params_->corners);
+    times->corners_s += SecondsSince(start);
+    if (!result.ok()) {
+      return Status(result.status().code(),
+                    "submap " + std::to_string(id_) + ": " + result.status().message());
+    }
+    corners_ = std::move(result->corners);
+  }
+  return &*corners_;
+}
+
+const StatusOr<GravityFrame>& SubmapFeatures::Gravity(StageTimes* times) {
+  if (!gravity_.has_value()) {
+    const auto start = std::chrono::steady_clock::now();
+    gravity_ = EstimateGravityFrame(*grid_, params_->gravity);
+    times->correlation_s += SecondsSince(start);
+  }
+  return *gravity_;
+}
+
+}  // namespace mapd::voxel

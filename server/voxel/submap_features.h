@@ -1,0 +1,46 @@
+// What the pair stages of a merge need of one submap beyond its voxels: its
+// corners (docs/algorithms.md B.1-B.3) and its gravity frame (B.9). Each is
+// computed on first use and kept for every pair the submap is in, so a merge
+// that the correlation generator settles never extracts corners, and a
+// submap in several pairs is levelled once. Internal to merge*.cc.
+#ifndef MAPD_VOXEL_SUBMAP_FEATURES_H_
+#define MAPD_VOXEL_SUBMAP_FEATURES_H_
+
+#include <cstdint>
+#include <optional>
+
+#include "common/status.h"
+#include "voxel/corner.h"
+#include "voxel/merge.h"
+#include "voxel/voxel_grid.h"
+
+namespace mapd::voxel {
+
+class SubmapFeatures {
+ public:
+  // `grid` and `params` must outlive this.
+  SubmapFeatures(uint64_t id, const VoxelGrid* grid, const MergeParams* params)
+      : id_(id), grid_(grid), params_(params) {}
+
+  // The corners; the first call extracts them and adds its seconds to
+  // times->corners_s. Errors: ExtractCorners's (bad params, a map beyond its
+  // limits), naming the submap.
+  StatusOr<const CornerSet*> Corners(StageTimes* times);
+  bool corners_extracted() const { return corners_.has_value(); }
+
+  // The levelling and wall histogram; the first call computes them and adds
+  // its seconds to times->correlation_s. FailedPrecondition (kept) when the
+  // map has no floor, ceiling or wall plane: the generator cannot run on it.
+  const StatusOr<GravityFrame>& Gravity(StageTimes* times);
+
+ private:
+  uint64_t id_;
+  const VoxelGrid* grid_;
+  const MergeParams* params_;
+  std::optional<CornerSet> corners_;
+  std::optional<StatusOr<GravityFrame>> gravity_;
+};
+
+}  // namespace mapd::voxel
+
+#endif  // MAPD_VOXEL_SUBMAP_FEATURES_H_
