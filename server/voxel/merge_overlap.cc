@@ -1,9 +1,11 @@
 #include "voxel/merge_overlap.h"
 
+#include <algorithm>
+
 namespace mapd::voxel {
 namespace {
 
-bool OccupiedNear(const VoxelGrid& grid, const VoxelKey& key) {
+bool GridOccupiedNear(const VoxelGrid& grid, const VoxelKey& key) {
   if (grid.IsOccupied(key)) return true;
   for (int dx = -1; dx <= 1; ++dx) {
     for (int dy = -1; dy <= 1; ++dy) {
@@ -16,28 +18,109 @@ bool OccupiedNear(const VoxelGrid& grid, const VoxelKey& key) {
   return false;
 }
 
-}  // namespace
+bool Bit(const std::vector<std::uint64_t>& bits, std::int64_t i) {
+  return (bits[static_cast<std::size_t>(i >> 6)] >> (i & 63)) & 1u;
+}
 
-OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
-                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
+void SetBit(std::vector<std::uint64_t>* bits, std::int64_t i) {
+  (*bits)[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
+}
+
+template <typename Grid>
+OverlapScore Score(const Grid& a, const VoxelGrid& a_grid, const VoxelGrid& b,
+                   const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
   OverlapScore out;
   const auto& centres = b.occupied_centres();
-  if (centres.empty() || a.empty()) return out;
+  if (centres.empty() || a_grid.empty()) return out;
   std::size_t step = 1;
   if (max_points > 0 && centres.size() > max_points)
     step = (centres.size() + max_points - 1) / max_points;
   for (std::size_t i = 0; i < centres.size(); i += step) {
-    const VoxelKey key = a.PointToKey(T_a_b * centres[i]);
-    if (OccupiedNear(a, key)) {
+    const VoxelKey key = a_grid.PointToKey(T_a_b * centres[i]);
+    if (a.OccupiedNear(key)) {
       ++out.observed;
       ++out.coinciding;
-    } else if (a.State(key) != VoxelState::kUnknown) {
+    } else if (a.Observed(key)) {
       ++out.observed;
     }
   }
   if (out.observed > 0)
     out.score = static_cast<double>(out.coinciding) / static_cast<double>(out.observed);
   return out;
+}
+
+// The grid itself, as Score's A.
+struct GridSide {
+  const VoxelGrid& grid;
+  bool OccupiedNear(const VoxelKey& key) const { return GridOccupiedNear(grid, key); }
+  bool Observed(const VoxelKey& key) const { return grid.State(key) != VoxelState::kUnknown; }
+};
+
+}  // namespace
+
+OverlapIndex::OverlapIndex(const VoxelGrid& a, std::size_t max_cells) : grid_(&a) {
+  if (a.empty()) return;
+  VoxelKey lo = a.occupied_keys().front(), hi = lo;
+  for (const VoxelKey& k : a.occupied_keys()) {
+    lo = lo.cwiseMin(k);
+    hi = hi.cwiseMax(k);
+  }
+  lo -= VoxelKey::Ones();  // the dilation's margin
+  hi += VoxelKey::Ones();
+  const VoxelKey size = hi - lo + VoxelKey::Ones();
+  const double cells = static_cast<double>(size.x()) * size.y() * size.z();
+  if (cells > static_cast<double>(max_cells)) return;
+  lo_ = lo;
+  size_ = size;
+  const std::size_t words = (static_cast<std::size_t>(cells) + 63) / 64;
+  near_.assign(words, 0);
+  observed_.assign(words, 0);
+  for (const VoxelKey& k : a.occupied_keys()) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) SetBit(&near_, Cell(k + VoxelKey(dx, dy, dz)));
+      }
+    }
+    SetBit(&observed_, Cell(k));
+  }
+  a.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
+    // Only the part of the cube inside the box.
+    const VoxelKey from = min_key.cwiseMax(lo_);
+    const VoxelKey to = (min_key + VoxelKey::Constant(edge - 1)).cwiseMin(hi);
+    for (int x = from.x(); x <= to.x(); ++x) {
+      for (int y = from.y(); y <= to.y(); ++y) {
+        for (int z = from.z(); z <= to.z(); ++z) SetBit(&observed_, Cell(VoxelKey(x, y, z)));
+      }
+    }
+  });
+}
+
+std::int64_t OverlapIndex::Cell(const VoxelKey& key) const {
+  const VoxelKey d = key - lo_;
+  if ((d.array() < 0).any() || (d.array() >= size_.array()).any()) return -1;
+  return (static_cast<std::int64_t>(d.x()) * size_.y() + d.y()) * size_.z() + d.z();
+}
+
+bool OverlapIndex::OccupiedNear(const VoxelKey& key) const {
+  if (near_.empty()) return GridOccupiedNear(*grid_, key);
+  const std::int64_t i = Cell(key);
+  return i >= 0 && Bit(near_, i);  // the box holds every occupied voxel's neighbours
+}
+
+bool OverlapIndex::Observed(const VoxelKey& key) const {
+  const std::int64_t i = near_.empty() ? -1 : Cell(key);
+  if (i < 0) return grid_->State(key) != VoxelState::kUnknown;
+  return Bit(observed_, i);
+}
+
+OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
+                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
+  return Score(GridSide{a}, a, b, T_a_b, max_points);
+}
+
+OverlapScore ComputeOverlapScore(const OverlapIndex& a, const VoxelGrid& b,
+                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
+  return Score(a, a.grid(), b, T_a_b, max_points);
 }
 
 }  // namespace mapd::voxel

@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "voxel/voxel_grid.h"
 
@@ -28,10 +29,42 @@ struct OverlapScore {
   double score = 0.0;            // coinciding / observed, 0 when observed == 0
 };
 
+// A's side of the score, computed once for the many transforms a merge scores
+// (each corner solution's ties, each refined hypothesis): one bit per voxel
+// of A's occupied box, plus one voxel, for "occupied within one voxel" and
+// one for "observed". Answers as the grid does (exact): a profile of refused
+// merges had a tenth of their CPU in the grid's hash lookups, up to 27 per
+// point of B.
+class OverlapIndex {
+ public:
+  // Bits only when the box has at most max_cells cells (2^28: 64 MiB for
+  // both sets); beyond it, and outside the box, queries ask the grid.
+  explicit OverlapIndex(const VoxelGrid& a, std::size_t max_cells = std::size_t{1} << 28);
+
+  const VoxelGrid& grid() const { return *grid_; }
+  bool has_bits() const { return !near_.empty(); }
+  // A has an occupied voxel at `key` or at one of its 26 neighbours.
+  bool OccupiedNear(const VoxelKey& key) const;
+  // A knows `key` (free or occupied).
+  bool Observed(const VoxelKey& key) const;
+
+ private:
+  // Index of `key` in the bit sets, or -1 outside the box.
+  std::int64_t Cell(const VoxelKey& key) const;
+
+  const VoxelGrid* grid_;
+  VoxelKey lo_ = VoxelKey::Zero();
+  VoxelKey size_ = VoxelKey::Zero();
+  std::vector<std::uint64_t> near_, observed_;
+};
+
 // Evaluates at most `max_points` voxels of B (an even, deterministic
 // subsample; 0 = all), so the tie-break over several candidate transforms
 // stays cheap. The counts are of the evaluated voxels.
 OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
+                                 const Eigen::Isometry3d& T_a_b, std::size_t max_points = 0);
+// The same, with A's side from `a` (same counts).
+OverlapScore ComputeOverlapScore(const OverlapIndex& a, const VoxelGrid& b,
                                  const Eigen::Isometry3d& T_a_b, std::size_t max_points = 0);
 
 }  // namespace mapd::voxel

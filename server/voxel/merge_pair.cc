@@ -56,6 +56,8 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
   if (params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points) {
     IcpParams screen_params = params.icp;
     screen_params.max_source_points = params.icp_screen_points;
+    screen_params.max_iterations =
+        std::min(params.icp_screen_iterations, params.icp.max_iterations);
     auto screen = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_initial,
                             finest_resolution_m, screen_params);
     if (screen.ok()) {
@@ -85,7 +87,7 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
   report->residual_m = icp->rms_residual_m;
   report->icp_iterations = icp->iterations;
   const OverlapScore overlap =
-      ComputeOverlapScore(*a.grid, *b.grid, report->T_a_b, params.overlap_points);
+      ComputeOverlapScore(a.features->Overlap(), *b.grid, report->T_a_b, params.overlap_points);
   report->overlap_score = overlap.score;
   const std::size_t n = b.grid->num_occupied();
   const std::size_t step = params.overlap_points > 0 && n > params.overlap_points
@@ -144,7 +146,8 @@ StatusOr<PairReport> TrySolution(const PairSide& a, const PairSide& b, const Cor
   auto start = std::chrono::steady_clock::now();
   const TransformScore tie_score = [&](const Eigen::Isometry3d& T_a_b) {
     return static_cast<double>(
-        ComputeOverlapScore(*a.grid, *b.grid, T_a_b, params.tie_break_points).coinciding);
+        ComputeOverlapScore(a.features->Overlap(), *b.grid, T_a_b, params.tie_break_points)
+            .coinciding);
   };
   auto match = matcher.Match(excluded, max_search_seconds, tie_score);
   times->matching_s += SecondsSince(start);

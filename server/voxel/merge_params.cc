@@ -39,6 +39,9 @@ Status MergeParams::Validate() const {
   if (!(icp_screen_residual_factor >= 1) || !std::isfinite(icp_screen_residual_factor)) {
     return Status::InvalidArgument("icp_screen_residual_factor must be finite and >= 1");
   }
+  if (icp_screen_iterations < 1) {
+    return Status::InvalidArgument("icp_screen_iterations must be >= 1");
+  }
   for (std::size_t i = 0; i < looser_tolerances.size(); ++i) {
     const MatchTolerances& t = looser_tolerances[i];
     if (!(t.signature_deg >= 0 && t.signature_deg <= 180) ||

@@ -33,4 +33,9 @@ const StatusOr<GravityFrame>& SubmapFeatures::Gravity(StageTimes* times) {
   return *gravity_;
 }
 
+const OverlapIndex& SubmapFeatures::Overlap() {
+  if (!overlap_.has_value()) overlap_.emplace(*grid_);
+  return *overlap_;
+}
+
 }  // namespace mapd::voxel

@@ -2,7 +2,7 @@
 // corners (docs/algorithms.md B.1-B.3) and its gravity frame (B.9). Each is
 // computed on first use and kept for every pair the submap is in, so a merge
 // that the correlation generator settles never extracts corners, and a
-// submap in several pairs is levelled once. Internal to merge*.cc.
+// submap in several pairs is levelled once. Also its overlap index. Internal to merge*.cc.
 #ifndef MAPD_VOXEL_SUBMAP_FEATURES_H_
 #define MAPD_VOXEL_SUBMAP_FEATURES_H_
 
@@ -12,6 +12,7 @@
 #include "common/status.h"
 #include "voxel/corner.h"
 #include "voxel/merge.h"
+#include "voxel/merge_overlap.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
@@ -33,12 +34,16 @@ class SubmapFeatures {
   // map has no floor, ceiling or wall plane: the generator cannot run on it.
   const StatusOr<GravityFrame>& Gravity(StageTimes* times);
 
+  // This submap as the A of overlap scores (merge_overlap.h), built on first use.
+  const OverlapIndex& Overlap();
+
  private:
   uint64_t id_;
   const VoxelGrid* grid_;
   const MergeParams* params_;
   std::optional<CornerSet> corners_;
   std::optional<StatusOr<GravityFrame>> gravity_;
+  std::optional<OverlapIndex> overlap_;
 };
 
 }  // namespace mapd::voxel

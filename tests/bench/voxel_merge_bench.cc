@@ -166,6 +166,12 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS"))
     params.min_matched_corners = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
+  if (const char* v = std::getenv("MAPD_BENCH_SCREEN_ITERATIONS"))
+    params.icp_screen_iterations = std::atoi(v);
+  if (const char* v = std::getenv("MAPD_BENCH_LOOSER_STAGES")) {
+    params.looser_tolerances.resize(
+        std::min<std::size_t>(params.looser_tolerances.size(), std::atoi(v)));
+  }
   const StatusOr<mapd::voxel::MergeOutcome> r = mapd::voxel::MergeSubmaps({{1, a}, {2, b}}, params);
   out.total_s = Since(start);
   out.code = r.status().code();

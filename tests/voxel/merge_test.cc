@@ -9,6 +9,7 @@
 
 #include "voxel/merge_graph.h"
 #include "voxel/merge_overlap.h"
+#include "voxel/octree_reader.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/voxel_scene.h"
 #include "voxel/voxel_grid.h"
@@ -395,6 +396,44 @@ TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
   const OverlapScore moved = ComputeOverlapScore(
       *a, *b, Eigen::Isometry3d(Eigen::Translation3d(0.0, 3 * kRoomResolutionM, 0.0)));
   EXPECT_LT(moved.score, 0.2);
+}
+
+TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
+  // A furnished room with its free space against a moved crop of it; and the
+  // wall above, whose free space lies outside the occupied box (grid path).
+  const std::string a_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::string b_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.0, 8.0),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  auto a_tree = ReadOctree(a_bt);
+  auto b_tree = ReadOctree(b_bt);
+  ASSERT_TRUE(a_tree.ok() && b_tree.ok());
+  auto a = VoxelGrid::FromOcTree(**a_tree);
+  auto b = VoxelGrid::FromOcTree(**b_tree);
+  std::vector<VoxelKey> wall, free;
+  for (int x = 0; x < 10; ++x) {
+    wall.emplace_back(x, 0, 0);
+    for (int y = 1; y <= 6; ++y) free.emplace_back(x, y, 0);
+  }
+  auto wall_grid = VoxelGrid::FromKeys(kRoomResolutionM, wall, free);
+  ASSERT_TRUE(a.ok() && b.ok() && wall_grid.ok());
+  for (const VoxelGrid* grid : {&*a, &*wall_grid}) {
+    const OverlapIndex bits(*grid);
+    const OverlapIndex no_bits(*grid, /*max_cells=*/1);
+    ASSERT_TRUE(bits.has_bits());
+    ASSERT_FALSE(no_bits.has_bits());
+    for (const Eigen::Isometry3d& T :
+         {Eigen::Isometry3d::Identity(), Pose(0, 0, 0, Eigen::Vector3d(0.0, 0.35, 0.0)),
+          Pose(17, 2, -3, Eigen::Vector3d(0.4, -0.3, 0.1)),
+          Pose(90, 0, 0, Eigen::Vector3d(3.0, 1.0, 0.0))}) {
+      const OverlapScore want = ComputeOverlapScore(*grid, *b, T);
+      for (const OverlapIndex* index : {&bits, &no_bits}) {
+        const OverlapScore got = ComputeOverlapScore(*index, *b, T);
+        EXPECT_EQ(got.observed, want.observed);
+        EXPECT_EQ(got.coinciding, want.coinciding);
+      }
+    }
+  }
 }
 
 TEST(InspectSubmapTest, SummarisesAValidMap) {
