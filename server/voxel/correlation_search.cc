@@ -72,6 +72,13 @@ class CoarseGrid {
     occ_.assign(size, 0.0);
     free_.assign(size, 0.0);
   }
+  // Empties the grid and moves it to `origin`; keeps its buffers (every yaw
+  // of b reuses one grid: fresh 2M-cell buffers cost page faults).
+  void Reset(const Eigen::Vector3d& origin) {
+    origin_ = origin;
+    std::fill(occ_.begin(), occ_.end(), 0.0);
+    std::fill(free_.begin(), free_.end(), 0.0);
+  }
   void Add(const Eigen::Vector3d& p, const Sample& s) {
     const Eigen::Vector3d f = (p - origin_) / cell_;
     const int x = static_cast<int>(std::floor(f.x()));
@@ -90,8 +97,8 @@ class CoarseGrid {
   // occupied cell does not count (else half the true wall cells would be
   // penalised), and dilated_occ() is what the other map's walls may hit.
   void Finish(int cover_radius) {
-    dilated_ = Dilate(occ_, 1);
-    cover_ = Dilate(occ_, cover_radius);
+    Dilate(occ_, 1, &dilated_);
+    Dilate(occ_, cover_radius, &cover_);
     for (std::size_t i = 0; i < occ_.size(); ++i) {
       free_[i] = dilated_[i] > 0 ? 0.0 : std::min(1.0, free_[i]);
       if (free_[i] > 0) cover_[i] = 1.0;
@@ -110,15 +117,16 @@ class CoarseGrid {
   // the axis that remember the nearest set cell behind and ahead, so it
   // costs O(cells) whatever the radius, and the innermost loop runs over
   // contiguous memory on every axis.
-  std::vector<double> Dilate(const std::vector<double>& in, int radius) const {
-    std::vector<double> out(in.size());
+  void Dilate(const std::vector<double>& in, int radius, std::vector<double>* result) {
+    std::vector<double>& out = *result;
+    out.resize(in.size());
     for (std::size_t i = 0; i < in.size(); ++i) out[i] = in[i] > 0 ? 1.0 : 0.0;
-    std::vector<double> pass;
+    std::vector<double>& pass = pass_;
     const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
                                                static_cast<std::size_t>(n_[2]), 1};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       pass.swap(out);
-      out.assign(pass.size(), 0.0);
+      out.assign(pass.size(), 0.0);           // within capacity: no allocation
       const std::size_t step = stride[axis];  // cells between neighbours on the axis
       const auto extent = static_cast<int>(n_[axis]);
       const std::size_t block = step * static_cast<std::size_t>(extent);
@@ -142,13 +150,13 @@ class CoarseGrid {
         }
       }
     }
-    return out;
   }
 
   std::array<int, 3> n_;
   Eigen::Vector3d origin_;
   double cell_;
   std::vector<double> occ_, free_, dilated_, cover_;
+  std::vector<double> pass_;  // Dilate's scratch
 };
 
 // A size with only the factors 2, 3, 5 (FFTW is fastest on those).
@@ -181,15 +189,14 @@ class Fft {
   Fft(const Fft&) = delete;
   Fft& operator=(const Fft&) = delete;
 
-  // The spectrum of `values` (real_size_ of them).
-  std::vector<std::complex<double>> Forward(const std::vector<double>& values) {
+  // The spectrum of `values` (real_size_ of them) into `out`.
+  void Forward(const std::vector<double>& values, std::vector<std::complex<double>>* out) {
     std::copy(values.begin(), values.end(), real_.get());
     fftw_execute(forward_);
-    std::vector<std::complex<double>> out(complex_size_);
+    out->resize(complex_size_);
     for (std::size_t i = 0; i < complex_size_; ++i) {
-      out[i] = {spectrum_[i][0], spectrum_[i][1]};
+      (*out)[i] = {spectrum_[i][0], spectrum_[i][1]};
     }
-    return out;
   }
   // The (unnormalised) inverse of `spectrum`; valid until the next call.
   const double* Inverse(const std::vector<std::complex<double>>& spectrum) {
@@ -342,16 +349,21 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
   grid_a.Finish(cover_radius);
-  const auto occ_a = fft.Forward(grid_a.occ());
-  const auto dilated_a = fft.Forward(grid_a.dilated_occ());
-  const auto free_a = fft.Forward(grid_a.free());
-  const auto cover_a = fft.Forward(grid_a.cover());
+  using Spectrum = std::vector<std::complex<double>>;
+  Spectrum occ_a, dilated_a, free_a, cover_a;
+  fft.Forward(grid_a.occ(), &occ_a);
+  fft.Forward(grid_a.dilated_occ(), &dilated_a);
+  fft.Forward(grid_a.free(), &free_a);
+  fft.Forward(grid_a.cover(), &cover_a);
   double cells_a = 0;
   for (double v : grid_a.occ()) cells_a += v;
   const std::vector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
-  std::vector<std::complex<double>> product(fft.complex_size());
+  // Buffers of b's side, reused by every yaw.
+  Spectrum product(fft.complex_size()), occ_b, free_b, cover_b;
+  std::vector<double> score(fft.real_size()), b_in_a(fft.real_size());
+  CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
   for (double yaw : yaws) {
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
@@ -359,12 +371,12 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * centroid_b;
     // b's grid origin follows its turned centroid so that b stays inside it.
     const Eigen::Vector3d origin = turned_centroid + offset_b;
-    CoarseGrid grid_b(n, origin, cell);
+    grid_b.Reset(origin);
     for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
     grid_b.Finish(cover_radius);
-    const auto occ_b = fft.Forward(grid_b.occ());
-    const auto free_b = fft.Forward(grid_b.free());
-    const auto cover_b = fft.Forward(grid_b.cover());
+    fft.Forward(grid_b.occ(), &occ_b);
+    fft.Forward(grid_b.free(), &free_b);
+    fft.Forward(grid_b.cover(), &cover_b);
     double cells_b = 0;
     for (double v : grid_b.occ()) cells_b += v;
     // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s).
@@ -373,10 +385,10 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
                    params.free_weight * occ_a[i] * std::conj(free_b[i]);
     }
     const double* inverse = fft.Inverse(product);
-    std::vector<double> score(inverse, inverse + fft.real_size());
+    std::copy(inverse, inverse + fft.real_size(), score.begin());
     for (std::size_t i = 0; i < product.size(); ++i) product[i] = cover_a[i] * std::conj(occ_b[i]);
     inverse = fft.Inverse(product);
-    const std::vector<double> b_in_a(inverse, inverse + fft.real_size());
+    std::copy(inverse, inverse + fft.real_size(), b_in_a.begin());
     for (std::size_t i = 0; i < product.size(); ++i) product[i] = occ_a[i] * std::conj(cover_b[i]);
     const double* a_in_b = fft.Inverse(product);
     // Normalised by the occupied cells each map has where the other has

@@ -125,10 +125,10 @@ struct MergeParams {
   double icp_screen_residual_factor = 1.5;
   // The screen's iterations (at most icp.max_iterations). The full ICP goes
   // on from where the screen ended, so the cap only decides how far a start
-  // may drift before it is judged. 30 instead of 150 (docs/voxel-merge.md):
-  // the same outcomes on 21 benchmark merges, refusals 8.7 -> 6.8 s and
-  // 17.4 -> 15.2 s of CPU.
-  int icp_screen_iterations = 30;
+  // may drift before it is judged. Measured (docs/voxel-merge.md): 30 saved
+  // 10-20 % of a refusal's CPU but refused a right new_college merge whose
+  // corner solution needed more iterations (60 kept it); so no cap by default.
+  int icp_screen_iterations = 150;
   // B's voxels scored per candidate transform in the corner search's tie-break
   // (the paper: the transform making the most voxels coincide); 0 = all.
   std::size_t tie_break_points = 20'000;
