@@ -74,6 +74,13 @@ class VoxelHashIndex {
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
     const Eigen::Vector3i c = Cell(q);
     const int max_ring = static_cast<int>(std::ceil(max_m / cell_m_));
+    // A query with no point within max_ring cells (most of a wrong
+    // alignment's, and those outside the overlap) is answered by one bit
+    // instead of a scan of (2 max_ring + 1)^3 cells.
+    if (max_m <= reach_m_ && !MaybeNear(c)) {
+      *squared_m2 = static_cast<float>(max_m * max_m);
+      return -1;
+    }
     double best = max_m * max_m;
     int best_index = -1;
     for (int ring = 0; ring <= max_ring; ++ring) {
@@ -111,6 +118,9 @@ class VoxelHashIndex {
   // answers "empty" first. A box of more than kMaxBits cells keeps no bits
   // (every cell goes to the hash, as before).
   static constexpr std::size_t kMaxBits = std::size_t{1} << 28;  // 32 MiB
+  // Cells of reach of the second bit set (the correspondence distance is 3
+  // voxels and a cell is a voxel).
+  static constexpr int kReach = 3;
 
   void MarkOccupied(const std::vector<Eigen::Vector3i>& cells) {
     if (cells.empty()) return;
@@ -129,6 +139,73 @@ class VoxelHashIndex {
       const std::size_t i = BitIndex(c - lo_);
       bits_[i >> 6] |= std::uint64_t{1} << (i & 63);
     }
+    MarkNear(cells);
+  }
+
+  // near_: over the box grown by kReach, one bit per cell that may have a
+  // point within kReach cells along every axis (a cube). Built by OR-ing the
+  // occupied bits shifted by every offset of the cube, one axis at a time.
+  // A shift along x also carries bits from the end of one row into the next,
+  // and so on: extra bits only, which cost a scan and change no answer.
+  void MarkNear(const std::vector<Eigen::Vector3i>& cells) {
+    const Eigen::Vector3i size = size_ + Eigen::Vector3i::Constant(2 * kReach);
+    const double count = static_cast<double>(size.x()) * size.y() * size.z();
+    if (count > static_cast<double>(kMaxBits)) return;
+    near_size_ = size;
+    std::vector<std::uint64_t> bits(static_cast<std::size_t>(count) / 64 + 1, 0);
+    for (const auto& c : cells) {
+      const std::size_t i = NearIndex(c - lo_ + Eigen::Vector3i::Constant(kReach));
+      bits[i >> 6] |= std::uint64_t{1} << (i & 63);
+    }
+    const std::size_t strides[3] = {1, static_cast<std::size_t>(size.x()),
+                                    static_cast<std::size_t>(size.x()) * size.y()};
+    for (const std::size_t stride : strides) {
+      std::vector<std::uint64_t> grown = bits;
+      for (int k = 1; k <= kReach; ++k) {
+        OrShifted(bits, k * stride, /*up=*/true, &grown);
+        OrShifted(bits, k * stride, /*up=*/false, &grown);
+      }
+      bits.swap(grown);
+    }
+    near_.swap(bits);
+    // Up to rounding (3 x 0.1 m / 0.1 m is 3.0000000000000004 cells).
+    reach_m_ = kReach * cell_m_ * (1 + 1e-9);
+  }
+
+  // out |= in moved by `shift` bits towards higher (up) or lower indices.
+  static void OrShifted(const std::vector<std::uint64_t>& in, std::size_t shift, bool up,
+                        std::vector<std::uint64_t>* out) {
+    const std::size_t words = in.size();
+    const std::size_t w = shift >> 6;
+    const unsigned b = static_cast<unsigned>(shift & 63);
+    if (w >= words) return;
+    for (std::size_t i = 0; i + w < words; ++i) {
+      // up: bit j of in goes to j + shift; down: to j - shift.
+      const std::size_t to = up ? i + w : i;
+      const std::size_t from = up ? i : i + w;
+      std::uint64_t v = b == 0 ? in[from] : (up ? in[from] << b : in[from] >> b);
+      (*out)[to] |= v;
+      if (b != 0) {
+        if (up && to + 1 < words) (*out)[to + 1] |= in[from] >> (64 - b);
+        if (!up && from + 1 < words) (*out)[to] |= in[from + 1] << (64 - b);
+      }
+    }
+  }
+
+  // False only when no point lies within kReach cells of c (per axis).
+  bool MaybeNear(const Eigen::Vector3i& c) const {
+    if (near_.empty()) return true;
+    const Eigen::Vector3i o = c - lo_ + Eigen::Vector3i::Constant(kReach);
+    if ((o.array() < 0).any() || (o.array() >= near_size_.array()).any()) return false;
+    const std::size_t i = NearIndex(o);
+    return (near_[i >> 6] >> (i & 63)) & 1;
+  }
+
+  std::size_t NearIndex(const Eigen::Vector3i& o) const {
+    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(near_size_.y()) +
+            static_cast<std::size_t>(o.y())) *
+               static_cast<std::size_t>(near_size_.x()) +
+           static_cast<std::size_t>(o.x());
   }
 
   // False only when no point lies in the cell.
@@ -165,6 +242,9 @@ class VoxelHashIndex {
   Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();                  // the bit set's first cell
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();                // and its extent, in cells
   std::vector<std::uint64_t> bits_;                               // empty: ask the hash
+  Eigen::Vector3i near_size_ = Eigen::Vector3i::Zero();           // near_'s extent (box + 2 kReach)
+  std::vector<std::uint64_t> near_;                               // empty: no shortcut
+  double reach_m_ = -1;                                           // near_'s reach, m; -1 without it
 };
 
 // The nearest target of a query point under either index.

@@ -33,6 +33,14 @@ int CountTrue(const std::vector<CornerPair>& found, const std::vector<CornerPair
   return n;
 }
 
+// A generated scene of num_a corners in A with the default options.
+CornerScene SceneOf(int num_a, uint32_t seed) {
+  CornerSceneOptions o;
+  o.num_a = num_a;
+  o.seed = seed;
+  return MakeCornerScene(o);
+}
+
 TEST(CornerMatchingParamsTest, ValidatesEveryField) {
   EXPECT_TRUE(CornerMatchingParams{}.Validate().ok());
   CornerMatchingParams p;
@@ -141,10 +149,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, GeneratedSceneTest,
                          SceneCaseName);
 
 TEST(CornerMatchingTest, ExhaustiveBacktrackingEqualsMaxCliqueSize) {
-  CornerSceneOptions o;
-  o.num_a = 20;
-  o.seed = 11;
-  const CornerScene scene = MakeCornerScene(o);
+  const CornerScene scene = SceneOf(20, 11);
   CornerMatchingParams params;
   params.top_k = 3;
   const auto pairs = SelectCandidatePairs(scene.a, scene.b, params);
@@ -163,10 +168,7 @@ TEST(CornerMatchingTest, ExhaustiveBacktrackingEqualsMaxCliqueSize) {
 }
 
 TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
-  CornerSceneOptions o;
-  o.num_a = 30;
-  o.seed = 5;
-  const CornerScene scene = MakeCornerScene(o);
+  const CornerScene scene = SceneOf(30, 5);
   CornerMatchingParams params;
   const StatusOr<CornerMatchResult> first = MatchCorners(scene.a, scene.b, params);
   ASSERT_TRUE(first.ok()) << first.status().ToString();
@@ -190,10 +192,7 @@ TEST(CornerMatchingTest, ExcludedPairsAreNeverUsed) {
 }
 
 TEST(CornerMatchingTest, MatcherSearchesTheGraphARebuildWouldGive) {
-  CornerSceneOptions o;
-  o.num_a = 30;
-  o.seed = 7;
-  const CornerScene scene = MakeCornerScene(o);
+  const CornerScene scene = SceneOf(30, 7);
   CornerMatchingParams params;
   params.use_normals = false;  // MatchCandidatePairs's graph has no normals test
   auto matcher = CornerMatcher::Create(scene.a, scene.b, params);
@@ -224,10 +223,7 @@ TEST(CornerMatchingTest, MatcherSearchesTheGraphARebuildWouldGive) {
 }
 
 TEST(CornerMatchingTest, CandidateCapLowersTopKForEveryCorner) {
-  CornerSceneOptions o;
-  o.num_a = 60;
-  o.seed = 8;
-  const CornerScene scene = MakeCornerScene(o);
+  const CornerScene scene = SceneOf(60, 8);
   CornerMatchingParams params;
   params.top_k = 32;
   const std::size_t uncapped = SelectCandidatePairs(scene.a, scene.b, params).size();
