@@ -44,6 +44,42 @@ Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& 
   return T;
 }
 
+// One bit per cell of a box of cells; cells outside the box read as clear.
+struct CellBits {
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero();    // the box's first cell
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();  // and its extent, in cells
+  std::vector<std::uint64_t> words;                // empty: no bits kept
+
+  // A box of `size` cells from `lo`, all clear; false (and no bits) when it
+  // has more than max_cells cells.
+  bool Reset(const Eigen::Vector3i& first, const Eigen::Vector3i& extent, std::size_t max_cells) {
+    const double count = static_cast<double>(extent.x()) * extent.y() * extent.z();
+    if (count > static_cast<double>(max_cells)) return false;
+    lo = first;
+    size = extent;
+    words.assign(static_cast<std::size_t>(count) / 64 + 1, 0);
+    return true;
+  }
+  // REQUIRES: c inside the box.
+  void Set(const Eigen::Vector3i& c) {
+    const std::size_t i = Index(c - lo);
+    words[i >> 6] |= std::uint64_t{1} << (i & 63);
+  }
+  bool Test(const Eigen::Vector3i& c) const {
+    const Eigen::Vector3i o = c - lo;
+    if ((o.array() < 0).any() || (o.array() >= size.array()).any()) return false;
+    const std::size_t i = Index(o);
+    return (words[i >> 6] >> (i & 63)) & 1;
+  }
+  // o: a cell's offset from lo, inside the box; x varies fastest.
+  std::size_t Index(const Eigen::Vector3i& o) const {
+    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(size.y()) +
+            static_cast<std::size_t>(o.y())) *
+               static_cast<std::size_t>(size.x()) +
+           static_cast<std::size_t>(o.x());
+  }
+};
+
 // Exact nearest neighbour within a radius on a hash of one-voxel cells.
 class VoxelHashIndex {
  public:
@@ -129,16 +165,8 @@ class VoxelHashIndex {
       lo = lo.cwiseMin(c);
       hi = hi.cwiseMax(c);
     }
-    const Eigen::Vector3i size = hi - lo + Eigen::Vector3i::Ones();
-    const double count = static_cast<double>(size.x()) * size.y() * size.z();
-    if (count > static_cast<double>(kMaxBits)) return;
-    lo_ = lo;
-    size_ = size;
-    bits_.assign(static_cast<std::size_t>(count) / 64 + 1, 0);
-    for (const auto& c : cells) {
-      const std::size_t i = BitIndex(c - lo_);
-      bits_[i >> 6] |= std::uint64_t{1} << (i & 63);
-    }
+    if (!occupied_.Reset(lo, hi - lo + Eigen::Vector3i::Ones(), kMaxBits)) return;
+    for (const auto& c : cells) occupied_.Set(c);
     MarkNear(cells);
   }
 
@@ -148,26 +176,20 @@ class VoxelHashIndex {
   // A shift along x also carries bits from the end of one row into the next,
   // and so on: extra bits only, which cost a scan and change no answer.
   void MarkNear(const std::vector<Eigen::Vector3i>& cells) {
-    const Eigen::Vector3i size = size_ + Eigen::Vector3i::Constant(2 * kReach);
-    const double count = static_cast<double>(size.x()) * size.y() * size.z();
-    if (count > static_cast<double>(kMaxBits)) return;
-    near_size_ = size;
-    std::vector<std::uint64_t> bits(static_cast<std::size_t>(count) / 64 + 1, 0);
-    for (const auto& c : cells) {
-      const std::size_t i = NearIndex(c - lo_ + Eigen::Vector3i::Constant(kReach));
-      bits[i >> 6] |= std::uint64_t{1} << (i & 63);
-    }
+    const Eigen::Vector3i margin = Eigen::Vector3i::Constant(kReach);
+    if (!near_.Reset(occupied_.lo - margin, occupied_.size + 2 * margin, kMaxBits)) return;
+    for (const auto& c : cells) near_.Set(c);
+    const Eigen::Vector3i& size = near_.size;
     const std::size_t strides[3] = {1, static_cast<std::size_t>(size.x()),
                                     static_cast<std::size_t>(size.x()) * size.y()};
     for (const std::size_t stride : strides) {
-      std::vector<std::uint64_t> grown = bits;
+      std::vector<std::uint64_t> grown = near_.words;
       for (int k = 1; k <= kReach; ++k) {
-        OrShifted(bits, k * stride, /*up=*/true, &grown);
-        OrShifted(bits, k * stride, /*up=*/false, &grown);
+        OrShifted(near_.words, k * stride, /*up=*/true, &grown);
+        OrShifted(near_.words, k * stride, /*up=*/false, &grown);
       }
-      bits.swap(grown);
+      near_.words.swap(grown);
     }
-    near_.swap(bits);
     // Up to rounding (3 x 0.1 m / 0.1 m is 3.0000000000000004 cells).
     reach_m_ = kReach * cell_m_ * (1 + 1e-9);
   }
@@ -193,36 +215,11 @@ class VoxelHashIndex {
   }
 
   // False only when no point lies within kReach cells of c (per axis).
-  bool MaybeNear(const Eigen::Vector3i& c) const {
-    if (near_.empty()) return true;
-    const Eigen::Vector3i o = c - lo_ + Eigen::Vector3i::Constant(kReach);
-    if ((o.array() < 0).any() || (o.array() >= near_size_.array()).any()) return false;
-    const std::size_t i = NearIndex(o);
-    return (near_[i >> 6] >> (i & 63)) & 1;
-  }
-
-  std::size_t NearIndex(const Eigen::Vector3i& o) const {
-    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(near_size_.y()) +
-            static_cast<std::size_t>(o.y())) *
-               static_cast<std::size_t>(near_size_.x()) +
-           static_cast<std::size_t>(o.x());
-  }
+  bool MaybeNear(const Eigen::Vector3i& c) const { return near_.words.empty() || near_.Test(c); }
 
   // False only when no point lies in the cell.
   bool MaybeOccupied(const Eigen::Vector3i& c) const {
-    if (bits_.empty()) return true;
-    const Eigen::Vector3i o = c - lo_;
-    if ((o.array() < 0).any() || (o.array() >= size_.array()).any()) return false;
-    const std::size_t i = BitIndex(o);
-    return (bits_[i >> 6] >> (i & 63)) & 1;
-  }
-
-  // o: a cell's offset from lo_, inside the box.
-  std::size_t BitIndex(const Eigen::Vector3i& o) const {
-    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(size_.y()) +
-            static_cast<std::size_t>(o.y())) *
-               static_cast<std::size_t>(size_.x()) +
-           static_cast<std::size_t>(o.x());
+    return occupied_.words.empty() || occupied_.Test(c);
   }
 
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
@@ -239,12 +236,9 @@ class VoxelHashIndex {
   double cell_m_;
   std::vector<int> order_;
   std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
-  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero();                  // the bit set's first cell
-  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();                // and its extent, in cells
-  std::vector<std::uint64_t> bits_;                               // empty: ask the hash
-  Eigen::Vector3i near_size_ = Eigen::Vector3i::Zero();           // near_'s extent (box + 2 kReach)
-  std::vector<std::uint64_t> near_;                               // empty: no shortcut
-  double reach_m_ = -1;                                           // near_'s reach, m; -1 without it
+  CellBits occupied_;    // over the cells' box; no bits: ask the hash
+  CellBits near_;        // over that box grown by kReach; no bits: no shortcut
+  double reach_m_ = -1;  // near_'s reach, m; -1 without it
 };
 
 // The nearest target of a query point under either index.
