@@ -1,5 +1,6 @@
 #include "voxel/gravity_alignment.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -29,6 +30,35 @@ Eigen::Vector3d MeanNormal(const std::vector<internal::FittedPlane>& planes,
     ++*count;
   }
   return sum;
+}
+
+// The unit vector u (sign towards `up`) that minimises
+//   sum_floors size (1 - (n.u)^2) + sum_walls size (n.u)^2
+// over the planes within floor_deg of `up` (floors, ceilings) and within
+// wall_deg of perpendicular to it (walls): the smallest eigenvector of
+// sum_walls size n n^T - sum_floors size n n^T. `up` when no wall qualifies.
+Eigen::Vector3d UpFromFloorsAndWalls(const std::vector<internal::FittedPlane>& planes,
+                                     const Eigen::Vector3d& up, double floor_deg, double wall_deg,
+                                     int min_size) {
+  const double floor_cos = std::cos(floor_deg * kDeg);
+  const double wall_sin = std::sin(wall_deg * kDeg);
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  int walls = 0;
+  for (const auto& plane : planes) {
+    if (plane.size < min_size) continue;
+    const double c = std::abs(plane.normal.dot(up));
+    const Eigen::Matrix3d nn = plane.size * plane.normal * plane.normal.transpose();
+    if (c >= floor_cos) {
+      scatter -= nn;
+    } else if (c <= wall_sin) {
+      scatter += nn;
+      ++walls;
+    }
+  }
+  if (walls == 0) return up;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  const Eigen::Vector3d u = solver.eigenvectors().col(0).normalized();  // smallest eigenvalue
+  return u.dot(up) < 0 ? Eigen::Vector3d(-u) : u;
 }
 
 // Circular Gaussian smoothing of a histogram.
@@ -62,6 +92,9 @@ Status GravityParams::Validate() const {
   }
   if (yaw_peaks < 1 || yaw_peaks > 8) {
     return Status::InvalidArgument("gravity: yaw_peaks must be in [1, 8]");
+  }
+  if (wall_up_rounds < 0 || wall_up_rounds > 10) {
+    return Status::InvalidArgument("gravity: wall_up_rounds must be in [0, 10]");
   }
   if (!(min_peak_separation_deg >= 0 && min_peak_separation_deg <= 90) || min_plane_voxels < 3) {
     return Status::InvalidArgument(
@@ -98,6 +131,10 @@ StatusOr<GravityFrame> EstimateGravityFrame(const VoxelGrid& grid, const Gravity
   const Eigen::Vector3d refined = MeanNormal(regions.planes, up, params.refine_up_deg,
                                              params.min_plane_voxels, &frame.floor_planes);
   if (refined.norm() > 0) up = refined.normalized();
+  for (int round = 0; round < params.wall_up_rounds; ++round) {
+    up = UpFromFloorsAndWalls(regions.planes, up, params.refine_up_deg, params.max_wall_tilt_deg,
+                              params.min_plane_voxels);
+  }
   frame.up = up;
   frame.R_up = Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitZ()).toRotationMatrix();
 

@@ -25,3 +25,13 @@ target_include_directories(voxel_hypotheses_diag PRIVATE ${PROJECT_SOURCE_DIR}/t
 target_include_directories(voxel_hypotheses_diag SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
 target_link_libraries(voxel_hypotheses_diag PRIVATE voxel ${OCTOMAP_LIBRARIES})
 mapd_set_warnings(voxel_hypotheses_diag)
+
+# Diagnostic: the correlation generator's levelling, yaws and translation
+# peaks against the ground truth.
+add_executable(voxel_correlation_diag
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_correlation_diag.cc
+  ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc)
+target_include_directories(voxel_correlation_diag PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_include_directories(voxel_correlation_diag SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
+target_link_libraries(voxel_correlation_diag PRIVATE voxel ${OCTOMAP_LIBRARIES})
+mapd_set_warnings(voxel_correlation_diag)

@@ -64,6 +64,43 @@ TEST(GravityAlignmentTest, YawCandidatesHoldTheTrueYaw) {
   EXPECT_NEAR(std::abs(std::remainder(yaws[1] - yaws[0], 2 * M_PI)), M_PI, 1e-9);
 }
 
+// A room whose floor is a 4 deg ramp and whose four walls are vertical: the
+// floor alone tilts up by 4 deg, the walls pull it back to vertical.
+TEST(GravityAlignmentTest, WallsCorrectTheUpOfARampFloor) {
+  constexpr int kSide = 60, kHeight = 40;
+  const double slope = std::tan(4.0 * M_PI / 180.0);
+  std::vector<VoxelKey> keys;
+  for (int x = 0; x < kSide; ++x) {
+    for (int y = 0; y < kSide; ++y) {
+      keys.emplace_back(x, y, static_cast<int>(std::lround(x * slope)));  // the ramp
+    }
+    for (int z = 6; z < kHeight; ++z) {  // walls y = 0 and y = kSide - 1
+      keys.emplace_back(x, 0, z);
+      keys.emplace_back(x, kSide - 1, z);
+    }
+  }
+  for (int y = 1; y < kSide - 1; ++y) {
+    for (int z = 6; z < kHeight; ++z) {  // walls x = 0 and x = kSide - 1
+      keys.emplace_back(0, y, z);
+      keys.emplace_back(kSide - 1, y, z);
+    }
+  }
+  auto grid = VoxelGrid::FromKeys(kRoomResolutionM, keys);
+  ASSERT_TRUE(grid.ok());
+  GravityParams floors_only;
+  floors_only.wall_up_rounds = 0;
+  auto from_floor = EstimateGravityFrame(*grid, floors_only);
+  auto from_both = EstimateGravityFrame(*grid, GravityParams{});
+  ASSERT_TRUE(from_floor.ok() && from_both.ok());
+  const double floor_error = AngleDeg(from_floor->up, Eigen::Vector3d::UnitZ());
+  const double joint_error = AngleDeg(from_both->up, Eigen::Vector3d::UnitZ());
+  EXPECT_GT(floor_error, 3.0);  // the ramp's normal
+  EXPECT_LT(joint_error, 0.5 * floor_error);
+  GravityParams bad;
+  bad.wall_up_rounds = 11;
+  EXPECT_NE(bad.Validate().message().find("wall_up_rounds"), std::string::npos);
+}
+
 TEST(GravityAlignmentTest, NoFloorIsAClearRefusal) {
   std::vector<VoxelKey> keys;  // one vertical wall: no floor, no ceiling
   for (int y = 0; y < 40; ++y) {

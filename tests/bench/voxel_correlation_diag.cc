@@ -1,0 +1,146 @@
+// Diagnostic (not a test): for trials of voxel_merge_bench (same crops, same
+// seeds), the correlation generator's inputs and outputs against the ground
+// truth: each map's levelling error, the true yaw after levelling and the yaw
+// candidates, the coarse cell, and where among the translation peaks (with
+// more peaks kept than the merge keeps) the first one near the truth ranks.
+//
+//   voxel_correlation_diag MAP.bt OVERLAP TRIALS [FIRST_TRIAL=0] [PEAKS_PER_YAW=20]
+//
+// Environment: DIAG_WALL_UP_ROUNDS (GravityParams::wall_up_rounds),
+// DIAG_MAX_CELLS, DIAG_CELL_VOXELS, DIAG_FREE_WEIGHT, DIAG_MIN_OVERLAP
+// (CorrelationParams).
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "bench/voxel_crops.h"
+#include "voxel/correlation_search.h"
+#include "voxel/gravity_alignment.h"
+#include "voxel/merge.h"
+#include "voxel/octree_reader.h"
+#include "voxel/voxel_grid.h"
+
+using namespace mapd;
+using namespace mapd::voxel;
+
+static VoxelGrid Load(const std::string& bytes) {
+  auto tree = ReadOctree(bytes);
+  if (!tree.ok()) {
+    std::fprintf(stderr, "%s\n", tree.status().message().c_str());
+    std::exit(2);
+  }
+  auto grid = VoxelGrid::FromOcTree(**tree);
+  return std::move(*grid);
+}
+
+static double Deg(double rad) { return rad * 180.0 / M_PI; }
+
+int main(int argc, char** argv) {
+  if (argc < 4) return 2;
+  std::ifstream in(argv[1], std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const VoxelGrid map = Load(ss.str());
+  const double overlap = std::atof(argv[2]);
+  const int trials = std::atoi(argv[3]);
+  const int first = argc > 4 ? std::atoi(argv[4]) : 0;
+  MergeParams params;
+  if (const char* v = std::getenv("DIAG_WALL_UP_ROUNDS")) {
+    params.gravity.wall_up_rounds = std::atoi(v);
+  }
+  CorrelationParams cp = params.correlation;
+  cp.peaks_per_yaw = argc > 5 ? std::atoi(argv[5]) : 20;
+  cp.max_hypotheses = 1000;
+  if (const char* v = std::getenv("DIAG_MAX_CELLS")) cp.max_cells = std::strtoull(v, nullptr, 10);
+  if (const char* v = std::getenv("DIAG_CELL_VOXELS")) cp.cell_voxels = std::atof(v);
+  if (const char* v = std::getenv("DIAG_FREE_WEIGHT")) cp.free_weight = std::atof(v);
+  if (const char* v = std::getenv("DIAG_MIN_OVERLAP")) cp.min_overlap_fraction = std::atof(v);
+  const double res = map.resolution();
+  for (int t = first; t < first + trials; ++t) {
+    bench::CropParams crop;
+    crop.overlap = overlap;
+    crop.disjoint = overlap <= 0;
+    const std::string path = argv[1];
+    crop.seed = bench::TrialSeed(1, path.substr(path.find_last_of('/') + 1), overlap, t);
+    auto pair = bench::MakeCropPair(map, crop);
+    if (!pair.ok()) {
+      std::printf("crop: %s\n", pair.status().message().c_str());
+      continue;
+    }
+    const VoxelGrid a = Load(pair->a_bt), b = Load(pair->b_bt);
+    auto fa = EstimateGravityFrame(a, params.gravity);
+    auto fb = EstimateGravityFrame(b, params.gravity);
+    if (!fa.ok() || !fb.ok()) {
+      std::printf("trial %d: gravity: %s\n", t,
+                  (fa.ok() ? fb.status() : fa.status()).message().c_str());
+      continue;
+    }
+    // The truth after levelling: R_a R_true R_b^T should turn about +z only.
+    const Eigen::Matrix3d M = fa->R_up * pair->T_a_b.linear() * fb->R_up.transpose();
+    const double tilt = Deg(std::acos(std::min(1.0, (M * Eigen::Vector3d::UnitZ()).z())));
+    const double yaw_true = std::atan2(M(1, 0), M(0, 0));
+    const double up_a = Deg(std::acos(std::min(1.0, fa->up.dot(Eigen::Vector3d::UnitZ()))));
+    std::printf(
+        "trial %d: up a %.2f deg from map z (floors %d, walls %d), b walls %d; levelled truth "
+        "tilt %.2f deg, yaw %.1f deg\n  yaws:",
+        t, up_a, fa->floor_planes, fa->wall_planes, fb->wall_planes, tilt, Deg(yaw_true));
+    const std::vector<double> yaws = YawCandidates(*fa, *fb, params.gravity);
+    for (double y : yaws) {
+      double d = std::remainder(y - yaw_true, 2 * M_PI);
+      std::printf(" %.1f (err %.1f)", Deg(y), Deg(d));
+    }
+    std::printf("\n");
+    // With the true yaw too, to see whether the translation search finds the truth given it.
+    std::vector<double> all = yaws;
+    all.push_back(yaw_true);
+    CorrelationStats stats;
+    auto hyps = SearchTranslations(a, fa->R_up, b, fb->R_up, all, res, cp, &stats);
+    if (!hyps.ok()) {
+      std::printf("  search: %s\n", hyps.status().message().c_str());
+      continue;
+    }
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& c : a.occupied_centres()) box.extend(c);
+    const Eigen::Vector3d extent = box.sizes();
+    std::printf(
+        "  cell %.2f m, grid %zu cells, %zu peaks; A's occupied extent %.0f x %.0f x %.0f m\n",
+        stats.cell_m, stats.grid_cells, hyps->size(), extent.x(), extent.y(), extent.z());
+    int shown = 0;
+    {
+      // The true yaw alone, many peaks: the rank of the first one near the truth.
+      CorrelationParams one = cp;
+      one.peaks_per_yaw = 300;
+      auto only = SearchTranslations(a, fa->R_up, b, fb->R_up, {yaw_true}, res, one, nullptr);
+      int rank = -1;
+      double best_score = 0, truth_score = 0;
+      for (std::size_t i = 0; only.ok() && i < only->size(); ++i) {
+        const CorrelationHypothesis& h = (*only)[i];
+        if (i == 0) best_score = h.score;
+        if (bench::TranslationErrorAt(h.T_a_b, pair->T_a_b, pair->centroid_b) < 2 * stats.cell_m) {
+          rank = static_cast<int>(i) + 1;
+          truth_score = h.score;
+          break;
+        }
+      }
+      std::printf("  true yaw alone: first peak near the truth ranks %d (score %.3f, best %.3f)\n",
+                  rank, truth_score, best_score);
+    }
+    for (std::size_t i = 0; i < hyps->size(); ++i) {
+      const CorrelationHypothesis& h = (*hyps)[i];
+      const double r = bench::RotationErrorDeg(h.T_a_b, pair->T_a_b);
+      const double e = bench::TranslationErrorAt(h.T_a_b, pair->T_a_b, pair->centroid_b);
+      const bool near = r < 3 + tilt && e < 2 * stats.cell_m;
+      if (i < 5 || near) {
+        std::printf("  #%zu yaw %.1f score %.3f: rot err %.1f deg, trans err %.2f m%s\n", i + 1,
+                    Deg(h.yaw_rad), h.score, r, e, near ? "  <- near truth" : "");
+        if (near && ++shown >= 3) break;
+      }
+    }
+    std::fflush(stdout);
+  }
+}
