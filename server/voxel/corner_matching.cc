@@ -219,14 +219,13 @@ StatusOr<CornerMatchResult> CornerMatcher::Match(
   // The subgraph induced by the pairs not excluded, in their order: the
   // graph BuildConsistencyGraph gives for those pairs (an edge depends only
   // on its two pairs).
+  std::vector<std::pair<int, int>> excluded = excluded_pairs;
+  std::sort(excluded.begin(), excluded.end());
   std::vector<int> new_index(pairs_.size(), -1);
   std::vector<CornerPair> kept;
   for (std::size_t v = 0; v < pairs_.size(); ++v) {
     const CornerPair& p = pairs_[v];
-    if (std::find(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(p.a, p.b)) !=
-        excluded_pairs.end()) {
-      continue;
-    }
+    if (std::binary_search(excluded.begin(), excluded.end(), std::make_pair(p.a, p.b))) continue;
     new_index[v] = static_cast<int>(kept.size());
     kept.push_back(p);
   }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "voxel/aligned_box.h"
+#include "voxel/cell_bits.h"
 
 namespace mapd::voxel {
 namespace {
@@ -43,42 +44,6 @@ Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& 
   T.matrix() = Eigen::umeyama(src, dst, false);
   return T;
 }
-
-// One bit per cell of a box of cells; cells outside the box read as clear.
-struct CellBits {
-  Eigen::Vector3i lo = Eigen::Vector3i::Zero();    // the box's first cell
-  Eigen::Vector3i size = Eigen::Vector3i::Zero();  // and its extent, in cells
-  std::vector<std::uint64_t> words;                // empty: no bits kept
-
-  // A box of `size` cells from `lo`, all clear; false (and no bits) when it
-  // has more than max_cells cells.
-  bool Reset(const Eigen::Vector3i& first, const Eigen::Vector3i& extent, std::size_t max_cells) {
-    const double count = static_cast<double>(extent.x()) * extent.y() * extent.z();
-    if (count > static_cast<double>(max_cells)) return false;
-    lo = first;
-    size = extent;
-    words.assign(static_cast<std::size_t>(count) / 64 + 1, 0);
-    return true;
-  }
-  // REQUIRES: c inside the box.
-  void Set(const Eigen::Vector3i& c) {
-    const std::size_t i = Index(c - lo);
-    words[i >> 6] |= std::uint64_t{1} << (i & 63);
-  }
-  bool Test(const Eigen::Vector3i& c) const {
-    const Eigen::Vector3i o = c - lo;
-    if ((o.array() < 0).any() || (o.array() >= size.array()).any()) return false;
-    const std::size_t i = Index(o);
-    return (words[i >> 6] >> (i & 63)) & 1;
-  }
-  // o: a cell's offset from lo, inside the box; x varies fastest.
-  std::size_t Index(const Eigen::Vector3i& o) const {
-    return (static_cast<std::size_t>(o.z()) * static_cast<std::size_t>(size.y()) +
-            static_cast<std::size_t>(o.y())) *
-               static_cast<std::size_t>(size.x()) +
-           static_cast<std::size_t>(o.x());
-  }
-};
 
 // Exact nearest neighbour within a radius on a hash of one-voxel cells.
 class VoxelHashIndex {
@@ -215,11 +180,11 @@ class VoxelHashIndex {
   }
 
   // False only when no point lies within kReach cells of c (per axis).
-  bool MaybeNear(const Eigen::Vector3i& c) const { return near_.words.empty() || near_.Test(c); }
+  bool MaybeNear(const Eigen::Vector3i& c) const { return near_.empty() || near_.Test(c); }
 
   // False only when no point lies in the cell.
   bool MaybeOccupied(const Eigen::Vector3i& c) const {
-    return occupied_.words.empty() || occupied_.Test(c);
+    return occupied_.empty() || occupied_.Test(c);
   }
 
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {

@@ -64,9 +64,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   if (!hypotheses.ok()) return hypotheses.status();
   run.generated = static_cast<int>(hypotheses->size());
 
-  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
-  centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
+  const Eigen::Vector3d& centroid_b = b.features->OccupiedCentroid();
   std::vector<Eigen::Isometry3d> known = accepted;
   // Hypotheses are refined best first. Once an answer is accepted (here or
   // by corner matching) only the best distinct peak of each yaw not yet

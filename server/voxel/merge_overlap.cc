@@ -18,14 +18,6 @@ bool GridOccupiedNear(const VoxelGrid& grid, const VoxelKey& key) {
   return false;
 }
 
-bool Bit(const std::vector<std::uint64_t>& bits, std::int64_t i) {
-  return (bits[static_cast<std::size_t>(i >> 6)] >> (i & 63)) & 1u;
-}
-
-void SetBit(std::vector<std::uint64_t>* bits, std::int64_t i) {
-  (*bits)[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
-}
-
 template <typename Grid>
 OverlapScore Score(const Grid& a, const VoxelGrid& a_grid, const VoxelGrid& b,
                    const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
@@ -68,49 +60,37 @@ OverlapIndex::OverlapIndex(const VoxelGrid& a, std::size_t max_cells) : grid_(&a
   lo -= VoxelKey::Ones();  // the dilation's margin
   hi += VoxelKey::Ones();
   const VoxelKey size = hi - lo + VoxelKey::Ones();
-  const double cells = static_cast<double>(size.x()) * size.y() * size.z();
-  if (cells > static_cast<double>(max_cells)) return;
-  lo_ = lo;
-  size_ = size;
-  const std::size_t words = (static_cast<std::size_t>(cells) + 63) / 64;
-  near_.assign(words, 0);
-  observed_.assign(words, 0);
+  if (!near_.Reset(lo, size, max_cells)) return;
+  observed_.Reset(lo, size, max_cells);
   for (const VoxelKey& k : a.occupied_keys()) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) SetBit(&near_, Cell(k + VoxelKey(dx, dy, dz)));
+        for (int dz = -1; dz <= 1; ++dz) near_.Set(k + VoxelKey(dx, dy, dz));
       }
     }
-    SetBit(&observed_, Cell(k));
+    observed_.Set(k);
   }
   a.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
-    // Only the part of the cube inside the box.
-    const VoxelKey from = min_key.cwiseMax(lo_);
+    // Only the part of the cube inside the box; x innermost, as the bits run.
+    const VoxelKey from = min_key.cwiseMax(lo);
     const VoxelKey to = (min_key + VoxelKey::Constant(edge - 1)).cwiseMin(hi);
-    for (int x = from.x(); x <= to.x(); ++x) {
+    for (int z = from.z(); z <= to.z(); ++z) {
       for (int y = from.y(); y <= to.y(); ++y) {
-        for (int z = from.z(); z <= to.z(); ++z) SetBit(&observed_, Cell(VoxelKey(x, y, z)));
+        for (int x = from.x(); x <= to.x(); ++x) observed_.Set(VoxelKey(x, y, z));
       }
     }
   });
 }
 
-std::int64_t OverlapIndex::Cell(const VoxelKey& key) const {
-  const VoxelKey d = key - lo_;
-  if ((d.array() < 0).any() || (d.array() >= size_.array()).any()) return -1;
-  return (static_cast<std::int64_t>(d.x()) * size_.y() + d.y()) * size_.z() + d.z();
-}
-
 bool OverlapIndex::OccupiedNear(const VoxelKey& key) const {
   if (near_.empty()) return GridOccupiedNear(*grid_, key);
-  const std::int64_t i = Cell(key);
-  return i >= 0 && Bit(near_, i);  // the box holds every occupied voxel's neighbours
+  return near_.Test(key);  // the box holds every occupied voxel's neighbours
 }
 
 bool OverlapIndex::Observed(const VoxelKey& key) const {
-  const std::int64_t i = near_.empty() ? -1 : Cell(key);
-  if (i < 0) return grid_->State(key) != VoxelState::kUnknown;
-  return Bit(observed_, i);
+  // Free space reaches beyond the box of the occupied voxels: ask the grid there.
+  if (!observed_.Contains(key)) return grid_->State(key) != VoxelState::kUnknown;
+  return observed_.Test(key);
 }
 
 OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,

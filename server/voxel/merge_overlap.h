@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "voxel/cell_bits.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
@@ -49,13 +50,9 @@ class OverlapIndex {
   bool Observed(const VoxelKey& key) const;
 
  private:
-  // Index of `key` in the bit sets, or -1 outside the box.
-  std::int64_t Cell(const VoxelKey& key) const;
-
   const VoxelGrid* grid_;
-  VoxelKey lo_ = VoxelKey::Zero();
-  VoxelKey size_ = VoxelKey::Zero();
-  std::vector<std::uint64_t> near_, observed_;
+  CellBits near_;      // occupied voxels grown by one; no bits: ask the grid
+  CellBits observed_;  // occupied or free, over the same box
 };
 
 // Evaluates at most `max_points` voxels of B (an even, deterministic

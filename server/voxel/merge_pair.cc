@@ -332,9 +332,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   }
 
   // The uniqueness gate, and the margin to the best distinct hypothesis.
-  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& c : b.grid->occupied_centres()) centroid_b += c;
-  centroid_b /= static_cast<double>(std::max<std::size_t>(1, b.grid->num_occupied()));
+  const Eigen::Vector3d& centroid_b = b.features->OccupiedCentroid();
   const auto distinct = [&](const PairReport& x, const PairReport& y) {
     return DistinctTransforms(x.T_a_b, y.T_a_b, centroid_b, params, finest_resolution_m);
   };

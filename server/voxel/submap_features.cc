@@ -1,5 +1,6 @@
 #include "voxel/submap_features.h"
 
+#include <algorithm>
 #include <chrono>
 #include <string>
 #include <utility>
@@ -36,6 +37,15 @@ const StatusOr<GravityFrame>& SubmapFeatures::Gravity(StageTimes* times) {
 const OverlapIndex& SubmapFeatures::Overlap() {
   if (!overlap_.has_value()) overlap_.emplace(*grid_);
   return *overlap_;
+}
+
+const Eigen::Vector3d& SubmapFeatures::OccupiedCentroid() {
+  if (!centroid_.has_value()) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& c : grid_->occupied_centres()) sum += c;
+    centroid_ = sum / static_cast<double>(std::max<std::size_t>(1, grid_->num_occupied()));
+  }
+  return *centroid_;
 }
 
 }  // namespace mapd::voxel

@@ -37,6 +37,10 @@ class SubmapFeatures {
   // This submap as the A of overlap scores (merge_overlap.h), built on first use.
   const OverlapIndex& Overlap();
 
+  // The mean of the occupied voxel centres, metres (zero for an empty grid):
+  // where two transforms of this submap are compared (DistinctTransforms).
+  const Eigen::Vector3d& OccupiedCentroid();
+
  private:
   uint64_t id_;
   const VoxelGrid* grid_;
@@ -44,6 +48,7 @@ class SubmapFeatures {
   std::optional<CornerSet> corners_;
   std::optional<StatusOr<GravityFrame>> gravity_;
   std::optional<OverlapIndex> overlap_;
+  std::optional<Eigen::Vector3d> centroid_;
 };
 
 }  // namespace mapd::voxel
