@@ -6,3 +6,9 @@ if(TARGET eval_svg)
   target_link_libraries(fusion_bench PRIVATE eval_svg)
   mapd_set_warnings(fusion_bench)
 endif()
+
+# Throughput of FusionEngine::Add on a synthetic block world (fusion library
+# only): ./fusion_throughput [FEATURES]
+add_executable(fusion_throughput fusion_throughput.cc)
+target_link_libraries(fusion_throughput PRIVATE fusion)
+mapd_set_warnings(fusion_throughput)

@@ -35,7 +35,11 @@ int main(int argc, char** argv) {
   std::vector<Segment2> walls;
   for (int i = 0; i < kBlocks; ++i) {
     for (int j = 0; j < kBlocks; ++j) {
-      const Vec2 origin(i * kSpacingM + uniform(0, 3), j * kSpacingM + uniform(0, 3));
+      // One draw per statement: the order of a call's arguments is unspecified,
+      // and the block world must be the same with every compiler.
+      const double dx = uniform(0, 3);
+      const double dy = uniform(0, 3);
+      const Vec2 origin(i * kSpacingM + dx, j * kSpacingM + dy);
       const double yaw = uniform(-0.3, 0.3);
       const Vec2 ex(std::cos(yaw), std::sin(yaw)), ey(-ex.y(), ex.x());
       const double w = uniform(8, 18), h = uniform(8, 18);
@@ -58,8 +62,12 @@ int main(int argc, char** argv) {
       const double t0 = uniform(-0.02, 0.5), t1 = std::min(1.02, t0 + uniform(0.2, 0.7));
       GroundFeature f;
       f.id = next_id++;
-      f.segment = {wall.a + t0 * wall.direction() + Vec2(noise(rng), noise(rng)),
-                   wall.a + t1 * wall.direction() + Vec2(noise(rng), noise(rng))};
+      const double ax = noise(rng);
+      const double ay = noise(rng);
+      const double bx = noise(rng);
+      const double by = noise(rng);
+      f.segment = {wall.a + t0 * wall.direction() + Vec2(ax, ay),
+                   wall.a + t1 * wall.direction() + Vec2(bx, by)};
       f.z_max_m = 3.0;
       features.push_back(f);
     }
