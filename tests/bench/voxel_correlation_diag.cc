@@ -9,43 +9,25 @@
 // Environment: DIAG_WALL_UP_ROUNDS (GravityParams::wall_up_rounds),
 // DIAG_MAX_CELLS, DIAG_CELL_VOXELS, DIAG_FREE_WEIGHT, DIAG_MIN_OVERLAP
 // (CorrelationParams).
-#include <octomap/OcTree.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "bench/voxel_crops.h"
 #include "voxel/correlation_search.h"
 #include "voxel/gravity_alignment.h"
 #include "voxel/merge.h"
-#include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
 
 using namespace mapd;
 using namespace mapd::voxel;
 
-static VoxelGrid Load(const std::string& bytes) {
-  auto tree = ReadOctree(bytes);
-  if (!tree.ok()) {
-    std::fprintf(stderr, "%s\n", tree.status().message().c_str());
-    std::exit(2);
-  }
-  auto grid = VoxelGrid::FromOcTree(**tree);
-  return std::move(*grid);
-}
-
 static double Deg(double rad) { return rad * 180.0 / M_PI; }
 
 int main(int argc, char** argv) {
   if (argc < 4) return 2;
-  std::ifstream in(argv[1], std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const VoxelGrid map = Load(ss.str());
   const double overlap = std::atof(argv[2]);
   const int trials = std::atoi(argv[3]);
   const int first = argc > 4 ? std::atoi(argv[4]) : 0;
@@ -60,25 +42,17 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("DIAG_CELL_VOXELS")) cp.cell_voxels = std::atof(v);
   if (const char* v = std::getenv("DIAG_FREE_WEIGHT")) cp.free_weight = std::atof(v);
   if (const char* v = std::getenv("DIAG_MIN_OVERLAP")) cp.min_overlap_fraction = std::atof(v);
-  const double res = map.resolution();
-  for (int t = first; t < first + trials; ++t) {
-    bench::CropParams crop;
-    crop.overlap = overlap;
-    crop.disjoint = overlap <= 0;
-    const std::string path = argv[1];
-    crop.seed = bench::TrialSeed(1, path.substr(path.find_last_of('/') + 1), overlap, t);
-    auto pair = bench::MakeCropPair(map, crop);
-    if (!pair.ok()) {
-      std::printf("crop: %s\n", pair.status().message().c_str());
-      continue;
-    }
-    const VoxelGrid a = Load(pair->a_bt), b = Load(pair->b_bt);
+  const auto visit = [&](int t, const bench::BenchTrial& trial) {
+    const bench::CropPair* pair = &trial.pair;
+    const VoxelGrid& a = trial.a;
+    const VoxelGrid& b = trial.b;
+    const double res = a.resolution();
     auto fa = EstimateGravityFrame(a, params.gravity);
     auto fb = EstimateGravityFrame(b, params.gravity);
     if (!fa.ok() || !fb.ok()) {
       std::printf("trial %d: gravity: %s\n", t,
                   (fa.ok() ? fb.status() : fa.status()).message().c_str());
-      continue;
+      return;
     }
     // The truth after levelling: R_a R_true R_b^T should turn about +z only.
     const Eigen::Matrix3d M = fa->R_up * pair->T_a_b.linear() * fb->R_up.transpose();
@@ -102,7 +76,7 @@ int main(int argc, char** argv) {
     auto hyps = SearchTranslations(a, fa->R_up, b, fb->R_up, all, res, cp, &stats);
     if (!hyps.ok()) {
       std::printf("  search: %s\n", hyps.status().message().c_str());
-      continue;
+      return;
     }
     Eigen::AlignedBox3d box;
     for (const Eigen::Vector3d& c : a.occupied_centres()) box.extend(c);
@@ -142,5 +116,6 @@ int main(int argc, char** argv) {
       }
     }
     std::fflush(stdout);
-  }
+  };
+  return bench::ForEachBenchTrial(argv[1], overlap, first, trials, visit);
 }

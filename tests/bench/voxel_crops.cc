@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 #include <vector>
+
+#include "voxel/octree_reader.h"
 
 namespace mapd::bench {
 namespace {
@@ -279,6 +282,51 @@ std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_nam
   return base_seed * 1000003ULL + name_hash % 1000003ULL * 10007ULL +
          static_cast<std::uint64_t>(std::llround(overlap * 100)) * 101ULL +
          static_cast<std::uint64_t>(trial);
+}
+
+StatusOr<voxel::VoxelGrid> GridFromBytes(const std::string& bt_bytes) {
+  StatusOr<voxel::OcTreePtr> tree = voxel::ReadOctree(bt_bytes);
+  if (!tree.ok()) return tree.status();
+  return voxel::VoxelGrid::FromOcTree(**tree);
+}
+
+StatusOr<voxel::VoxelGrid> ReadGridFile(const std::string& path) {
+  StatusOr<voxel::OcTreePtr> tree = voxel::ReadOctreeFile(path);
+  if (!tree.ok()) return tree.status();
+  return voxel::VoxelGrid::FromOcTree(**tree);
+}
+
+StatusOr<BenchTrial> MakeBenchTrial(const voxel::VoxelGrid& map, const std::string& map_path,
+                                    double overlap, int trial) {
+  CropParams params;
+  params.disjoint = overlap <= 0;
+  if (!params.disjoint) params.overlap = overlap;
+  params.seed = TrialSeed(1, map_path.substr(map_path.find_last_of('/') + 1), overlap, trial);
+  StatusOr<CropPair> pair = MakeCropPair(map, params);
+  if (!pair.ok()) return pair.status();
+  StatusOr<voxel::VoxelGrid> a = GridFromBytes(pair->a_bt);
+  if (!a.ok()) return a.status();
+  StatusOr<voxel::VoxelGrid> b = GridFromBytes(pair->b_bt);
+  if (!b.ok()) return b.status();
+  return BenchTrial{std::move(*pair), std::move(*a), std::move(*b)};
+}
+
+int ForEachBenchTrial(const std::string& map_path, double overlap, int first, int count,
+                      const std::function<void(int trial, const BenchTrial&)>& visit) {
+  const StatusOr<voxel::VoxelGrid> map = ReadGridFile(map_path);
+  if (!map.ok()) {
+    std::fprintf(stderr, "%s: %s\n", map_path.c_str(), map.status().message().c_str());
+    return 2;
+  }
+  for (int t = first; t < first + count; ++t) {
+    const StatusOr<BenchTrial> trial = MakeBenchTrial(*map, map_path, overlap, t);
+    if (!trial.ok()) {
+      std::printf("trial %d: %s\n", t, trial.status().message().c_str());
+      continue;
+    }
+    visit(t, *trial);
+  }
+  return 0;
 }
 
 double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {

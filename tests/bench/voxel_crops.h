@@ -32,6 +32,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "common/status.h"
@@ -85,6 +86,29 @@ std::uint64_t TrialSeed(std::uint64_t base_seed, const std::string& map_file_nam
 double RotationErrorDeg(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth);
 double TranslationErrorAt(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,
                           const Eigen::Vector3d& point);
+
+// An OctoMap .bt file's bytes, or the file at `path`, as a voxel grid (the
+// errors of voxel::ReadOctree and VoxelGrid::FromOcTree).
+StatusOr<voxel::VoxelGrid> GridFromBytes(const std::string& bt_bytes);
+StatusOr<voxel::VoxelGrid> ReadGridFile(const std::string& path);
+
+// Trial `trial` of voxel_merge_bench run with its default flags (--seed=1,
+// --gap-m=2, --max-voxels=150000) on the map file `map_path` (its name,
+// without the directory, seeds it); overlap <= 0 gives the negative pair.
+// The crops are read back from their .bt bytes, as the merge reads them.
+// The diagnostics replay the benchmark's trials with it.
+struct BenchTrial {
+  CropPair pair;
+  voxel::VoxelGrid a, b;
+};
+StatusOr<BenchTrial> MakeBenchTrial(const voxel::VoxelGrid& map, const std::string& map_path,
+                                    double overlap, int trial);
+// Reads the map at `map_path` and calls `visit` with trials [first, first +
+// count) of MakeBenchTrial; a trial that cannot be made is reported on stdout
+// and skipped. Returns 2 (after reporting on stderr) when the map cannot be
+// read, else 0: the diagnostics' main loop.
+int ForEachBenchTrial(const std::string& map_path, double overlap, int first, int count,
+                      const std::function<void(int trial, const BenchTrial&)>& visit);
 
 }  // namespace mapd::bench
 

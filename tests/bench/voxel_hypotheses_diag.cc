@@ -12,14 +12,11 @@
 // Environment: DIAG_SIG_DEG, DIAG_NORMAL_DEG, DIAG_TOP_K, DIAG_USE_NORMALS
 // override the matching tolerances, DIAG_ICP_ITERATIONS the ICP's; DIAG_NORMALS=1 prints every true
 // pair.
-#include <octomap/OcTree.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "bench/voxel_crops.h"
@@ -28,21 +25,10 @@
 #include "voxel/icp.h"
 #include "voxel/merge.h"
 #include "voxel/merge_overlap.h"
-#include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
 
 using namespace mapd;
 using namespace mapd::voxel;
-
-static VoxelGrid Load(const std::string& bytes) {
-  auto tree = ReadOctree(bytes);
-  if (!tree.ok()) {
-    std::fprintf(stderr, "%s\n", tree.status().message().c_str());
-    std::exit(2);
-  }
-  auto grid = VoxelGrid::FromOcTree(**tree);
-  return std::move(*grid);
-}
 
 // Of B's occupied voxels mapped into A's occupied bounding box, the share on or next to an occupied
 // voxel of A.
@@ -67,10 +53,6 @@ static void Agreement(const VoxelGrid& a, const VoxelGrid& b, const Eigen::Isome
 
 int main(int argc, char** argv) {
   if (argc < 4) return 2;
-  std::ifstream in(argv[1], std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const VoxelGrid map = Load(ss.str());
   const double overlap = std::atof(argv[2]);
   const int trials = std::atoi(argv[3]);
   const int solutions = argc > 4 ? std::atoi(argv[4]) : 4;
@@ -84,19 +66,11 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("DIAG_TOP_K")) params.matching.top_k = std::atoi(v);
   if (const char* v = std::getenv("DIAG_USE_NORMALS"))
     params.matching.use_normals = std::atoi(v) != 0;
-  const double res = map.resolution();
-  for (int t = first; t < first + trials; ++t) {
-    bench::CropParams cp;
-    cp.overlap = overlap;
-    const std::string path = argv[1];
-    // The seeds of voxel_merge_bench (--seed=1), so trial t is its trial t.
-    cp.seed = bench::TrialSeed(1, path.substr(path.find_last_of('/') + 1), overlap, t);
-    auto pair = bench::MakeCropPair(map, cp);
-    if (!pair.ok()) {
-      std::printf("crop: %s\n", pair.status().message().c_str());
-      continue;
-    }
-    const VoxelGrid a = Load(pair->a_bt), b = Load(pair->b_bt);
+  const auto visit = [&](int t, const bench::BenchTrial& trial) {
+    const bench::CropPair* pair = &trial.pair;
+    const VoxelGrid& a = trial.a;
+    const VoxelGrid& b = trial.b;
+    const double res = a.resolution();
     auto ca = ExtractCorners(a, params.corners);
     auto cb = ExtractCorners(b, params.corners);
     std::printf("trial %d yaw %.0f corners %zu %zu\n", t, pair->yaw_deg, ca->corners.size(),
@@ -208,5 +182,6 @@ int main(int argc, char** argv) {
     }
     m.excluded_pairs.clear();
     std::fflush(stdout);
-  }
+  };
+  return bench::ForEachBenchTrial(argv[1], overlap, first, trials, visit);
 }
