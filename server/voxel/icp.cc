@@ -78,7 +78,7 @@ class VoxelHashIndex {
     // A query with no point within max_ring cells (most of a wrong
     // alignment's, and those outside the overlap) is answered by one bit
     // instead of a scan of (2 max_ring + 1)^3 cells.
-    if (max_m <= reach_m_ && !MaybeNear(c)) {
+    if (!near_.empty() && max_m <= ReachM() && !MaybeNear(c)) {
       *squared_m2 = static_cast<float>(max_m * max_m);
       return -1;
     }
@@ -155,8 +155,6 @@ class VoxelHashIndex {
       }
       near_.words.swap(grown);
     }
-    // Up to rounding (3 x 0.1 m / 0.1 m is 3.0000000000000004 cells).
-    reach_m_ = kReach * cell_m_ * (1 + 1e-9);
   }
 
   // out |= in moved by `shift` bits towards higher (up) or lower indices.
@@ -178,6 +176,10 @@ class VoxelHashIndex {
       }
     }
   }
+
+  // near_'s reach in metres, up to rounding (3 x 0.1 m / 0.1 m is
+  // 3.0000000000000004 cells).
+  double ReachM() const { return kReach * cell_m_ * (1 + 1e-9); }
 
   // False only when no point lies within kReach cells of c (per axis).
   bool MaybeNear(const Eigen::Vector3i& c) const { return near_.empty() || near_.Test(c); }
@@ -201,9 +203,8 @@ class VoxelHashIndex {
   double cell_m_;
   std::vector<int> order_;
   std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
-  CellBits occupied_;    // over the cells' box; no bits: ask the hash
-  CellBits near_;        // over that box grown by kReach; no bits: no shortcut
-  double reach_m_ = -1;  // near_'s reach, m; -1 without it
+  CellBits occupied_;  // over the cells' box; no bits: ask the hash
+  CellBits near_;      // over that box grown by kReach; no bits: no shortcut
 };
 
 // The nearest target of a query point under either index.

@@ -16,22 +16,18 @@ mapd_set_warnings(voxel_merge_bench)
 set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc PROPERTIES
                             COMPILE_OPTIONS -Wno-array-bounds)
 
-# Diagnostic: the first corner solutions of each trial with their gate figures
-# and true errors (how MergeParams' acceptance gates were chosen).
-add_executable(voxel_hypotheses_diag
-  ${CMAKE_CURRENT_LIST_DIR}/voxel_hypotheses_diag.cc
-  ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc)
-target_include_directories(voxel_hypotheses_diag PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-target_include_directories(voxel_hypotheses_diag SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
-target_link_libraries(voxel_hypotheses_diag PRIVATE voxel ${OCTOMAP_LIBRARIES})
-mapd_set_warnings(voxel_hypotheses_diag)
-
-# Diagnostic: the correlation generator's levelling, yaws and translation
-# peaks against the ground truth.
-add_executable(voxel_correlation_diag
-  ${CMAKE_CURRENT_LIST_DIR}/voxel_correlation_diag.cc
-  ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc)
-target_include_directories(voxel_correlation_diag PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-target_include_directories(voxel_correlation_diag SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
-target_link_libraries(voxel_correlation_diag PRIVATE voxel ${OCTOMAP_LIBRARIES})
-mapd_set_warnings(voxel_correlation_diag)
+# The diagnostics replay the benchmark's trials (voxel_crops.h) through one
+# part of the merge and print it against the ground truth.
+function(mapd_add_voxel_diag name)
+  add_executable(${name} ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/${name}.cc
+                         ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/voxel_crops.cc)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  target_include_directories(${name} SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
+  target_link_libraries(${name} PRIVATE voxel ${OCTOMAP_LIBRARIES})
+  mapd_set_warnings(${name})
+endfunction()
+# The first corner solutions of each trial with their gate figures and true
+# errors (how MergeParams' acceptance gates were chosen).
+mapd_add_voxel_diag(voxel_hypotheses_diag)
+# The correlation generator's levelling, yaws and translation peaks.
+mapd_add_voxel_diag(voxel_correlation_diag)
