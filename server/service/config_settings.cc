@@ -386,6 +386,10 @@ const std::vector<Setting>& Settings() {
             "matching tolerance stages (strict, then looser) accepted nothing; 0 = before corner matching, 3 = "
             "after all of them",
             [](C& c) -> auto& { return c.submaps.correlation_after_corner_stages; }, 0, 100),
+      Count("merge.correlation_max_cells", "cells of the correlation generator's FFT grid (~40 bytes each, "
+            "per running merge); a map too large for cells of 3 voxels gets coarser ones, and outdoors those "
+            "place fewer maps (a 150 m campus map at 0.2 m needs ~14M cells)",
+            [](C& c) -> auto& { return c.submaps.correlation_max_cells; }, 1000, 200'000'000),
       Flag("merge.correlation_check_accepted", "also run the correlation generator after an accepted corner "
            "solution, so that the uniqueness gate sees the other yaws (on geb079 it cost 2.6-3.9 s of CPU per "
            "accepted merge)",

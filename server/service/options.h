@@ -99,6 +99,8 @@ struct SubmapOptions {
   bool correlation = true;
   int correlation_after_corner_stages = 1;
   bool correlation_check_accepted = true;
+  // Cap on its FFT grid (voxel::CorrelationParams::max_cells; ~40 bytes a cell).
+  size_t correlation_max_cells = 16'000'000;
   // Every merge the gates accept waits for ApproveMerge (PROPOSED), as if
   // each request set MergeSubmapsRequest.review.
   bool merge_review = false;

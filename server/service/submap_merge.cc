@@ -33,6 +33,7 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.correlation.enabled = o.correlation;
   p.correlation.after_corner_stages = o.correlation_after_corner_stages;
   p.correlation.check_corner_solutions = o.correlation_check_accepted;
+  p.correlation.max_cells = o.correlation_max_cells;
   return p;
 }
 

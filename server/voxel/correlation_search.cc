@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -21,11 +22,13 @@ std::mutex& PlannerMutex() {
 }
 
 struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
+  void operator()(void* p) const { fftwf_free(p); }
 };
-using RealBuffer = std::unique_ptr<double[], FftwFree>;
-using ComplexBuffer = std::unique_ptr<fftw_complex[], FftwFree>;
-
+// Single precision: the grids hold 0/1 and shares of a cell, the scores are
+// only ranked, and floats halve the memory and time of the FFTs (a 16M-cell
+// grid is what keeps the cell at cell_voxels on a 150 m outdoor map).
+using Complex = std::complex<float>;
+using Spectrum = std::vector<Complex>;
 // A point sample of a map: an occupied voxel centre (occupied = 1) or a piece
 // of a free cube (free = its volume, in coarse cells).
 struct Sample {
@@ -69,15 +72,15 @@ class CoarseGrid {
   CoarseGrid(const std::array<int, 3>& n, const Eigen::Vector3d& origin, double cell)
       : n_(n), origin_(origin), cell_(cell) {
     const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-    occ_.assign(size, 0.0);
-    free_.assign(size, 0.0);
+    occ_.assign(size, 0);
+    free_.assign(size, 0.0F);
   }
   // Empties the grid and moves it to `origin`; keeps its buffers (every yaw
-  // of b reuses one grid: fresh 2M-cell buffers cost page faults).
+  // of b reuses one grid: fresh 16M-cell buffers cost page faults).
   void Reset(const Eigen::Vector3d& origin) {
     origin_ = origin;
-    std::fill(occ_.begin(), occ_.end(), 0.0);
-    std::fill(free_.begin(), free_.end(), 0.0);
+    std::fill(occ_.begin(), occ_.end(), 0);
+    std::fill(free_.begin(), free_.end(), 0.0F);
   }
   void Add(const Eigen::Vector3d& p, const Sample& s) {
     const Eigen::Vector3d f = (p - origin_) / cell_;
@@ -87,9 +90,9 @@ class CoarseGrid {
     if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) return;
     const std::size_t i = (static_cast<std::size_t>(x) * n_[1] + y) * n_[2] + z;
     if (s.occupied) {
-      occ_[i] = 1.0;
+      occ_[i] = 1;
     } else {
-      free_[i] += s.free_volume;
+      free_[i] += static_cast<float>(s.free_volume);
     }
   }
   // A wall rasterised in two grids offset by a fraction of a cell lands in
@@ -100,33 +103,32 @@ class CoarseGrid {
     Dilate(occ_, 1, &dilated_);
     Dilate(occ_, cover_radius, &cover_);
     for (std::size_t i = 0; i < occ_.size(); ++i) {
-      free_[i] = dilated_[i] > 0 ? 0.0 : std::min(1.0, free_[i]);
-      if (free_[i] > 0) cover_[i] = 1.0;
+      free_[i] = dilated_[i] != 0 ? 0.0F : std::min(1.0F, free_[i]);
+      if (free_[i] > 0) cover_[i] = 1;
     }
   }
-  const std::vector<double>& occ() const { return occ_; }
-  const std::vector<double>& dilated_occ() const { return dilated_; }
+  const std::vector<std::uint8_t>& occ() const { return occ_; }
+  const std::vector<std::uint8_t>& dilated_occ() const { return dilated_; }
   // Where this map has data: within cover_radius cells of an occupied cell,
   // or free.
-  const std::vector<double>& cover() const { return cover_; }
-  const std::vector<double>& free() const { return free_; }
+  const std::vector<std::uint8_t>& cover() const { return cover_; }
+  const std::vector<float>& free() const { return free_; }
 
  private:
-  // Binary dilation (1 where a cell > 0 lies within `radius` cells along
+  // Binary dilation (1 where a set cell lies within `radius` cells along
   // each axis: a cube), one axis at a time. Each pass is two sweeps along
   // the axis that remember the nearest set cell behind and ahead, so it
   // costs O(cells) whatever the radius, and the innermost loop runs over
   // contiguous memory on every axis.
-  void Dilate(const std::vector<double>& in, int radius, std::vector<double>* result) {
-    std::vector<double>& out = *result;
-    out.resize(in.size());
-    for (std::size_t i = 0; i < in.size(); ++i) out[i] = in[i] > 0 ? 1.0 : 0.0;
-    std::vector<double>& pass = pass_;
+  void Dilate(const std::vector<std::uint8_t>& in, int radius, std::vector<std::uint8_t>* result) {
+    std::vector<std::uint8_t>& out = *result;
+    out = in;
+    std::vector<std::uint8_t>& pass = pass_;
     const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
                                                static_cast<std::size_t>(n_[2]), 1};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       pass.swap(out);
-      out.assign(pass.size(), 0.0);           // within capacity: no allocation
+      out.assign(pass.size(), 0);             // within capacity: no allocation
       const std::size_t step = stride[axis];  // cells between neighbours on the axis
       const auto extent = static_cast<int>(n_[axis]);
       const std::size_t block = step * static_cast<std::size_t>(extent);
@@ -136,16 +138,16 @@ class CoarseGrid {
         for (int k = 0; k < extent; ++k) {
           const std::size_t row = base + static_cast<std::size_t>(k) * step;
           for (std::size_t j = 0; j < step; ++j) {
-            if (pass[row + j] > 0) nearest[j] = k;
-            if (k - nearest[j] <= radius) out[row + j] = 1.0;
+            if (pass[row + j] != 0) nearest[j] = k;
+            if (k - nearest[j] <= radius) out[row + j] = 1;
           }
         }
         std::fill(nearest.begin(), nearest.end(), extent + radius);  // next set cell ahead
         for (int k = extent - 1; k >= 0; --k) {
           const std::size_t row = base + static_cast<std::size_t>(k) * step;
           for (std::size_t j = 0; j < step; ++j) {
-            if (pass[row + j] > 0) nearest[j] = k;
-            if (nearest[j] - k <= radius) out[row + j] = 1.0;
+            if (pass[row + j] != 0) nearest[j] = k;
+            if (nearest[j] - k <= radius) out[row + j] = 1;
           }
         }
       }
@@ -155,8 +157,9 @@ class CoarseGrid {
   std::array<int, 3> n_;
   Eigen::Vector3d origin_;
   double cell_;
-  std::vector<double> occ_, free_, dilated_, cover_;
-  std::vector<double> pass_;  // Dilate's scratch
+  std::vector<std::uint8_t> occ_, dilated_, cover_;
+  std::vector<float> free_;
+  std::vector<std::uint8_t> pass_;  // Dilate's scratch
 };
 
 // A size with only the factors 2, 3, 5 (FFTW is fastest on those).
@@ -170,66 +173,66 @@ int FftSize(int n) {
   }
 }
 
+// One r2c / c2r plan pair on the padded grid, with its own buffers: a
+// transform reads and writes them in place, so a correlation needs only the
+// spectra it keeps.
 class Fft {
  public:
-  explicit Fft(const std::array<int, 3>& n) : n_(n) {
+  explicit Fft(const std::array<int, 3>& n) {
     real_size_ = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     complex_size_ = static_cast<std::size_t>(n[0]) * n[1] * (n[2] / 2 + 1);
-    real_.reset(fftw_alloc_real(real_size_));
-    spectrum_.reset(fftw_alloc_complex(complex_size_));
+    real_.reset(fftwf_alloc_real(real_size_));
+    spectrum_.reset(fftwf_alloc_complex(complex_size_));
     const std::lock_guard<std::mutex> lock(PlannerMutex());
-    forward_ = fftw_plan_dft_r2c_3d(n[0], n[1], n[2], real_.get(), spectrum_.get(), FFTW_ESTIMATE);
-    inverse_ = fftw_plan_dft_c2r_3d(n[0], n[1], n[2], spectrum_.get(), real_.get(), FFTW_ESTIMATE);
+    forward_ = fftwf_plan_dft_r2c_3d(n[0], n[1], n[2], real_.get(), spectrum_.get(), FFTW_ESTIMATE);
+    inverse_ = fftwf_plan_dft_c2r_3d(n[0], n[1], n[2], spectrum_.get(), real_.get(), FFTW_ESTIMATE);
   }
   ~Fft() {
     const std::lock_guard<std::mutex> lock(PlannerMutex());
-    fftw_destroy_plan(forward_);
-    fftw_destroy_plan(inverse_);
+    fftwf_destroy_plan(forward_);
+    fftwf_destroy_plan(inverse_);
   }
   Fft(const Fft&) = delete;
   Fft& operator=(const Fft&) = delete;
 
-  // The spectrum of `values` (real_size_ of them) into `out`.
-  void Forward(const std::vector<double>& values, std::vector<std::complex<double>>* out) {
-    std::copy(values.begin(), values.end(), real_.get());
-    fftw_execute(forward_);
-    out->resize(complex_size_);
-    for (std::size_t i = 0; i < complex_size_; ++i) {
-      (*out)[i] = {spectrum_[i][0], spectrum_[i][1]};
-    }
+  // The spectrum of value(i) over the real_size() cells, into spectrum().
+  template <typename ValueAt>
+  Complex* Forward(const ValueAt& value) {
+    float* real = real_.get();
+    for (std::size_t i = 0; i < real_size_; ++i) real[i] = static_cast<float>(value(i));
+    fftwf_execute(forward_);
+    return spectrum();
   }
-  // The (unnormalised) inverse of `spectrum`; valid until the next call.
-  const double* Inverse(const std::vector<std::complex<double>>& spectrum) {
-    for (std::size_t i = 0; i < complex_size_; ++i) {
-      spectrum_[i][0] = spectrum[i].real();
-      spectrum_[i][1] = spectrum[i].imag();
-    }
-    fftw_execute(inverse_);
+  // The (unnormalised) inverse of spectrum(), which it overwrites; valid
+  // until the next call.
+  float* Inverse() {
+    fftwf_execute(inverse_);
     return real_.get();
   }
+  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
+  Complex* spectrum() { return reinterpret_cast<Complex*>(spectrum_.get()); }
   std::size_t real_size() const { return real_size_; }
   std::size_t complex_size() const { return complex_size_; }
 
  private:
-  std::array<int, 3> n_;
   std::size_t real_size_ = 0, complex_size_ = 0;
-  RealBuffer real_;
-  ComplexBuffer spectrum_;
-  fftw_plan forward_ = nullptr;
-  fftw_plan inverse_ = nullptr;
+  std::unique_ptr<float[], FftwFree> real_;
+  std::unique_ptr<fftwf_complex[], FftwFree> spectrum_;
+  fftwf_plan forward_ = nullptr;
+  fftwf_plan inverse_ = nullptr;
 };
 
 struct Peak {
-  double score;
+  float score;
   std::array<int, 3> shift;
 };
 
 // The best `count` local maxima (score > 0) at least `separation` cells apart
 // (circular distance on the padded grid).
-std::vector<Peak> TopPeaks(const double* s, const std::array<int, 3>& n, int count,
+std::vector<Peak> TopPeaks(const float* s, const std::array<int, 3>& n, int count,
                            double separation) {
   const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-  std::vector<std::pair<double, std::size_t>> order;
+  std::vector<std::pair<float, std::size_t>> order;
   for (std::size_t i = 0; i < size; ++i) {
     if (s[i] > 0) order.emplace_back(s[i], i);
   }
@@ -344,25 +347,35 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // b's grid origin relative to its (turned) centroid: one cell of margin.
   const Eigen::Vector3d offset_b(-radius_b - cell, -radius_b - cell, z_lo - cell);
   Fft fft(n);
-  CoarseGrid grid_a(n, origin_a, cell);
-  for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
+  const std::size_t spectrum_size = fft.complex_size();
+  const auto keep = [&](const Complex* spectrum) {
+    return Spectrum(spectrum, spectrum + spectrum_size);
+  };
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
-  grid_a.Finish(cover_radius);
-  using Spectrum = std::vector<std::complex<double>>;
-  Spectrum occ_a, dilated_a, free_a, cover_a;
-  fft.Forward(grid_a.occ(), &occ_a);
-  fft.Forward(grid_a.dilated_occ(), &dilated_a);
-  fft.Forward(grid_a.free(), &free_a);
-  fft.Forward(grid_a.cover(), &cover_a);
+  const auto w = static_cast<float>(params.free_weight);
+  // a's three spectra; its grid goes once they are taken.
+  Spectrum occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
   double cells_a = 0;
-  for (double v : grid_a.occ()) cells_a += v;
+  {
+    CoarseGrid grid_a(n, origin_a, cell);
+    for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
+    grid_a.Finish(cover_radius);
+    const auto& occ = grid_a.occ();
+    const auto& dilated = grid_a.dilated_occ();
+    const auto& free = grid_a.free();
+    const auto& cover = grid_a.cover();
+    occ_a = keep(fft.Forward([&](std::size_t i) { return occ[i]; }));
+    hit_a = keep(fft.Forward([&](std::size_t i) { return dilated[i] - w * free[i]; }));
+    cover_a = keep(fft.Forward([&](std::size_t i) { return cover[i]; }));
+    for (std::uint8_t v : occ) cells_a += v;
+  }
   const std::vector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
   // Buffers of b's side, reused by every yaw.
-  Spectrum product(fft.complex_size()), occ_b, free_b, cover_b;
-  std::vector<double> score(fft.real_size()), b_in_a(fft.real_size());
+  Spectrum occ_b(spectrum_size);
+  std::vector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
   CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
   for (double yaw : yaws) {
     const Eigen::Matrix3d R =
@@ -374,37 +387,44 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     grid_b.Reset(origin);
     for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
     grid_b.Finish(cover_radius);
-    fft.Forward(grid_b.occ(), &occ_b);
-    fft.Forward(grid_b.free(), &free_b);
-    fft.Forward(grid_b.cover(), &cover_b);
+    const auto& occ = grid_b.occ();
+    const auto& free = grid_b.free();
+    const auto& cover = grid_b.cover();
     double cells_b = 0;
-    for (double v : grid_b.occ()) cells_b += v;
-    // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s).
-    for (std::size_t i = 0; i < product.size(); ++i) {
-      product[i] = (dilated_a[i] - params.free_weight * free_a[i]) * std::conj(occ_b[i]) -
-                   params.free_weight * occ_a[i] * std::conj(free_b[i]);
+    for (std::uint8_t v : occ) cells_b += v;
+    // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s). Each product is formed in
+    // the transform's own spectrum and each inverse folded into `weight`
+    // before the next, so only occ_b's spectrum and one real array are kept.
+    const Complex* spectrum = fft.Forward([&](std::size_t i) { return occ[i]; });
+    std::copy(spectrum, spectrum + spectrum_size, occ_b.begin());
+    // The score is normalised by the occupied cells each map has where the
+    // other has data: sliding a corridor over more of the other map adds
+    // hits but adds as many cells that miss. Overlaps below
+    // min_overlap_fraction of the smaller map are no peak (a few cells can
+    // agree by chance).
+    const double min_cells = std::max(params.min_overlap_fraction * std::min(cells_a, cells_b) *
+                                          static_cast<double>(fft.real_size()),
+                                      1.0);
+    Complex* product = fft.Forward([&](std::size_t i) { return cover[i]; });
+    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = occ_a[i] * std::conj(product[i]);
+    const float* a_in_b = fft.Inverse();
+    std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
+    product = fft.spectrum();
+    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = cover_a[i] * std::conj(occ_b[i]);
+    const float* b_in_a = fft.Inverse();
+    for (std::size_t i = 0; i < weight.size(); ++i) {
+      const double in_a = b_in_a[i], in_b = weight[i];
+      weight[i] =
+          std::min(in_a, in_b) >= min_cells ? static_cast<float>(1.0 / std::sqrt(in_a * in_b)) : 0;
     }
-    const double* inverse = fft.Inverse(product);
-    std::copy(inverse, inverse + fft.real_size(), score.begin());
-    for (std::size_t i = 0; i < product.size(); ++i) product[i] = cover_a[i] * std::conj(occ_b[i]);
-    inverse = fft.Inverse(product);
-    std::copy(inverse, inverse + fft.real_size(), b_in_a.begin());
-    for (std::size_t i = 0; i < product.size(); ++i) product[i] = occ_a[i] * std::conj(cover_b[i]);
-    const double* a_in_b = fft.Inverse(product);
-    // Normalised by the occupied cells each map has where the other has
-    // data: sliding a corridor over more of the other map adds hits but adds
-    // as many cells that miss. Overlaps below min_overlap_fraction of the
-    // smaller map are no peak (a few cells can agree by chance).
-    const double min_cells = params.min_overlap_fraction * std::min(cells_a, cells_b) *
-                             static_cast<double>(fft.real_size());
-    for (std::size_t i = 0; i < score.size(); ++i) {
-      const double overlap = std::min(b_in_a[i], a_in_b[i]);
-      score[i] = overlap >= std::max(min_cells, 1.0)
-                     ? score[i] / std::sqrt(std::max(b_in_a[i], 1.0) * std::max(a_in_b[i], 1.0))
-                     : 0.0;
+    product = fft.Forward([&](std::size_t i) { return free[i]; });
+    for (std::size_t i = 0; i < spectrum_size; ++i) {
+      product[i] = hit_a[i] * std::conj(occ_b[i]) - w * occ_a[i] * std::conj(product[i]);
     }
+    float* score = fft.Inverse();
+    for (std::size_t i = 0; i < weight.size(); ++i) score[i] *= weight[i];
     for (const Peak& peak :
-         TopPeaks(score.data(), n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+         TopPeaks(score, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
       Eigen::Vector3d shift;
       for (int k = 0; k < 3; ++k) {
         const int s = peak.shift[static_cast<std::size_t>(k)];

@@ -12,6 +12,9 @@
 // furniture and side rooms into the other map's observed free space, which
 // the penalty counts. Space either map never observed counts neither way.
 //
+// The grids and FFTs are single precision (FFTW3's fftwf): they hold 0/1
+// and shares of a cell, and the scores are only ranked.
+//
 // Thread safety: reentrant (FFTW's planner, which is not, is serialised
 // inside).
 #ifndef MAPD_VOXEL_CORRELATION_SEARCH_H_
@@ -51,9 +54,13 @@ struct CorrelationParams {
   // and the FFTs stay small, fine enough that a peak starts ICP within its
   // basin (ICP converges from a few voxels).
   double cell_voxels = 3.0;
-  // Cap on the padded FFT grid; larger maps get coarser cells. 2M cells take
-  // ~100 MiB (five complex spectra) and 0.1-0.3 s per FFT here.
-  std::size_t max_cells = 2'000'000;
+  // Cap on the padded FFT grid; larger maps get coarser cells. Indoor
+  // submaps of 150k voxels need 1-2M cells; a 150k-voxel outdoor map (150 m
+  // across at 0.2 m) needs ~14M for cells of 3 voxels, and at the 2M cap
+  // (before) its 1.3 m cells ranked the true shift below 190th (coarse cells
+  // of trees and hedges match anything; docs/voxel-merge.md). Single precision,
+  // 16M cells take ~40 bytes each (~600 MiB) and ~1.5 s per yaw here.
+  std::size_t max_cells = 16'000'000;
   // w in S(t) above. A conflict (a wall where the other map saw through) is
   // strong evidence and rare: free space within a cell of either map's
   // walls does not count, so few cells are left to conflict. In the

@@ -168,6 +168,8 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_SCREEN_ITERATIONS"))
     params.icp_screen_iterations = std::atoi(v);
+  if (const char* v = std::getenv("MAPD_BENCH_CORRELATION_MAX_CELLS"))
+    params.correlation.max_cells = std::strtoull(v, nullptr, 10);
   if (const char* v = std::getenv("MAPD_BENCH_LOOSER_STAGES")) {
     params.looser_tolerances.resize(
         std::min<std::size_t>(params.looser_tolerances.size(), std::atoi(v)));

@@ -133,7 +133,8 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
              "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
              "--merge.max_seconds=10", "--merge.resolution_policy=resample",
              "--merge.fusion_rule=log_odds", "--merge.correlation=false",
-             "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0"},
+             "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0",
+             "--merge.correlation_max_cells=4000000"},
             &c)
           .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -148,9 +149,11 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_FALSE(c.submaps.correlation);
   EXPECT_FALSE(c.submaps.correlation_check_accepted);
   EXPECT_EQ(c.submaps.correlation_after_corner_stages, 0);
+  EXPECT_EQ(c.submaps.correlation_max_cells, 4'000'000u);
   const ServerConfig defaults;
   EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 1);
   EXPECT_TRUE(defaults.submaps.correlation);
+  EXPECT_EQ(defaults.submaps.correlation_max_cells, 16'000'000u);  // = voxel::CorrelationParams
 
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--limits.max_concurrent_merges=0", "limits.max_concurrent_merges"},
@@ -163,6 +166,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       {"--merge.fusion_rule=max", "merge.fusion_rule"},
       {"--merge.correlation_after_corner_stages=101", "merge.correlation_after_corner_stages"},
       {"--merge.correlation=maybe", "merge.correlation"},
+      {"--merge.correlation_max_cells=999", "merge.correlation_max_cells"},
   };
   for (const auto& [flag, name] : bad) {
     ServerConfig d;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 namespace mapd::testing {
@@ -68,6 +69,30 @@ VoxelScene OtherRoom() {
 VoxelScene FlatWall() {
   VoxelScene scene;
   scene.boxes = {Box(0.0, 0.0, 0.0, 6.0, 0.2, 3.0)};
+  return scene;
+}
+
+VoxelScene Grove() {
+  VoxelScene scene;
+  scene.boxes = {Box(0.0, 0.0, -2.0, 40.0, 40.0, 12.0, true)};
+  // A fixed linear congruential sequence: the same grove on every platform.
+  std::uint32_t state = 20261202;
+  const auto unit = [&state] {
+    state = state * 1664525U + 1013904223U;
+    return static_cast<double>(state >> 8) / static_cast<double>(1U << 24);
+  };
+  // Uneven ground: 5 m terraces 0-0.8 m high (a flat ground would match
+  // itself at any horizontal shift).
+  for (int i = 0; i < 8; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      scene.boxes.push_back(Box(5.0 * i, 5.0 * j, -1.5, 5.0 * i + 5, 5.0 * j + 5, 0.8 * unit()));
+    }
+  }
+  for (int i = 0; i < 90; ++i) {
+    const double x = 1.0 + 37.0 * unit(), y = 1.0 + 37.0 * unit();
+    const double w = 0.4 + 1.2 * unit(), d = 0.4 + 1.2 * unit(), h = 0.5 + 4.5 * unit();
+    scene.boxes.push_back(Box(x, y, 0.0, x + w, y + d, h));
+  }
   return scene;
 }
 

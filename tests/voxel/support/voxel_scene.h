@@ -44,6 +44,12 @@ Eigen::AlignedBox3d RoomCropX(double x0, double x1);
 VoxelScene OtherRoom();
 // A single flat wall (no corners).
 VoxelScene FlatWall();
+// Outdoors, roughly: 40 x 40 m of terraced ground (5 m squares, 0-0.8 m
+// high), free up to 12 m, with 90 trunks and bushes (0.4-1.6 m across,
+// 0.5-5 m tall) at pseudo-random places, 4 m apart on average: clutter that
+// a coarse cell blurs into a carpet. Crop it above z = -1 (the terraces'
+// bottoms and the free room's floor lie below).
+VoxelScene Grove();
 
 // Rasterises the part of `scene` inside `crop_scene` (scene frame, metres)
 // into a tree in the submap frame: voxel centre c (submap frame) gets
