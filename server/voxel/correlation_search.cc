@@ -8,18 +8,13 @@
 #include <complex>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <utility>
 
+#include "voxel/fft_support.h"
+
 namespace mapd::voxel {
 namespace {
-
-// FFTW's planner is not thread-safe; execution is.
-std::mutex& PlannerMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
 
 struct FftwFree {
   void operator()(void* p) const { fftwf_free(p); }
@@ -162,17 +157,6 @@ class CoarseGrid {
   std::vector<std::uint8_t> pass_;  // Dilate's scratch
 };
 
-// A size with only the factors 2, 3, 5 (FFTW is fastest on those).
-int FftSize(int n) {
-  for (int m = std::max(n, 1);; ++m) {
-    int r = m;
-    for (int f : {2, 3, 5}) {
-      while (r % f == 0) r /= f;
-    }
-    if (r == 1) return m;
-  }
-}
-
 // One r2c / c2r plan pair on the padded grid, with its own buffers: a
 // transform reads and writes them in place, so a correlation needs only the
 // spectra it keeps.
@@ -183,12 +167,12 @@ class Fft {
     complex_size_ = static_cast<std::size_t>(n[0]) * n[1] * (n[2] / 2 + 1);
     real_.reset(fftwf_alloc_real(real_size_));
     spectrum_.reset(fftwf_alloc_complex(complex_size_));
-    const std::lock_guard<std::mutex> lock(PlannerMutex());
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
     forward_ = fftwf_plan_dft_r2c_3d(n[0], n[1], n[2], real_.get(), spectrum_.get(), FFTW_ESTIMATE);
     inverse_ = fftwf_plan_dft_c2r_3d(n[0], n[1], n[2], spectrum_.get(), real_.get(), FFTW_ESTIMATE);
   }
   ~Fft() {
-    const std::lock_guard<std::mutex> lock(PlannerMutex());
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
     fftwf_destroy_plan(forward_);
     fftwf_destroy_plan(inverse_);
   }
@@ -287,7 +271,7 @@ Status CorrelationParams::Validate() const {
   if (!(min_peak_separation_cells >= 0 && min_peak_separation_cells <= 1000)) {
     return Status::InvalidArgument("correlation.min_peak_separation_cells must be in [0, 1000]");
   }
-  return Status::Ok();
+  return yaw_refinement.Validate();
 }
 
 StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(

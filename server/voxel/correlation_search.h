@@ -26,6 +26,7 @@
 
 #include "common/status.h"
 #include "voxel/voxel_grid.h"
+#include "voxel/yaw_refinement.h"
 
 namespace mapd::voxel {
 
@@ -83,6 +84,9 @@ struct CorrelationParams {
   int max_hypotheses = 12;
   // Peaks closer than this (coarse cells) are one.
   double min_peak_separation_cells = 3.0;
+  // Before the search, each yaw candidate is replaced by the best yaw near
+  // it in a plan view of the two maps (yaw_refinement.h).
+  YawRefinementParams yaw_refinement;
 
   Status Validate() const;
 };

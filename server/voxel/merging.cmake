@@ -7,6 +7,7 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc
   ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment.cc
   ${CMAKE_CURRENT_LIST_DIR}/correlation_search.cc
+  ${CMAKE_CURRENT_LIST_DIR}/yaw_refinement.cc
   ${CMAKE_CURRENT_LIST_DIR}/submap_features.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_hypotheses.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_pair.cc

@@ -6,10 +6,12 @@
 //
 //   voxel_correlation_diag MAP.bt OVERLAP TRIALS [FIRST_TRIAL=0] [PEAKS_PER_YAW=20]
 //
-// Environment: DIAG_WALL_UP_ROUNDS (GravityParams::wall_up_rounds),
+// Environment: DIAG_WALL_UP_ROUNDS, DIAG_YAW_PEAKS (GravityParams),
 // DIAG_MAX_CELLS, DIAG_CELL_VOXELS, DIAG_FREE_WEIGHT, DIAG_MIN_OVERLAP
-// (CorrelationParams).
+// (CorrelationParams), DIAG_NO_REFINEMENT, DIAG_BAND_LOW, DIAG_BAND_HIGH (its
+// yaw_refinement).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +34,7 @@ int main(int argc, char** argv) {
   const int trials = std::atoi(argv[3]);
   const int first = argc > 4 ? std::atoi(argv[4]) : 0;
   MergeParams params;
+  if (const char* v = std::getenv("DIAG_YAW_PEAKS")) params.gravity.yaw_peaks = std::atoi(v);
   if (const char* v = std::getenv("DIAG_WALL_UP_ROUNDS")) {
     params.gravity.wall_up_rounds = std::atoi(v);
   }
@@ -42,6 +45,9 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("DIAG_CELL_VOXELS")) cp.cell_voxels = std::atof(v);
   if (const char* v = std::getenv("DIAG_FREE_WEIGHT")) cp.free_weight = std::atof(v);
   if (const char* v = std::getenv("DIAG_MIN_OVERLAP")) cp.min_overlap_fraction = std::atof(v);
+  if (std::getenv("DIAG_NO_REFINEMENT") != nullptr) cp.yaw_refinement.enabled = false;
+  if (const char* v = std::getenv("DIAG_BAND_LOW")) cp.yaw_refinement.band_low_m = std::atof(v);
+  if (const char* v = std::getenv("DIAG_BAND_HIGH")) cp.yaw_refinement.band_high_m = std::atof(v);
   const auto visit = [&](int t, const bench::BenchTrial& trial) {
     const bench::CropPair* pair = &trial.pair;
     const VoxelGrid& a = trial.a;
@@ -63,10 +69,22 @@ int main(int argc, char** argv) {
         "trial %d: up a %.2f deg from map z (floors %d, walls %d), b walls %d; levelled truth "
         "tilt %.2f deg, yaw %.1f deg\n  yaws:",
         t, up_a, fa->floor_planes, fa->wall_planes, fb->wall_planes, tilt, Deg(yaw_true));
-    const std::vector<double> yaws = YawCandidates(*fa, *fb, params.gravity);
+    const std::vector<double> candidates = YawCandidates(*fa, *fb, params.gravity);
+    for (double y : candidates) {
+      std::printf(" %.1f (err %.1f)", Deg(y), Deg(std::remainder(y - yaw_true, 2 * M_PI)));
+    }
+    YawRefinementStats refinement;
+    auto refined =
+        RefineYaws(a, fa->R_up, b, fb->R_up, candidates, res, cp.yaw_refinement, &refinement);
+    if (!refined.ok()) {
+      std::printf("\n  refinement: %s\n", refined.status().message().c_str());
+      return;
+    }
+    const std::vector<double>& yaws = *refined;
+    std::printf("\n  refined (%d yaws scored, %.2f m columns):", refinement.yaws_scored,
+                refinement.pixel_m);
     for (double y : yaws) {
-      double d = std::remainder(y - yaw_true, 2 * M_PI);
-      std::printf(" %.1f (err %.1f)", Deg(y), Deg(d));
+      std::printf(" %.1f (err %.1f)", Deg(y), Deg(std::remainder(y - yaw_true, 2 * M_PI)));
     }
     std::printf("\n");
     // With the true yaw too, to see whether the translation search finds the truth given it.
@@ -82,7 +100,8 @@ int main(int argc, char** argv) {
     for (const Eigen::Vector3d& c : a.occupied_centres()) box.extend(c);
     const Eigen::Vector3d extent = box.sizes();
     std::printf(
-        "  cell %.2f m, grid %zu cells, %zu peaks; A's occupied extent %.0f x %.0f x %.0f m\n",
+        "  cell %.2f m, grid %zu cells, %zu peaks; A's occupied extent %.0f x %.0f x "
+        "%.0f m\n",
         stats.cell_m, stats.grid_cells, hyps->size(), extent.x(), extent.y(), extent.z());
     int shown = 0;
     {

@@ -1,0 +1,304 @@
+#include "voxel/yaw_refinement.h"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <utility>
+
+#include "voxel/fft_support.h"
+
+namespace mapd::voxel {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+using Complex = std::complex<float>;
+
+struct FftwFree {
+  void operator()(void* p) const { fftwf_free(p); }
+};
+
+// A 2D r2c / c2r plan pair with its own buffers (single precision: the
+// images hold 0/1 and the scores are only ranked).
+class Fft2 {
+ public:
+  Fft2(int nx, int ny)
+      : real_size_(static_cast<std::size_t>(nx) * ny),
+        complex_size_(static_cast<std::size_t>(nx) * (ny / 2 + 1)),
+        real_(fftwf_alloc_real(real_size_)),
+        spectrum_(fftwf_alloc_complex(complex_size_)) {
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    forward_ = fftwf_plan_dft_r2c_2d(nx, ny, real_.get(), spectrum_.get(), FFTW_ESTIMATE);
+    inverse_ = fftwf_plan_dft_c2r_2d(nx, ny, spectrum_.get(), real_.get(), FFTW_ESTIMATE);
+  }
+  ~Fft2() {
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    fftwf_destroy_plan(forward_);
+    fftwf_destroy_plan(inverse_);
+  }
+  Fft2(const Fft2&) = delete;
+  Fft2& operator=(const Fft2&) = delete;
+
+  // The spectrum of `values` (real_size() of them) into `out`.
+  void Forward(const std::vector<float>& values, std::vector<Complex>* out) {
+    std::copy(values.begin(), values.end(), real_.get());
+    fftwf_execute(forward_);
+    const Complex* s = spectrum();
+    out->assign(s, s + complex_size_);
+  }
+  // The (unnormalised) correlation sum_x f(x) g(x - s) from the spectra of f
+  // and g; valid until the next call.
+  const float* Correlate(const std::vector<Complex>& f, const std::vector<Complex>& g) {
+    Complex* s = spectrum();
+    for (std::size_t i = 0; i < complex_size_; ++i) s[i] = f[i] * std::conj(g[i]);
+    fftwf_execute(inverse_);
+    return real_.get();
+  }
+  std::size_t real_size() const { return real_size_; }
+
+ private:
+  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
+  Complex* spectrum() { return reinterpret_cast<Complex*>(spectrum_.get()); }
+
+  std::size_t real_size_, complex_size_;
+  std::unique_ptr<float[], FftwFree> real_;
+  std::unique_ptr<fftwf_complex[], FftwFree> spectrum_;
+  fftwf_plan forward_ = nullptr;
+  fftwf_plan inverse_ = nullptr;
+};
+
+// Structure columns and data columns of one map on the padded image.
+class ColumnImage {
+ public:
+  ColumnImage(int nx, int ny, double pixel_m) : nx_(nx), ny_(ny), pixel_m_(pixel_m) {
+    const std::size_t size = static_cast<std::size_t>(nx) * ny;
+    lowest_.resize(size);
+    above_.resize(size);
+    structure_.resize(size);
+    data_.resize(size);
+  }
+
+  // `points` (levelled, metres) turned by `yaw` about +z, with `origin` at
+  // the image's corner.
+  void Rasterise(const std::vector<Eigen::Vector3d>& points, double yaw,
+                 const Eigen::Vector2d& origin, const YawRefinementParams& params) {
+    std::fill(lowest_.begin(), lowest_.end(), 1e30F);
+    std::fill(above_.begin(), above_.end(), 0);
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    pixel_.resize(points.size());
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const Eigen::Vector3d& p = points[k];
+      const double x = c * p.x() - s * p.y(), y = s * p.x() + c * p.y();
+      const int ix = static_cast<int>(std::floor((x - origin.x()) / pixel_m_));
+      const int iy = static_cast<int>(std::floor((y - origin.y()) / pixel_m_));
+      if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) {
+        pixel_[k] = -1;
+        continue;
+      }
+      pixel_[k] = static_cast<std::int64_t>(ix) * ny_ + iy;
+      float& low = lowest_[static_cast<std::size_t>(pixel_[k])];
+      low = std::min(low, static_cast<float>(p.z()));
+    }
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (pixel_[k] < 0) continue;
+      const auto i = static_cast<std::size_t>(pixel_[k]);
+      const double height = points[k].z() - lowest_[i];
+      if (height > params.band_low_m && height <= params.band_high_m) ++above_[i];
+    }
+    structures_ = 0;
+    for (std::size_t i = 0; i < data_.size(); ++i) {
+      data_[i] = lowest_[i] < 1e29F ? 1.0F : 0.0F;
+      structure_[i] = above_[i] >= params.min_voxels_in_band ? 1.0F : 0.0F;
+      structures_ += structure_[i];
+    }
+  }
+
+  // 1 where a set pixel lies within `radius` pixels along both axes.
+  std::vector<float> Dilated(const std::vector<float>& in, int radius) const {
+    std::vector<float> rows(in.size(), 0.0F), out(in.size(), 0.0F);
+    for (int x = 0; x < nx_; ++x) {
+      for (int y = 0; y < ny_; ++y) {
+        if (in[Index(x, y)] == 0) continue;
+        for (int d = std::max(0, y - radius); d <= std::min(ny_ - 1, y + radius); ++d) {
+          rows[Index(x, d)] = 1.0F;
+        }
+      }
+    }
+    for (int x = 0; x < nx_; ++x) {
+      for (int y = 0; y < ny_; ++y) {
+        if (rows[Index(x, y)] == 0) continue;
+        for (int d = std::max(0, x - radius); d <= std::min(nx_ - 1, x + radius); ++d) {
+          out[Index(d, y)] = 1.0F;
+        }
+      }
+    }
+    return out;
+  }
+
+  const std::vector<float>& structure() const { return structure_; }
+  const std::vector<float>& data() const { return data_; }
+  double structures() const { return structures_; }
+
+ private:
+  std::size_t Index(int x, int y) const { return static_cast<std::size_t>(x) * ny_ + y; }
+
+  int nx_, ny_;
+  double pixel_m_;
+  std::vector<float> lowest_;
+  std::vector<int> above_;
+  std::vector<float> structure_, data_;
+  std::vector<std::int64_t> pixel_;  // each point's pixel, -1 outside
+  double structures_ = 0;
+};
+
+// A data pixel reaches this far (pixels): a sensor sees a surface from the
+// columns in front of it, and a turned column lands in a neighbour.
+constexpr int kDataRadius = 2;
+
+}  // namespace
+
+Status YawRefinementParams::Validate() const {
+  if (!(window_deg >= 0 && window_deg <= 90) || !(coarse_step_deg >= 1 && coarse_step_deg <= 30)) {
+    return Status::InvalidArgument(
+        "yaw_refinement.window_deg must be in [0, 90] and coarse_step_deg in [1, 30]");
+  }
+  if (!(pixel_voxels >= 1 && pixel_voxels <= 64)) {
+    return Status::InvalidArgument("yaw_refinement.pixel_voxels must be in [1, 64]");
+  }
+  if (!(band_low_m >= 0 && band_low_m < band_high_m && band_high_m <= 100) ||
+      min_voxels_in_band < 1 || min_voxels_in_band > 1000) {
+    return Status::InvalidArgument(
+        "yaw_refinement.band_low_m and band_high_m must satisfy 0 <= low < high <= 100 and "
+        "min_voxels_in_band be in [1, 1000]");
+  }
+  if (!(min_change_deg >= 0 && min_change_deg <= 90) || max_added < 0 || max_added > 100) {
+    return Status::InvalidArgument(
+        "yaw_refinement.min_change_deg must be in [0, 90] and max_added in [0, 100]");
+  }
+  if (!(min_overlap_fraction > 0 && min_overlap_fraction <= 1)) {
+    return Status::InvalidArgument("yaw_refinement.min_overlap_fraction must be in (0, 1]");
+  }
+  return Status::Ok();
+}
+
+StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
+                                         const VoxelGrid& b, const Eigen::Matrix3d& R_b,
+                                         const std::vector<double>& yaws,
+                                         double finest_resolution_m,
+                                         const YawRefinementParams& params,
+                                         YawRefinementStats* stats) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
+  if (!params.enabled || a.empty() || b.empty() || yaws.empty()) return yaws;
+  const double pixel = params.pixel_voxels * finest_resolution_m;
+  if (stats != nullptr) stats->pixel_m = pixel;
+
+  // a levelled in its box; b levelled about its centroid, so that any yaw
+  // keeps it within a circle.
+  std::vector<Eigen::Vector3d> points_a, points_b;
+  points_a.reserve(a.num_occupied());
+  points_b.reserve(b.num_occupied());
+  Eigen::AlignedBox2d box_a;
+  for (const Eigen::Vector3d& c : a.occupied_centres()) {
+    points_a.push_back(R_a * c);
+    box_a.extend(points_a.back().head<2>());
+  }
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : b.occupied_centres()) centroid_b += R_b * c;
+  centroid_b /= static_cast<double>(b.num_occupied());
+  centroid_b.z() = 0;  // heights stay as they are: columns compare them within themselves
+  double radius_b = 0;
+  for (const Eigen::Vector3d& c : b.occupied_centres()) {
+    points_b.push_back(R_b * c - centroid_b);
+    radius_b = std::max(radius_b, points_b.back().head<2>().norm());
+  }
+  const int span_b = static_cast<int>(std::ceil(2 * radius_b / pixel)) + 2;
+  const int nx = FftSize(static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2 + span_b);
+  const int ny = FftSize(static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2 + span_b);
+
+  Fft2 fft(nx, ny);
+  std::vector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
+  double structures_a = 0;
+  {
+    ColumnImage image(nx, ny, pixel);
+    image.Rasterise(points_a, 0.0, box_a.min() - Eigen::Vector2d::Constant(pixel), params);
+    fft.Forward(image.structure(), &structure_a);
+    fft.Forward(image.Dilated(image.structure(), 1), &dilated_a);
+    fft.Forward(image.Dilated(image.data(), kDataRadius), &data_a);
+    structures_a = image.structures();
+  }
+  if (structures_a == 0) return yaws;
+  ColumnImage image_b(nx, ny, pixel);
+  const Eigen::Vector2d origin_b = -Eigen::Vector2d::Constant(radius_b + pixel);
+  std::vector<float> weight(fft.real_size());
+  int scored = 0;
+  // The best normalised correlation over all shifts (as in
+  // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)).
+  const auto score = [&](double yaw) {
+    ++scored;
+    image_b.Rasterise(points_b, yaw, origin_b, params);
+    if (image_b.structures() == 0) return 0.0;
+    fft.Forward(image_b.structure(), &structure_b);
+    fft.Forward(image_b.Dilated(image_b.data(), kDataRadius), &data_b);
+    const double min_pixels =
+        std::max(1.0, params.min_overlap_fraction * std::min(structures_a, image_b.structures())) *
+        static_cast<double>(fft.real_size());
+    const float* a_in_b = fft.Correlate(structure_a, data_b);
+    std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
+    const float* b_in_a = fft.Correlate(data_a, structure_b);
+    for (std::size_t i = 0; i < weight.size(); ++i) {
+      const double in_a = b_in_a[i], in_b = weight[i];
+      weight[i] = std::min(in_a, in_b) >= min_pixels
+                      ? static_cast<float>(1.0 / std::sqrt(in_a * in_b))
+                      : 0.0F;
+    }
+    const float* hits = fft.Correlate(dilated_a, structure_b);
+    double best = 0;
+    for (std::size_t i = 0; i < weight.size(); ++i) {
+      best = std::max(best, static_cast<double>(hits[i] * weight[i]));
+    }
+    return best;
+  };
+
+  std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
+  const int steps = static_cast<int>(std::floor(params.window_deg / params.coarse_step_deg));
+  for (double yaw : yaws) {
+    double best_offset = 0, best_score = score(yaw);
+    for (int k = -steps; k <= steps; ++k) {
+      if (k == 0) continue;
+      const double offset = k * params.coarse_step_deg;
+      const double s = score(yaw + offset * kDeg);
+      if (s > best_score) best_offset = offset, best_score = s;
+    }
+    const double coarse_best = best_offset;
+    for (double d = 1; d < params.coarse_step_deg; ++d) {
+      for (double offset : {coarse_best - d, coarse_best + d}) {
+        if (std::abs(offset) > params.window_deg) continue;
+        const double s = score(yaw + offset * kDeg);
+        if (s > best_score) best_offset = offset, best_score = s;
+      }
+    }
+    if (std::abs(best_offset) >= params.min_change_deg) {
+      refined.emplace_back(best_score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
+    }
+  }
+  std::stable_sort(refined.begin(), refined.end(),
+                   [](const auto& x, const auto& y) { return x.first > y.first; });
+  if (static_cast<int>(refined.size()) > params.max_added) {
+    refined.resize(static_cast<std::size_t>(params.max_added));
+  }
+  if (stats != nullptr) {
+    stats->yaws_scored = scored;
+    stats->yaws_added = static_cast<int>(refined.size());
+  }
+  std::vector<double> out = yaws;
+  for (const auto& scored_yaw : refined) out.push_back(scored_yaw.second);
+  return out;
+}
+
+}  // namespace mapd::voxel

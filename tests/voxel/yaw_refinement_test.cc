@@ -1,0 +1,119 @@
+#include "voxel/yaw_refinement.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "voxel/support/voxel_scene.h"
+
+namespace mapd::voxel {
+namespace {
+
+using testing::GridOf;
+using testing::Pose;
+using testing::RasteriseSubmap;
+
+const Eigen::Matrix3d kUpright = Eigen::Matrix3d::Identity();
+constexpr double kGroveResolutionM = 0.25;
+constexpr double kRadPerDeg = M_PI / 180.0;
+
+double DegreesBetween(double x, double y) {
+  return std::abs(std::remainder(x - y, 2 * M_PI)) / kRadPerDeg;
+}
+
+// Two crops of the generated grove, a third of which overlap; b is turned by
+// 30 deg (the yaw that puts b back on a).
+class YawRefinementTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const testing::VoxelScene grove = testing::Grove();
+    a_ = new VoxelGrid(GridOf(RasteriseSubmap(
+        grove, Eigen::AlignedBox3d(Eigen::Vector3d(0.5, 0.5, -1), Eigen::Vector3d(24, 39.5, 6)),
+        Eigen::Isometry3d::Identity(), kGroveResolutionM)));
+    b_ = new VoxelGrid(GridOf(RasteriseSubmap(
+        grove, Eigen::AlignedBox3d(Eigen::Vector3d(16, 0.5, -1), Eigen::Vector3d(39.5, 39.5, 6)),
+        Pose(30, 0, 0, Eigen::Vector3d(14.3, -2.2, 0.4)), kGroveResolutionM)));
+  }
+  static void TearDownTestSuite() {
+    delete a_;
+    delete b_;
+  }
+  static VoxelGrid* a_;
+  static VoxelGrid* b_;
+};
+VoxelGrid* YawRefinementTest::a_ = nullptr;
+VoxelGrid* YawRefinementTest::b_ = nullptr;
+
+// A candidate 8 deg off (as the wall histograms of outdoor maps give) gets
+// a yaw within a degree of the truth added after the candidates; one within
+// min_change_deg of its best gets none.
+TEST_F(YawRefinementTest, AddsTheBestYawNearAnOffCandidate) {
+  const double truth = 30 * kRadPerDeg;
+  YawRefinementStats stats;
+  auto refined =
+      RefineYaws(*a_, kUpright, *b_, kUpright, {truth + 8 * kRadPerDeg, truth - 1 * kRadPerDeg},
+                 kGroveResolutionM, YawRefinementParams{}, &stats);
+  ASSERT_TRUE(refined.ok()) << refined.status().ToString();
+  ASSERT_EQ(refined->size(), 3u);
+  EXPECT_DOUBLE_EQ((*refined)[0], truth + 8 * kRadPerDeg);
+  EXPECT_DOUBLE_EQ((*refined)[1], truth - 1 * kRadPerDeg);
+  EXPECT_LE(DegreesBetween((*refined)[2], truth), 1.0);
+  EXPECT_EQ(stats.yaws_added, 1);
+  EXPECT_DOUBLE_EQ(stats.pixel_m, 2 * kGroveResolutionM);
+  EXPECT_GT(stats.yaws_scored, 20);
+
+  // With max_added 0, or switched off, the candidates pass through alone.
+  YawRefinementParams none;
+  none.max_added = 0;
+  auto kept = RefineYaws(*a_, kUpright, *b_, kUpright, {truth + 8 * kRadPerDeg}, kGroveResolutionM,
+                         none, nullptr);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(kept->size(), 1u);
+  YawRefinementParams off;
+  off.enabled = false;
+  auto same = RefineYaws(*a_, kUpright, *b_, kUpright, {truth + 8 * kRadPerDeg}, kGroveResolutionM,
+                         off, nullptr);
+  ASSERT_TRUE(same.ok());
+  ASSERT_EQ(same->size(), 1u);
+  EXPECT_DOUBLE_EQ(same->front(), truth + 8 * kRadPerDeg);
+}
+
+// A map with no column of upright structure (the lower 1.5 m of a wall: no
+// voxel 2 m over its column's lowest) keeps the candidates.
+TEST_F(YawRefinementTest, NoStructureKeepsTheCandidates) {
+  const VoxelGrid low = GridOf(
+      RasteriseSubmap(testing::FlatWall(),
+                      Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(7, 1, 1.5)),
+                      Eigen::Isometry3d::Identity(), kGroveResolutionM));
+  auto refined = RefineYaws(low, kUpright, *b_, kUpright, {0.3}, kGroveResolutionM,
+                            YawRefinementParams{}, nullptr);
+  ASSERT_TRUE(refined.ok()) << refined.status().ToString();
+  EXPECT_DOUBLE_EQ(refined->front(), 0.3);
+}
+
+TEST(YawRefinementParamsTest, BadParamsAreNamed) {
+  YawRefinementParams p;
+  p.pixel_voxels = 0;
+  EXPECT_NE(p.Validate().message().find("pixel_voxels"), std::string::npos);
+  p = YawRefinementParams{};
+  p.window_deg = 120;
+  EXPECT_NE(p.Validate().message().find("window_deg"), std::string::npos);
+  p = YawRefinementParams{};
+  p.min_voxels_in_band = 0;
+  EXPECT_NE(p.Validate().message().find("min_voxels_in_band"), std::string::npos);
+  p = YawRefinementParams{};
+  p.band_high_m = 1.0;  // below band_low_m
+  EXPECT_NE(p.Validate().message().find("band_high_m"), std::string::npos);
+  p = YawRefinementParams{};
+  p.max_added = -1;
+  EXPECT_NE(p.Validate().message().find("max_added"), std::string::npos);
+  p = YawRefinementParams{};
+  p.min_overlap_fraction = 0;
+  EXPECT_NE(p.Validate().message().find("min_overlap_fraction"), std::string::npos);
+  const VoxelGrid empty;
+  EXPECT_EQ(RefineYaws(empty, kUpright, empty, kUpright, {0.0}, 0.1, p, nullptr).status().code(),
+            StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace mapd::voxel
