@@ -1,13 +1,10 @@
 #include "voxel/correlation_search.h"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <utility>
 
@@ -16,14 +13,6 @@
 namespace mapd::voxel {
 namespace {
 
-struct FftwFree {
-  void operator()(void* p) const { fftwf_free(p); }
-};
-// Single precision: the grids hold 0/1 and shares of a cell, the scores are
-// only ranked, and floats halve the memory and time of the FFTs (a 16M-cell
-// grid is what keeps the cell at cell_voxels on a 150 m outdoor map).
-using Complex = std::complex<float>;
-using Spectrum = std::vector<Complex>;
 // A point sample of a map: an occupied voxel centre (occupied = 1) or a piece
 // of a free cube (free = its volume, in coarse cells).
 struct Sample {
@@ -157,55 +146,6 @@ class CoarseGrid {
   std::vector<std::uint8_t> pass_;  // Dilate's scratch
 };
 
-// One r2c / c2r plan pair on the padded grid, with its own buffers: a
-// transform reads and writes them in place, so a correlation needs only the
-// spectra it keeps.
-class Fft {
- public:
-  explicit Fft(const std::array<int, 3>& n) {
-    real_size_ = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-    complex_size_ = static_cast<std::size_t>(n[0]) * n[1] * (n[2] / 2 + 1);
-    real_.reset(fftwf_alloc_real(real_size_));
-    spectrum_.reset(fftwf_alloc_complex(complex_size_));
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    forward_ = fftwf_plan_dft_r2c_3d(n[0], n[1], n[2], real_.get(), spectrum_.get(), FFTW_ESTIMATE);
-    inverse_ = fftwf_plan_dft_c2r_3d(n[0], n[1], n[2], spectrum_.get(), real_.get(), FFTW_ESTIMATE);
-  }
-  ~Fft() {
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftwf_destroy_plan(forward_);
-    fftwf_destroy_plan(inverse_);
-  }
-  Fft(const Fft&) = delete;
-  Fft& operator=(const Fft&) = delete;
-
-  // The spectrum of value(i) over the real_size() cells, into spectrum().
-  template <typename ValueAt>
-  Complex* Forward(const ValueAt& value) {
-    float* real = real_.get();
-    for (std::size_t i = 0; i < real_size_; ++i) real[i] = static_cast<float>(value(i));
-    fftwf_execute(forward_);
-    return spectrum();
-  }
-  // The (unnormalised) inverse of spectrum(), which it overwrites; valid
-  // until the next call.
-  float* Inverse() {
-    fftwf_execute(inverse_);
-    return real_.get();
-  }
-  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
-  Complex* spectrum() { return reinterpret_cast<Complex*>(spectrum_.get()); }
-  std::size_t real_size() const { return real_size_; }
-  std::size_t complex_size() const { return complex_size_; }
-
- private:
-  std::size_t real_size_ = 0, complex_size_ = 0;
-  std::unique_ptr<float[], FftwFree> real_;
-  std::unique_ptr<fftwf_complex[], FftwFree> spectrum_;
-  fftwf_plan forward_ = nullptr;
-  fftwf_plan inverse_ = nullptr;
-};
-
 struct Peak {
   float score;
   std::array<int, 3> shift;
@@ -330,16 +270,16 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   const Eigen::Vector3d origin_a = box_a.lo - Eigen::Vector3d::Constant(cell);
   // b's grid origin relative to its (turned) centroid: one cell of margin.
   const Eigen::Vector3d offset_b(-radius_b - cell, -radius_b - cell, z_lo - cell);
-  Fft fft(n);
+  RealFft fft({n[0], n[1], n[2]});
   const std::size_t spectrum_size = fft.complex_size();
   const auto keep = [&](const Complex* spectrum) {
-    return Spectrum(spectrum, spectrum + spectrum_size);
+    return std::vector<Complex>(spectrum, spectrum + spectrum_size);
   };
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
   const auto w = static_cast<float>(params.free_weight);
   // a's three spectra; its grid goes once they are taken.
-  Spectrum occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
+  std::vector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
   double cells_a = 0;
   {
     CoarseGrid grid_a(n, origin_a, cell);
@@ -358,7 +298,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
 
   std::vector<CorrelationHypothesis> out;
   // Buffers of b's side, reused by every yaw.
-  Spectrum occ_b(spectrum_size);
+  std::vector<Complex> occ_b(spectrum_size);
   std::vector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
   CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
   for (double yaw : yaws) {

@@ -1,32 +1,66 @@
-// What the voxel library's FFT users share (correlation_search.cc,
-// yaw_refinement.cc).
+// The voxel library's FFTs (correlation_search.cc, yaw_refinement.cc): real-
+// to-complex transforms in single precision (FFTW's fftwf) on grids of 2 or
+// 3 dimensions, and the planner lock. Single precision: the grids hold 0/1
+// and shares of a cell, and the correlations are only ranked.
 #ifndef MAPD_VOXEL_FFT_SUPPORT_H_
 #define MAPD_VOXEL_FFT_SUPPORT_H_
 
-#include <algorithm>
+#include <complex>
+#include <cstddef>
 #include <mutex>
+#include <vector>
+
+struct fftwf_plan_s;  // fftw3.h's plan, kept out of this header
 
 namespace mapd::voxel {
+
+using Complex = std::complex<float>;
 
 // FFTW's planner (plan creation and destruction) is not thread-safe; plan
 // execution is. Every plan of the library is made and destroyed under this
 // one lock, so merges may run concurrently.
-inline std::mutex& FftwPlannerMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
+std::mutex& FftwPlannerMutex();
 
 // The smallest size >= n with only the factors 2, 3 and 5 (FFTW is fastest
 // on those).
-inline int FftSize(int n) {
-  for (int m = std::max(n, 1);; ++m) {
-    int r = m;
-    for (int f : {2, 3, 5}) {
-      while (r % f == 0) r /= f;
-    }
-    if (r == 1) return m;
+int FftSize(int n);
+
+// One r2c / c2r plan pair on a row-major grid of `dims` (the last dimension
+// is halved in the spectrum), with its own buffers: a transform reads and
+// writes them in place, so a correlation keeps only the spectra it needs.
+// sum_x f(x) g(x - s) = Inverse of (F * conj(G)), unnormalised (times
+// real_size()).
+class RealFft {
+ public:
+  explicit RealFft(const std::vector<int>& dims);
+  ~RealFft();
+  RealFft(const RealFft&) = delete;
+  RealFft& operator=(const RealFft&) = delete;
+
+  // Fills the real buffer with value(i) for every cell and transforms it;
+  // returns the spectrum (valid until the next call).
+  template <typename ValueAt>
+  Complex* Forward(const ValueAt& value) {
+    for (std::size_t i = 0; i < real_size_; ++i) real_[i] = static_cast<float>(value(i));
+    ExecuteForward();
+    return spectrum_;
   }
-}
+  // The inverse of spectrum(), which it overwrites; valid until the next call.
+  float* Inverse();
+
+  Complex* spectrum() { return spectrum_; }
+  std::size_t real_size() const { return real_size_; }
+  std::size_t complex_size() const { return complex_size_; }
+
+ private:
+  void ExecuteForward();
+
+  std::size_t real_size_ = 1, complex_size_ = 1;
+  float* real_ = nullptr;
+  Complex* spectrum_ = nullptr;
+  fftwf_plan_s* forward_ = nullptr;
+  fftwf_plan_s* inverse_ = nullptr;
+};
 
 }  // namespace mapd::voxel
 

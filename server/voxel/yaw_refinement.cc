@@ -1,14 +1,10 @@
 #include "voxel/yaw_refinement.h"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
 #include <cstdint>
-#include <memory>
-#include <mutex>
 #include <utility>
 
 #include "voxel/fft_support.h"
@@ -17,60 +13,19 @@ namespace mapd::voxel {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-using Complex = std::complex<float>;
+// The spectrum of `values` into `out`.
+void Transform(RealFft& fft, const std::vector<float>& values, std::vector<Complex>* out) {
+  const Complex* s = fft.Forward([&](std::size_t i) { return values[i]; });
+  out->assign(s, s + fft.complex_size());
+}
 
-struct FftwFree {
-  void operator()(void* p) const { fftwf_free(p); }
-};
-
-// A 2D r2c / c2r plan pair with its own buffers (single precision: the
-// images hold 0/1 and the scores are only ranked).
-class Fft2 {
- public:
-  Fft2(int nx, int ny)
-      : real_size_(static_cast<std::size_t>(nx) * ny),
-        complex_size_(static_cast<std::size_t>(nx) * (ny / 2 + 1)),
-        real_(fftwf_alloc_real(real_size_)),
-        spectrum_(fftwf_alloc_complex(complex_size_)) {
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    forward_ = fftwf_plan_dft_r2c_2d(nx, ny, real_.get(), spectrum_.get(), FFTW_ESTIMATE);
-    inverse_ = fftwf_plan_dft_c2r_2d(nx, ny, spectrum_.get(), real_.get(), FFTW_ESTIMATE);
-  }
-  ~Fft2() {
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftwf_destroy_plan(forward_);
-    fftwf_destroy_plan(inverse_);
-  }
-  Fft2(const Fft2&) = delete;
-  Fft2& operator=(const Fft2&) = delete;
-
-  // The spectrum of `values` (real_size() of them) into `out`.
-  void Forward(const std::vector<float>& values, std::vector<Complex>* out) {
-    std::copy(values.begin(), values.end(), real_.get());
-    fftwf_execute(forward_);
-    const Complex* s = spectrum();
-    out->assign(s, s + complex_size_);
-  }
-  // The (unnormalised) correlation sum_x f(x) g(x - s) from the spectra of f
-  // and g; valid until the next call.
-  const float* Correlate(const std::vector<Complex>& f, const std::vector<Complex>& g) {
-    Complex* s = spectrum();
-    for (std::size_t i = 0; i < complex_size_; ++i) s[i] = f[i] * std::conj(g[i]);
-    fftwf_execute(inverse_);
-    return real_.get();
-  }
-  std::size_t real_size() const { return real_size_; }
-
- private:
-  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
-  Complex* spectrum() { return reinterpret_cast<Complex*>(spectrum_.get()); }
-
-  std::size_t real_size_, complex_size_;
-  std::unique_ptr<float[], FftwFree> real_;
-  std::unique_ptr<fftwf_complex[], FftwFree> spectrum_;
-  fftwf_plan forward_ = nullptr;
-  fftwf_plan inverse_ = nullptr;
-};
+// sum_x f(x) g(x - s) for every shift s (unnormalised), from the spectra of f
+// and g; valid until the next transform.
+const float* Correlate(RealFft& fft, const std::vector<Complex>& f, const std::vector<Complex>& g) {
+  Complex* s = fft.spectrum();
+  for (std::size_t i = 0; i < fft.complex_size(); ++i) s[i] = f[i] * std::conj(g[i]);
+  return fft.Inverse();
+}
 
 // Structure columns and data columns of one map on the padded image.
 class ColumnImage {
@@ -221,15 +176,15 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   const int nx = FftSize(static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2 + span_b);
   const int ny = FftSize(static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2 + span_b);
 
-  Fft2 fft(nx, ny);
+  RealFft fft({nx, ny});
   std::vector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
   double structures_a = 0;
   {
     ColumnImage image(nx, ny, pixel);
     image.Rasterise(points_a, 0.0, box_a.min() - Eigen::Vector2d::Constant(pixel), params);
-    fft.Forward(image.structure(), &structure_a);
-    fft.Forward(image.Dilated(image.structure(), 1), &dilated_a);
-    fft.Forward(image.Dilated(image.data(), kDataRadius), &data_a);
+    Transform(fft, image.structure(), &structure_a);
+    Transform(fft, image.Dilated(image.structure(), 1), &dilated_a);
+    Transform(fft, image.Dilated(image.data(), kDataRadius), &data_a);
     structures_a = image.structures();
   }
   if (structures_a == 0) return yaws;
@@ -243,21 +198,21 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     ++scored;
     image_b.Rasterise(points_b, yaw, origin_b, params);
     if (image_b.structures() == 0) return 0.0;
-    fft.Forward(image_b.structure(), &structure_b);
-    fft.Forward(image_b.Dilated(image_b.data(), kDataRadius), &data_b);
+    Transform(fft, image_b.structure(), &structure_b);
+    Transform(fft, image_b.Dilated(image_b.data(), kDataRadius), &data_b);
     const double min_pixels =
         std::max(1.0, params.min_overlap_fraction * std::min(structures_a, image_b.structures())) *
         static_cast<double>(fft.real_size());
-    const float* a_in_b = fft.Correlate(structure_a, data_b);
+    const float* a_in_b = Correlate(fft, structure_a, data_b);
     std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
-    const float* b_in_a = fft.Correlate(data_a, structure_b);
+    const float* b_in_a = Correlate(fft, data_a, structure_b);
     for (std::size_t i = 0; i < weight.size(); ++i) {
       const double in_a = b_in_a[i], in_b = weight[i];
       weight[i] = std::min(in_a, in_b) >= min_pixels
                       ? static_cast<float>(1.0 / std::sqrt(in_a * in_b))
                       : 0.0F;
     }
-    const float* hits = fft.Correlate(dilated_a, structure_b);
+    const float* hits = Correlate(fft, dilated_a, structure_b);
     double best = 0;
     for (std::size_t i = 0; i < weight.size(); ++i) {
       best = std::max(best, static_cast<double>(hits[i] * weight[i]));
