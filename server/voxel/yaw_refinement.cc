@@ -122,8 +122,9 @@ Status YawRefinementParams::Validate() const {
     return Status::InvalidArgument(
         "yaw_refinement.window_deg must be in [0, 90] and coarse_step_deg in [1, 30]");
   }
-  if (!(pixel_voxels >= 1 && pixel_voxels <= 64)) {
-    return Status::InvalidArgument("yaw_refinement.pixel_voxels must be in [1, 64]");
+  if (!(pixel_voxels >= 1 && pixel_voxels <= 64) || max_pixels < 1000 || max_pixels > 100'000'000) {
+    return Status::InvalidArgument(
+        "yaw_refinement.pixel_voxels must be in [1, 64] and max_pixels in [1000, 100000000]");
   }
   if (!(band_low_m >= 0 && band_low_m < band_high_m && band_high_m <= 100) ||
       min_voxels_in_band < 1 || min_voxels_in_band > 1000) {
@@ -150,8 +151,6 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
   if (!params.enabled || a.empty() || b.empty() || yaws.empty()) return yaws;
-  const double pixel = params.pixel_voxels * finest_resolution_m;
-  if (stats != nullptr) stats->pixel_m = pixel;
 
   // a levelled in its box; b levelled about its centroid, so that any yaw
   // keeps it within a circle.
@@ -172,9 +171,20 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     points_b.push_back(R_b * c - centroid_b);
     radius_b = std::max(radius_b, points_b.back().head<2>().norm());
   }
-  const int span_b = static_cast<int>(std::ceil(2 * radius_b / pixel)) + 2;
-  const int nx = FftSize(static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2 + span_b);
-  const int ny = FftSize(static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2 + span_b);
+  // The column edge, grown (as SearchTranslations grows its cell) until the
+  // padded image fits max_pixels.
+  double pixel = params.pixel_voxels * finest_resolution_m;
+  int nx = 0, ny = 0;
+  for (int attempt = 0;; ++attempt) {
+    const int span_b = static_cast<int>(std::ceil(2 * radius_b / pixel)) + 2;
+    nx = FftSize(static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2 + span_b);
+    ny = FftSize(static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2 + span_b);
+    const double over = static_cast<double>(nx) * ny / static_cast<double>(params.max_pixels);
+    if (over <= 1) break;
+    if (attempt >= 64) return yaws;  // unreachable for maps within VoxelGrid's key range
+    pixel *= std::max(1.05, std::sqrt(over));
+  }
+  if (stats != nullptr) stats->pixel_m = pixel;
 
   RealFft fft({nx, ny});
   std::vector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;

@@ -24,6 +24,7 @@
 #define MAPD_VOXEL_YAW_REFINEMENT_H_
 
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <vector>
 
 #include "common/status.h"
@@ -41,6 +42,9 @@ struct YawRefinementParams {
   // voxels) 2 voxels ranked the true yaw first in 6 of 6 pairs at 20 %
   // overlap; 4 voxels in 1 of 6.
   double pixel_voxels = 2.0;
+  // Cap on the padded image; larger maps get larger columns. The campus
+  // crops need ~0.45M pixels; 2M hold ~100 MiB of buffers.
+  std::size_t max_pixels = 2'000'000;
   // The height band (metres above a column's lowest voxel). On the campus
   // crops 2-100 m, 1-2 m and 0.5-2 m all refined the candidates nearest the
   // truth to within 1 deg in 6 of 6 pairs at 20 % overlap.

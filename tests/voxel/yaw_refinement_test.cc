@@ -62,6 +62,15 @@ TEST_F(YawRefinementTest, AddsTheBestYawNearAnOffCandidate) {
   EXPECT_DOUBLE_EQ(stats.pixel_m, 2 * kGroveResolutionM);
   EXPECT_GT(stats.yaws_scored, 20);
 
+  // A small image cap makes the columns coarser, not the call fail.
+  YawRefinementParams small;
+  small.max_pixels = 1000;
+  YawRefinementStats coarse;
+  auto capped = RefineYaws(*a_, kUpright, *b_, kUpright, {truth + 8 * kRadPerDeg},
+                           kGroveResolutionM, small, &coarse);
+  ASSERT_TRUE(capped.ok()) << capped.status().ToString();
+  EXPECT_GT(coarse.pixel_m, 5 * stats.pixel_m);
+
   // With max_added 0, or switched off, the candidates pass through alone.
   YawRefinementParams none;
   none.max_added = 0;
@@ -104,6 +113,9 @@ TEST(YawRefinementParamsTest, BadParamsAreNamed) {
   p = YawRefinementParams{};
   p.band_high_m = 1.0;  // below band_low_m
   EXPECT_NE(p.Validate().message().find("band_high_m"), std::string::npos);
+  p = YawRefinementParams{};
+  p.max_pixels = 10;
+  EXPECT_NE(p.Validate().message().find("max_pixels"), std::string::npos);
   p = YawRefinementParams{};
   p.max_added = -1;
   EXPECT_NE(p.Validate().message().find("max_added"), std::string::npos);
