@@ -65,7 +65,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   }
   run.yaws = static_cast<int>(yaws->size());
   CorrelationParams search = params.correlation;
-  search.max_hypotheses = static_cast<int>(yaws->size()) * search.peaks_per_yaw;  // capped below
+  search.max_hypotheses = 1000;  // every peak (the most Validate allows); capped below
   auto all = SearchTranslations(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, *yaws,
                                 finest_resolution_m, search, nullptr);
   times->correlation_s += SecondsSince(start);

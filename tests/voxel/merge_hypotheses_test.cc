@@ -57,6 +57,28 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
   EXPECT_GE(pair.hypotheses_tried, 1);
 }
 
+// Two crops of a hall's middle: floor and ceiling, no wall, so no yaw to
+// take. The pair is refused (FailedPrecondition) with that reason, not an
+// error.
+TEST(MergeHypothesesTest, FloorsWithoutWallsAreRefusedNotAnError) {
+  testing::VoxelScene hall;
+  hall.boxes = {{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(30.05, 30.05, 3.05), true}};
+  const std::string a = RasteriseSubmap(
+      hall, Eigen::AlignedBox3d(Eigen::Vector3d(10, 10, -1), Eigen::Vector3d(16, 16, 4)),
+      Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::string b = RasteriseSubmap(
+      hall, Eigen::AlignedBox3d(Eigen::Vector3d(13, 10, -1), Eigen::Vector3d(19, 16, 4)),
+      Pose(20, 0, 0, Eigen::Vector3d(1, 2, 0)), kRoomResolutionM);
+  MergeParams params;
+  params.correlation.after_corner_stages = 0;
+  auto outcome = MergeSubmaps({{1, a}, {2, b}}, params);
+  ASSERT_FALSE(outcome.ok());
+  EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition)
+      << outcome.status().ToString();
+  EXPECT_NE(outcome.status().message().find("no vertical wall plane"), std::string::npos)
+      << outcome.status().message();
+}
+
 TEST(MergeHypothesesTest, CorrelationFirstExtractsNoCornersForAPairItSettles) {
   const Corridors c = MakeCorridors();
   MergeParams params;
