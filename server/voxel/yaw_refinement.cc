@@ -150,6 +150,10 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
                                          YawRefinementStats* stats) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
+  for (double yaw : yaws) {
+    // A NaN or infinite yaw would turn every column into an undefined pixel index.
+    if (!std::isfinite(yaw)) return Status::InvalidArgument("yaw candidates must be finite");
+  }
   if (!params.enabled || a.empty() || b.empty() || yaws.empty()) return yaws;
 
   // a levelled in its box; b levelled about its centroid, so that any yaw

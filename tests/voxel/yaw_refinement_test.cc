@@ -100,6 +100,15 @@ TEST_F(YawRefinementTest, NoStructureKeepsTheCandidates) {
   EXPECT_DOUBLE_EQ(refined->front(), 0.3);
 }
 
+TEST_F(YawRefinementTest, NonFiniteYawsAreRefused) {
+  for (double bad : {std::nan(""), HUGE_VAL}) {
+    auto refined = RefineYaws(*a_, kUpright, *b_, kUpright, {0.5, bad}, kGroveResolutionM,
+                              YawRefinementParams{}, nullptr);
+    EXPECT_EQ(refined.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(refined.status().message(), "yaw candidates must be finite");
+  }
+}
+
 TEST(YawRefinementParamsTest, BadParamsAreNamed) {
   YawRefinementParams p;
   p.pixel_voxels = 0;
