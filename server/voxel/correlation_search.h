@@ -84,8 +84,9 @@ struct CorrelationParams {
   int max_hypotheses = 12;
   // Peaks closer than this (coarse cells) are one.
   double min_peak_separation_cells = 3.0;
-  // Before the search, each yaw candidate is replaced by the best yaw near
-  // it in a plan view of the two maps (yaw_refinement.h).
+  // Before the search, the best yaws near the candidates in a plan view of
+  // the two maps are added to them (yaw_refinement.h; RunCorrelation in
+  // merge_hypotheses.cc tries their peaks after the candidates').
   YawRefinementParams yaw_refinement;
 
   Status Validate() const;
