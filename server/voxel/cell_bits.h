@@ -8,6 +8,7 @@
 #define MAPD_VOXEL_CELL_BITS_H_
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -38,6 +39,19 @@ struct CellBits {
   void Set(const Eigen::Vector3i& c) {
     const std::size_t i = Index(c - lo);
     words[i >> 6] |= std::uint64_t{1} << (i & 63);
+  }
+  // Sets the row of cells from `first` to x = last_x (same y and z).
+  // REQUIRES: Contains(first), first.x() <= last_x < lo.x() + size.x().
+  void SetRow(const Eigen::Vector3i& first, int last_x) {
+    std::size_t i = Index(first - lo);
+    const std::size_t end = i + static_cast<std::size_t>(last_x - first.x()) + 1;
+    while (i < end) {
+      const std::size_t bit = i & 63;
+      const std::size_t count = std::min<std::size_t>(64 - bit, end - i);
+      const std::uint64_t ones = count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
+      words[i >> 6] |= ones << bit;
+      i += count;
+    }
   }
   // Cells outside the box (or with no bits kept) read as clear.
   bool Test(const Eigen::Vector3i& c) const {

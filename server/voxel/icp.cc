@@ -6,15 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "voxel/aligned_box.h"
-#include "voxel/cell_bits.h"
+#include "voxel/nearest_voxel.h"
 
 namespace mapd::voxel {
 namespace {
@@ -45,175 +43,13 @@ Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& 
   return T;
 }
 
-// Exact nearest neighbour within a radius on a hash of one-voxel cells.
-class VoxelHashIndex {
- public:
-  VoxelHashIndex(const std::vector<Eigen::Vector3d>& points, double cell_m)
-      : points_(points), cell_m_(cell_m) {
-    std::vector<std::pair<std::uint64_t, int>> keyed;
-    keyed.reserve(points.size());
-    std::vector<Eigen::Vector3i> cells;
-    cells.reserve(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      cells.push_back(Cell(points[i]));
-      keyed.push_back({Pack(cells.back()), static_cast<int>(i)});
-    }
-    MarkOccupied(cells);
-    std::sort(keyed.begin(), keyed.end());
-    order_.reserve(keyed.size());
-    cells_.reserve(keyed.size());
-    for (std::size_t i = 0; i < keyed.size(); ++i) {
-      if (i == 0 || keyed[i].first != keyed[i - 1].first) {
-        cells_[keyed[i].first] = {static_cast<int>(i), 0};
-      }
-      ++cells_[keyed[i].first].second;
-      order_.push_back(keyed[i].second);
-    }
-  }
-
-  // Index of the nearest point within max_m (-1 if none) and its squared distance.
-  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
-    const Eigen::Vector3i c = Cell(q);
-    const int max_ring = static_cast<int>(std::ceil(max_m / cell_m_));
-    // A query with no point within max_ring cells (most of a wrong
-    // alignment's, and those outside the overlap) is answered by one bit
-    // instead of a scan of (2 max_ring + 1)^3 cells.
-    if (!near_.empty() && max_m <= ReachM() && !MaybeNear(c)) {
-      *squared_m2 = static_cast<float>(max_m * max_m);
-      return -1;
-    }
-    double best = max_m * max_m;
-    int best_index = -1;
-    for (int ring = 0; ring <= max_ring; ++ring) {
-      for (int dx = -ring; dx <= ring; ++dx) {
-        for (int dy = -ring; dy <= ring; ++dy) {
-          const bool face = std::abs(dx) == ring || std::abs(dy) == ring;
-          for (int dz = -ring; dz <= ring; dz += (face ? 1 : 2 * std::max(ring, 1))) {
-            const Eigen::Vector3i cell = c + Eigen::Vector3i(dx, dy, dz);
-            if (!MaybeOccupied(cell)) continue;
-            auto it = cells_.find(Pack(cell));
-            if (it == cells_.end()) continue;
-            for (int k = it->second.first; k < it->second.first + it->second.second; ++k) {
-              const int index = order_[static_cast<std::size_t>(k)];
-              const double d = (points_[static_cast<std::size_t>(index)] - q).squaredNorm();
-              if (d <= best) {
-                best = d;
-                best_index = index;
-              }
-            }
-          }
-        }
-      }
-      // Points in rings beyond `ring` are at least ring * cell away.
-      const double bound = static_cast<double>(ring) * cell_m_;
-      if (best_index >= 0 && best <= bound * bound) break;
-    }
-    *squared_m2 = static_cast<float>(best);
-    return best_index;
-  }
-
- private:
-  // Most cells a ring visits hold no point, and a hash lookup (a division and
-  // a chain of nodes) cost about 60 % of the correspondence search, which was
-  // a third of a merge's CPU. One bit per cell over the cells' bounding box
-  // answers "empty" first. A box of more than kMaxBits cells keeps no bits
-  // (every cell goes to the hash, as before).
-  static constexpr std::size_t kMaxBits = std::size_t{1} << 28;  // 32 MiB
-  // Cells of reach of the second bit set (the correspondence distance is 3
-  // voxels and a cell is a voxel).
-  static constexpr int kReach = 3;
-
-  void MarkOccupied(const std::vector<Eigen::Vector3i>& cells) {
-    if (cells.empty()) return;
-    Eigen::Vector3i lo = cells.front(), hi = cells.front();
-    for (const auto& c : cells) {
-      lo = lo.cwiseMin(c);
-      hi = hi.cwiseMax(c);
-    }
-    if (!occupied_.Reset(lo, hi - lo + Eigen::Vector3i::Ones(), kMaxBits)) return;
-    for (const auto& c : cells) occupied_.Set(c);
-    MarkNear(cells);
-  }
-
-  // near_: over the box grown by kReach, one bit per cell that may have a
-  // point within kReach cells along every axis (a cube). Built by OR-ing the
-  // occupied bits shifted by every offset of the cube, one axis at a time.
-  // A shift along x also carries bits from the end of one row into the next,
-  // and so on: extra bits only, which cost a scan and change no answer.
-  void MarkNear(const std::vector<Eigen::Vector3i>& cells) {
-    const Eigen::Vector3i margin = Eigen::Vector3i::Constant(kReach);
-    if (!near_.Reset(occupied_.lo - margin, occupied_.size + 2 * margin, kMaxBits)) return;
-    for (const auto& c : cells) near_.Set(c);
-    const Eigen::Vector3i& size = near_.size;
-    const std::size_t strides[3] = {1, static_cast<std::size_t>(size.x()),
-                                    static_cast<std::size_t>(size.x()) * size.y()};
-    for (const std::size_t stride : strides) {
-      std::vector<std::uint64_t> grown = near_.words;
-      for (int k = 1; k <= kReach; ++k) {
-        OrShifted(near_.words, k * stride, /*up=*/true, &grown);
-        OrShifted(near_.words, k * stride, /*up=*/false, &grown);
-      }
-      near_.words.swap(grown);
-    }
-  }
-
-  // out |= in moved by `shift` bits towards higher (up) or lower indices.
-  static void OrShifted(const std::vector<std::uint64_t>& in, std::size_t shift, bool up,
-                        std::vector<std::uint64_t>* out) {
-    const std::size_t words = in.size();
-    const std::size_t w = shift >> 6;
-    const unsigned b = static_cast<unsigned>(shift & 63);
-    if (w >= words) return;
-    for (std::size_t i = 0; i + w < words; ++i) {
-      // up: bit j of in goes to j + shift; down: to j - shift.
-      const std::size_t to = up ? i + w : i;
-      const std::size_t from = up ? i : i + w;
-      std::uint64_t v = b == 0 ? in[from] : (up ? in[from] << b : in[from] >> b);
-      (*out)[to] |= v;
-      if (b != 0) {
-        if (up && to + 1 < words) (*out)[to + 1] |= in[from] >> (64 - b);
-        if (!up && from + 1 < words) (*out)[to] |= in[from + 1] << (64 - b);
-      }
-    }
-  }
-
-  // near_'s reach in metres, up to rounding (3 x 0.1 m / 0.1 m is
-  // 3.0000000000000004 cells).
-  double ReachM() const { return kReach * cell_m_ * (1 + 1e-9); }
-
-  // False only when no point lies within kReach cells of c (per axis).
-  bool MaybeNear(const Eigen::Vector3i& c) const { return near_.empty() || near_.Test(c); }
-
-  // False only when no point lies in the cell.
-  bool MaybeOccupied(const Eigen::Vector3i& c) const {
-    return occupied_.empty() || occupied_.Test(c);
-  }
-
-  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d s = (p / cell_m_).array().floor().cwiseMax(-1e6).cwiseMin(1e6);
-    return s.cast<int>();
-  }
-  static std::uint64_t Pack(const Eigen::Vector3i& c) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1FFFFF) << 42) |
-           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1FFFFF) << 21) |
-           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1FFFFF));
-  }
-
-  const std::vector<Eigen::Vector3d>& points_;
-  double cell_m_;
-  std::vector<int> order_;
-  std::unordered_map<std::uint64_t, std::pair<int, int>> cells_;  // start in order_, count
-  CellBits occupied_;  // over the cells' box; no bits: ask the hash
-  CellBits near_;      // over that box grown by kReach; no bits: no shortcut
-};
-
 // The nearest target of a query point under either index.
 class NearestTarget {
  public:
   NearestTarget(const std::vector<Eigen::Vector3d>& target, double voxel_m, NeighbourSearch search)
       : search_(search) {
     if (search == NeighbourSearch::kVoxelHash) {
-      hash_ = std::make_unique<VoxelHashIndex>(target, voxel_m);
+      hash_ = std::make_unique<NearestVoxelIndex>(target, voxel_m);
       return;
     }
     pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
@@ -235,7 +71,7 @@ class NearestTarget {
 
  private:
   NeighbourSearch search_;
-  std::unique_ptr<VoxelHashIndex> hash_;
+  std::unique_ptr<NearestVoxelIndex> hash_;
   pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
   mutable std::vector<int> index_ = std::vector<int>(1);
   mutable std::vector<float> sq_ = std::vector<float>(1);

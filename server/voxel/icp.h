@@ -13,9 +13,11 @@
 // after 18 iterations (point-to-plane would need fewer; not done).
 //
 // Nearest neighbours, exact within max_correspondence_voxels, two choices:
-// kVoxelHash (default): the target points hashed into cells of one voxel; a
-// query scans rings of cells outwards and stops as soon as the best distance
-// is below the ring's bound (usually after the 27 cells around it).
+// kVoxelHash (default): the target points binned into cells of one voxel
+// (NearestVoxelIndex, nearest_voxel.h: bit sets and rank, a hash only for
+// huge boxes); a query scans rings of cells outwards and stops as soon as the
+// best distance is below the next ring's bound (usually after the 27 cells
+// around it).
 // kKdTree: PCL's KdTreeFLANN. Measured on geb079.bt (186k voxels, 8 cm),
 // whole RefineIcp, 18 iterations, CPU s on a loaded 2-core machine: 10k
 // source points 0.42 (hash) vs 0.67 (k-d tree), 20k 0.59 vs 1.23; on

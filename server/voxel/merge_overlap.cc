@@ -61,7 +61,20 @@ OverlapIndex::OverlapIndex(const VoxelGrid& a, std::size_t max_cells) : grid_(&a
   hi += VoxelKey::Ones();
   const VoxelKey size = hi - lo + VoxelKey::Ones();
   if (!near_.Reset(lo, size, max_cells)) return;
-  observed_.Reset(lo, size, max_cells);
+  // Observed: over every voxel A knows (free space reaches beyond the
+  // occupied box) when that box fits, so that a point of B anywhere outside
+  // it is unknown at once; else over the occupied box, the grid answering
+  // outside it. Wrong alignments put most of B outside A's occupied box, and
+  // there the grid's answer "unknown" costs a hash lookup per octree level.
+  VoxelKey known_lo = lo, known_hi = hi;
+  a.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
+    known_lo = known_lo.cwiseMin(min_key);
+    known_hi = known_hi.cwiseMax(min_key + VoxelKey::Constant(edge - 1));
+  });
+  observed_everywhere_ =
+      observed_.Reset(known_lo, known_hi - known_lo + VoxelKey::Ones(), max_cells);
+  if (!observed_everywhere_) observed_.Reset(lo, size, max_cells);
+  const VoxelKey observed_hi = observed_.lo + observed_.size - VoxelKey::Ones();
   for (const VoxelKey& k : a.occupied_keys()) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
@@ -71,13 +84,12 @@ OverlapIndex::OverlapIndex(const VoxelGrid& a, std::size_t max_cells) : grid_(&a
     observed_.Set(k);
   }
   a.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
-    // Only the part of the cube inside the box; x innermost, as the bits run.
-    const VoxelKey from = min_key.cwiseMax(lo);
-    const VoxelKey to = (min_key + VoxelKey::Constant(edge - 1)).cwiseMin(hi);
+    // Only the part of the cube inside the box, a row along x at a time.
+    const VoxelKey from = min_key.cwiseMax(observed_.lo);
+    const VoxelKey to = (min_key + VoxelKey::Constant(edge - 1)).cwiseMin(observed_hi);
+    if ((from.array() > to.array()).any()) return;
     for (int z = from.z(); z <= to.z(); ++z) {
-      for (int y = from.y(); y <= to.y(); ++y) {
-        for (int x = from.x(); x <= to.x(); ++x) observed_.Set(VoxelKey(x, y, z));
-      }
+      for (int y = from.y(); y <= to.y(); ++y) observed_.SetRow(VoxelKey(from.x(), y, z), to.x());
     }
   });
 }
@@ -88,8 +100,9 @@ bool OverlapIndex::OccupiedNear(const VoxelKey& key) const {
 }
 
 bool OverlapIndex::Observed(const VoxelKey& key) const {
-  // Free space reaches beyond the box of the occupied voxels: ask the grid there.
-  if (!observed_.Contains(key)) return grid_->State(key) != VoxelState::kUnknown;
+  if (!observed_.Contains(key)) {
+    return !observed_everywhere_ && grid_->State(key) != VoxelState::kUnknown;
+  }
   return observed_.Test(key);
 }
 

@@ -38,12 +38,15 @@ struct OverlapScore {
 // point of B.
 class OverlapIndex {
  public:
-  // Bits only when the box has at most max_cells cells (2^28: 64 MiB for
-  // both sets); beyond it, and outside the box, queries ask the grid.
+  // Bits only when the box has at most max_cells cells (2^28: 32 MiB a
+  // set); beyond it, and outside the boxes, queries ask the grid.
   explicit OverlapIndex(const VoxelGrid& a, std::size_t max_cells = std::size_t{1} << 28);
 
   const VoxelGrid& grid() const { return *grid_; }
   bool has_bits() const { return !near_.empty(); }
+  // The bits cover every voxel A knows (free space included), not only the
+  // occupied box.
+  bool observes_everywhere() const { return observed_everywhere_; }
   // A has an occupied voxel at `key` or at one of its 26 neighbours.
   bool OccupiedNear(const VoxelKey& key) const;
   // A knows `key` (free or occupied).
@@ -52,7 +55,8 @@ class OverlapIndex {
  private:
   const VoxelGrid* grid_;
   CellBits near_;      // occupied voxels grown by one; no bits: ask the grid
-  CellBits observed_;  // occupied or free, over the same box
+  CellBits observed_;  // occupied or free, over every known voxel's box or else near_'s
+  bool observed_everywhere_ = false;  // observed_ covers every voxel A knows
 };
 
 // Evaluates at most `max_points` voxels of B (an even, deterministic

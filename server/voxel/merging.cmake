@@ -1,6 +1,7 @@
 # Part 3 of the voxel library: ICP, overlap score, occupancy fusion and the
 # merge pipeline (docs/algorithms.md B.5-B.7). Included by CMakeLists.txt.
 list(APPEND VOXEL_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/nearest_voxel.cc
   ${CMAKE_CURRENT_LIST_DIR}/icp.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_overlap.cc
   ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion.cc

@@ -43,5 +43,22 @@ TEST(CellBitsTest, ABoxAboveTheCapKeepsNoBits) {
   EXPECT_FALSE(bits.empty());
 }
 
+TEST(CellBitsTest, SetRowSetsExactlyItsCellsAcrossWordBoundaries) {
+  CellBits bits;
+  const Eigen::Vector3i lo(-5, 0, 0), extent(150, 2, 2);  // rows of 150 bits
+  ASSERT_TRUE(bits.Reset(lo, extent, 1000));
+  bits.SetRow(Eigen::Vector3i(-3, 1, 0), 129);  // 133 cells, over three words
+  bits.SetRow(Eigen::Vector3i(7, 0, 1), 7);     // one cell
+  for (int z = 0; z < 2; ++z) {
+    for (int y = 0; y < 2; ++y) {
+      for (int x = -5; x < 145; ++x) {
+        const bool expected =
+            (y == 1 && z == 0 && x >= -3 && x <= 129) || (x == 7 && y == 0 && z == 1);
+        EXPECT_EQ(bits.Test(Eigen::Vector3i(x, y, z)), expected) << x << " " << y << " " << z;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace mapd::voxel

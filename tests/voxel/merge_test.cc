@@ -420,14 +420,23 @@ TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
   for (const VoxelGrid* grid : {&*a, &*wall_grid}) {
     const OverlapIndex bits(*grid);
     const OverlapIndex no_bits(*grid, /*max_cells=*/1);
-    ASSERT_TRUE(bits.has_bits());
+    // Room for the occupied box (grown by one) only: free space beyond it
+    // is the grid's to answer.
+    const VoxelKey box = grid->max_key() - grid->min_key() + VoxelKey::Constant(3);
+    const OverlapIndex occupied_box(*grid, static_cast<std::size_t>(box.prod()));
+    ASSERT_TRUE(bits.has_bits() && bits.observes_everywhere());
     ASSERT_FALSE(no_bits.has_bits());
+    ASSERT_TRUE(occupied_box.has_bits());
+    // The wall's free space lies beyond its occupied box.
+    if (grid == &*wall_grid) {
+      ASSERT_FALSE(occupied_box.observes_everywhere());
+    }
     for (const Eigen::Isometry3d& T :
          {Eigen::Isometry3d::Identity(), Pose(0, 0, 0, Eigen::Vector3d(0.0, 0.35, 0.0)),
           Pose(17, 2, -3, Eigen::Vector3d(0.4, -0.3, 0.1)),
           Pose(90, 0, 0, Eigen::Vector3d(3.0, 1.0, 0.0))}) {
       const OverlapScore want = ComputeOverlapScore(*grid, *b, T);
-      for (const OverlapIndex* index : {&bits, &no_bits}) {
+      for (const OverlapIndex* index : {&bits, &no_bits, &occupied_box}) {
         const OverlapScore got = ComputeOverlapScore(*index, *b, T);
         EXPECT_EQ(got.observed, want.observed);
         EXPECT_EQ(got.coinciding, want.coinciding);

@@ -2,6 +2,7 @@
 mapd_add_test(voxel_merging_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/merge_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/icp_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/nearest_voxel_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/cell_bits_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment_test.cc
