@@ -394,6 +394,10 @@ const std::vector<Setting>& Settings() {
            "solution, so that the uniqueness gate sees the other yaws (on geb079 it cost 2.6-3.9 s of CPU per "
            "accepted merge)",
            [](C& c) -> auto& { return c.submaps.correlation_check_accepted; }),
+      Flag("merge.correlation_looser_stages", "also run corner matching's looser tolerance stages after the "
+           "correlation generator searched and accepted nothing (they always run when it cannot run); on the "
+           "benchmark they placed no further map and were half of a refusal's CPU",
+           [](C& c) -> auto& { return c.submaps.correlation_looser_stages_after_refusal; }),
       Flag("merge.review", "every merge the gates accept waits for an operator's ApproveMerge (stored "
            "PROPOSED: no frame tied, global map unchanged), as if each request set review",
            [](C& c) -> auto& { return c.submaps.merge_review; }),

@@ -99,6 +99,9 @@ struct SubmapOptions {
   bool correlation = true;
   int correlation_after_corner_stages = 1;
   bool correlation_check_accepted = true;
+  // Corner matching's looser stages after the generator searched and refused
+  // (voxel::CorrelationParams::looser_stages_after_refusal).
+  bool correlation_looser_stages_after_refusal = false;
   // Cap on its FFT grid (voxel::CorrelationParams::max_cells; ~40 bytes a cell).
   size_t correlation_max_cells = 16'000'000;
   // Every merge the gates accept waits for ApproveMerge (PROPOSED), as if

@@ -45,6 +45,13 @@ struct CorrelationParams {
   // maps carry little free space, so corner matching goes first by default.
   // A large value (e.g. 100): after every stage, the order before.
   int after_corner_stages = 1;
+  // Whether the looser corner stages still run when the
+  // generator ran and accepted nothing. Off: on the benchmark's 90 merges and
+  // 18 negative pairs (docs/voxel-merge.md, "Refusals") they placed nothing
+  // the generator had not, every outcome was the same without them, and they
+  // were half of a refusal's CPU. They always run when the generator could
+  // not (no floor or wall plane to level or turn by) or is disabled.
+  bool looser_stages_after_refusal = false;
   // Also run it after corner matching accepted a solution (in the stages
   // before it), so that the uniqueness gate sees the other yaws too; then only the best peak of
   // each yaw that is distinct from the accepted answer is refined (every hypothesis refined cost

@@ -308,11 +308,17 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     correlation = std::move(run).value();
     correlation_ran = true;
   }
-  // The remaining (looser) corner stages, when nothing was accepted yet.
-  if (stages_before < num_stages && !corner_accepted && !AnyAccepted(correlation.tried) &&
+  // The remaining corner stages, when nothing was accepted yet; after a
+  // search that refused, the strict stage only (when the generator went
+  // first), unless looser_stages_after_refusal.
+  const bool correlation_searched = correlation_ran && correlation.not_run.empty();
+  const std::size_t stages_end = correlation_searched && !cp.looser_stages_after_refusal
+                                     ? std::max<std::size_t>(stages_before, 1)
+                                     : num_stages;
+  if (stages_before < stages_end && !corner_accepted && !AnyAccepted(correlation.tried) &&
       (corners.solutions == 0 || time_left())) {
     MAPD_RETURN_IF_ERROR(RunCornerStages(a, b, params, finest_resolution_m, stages_before,
-                                         num_stages, false, start, seconds_left, times, &corners));
+                                         stages_end, false, start, seconds_left, times, &corners));
   }
   const bool corners_ran = corners.solutions > 0 || !corners.first.reason.empty();
 

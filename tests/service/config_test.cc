@@ -134,7 +134,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
              "--merge.max_seconds=10", "--merge.resolution_policy=resample",
              "--merge.fusion_rule=log_odds", "--merge.correlation=false",
              "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0",
-             "--merge.correlation_max_cells=4000000"},
+             "--merge.correlation_max_cells=4000000", "--merge.correlation_looser_stages=yes"},
             &c)
           .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -150,10 +150,12 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_FALSE(c.submaps.correlation_check_accepted);
   EXPECT_EQ(c.submaps.correlation_after_corner_stages, 0);
   EXPECT_EQ(c.submaps.correlation_max_cells, 4'000'000u);
+  EXPECT_TRUE(c.submaps.correlation_looser_stages_after_refusal);
   const ServerConfig defaults;
   EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 1);
   EXPECT_TRUE(defaults.submaps.correlation);
   EXPECT_EQ(defaults.submaps.correlation_max_cells, 16'000'000u);  // = voxel::CorrelationParams
+  EXPECT_FALSE(defaults.submaps.correlation_looser_stages_after_refusal);
 
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--limits.max_concurrent_merges=0", "limits.max_concurrent_merges"},

@@ -128,6 +128,21 @@ TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   EXPECT_NE(message.find("hypotheses from "), std::string::npos) << message;
   EXPECT_NE(message.find("above 0.01 voxels"), std::string::npos) << message;
 
+  // The looser corner stages did not run after the generator refused: the
+  // strict stage's attempts only. With looser_stages_after_refusal, more.
+  const auto corner_solutions = [](const std::string& m) {
+    const std::size_t end = m.find(" corner solution");
+    const std::size_t begin = m.rfind('(', end);
+    return std::stoi(m.substr(begin + 1, end - begin - 1));
+  };
+  EXPECT_LE(corner_solutions(message), params.max_match_attempts) << message;
+  MergeParams looser = params;
+  looser.correlation.looser_stages_after_refusal = true;
+  auto with_looser = MergeSubmaps({{1, c.a}, {2, c.b}}, looser);
+  ASSERT_FALSE(with_looser.ok());
+  EXPECT_GT(corner_solutions(with_looser.status().message()), params.max_match_attempts)
+      << with_looser.status().message();
+
   // The correlation first: the message keeps the order the stages ran in.
   params.correlation.after_corner_stages = 0;
   auto first = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
@@ -135,6 +150,9 @@ TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   const std::string& reordered = first.status().message();
   EXPECT_NE(reordered.find("not merged: correlation: "), std::string::npos) << reordered;
   EXPECT_NE(reordered.find("; corner matching: "), std::string::npos) << reordered;
+  // ... and corner matching's strict stage ran after it.
+  EXPECT_GE(corner_solutions(reordered), 1) << reordered;
+  EXPECT_LE(corner_solutions(reordered), params.max_match_attempts) << reordered;
 }
 
 TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
