@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -206,7 +207,8 @@ StatusOr<VoxelGrid> Coarsen(const VoxelGrid& grid, int scale) {
 }  // namespace
 
 StatusOr<CornerExtractionResult> ExtractCorners(const VoxelGrid& original,
-                                                const CornerExtractionParams& params) {
+                                                const CornerExtractionParams& params,
+                                                const internal::GridSurface* surface) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   CornerExtractionResult result;
   result.occupied_voxels = original.num_occupied();
@@ -239,9 +241,12 @@ StatusOr<CornerExtractionResult> ExtractCorners(const VoxelGrid& original,
 
   // B.2: normals and planar regions on the grid.
   start = Clock::now();
-  const internal::VoxelIndex index(keys);
-  const internal::GridNormals normals =
-      internal::ComputeGridNormals(keys, index, params.normal_radius);
+  std::optional<internal::GridSurface> own;
+  if (surface == nullptr || result.scale > 1 || surface->radius_voxels != params.normal_radius) {
+    surface = &own.emplace(keys, params.normal_radius);
+  }
+  const internal::VoxelIndex& index = surface->index;
+  const internal::GridNormals& normals = surface->normals;
   result.seconds_normals = SecondsSince(start);
   start = Clock::now();
   internal::PlaneRegionParams region_params;

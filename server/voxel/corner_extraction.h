@@ -24,6 +24,9 @@
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
+namespace internal {
+struct GridSurface;
+}  // namespace internal
 
 // Lengths in voxels (multiples of the grid's resolution) unless named _m.
 struct CornerExtractionParams {
@@ -114,9 +117,12 @@ struct CornerExtractionResult {
 
 // REQUIRES: nothing; an empty grid gives no corners. Errors: InvalidArgument
 // for bad params, ResourceExhausted beyond max_occupied_voxels or when
-// max_table_bytes cannot hold even the smallest block.
+// max_table_bytes cannot hold even the smallest block. `surface`, when
+// given, is grid's occupied voxels' index and normals (normals_grid.h); it is
+// used at scale 1 when its radius is normal_radius, else computed here.
 StatusOr<CornerExtractionResult> ExtractCorners(const VoxelGrid& grid,
-                                                const CornerExtractionParams& params = {});
+                                                const CornerExtractionParams& params = {},
+                                                const internal::GridSurface* surface = nullptr);
 
 }  // namespace mapd::voxel
 

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "voxel/corner_voxel_index.h"
@@ -103,13 +104,17 @@ Status GravityParams::Validate() const {
   return Status::Ok();
 }
 
-StatusOr<GravityFrame> EstimateGravityFrame(const VoxelGrid& grid, const GravityParams& params) {
+StatusOr<GravityFrame> EstimateGravityFrame(const VoxelGrid& grid, const GravityParams& params,
+                                            const internal::GridSurface* surface) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   const std::vector<VoxelKey>& keys = grid.occupied_keys();
-  const internal::VoxelIndex index(keys);
-  // The corner extractor's defaults (corner_extraction.h): they fit real
-  // walls of thick, noisy scans.
-  const internal::GridNormals normals = internal::ComputeGridNormals(keys, index, 2.5);
+  std::optional<internal::GridSurface> own;
+  if (surface == nullptr || surface->radius_voxels != kGravityNormalRadiusVoxels) {
+    surface = &own.emplace(keys, kGravityNormalRadiusVoxels);
+  }
+  const internal::VoxelIndex& index = surface->index;
+  const internal::GridNormals& normals = surface->normals;
+  // The corner extractor's other defaults (corner_extraction.h).
   internal::PlaneRegionParams region_params;
   region_params.smoothness_deg = 15.0;
   region_params.region_angle_deg = 18.0;

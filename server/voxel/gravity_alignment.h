@@ -16,6 +16,9 @@
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
+namespace internal {
+struct GridSurface;
+}  // namespace internal
 
 struct GravityParams {
   // Planes whose normal is within this of +-z count as floor or ceiling. The
@@ -65,9 +68,16 @@ struct GravityFrame {
   int wall_planes = 0;   // planes that voted in the histogram
 };
 
+// Normals are taken within this radius (voxels), the corner extractor's
+// default (corner_extraction.h): they fit real walls of thick, noisy scans.
+inline constexpr double kGravityNormalRadiusVoxels = 2.5;
+
 // FailedPrecondition when no plane is within max_up_tilt_deg of vertical or
-// no wall plane votes (the generator cannot run on this map).
-StatusOr<GravityFrame> EstimateGravityFrame(const VoxelGrid& grid, const GravityParams& params);
+// no wall plane votes (the generator cannot run on this map). `surface`,
+// when given, is grid's occupied voxels' index and normals (normals_grid.h),
+// used when its radius is kGravityNormalRadiusVoxels.
+StatusOr<GravityFrame> EstimateGravityFrame(const VoxelGrid& grid, const GravityParams& params,
+                                            const internal::GridSurface* surface = nullptr);
 
 // Yaw candidates (radians, about +z after levelling) that rotate b's walls
 // onto a's: the top yaw_peaks peaks of the circular correlation of the two

@@ -27,6 +27,17 @@ struct GridNormals {
 GridNormals ComputeGridNormals(const std::vector<VoxelKey>& keys, const VoxelIndex& index,
                                double radius_voxels);
 
+// The occupied voxels' index and their normals at one radius: what corner
+// extraction (B.2) and levelling (B.9) both start from, built once per
+// submap of a merge (SubmapFeatures) when their radii agree.
+struct GridSurface {
+  GridSurface(const std::vector<VoxelKey>& keys, double radius)
+      : index(keys), normals(ComputeGridNormals(keys, index, radius)), radius_voxels(radius) {}
+  VoxelIndex index;
+  GridNormals normals;
+  double radius_voxels;
+};
+
 }  // namespace mapd::voxel::internal
 
 #endif  // MAPD_VOXEL_NORMALS_GRID_H_

@@ -14,7 +14,11 @@ namespace mapd::voxel {
 StatusOr<const CornerSet*> SubmapFeatures::Corners(StageTimes* times) {
   if (!corners_.has_value()) {
     const auto start = std::chrono::steady_clock::now();
-    auto result = ExtractCorners(*grid_, params_->corners);
+    auto result = ExtractCorners(
+        *grid_, params_->corners,
+        params_->corners.scale == 1 && params_->corners.normal_radius == kGravityNormalRadiusVoxels
+            ? &Surface()
+            : nullptr);
     times->corners_s += SecondsSince(start);
     if (!result.ok()) {
       return Status(result.status().code(),
@@ -28,10 +32,17 @@ StatusOr<const CornerSet*> SubmapFeatures::Corners(StageTimes* times) {
 const StatusOr<GravityFrame>& SubmapFeatures::Gravity(StageTimes* times) {
   if (!gravity_.has_value()) {
     const auto start = std::chrono::steady_clock::now();
-    gravity_ = EstimateGravityFrame(*grid_, params_->gravity);
+    gravity_ = EstimateGravityFrame(*grid_, params_->gravity, &Surface());
     times->correlation_s += SecondsSince(start);
   }
   return *gravity_;
+}
+
+const internal::GridSurface& SubmapFeatures::Surface() {
+  if (!surface_.has_value()) {
+    surface_.emplace(grid_->occupied_keys(), kGravityNormalRadiusVoxels);
+  }
+  return *surface_;
 }
 
 const OverlapIndex& SubmapFeatures::Overlap() {

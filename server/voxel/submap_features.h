@@ -13,6 +13,7 @@
 #include "voxel/corner.h"
 #include "voxel/merge.h"
 #include "voxel/merge_overlap.h"
+#include "voxel/normals_grid.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
@@ -34,6 +35,10 @@ class SubmapFeatures {
   // map has no floor, ceiling or wall plane: the generator cannot run on it.
   const StatusOr<GravityFrame>& Gravity(StageTimes* times);
 
+  // The occupied voxels' index and normals at kGravityNormalRadiusVoxels,
+  // shared by levelling and (at that radius) corner extraction.
+  const internal::GridSurface& Surface();
+
   // This submap as the A of overlap scores (merge_overlap.h), built on first use.
   const OverlapIndex& Overlap();
 
@@ -47,6 +52,7 @@ class SubmapFeatures {
   const MergeParams* params_;
   std::optional<CornerSet> corners_;
   std::optional<StatusOr<GravityFrame>> gravity_;
+  std::optional<internal::GridSurface> surface_;
   std::optional<OverlapIndex> overlap_;
   std::optional<Eigen::Vector3d> centroid_;
 };
