@@ -236,8 +236,10 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
 
   std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
   const int steps = static_cast<int>(std::floor(params.window_deg / params.coarse_step_deg));
+  std::vector<double> candidate_scores, window_scores;
   for (double yaw : yaws) {
     double best_offset = 0, best_score = score(yaw);
+    candidate_scores.push_back(best_score);
     for (int k = -steps; k <= steps; ++k) {
       if (k == 0) continue;
       const double offset = k * params.coarse_step_deg;
@@ -252,6 +254,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
         if (s > best_score) best_offset = offset, best_score = s;
       }
     }
+    window_scores.push_back(best_score);
     if (std::abs(best_offset) >= params.min_change_deg) {
       refined.emplace_back(best_score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
     }
@@ -264,6 +267,8 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   if (stats != nullptr) {
     stats->yaws_scored = scored;
     stats->yaws_added = static_cast<int>(refined.size());
+    stats->candidate_scores = candidate_scores;
+    stats->window_scores = window_scores;
   }
   std::vector<double> out = yaws;
   for (const auto& scored_yaw : refined) out.push_back(scored_yaw.second);

@@ -70,6 +70,9 @@ struct YawRefinementStats {
   int yaws_scored = 0;
   int yaws_added = 0;
   double pixel_m = 0.0;
+  // Per input yaw: the 2D score at it and the best in its window (empty
+  // when nothing was scored).
+  std::vector<double> candidate_scores, window_scores;
 };
 
 // R_a, R_b level each map (R * up = +z); a yaw turns levelled b about +z, as

@@ -86,7 +86,12 @@ int main(int argc, char** argv) {
     for (double y : yaws) {
       std::printf(" %.1f (err %.1f)", Deg(y), Deg(std::remainder(y - yaw_true, 2 * M_PI)));
     }
+    std::printf("\n  plan-view scores (at candidate / best in window):");
+    for (std::size_t k = 0; k < refinement.window_scores.size(); ++k) {
+      std::printf(" %.3f/%.3f", refinement.candidate_scores[k], refinement.window_scores[k]);
+    }
     std::printf("\n");
+    if (std::getenv("DIAG_PLAN_ONLY") != nullptr) return;
     // With the true yaw too, to see whether the translation search finds the truth given it.
     std::vector<double> all = yaws;
     all.push_back(yaw_true);
