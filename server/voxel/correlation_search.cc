@@ -54,7 +54,7 @@ struct CellBox {
 class CoarseGrid {
  public:
   CoarseGrid(const std::array<int, 3>& n, const Eigen::Vector3d& origin, double cell)
-      : n_(n), origin_(origin), cell_(cell) {
+      : n_(n), occ_lo_(n), occ_hi_{-1, -1, -1}, origin_(origin), cell_(cell) {
     const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     occ_.assign(size, 0);
     free_.assign(size, 0.0F);
@@ -63,6 +63,8 @@ class CoarseGrid {
   // of b reuses one grid: fresh 16M-cell buffers cost page faults).
   void Reset(const Eigen::Vector3d& origin) {
     origin_ = origin;
+    occ_lo_ = n_;
+    occ_hi_ = {-1, -1, -1};
     std::fill(occ_.begin(), occ_.end(), 0);
     std::fill(free_.begin(), free_.end(), 0.0F);
   }
@@ -75,6 +77,8 @@ class CoarseGrid {
     const std::size_t i = (static_cast<std::size_t>(x) * n_[1] + y) * n_[2] + z;
     if (s.occupied) {
       occ_[i] = 1;
+      occ_lo_ = {std::min(occ_lo_[0], x), std::min(occ_lo_[1], y), std::min(occ_lo_[2], z)};
+      occ_hi_ = {std::max(occ_hi_[0], x), std::max(occ_hi_[1], y), std::max(occ_hi_[2], z)};
     } else {
       free_[i] += static_cast<float>(s.free_volume);
     }
@@ -84,8 +88,8 @@ class CoarseGrid {
   // occupied cell does not count (else half the true wall cells would be
   // penalised), and dilated_occ() is what the other map's walls may hit.
   void Finish(int cover_radius) {
-    Dilate(occ_, 1, &dilated_);
-    Dilate(occ_, cover_radius, &cover_);
+    Dilate(1, &dilated_);
+    Dilate(cover_radius, &cover_);
     for (std::size_t i = 0; i < occ_.size(); ++i) {
       free_[i] = dilated_[i] != 0 ? 0.0F : std::min(1.0F, free_[i]);
       if (free_[i] > 0) cover_[i] = 1;
@@ -99,46 +103,86 @@ class CoarseGrid {
   const std::vector<float>& free() const { return free_; }
 
  private:
-  // Binary dilation (1 where a set cell lies within `radius` cells along
-  // each axis: a cube), one axis at a time. Each pass is two sweeps along
+  // Binary dilation of occ_ (1 where an occupied cell lies within `radius`
+  // cells along each axis: a cube), one axis at a time, inside the occupied
+  // cells' box grown by `radius` (a map fills an eighth of its padded grid
+  // or less; outside the box nothing is set). Each pass is two sweeps along
   // the axis that remember the nearest set cell behind and ahead, so it
   // costs O(cells) whatever the radius, and the innermost loop runs over
-  // contiguous memory on every axis.
-  void Dilate(const std::vector<std::uint8_t>& in, int radius, std::vector<std::uint8_t>* result) {
+  // contiguous memory (z) on every axis.
+  void Dilate(int radius, std::vector<std::uint8_t>* result) {
     std::vector<std::uint8_t>& out = *result;
-    out = in;
-    std::vector<std::uint8_t>& pass = pass_;
-    const std::array<std::size_t, 3> stride = {static_cast<std::size_t>(n_[1]) * n_[2],
-                                               static_cast<std::size_t>(n_[2]), 1};
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      pass.swap(out);
-      out.assign(pass.size(), 0);             // within capacity: no allocation
-      const std::size_t step = stride[axis];  // cells between neighbours on the axis
-      const auto extent = static_cast<int>(n_[axis]);
-      const std::size_t block = step * static_cast<std::size_t>(extent);
-      std::vector<int> nearest(step);
-      for (std::size_t base = 0; base < pass.size(); base += block) {
-        std::fill(nearest.begin(), nearest.end(), -radius - 1);  // last set cell behind
-        for (int k = 0; k < extent; ++k) {
-          const std::size_t row = base + static_cast<std::size_t>(k) * step;
-          for (std::size_t j = 0; j < step; ++j) {
-            if (pass[row + j] != 0) nearest[j] = k;
-            if (k - nearest[j] <= radius) out[row + j] = 1;
-          }
+    out.assign(occ_.size(), 0);  // within capacity: no allocation
+    if (occ_hi_[0] < 0) return;  // nothing occupied
+    std::array<int, 3> lo{}, hi{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      lo[k] = std::max(0, occ_lo_[k] - radius);
+      hi[k] = std::min(n_[k] - 1, occ_hi_[k] + radius);
+    }
+    const auto index = [&](int x, int y, int z) {
+      return (static_cast<std::size_t>(x) * n_[1] + y) * n_[2] + z;
+    };
+    const int wz = hi[2] - lo[2] + 1;
+    std::vector<int> nearest;
+    // The pass along `axis` reads `in` and sets `to` (cleared in the box).
+    const auto pass = [&](std::size_t axis, const std::vector<std::uint8_t>& in,
+                          std::vector<std::uint8_t>* to) {
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        for (int y = lo[1]; y <= hi[1]; ++y) std::fill_n(to->begin() + index(x, y, lo[2]), wz, 0);
+      }
+      // Lines along `axis`, walked forwards then backwards; `nearest` per
+      // line: the last set cell met.
+      const int a_lo = lo[axis], a_hi = hi[axis];
+      const auto sweep = [&](auto&& cell_of, int lines, bool forward) {
+        nearest.assign(static_cast<std::size_t>(lines),
+                       forward ? a_lo - radius - 1 : a_hi + radius + 1);
+        for (int k = forward ? a_lo : a_hi; forward ? k <= a_hi : k >= a_lo;
+             k += forward ? 1 : -1) {
+          cell_of(k, [&](std::size_t line, std::size_t i) {
+            int& near = nearest[line];
+            if (in[i] != 0) near = k;
+            if (std::abs(k - near) <= radius) (*to)[i] = 1;
+          });
         }
-        std::fill(nearest.begin(), nearest.end(), extent + radius);  // next set cell ahead
-        for (int k = extent - 1; k >= 0; --k) {
-          const std::size_t row = base + static_cast<std::size_t>(k) * step;
-          for (std::size_t j = 0; j < step; ++j) {
-            if (pass[row + j] != 0) nearest[j] = k;
-            if (nearest[j] - k <= radius) out[row + j] = 1;
+      };
+      const int wy = hi[1] - lo[1] + 1;
+      for (const bool forward : {true, false}) {
+        if (axis == 0) {  // lines along x: one per (y, z) of the box
+          sweep(
+              [&](int x, auto&& visit) {
+                for (int y = lo[1]; y <= hi[1]; ++y) {
+                  const std::size_t row = index(x, y, lo[2]);
+                  const std::size_t line = static_cast<std::size_t>(y - lo[1]) * wz;
+                  for (int z = 0; z < wz; ++z) visit(line + z, row + z);
+                }
+              },
+              wy * wz, forward);
+        } else if (axis == 1) {  // along y: one per (x, z), x outermost
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            sweep(
+                [&](int y, auto&& visit) {
+                  const std::size_t row = index(x, y, lo[2]);
+                  for (int z = 0; z < wz; ++z) visit(static_cast<std::size_t>(z), row + z);
+                },
+                wz, forward);
+          }
+        } else {  // along z: one per (x, y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+              sweep([&](int z, auto&& visit) { visit(0, index(x, y, z)); }, 1, forward);
+            }
           }
         }
       }
-    }
+    };
+    pass_.assign(occ_.size(), 0);
+    pass(0, occ_, &out);
+    pass(1, out, &pass_);
+    pass(2, pass_, &out);
   }
 
   std::array<int, 3> n_;
+  std::array<int, 3> occ_lo_, occ_hi_;  // occupied cells' box (hi < 0: none)
   Eigen::Vector3d origin_;
   double cell_;
   std::vector<std::uint8_t> occ_, dilated_, cover_;
