@@ -374,11 +374,11 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
                                           static_cast<double>(fft.real_size()),
                                       1.0);
     Complex* product = fft.Forward([&](std::size_t i) { return cover[i]; });
-    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = occ_a[i] * std::conj(product[i]);
+    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(occ_a[i], product[i]);
     const float* a_in_b = fft.Inverse();
     std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
     product = fft.spectrum();
-    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = cover_a[i] * std::conj(occ_b[i]);
+    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(cover_a[i], occ_b[i]);
     const float* b_in_a = fft.Inverse();
     for (std::size_t i = 0; i < weight.size(); ++i) {
       const double in_a = b_in_a[i], in_b = weight[i];
@@ -387,7 +387,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     }
     product = fft.Forward([&](std::size_t i) { return free[i]; });
     for (std::size_t i = 0; i < spectrum_size; ++i) {
-      product[i] = hit_a[i] * std::conj(occ_b[i]) - w * occ_a[i] * std::conj(product[i]);
+      product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }
     float* score = fft.Inverse();
     for (std::size_t i = 0; i < weight.size(); ++i) score[i] *= weight[i];

@@ -23,7 +23,7 @@ void Transform(RealFft& fft, const std::vector<float>& values, std::vector<Compl
 // and g; valid until the next transform.
 const float* Correlate(RealFft& fft, const std::vector<Complex>& f, const std::vector<Complex>& g) {
   Complex* s = fft.spectrum();
-  for (std::size_t i = 0; i < fft.complex_size(); ++i) s[i] = f[i] * std::conj(g[i]);
+  for (std::size_t i = 0; i < fft.complex_size(); ++i) s[i] = MulConj(f[i], g[i]);
   return fft.Inverse();
 }
 
