@@ -14,11 +14,12 @@ namespace mapd::voxel {
 StatusOr<const CornerSet*> SubmapFeatures::Corners(StageTimes* times) {
   if (!corners_.has_value()) {
     const auto start = std::chrono::steady_clock::now();
-    auto result = ExtractCorners(
-        *grid_, params_->corners,
-        params_->corners.scale == 1 && params_->corners.normal_radius == kGravityNormalRadiusVoxels
-            ? &Surface()
-            : nullptr);
+    // The shared normals when they are the ones corner extraction uses (and
+    // the map is within its limit, which it checks first).
+    const CornerExtractionParams& corners = params_->corners;
+    const bool shared = corners.scale == 1 && corners.normal_radius == kGravityNormalRadiusVoxels &&
+                        grid_->num_occupied() <= corners.max_occupied_voxels;
+    auto result = ExtractCorners(*grid_, corners, shared ? &Surface() : nullptr);
     times->corners_s += SecondsSince(start);
     if (!result.ok()) {
       return Status(result.status().code(),
