@@ -108,7 +108,12 @@ void NearestVoxelIndex::OfferCell(std::size_t i, const Eigen::Vector3d& q, Best*
   const std::uint64_t below = (std::uint64_t{1} << (i & 63)) - 1;
   const std::size_t k = rank_[i >> 6] + static_cast<std::size_t>(
                                             __builtin_popcountll(occupied_.words[i >> 6] & below));
-  for (int j = first_[k]; j < first_[k + 1]; ++j) {
+  OfferPoints(first_[k], first_[k + 1], q, best);
+}
+
+void NearestVoxelIndex::OfferPoints(int begin, int end, const Eigen::Vector3d& q,
+                                    Best* best) const {
+  for (int j = begin; j < end; ++j) {
     best->Offer((sorted_[static_cast<std::size_t>(j)] - q).squaredNorm(),
                 order_[static_cast<std::size_t>(j)]);
   }
@@ -149,10 +154,7 @@ void NearestVoxelIndex::ScanCellHashed(const Eigen::Vector3i& cell, const Eigen:
                                        Best* best) const {
   auto it = cells_.find(PackCell(cell));
   if (it == cells_.end()) return;
-  for (int j = it->second.first; j < it->second.first + it->second.second; ++j) {
-    best->Offer((sorted_[static_cast<std::size_t>(j)] - q).squaredNorm(),
-                order_[static_cast<std::size_t>(j)]);
-  }
+  OfferPoints(it->second.first, it->second.first + it->second.second, q, best);
 }
 
 int NearestVoxelIndex::Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {

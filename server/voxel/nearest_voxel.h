@@ -61,8 +61,6 @@ class NearestVoxelIndex {
   };
 
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const;
-  void BuildDense(const std::vector<Eigen::Vector3i>& cells);
-  void BuildHash(const std::vector<Eigen::Vector3i>& cells);
   void MarkNear(const std::vector<Eigen::Vector3i>& cells);
   // Offers the points of the cells of one row along x: x in [x0, x1], at (y, z).
   void ScanRow(int x0, int x1, int y, int z, bool ends_only, const Eigen::Vector3d& q,
@@ -70,6 +68,8 @@ class NearestVoxelIndex {
   void ScanCellHashed(const Eigen::Vector3i& cell, const Eigen::Vector3d& q, Best* best) const;
   // Offers the points of the cell at bit i of occupied_.
   void OfferCell(std::size_t i, const Eigen::Vector3d& q, Best* best) const;
+  // Offers sorted_[begin, end).
+  void OfferPoints(int begin, int end, const Eigen::Vector3d& q, Best* best) const;
 
   double cell_m_;
   CellBits near_;      // over the points' cell box grown by kReachCells
