@@ -372,6 +372,11 @@ const std::vector<Setting>& Settings() {
            [](C& c) -> auto& { return c.submaps.max_residual_voxels; }, {0, 100, true}),
       Real("merge.min_overlap_score", "smallest accepted overlap score (0.7 let a 90-degree-wrong merge through)",
            [](C& c) -> auto& { return c.submaps.min_overlap_score; }, {0, 1}),
+      Real("merge.min_shared_free_ratio", "free space both maps saw, per voxel where their surfaces "
+           "coincide (B's free voxels on A's free space); a placement that only puts one map's wall on "
+           "the other's shares none, right merges of real maps 2.6-12; only when both maps carry free "
+           "space; 0 = off",
+           [](C& c) -> auto& { return c.submaps.min_shared_free_ratio; }, {0, 1000}),
       Real("merge.max_seconds", "time budget of one merge, seconds",
            [](C& c) -> auto& { return c.submaps.max_merge_seconds; }, {0, 86400, true}),
       Choice("merge.resolution_policy", "submaps of different resolutions: refuse, or resample to the finest",

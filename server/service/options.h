@@ -89,6 +89,10 @@ struct SubmapOptions {
       0.75;  // RMS after ICP, voxels of the coarser map (= voxel::MergeParams)
   double min_overlap_score =
       0.9;  // [0, 1] (= voxel::MergeParams; 0.7 let a 90-degree-wrong merge through)
+  // B's free voxels on A's free space per coinciding voxel, when both maps
+  // carry free space (= voxel::MergeParams; 0 = off): a placement that only
+  // puts one map's wall on the other's shares none.
+  double min_shared_free_ratio = 1.0;
   double max_merge_seconds = 60.0;    // budget of one merge, seconds
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule

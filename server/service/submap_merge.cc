@@ -26,6 +26,7 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.min_matched_corners = o.min_matched_corners;
   p.max_residual_voxels = o.max_residual_voxels;
   p.min_overlap_score = o.min_overlap_score;
+  p.min_shared_free_ratio = o.min_shared_free_ratio;
   p.max_seconds = o.max_merge_seconds;
   p.resolution_policy = o.resample_resolutions ? voxel::ResolutionPolicy::kResampleToFinest
                                                : voxel::ResolutionPolicy::kRefuse;

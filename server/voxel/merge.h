@@ -70,6 +70,14 @@ struct MergeParams {
   // such placements of the test rooms at 2-4 % support while the true ones
   // had 40-100 %. The benchmark's 10 % overlap crops have ~10 %.
   double min_support_fraction = 0.05;
+  // Shared free space, when both maps carry free space (voxel/merge_overlap.h
+  // SharedFree): B's free voxels that land on A's free space, per B voxel
+  // that coincides with A's. Support and overlap pass a placement that puts
+  // B's wall on A's wall with B's room on the far side, in A's unknown space
+  // (a generated half-room next door to the other: residual 0.21 voxels,
+  // overlap 1.00, support 0.10); both maps saw the space in front of the
+  // walls of a right merge, and neither in such a placement. 0 = off.
+  double min_shared_free_ratio = 1.0;
   FusionRule fusion_rule = FusionRule::kOverlapRule;
   ResolutionPolicy resolution_policy = ResolutionPolicy::kRefuse;
   // Budget for one merge, checked between stages and pairs (ResourceExhausted
@@ -213,6 +221,9 @@ struct PairReport {
   double residual_m = 0.0;
   double overlap_score = 0.0;
   double support_fraction = 0.0;  // see MergeParams::min_support_fraction
+  // See MergeParams::min_shared_free_ratio; -1 when not measured (a map
+  // without free space, or a hypothesis refused by an earlier gate).
+  double shared_free_ratio = -1.0;
   int icp_iterations = 0;
   // Which generator gave T_a_b: "corner solution N" or "correlation ...".
   std::string source;

@@ -1,6 +1,7 @@
 #include "voxel/merge_overlap.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace mapd::voxel {
 namespace {
@@ -114,6 +115,47 @@ OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
 OverlapScore ComputeOverlapScore(const OverlapIndex& a, const VoxelGrid& b,
                                  const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
   return Score(a, a.grid(), b, T_a_b, max_points);
+}
+
+namespace {
+
+// The first multiple of `stride` at or above `v` (any sign).
+int FirstMultiple(int v, int stride) {
+  const int q = v / stride;
+  const int down = (v % stride != 0 && v < 0) ? q - 1 : q;  // floor(v / stride)
+  return down * stride == v ? v : (down + 1) * stride;
+}
+
+}  // namespace
+
+SharedFree ComputeSharedFree(const OverlapIndex& a, const VoxelGrid& b,
+                             const Eigen::Isometry3d& T_a_b, std::size_t max_points) {
+  SharedFree out;
+  double volume = 0;  // B's free voxels
+  b.ForEachFreeCube([&](const VoxelKey&, int edge) { volume += std::pow(edge, 3.0); });
+  if (volume == 0 || a.grid().empty()) return out;
+  if (max_points > 0 && volume > static_cast<double>(max_points)) {
+    out.stride = static_cast<int>(std::ceil(std::cbrt(volume / static_cast<double>(max_points))));
+  }
+  const int s = out.stride;
+  const VoxelGrid& a_grid = a.grid();
+  b.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
+    VoxelKey from, to;
+    for (int i = 0; i < 3; ++i) {
+      from[i] = FirstMultiple(min_key[i], s);
+      to[i] = min_key[i] + edge - 1;
+    }
+    for (int z = from.z(); z <= to.z(); z += s) {
+      for (int y = from.y(); y <= to.y(); y += s) {
+        for (int x = from.x(); x <= to.x(); x += s) {
+          const VoxelKey key = a_grid.PointToKey(T_a_b * b.KeyToCentre(VoxelKey(x, y, z)));
+          ++out.evaluated;
+          if (a.Observed(key) && !a.OccupiedNear(key)) ++out.shared;
+        }
+      }
+    }
+  });
+  return out;
 }
 
 }  // namespace mapd::voxel

@@ -68,6 +68,26 @@ OverlapScore ComputeOverlapScore(const VoxelGrid& a, const VoxelGrid& b,
 OverlapScore ComputeOverlapScore(const OverlapIndex& a, const VoxelGrid& b,
                                  const Eigen::Isometry3d& T_a_b, std::size_t max_points = 0);
 
+// Free space both maps saw (the touching-placement gate,
+// MergeParams::min_shared_free_ratio). B's free voxels are mapped into A
+// (centre through T_a_b) and count as SHARED when they land on A's free space
+// more than one voxel from A's occupied voxels: free space just behind a
+// wall both maps share is not evidence that they saw the same side of it.
+// A right merge shares the space in front of its coinciding walls; a
+// placement that only puts B's wall on A's, B's room on the far side of it,
+// shares none. Estimated on the voxels of B's free cubes whose keys are
+// multiples of one stride per axis, the stride chosen for at most
+// `max_points` of them (0 = every free voxel).
+struct SharedFree {
+  std::uint64_t evaluated = 0;  // lattice voxels of B's free space mapped into A
+  std::uint64_t shared = 0;     // of those, on A's free space as above
+  int stride = 1;               // voxels per axis between lattice points
+  // shared * stride^3: B's free voxels in A's free space (an estimate).
+  double shared_voxels() const { return static_cast<double>(shared) * stride * stride * stride; }
+};
+SharedFree ComputeSharedFree(const OverlapIndex& a, const VoxelGrid& b,
+                             const Eigen::Isometry3d& T_a_b, std::size_t max_points);
+
 }  // namespace mapd::voxel
 
 #endif  // MAPD_VOXEL_MERGE_OVERLAP_H_

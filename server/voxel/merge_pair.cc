@@ -123,6 +123,26 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
                      Fixed(params.min_support_fraction, 3) + " (B's voxels coinciding with A's)";
     return Status::Ok();
   }
+  // Only now: a right merge reaches this once or twice, and maps that carry
+  // no free space (built from points alone) have nothing to share.
+  if (a.grid->has_free_space() && b.grid->has_free_space() && overlap.coinciding > 0) {
+    const auto start_free = std::chrono::steady_clock::now();
+    const SharedFree free =
+        ComputeSharedFree(a.features->Overlap(), *b.grid, report->T_a_b, params.overlap_points);
+    times->alignment_s += SecondsSince(start_free);
+    // Both counts in B's voxels: the coinciding ones were counted every
+    // `step`-th.
+    report->shared_free_ratio = free.shared_voxels() / (static_cast<double>(overlap.coinciding) *
+                                                        static_cast<double>(step));
+    if (report->shared_free_ratio < params.min_shared_free_ratio) {
+      report->reason = "shared free space " + Fixed(report->shared_free_ratio, 2) +
+                       " voxels per coinciding voxel, below " +
+                       Fixed(params.min_shared_free_ratio, 2) +
+                       " (B's surfaces lie on A's, but the space in front of them that one map "
+                       "saw as free the other did not see)";
+      return Status::Ok();
+    }
+  }
   report->accepted = true;
   return Status::Ok();
 }

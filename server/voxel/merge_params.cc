@@ -20,6 +20,9 @@ Status MergeParams::Validate() const {
     return Status::InvalidArgument(
         "min_support_fraction and ambiguous_support_ratio must be in [0, 1]");
   }
+  if (!(min_shared_free_ratio >= 0) || !std::isfinite(min_shared_free_ratio)) {
+    return Status::InvalidArgument("min_shared_free_ratio must be finite and >= 0");
+  }
   if (fusion_rule != FusionRule::kOverlapRule && fusion_rule != FusionRule::kLogOdds) {
     return Status::InvalidArgument("fusion_rule is not a known rule");
   }

@@ -86,6 +86,13 @@ class VoxelGrid {
   // per axis (edge = 2^level voxels). Order unspecified. For views that need
   // free space per region (mapctl occupancy-grid) without probing key by key.
   void ForEachFreeCube(const std::function<void(const VoxelKey& min_key, int edge)>& fn) const;
+  // At least one free voxel (maps built from points alone carry none).
+  bool has_free_space() const {
+    for (const auto& cubes : free_) {
+      if (!cubes.empty()) return true;
+    }
+    return false;
+  }
 
  private:
   static constexpr int kLevels = 17;  // cube edge 2^level voxels, level 0 = finest

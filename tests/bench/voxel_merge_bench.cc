@@ -109,6 +109,11 @@ const PairColumn kPairColumns[] = {
      [](const mapd::voxel::PairReport& p, double res) {
        return p.second_residual_m < 0 ? std::nan("") : (p.second_residual_m - p.residual_m) / res;
      }},
+    // The touching-placement gate's figure (MergeParams::min_shared_free_ratio).
+    {"median shared free per coinciding voxel", "%.1f",
+     [](const mapd::voxel::PairReport& p, double) {
+       return p.shared_free_ratio < 0 ? std::nan("") : p.shared_free_ratio;
+     }},
     {"median hypotheses tried", "%.0f",
      [](const mapd::voxel::PairReport& p, double) {
        return static_cast<double>(p.hypotheses_tried);
@@ -163,6 +168,8 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
     params.max_residual_voxels = std::atof(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_OVERLAP_SCORE"))
     params.min_overlap_score = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MIN_SHARED_FREE_RATIO"))
+    params.min_shared_free_ratio = std::atof(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS"))
     params.min_matched_corners = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
@@ -198,6 +205,7 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
     }
     for (const auto& pair : r->pairs) {
       if (!pair.accepted) continue;
+      out.message += " shared_free=" + std::to_string(pair.shared_free_ratio);
       for (const PairColumn& column : kPairColumns) {
         out.pair_values.push_back(column.value(pair, r->resolution));
       }

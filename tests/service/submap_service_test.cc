@@ -508,6 +508,7 @@ TEST(SubmapOptionsTest, MergeDefaultsAreTheVoxelLibrarys) {
   EXPECT_EQ(options.min_matched_corners, params.min_matched_corners);
   EXPECT_EQ(options.max_residual_voxels, params.max_residual_voxels);
   EXPECT_EQ(options.min_overlap_score, params.min_overlap_score);
+  EXPECT_EQ(options.min_shared_free_ratio, params.min_shared_free_ratio);
 }
 
 }  // namespace

@@ -445,6 +445,61 @@ TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
   }
 }
 
+// The touching-placement gate's figure. B is A turned 180 deg about a
+// vertical axis in A's end wall: that wall lands on itself and the rest of B
+// in A's unknown space beyond it, so overlap and support pass, but no free
+// voxel of B lands on A's free space. A right placement of an overlapping
+// crop shares the room between them.
+TEST(SharedFreeTest, APlacementSharingOnlyAWallSharesNoFreeSpace) {
+  const std::string a_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::string b_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.0, 8.0),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  auto a_tree = ReadOctree(a_bt);
+  auto b_tree = ReadOctree(b_bt);
+  ASSERT_TRUE(a_tree.ok() && b_tree.ok());
+  auto a = VoxelGrid::FromOcTree(**a_tree);
+  auto b = VoxelGrid::FromOcTree(**b_tree);
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_TRUE(a->has_free_space() && b->has_free_space());
+  const OverlapIndex index(*a);
+  const auto ratio = [](const SharedFree& free, const OverlapScore& overlap) {
+    return free.shared_voxels() / static_cast<double>(overlap.coinciding);
+  };
+
+  const Eigen::Isometry3d right = Eigen::Isometry3d::Identity();
+  const SharedFree shared = ComputeSharedFree(index, *b, right, 0);
+  const OverlapScore overlap = ComputeOverlapScore(index, *b, right);
+  EXPECT_EQ(shared.stride, 1);
+  EXPECT_GT(ratio(shared, overlap), 2.0);
+  // A sparser lattice estimates the same volume.
+  const SharedFree sampled = ComputeSharedFree(index, *b, right, shared.evaluated / 8);
+  EXPECT_GE(sampled.stride, 2);
+  EXPECT_NEAR(sampled.shared_voxels(), shared.shared_voxels(), 0.1 * shared.shared_voxels());
+
+  // The turn about A's wall at x = min_key.x: voxel centres land on centres.
+  const double res = a->resolution();
+  const Eigen::Vector3d axis((a->min_key().x() + 0.5) * res,
+                             (a->min_key().y() + a->max_key().y() + 1) * 0.5 * res, 0.0);
+  const Eigen::Isometry3d touching = Eigen::Translation3d(axis) *
+                                     Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
+                                     Eigen::Translation3d(-axis);
+  const OverlapScore touching_overlap = ComputeOverlapScore(index, *a, touching);
+  ASSERT_GT(touching_overlap.observed, 0u);
+  EXPECT_GE(touching_overlap.score, MergeParams{}.min_overlap_score);
+  EXPECT_GE(static_cast<double>(touching_overlap.coinciding) / a->num_occupied(),
+            MergeParams{}.min_support_fraction);
+  const SharedFree touching_free = ComputeSharedFree(index, *a, touching, 0);
+  EXPECT_GT(touching_free.evaluated, 0u);
+  EXPECT_EQ(touching_free.shared, 0u);
+
+  // A map without free space has nothing to share.
+  auto occupied_only = VoxelGrid::FromKeys(res, a->occupied_keys());
+  ASSERT_TRUE(occupied_only.ok());
+  EXPECT_FALSE(occupied_only->has_free_space());
+  EXPECT_EQ(ComputeSharedFree(index, *occupied_only, right, 0).evaluated, 0u);
+}
+
 TEST(InspectSubmapTest, SummarisesAValidMap) {
   const std::string a = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
                                         Eigen::Isometry3d::Identity(), kRoomResolutionM);
