@@ -266,26 +266,29 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
   if (a.empty() || b.empty() || yaws.empty()) return std::vector<CorrelationHypothesis>{};
 
-  // Extents: a levelled; b levelled and turned by any yaw stays within a
-  // cylinder about its occupied voxels' centroid.
+  // Extents: a levelled; b levelled and turned by each yaw, in the box of
+  // its occupied voxels (the grid holds the largest of these boxes; a
+  // cylinder about b's centroid, which holds any yaw, made the outdoor grids
+  // up to a third larger).
   CellBox box_a;
   for (const Eigen::Vector3d& c : a.occupied_centres()) {
     const Eigen::Vector3d p = R_a * c;
     box_a.lo = box_a.lo.cwiseMin(p);
     box_a.hi = box_a.hi.cwiseMax(p);
   }
-  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& c : b.occupied_centres()) centroid_b += R_b * c;
-  centroid_b /= static_cast<double>(b.num_occupied());
-  double radius_b = 0, z_lo = 1e300, z_hi = -1e300;
-  for (const Eigen::Vector3d& c : b.occupied_centres()) {
-    const Eigen::Vector3d p = R_b * c - centroid_b;
-    radius_b = std::max(radius_b, std::hypot(p.x(), p.y()));
-    z_lo = std::min(z_lo, p.z());
-    z_hi = std::max(z_hi, p.z());
+  std::vector<CellBox> boxes_b(yaws.size());
+  Eigen::Vector3d extent_b = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < yaws.size(); ++k) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(yaws[k], Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
+    for (const Eigen::Vector3d& c : b.occupied_centres()) {
+      const Eigen::Vector3d p = R * c;
+      boxes_b[k].lo = boxes_b[k].lo.cwiseMin(p);
+      boxes_b[k].hi = boxes_b[k].hi.cwiseMax(p);
+    }
+    extent_b = extent_b.cwiseMax(boxes_b[k].hi - boxes_b[k].lo);
   }
   const Eigen::Vector3d extent_a = box_a.hi - box_a.lo;
-  const Eigen::Vector3d extent_b(2 * radius_b, 2 * radius_b, z_hi - z_lo);
 
   double cell = params.cell_voxels * finest_resolution_m;
   std::array<int, 3> na{}, nb{}, n{};
@@ -312,8 +315,6 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   }
 
   const Eigen::Vector3d origin_a = box_a.lo - Eigen::Vector3d::Constant(cell);
-  // b's grid origin relative to its (turned) centroid: one cell of margin.
-  const Eigen::Vector3d offset_b(-radius_b - cell, -radius_b - cell, z_lo - cell);
   RealFft fft({n[0], n[1], n[2]});
   const std::size_t spectrum_size = fft.complex_size();
   const auto keep = [&](const Complex* spectrum) {
@@ -345,13 +346,12 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   std::vector<Complex> occ_b(spectrum_size);
   std::vector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
   CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
-  for (double yaw : yaws) {
+  for (std::size_t y = 0; y < yaws.size(); ++y) {
+    const double yaw = yaws[y];
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
-    const Eigen::Vector3d turned_centroid =
-        Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * centroid_b;
-    // b's grid origin follows its turned centroid so that b stays inside it.
-    const Eigen::Vector3d origin = turned_centroid + offset_b;
+    // b's grid origin: its turned box, one cell of margin.
+    const Eigen::Vector3d origin = boxes_b[y].lo - Eigen::Vector3d::Constant(cell);
     grid_b.Reset(origin);
     for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
     grid_b.Finish(cover_radius);

@@ -63,18 +63,20 @@ struct CorrelationParams {
   // basin (ICP converges from a few voxels).
   double cell_voxels = 3.0;
   // Cap on the padded FFT grid; larger maps get coarser cells. Indoor
-  // submaps of 150k voxels need 1-2M cells; a 150k-voxel outdoor map (150 m
-  // across at 0.2 m) needs ~14M for cells of 3 voxels, and at the 2M cap
-  // (before) its 1.3 m cells ranked the true shift below 190th (coarse cells
-  // of trees and hedges match anything; docs/voxel-merge.md). Single precision,
+  // submaps of 150k voxels need 0.9-1.6M cells; 150k-voxel outdoor maps (the
+  // campus crops, 71-132 m across at 0.2 m) need 11.5-16M for cells of 3
+  // voxels, and at the 2M cap (before) their 1.3 m cells ranked the true
+  // shift below 190th (coarse cells of trees and hedges match anything;
+  // docs/voxel-merge.md). Single precision,
   // 16M cells take ~40 bytes each (~600 MiB) and ~1.5 s per yaw here.
   std::size_t max_cells = 16'000'000;
   // w in S(t) above. A conflict (a wall where the other map saw through) is
   // strong evidence and rare: free space within a cell of either map's
   // walls does not count, so few cells are left to conflict. In the
   // corridor test fixture (tests/voxel/support/corridor_scene.h) the true
-  // placement ranks 1st at w = 10, 23rd at 5 and below 60th at 1, where
-  // sliding b along the corridor (more wall on wall) wins.
+  // placement ranks 5th at any w from 1 to 20 and 14th at 0, where the flip
+  // and slides of b along the corridor (more wall on wall) win. (On an
+  // earlier grid placement: 1st at 10, 23rd at 5, below 60th at 1.)
   double free_weight = 10.0;
   // A map has data within this of its occupied voxels (or where it is
   // free): the score is normalised by the occupied cells each map has inside
