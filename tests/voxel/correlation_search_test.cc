@@ -121,13 +121,14 @@ TEST(CorrelationSearchTest, FindsTheShiftInClutterAtItsOwnCell) {
   EXPECT_EQ(rank_of_truth(*found, fine.cell_m), 1);
 
   // Cells over twice as coarse, from a cap of an eighth of the grid (1.75 m
-  // here): the truth is not among the 20 best peaks.
+  // here): the truth is not among the 20 best peaks (a quarter, 1.31 m cells,
+  // ranks it 4th).
   params.max_cells = fine.grid_cells / 8;
   CorrelationStats coarse;
   auto blurred = SearchTranslations(a, kLevel, b, kLevel, {yaw}, kResolutionM, params, &coarse);
   ASSERT_TRUE(blurred.ok()) << blurred.status().ToString();
   EXPECT_GT(coarse.cell_m, 1.9 * fine.cell_m);
-  EXPECT_NE(rank_of_truth(*blurred, coarse.cell_m), 1);
+  EXPECT_EQ(rank_of_truth(*blurred, coarse.cell_m), 0);
 }
 
 TEST(CorrelationSearchTest, BadParamsAreNamed) {
