@@ -9,7 +9,9 @@
 
 #include "voxel/merge_graph.h"
 #include "voxel/merge_overlap.h"
+#include "voxel/merge_pair.h"
 #include "voxel/octree_reader.h"
+#include "voxel/submap_features.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/voxel_scene.h"
 #include "voxel/voxel_grid.h"
@@ -445,12 +447,12 @@ TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
   }
 }
 
-// The touching-placement gate's figure. B is A turned 180 deg about a
+// The touching-placement gate. B is A turned 180 deg about a
 // vertical axis in A's end wall: that wall lands on itself and the rest of B
 // in A's unknown space beyond it, so overlap and support pass, but no free
 // voxel of B lands on A's free space. A right placement of an overlapping
 // crop shares the room between them.
-TEST(SharedFreeTest, APlacementSharingOnlyAWallSharesNoFreeSpace) {
+TEST(SharedFreeGateTest, RefusesAPlacementThatSharesOnlyAWall) {
   const std::string a_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
                                            Eigen::Isometry3d::Identity(), kRoomResolutionM);
   const std::string b_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.0, 8.0),
@@ -492,6 +494,35 @@ TEST(SharedFreeTest, APlacementSharingOnlyAWallSharesNoFreeSpace) {
   const SharedFree touching_free = ComputeSharedFree(index, *a, touching, 0);
   EXPECT_GT(touching_free.evaluated, 0u);
   EXPECT_EQ(touching_free.shared, 0u);
+
+  // Through ICP and every gate (RefineAndGate): the touching placement passes
+  // residual, overlap and support, and only the shared free space refuses it.
+  MergeParams params;
+  SubmapFeatures features_a(1, &*a, &params), features_b(2, &*b, &params),
+      features_a_as_b(2, &*a, &params);
+  const PairSide side_a{1, &*a, &features_a};
+  StageTimes times;
+  PairReport touching_report;
+  ASSERT_TRUE(RefineAndGate(side_a, {2, &*a, &features_a_as_b}, params, touching, res, &times,
+                            &touching_report)
+                  .ok());
+  EXPECT_FALSE(touching_report.accepted);
+  EXPECT_NE(touching_report.reason.find("shared free space 0.00"), std::string::npos)
+      << touching_report.reason;
+  EXPECT_GE(touching_report.overlap_score, params.min_overlap_score);
+  EXPECT_GE(touching_report.support_fraction, params.min_support_fraction);
+  PairReport right_report;
+  ASSERT_TRUE(
+      RefineAndGate(side_a, {2, &*b, &features_b}, params, right, res, &times, &right_report).ok());
+  EXPECT_TRUE(right_report.accepted) << right_report.reason;
+  EXPECT_GT(right_report.shared_free_ratio, 2.0);
+  // Off, the gate lets the touching placement through: nothing else stops it.
+  params.min_shared_free_ratio = 0;
+  PairReport ungated;
+  ASSERT_TRUE(
+      RefineAndGate(side_a, {2, &*a, &features_a_as_b}, params, touching, res, &times, &ungated)
+          .ok());
+  EXPECT_TRUE(ungated.accepted) << ungated.reason;
 
   // A map without free space has nothing to share.
   auto occupied_only = VoxelGrid::FromKeys(res, a->occupied_keys());
