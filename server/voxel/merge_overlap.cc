@@ -134,9 +134,9 @@ SharedFree ComputeSharedFree(const OverlapIndex& a, const VoxelGrid& b,
   double volume = 0;  // B's free voxels
   b.ForEachFreeCube([&](const VoxelKey&, int edge) { volume += std::pow(edge, 3.0); });
   if (volume == 0 || a.grid().empty()) return out;
-  if (max_points > 0 && volume > static_cast<double>(max_points)) {
-    out.stride = static_cast<int>(std::ceil(std::cbrt(volume / static_cast<double>(max_points))));
-  }
+  const double budget = static_cast<double>(
+      max_points > 0 ? std::min(max_points, kMaxSharedFreePoints) : kMaxSharedFreePoints);
+  if (volume > budget) out.stride = static_cast<int>(std::ceil(std::cbrt(volume / budget)));
   const int s = out.stride;
   const VoxelGrid& a_grid = a.grid();
   b.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {

@@ -77,7 +77,9 @@ OverlapScore ComputeOverlapScore(const OverlapIndex& a, const VoxelGrid& b,
 // placement that only puts B's wall on A's, B's room on the far side of it,
 // shares none. Estimated on the voxels of B's free cubes whose keys are
 // multiples of one stride per axis, the stride chosen for at most
-// `max_points` of them (0 = every free voxel).
+// `max_points` of them (0 = every free voxel, up to kMaxSharedFreePoints: a
+// map's free leaf can hold 2^48 voxels).
+inline constexpr std::size_t kMaxSharedFreePoints = std::size_t{1} << 24;
 struct SharedFree {
   std::uint64_t evaluated = 0;  // lattice voxels of B's free space mapped into A
   std::uint64_t shared = 0;     // of those, on A's free space as above

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include "voxel/octree_reader.h"
 #include "voxel/submap_features.h"
 #include "voxel/support/corner_scene.h"
+#include "voxel/support/hostile_bt.h"
 #include "voxel/support/voxel_scene.h"
 #include "voxel/voxel_grid.h"
 
@@ -345,6 +348,11 @@ TEST(MergeTest, ValidateNamesTheBadField) {
   params = MergeParams{};
   params.min_overlap_score = 1.5;
   EXPECT_NE(params.Validate().message().find("min_overlap_score"), std::string::npos);
+  for (const double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    params = MergeParams{};
+    params.min_shared_free_ratio = bad;
+    EXPECT_NE(params.Validate().message().find("min_shared_free_ratio"), std::string::npos);
+  }
   params = MergeParams{};
   params.icp.trim_fraction = 0.0;
   EXPECT_NE(params.Validate().message().find("icp.trim_fraction"), std::string::npos);
@@ -529,6 +537,27 @@ TEST(SharedFreeGateTest, RefusesAPlacementThatSharesOnlyAWall) {
   ASSERT_TRUE(occupied_only.ok());
   EXPECT_FALSE(occupied_only->has_free_space());
   EXPECT_EQ(ComputeSharedFree(index, *occupied_only, right, 0).evaluated, 0u);
+}
+
+// A free leaf just below the root (a cube of 2^15 voxels a side, ~3.5e13
+// voxels; hostile or not, a valid file) is sampled on a lattice of at most
+// kMaxSharedFreePoints, not walked voxel by voxel, even when asked for all.
+TEST(SharedFreeGateTest, AHugeFreeLeafIsSampledNotWalked) {
+  auto tree = ReadOctree(testing::BtHeader("2", "0.1") + std::string("\x01\x00", 2));
+  ASSERT_TRUE(tree.ok()) << tree.status().ToString();
+  auto huge = VoxelGrid::FromOcTree(**tree);
+  ASSERT_TRUE(huge.ok()) << huge.status().ToString();
+  ASSERT_TRUE(huge->has_free_space());
+  auto a = VoxelGrid::FromKeys(0.1, {VoxelKey(0, 0, 0)}, {VoxelKey(5, 5, 5)});
+  ASSERT_TRUE(a.ok());
+  const OverlapIndex index(*a);
+  for (const std::size_t max_points : {std::size_t{0}, std::size_t{1000}}) {
+    const SharedFree free =
+        ComputeSharedFree(index, *huge, Eigen::Isometry3d::Identity(), max_points);
+    EXPECT_GT(free.evaluated, 0u);
+    EXPECT_LE(free.evaluated, max_points > 0 ? 2 * max_points : 2 * kMaxSharedFreePoints);
+    EXPECT_GE(free.stride, 128);  // (2^45 / 2^24)^(1/3): 2^7
+  }
 }
 
 TEST(InspectSubmapTest, SummarisesAValidMap) {
