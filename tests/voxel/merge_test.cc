@@ -408,26 +408,34 @@ TEST(OverlapScoreTest, CountsCoincidingAmongObservedVoxels) {
   EXPECT_LT(moved.score, 0.2);
 }
 
+// Two overlapping crops of the furnished room with their free space, in the
+// scene frame: x in [-0.5, 5.6) m and [2.0, 8.0) m.
+void OverlappingRoomGrids(VoxelGrid* a, VoxelGrid* b) {
+  const auto crop = [](double x_min_m, double x_max_m, VoxelGrid* out) {
+    auto tree = ReadOctree(RasteriseSubmap(FurnishedRoom(), RoomCropX(x_min_m, x_max_m),
+                                           Eigen::Isometry3d::Identity(), kRoomResolutionM));
+    ASSERT_TRUE(tree.ok()) << tree.status().ToString();
+    auto grid = VoxelGrid::FromOcTree(**tree);
+    ASSERT_TRUE(grid.ok()) << grid.status().ToString();
+    *out = std::move(*grid);
+  };
+  crop(-0.5, 5.6, a);
+  crop(2.0, 8.0, b);
+}
+
 TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
   // A furnished room with its free space against a moved crop of it; and the
   // wall above, whose free space lies outside the occupied box (grid path).
-  const std::string a_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
-                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
-  const std::string b_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.0, 8.0),
-                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
-  auto a_tree = ReadOctree(a_bt);
-  auto b_tree = ReadOctree(b_bt);
-  ASSERT_TRUE(a_tree.ok() && b_tree.ok());
-  auto a = VoxelGrid::FromOcTree(**a_tree);
-  auto b = VoxelGrid::FromOcTree(**b_tree);
+  VoxelGrid a, b;
+  ASSERT_NO_FATAL_FAILURE(OverlappingRoomGrids(&a, &b));
   std::vector<VoxelKey> wall, free;
   for (int x = 0; x < 10; ++x) {
     wall.emplace_back(x, 0, 0);
     for (int y = 1; y <= 6; ++y) free.emplace_back(x, y, 0);
   }
   auto wall_grid = VoxelGrid::FromKeys(kRoomResolutionM, wall, free);
-  ASSERT_TRUE(a.ok() && b.ok() && wall_grid.ok());
-  for (const VoxelGrid* grid : {&*a, &*wall_grid}) {
+  ASSERT_TRUE(wall_grid.ok());
+  for (const VoxelGrid* grid : {&a, &*wall_grid}) {
     const OverlapIndex bits(*grid);
     const OverlapIndex no_bits(*grid, /*max_cells=*/1);
     // Room for the occupied box (grown by one) only: free space beyond it
@@ -445,9 +453,9 @@ TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
          {Eigen::Isometry3d::Identity(), Pose(0, 0, 0, Eigen::Vector3d(0.0, 0.35, 0.0)),
           Pose(17, 2, -3, Eigen::Vector3d(0.4, -0.3, 0.1)),
           Pose(90, 0, 0, Eigen::Vector3d(3.0, 1.0, 0.0))}) {
-      const OverlapScore want = ComputeOverlapScore(*grid, *b, T);
+      const OverlapScore want = ComputeOverlapScore(*grid, b, T);
       for (const OverlapIndex* index : {&bits, &no_bits, &occupied_box}) {
-        const OverlapScore got = ComputeOverlapScore(*index, *b, T);
+        const OverlapScore got = ComputeOverlapScore(*index, b, T);
         EXPECT_EQ(got.observed, want.observed);
         EXPECT_EQ(got.coinciding, want.coinciding);
       }
@@ -461,57 +469,49 @@ TEST(OverlapScoreTest, TheIndexGivesTheGridsCounts) {
 // voxel of B lands on A's free space. A right placement of an overlapping
 // crop shares the room between them.
 TEST(SharedFreeGateTest, RefusesAPlacementThatSharesOnlyAWall) {
-  const std::string a_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(-0.5, 5.6),
-                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
-  const std::string b_bt = RasteriseSubmap(FurnishedRoom(), RoomCropX(2.0, 8.0),
-                                           Eigen::Isometry3d::Identity(), kRoomResolutionM);
-  auto a_tree = ReadOctree(a_bt);
-  auto b_tree = ReadOctree(b_bt);
-  ASSERT_TRUE(a_tree.ok() && b_tree.ok());
-  auto a = VoxelGrid::FromOcTree(**a_tree);
-  auto b = VoxelGrid::FromOcTree(**b_tree);
-  ASSERT_TRUE(a.ok() && b.ok());
-  ASSERT_TRUE(a->has_free_space() && b->has_free_space());
-  const OverlapIndex index(*a);
+  VoxelGrid a, b;
+  ASSERT_NO_FATAL_FAILURE(OverlappingRoomGrids(&a, &b));
+  ASSERT_TRUE(a.has_free_space() && b.has_free_space());
+  const OverlapIndex index(a);
   const auto ratio = [](const SharedFree& free, const OverlapScore& overlap) {
     return free.shared_voxels() / static_cast<double>(overlap.coinciding);
   };
 
   const Eigen::Isometry3d right = Eigen::Isometry3d::Identity();
-  const SharedFree shared = ComputeSharedFree(index, *b, right, 0);
-  const OverlapScore overlap = ComputeOverlapScore(index, *b, right);
+  const SharedFree shared = ComputeSharedFree(index, b, right, 0);
+  const OverlapScore overlap = ComputeOverlapScore(index, b, right);
   EXPECT_EQ(shared.stride, 1);
   EXPECT_GT(ratio(shared, overlap), 2.0);
   // A sparser lattice estimates the same volume.
-  const SharedFree sampled = ComputeSharedFree(index, *b, right, shared.evaluated / 8);
+  const SharedFree sampled = ComputeSharedFree(index, b, right, shared.evaluated / 8);
   EXPECT_GE(sampled.stride, 2);
   EXPECT_NEAR(sampled.shared_voxels(), shared.shared_voxels(), 0.1 * shared.shared_voxels());
 
   // The turn about A's wall at x = min_key.x: voxel centres land on centres.
-  const double res = a->resolution();
-  const Eigen::Vector3d axis((a->min_key().x() + 0.5) * res,
-                             (a->min_key().y() + a->max_key().y() + 1) * 0.5 * res, 0.0);
+  const double res = a.resolution();
+  const Eigen::Vector3d axis((a.min_key().x() + 0.5) * res,
+                             (a.min_key().y() + a.max_key().y() + 1) * 0.5 * res, 0.0);
   const Eigen::Isometry3d touching = Eigen::Translation3d(axis) *
                                      Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
                                      Eigen::Translation3d(-axis);
-  const OverlapScore touching_overlap = ComputeOverlapScore(index, *a, touching);
+  const OverlapScore touching_overlap = ComputeOverlapScore(index, a, touching);
   ASSERT_GT(touching_overlap.observed, 0u);
   EXPECT_GE(touching_overlap.score, MergeParams{}.min_overlap_score);
-  EXPECT_GE(static_cast<double>(touching_overlap.coinciding) / a->num_occupied(),
+  EXPECT_GE(static_cast<double>(touching_overlap.coinciding) / a.num_occupied(),
             MergeParams{}.min_support_fraction);
-  const SharedFree touching_free = ComputeSharedFree(index, *a, touching, 0);
+  const SharedFree touching_free = ComputeSharedFree(index, a, touching, 0);
   EXPECT_GT(touching_free.evaluated, 0u);
   EXPECT_EQ(touching_free.shared, 0u);
 
   // Through ICP and every gate (RefineAndGate): the touching placement passes
   // residual, overlap and support, and only the shared free space refuses it.
   MergeParams params;
-  SubmapFeatures features_a(1, &*a, &params), features_b(2, &*b, &params),
-      features_a_as_b(2, &*a, &params);
-  const PairSide side_a{1, &*a, &features_a};
+  SubmapFeatures features_a(1, &a, &params), features_b(2, &b, &params),
+      features_a_as_b(2, &a, &params);
+  const PairSide side_a{1, &a, &features_a};
   StageTimes times;
   PairReport touching_report;
-  ASSERT_TRUE(RefineAndGate(side_a, {2, &*a, &features_a_as_b}, params, touching, res, &times,
+  ASSERT_TRUE(RefineAndGate(side_a, {2, &a, &features_a_as_b}, params, touching, res, &times,
                             &touching_report)
                   .ok());
   EXPECT_FALSE(touching_report.accepted);
@@ -521,19 +521,19 @@ TEST(SharedFreeGateTest, RefusesAPlacementThatSharesOnlyAWall) {
   EXPECT_GE(touching_report.support_fraction, params.min_support_fraction);
   PairReport right_report;
   ASSERT_TRUE(
-      RefineAndGate(side_a, {2, &*b, &features_b}, params, right, res, &times, &right_report).ok());
+      RefineAndGate(side_a, {2, &b, &features_b}, params, right, res, &times, &right_report).ok());
   EXPECT_TRUE(right_report.accepted) << right_report.reason;
   EXPECT_GT(right_report.shared_free_ratio, 2.0);
   // Off, the gate lets the touching placement through: nothing else stops it.
   params.min_shared_free_ratio = 0;
   PairReport ungated;
   ASSERT_TRUE(
-      RefineAndGate(side_a, {2, &*a, &features_a_as_b}, params, touching, res, &times, &ungated)
+      RefineAndGate(side_a, {2, &a, &features_a_as_b}, params, touching, res, &times, &ungated)
           .ok());
   EXPECT_TRUE(ungated.accepted) << ungated.reason;
 
   // A map without free space has nothing to share.
-  auto occupied_only = VoxelGrid::FromKeys(res, a->occupied_keys());
+  auto occupied_only = VoxelGrid::FromKeys(res, a.occupied_keys());
   ASSERT_TRUE(occupied_only.ok());
   EXPECT_FALSE(occupied_only->has_free_space());
   EXPECT_EQ(ComputeSharedFree(index, *occupied_only, right, 0).evaluated, 0u);
