@@ -98,10 +98,12 @@ struct SubmapOptions {
   bool log_odds_fusion = false;       // false: the paper's overlap rule
   // The correlation generator (voxel::CorrelationParams): run after the
   // first correlation_after_corner_stages corner-matching stages accepted
-  // nothing, and also after an accepted solution so that the uniqueness gate
-  // sees other yaws (correlation_check_accepted). CPU: docs/voxel-merge.md.
+  // nothing (0: first, corner matching only when it accepts nothing), and,
+  // when corner matching went first, also after an accepted solution so that
+  // the uniqueness gate sees other yaws (correlation_check_accepted). CPU:
+  // docs/voxel-merge.md.
   bool correlation = true;
-  int correlation_after_corner_stages = 1;
+  int correlation_after_corner_stages = 0;
   bool correlation_check_accepted = true;
   // Corner matching's looser stages after the generator searched and refused
   // (voxel::CorrelationParams::looser_stages_after_refusal).

@@ -36,15 +36,17 @@ struct CorrelationParams {
   // When it runs: after this many of corner matching's tolerance stages
   // (MergeParams: the strict one, then looser_tolerances) have accepted
   // nothing; the remaining stages run only when it accepts nothing too.
-  // 1 (the default): the strict stage's solutions are cheap and, where
-  // corners repeat, right; the looser stages' denser graphs and refused
-  // solutions were most of a low-overlap merge's CPU (docs/voxel-merge.md).
-  // 0: the generator first (corners are then extracted only when it accepts
-  // nothing); its peaks put a room's floor on the other room's ceiling in
-  // the test scenes, which the gates cannot tell from the truth when the
-  // maps carry little free space, so corner matching goes first by default.
-  // A large value (e.g. 100): after every stage, the order before.
-  int after_corner_stages = 1;
+  // 0 (the default): the generator first; corners are extracted only when it
+  // accepts nothing. On the benchmark's 90 merges and 18 negative pairs every
+  // outcome was the same as with corner matching first, at 22-40 % less CPU
+  // indoors: corner extraction and matching were half of an indoor merge
+  // (docs/voxel-merge.md, "Correlation first"). It was 1 until the shared
+  // free space gate (MergeParams::min_shared_free_ratio): the generator's
+  // peaks that put a room's floor on the other room's ceiling passed every
+  // other gate in the test scenes. 1: the strict corner stage first, then
+  // the generator as a check on what it accepted (check_corner_solutions).
+  // A large value (e.g. 100): after every stage.
+  int after_corner_stages = 0;
   // Whether the looser corner stages still run when the
   // generator ran and accepted nothing. Off: on the benchmark's 90 merges and
   // 18 negative pairs (docs/voxel-merge.md, "Refusals") they placed nothing

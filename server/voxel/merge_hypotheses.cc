@@ -96,11 +96,12 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   const Eigen::Vector3d& centroid_b = b.features->OccupiedCentroid();
   std::vector<Eigen::Isometry3d> known = accepted;
   // Hypotheses are refined best first. Once an answer is accepted (here or
-  // by corner matching) only the best distinct peak of each yaw not yet
-  // refined is: enough for the uniqueness gate to see the other yaws (a
-  // symmetric building's twin is another yaw), while every further peak
-  // would cost an ICP screen.
-  std::vector<double> yaws_refined;
+  // by corner matching) only the best distinct peak of each yaw is that was
+  // not refined before (peaks refused before the answer do not count): enough
+  // for the uniqueness gate to see the other yaws (a symmetric building's
+  // twin is another yaw) and a second place at the answer's own yaw (a slide
+  // along a corridor), while every further peak would cost an ICP screen.
+  std::vector<double> yaws_checked;  // a peak refined while an answer was known
   for (std::size_t i = 0; i < hypotheses.size(); ++i) {
     const CorrelationHypothesis& h = hypotheses[i];
     bool near = false;
@@ -111,10 +112,12 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
       ++run.agreeing;
       continue;
     }
-    const bool yaw_refined =
-        std::find(yaws_refined.begin(), yaws_refined.end(), h.yaw_rad) != yaws_refined.end();
-    if (!known.empty() && yaw_refined) continue;
-    if (!yaw_refined) yaws_refined.push_back(h.yaw_rad);
+    if (!known.empty()) {
+      if (std::find(yaws_checked.begin(), yaws_checked.end(), h.yaw_rad) != yaws_checked.end()) {
+        continue;
+      }
+      yaws_checked.push_back(h.yaw_rad);
+    }
     TriedHypothesis tried;
     tried.label = "correlation yaw " + Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) +
                   " deg, peak " + std::to_string(i + 1);

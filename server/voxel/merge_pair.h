@@ -42,10 +42,11 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
 //
 // Every generator's hypotheses pass the uniqueness gate too: two distinct
 // accepted hypotheses refuse the pair naming both. Corner matching's first
-// correlation.after_corner_stages tolerance stages run first; then the
-// correlation generator when they accepted nothing (or always, with
-// correlation.check_corner_solutions); then the remaining stages when nothing
-// was accepted yet. A refusal names what every stage found.
+// correlation.after_corner_stages tolerance stages run first (none by
+// default); then the correlation generator when they accepted nothing (or
+// always, with correlation.check_corner_solutions); then the remaining
+// stages when nothing was accepted yet (after a search that refused, the
+// strict one only). A refusal names what every stage found.
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times);
 

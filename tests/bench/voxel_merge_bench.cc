@@ -168,6 +168,8 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
     params.max_residual_voxels = std::atof(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_OVERLAP_SCORE"))
     params.min_overlap_score = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_CORRELATION_AFTER_CORNER_STAGES"))
+    params.correlation.after_corner_stages = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_SHARED_FREE_RATIO"))
     params.min_shared_free_ratio = std::atof(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS"))

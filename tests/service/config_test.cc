@@ -154,7 +154,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_EQ(c.submaps.correlation_max_cells, 4'000'000u);
   EXPECT_TRUE(c.submaps.correlation_looser_stages_after_refusal);
   const ServerConfig defaults;
-  EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 1);
+  EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 0);
   EXPECT_TRUE(defaults.submaps.correlation);
   EXPECT_EQ(defaults.submaps.correlation_max_cells, 16'000'000u);  // = voxel::CorrelationParams
   EXPECT_FALSE(defaults.submaps.correlation_looser_stages_after_refusal);

@@ -118,7 +118,8 @@ TEST(MergeHypothesesTest, UniquenessGateRefusesASymmetricRoomNamingBoth) {
 TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   const Corridors c = MakeCorridors();
   MergeParams params;
-  params.max_residual_voxels = 0.01;  // nothing can pass
+  params.max_residual_voxels = 0.01;           // nothing can pass
+  params.correlation.after_corner_stages = 1;  // corner matching's strict stage first
   auto outcome = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
   ASSERT_FALSE(outcome.ok());
   const std::string& message = outcome.status().message();
