@@ -389,7 +389,7 @@ const std::vector<Setting>& Settings() {
            [](C& c) -> auto& { return c.submaps.correlation; }),
       Count("merge.correlation_after_corner_stages", "the correlation generator runs after this many corner-"
             "matching tolerance stages (strict, then looser) accepted nothing; 0 = before corner matching (corners "
-            "only when it accepts nothing: same outcomes on the benchmark, 22-40 % less CPU indoors), 1 = after "
+            "only when it accepts nothing: same outcomes on the benchmark, 30-45 % less CPU indoors), 1 = after "
             "the strict stage, 3 = after all of them",
             [](C& c) -> auto& { return c.submaps.correlation_after_corner_stages; }, 0, 100),
       Count("merge.correlation_max_cells", "cells of the correlation generator's FFT grid (~40 bytes each, "

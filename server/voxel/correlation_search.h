@@ -38,8 +38,8 @@ struct CorrelationParams {
   // nothing; the remaining stages run only when it accepts nothing too.
   // 0 (the default): the generator first; corners are extracted only when it
   // accepts nothing. On the benchmark's 90 merges and 18 negative pairs every
-  // outcome was the same as with corner matching first, at 22-40 % less CPU
-  // indoors: corner extraction and matching were half of an indoor merge
+  // outcome was the same as with corner matching first, at 30-45 % less CPU
+  // indoors: corner extraction and matching were a third to a half of an indoor merge
   // (docs/voxel-merge.md, "Correlation first"). It was 1 until the shared
   // free space gate (MergeParams::min_shared_free_ratio): the generator's
   // peaks that put a room's floor on the other room's ceiling passed every
