@@ -25,10 +25,10 @@ OverlapScore Score(const Grid& a, const VoxelGrid& a_grid, const VoxelGrid& b,
   OverlapScore out;
   const auto& centres = b.occupied_centres();
   if (centres.empty() || a_grid.empty()) return out;
-  std::size_t step = 1;
   if (max_points > 0 && centres.size() > max_points)
-    step = (centres.size() + max_points - 1) / max_points;
-  for (std::size_t i = 0; i < centres.size(); i += step) {
+    out.step = (centres.size() + max_points - 1) / max_points;
+  for (std::size_t i = 0; i < centres.size(); i += out.step) {
+    ++out.evaluated;
     const VoxelKey key = a_grid.PointToKey(T_a_b * centres[i]);
     if (a.OccupiedNear(key)) {
       ++out.observed;

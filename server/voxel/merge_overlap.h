@@ -25,7 +25,9 @@
 namespace mapd::voxel {
 
 struct OverlapScore {
-  std::uint64_t observed = 0;    // B's occupied voxels that fall on A's observed space
+  std::uint64_t evaluated = 0;   // B's occupied voxels mapped (every `step`-th)
+  std::size_t step = 1;          // B's voxels per evaluated one
+  std::uint64_t observed = 0;    // of those, on A's observed space
   std::uint64_t coinciding = 0;  // of those, on (or next to) an occupied voxel of A
   double score = 0.0;            // coinciding / observed, 0 when observed == 0
 };

@@ -89,13 +89,9 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
   const OverlapScore overlap =
       ComputeOverlapScore(a.features->Overlap(), *b.grid, report->T_a_b, params.overlap_points);
   report->overlap_score = overlap.score;
-  const std::size_t n = b.grid->num_occupied();
-  const std::size_t step = params.overlap_points > 0 && n > params.overlap_points
-                               ? (n + params.overlap_points - 1) / params.overlap_points
-                               : 1;
-  const std::size_t evaluated = (n + step - 1) / step;
-  report->support_fraction =
-      evaluated > 0 ? static_cast<double>(overlap.coinciding) / static_cast<double>(evaluated) : 0;
+  report->support_fraction = overlap.evaluated > 0 ? static_cast<double>(overlap.coinciding) /
+                                                         static_cast<double>(overlap.evaluated)
+                                                   : 0;
   times->alignment_s += SecondsSince(start);
 
   const double residual_voxels = report->residual_m / gate_voxel_m;
@@ -133,7 +129,7 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
     // Both counts in B's voxels: the coinciding ones were counted every
     // `step`-th.
     report->shared_free_ratio = free.shared_voxels() / (static_cast<double>(overlap.coinciding) *
-                                                        static_cast<double>(step));
+                                                        static_cast<double>(overlap.step));
     if (report->shared_free_ratio < params.min_shared_free_ratio) {
       report->reason = "shared free space " + Fixed(report->shared_free_ratio, 2) +
                        " voxels per coinciding voxel, below " +
