@@ -58,15 +58,23 @@ class CoarseGrid {
     const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     occ_.assign(size, 0);
     free_.assign(size, 0.0F);
+    dilated_.assign(size, 0);
+    cover_.assign(size, 0);
+    pass_.assign(size, 0);
   }
   // Empties the grid and moves it to `origin`; keeps its buffers (every yaw
-  // of b reuses one grid: fresh 16M-cell buffers cost page faults).
+  // of b reuses one grid: fresh 16M-cell buffers cost page faults). Every
+  // buffer is zero outside the content rows, so only those are cleared.
   void Reset(const Eigen::Vector3d& origin) {
     origin_ = origin;
+    ForEachContentRow([&](std::size_t row) {
+      for (auto* v : {&occ_, &dilated_, &cover_, &pass_}) std::fill_n(v->begin() + row, n_[2], 0);
+      std::fill_n(free_.begin() + row, n_[2], 0.0F);
+    });
     occ_lo_ = n_;
     occ_hi_ = {-1, -1, -1};
-    std::fill(occ_.begin(), occ_.end(), 0);
-    std::fill(free_.begin(), free_.end(), 0.0F);
+    free_hi_ = {-1, -1};
+    extent_ = {0, 0};
   }
   void Add(const Eigen::Vector3d& p, const Sample& s) {
     const Eigen::Vector3d f = (p - origin_) / cell_;
@@ -81,6 +89,7 @@ class CoarseGrid {
       occ_hi_ = {std::max(occ_hi_[0], x), std::max(occ_hi_[1], y), std::max(occ_hi_[2], z)};
     } else {
       free_[i] += static_cast<float>(s.free_volume);
+      free_hi_ = {std::max(free_hi_[0], x), std::max(free_hi_[1], y)};
     }
   }
   // A wall rasterised in two grids offset by a fraction of a cell lands in
@@ -88,13 +97,25 @@ class CoarseGrid {
   // occupied cell does not count (else half the true wall cells would be
   // penalised), and dilated_occ() is what the other map's walls may hit.
   void Finish(int cover_radius) {
+    for (int k = 0; k < 2; ++k) {
+      const int occ_end = occ_hi_[0] < 0 ? 0 : std::min(n_[k], occ_hi_[k] + cover_radius + 1);
+      extent_[k] = std::max(occ_end, free_hi_[k] + 1);
+    }
     Dilate(1, &dilated_);
     Dilate(cover_radius, &cover_);
-    for (std::size_t i = 0; i < occ_.size(); ++i) {
-      free_[i] = dilated_[i] != 0 ? 0.0F : std::min(1.0F, free_[i]);
-      if (free_[i] > 0) cover_[i] = 1;
-    }
+    occupied_cells_ = 0;
+    ForEachContentRow([&](std::size_t row) {
+      for (std::size_t i = row; i < row + static_cast<std::size_t>(n_[2]); ++i) {
+        free_[i] = dilated_[i] != 0 ? 0.0F : std::min(1.0F, free_[i]);
+        if (free_[i] > 0) cover_[i] = 1;
+        occupied_cells_ += occ_[i];
+      }
+    });
   }
+  // After Finish: every cell outside x < extent[0], y < extent[1] is zero
+  // in every buffer (for RealFft::ForwardInBox).
+  const std::array<int, 2>& extent() const { return extent_; }
+  std::size_t occupied_cells() const { return occupied_cells_; }
   const std::vector<std::uint8_t>& occ() const { return occ_; }
   const std::vector<std::uint8_t>& dilated_occ() const { return dilated_; }
   // Where this map has data: within cover_radius cells of an occupied cell,
@@ -111,9 +132,8 @@ class CoarseGrid {
   // costs O(cells) whatever the radius, and the innermost loop runs over
   // contiguous memory (z) on every axis.
   void Dilate(int radius, std::vector<std::uint8_t>* result) {
-    std::vector<std::uint8_t>& out = *result;
-    out.assign(occ_.size(), 0);  // within capacity: no allocation
-    if (occ_hi_[0] < 0) return;  // nothing occupied
+    std::vector<std::uint8_t>& out = *result;  // zero outside the box below
+    if (occ_hi_[0] < 0) return;                // nothing occupied
     std::array<int, 3> lo{}, hi{};
     for (std::size_t k = 0; k < 3; ++k) {
       lo[k] = std::max(0, occ_lo_[k] - radius);
@@ -175,14 +195,24 @@ class CoarseGrid {
         }
       }
     };
-    pass_.assign(occ_.size(), 0);
     pass(0, occ_, &out);
     pass(1, out, &pass_);
     pass(2, pass_, &out);
   }
 
+  // Calls visit(index of the row's first cell) for every z row inside extent_.
+  template <typename Visit>
+  void ForEachContentRow(Visit&& visit) const {
+    for (int x = 0; x < extent_[0]; ++x) {
+      for (int y = 0; y < extent_[1]; ++y) visit((static_cast<std::size_t>(x) * n_[1] + y) * n_[2]);
+    }
+  }
+
   std::array<int, 3> n_;
   std::array<int, 3> occ_lo_, occ_hi_;  // occupied cells' box (hi < 0: none)
+  std::array<int, 2> free_hi_{-1, -1};  // the free samples' last x, y (< 0: none)
+  std::array<int, 2> extent_{0, 0};     // see extent()
+  std::size_t occupied_cells_ = 0;
   Eigen::Vector3d origin_;
   double cell_;
   std::vector<std::uint8_t> occ_, dilated_, cover_;
@@ -334,10 +364,11 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& dilated = grid_a.dilated_occ();
     const auto& free = grid_a.free();
     const auto& cover = grid_a.cover();
-    occ_a = keep(fft.Forward([&](std::size_t i) { return occ[i]; }));
-    hit_a = keep(fft.Forward([&](std::size_t i) { return dilated[i] - w * free[i]; }));
-    cover_a = keep(fft.Forward([&](std::size_t i) { return cover[i]; }));
-    for (std::uint8_t v : occ) cells_a += v;
+    const std::array<int, 2>& extent = grid_a.extent();
+    occ_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; }));
+    hit_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return dilated[i] - w * free[i]; }));
+    cover_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; }));
+    cells_a = static_cast<double>(grid_a.occupied_cells());
   }
   const std::vector<Sample> samples_b = Samples(b, cell);
 
@@ -358,12 +389,12 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& occ = grid_b.occ();
     const auto& free = grid_b.free();
     const auto& cover = grid_b.cover();
-    double cells_b = 0;
-    for (std::uint8_t v : occ) cells_b += v;
+    const double cells_b = static_cast<double>(grid_b.occupied_cells());
+    const std::array<int, 2>& extent = grid_b.extent();
     // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s). Each product is formed in
     // the transform's own spectrum and each inverse folded into `weight`
     // before the next, so only occ_b's spectrum and one real array are kept.
-    const Complex* spectrum = fft.Forward([&](std::size_t i) { return occ[i]; });
+    const Complex* spectrum = fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; });
     std::copy(spectrum, spectrum + spectrum_size, occ_b.begin());
     // The score is normalised by the occupied cells each map has where the
     // other has data: sliding a corridor over more of the other map adds
@@ -373,7 +404,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const double min_cells = std::max(params.min_overlap_fraction * std::min(cells_a, cells_b) *
                                           static_cast<double>(fft.real_size()),
                                       1.0);
-    Complex* product = fft.Forward([&](std::size_t i) { return cover[i]; });
+    Complex* product = fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; });
     for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(occ_a[i], product[i]);
     const float* a_in_b = fft.Inverse();
     std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
@@ -385,7 +416,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       weight[i] =
           std::min(in_a, in_b) >= min_cells ? static_cast<float>(1.0 / std::sqrt(in_a * in_b)) : 0;
     }
-    product = fft.Forward([&](std::size_t i) { return free[i]; });
+    product = fft.ForwardInBox(extent, [&](std::size_t i) { return free[i]; });
     for (std::size_t i = 0; i < spectrum_size; ++i) {
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }

@@ -21,7 +21,7 @@ int FftSize(int n) {
   }
 }
 
-RealFft::RealFft(const std::vector<int>& dims) {
+RealFft::RealFft(const std::vector<int>& dims) : dims_(dims) {
   for (std::size_t k = 0; k < dims.size(); ++k) {
     real_size_ *= static_cast<std::size_t>(dims[k]);
     complex_size_ *= static_cast<std::size_t>(k + 1 < dims.size() ? dims[k] : dims[k] / 2 + 1);
@@ -41,12 +41,61 @@ RealFft::~RealFft() {
     const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
     fftwf_destroy_plan(forward_);
     fftwf_destroy_plan(inverse_);
+    for (const BoxPlans& p : box_plans_) {
+      fftwf_destroy_plan(p.rows);
+      fftwf_destroy_plan(p.columns);
+      fftwf_destroy_plan(p.planes);
+    }
   }
   fftwf_free(real_);
   fftwf_free(spectrum_);
 }
 
 void RealFft::ExecuteForward() { fftwf_execute(forward_); }
+
+void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
+  const int n0 = dims_[0], n1 = dims_[1], n2c = dims_[2] / 2 + 1;
+  extent = {std::clamp(extent[0], 0, n0), std::clamp(extent[1], 0, n1)};
+  if (extent[0] == 0 || extent[1] == 0) {  // all zero
+    std::fill(spectrum_, spectrum_ + complex_size_, Complex(0, 0));
+    return;
+  }
+  auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
+  auto found = std::find_if(box_plans_.begin(), box_plans_.end(),
+                            [&](const BoxPlans& p) { return p.extent == extent; });
+  if (found == box_plans_.end()) {
+    BoxPlans p;
+    p.extent = extent;
+    // Guru interface: a 1D transform of `length` (stride) repeated over
+    // `loops` (count, input stride, output stride), in spectrum elements for
+    // the complex passes; FFTW_ESTIMATE plans do not touch the buffers.
+    const fftwf_iodim along_z = {dims_[2], 1, 1};
+    const fftwf_iodim rows[2] = {{extent[0], n1 * dims_[2], n1 * n2c}, {extent[1], dims_[2], n2c}};
+    const fftwf_iodim along_y = {n1, n2c, n2c};
+    const fftwf_iodim columns[2] = {{extent[0], n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
+    const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
+    const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    p.rows = fftwf_plan_guru_dft_r2c(1, &along_z, 2, rows, real_, spectrum, FFTW_ESTIMATE);
+    p.columns = fftwf_plan_guru_dft(1, &along_y, 2, columns, spectrum, spectrum, FFTW_FORWARD,
+                                    FFTW_ESTIMATE);
+    p.planes = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_FORWARD,
+                                   FFTW_ESTIMATE);
+    box_plans_.push_back(p);
+    found = box_plans_.end() - 1;
+  }
+  // The passes read zeros where the rows were not transformed.
+  const std::size_t plane = static_cast<std::size_t>(n1) * n2c;
+  for (std::size_t x = 0; x < static_cast<std::size_t>(extent[0]); ++x) {
+    std::fill_n(spectrum_ + x * plane + static_cast<std::size_t>(extent[1]) * n2c,
+                static_cast<std::size_t>(n1 - extent[1]) * n2c, Complex(0, 0));
+  }
+  std::fill(spectrum_ + static_cast<std::size_t>(extent[0]) * plane, spectrum_ + complex_size_,
+            Complex(0, 0));
+  fftwf_execute(found->rows);
+  fftwf_execute(found->columns);
+  fftwf_execute(found->planes);
+}
 
 float* RealFft::Inverse() {
   fftwf_execute(inverse_);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "voxel/support/corridor_scene.h"
 #include "voxel/support/voxel_scene.h"
 
 namespace mapd::voxel {

@@ -1,0 +1,59 @@
+#include "voxel/fft_support.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace mapd::voxel {
+namespace {
+
+// A grid that is random inside x < extent[0], y < extent[1] and zero outside.
+std::vector<float> GridInBox(const std::array<int, 3>& n, const std::array<int, 2>& extent,
+                             unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> value(-1.0F, 1.0F);
+  std::vector<float> grid(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0.0F);
+  for (int x = 0; x < extent[0]; ++x) {
+    for (int y = 0; y < extent[1]; ++y) {
+      for (int z = 0; z < n[2]; ++z)
+        grid[(static_cast<std::size_t>(x) * n[1] + y) * n[2] + z] = value(random);
+    }
+  }
+  return grid;
+}
+
+// ForwardInBox transforms only the rows and planes inside its box; the
+// spectrum must be the whole grid's, whatever was in the buffers before
+// (each box is run after another, larger one) and for boxes that are empty
+// or the whole grid.
+TEST(RealFftTest, ForwardInBoxIsTheWholeGridsTransform) {
+  const std::array<int, 3> n = {12, 10, 9};
+  RealFft fft({n[0], n[1], n[2]});
+  const std::vector<std::array<int, 2>> extents = {{12, 10}, {5, 4}, {1, 10}, {12, 1},
+                                                   {7, 7},   {0, 6}, {5, 4}};
+  for (std::size_t k = 0; k < extents.size(); ++k) {
+    const std::vector<float> grid = GridInBox(n, extents[k], static_cast<unsigned>(k));
+    const Complex* full = fft.Forward([&](std::size_t i) { return grid[i]; });
+    const std::vector<Complex> expected(full, full + fft.complex_size());
+    // A value read outside the box would poison the spectrum.
+    const Complex* pruned = fft.ForwardInBox(extents[k], [&](std::size_t i) {
+      const std::size_t x = i / (static_cast<std::size_t>(n[1]) * n[2]);
+      const std::size_t y = (i / n[2]) % n[1];
+      const bool inside = x < static_cast<std::size_t>(extents[k][0]) &&
+                          y < static_cast<std::size_t>(extents[k][1]);
+      return inside ? grid[i] : NAN;
+    });
+    double worst = 0;
+    for (std::size_t i = 0; i < fft.complex_size(); ++i) {
+      worst = std::max(worst, static_cast<double>(std::abs(pruned[i] - expected[i])));
+    }
+    EXPECT_LT(worst, 1e-4) << "extent " << extents[k][0] << " x " << extents[k][1];
+  }
+}
+
+}  // namespace
+}  // namespace mapd::voxel
