@@ -13,31 +13,39 @@
 namespace mapd::voxel {
 namespace {
 
-// A point sample of a map: an occupied voxel centre (occupied = 1) or a piece
-// of a free cube (free = its volume, in coarse cells).
+// A point sample of a map: an occupied voxel centre (occupied = true) or a
+// piece of a free cube (free_volume = its volume, in coarse cells). 32 bytes:
+// a crop of 5 cm voxels has over a million free pieces.
 struct Sample {
   Eigen::Vector3d p;
+  float free_volume = 0.0F;
   bool occupied = false;
-  double free_volume = 0.0;
 };
 
 // The occupied centres and the free cubes cut into pieces of at most half a
 // coarse cell, so that a rotated cube spreads over the right cells.
 std::vector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
-  std::vector<Sample> samples;
-  samples.reserve(grid.num_occupied());
-  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples.push_back({c, true, 0.0});
   const double res = grid.resolution();
   const int piece = std::max(1, static_cast<int>(std::floor(0.5 * cell_m / res)));
   const double cell_volume = std::pow(cell_m / res, 3);
+  // Counted first: growing the vector cost a tenth of the search on
+  // fr_078_tidyup (copies and page faults).
+  std::size_t count = grid.num_occupied();
+  grid.ForEachFreeCube([&](const VoxelKey&, int edge) {
+    const std::size_t per_edge = static_cast<std::size_t>((edge + piece - 1) / piece);
+    count += per_edge * per_edge * per_edge;
+  });
+  std::vector<Sample> samples;
+  samples.reserve(count);
+  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples.push_back({c, 0.0F, true});
   grid.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
     const int step = std::min(edge, piece);
-    const double volume = std::pow(step, 3) / cell_volume;
+    const auto volume = static_cast<float>(std::pow(step, 3) / cell_volume);
     for (int x = 0; x < edge; x += step) {
       for (int y = 0; y < edge; y += step) {
         for (int z = 0; z < edge; z += step) {
           const Eigen::Vector3d corner = (min_key + VoxelKey(x, y, z)).cast<double>() * res;
-          samples.push_back({corner + Eigen::Vector3d::Constant(0.5 * step * res), false, volume});
+          samples.push_back({corner + Eigen::Vector3d::Constant(0.5 * step * res), volume, false});
         }
       }
     }
@@ -88,7 +96,7 @@ class CoarseGrid {
       occ_lo_ = {std::min(occ_lo_[0], x), std::min(occ_lo_[1], y), std::min(occ_lo_[2], z)};
       occ_hi_ = {std::max(occ_hi_[0], x), std::max(occ_hi_[1], y), std::max(occ_hi_[2], z)};
     } else {
-      free_[i] += static_cast<float>(s.free_volume);
+      free_[i] += s.free_volume;
       free_hi_ = {std::max(free_hi_[0], x), std::max(free_hi_[1], y)};
     }
   }
