@@ -24,6 +24,10 @@ class VoxelIndex {
   // The index of the occupied voxel `key`, -1 when it is not occupied.
   int Find(const VoxelKey& key) const;
 
+  // out[((x * edge) + y) * edge + z] = 1 where lo + (x, y, z) is occupied, else
+  // 0, for x, y, z in [0, edge): a dense copy of a small window.
+  void FillOccupancy(const VoxelKey& lo, int edge, std::uint8_t* out) const;
+
   // Calls visit(index, offset) for every occupied voxel in the cube of
   // half-width `h` (voxels) centred on `centre`; offset = key - centre.
   template <typename Visit>

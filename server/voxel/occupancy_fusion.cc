@@ -40,10 +40,15 @@ std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
     leaf.key = it.getKey();
     leaves.push_back(leaf);
   }
-  // Free leaves smallest first, so that the cap drops the big open cubes.
-  std::stable_sort(leaves.begin(), leaves.end(),
-                   [](const Leaf& x, const Leaf& y) { return x.level < y.level; });
-  return leaves;
+  // Free leaves smallest first, so that the cap drops the big open cubes: a
+  // stable counting sort by level (a merge sort of the leaves was a quarter
+  // of the fusion's CPU on a 5 cm crop).
+  std::vector<std::size_t> start(static_cast<std::size_t>(depth) + 2, 0);
+  for (const Leaf& leaf : leaves) ++start[static_cast<std::size_t>(leaf.level) + 1];
+  for (std::size_t level = 1; level < start.size(); ++level) start[level] += start[level - 1];
+  std::vector<Leaf> sorted(leaves.size());
+  for (const Leaf& leaf : leaves) sorted[start[static_cast<std::size_t>(leaf.level)]++] = leaf;
+  return sorted;
 }
 
 Box BoundsOf(const std::vector<Leaf>& leaves) {

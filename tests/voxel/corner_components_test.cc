@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,21 @@ TEST(VoxelIndexTest, FindsEveryKeyAndEnumeratesCubesLikeBruteForce) {
     }
     std::sort(seen.begin(), seen.end());
     EXPECT_EQ(seen, expected);
+  }
+  // Dense windows across brick boundaries and zero agree with Find.
+  for (const VoxelKey& lo : {VoxelKey(-10, -10, -13), VoxelKey(-3, 2, -6), VoxelKey(5, -9, 0)}) {
+    const int edge = 12;
+    std::vector<std::uint8_t> window(edge * edge * edge, 7);
+    index.FillOccupancy(lo, edge, window.data());
+    for (int x = 0; x < edge; ++x) {
+      for (int y = 0; y < edge; ++y) {
+        for (int z = 0; z < edge; ++z) {
+          const bool occupied = index.Find(lo + VoxelKey(x, y, z)) >= 0;
+          ASSERT_EQ(window[static_cast<std::size_t>((x * edge + y) * edge + z)], occupied ? 1 : 0)
+              << "window at " << lo.transpose() << ", cell " << x << " " << y << " " << z;
+        }
+      }
+    }
   }
 }
 
