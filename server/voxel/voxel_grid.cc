@@ -3,6 +3,7 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -69,9 +70,13 @@ StatusOr<VoxelGrid> VoxelGrid::FromOcTree(const octomap::OcTree& tree,
   const int max_depth = static_cast<int>(tree.getTreeDepth());
   // First pass: count the occupied voxels before expanding anything.
   std::uint64_t occupied = 0;
+  std::array<std::size_t, kLevels> free_cubes{};  // per level, to size the sets once
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!tree.isNodeOccupied(*it)) continue;
     const int level = max_depth - static_cast<int>(it.getDepth());
+    if (!tree.isNodeOccupied(*it)) {
+      if (level < kLevels) ++free_cubes[static_cast<std::size_t>(level)];
+      continue;
+    }
     occupied += std::uint64_t{1} << (3 * level);
     if (occupied > limits.max_occupied_voxels) {
       return Status::ResourceExhausted("octree has more than " +
@@ -80,6 +85,9 @@ StatusOr<VoxelGrid> VoxelGrid::FromOcTree(const octomap::OcTree& tree,
     }
   }
   grid.occupied_keys_.reserve(occupied);
+  for (std::size_t level = 0; level < free_cubes.size(); ++level) {
+    grid.free_[level].reserve(free_cubes[level]);
+  }
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const int level = max_depth - static_cast<int>(it.getDepth());
     // A leaf of depth d covers the aligned cube of edge 2^level that holds its key.
