@@ -73,9 +73,14 @@ class ColumnImage {
     }
   }
 
-  // 1 where a set pixel lies within `radius` pixels along both axes.
-  std::vector<float> Dilated(const std::vector<float>& in, int radius) const {
-    std::vector<float> rows(in.size(), 0.0F), out(in.size(), 0.0F);
+  // 1 where a set pixel lies within `radius` pixels along both axes; valid
+  // until the next call (the buffers are kept: a refinement dilates ~100
+  // images, and fresh ones of a campus crop cost page faults each time).
+  const std::vector<float>& Dilated(const std::vector<float>& in, int radius) {
+    std::vector<float>& rows = rows_scratch_;
+    std::vector<float>& out = dilated_;
+    rows.assign(in.size(), 0.0F);
+    out.assign(in.size(), 0.0F);
     for (int x = 0; x < nx_; ++x) {
       for (int y = 0; y < ny_; ++y) {
         if (in[Index(x, y)] == 0) continue;
@@ -107,7 +112,8 @@ class ColumnImage {
   std::vector<float> lowest_;
   std::vector<int> above_;
   std::vector<float> structure_, data_;
-  std::vector<std::int64_t> pixel_;  // each point's pixel, -1 outside
+  std::vector<std::int64_t> pixel_;            // each point's pixel, -1 outside
+  std::vector<float> rows_scratch_, dilated_;  // Dilated's
   double structures_ = 0;
 };
 

@@ -188,6 +188,11 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   out.code = r.status().code();
   out.message = r.status().message();
   if (r.ok()) {
+    if (const char* dump = std::getenv("MAPD_BENCH_DUMP")) {
+      std::FILE* f = std::fopen(dump, "wb");
+      std::fwrite(r->merged_bt.data(), 1, r->merged_bt.size(), f);
+      std::fclose(f);
+    }
     const auto& t = r->times;
     out.stage_s = {
         t.corners_s,
