@@ -188,10 +188,11 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   out.code = r.status().code();
   out.message = r.status().message();
   if (r.ok()) {
-    if (const char* dump = std::getenv("MAPD_BENCH_DUMP")) {
-      std::FILE* f = std::fopen(dump, "wb");
-      std::fwrite(r->merged_bt.data(), 1, r->merged_bt.size(), f);
-      std::fclose(f);
+    // The merged map, to check that a change leaves it byte for byte the same.
+    if (const char* path = std::getenv("MAPD_BENCH_MERGED_BT")) {
+      std::ofstream file(path, std::ios::binary);
+      file.write(r->merged_bt.data(), static_cast<std::streamsize>(r->merged_bt.size()));
+      if (!file) std::fprintf(stderr, "cannot write the merged map to %s\n", path);
     }
     const auto& t = r->times;
     out.stage_s = {
