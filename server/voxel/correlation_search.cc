@@ -237,15 +237,11 @@ struct Peak {
   std::array<int, 3> shift;
 };
 
-// The best `count` local maxima (score > 0) at least `separation` cells apart
-// (circular distance on the padded grid).
-std::vector<Peak> TopPeaks(const float* s, const std::array<int, 3>& n, int count,
-                           double separation) {
-  const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-  std::vector<std::pair<float, std::size_t>> order;
-  for (std::size_t i = 0; i < size; ++i) {
-    if (s[i] > 0) order.emplace_back(s[i], i);
-  }
+// The best `count` of the (score, cell) pairs in `order` (the cells with a
+// positive score, ascending) at least `separation` cells apart (circular
+// distance on the padded grid).
+std::vector<Peak> TopPeaks(std::vector<std::pair<float, std::size_t>> order,
+                           const std::array<int, 3>& n, int count, double separation) {
   const std::size_t keep = std::min<std::size_t>(order.size(), 4096);
   std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
                     [](const auto& x, const auto& y) { return x.first > y.first; });
@@ -368,6 +364,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // a's three spectra; its grid goes once they are taken.
   std::vector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
   double cells_a = 0;
+  std::array<int, 2> rows_a{};  // a's content rows (CoarseGrid::extent)
   {
     CoarseGrid grid_a(n, origin_a, cell);
     for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
@@ -377,6 +374,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& free = grid_a.free();
     const auto& cover = grid_a.cover();
     const std::array<int, 2>& extent = grid_a.extent();
+    rows_a = extent;
     occ_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; }));
     hit_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return dilated[i] - w * free[i]; }));
     cover_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; }));
@@ -418,24 +416,50 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
                                       1.0);
     Complex* product = fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; });
     for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(occ_a[i], product[i]);
-    const float* a_in_b = fft.Inverse();
-    std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
+    // Only shifts where the two grids' content can meet can score: a's
+    // content rows [0, rows_a) against b's [0, extent) are shifts
+    // [0, rows_a) and [n - extent + 1, n) along x and y; the inverses and
+    // every loop below skip the other rows.
+    RealFft::Ranges meet[2];
+    for (std::size_t k = 0; k < 2; ++k) {
+      const int first_end = std::min(rows_a[k], n[k]);
+      const int second_begin = std::max(first_end, n[k] - extent[k] + 1);
+      if (first_end > 0) meet[k].push_back({0, first_end});
+      if (second_begin < n[k]) meet[k].push_back({second_begin, n[k]});
+    }
+    const auto for_each_cell = [&](auto&& visit) {  // of the rows that meet, ascending
+      for (const auto& [x0, x1] : meet[0]) {
+        for (int x = x0; x < x1; ++x) {
+          for (const auto& [y0, y1] : meet[1]) {
+            const std::size_t begin = (static_cast<std::size_t>(x) * n[1] + y0) * n[2];
+            const std::size_t end = begin + static_cast<std::size_t>(y1 - y0) * n[2];
+            for (std::size_t i = begin; i < end; ++i) visit(i);
+          }
+        }
+      }
+    };
+    const float* a_in_b = fft.InverseRows(meet[0], meet[1]);
+    for_each_cell([&](std::size_t i) { weight[i] = a_in_b[i]; });
     product = fft.spectrum();
     for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(cover_a[i], occ_b[i]);
-    const float* b_in_a = fft.Inverse();
-    for (std::size_t i = 0; i < weight.size(); ++i) {
+    const float* b_in_a = fft.InverseRows(meet[0], meet[1]);
+    for_each_cell([&](std::size_t i) {
       const double in_a = b_in_a[i], in_b = weight[i];
       weight[i] =
           std::min(in_a, in_b) >= min_cells ? static_cast<float>(1.0 / std::sqrt(in_a * in_b)) : 0;
-    }
+    });
     product = fft.ForwardInBox(extent, [&](std::size_t i) { return free[i]; });
     for (std::size_t i = 0; i < spectrum_size; ++i) {
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }
-    float* score = fft.Inverse();
-    for (std::size_t i = 0; i < weight.size(); ++i) score[i] *= weight[i];
+    float* score = fft.InverseRows(meet[0], meet[1]);
+    std::vector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
+    for_each_cell([&](std::size_t i) {
+      score[i] *= weight[i];
+      if (score[i] > 0) positive.emplace_back(score[i], i);
+    });
     for (const Peak& peak :
-         TopPeaks(score, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+         TopPeaks(std::move(positive), n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
       Eigen::Vector3d shift;
       for (int k = 0; k < 3; ++k) {
         const int s = peak.shift[static_cast<std::size_t>(k)];

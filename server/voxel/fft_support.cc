@@ -41,6 +41,9 @@ RealFft::~RealFft() {
     const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
     fftwf_destroy_plan(forward_);
     fftwf_destroy_plan(inverse_);
+    if (inverse_planes_ != nullptr) fftwf_destroy_plan(inverse_planes_);
+    for (const auto& [range, plan] : inverse_columns_) fftwf_destroy_plan(plan);
+    for (const auto& [ranges, plan] : inverse_rows_) fftwf_destroy_plan(plan);
     for (const BoxPlans& p : box_plans_) {
       fftwf_destroy_plan(p.rows);
       fftwf_destroy_plan(p.columns);
@@ -99,6 +102,54 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
 
 float* RealFft::Inverse() {
   fftwf_execute(inverse_);
+  return real_;
+}
+
+float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
+  const int n0 = dims_[0], n1 = dims_[1], n2 = dims_[2], n2c = dims_[2] / 2 + 1;
+  auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
+  const std::size_t plane = static_cast<std::size_t>(n1) * n2c;
+  // Planned on first use, each on the part of the buffers it transforms
+  // (guru interface, as ExecuteForwardInBox; FFTW_ESTIMATE plans do not touch
+  // the buffers).
+  const auto planned = [&](auto* cache, const auto& key, auto&& make) {
+    auto found = cache->find(key);
+    if (found == cache->end()) {
+      const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+      found = cache->emplace(key, make()).first;
+    }
+    return found->second;
+  };
+  if (inverse_planes_ == nullptr) {
+    const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
+    const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
+    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    inverse_planes_ = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_BACKWARD,
+                                          FFTW_ESTIMATE);
+  }
+  fftwf_execute(inverse_planes_);
+  for (const auto& [x0, x1] : xs) {
+    if (x0 >= x1) continue;
+    fftwf_complex* part = spectrum + static_cast<std::size_t>(x0) * plane;
+    fftwf_execute(planned(&inverse_columns_, std::make_pair(x0, x1), [&] {
+      const fftwf_iodim along_y = {n1, n2c, n2c};
+      const fftwf_iodim columns[2] = {{x1 - x0, n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
+      return fftwf_plan_guru_dft(1, &along_y, 2, columns, part, part, FFTW_BACKWARD, FFTW_ESTIMATE);
+    }));
+  }
+  for (const auto& [x0, x1] : xs) {
+    for (const auto& [y0, y1] : ys) {
+      if (x0 >= x1 || y0 >= y1) continue;
+      const std::size_t first = static_cast<std::size_t>(x0) * n1 + static_cast<std::size_t>(y0);
+      fftwf_complex* in = spectrum + first * n2c;
+      float* out = real_ + first * static_cast<std::size_t>(n2);
+      fftwf_execute(planned(&inverse_rows_, std::array<int, 4>{x0, x1, y0, y1}, [&] {
+        const fftwf_iodim along_z = {n2, 1, 1};
+        const fftwf_iodim rows[2] = {{x1 - x0, n1 * n2c, n1 * n2}, {y1 - y0, n2c, n2}};
+        return fftwf_plan_guru_dft_c2r(1, &along_z, 2, rows, in, out, FFTW_ESTIMATE);
+      }));
+    }
+  }
   return real_;
 }
 
