@@ -143,6 +143,38 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
   EXPECT_EQ(StateOf(**reread, 1, 1, 2), S::kUnknown);
 }
 
+TEST(OccupancyFusionTest, AFreeLeafTheSubmapNeverSawIsClearedWhole) {
+  // A: a pruned free 4x4x4 block (one leaf) and a free voxel beside it; B's
+  // box covers both but B saw only that voxel: the block becomes unknown (at
+  // once, as one node), the voxel stays free (free in both).
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
+  for (int x = 0; x < 4; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 4; ++z) Set(&a, x, S::kFree, y, z);
+  Set(&a, 5, S::kFree, 0, 0);
+  a.prune();
+  Set(&b, 5, S::kFree, 0, 0);
+  Set(&b, -1, S::kOccupied, -1, -1);  // B's box holds the block
+  Set(&b, 6, S::kOccupied, 5, 5);
+  FusionParams params;
+  auto merged = StartMergedMap(a, kTreeRes, params);
+  ASSERT_TRUE(merged.ok());
+  FusionStats stats;
+  ASSERT_TRUE(FuseInto(b, Eigen::Isometry3d::Identity(), params, merged->get(), &stats).ok());
+  EXPECT_EQ(stats.free_cleared, 64u);
+  for (int x = 0; x < 4; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 4; ++z) EXPECT_EQ(StateOf(**merged, x, y, z), S::kUnknown);
+  EXPECT_EQ(StateOf(**merged, 5, 0, 0), S::kFree);
+  EXPECT_EQ(StateOf(**merged, -1, -1, -1), S::kOccupied);
+  auto bytes = WriteBinaryOctree(**merged);
+  ASSERT_TRUE(bytes.ok());
+  auto reread = ReadOctree(*bytes);
+  ASSERT_TRUE(reread.ok()) << reread.status().ToString();
+  EXPECT_EQ(StateOf(**reread, 2, 2, 2), S::kUnknown);
+  EXPECT_EQ(StateOf(**reread, 5, 0, 0), S::kFree);
+}
+
 TEST(OccupancyFusionTest, RotatedSubmapLandsOnTheRightVoxels) {
   octomap::OcTree a(kTreeRes), b(kTreeRes);
   Set(&a, 0, S::kOccupied);
