@@ -28,26 +28,13 @@ int VoxelIndex::Find(const VoxelKey& key) const {
 
 void VoxelIndex::FillOccupancy(const VoxelKey& lo, int edge, std::uint8_t* out) const {
   std::fill_n(out, static_cast<std::size_t>(edge) * edge * edge, std::uint8_t{0});
-  const VoxelKey hi = lo + VoxelKey::Constant(edge - 1);
-  for (int bx = lo.x() >> kBrickBits; bx <= (hi.x() >> kBrickBits); ++bx) {
-    for (int by = lo.y() >> kBrickBits; by <= (hi.y() >> kBrickBits); ++by) {
-      for (int bz = lo.z() >> kBrickBits; bz <= (hi.z() >> kBrickBits); ++bz) {
-        const std::int32_t* brick = Brick(bx, by, bz);
-        if (brick == nullptr) continue;
-        const VoxelKey base(bx * kBrick, by * kBrick, bz * kBrick);
-        const VoxelKey a = lo.cwiseMax(base) - base;
-        const VoxelKey b = hi.cwiseMin(base + VoxelKey::Constant(kBrick - 1)) - base;
-        for (int x = a.x(); x <= b.x(); ++x) {
-          for (int y = a.y(); y <= b.y(); ++y) {
-            const std::int32_t* row = brick + ((x << kBrickBits) + y) * kBrick;
-            const VoxelKey at = base + VoxelKey(x, y, 0) - lo;
-            std::uint8_t* to = out + (static_cast<std::size_t>(at.x()) * edge + at.y()) * edge;
-            for (int z = a.z(); z <= b.z(); ++z) to[base.z() + z - lo.z()] = row[z] >= 0 ? 1 : 0;
-          }
-        }
-      }
-    }
-  }
+  ForEachRow(lo, lo + VoxelKey::Constant(edge - 1),
+             [&](const std::int32_t* cells, const VoxelKey& first, int count) {
+               const VoxelKey at = first - lo;
+               std::uint8_t* to =
+                   out + (static_cast<std::size_t>(at.x()) * edge + at.y()) * edge + at.z();
+               for (int z = 0; z < count; ++z) to[z] = cells[z] >= 0 ? 1 : 0;
+             });
 }
 
 }  // namespace mapd::voxel::internal

@@ -32,8 +32,20 @@ class VoxelIndex {
   // half-width `h` (voxels) centred on `centre`; offset = key - centre.
   template <typename Visit>
   void ForEachInCube(const VoxelKey& centre, int h, Visit&& visit) const {
-    const VoxelKey lo = centre - VoxelKey::Constant(h);
-    const VoxelKey hi = centre + VoxelKey::Constant(h);
+    ForEachRow(centre - VoxelKey::Constant(h), centre + VoxelKey::Constant(h),
+               [&](const std::int32_t* cells, const VoxelKey& first, int count) {
+                 for (int z = 0; z < count; ++z) {
+                   if (cells[z] >= 0) visit(cells[z], VoxelKey(first + VoxelKey(0, 0, z) - centre));
+                 }
+               });
+  }
+
+ private:
+  // Calls visit(cells, first, count) for every run along z of the bricks'
+  // cells inside the box [lo, hi] (inclusive): cells[k] is the index at key
+  // first + (0, 0, k) (-1 when empty), k < count. Missing bricks are skipped.
+  template <typename Visit>
+  void ForEachRow(const VoxelKey& lo, const VoxelKey& hi, Visit&& visit) const {
     for (int bx = lo.x() >> kBrickBits; bx <= (hi.x() >> kBrickBits); ++bx) {
       for (int by = lo.y() >> kBrickBits; by <= (hi.y() >> kBrickBits); ++by) {
         for (int bz = lo.z() >> kBrickBits; bz <= (hi.z() >> kBrickBits); ++bz) {
@@ -44,10 +56,8 @@ class VoxelIndex {
           const VoxelKey b = hi.cwiseMin(base + VoxelKey::Constant(kBrick - 1)) - base;
           for (int x = a.x(); x <= b.x(); ++x) {
             for (int y = a.y(); y <= b.y(); ++y) {
-              const std::int32_t* row = brick + ((x << kBrickBits) + y) * kBrick;
-              for (int z = a.z(); z <= b.z(); ++z) {
-                if (row[z] >= 0) visit(row[z], VoxelKey(base + VoxelKey(x, y, z) - centre));
-              }
+              visit(brick + ((x << kBrickBits) + y) * kBrick + a.z(),
+                    VoxelKey(base + VoxelKey(x, y, a.z())), b.z() - a.z() + 1);
             }
           }
         }
@@ -55,7 +65,6 @@ class VoxelIndex {
     }
   }
 
- private:
   static std::uint64_t Pack(int bx, int by, int bz) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx) & 0x1fffff) << 42) |
            (static_cast<std::uint64_t>(static_cast<std::uint32_t>(by) & 0x1fffff) << 21) |
