@@ -128,7 +128,9 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
                                           FFTW_ESTIMATE);
   }
   fftwf_execute(inverse_planes_);
-  for (const auto& [x0, x1] : xs) {
+  // Plain ints, not structured bindings: C++17 lambdas cannot capture those.
+  for (const std::pair<int, int>& x_range : xs) {
+    const int x0 = x_range.first, x1 = x_range.second;
     if (x0 >= x1) continue;
     fftwf_complex* part = spectrum + static_cast<std::size_t>(x0) * plane;
     fftwf_execute(planned(&inverse_columns_, std::make_pair(x0, x1), [&] {
@@ -137,8 +139,10 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
       return fftwf_plan_guru_dft(1, &along_y, 2, columns, part, part, FFTW_BACKWARD, FFTW_ESTIMATE);
     }));
   }
-  for (const auto& [x0, x1] : xs) {
-    for (const auto& [y0, y1] : ys) {
+  for (const std::pair<int, int>& x_range : xs) {
+    for (const std::pair<int, int>& y_range : ys) {
+      const int x0 = x_range.first, x1 = x_range.second;
+      const int y0 = y_range.first, y1 = y_range.second;
       if (x0 >= x1 || y0 >= y1) continue;
       const std::size_t first = static_cast<std::size_t>(x0) * n1 + static_cast<std::size_t>(y0);
       fftwf_complex* in = spectrum + first * n2c;
