@@ -44,7 +44,7 @@ RealFft::~RealFft() {
     if (inverse_planes_ != nullptr) fftwf_destroy_plan(inverse_planes_);
     for (const auto& [range, plan] : inverse_columns_) fftwf_destroy_plan(plan);
     for (const auto& [ranges, plan] : inverse_rows_) fftwf_destroy_plan(plan);
-    for (const BoxPlans& p : box_plans_) {
+    for (const auto& [extent, p] : box_plans_) {
       fftwf_destroy_plan(p.rows);
       fftwf_destroy_plan(p.columns);
       fftwf_destroy_plan(p.planes);
@@ -64,11 +64,9 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
     return;
   }
   auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
-  auto found = std::find_if(box_plans_.begin(), box_plans_.end(),
-                            [&](const BoxPlans& p) { return p.extent == extent; });
+  auto found = box_plans_.find(extent);
   if (found == box_plans_.end()) {
     BoxPlans p;
-    p.extent = extent;
     // Guru interface: a 1D transform of `length` (stride) repeated over
     // `loops` (count, input stride, output stride), in spectrum elements for
     // the complex passes; FFTW_ESTIMATE plans do not touch the buffers.
@@ -84,8 +82,7 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
                                     FFTW_ESTIMATE);
     p.planes = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_FORWARD,
                                    FFTW_ESTIMATE);
-    box_plans_.push_back(p);
-    found = box_plans_.end() - 1;
+    found = box_plans_.emplace(extent, p).first;
   }
   // The passes read zeros where the rows were not transformed.
   const std::size_t plane = static_cast<std::size_t>(n1) * n2c;
@@ -95,9 +92,9 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
   }
   std::fill(spectrum_ + static_cast<std::size_t>(extent[0]) * plane, spectrum_ + complex_size_,
             Complex(0, 0));
-  fftwf_execute(found->rows);
-  fftwf_execute(found->columns);
-  fftwf_execute(found->planes);
+  fftwf_execute(found->second.rows);
+  fftwf_execute(found->second.columns);
+  fftwf_execute(found->second.planes);
 }
 
 float* RealFft::Inverse() {

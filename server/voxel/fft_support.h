@@ -80,7 +80,7 @@ class RealFft {
   // The inverse of spectrum(), which it overwrites; valid until the next call.
   float* Inverse();
 
-  // Half-open index ranges along one axis, ascending.
+  // Half-open index ranges along one axis, ascending, within [0, dims).
   using Ranges = std::vector<std::pair<int, int>>;
   // Inverse() of a 3D grid for the rows (x, y, every z) with x in `xs` and y
   // in `ys` alone; the result's other rows are undefined. The y and z passes
@@ -99,7 +99,6 @@ class RealFft {
 
   // The three passes of ForwardInBox for one extent (planned on first use).
   struct BoxPlans {
-    std::array<int, 2> extent;
     fftwf_plan_s* rows = nullptr;     // r2c along z, x < extent[0], y < extent[1]
     fftwf_plan_s* columns = nullptr;  // along y, x < extent[0]
     fftwf_plan_s* planes = nullptr;   // along x, everywhere
@@ -112,7 +111,7 @@ class RealFft {
   std::map<std::array<int, 4>, fftwf_plan_s*> inverse_rows_;
 
   std::vector<int> dims_;
-  std::vector<BoxPlans> box_plans_;
+  std::map<std::array<int, 2>, BoxPlans> box_plans_;
   std::size_t real_size_ = 1, complex_size_ = 1;
   float* real_ = nullptr;
   Complex* spectrum_ = nullptr;
