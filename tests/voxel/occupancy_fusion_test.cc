@@ -35,6 +35,35 @@ S StateOf(const octomap::OcTree& tree, int x, int y = 0, int z = 0) {
   return tree.isNodeOccupied(node) ? S::kOccupied : S::kFree;
 }
 
+// A pruned free block of 4x4x4 voxels at the origin (one leaf of level 2).
+void SetFreeBlock(octomap::OcTree* tree) {
+  for (int x = 0; x < 4; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 4; ++z) Set(tree, x, S::kFree, y, z);
+}
+
+// a with b (placed by T_a_b) fused in, or the first error.
+StatusOr<OcTreePtr> FuseTrees(const octomap::OcTree& a, const octomap::OcTree& b,
+                              const Eigen::Isometry3d& T_a_b, const FusionParams& params,
+                              FusionStats* stats) {
+  auto merged = StartMergedMap(a, kTreeRes, params);
+  if (!merged.ok()) return merged.status();
+  MAPD_RETURN_IF_ERROR(FuseInto(b, T_a_b, params, merged->get(), stats));
+  return merged;
+}
+
+StatusOr<OcTreePtr> FuseAtIdentity(const octomap::OcTree& a, const octomap::OcTree& b,
+                                   FusionStats* stats) {
+  return FuseTrees(a, b, Eigen::Isometry3d::Identity(), FusionParams{}, stats);
+}
+
+// The tree written as a .bt and read back (what a client gets).
+StatusOr<OcTreePtr> Reread(const octomap::OcTree& tree) {
+  auto bytes = WriteBinaryOctree(tree);
+  if (!bytes.ok()) return bytes.status();
+  return ReadOctree(*bytes);
+}
+
 // A's voxels x in [0, 10], B's in [5, 14] (a row along x): the overlap region
 // is x in [5, 10]. B is given in its own frame, where x' = x - 5, so T_a_b is
 // a translation of +0.5 m along x.
@@ -66,9 +95,8 @@ Row MakeRow() {
 OcTreePtr Fuse(const Row& row, FusionRule rule, FusionStats* stats = nullptr) {
   FusionParams params;
   params.rule = rule;
-  auto merged = StartMergedMap(row.a, kTreeRes, params);
-  EXPECT_TRUE(merged.ok());
-  EXPECT_TRUE(FuseInto(row.b, row.T_a_b, params, merged->get(), stats).ok());
+  auto merged = FuseTrees(row.a, row.b, row.T_a_b, params, stats);
+  EXPECT_TRUE(merged.ok()) << merged.status().ToString();
   return std::move(merged).value();
 }
 
@@ -113,9 +141,7 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
   // voxel by voxel, through OctoMap's pruned nodes (the path that crashes
   // OctoMap 1.9.7's own deleteNode).
   octomap::OcTree a(kTreeRes), b(kTreeRes);
-  for (int x = 0; x < 4; ++x)
-    for (int y = 0; y < 4; ++y)
-      for (int z = 0; z < 4; ++z) Set(&a, x, S::kFree, y, z);
+  SetFreeBlock(&a);
   a.prune();
   for (int x = 0; x < 4; ++x)
     for (int y = 0; y < 4; ++y) {
@@ -123,11 +149,9 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
       Set(&b, x, S::kFree, y, 1);
     }
   Set(&b, 0, S::kOccupied, 0, 3);  // stretches B's box over the whole block
-  FusionParams params;
-  auto merged = StartMergedMap(a, kTreeRes, params);
-  ASSERT_TRUE(merged.ok());
   FusionStats stats;
-  ASSERT_TRUE(FuseInto(b, Eigen::Isometry3d::Identity(), params, merged->get(), &stats).ok());
+  auto merged = FuseAtIdentity(a, b, &stats);
+  ASSERT_TRUE(merged.ok()) << merged.status().ToString();
   EXPECT_EQ(stats.free_cleared, 31u);  // 32 upper voxels, one of them occupied in B
   for (int x = 0; x < 4; ++x)
     for (int y = 0; y < 4; ++y) {
@@ -135,9 +159,7 @@ TEST(OccupancyFusionTest, ClearingInsideAPrunedFreeBlockKeepsTheTreeValid) {
       EXPECT_EQ(StateOf(**merged, x, y, 2), S::kUnknown);
     }
   EXPECT_EQ(StateOf(**merged, 0, 0, 3), S::kOccupied);
-  auto bytes = WriteBinaryOctree(**merged);
-  ASSERT_TRUE(bytes.ok());
-  auto reread = ReadOctree(*bytes);
+  auto reread = Reread(**merged);
   ASSERT_TRUE(reread.ok()) << reread.status().ToString();
   EXPECT_EQ(StateOf(**reread, 1, 1, 0), S::kFree);
   EXPECT_EQ(StateOf(**reread, 1, 1, 2), S::kUnknown);
@@ -148,28 +170,22 @@ TEST(OccupancyFusionTest, AFreeLeafTheSubmapNeverSawIsClearedWhole) {
   // box covers both but B saw only that voxel: the block becomes unknown (at
   // once, as one node), the voxel stays free (free in both).
   octomap::OcTree a(kTreeRes), b(kTreeRes);
-  for (int x = 0; x < 4; ++x)
-    for (int y = 0; y < 4; ++y)
-      for (int z = 0; z < 4; ++z) Set(&a, x, S::kFree, y, z);
+  SetFreeBlock(&a);
   Set(&a, 5, S::kFree, 0, 0);
   a.prune();
   Set(&b, 5, S::kFree, 0, 0);
   Set(&b, -1, S::kOccupied, -1, -1);  // B's box holds the block
   Set(&b, 6, S::kOccupied, 5, 5);
-  FusionParams params;
-  auto merged = StartMergedMap(a, kTreeRes, params);
-  ASSERT_TRUE(merged.ok());
   FusionStats stats;
-  ASSERT_TRUE(FuseInto(b, Eigen::Isometry3d::Identity(), params, merged->get(), &stats).ok());
+  auto merged = FuseAtIdentity(a, b, &stats);
+  ASSERT_TRUE(merged.ok()) << merged.status().ToString();
   EXPECT_EQ(stats.free_cleared, 64u);
   for (int x = 0; x < 4; ++x)
     for (int y = 0; y < 4; ++y)
       for (int z = 0; z < 4; ++z) EXPECT_EQ(StateOf(**merged, x, y, z), S::kUnknown);
   EXPECT_EQ(StateOf(**merged, 5, 0, 0), S::kFree);
   EXPECT_EQ(StateOf(**merged, -1, -1, -1), S::kOccupied);
-  auto bytes = WriteBinaryOctree(**merged);
-  ASSERT_TRUE(bytes.ok());
-  auto reread = ReadOctree(*bytes);
+  auto reread = Reread(**merged);
   ASSERT_TRUE(reread.ok()) << reread.status().ToString();
   EXPECT_EQ(StateOf(**reread, 2, 2, 2), S::kUnknown);
   EXPECT_EQ(StateOf(**reread, 5, 0, 0), S::kFree);
