@@ -15,7 +15,7 @@ PORT="${MAPD_DEMO_PORT:-50051}"
 export MAPD_SERVER="127.0.0.1:$PORT"
 MAPCTL=build/client/mapctl
 
-build/server/mapd/mapd --listen "$MAPD_SERVER" 2> "$MAPD_DATA_DIR/mapd.log" &
+GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build/server/mapd/mapd --listen "$MAPD_SERVER" 2> "$MAPD_DATA_DIR/mapd.log" &
 MAPD_PID=$!
 trap 'kill -TERM $MAPD_PID 2>/dev/null || true' EXIT
 for _ in $(seq 50); do

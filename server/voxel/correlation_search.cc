@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "voxel/fft_support.h"
+#include "voxel/large_array.h"
 
 namespace mapd::voxel {
 namespace {
@@ -29,7 +30,7 @@ struct Sample {
 // voxels changed no outcome of the benchmark's 108 pairs and took 8 % off
 // fr_078_tidyup merges (docs/voxel-merge.md, "Exact speed-ups and free
 // pieces of two voxels").
-std::vector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
+LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
   const double res = grid.resolution();
   const int piece = std::max(1, static_cast<int>(std::lround(0.5 * cell_m / res)));
   const double cell_volume = std::pow(cell_m / res, 3);
@@ -40,7 +41,7 @@ std::vector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
     const std::size_t per_edge = static_cast<std::size_t>((edge + piece - 1) / piece);
     count += per_edge * per_edge * per_edge;
   });
-  std::vector<Sample> samples;
+  LargeVector<Sample> samples;
   samples.reserve(count);
   for (const Eigen::Vector3d& c : grid.occupied_centres()) samples.push_back({c, 0.0F, true});
   grid.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
@@ -129,12 +130,12 @@ class CoarseGrid {
   // in every buffer (for RealFft::ForwardInBox).
   const std::array<int, 2>& extent() const { return extent_; }
   std::size_t occupied_cells() const { return occupied_cells_; }
-  const std::vector<std::uint8_t>& occ() const { return occ_; }
-  const std::vector<std::uint8_t>& dilated_occ() const { return dilated_; }
+  const LargeVector<std::uint8_t>& occ() const { return occ_; }
+  const LargeVector<std::uint8_t>& dilated_occ() const { return dilated_; }
   // Where this map has data: within cover_radius cells of an occupied cell,
   // or free.
-  const std::vector<std::uint8_t>& cover() const { return cover_; }
-  const std::vector<float>& free() const { return free_; }
+  const LargeVector<std::uint8_t>& cover() const { return cover_; }
+  const LargeVector<float>& free() const { return free_; }
 
  private:
   // Binary dilation of occ_ (1 where an occupied cell lies within `radius`
@@ -144,8 +145,8 @@ class CoarseGrid {
   // the axis that remember the nearest set cell behind and ahead, so it
   // costs O(cells) whatever the radius, and the innermost loop runs over
   // contiguous memory (z) on every axis.
-  void Dilate(int radius, std::vector<std::uint8_t>* result) {
-    std::vector<std::uint8_t>& out = *result;  // zero outside the box below
+  void Dilate(int radius, LargeVector<std::uint8_t>* result) {
+    LargeVector<std::uint8_t>& out = *result;  // zero outside the box below
     if (occ_hi_[0] < 0) return;                // nothing occupied
     std::array<int, 3> lo{}, hi{};
     for (std::size_t k = 0; k < 3; ++k) {
@@ -158,8 +159,8 @@ class CoarseGrid {
     const int wz = hi[2] - lo[2] + 1;
     std::vector<int> nearest;
     // The pass along `axis` reads `in` and sets `to` (cleared in the box).
-    const auto pass = [&](std::size_t axis, const std::vector<std::uint8_t>& in,
-                          std::vector<std::uint8_t>* to) {
+    const auto pass = [&](std::size_t axis, const LargeVector<std::uint8_t>& in,
+                          LargeVector<std::uint8_t>* to) {
       for (int x = lo[0]; x <= hi[0]; ++x) {
         for (int y = lo[1]; y <= hi[1]; ++y) std::fill_n(to->begin() + index(x, y, lo[2]), wz, 0);
       }
@@ -228,9 +229,9 @@ class CoarseGrid {
   std::size_t occupied_cells_ = 0;
   Eigen::Vector3d origin_;
   double cell_;
-  std::vector<std::uint8_t> occ_, dilated_, cover_;
-  std::vector<float> free_;
-  std::vector<std::uint8_t> pass_;  // Dilate's scratch
+  LargeVector<std::uint8_t> occ_, dilated_, cover_;
+  LargeVector<float> free_;
+  LargeVector<std::uint8_t> pass_;  // Dilate's scratch
 };
 
 struct Peak {
@@ -241,7 +242,7 @@ struct Peak {
 // The best `count` of the (score, cell) pairs in `order` (the cells with a
 // positive score, ascending) at least `separation` cells apart (circular
 // distance on the padded grid).
-std::vector<Peak> TopPeaks(std::vector<std::pair<float, std::size_t>> order,
+std::vector<Peak> TopPeaks(LargeVector<std::pair<float, std::size_t>> order,
                            const std::array<int, 3>& n, int count, double separation) {
   const std::size_t keep = std::min<std::size_t>(order.size(), 4096);
   std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
@@ -357,13 +358,13 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   RealFft fft({n[0], n[1], n[2]});
   const std::size_t spectrum_size = fft.complex_size();
   const auto keep = [&](const Complex* spectrum) {
-    return std::vector<Complex>(spectrum, spectrum + spectrum_size);
+    return LargeVector<Complex>(spectrum, spectrum + spectrum_size);
   };
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
   const auto w = static_cast<float>(params.free_weight);
   // a's three spectra; its grid goes once they are taken.
-  std::vector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
+  LargeVector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
   double cells_a = 0;
   std::array<int, 2> rows_a{};  // a's content rows (CoarseGrid::extent)
   {
@@ -381,12 +382,12 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     cover_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; }));
     cells_a = static_cast<double>(grid_a.occupied_cells());
   }
-  const std::vector<Sample> samples_b = Samples(b, cell);
+  const LargeVector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
   // Buffers of b's side, reused by every yaw.
-  std::vector<Complex> occ_b(spectrum_size);
-  std::vector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
+  LargeVector<Complex> occ_b(spectrum_size);
+  LargeVector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
   CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
@@ -454,7 +455,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }
     float* score = fft.InverseRows(meet[0], meet[1]);
-    std::vector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
+    LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
     for_each_cell([&](std::size_t i) {
       score[i] *= weight[i];
       if (score[i] > 0) positive.emplace_back(score[i], i);

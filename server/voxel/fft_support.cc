@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "voxel/large_array.h"
+
 namespace mapd::voxel {
 
 std::mutex& FftwPlannerMutex() {
@@ -26,10 +28,11 @@ RealFft::RealFft(const std::vector<int>& dims) : dims_(dims) {
     real_size_ *= static_cast<std::size_t>(dims[k]);
     complex_size_ *= static_cast<std::size_t>(k + 1 < dims.size() ? dims[k] : dims[k] / 2 + 1);
   }
-  real_ = fftwf_alloc_real(real_size_);
+  // Huge-page blocks (large_array.h), aligned beyond FFTW's SIMD needs.
+  real_ = static_cast<float*>(internal::AllocateLarge(real_size_ * sizeof(float)));
+  spectrum_ = static_cast<Complex*>(internal::AllocateLarge(complex_size_ * sizeof(Complex)));
   // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
-  auto* spectrum = fftwf_alloc_complex(complex_size_);
-  spectrum_ = reinterpret_cast<Complex*>(spectrum);
+  auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
   const int rank = static_cast<int>(dims.size());
   const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
   forward_ = fftwf_plan_dft_r2c(rank, dims.data(), real_, spectrum, FFTW_ESTIMATE);
@@ -50,8 +53,8 @@ RealFft::~RealFft() {
       fftwf_destroy_plan(p.planes);
     }
   }
-  fftwf_free(real_);
-  fftwf_free(spectrum_);
+  internal::FreeLarge(real_, real_size_ * sizeof(float));
+  internal::FreeLarge(spectrum_, complex_size_ * sizeof(Complex));
 }
 
 void RealFft::ExecuteForward() { fftwf_execute(forward_); }

@@ -7,6 +7,7 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc
   ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment.cc
+  ${CMAKE_CURRENT_LIST_DIR}/large_array.cc
   ${CMAKE_CURRENT_LIST_DIR}/fft_support.cc
   ${CMAKE_CURRENT_LIST_DIR}/correlation_search.cc
   ${CMAKE_CURRENT_LIST_DIR}/yaw_refinement.cc

@@ -8,20 +8,21 @@
 #include <utility>
 
 #include "voxel/fft_support.h"
+#include "voxel/large_array.h"
 
 namespace mapd::voxel {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 // The spectrum of `values` into `out`.
-void Transform(RealFft& fft, const std::vector<float>& values, std::vector<Complex>* out) {
+void Transform(RealFft& fft, const LargeVector<float>& values, LargeVector<Complex>* out) {
   const Complex* s = fft.Forward([&](std::size_t i) { return values[i]; });
   out->assign(s, s + fft.complex_size());
 }
 
 // sum_x f(x) g(x - s) for every shift s (unnormalised), from the spectra of f
 // and g; valid until the next transform.
-const float* Correlate(RealFft& fft, const std::vector<Complex>& f, const std::vector<Complex>& g) {
+const float* Correlate(RealFft& fft, const LargeVector<Complex>& f, const LargeVector<Complex>& g) {
   Complex* s = fft.spectrum();
   for (std::size_t i = 0; i < fft.complex_size(); ++i) s[i] = MulConj(f[i], g[i]);
   return fft.Inverse();
@@ -76,9 +77,9 @@ class ColumnImage {
   // 1 where a set pixel lies within `radius` pixels along both axes; valid
   // until the next call (the buffers are kept: a refinement dilates ~100
   // images, and fresh ones of a campus crop cost page faults each time).
-  const std::vector<float>& Dilated(const std::vector<float>& in, int radius) {
-    std::vector<float>& rows = rows_scratch_;
-    std::vector<float>& out = dilated_;
+  const LargeVector<float>& Dilated(const LargeVector<float>& in, int radius) {
+    LargeVector<float>& rows = rows_scratch_;
+    LargeVector<float>& out = dilated_;
     rows.assign(in.size(), 0.0F);
     out.assign(in.size(), 0.0F);
     for (int x = 0; x < nx_; ++x) {
@@ -100,8 +101,8 @@ class ColumnImage {
     return out;
   }
 
-  const std::vector<float>& structure() const { return structure_; }
-  const std::vector<float>& data() const { return data_; }
+  const LargeVector<float>& structure() const { return structure_; }
+  const LargeVector<float>& data() const { return data_; }
   double structures() const { return structures_; }
 
  private:
@@ -109,11 +110,11 @@ class ColumnImage {
 
   int nx_, ny_;
   double pixel_m_;
-  std::vector<float> lowest_;
-  std::vector<int> above_;
-  std::vector<float> structure_, data_;
-  std::vector<std::int64_t> pixel_;            // each point's pixel, -1 outside
-  std::vector<float> rows_scratch_, dilated_;  // Dilated's
+  LargeVector<float> lowest_;
+  LargeVector<int> above_;
+  LargeVector<float> structure_, data_;
+  LargeVector<std::int64_t> pixel_;            // each point's pixel, -1 outside
+  LargeVector<float> rows_scratch_, dilated_;  // Dilated's
   double structures_ = 0;
 };
 
@@ -197,7 +198,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   if (stats != nullptr) stats->pixel_m = pixel;
 
   RealFft fft({nx, ny});
-  std::vector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
+  LargeVector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
   double structures_a = 0;
   {
     ColumnImage image(nx, ny, pixel);
@@ -210,7 +211,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   if (structures_a == 0) return yaws;
   ColumnImage image_b(nx, ny, pixel);
   const Eigen::Vector2d origin_b = -Eigen::Vector2d::Constant(radius_b + pixel);
-  std::vector<float> weight(fft.real_size());
+  LargeVector<float> weight(fft.real_size());
   int scored = 0;
   // The best normalised correlation over all shifts (as in
   // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)).

@@ -20,6 +20,8 @@
 // else /work/shared/data/octomap; missing maps are skipped. --keep-crops copies
 // every pair to DIR/<map>-<overlap>-<trial>-{a,b}.bt (overlap 0 = negative), to
 // profile one merge with `--worker=ours A.bt B.bt` under perf or callgrind.
+// Workers inherit the environment; run with GLIBC_TUNABLES=glibc.malloc.hugetlb=1
+// to measure merges as deploy/mapd.service runs them (the table says which).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -436,6 +438,11 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   for (std::size_t i = 0; i < 18 + kNumPairColumns; ++i) table << "---|";
   table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
+  // The workers inherit the environment: say how their malloc ran (huge
+  // pages or not moves a campus merge's CPU by 10-25 %, docs/operations.md).
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  table << "\nWorkers ran with GLIBC_TUNABLES=" << (tunables == nullptr ? "(unset)" : tunables)
+        << "\n";
   std::ostringstream notes;
   for (const Row& r : rows) {
     for (const auto& [msg, count] : r.error_messages) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <fstream>
 #include <thread>
 
@@ -79,6 +80,34 @@ TEST(MapdProcessTest, HealthProbeSaysServingThenUnreachable) {
   r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address, "--timeout", "2"});
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_EQ(RunCommand({MAPD_HEALTH_BINARY, "--bogus", "x"}).exit_code, 2);
+}
+
+// glibc reads GLIBC_TUNABLES at process start, so mapd can only say whether
+// its malloc uses huge pages, and what to set when it does not.
+TEST(MapdProcessTest, TheStartLogSaysWhetherMallocUsesHugePages) {
+  const char* saved = std::getenv("GLIBC_TUNABLES");
+  const std::string before = saved == nullptr ? "" : saved;
+  const auto start_log = [](const std::string& tunables) {
+    TempDir dir;
+    setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
+    MapdProcess mapd = StartMapd(dir.File("map.db"), {}, kDefaultMapdBinary,
+                                 std::chrono::seconds(20), "listening");
+    std::string log = mapd.log();
+    if (mapd.pid > 0) Stop(mapd.pid, SIGTERM);
+    return log;
+  };
+  EXPECT_THAT(start_log("glibc.malloc.hugetlb=1"), HasSubstr("malloc_huge_pages=on"));
+  EXPECT_THAT(start_log("glibc.malloc.check=0:glibc.malloc.hugetlb=2"),
+              HasSubstr("malloc_huge_pages=on"));
+  const std::string off = start_log("glibc.malloc.hugetlb=0");
+  EXPECT_THAT(off, HasSubstr("malloc_huge_pages=\"off"));
+  EXPECT_THAT(off, HasSubstr("GLIBC_TUNABLES=glibc.malloc.hugetlb=1"));
+  EXPECT_THAT(start_log("xglibc.malloc.hugetlb=1"), HasSubstr("malloc_huge_pages=\"off"));
+  if (saved == nullptr) {
+    unsetenv("GLIBC_TUNABLES");
+  } else {
+    setenv("GLIBC_TUNABLES", before.c_str(), 1);
+  }
 }
 
 TEST(MapdProcessTest, AFileThatIsNotADatabaseIsRefusedAndLeftAlone) {

@@ -8,6 +8,7 @@ mapd_add_test(voxel_merging_test
           ${CMAKE_CURRENT_LIST_DIR}/gravity_alignment_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/correlation_search_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/fft_support_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/large_array_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/yaw_refinement_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/merge_hypotheses_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corridor_scene.cc
