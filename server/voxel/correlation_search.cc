@@ -239,11 +239,12 @@ struct Peak {
   std::array<int, 3> shift;
 };
 
-// The best `count` of the (score, cell) pairs in `order` (the cells with a
+// The best `count` of the (score, cell) pairs in `*pairs` (the cells with a
 // positive score, ascending) at least `separation` cells apart (circular
-// distance on the padded grid).
-std::vector<Peak> TopPeaks(LargeVector<std::pair<float, std::size_t>> order,
+// distance on the padded grid). Reorders `*pairs` (a buffer every yaw reuses).
+std::vector<Peak> TopPeaks(LargeVector<std::pair<float, std::size_t>>* pairs,
                            const std::array<int, 3>& n, int count, double separation) {
+  auto& order = *pairs;
   const std::size_t keep = std::min<std::size_t>(order.size(), 4096);
   std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
                     [](const auto& x, const auto& y) { return x.first > y.first; });
@@ -363,12 +364,15 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
   const auto w = static_cast<float>(params.free_weight);
-  // a's three spectra; its grid goes once they are taken.
+  // a's three spectra, kept for every yaw.
   LargeVector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
   double cells_a = 0;
   std::array<int, 2> rows_a{};  // a's content rows (CoarseGrid::extent)
+  // One grid for both maps: b's yaws reuse a's buffers (Reset clears only
+  // the content rows), so the search maps 16M-cell buffers once, not twice.
+  CoarseGrid grid(n, origin_a, cell);
   {
-    CoarseGrid grid_a(n, origin_a, cell);
+    CoarseGrid& grid_a = grid;
     for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
     grid_a.Finish(cover_radius);
     const auto& occ = grid_a.occ();
@@ -388,7 +392,8 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // Buffers of b's side, reused by every yaw.
   LargeVector<Complex> occ_b(spectrum_size);
   LargeVector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
-  CoarseGrid grid_b(n, Eigen::Vector3d::Zero(), cell);
+  CoarseGrid& grid_b = grid;
+  LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
     const Eigen::Matrix3d R =
@@ -455,13 +460,13 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }
     float* score = fft.InverseRows(meet[0], meet[1]);
-    LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
+    positive.clear();
     for_each_cell([&](std::size_t i) {
       score[i] *= weight[i];
       if (score[i] > 0) positive.emplace_back(score[i], i);
     });
     for (const Peak& peak :
-         TopPeaks(std::move(positive), n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+         TopPeaks(&positive, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
       Eigen::Vector3d shift;
       for (int k = 0; k < 3; ++k) {
         const int s = peak.shift[static_cast<std::size_t>(k)];
