@@ -297,7 +297,7 @@ void MapCore::WriterLoop() {
       }
     }
     if (probe) {
-      write_health_.Record(store_->ProbeWrite());
+      write_health_.Record(store_->ProbeWrite(), WriteHealth::Attempt::kProbe);
       continue;
     }
     if (!group.empty() || !fused.empty()) CommitGroup(group, fused);

@@ -20,7 +20,7 @@ bool WriteHealth::IsStorageFailure(const Status& s) {
   }
 }
 
-void WriteHealth::Record(const Status& outcome) {
+void WriteHealth::Record(const Status& outcome, Attempt attempt) {
   std::function<void(const Status&)> notify;
   Status now;
   {
@@ -32,6 +32,10 @@ void WriteHealth::Record(const Status& outcome) {
       if (!was_ok) return;  // still failing: one change, one notification
       now = outcome;
     } else if (outcome.ok()) {
+      if (!was_ok && failure_.code() == StatusCode::kResourceExhausted &&
+          attempt != Attempt::kProbe) {
+        return;  // still full until the probe finds room
+      }
       consecutive_ = 0;
       if (was_ok) return;
       failure_ = Status::Ok();

@@ -3,7 +3,8 @@
 // error, a lock held too long by another process) the server reports
 // NOT_SERVING with the reason, refuses batches and writes at once instead of
 // queueing them, and retries with a growing pause. The first commit that
-// succeeds again (a batch or a probe) makes it healthy.
+// succeeds again (a batch or a probe) makes it healthy, except after a full
+// disk, which only the probe declares over (see Record).
 //
 // Thread safety: every method may be called from any thread; the listener
 // runs on the thread that recorded the change, without internal locks held.
@@ -23,10 +24,18 @@ class WriteHealth {
   // Runs on every change between healthy (Ok) and failing (the failure).
   void SetListener(std::function<void(const Status&)> listener);
 
-  // A commit attempt's outcome. Only storage failures count (see
-  // IsStorageFailure); anything else is a verdict on the request, and a
-  // success clears a failure.
-  void Record(const Status& outcome);
+  // What an outcome comes from.
+  enum class Attempt {
+    kCommit,  // a batch group or a write job
+    kProbe,   // the writer's probe (Store::ProbeWrite)
+  };
+  // An attempt's outcome. Only storage failures count (see
+  // IsStorageFailure); anything else is a verdict on the request. A success
+  // clears a failure, except a full disk (ResourceExhausted), which only a
+  // probe clears: the probe asks for real room, while a retried commit can
+  // fit in the space its failed attempt freed and the next batch fail again
+  // (health flapped between NOT_SERVING and SERVING on a full tmpfs).
+  void Record(const Status& outcome, Attempt attempt = Attempt::kCommit);
 
   bool ok() const;
   // Ok, or Unavailable with the failure's reason and what to do.
