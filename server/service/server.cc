@@ -35,7 +35,7 @@ std::string MallocHugePages() {
     const char mode = at + key.size() < value.size() ? value[at + key.size()] : '0';
     if (mode == '1' || mode == '2') return "on";
   }
-  return "off (merges of large submaps cost 10-25 % more CPU in page faults; start mapd with "
+  return "off (merges of large submaps take 20-45 % more CPU, in page faults; start mapd with "
          "GLIBC_TUNABLES=glibc.malloc.hugetlb=1, docs/operations.md)";
 }
 

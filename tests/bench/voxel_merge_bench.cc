@@ -439,7 +439,7 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
   // The workers inherit the environment: say how their malloc ran (huge
-  // pages or not moves a campus merge's CPU by 10-25 %, docs/operations.md).
+  // pages or not moves a campus merge's CPU by 20-30 %, docs/operations.md).
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   table << "\nWorkers ran with GLIBC_TUNABLES=" << (tunables == nullptr ? "(unset)" : tunables)
         << "\n";
