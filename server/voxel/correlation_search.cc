@@ -372,27 +372,25 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // the content rows), so the search maps 16M-cell buffers once, not twice.
   CoarseGrid grid(n, origin_a, cell);
   {
-    CoarseGrid& grid_a = grid;
-    for (const Sample& s : Samples(a, cell)) grid_a.Add(R_a * s.p, s);
-    grid_a.Finish(cover_radius);
-    const auto& occ = grid_a.occ();
-    const auto& dilated = grid_a.dilated_occ();
-    const auto& free = grid_a.free();
-    const auto& cover = grid_a.cover();
-    const std::array<int, 2>& extent = grid_a.extent();
+    for (const Sample& s : Samples(a, cell)) grid.Add(R_a * s.p, s);
+    grid.Finish(cover_radius);
+    const auto& occ = grid.occ();
+    const auto& dilated = grid.dilated_occ();
+    const auto& free = grid.free();
+    const auto& cover = grid.cover();
+    const std::array<int, 2>& extent = grid.extent();
     rows_a = extent;
     occ_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; }));
     hit_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return dilated[i] - w * free[i]; }));
     cover_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; }));
-    cells_a = static_cast<double>(grid_a.occupied_cells());
+    cells_a = static_cast<double>(grid.occupied_cells());
   }
   const LargeVector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
   // Buffers of b's side, reused by every yaw.
   LargeVector<Complex> occ_b(spectrum_size);
-  LargeVector<float> weight(fft.real_size());  // 1 / normaliser, 0 where no peak may be
-  CoarseGrid& grid_b = grid;
+  LargeVector<float> weight(fft.real_size());           // 1 / normaliser, 0 where no peak may be
   LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
@@ -400,14 +398,14 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
     // b's grid origin: its turned box, one cell of margin.
     const Eigen::Vector3d origin = boxes_b[y].lo - Eigen::Vector3d::Constant(cell);
-    grid_b.Reset(origin);
-    for (const Sample& s : samples_b) grid_b.Add(R * s.p, s);
-    grid_b.Finish(cover_radius);
-    const auto& occ = grid_b.occ();
-    const auto& free = grid_b.free();
-    const auto& cover = grid_b.cover();
-    const double cells_b = static_cast<double>(grid_b.occupied_cells());
-    const std::array<int, 2>& extent = grid_b.extent();
+    grid.Reset(origin);
+    for (const Sample& s : samples_b) grid.Add(R * s.p, s);
+    grid.Finish(cover_radius);
+    const auto& occ = grid.occ();
+    const auto& free = grid.free();
+    const auto& cover = grid.cover();
+    const double cells_b = static_cast<double>(grid.occupied_cells());
+    const std::array<int, 2>& extent = grid.extent();
     // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s). Each product is formed in
     // the transform's own spectrum and each inverse folded into `weight`
     // before the next, so only occ_b's spectrum and one real array are kept.

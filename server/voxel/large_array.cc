@@ -3,6 +3,7 @@
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 
@@ -14,6 +15,8 @@ std::size_t RoundUp(std::size_t bytes, std::size_t to) { return (bytes + to - 1)
 }  // namespace
 
 void* AllocateLarge(std::size_t bytes) {
+  // No block can be this large, and rounding it up would wrap around.
+  if (bytes > static_cast<std::size_t>(PTRDIFF_MAX)) throw std::bad_alloc();
   if (bytes < kHugePageBytes) {
     // Small blocks: the heap (aligned for FFTW's SIMD loads).
     void* p = std::aligned_alloc(64, RoundUp(std::max<std::size_t>(bytes, 1), 64));

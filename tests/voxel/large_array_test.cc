@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <new>
 #include <numeric>
 #include <sstream>
 #include <string>
@@ -46,6 +47,16 @@ TEST(LargeArrayTest, SmallBlocksComeFromTheHeapAligned) {
   for (int i = 0; i < 5'000'000; ++i) v.push_back(static_cast<std::uint8_t>(i));
   EXPECT_EQ(v.size(), 5'000'001U);
   EXPECT_EQ(v.back(), static_cast<std::uint8_t>(4'999'999));
+}
+
+// A size no system has (or one that would wrap when rounded to huge pages)
+// is refused as operator new refuses it, never handed a small block.
+TEST(LargeArrayTest, ImpossibleSizesThrowBadAlloc) {
+  LargeArrayAllocator<float> floats;
+  EXPECT_THROW(floats.allocate(static_cast<std::size_t>(-1) / sizeof(float) + 1),
+               std::bad_array_new_length);
+  EXPECT_THROW(internal::AllocateLarge(static_cast<std::size_t>(-1) - 10), std::bad_alloc);
+  EXPECT_THROW(internal::AllocateLarge(std::size_t{1} << 60), std::bad_alloc);
 }
 
 // A long-running server must get a merge's peak back: a freed large block is
