@@ -11,7 +11,7 @@
 //   voxel_merge_bench [--dir=DIR] [--maps=geb079.bt,...] [--overlaps=0.1,0.2,0.3,0.5]
 //                     [--trials=20] [--trials-other=N] [--negatives=N] [--gap-m=2]
 //                     [--methods=ours,fpfh] [--seed=1] [--max-voxels=150000]
-//                     [--threads=1] [--out=FILE] [--keep-crops=DIR]
+//                     [--threads=1] [--out=FILE] [--keep-crops=DIR] [--baseline=BINARY]
 //
 // --trials applies to overlap 0.5, --trials-other (default = --trials) to the
 // others. --negatives (default = --trials-other) pairs per map of two DISJOINT
@@ -22,6 +22,14 @@
 // profile one merge with `--worker=ours A.bt B.bt` under perf or callgrind.
 // Workers inherit the environment; run with GLIBC_TUNABLES=glibc.malloc.hugetlb=1
 // to measure merges as deploy/mapd.service runs them (the table says which).
+//
+// --baseline=BINARY: every "ours" merge also runs in BINARY's worker (another
+// build of this benchmark, e.g. of the code before a change), on the same
+// crops, the two in alternating order. A second table gives per row how many
+// outcomes differ (status, transform, message or pair figures, bit for bit)
+// and the median of the paired CPU ratios. The machine's drift hits both
+// sides of a pair alike: on a VM whose speed wandered by a third between
+// runs, unpaired medians could not show a 10 % change.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -303,6 +311,7 @@ struct Options {
   int threads = 1;
   std::string out;
   std::string keep_crops;  // --keep-crops: where to copy every crop pair
+  std::string baseline;    // --baseline: another build's binary, run on every "ours" pair
 };
 
 // Runs one worker process; FAILED status INTERNAL when it crashed or timed out.
@@ -364,6 +373,20 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
   return out;
 }
 
+// Whether two workers' outcomes are the same, bit for bit (timings aside).
+bool SameOutcome(const WorkerOutput& x, const WorkerOutput& y) {
+  if (x.code != y.code || x.accepted != y.accepted || x.message != y.message ||
+      !(x.T.matrix().array() == y.T.matrix().array()).all() ||
+      x.pair_values.size() != y.pair_values.size()) {
+    return false;
+  }
+  for (std::size_t i = 0; i < x.pair_values.size(); ++i) {
+    const double a = x.pair_values[i], b = y.pair_values[i];
+    if (!(a == b || (std::isnan(a) && std::isnan(b)))) return false;
+  }
+  return true;
+}
+
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
@@ -383,6 +406,9 @@ struct Row {
   std::vector<std::vector<double>> stage_s;
   long peak_rss_kb = 0;
   std::map<std::string, int> error_messages;
+  // --baseline: its CPU, this build's over its per pair, and outcomes that differ.
+  std::vector<double> baseline_cpu_s, cpu_ratio;
+  int baseline_differs = 0;
 };
 
 std::string Fmt(const char* fmt, double v) {
@@ -438,6 +464,21 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   for (std::size_t i = 0; i < 18 + kNumPairColumns; ++i) table << "---|";
   table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
+  if (std::any_of(rows.begin(), rows.end(),
+                  [](const Row& r) { return !r.baseline_cpu_s.empty(); })) {
+    table << "\nAgainst --baseline (paired on the same crops, alternating order):\n\n"
+             "| map | overlap | method | outcomes differing | median CPU, baseline (s) | "
+             "median CPU, this build (s) | median CPU ratio, this / baseline |\n"
+             "|---|---|---|---|---|---|---|\n";
+    for (const Row& r : rows) {
+      if (r.baseline_cpu_s.empty()) continue;
+      table << "| " << r.map << " | "
+            << (r.negative ? std::string("none (disjoint)") : Fmt("%.1f", r.overlap)) << " | "
+            << r.method << " | " << r.baseline_differs << " of " << r.baseline_cpu_s.size() << " | "
+            << Fmt("%.2f", Median(r.baseline_cpu_s)) << " | " << Fmt("%.2f", Median(r.cpu_s))
+            << " | " << Fmt("%.3f", Median(r.cpu_ratio)) << " |\n";
+    }
+  }
   // The workers inherit the environment: say how their malloc ran (huge
   // pages or not moves a campus merge's CPU by 20-30 %, docs/operations.md).
   const char* tunables = std::getenv("GLIBC_TUNABLES");
@@ -495,6 +536,8 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->out = val;
     } else if (key == "--keep-crops") {
       o->keep_crops = val;
+    } else if (key == "--baseline") {
+      o->baseline = val;
     } else {
       std::fprintf(stderr, "unknown flag %s (see the header of voxel_merge_bench.cc)\n",
                    arg.c_str());
@@ -610,9 +653,28 @@ int main(int argc, char** argv) {
                      pair->translation_m, gen_s);
         for (std::size_t k = 0; k < opt.methods.size(); ++k) {
           Row& row = method_rows[k];
-          long rss_kb = 0;
+          long rss_kb = 0, baseline_rss_kb = 0;
+          const bool paired = !opt.baseline.empty() && opt.methods[k] == "ours";
+          const auto run_baseline = [&] {
+            return RunWorker(opt.baseline, opt.methods[k], path_a, path_b, opt.threads,
+                             static_cast<unsigned>(cp.seed), &baseline_rss_kb);
+          };
+          // Alternating which runs first, so that neither side always meets
+          // a cold cache or the other's freed memory.
+          WorkerOutput base;
+          if (paired && trial % 2 == 1) base = run_baseline();
           const WorkerOutput w = RunWorker(self, opt.methods[k], path_a, path_b, opt.threads,
                                            static_cast<unsigned>(cp.seed), &rss_kb);
+          if (paired && trial % 2 == 0) base = run_baseline();
+          if (paired) {
+            const bool same = SameOutcome(w, base);
+            row.baseline_differs += same ? 0 : 1;
+            row.baseline_cpu_s.push_back(base.cpu_s);
+            if (base.cpu_s > 0) row.cpu_ratio.push_back(w.cpu_s / base.cpu_s);
+            std::fprintf(stderr, "  baseline: %s, cpu %.2f s |%s\n",
+                         same ? "same outcome" : "DIFFERS", base.cpu_s,
+                         same ? "" : base.message.c_str());
+          }
           ++row.trials;
           row.achieved.push_back(pair->achieved_overlap);
           row.crop_a.push_back(static_cast<double>(pair->out_occupied_a));
