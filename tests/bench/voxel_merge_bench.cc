@@ -406,9 +406,10 @@ struct Row {
   std::vector<std::vector<double>> stage_s;
   long peak_rss_kb = 0;
   std::map<std::string, int> error_messages;
-  // --baseline: its CPU, this build's over its per pair, and outcomes that differ.
+  // --baseline: pairs run, outcomes that differ, its CPU, and this build's
+  // over its per pair (crashed workers count as differing, with no CPU).
+  int baseline_runs = 0, baseline_differs = 0;
   std::vector<double> baseline_cpu_s, cpu_ratio;
-  int baseline_differs = 0;
 };
 
 std::string Fmt(const char* fmt, double v) {
@@ -464,17 +465,16 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   for (std::size_t i = 0; i < 18 + kNumPairColumns; ++i) table << "---|";
   table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
-  if (std::any_of(rows.begin(), rows.end(),
-                  [](const Row& r) { return !r.baseline_cpu_s.empty(); })) {
+  if (std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.baseline_runs > 0; })) {
     table << "\nAgainst --baseline (paired on the same crops, alternating order):\n\n"
              "| map | overlap | method | outcomes differing | median CPU, baseline (s) | "
              "median CPU, this build (s) | median CPU ratio, this / baseline |\n"
              "|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
-      if (r.baseline_cpu_s.empty()) continue;
+      if (r.baseline_runs == 0) continue;
       table << "| " << r.map << " | "
             << (r.negative ? std::string("none (disjoint)") : Fmt("%.1f", r.overlap)) << " | "
-            << r.method << " | " << r.baseline_differs << " of " << r.baseline_cpu_s.size() << " | "
+            << r.method << " | " << r.baseline_differs << " of " << r.baseline_runs << " | "
             << Fmt("%.2f", Median(r.baseline_cpu_s)) << " | " << Fmt("%.2f", Median(r.cpu_s))
             << " | " << Fmt("%.3f", Median(r.cpu_ratio)) << " |\n";
     }
@@ -668,9 +668,12 @@ int main(int argc, char** argv) {
           if (paired && trial % 2 == 0) base = run_baseline();
           if (paired) {
             const bool same = SameOutcome(w, base);
+            ++row.baseline_runs;
             row.baseline_differs += same ? 0 : 1;
-            row.baseline_cpu_s.push_back(base.cpu_s);
-            if (base.cpu_s > 0) row.cpu_ratio.push_back(w.cpu_s / base.cpu_s);
+            const bool timed =
+                w.code != StatusCode::kInternal && base.code != StatusCode::kInternal;
+            if (base.code != StatusCode::kInternal) row.baseline_cpu_s.push_back(base.cpu_s);
+            if (timed && base.cpu_s > 0) row.cpu_ratio.push_back(w.cpu_s / base.cpu_s);
             std::fprintf(stderr, "  baseline: %s, cpu %.2f s |%s\n",
                          same ? "same outcome" : "DIFFERS", base.cpu_s,
                          same ? "" : base.message.c_str());
