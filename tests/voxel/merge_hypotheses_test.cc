@@ -115,6 +115,29 @@ TEST(MergeHypothesesTest, UniquenessGateRefusesASymmetricRoomNamingBoth) {
   EXPECT_NE(message.find("overlap"), std::string::npos);
 }
 
+// The same room in the poses where the uniqueness gate once missed the twin:
+// only one peak per yaw is refined after an answer, and which of the twin
+// yaw's near-equal peaks comes first hung on last-bit ties (these merged
+// before the answer's 180 deg twin was always refined).
+TEST(MergeHypothesesTest, UniquenessGateRefusesTheSymmetricRoomInEveryPose) {
+  const Eigen::AlignedBox3d whole(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(7, 4, 3.5));
+  const std::string a =
+      RasteriseSubmap(testing::EmptyRoom(), whole, Eigen::Isometry3d::Identity(), kRoomResolutionM);
+  const std::vector<Eigen::Isometry3d> poses = {
+      Pose(-100, 0, 0, Eigen::Vector3d(-0.7, 0.4, 0.1)),
+      Pose(10, 0, 0, Eigen::Vector3d(2.3, -1.1, 0.0)),
+      Pose(-20, 0, 0, Eigen::Vector3d(1.0, 2.0, 0.0)),
+  };
+  for (const Eigen::Isometry3d& T_a_b : poses) {
+    const std::string b = RasteriseSubmap(testing::EmptyRoom(), whole, T_a_b, kRoomResolutionM);
+    auto outcome = MergeSubmaps({{1, a}, {2, b}}, MergeParams{});
+    ASSERT_FALSE(outcome.ok()) << "merged a symmetric room: " << outcome->pairs.front().source;
+    EXPECT_EQ(outcome.status().code(), StatusCode::kFailedPrecondition);
+    EXPECT_NE(outcome.status().message().find("ambiguous"), std::string::npos)
+        << outcome.status().message();
+  }
+}
+
 TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   const Corridors c = MakeCorridors();
   MergeParams params;
