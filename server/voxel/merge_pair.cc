@@ -358,34 +358,33 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
   const auto distinct = [&](const PairReport& x, const PairReport& y) {
     return DistinctTransforms(x.T_a_b, y.T_a_b, centroid_b, params, finest_resolution_m);
   };
-  // The answer's 180 deg twin (b turned about its vertical through its
-  // centroid) is always refined, unless a hypothesis already ended there. A
-  // room symmetric under that turn passes every gate at both; which of the
-  // twin yaw's peaks the generator refines hangs on last-bit ties between
-  // them, and in a generated empty room it missed the twin in 3 of 24 poses,
-  // which then merged (docs/voxel-merge.md).
   if (accepted_index >= 0) {
-    const PairReport& answer = tried[static_cast<std::size_t>(accepted_index)].report;
+    // The answer's 180 deg twin (b turned about its vertical through its
+    // centroid) is always refined, unless a hypothesis already ended there. A
+    // room symmetric under that turn passes every gate at both; which of the
+    // twin yaw's peaks the generator refines hangs on last-bit ties between
+    // them, and in a generated empty room it missed the twin in 3 of 24
+    // poses, which then merged (docs/voxel-merge.md).
+    const TriedHypothesis& answer = tried[static_cast<std::size_t>(accepted_index)];
     const StatusOr<GravityFrame>& frame_b = b.features->Gravity(times);
     const Eigen::Vector3d up = frame_b.ok() ? frame_b->up : Eigen::Vector3d::UnitZ();
     const Eigen::Isometry3d turn = Eigen::Translation3d(centroid_b) *
                                    Eigen::AngleAxisd(M_PI, up.normalized()) *
                                    Eigen::Translation3d(-centroid_b);
     TriedHypothesis twin;
-    twin.label = "the 180 deg turn of " + tried[static_cast<std::size_t>(accepted_index)].label;
+    twin.label = "the 180 deg turn of " + answer.label;
     twin.report.id_a = a.id;
     twin.report.id_b = b.id;
-    twin.report.T_a_b = answer.T_a_b * turn;
+    twin.report.T_a_b = answer.report.T_a_b * turn;
     const bool reached = std::any_of(tried.begin(), tried.end(), [&](const TriedHypothesis& h) {
       return h.report.residual_m > 0 && !distinct(h.report, twin.report);
     });
     if (!reached) {
       MAPD_RETURN_IF_ERROR(
           RefineAndGate(a, b, params, twin.report.T_a_b, finest_resolution_m, times, &twin.report));
-      tried.push_back(std::move(twin));
+      tried.push_back(std::move(twin));  // `answer` is not used past here
     }
-  }
-  if (accepted_index >= 0) {
+
     const TriedHypothesis& best = tried[static_cast<std::size_t>(accepted_index)];
     PairReport report = best.report;
     report.source = best.label;
