@@ -5,6 +5,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -356,18 +357,15 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   }
 
   const Eigen::Vector3d origin_a = box_a.lo - Eigen::Vector3d::Constant(cell);
-  RealFft fft({n[0], n[1], n[2]});
-  const std::size_t spectrum_size = fft.complex_size();
-  const auto keep = [&](const Complex* spectrum) {
-    return LargeVector<Complex>(spectrum, spectrum + spectrum_size);
-  };
   const int cover_radius =
       std::max(1, static_cast<int>(std::lround(params.coverage_radius_m / cell)));
   const auto w = static_cast<float>(params.free_weight);
-  // a's three spectra, kept for every yaw.
-  LargeVector<Complex> occ_a, hit_a, cover_a;  // hit_a: dilated occupancy - w * free
+  const std::size_t n1 = static_cast<std::size_t>(n[1]), n2 = static_cast<std::size_t>(n[2]);
+  // a's content rows (CoarseGrid::extent) as its three transform inputs,
+  // each row of n2 values: a's spectra are made again for every FFT size.
+  LargeVector<float> occ_rows_a, hit_rows_a, cover_rows_a;  // hit: dilated occupancy - w * free
   double cells_a = 0;
-  std::array<int, 2> rows_a{};  // a's content rows (CoarseGrid::extent)
+  std::array<int, 2> rows_a{};
   // One grid for both maps: b's yaws reuse a's buffers (Reset clears only
   // the content rows), so the search maps 16M-cell buffers once, not twice.
   CoarseGrid grid(n, origin_a, cell);
@@ -378,19 +376,31 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& dilated = grid.dilated_occ();
     const auto& free = grid.free();
     const auto& cover = grid.cover();
-    const std::array<int, 2>& extent = grid.extent();
-    rows_a = extent;
-    occ_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; }));
-    hit_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return dilated[i] - w * free[i]; }));
-    cover_a = keep(fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; }));
+    rows_a = grid.extent();
+    const std::size_t cells = static_cast<std::size_t>(rows_a[0]) * rows_a[1] * n2;
+    occ_rows_a.resize(cells);
+    hit_rows_a.resize(cells);
+    cover_rows_a.resize(cells);
+    std::size_t k = 0;
+    for (std::size_t x = 0; x < static_cast<std::size_t>(rows_a[0]); ++x) {
+      for (std::size_t y = 0; y < static_cast<std::size_t>(rows_a[1]); ++y) {
+        for (std::size_t i = (x * n1 + y) * n2, end = i + n2; i < end; ++i, ++k) {
+          occ_rows_a[k] = occ[i];
+          hit_rows_a[k] = dilated[i] - w * free[i];
+          cover_rows_a[k] = cover[i];
+        }
+      }
+    }
     cells_a = static_cast<double>(grid.occupied_cells());
   }
   const LargeVector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
-  // Buffers of b's side, reused by every yaw.
-  LargeVector<Complex> occ_b(spectrum_size);
-  LargeVector<float> weight(fft.real_size());           // 1 / normaliser, 0 where no peak may be
+  // The FFT of the current size, a's three spectra on it, and b's buffers.
+  std::array<int, 3> size{};
+  std::unique_ptr<RealFft> sized_fft;
+  LargeVector<Complex> occ_a, hit_a, cover_a, occ_b;
+  LargeVector<float> weight;                            // 1 / normaliser, 0 where no peak may be
   LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
@@ -406,10 +416,44 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& cover = grid.cover();
     const double cells_b = static_cast<double>(grid.occupied_cells());
     const std::array<int, 2>& extent = grid.extent();
-    // sum_x A(x) B(x - s) = IFFT(FA * conj(FB))(s). Each product is formed in
-    // the transform's own spectrum and each inverse folded into `weight`
-    // before the next, so only occ_b's spectrum and one real array are kept.
-    const Complex* spectrum = fft.ForwardInBox(extent, [&](std::size_t i) { return occ[i]; });
+    // This yaw's FFT size: along x and y a's content rows plus b's, every
+    // shift where they meet without wrapping around (n holds b's largest box
+    // over the yaws: a slab turned by 90 deg is long in x or in y, not both,
+    // so a yaw's grid is often a half or less of it). Where they do not fit
+    // in n, n, as for every yaw before: the same correlation either way.
+    std::array<int, 3> m = n;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const int shifts = rows_a[k] + extent[k] - 1;
+      if (shifts <= n[k]) m[k] = FftSize(std::max(shifts, 1));
+    }
+    if (!sized_fft || m != size) {
+      size = m;
+      sized_fft.reset();  // one size's buffers at a time
+      sized_fft = std::make_unique<RealFft>(std::vector<int>{m[0], m[1], m[2]});
+      RealFft& f = *sized_fft;
+      const auto spectrum_of = [&](const LargeVector<float>& rows) {
+        const Complex* spectrum = f.ForwardInBoxRows(rows_a, [&](int x, int y_, float* row) {
+          const float* from = rows.data() + (static_cast<std::size_t>(x) * rows_a[1] + y_) * n2;
+          std::copy(from, from + n2, row);
+        });
+        return LargeVector<Complex>(spectrum, spectrum + f.complex_size());
+      };
+      occ_a = spectrum_of(occ_rows_a);
+      hit_a = spectrum_of(hit_rows_a);
+      cover_a = spectrum_of(cover_rows_a);
+      occ_b.assign(f.complex_size(), Complex(0, 0));
+      weight.assign(f.real_size(), 0.0F);
+    }
+    RealFft& fft = *sized_fft;
+    const std::size_t spectrum_size = fft.complex_size();
+    // b's rows, copied from the grid (laid out for n) into the transform's.
+    const auto rows_of = [&](const auto& field) {
+      return [&](int x, int y_, float* row) {
+        const std::size_t from = (static_cast<std::size_t>(x) * n1 + y_) * n2;
+        for (std::size_t z = 0; z < n2; ++z) row[z] = static_cast<float>(field[from + z]);
+      };
+    };
+    const Complex* spectrum = fft.ForwardInBoxRows(extent, rows_of(occ));
     std::copy(spectrum, spectrum + spectrum_size, occ_b.begin());
     // The score is normalised by the occupied cells each map has where the
     // other has data: sliding a corridor over more of the other map adds
@@ -419,7 +463,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const double min_cells = std::max(params.min_overlap_fraction * std::min(cells_a, cells_b) *
                                           static_cast<double>(fft.real_size()),
                                       1.0);
-    Complex* product = fft.ForwardInBox(extent, [&](std::size_t i) { return cover[i]; });
+    Complex* product = fft.ForwardInBoxRows(extent, rows_of(cover));
     for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(occ_a[i], product[i]);
     // Only shifts where the two grids' content can meet can score: a's
     // content rows [0, rows_a) against b's [0, extent) are shifts
@@ -427,17 +471,17 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     // every loop below skip the other rows.
     RealFft::Ranges meet[2];
     for (std::size_t k = 0; k < 2; ++k) {
-      const int first_end = std::min(rows_a[k], n[k]);
-      const int second_begin = std::max(first_end, n[k] - extent[k] + 1);
+      const int first_end = std::min(rows_a[k], m[k]);
+      const int second_begin = std::max(first_end, m[k] - extent[k] + 1);
       if (first_end > 0) meet[k].push_back({0, first_end});
-      if (second_begin < n[k]) meet[k].push_back({second_begin, n[k]});
+      if (second_begin < m[k]) meet[k].push_back({second_begin, m[k]});
     }
     const auto for_each_cell = [&](auto&& visit) {  // of the rows that meet, ascending
       for (const auto& [x0, x1] : meet[0]) {
         for (int x = x0; x < x1; ++x) {
           for (const auto& [y0, y1] : meet[1]) {
-            const std::size_t begin = (static_cast<std::size_t>(x) * n[1] + y0) * n[2];
-            const std::size_t end = begin + static_cast<std::size_t>(y1 - y0) * n[2];
+            const std::size_t begin = (static_cast<std::size_t>(x) * m[1] + y0) * m[2];
+            const std::size_t end = begin + static_cast<std::size_t>(y1 - y0) * m[2];
             for (std::size_t i = begin; i < end; ++i) visit(i);
           }
         }
@@ -453,7 +497,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       weight[i] =
           std::min(in_a, in_b) >= min_cells ? static_cast<float>(1.0 / std::sqrt(in_a * in_b)) : 0;
     });
-    product = fft.ForwardInBox(extent, [&](std::size_t i) { return free[i]; });
+    product = fft.ForwardInBoxRows(extent, rows_of(free));
     for (std::size_t i = 0; i < spectrum_size; ++i) {
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
     }
@@ -464,11 +508,11 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       if (score[i] > 0) positive.emplace_back(score[i], i);
     });
     for (const Peak& peak :
-         TopPeaks(&positive, n, params.peaks_per_yaw, params.min_peak_separation_cells)) {
+         TopPeaks(&positive, m, params.peaks_per_yaw, params.min_peak_separation_cells)) {
       Eigen::Vector3d shift;
       for (int k = 0; k < 3; ++k) {
         const int s = peak.shift[static_cast<std::size_t>(k)];
-        shift[k] = s < na[static_cast<std::size_t>(k)] ? s : s - n[static_cast<std::size_t>(k)];
+        shift[k] = s < na[static_cast<std::size_t>(k)] ? s : s - m[static_cast<std::size_t>(k)];
       }
       // b's cell j lands on a's cell j + shift: x_a' = R x_b + t.
       const Eigen::Vector3d t = origin_a - origin + shift * cell;

@@ -77,6 +77,22 @@ class RealFft {
     ExecuteForwardInBox(extent);
     return spectrum_;
   }
+  // ForwardInBox with the rows filled by fill_row(x, y, row): the row's
+  // dims[2] values, x < extent[0], y < extent[1] (a grid of another layout
+  // copied in).
+  template <typename FillRow>
+  Complex* ForwardInBoxRows(const std::array<int, 2>& extent, const FillRow& fill_row) {
+    const std::size_t n1 = static_cast<std::size_t>(dims_[1]),
+                      n2 = static_cast<std::size_t>(dims_[2]);
+    for (int x = 0; x < extent[0]; ++x) {
+      for (int y = 0; y < extent[1]; ++y) {
+        fill_row(x, y,
+                 real_ + (static_cast<std::size_t>(x) * n1 + static_cast<std::size_t>(y)) * n2);
+      }
+    }
+    ExecuteForwardInBox(extent);
+    return spectrum_;
+  }
   // The inverse of spectrum(), which it overwrites; valid until the next call.
   float* Inverse();
 
