@@ -5,7 +5,6 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <utility>
 
@@ -396,11 +395,15 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   const LargeVector<Sample> samples_b = Samples(b, cell);
 
   std::vector<CorrelationHypothesis> out;
-  // The FFT of the current size, a's three spectra on it, and b's buffers.
-  std::array<int, 3> size{};
-  std::unique_ptr<RealFft> sized_fft;
+  // The FFT, reshaped to each yaw's size on the common grid's buffers, a's
+  // three spectra on the current size, and b's buffers. Reserved for the
+  // common grid (untouched until used), so no size change maps fresh pages.
+  RealFft fft({n[0], n[1], n[2]});
+  std::array<int, 3> size{};  // of the spectra below; none yet
   LargeVector<Complex> occ_a, hit_a, cover_a, occ_b;
-  LargeVector<float> weight;                            // 1 / normaliser, 0 where no peak may be
+  LargeVector<float> weight;  // 1 / normaliser, 0 where no peak may be
+  for (auto* v : {&occ_a, &hit_a, &cover_a, &occ_b}) v->reserve(fft.complex_size());
+  weight.reserve(fft.real_size());
   LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
@@ -426,25 +429,22 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       const int shifts = rows_a[k] + extent[k] - 1;
       if (shifts <= n[k]) m[k] = FftSize(std::max(shifts, 1));
     }
-    if (!sized_fft || m != size) {
+    if (m != size) {
       size = m;
-      sized_fft.reset();  // one size's buffers at a time
-      sized_fft = std::make_unique<RealFft>(std::vector<int>{m[0], m[1], m[2]});
-      RealFft& f = *sized_fft;
-      const auto spectrum_of = [&](const LargeVector<float>& rows) {
-        const Complex* spectrum = f.ForwardInBoxRows(rows_a, [&](int x, int y_, float* row) {
+      fft.Reshape({m[0], m[1], m[2]});
+      const auto spectrum_of = [&](const LargeVector<float>& rows, LargeVector<Complex>* spectra) {
+        const Complex* spectrum = fft.ForwardInBoxRows(rows_a, [&](int x, int y_, float* row) {
           const float* from = rows.data() + (static_cast<std::size_t>(x) * rows_a[1] + y_) * n2;
           std::copy(from, from + n2, row);
         });
-        return LargeVector<Complex>(spectrum, spectrum + f.complex_size());
+        spectra->assign(spectrum, spectrum + fft.complex_size());
       };
-      occ_a = spectrum_of(occ_rows_a);
-      hit_a = spectrum_of(hit_rows_a);
-      cover_a = spectrum_of(cover_rows_a);
-      occ_b.assign(f.complex_size(), Complex(0, 0));
-      weight.assign(f.real_size(), 0.0F);
+      spectrum_of(occ_rows_a, &occ_a);
+      spectrum_of(hit_rows_a, &hit_a);
+      spectrum_of(cover_rows_a, &cover_a);
+      occ_b.resize(fft.complex_size());
+      weight.assign(fft.real_size(), 0.0F);
     }
-    RealFft& fft = *sized_fft;
     const std::size_t spectrum_size = fft.complex_size();
     // b's rows, copied from the grid (laid out for n) into the transform's.
     const auto rows_of = [&](const auto& field) {

@@ -3,6 +3,8 @@
 #include <fftw3.h>
 
 #include <algorithm>
+#include <cassert>
+#include <tuple>
 
 #include "voxel/large_array.h"
 
@@ -23,38 +25,70 @@ int FftSize(int n) {
   }
 }
 
-RealFft::RealFft(const std::vector<int>& dims) : dims_(dims) {
+namespace {
+// Cells of a real grid of `dims` and of its half spectrum.
+std::pair<std::size_t, std::size_t> Sizes(const std::vector<int>& dims) {
+  std::size_t real = 1, complex = 1;
   for (std::size_t k = 0; k < dims.size(); ++k) {
-    real_size_ *= static_cast<std::size_t>(dims[k]);
-    complex_size_ *= static_cast<std::size_t>(k + 1 < dims.size() ? dims[k] : dims[k] / 2 + 1);
+    real *= static_cast<std::size_t>(dims[k]);
+    complex *= static_cast<std::size_t>(k + 1 < dims.size() ? dims[k] : dims[k] / 2 + 1);
   }
+  return {real, complex};
+}
+}  // namespace
+
+RealFft::RealFft(const std::vector<int>& dims) : dims_(dims), capacity_dims_(dims) {
+  std::tie(real_size_, complex_size_) = Sizes(dims);
+  real_capacity_ = real_size_;
+  complex_capacity_ = complex_size_;
   // Huge-page blocks (large_array.h), aligned beyond FFTW's SIMD needs.
-  real_ = static_cast<float*>(internal::AllocateLarge(real_size_ * sizeof(float)));
-  spectrum_ = static_cast<Complex*>(internal::AllocateLarge(complex_size_ * sizeof(Complex)));
-  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
-  auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
-  const int rank = static_cast<int>(dims.size());
-  const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  forward_ = fftwf_plan_dft_r2c(rank, dims.data(), real_, spectrum, FFTW_ESTIMATE);
-  inverse_ = fftwf_plan_dft_c2r(rank, dims.data(), spectrum, real_, FFTW_ESTIMATE);
+  real_ = static_cast<float*>(internal::AllocateLarge(real_capacity_ * sizeof(float)));
+  spectrum_ = static_cast<Complex*>(internal::AllocateLarge(complex_capacity_ * sizeof(Complex)));
+  MakePlans();
 }
 
 RealFft::~RealFft() {
-  {
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftwf_destroy_plan(forward_);
-    fftwf_destroy_plan(inverse_);
-    if (inverse_planes_ != nullptr) fftwf_destroy_plan(inverse_planes_);
-    for (const auto& [range, plan] : inverse_columns_) fftwf_destroy_plan(plan);
-    for (const auto& [ranges, plan] : inverse_rows_) fftwf_destroy_plan(plan);
-    for (const auto& [extent, p] : box_plans_) {
-      fftwf_destroy_plan(p.rows);
-      fftwf_destroy_plan(p.columns);
-      fftwf_destroy_plan(p.planes);
-    }
+  DestroyPlans();
+  internal::FreeLarge(real_, real_capacity_ * sizeof(float));
+  internal::FreeLarge(spectrum_, complex_capacity_ * sizeof(Complex));
+}
+
+void RealFft::Reshape(const std::vector<int>& dims) {
+  if (dims == dims_) return;
+  // A grid no larger along any axis fits the buffers, the half spectrum too.
+  assert(dims.size() == capacity_dims_.size());
+  for (std::size_t k = 0; k < dims.size(); ++k) assert(dims[k] > 0 && dims[k] <= capacity_dims_[k]);
+  DestroyPlans();
+  dims_ = dims;
+  std::tie(real_size_, complex_size_) = Sizes(dims);
+  MakePlans();
+}
+
+void RealFft::MakePlans() {
+  // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
+  auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
+  const int rank = static_cast<int>(dims_.size());
+  const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  forward_ = fftwf_plan_dft_r2c(rank, dims_.data(), real_, spectrum, FFTW_ESTIMATE);
+  inverse_ = fftwf_plan_dft_c2r(rank, dims_.data(), spectrum, real_, FFTW_ESTIMATE);
+}
+
+void RealFft::DestroyPlans() {
+  const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  fftwf_destroy_plan(forward_);
+  fftwf_destroy_plan(inverse_);
+  if (inverse_planes_ != nullptr) fftwf_destroy_plan(inverse_planes_);
+  for (const auto& [range, plan] : inverse_columns_) fftwf_destroy_plan(plan);
+  for (const auto& [ranges, plan] : inverse_rows_) fftwf_destroy_plan(plan);
+  for (const auto& [extent, p] : box_plans_) {
+    fftwf_destroy_plan(p.rows);
+    fftwf_destroy_plan(p.columns);
+    fftwf_destroy_plan(p.planes);
   }
-  internal::FreeLarge(real_, real_size_ * sizeof(float));
-  internal::FreeLarge(spectrum_, complex_size_ * sizeof(Complex));
+  forward_ = inverse_ = inverse_planes_ = nullptr;
+  inverse_columns_.clear();
+  inverse_rows_.clear();
+  box_plans_.clear();
 }
 
 void RealFft::ExecuteForward() { fftwf_execute(forward_); }

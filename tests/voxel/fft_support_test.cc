@@ -90,5 +90,34 @@ TEST(RealFftTest, InverseRowsIsTheInverseOnItsRows) {
   }
 }
 
+// Reshape puts a smaller grid on the same buffers: its transforms, pruned or
+// whole, forward or inverse, must be those of a RealFft made for that size,
+// after the buffers held a larger grid's (and back to the larger size).
+TEST(RealFftTest, ReshapedIsTheTransformOfTheNewSize) {
+  RealFft fft({12, 10, 9});
+  for (const std::array<int, 3>& n :
+       std::vector<std::array<int, 3>>{{12, 10, 9}, {6, 10, 9}, {8, 5, 9}, {12, 10, 9}}) {
+    fft.Reshape({n[0], n[1], n[2]});
+    RealFft fresh({n[0], n[1], n[2]});
+    ASSERT_EQ(fft.real_size(), fresh.real_size());
+    ASSERT_EQ(fft.complex_size(), fresh.complex_size());
+    const std::array<int, 2> extent = {n[0] / 2, n[1] - 1};
+    const std::vector<float> grid = GridInBox(n, extent, static_cast<unsigned>(n[0] + n[1]));
+    const auto at = [&](std::size_t i) { return grid[i]; };
+    const Complex* expected = fresh.Forward(at);
+    const Complex* pruned = fft.ForwardInBox(extent, at);
+    double worst = 0;
+    for (std::size_t i = 0; i < fft.complex_size(); ++i) {
+      worst = std::max(worst, static_cast<double>(std::abs(pruned[i] - expected[i])));
+    }
+    EXPECT_LT(worst, 1e-4) << "size " << n[0] << " x " << n[1] << " x " << n[2];
+    const float* round_trip = fft.InverseRows({{0, n[0]}}, {{0, n[1]}});
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+      ASSERT_NEAR(round_trip[i] / static_cast<float>(fft.real_size()), grid[i], 1e-4)
+          << "size " << n[0] << " x " << n[1] << " x " << n[2] << ", cell " << i;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace mapd::voxel
