@@ -78,6 +78,17 @@ double CpuSeconds() {
          1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
+// The system part alone: almost all of it is the kernel zeroing pages on
+// first touch, whose cost on a virtual machine depends on whether the host
+// still backs the guest's free memory (1 GiB of fresh huge pages took
+// 0.07-2.0 s on the benchmark VM, run to run), so it is the noisy part.
+double SystemCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_stime.tv_usec);
+}
+
 StatusOr<std::string> ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::NotFound("cannot open " + path);
@@ -134,7 +145,9 @@ constexpr std::size_t kNumPairColumns = sizeof(kPairColumns) / sizeof(kPairColum
 // ---------------------------------------------------------------------------
 // Worker side: one merge, one line of results on stdout.
 //   RESULT <code> <accepted> <T 16 numbers, row-major> <n stages> <stage_s>... <total_s> <rss_kb>
-//   <cpu_s> STAGES <name>... PAIR <kPairColumns values> MESSAGE <text>
+//   <cpu_s> STAGES <name>... PAIR <kPairColumns values> MESSAGE <text> SYSTEM <system_cpu_s>
+// each tag starting a line; SYSTEM is optional (--baseline may run a build
+// from before it).
 struct WorkerOutput {
   StatusCode code = StatusCode::kOk;
   bool accepted = false;
@@ -142,8 +155,9 @@ struct WorkerOutput {
   std::vector<std::string> stage_names;
   std::vector<double> stage_s;
   double total_s = 0;
-  double cpu_s = 0;                 // the whole worker process, reading the files included
-  std::vector<double> pair_values;  // kPairColumns of the accepted pair; empty otherwise
+  double cpu_s = 0;                    // the whole worker process, reading the files included
+  double system_cpu_s = std::nan("");  // of cpu_s (NaN: the worker did not say)
+  std::vector<double> pair_values;     // kPairColumns of the accepted pair; empty otherwise
   std::string message;
 };
 
@@ -154,13 +168,14 @@ void PrintWorkerOutput(const WorkerOutput& out) {
   }
   std::printf(" %zu", out.stage_s.size());
   for (double s : out.stage_s) std::printf(" %.6f", s);
+  const double system_s = SystemCpuSeconds();  // first: never above the total
   std::printf(" %.6f %ld %.3f\nSTAGES", out.total_s, PeakRssKb(), CpuSeconds());
   for (const std::string& n : out.stage_names) std::printf(" %s", n.c_str());
   std::printf("\nPAIR");
   for (double v : out.pair_values) std::printf(" %.6g", v);
   std::string msg = out.message;
   std::replace(msg.begin(), msg.end(), '\n', ' ');
-  std::printf("\nMESSAGE %s\n", msg.c_str());
+  std::printf("\nMESSAGE %s\nSYSTEM %.3f\n", msg.c_str(), system_s);
   std::fflush(stdout);
 }
 
@@ -363,6 +378,8 @@ WorkerOutput RunWorker(const std::string& self, const std::string& method,
       while (ls >> v) out.pair_values.push_back(std::strtod(v.c_str(), nullptr));
     } else if (tag == "MESSAGE") {
       std::getline(ls, out.message);
+    } else if (tag == "SYSTEM") {
+      ls >> out.system_cpu_s;
     }
   }
   if (!got) {
@@ -400,6 +417,7 @@ struct Row {
   bool negative = false;  // disjoint crops: every accepted merge is wrong
   int trials = 0, success = 0, wrong = 0, refused = 0, errors = 0;
   std::vector<double> rot_deg, trans_vox, total_s, cpu_s, cpu_refused_s, achieved, crop_a, crop_b;
+  std::vector<double> system_cpu_s;  // the part of cpu_s that was the kernel's
   std::vector<double> free_a, free_b;
   std::vector<std::vector<double>> pair_values;  // per kPairColumns
   std::vector<std::string> stage_names;
@@ -410,6 +428,7 @@ struct Row {
   // over its per pair (crashed workers count as differing, with no CPU).
   int baseline_runs = 0, baseline_differs = 0;
   std::vector<double> baseline_cpu_s, cpu_ratio;
+  std::vector<double> user_cpu_ratio;  // CPU less system CPU, where both workers said
 };
 
 std::string Fmt(const char* fmt, double v) {
@@ -442,7 +461,8 @@ std::string RowToMarkdown(const Row& row) {
     << row.refused << " | " << row.errors << " | " << Fmt("%.2f", Median(row.rot_deg)) << " | "
     << Fmt("%.2f", Median(row.trans_vox)) << " | " << stages << " | "
     << Fmt("%.2f", Median(row.total_s)) << " | " << Fmt("%.2f", Median(row.cpu_s)) << " | "
-    << Fmt("%.2f", Median(row.cpu_refused_s)) << " | " << Fmt("%.2f", max_cpu) << " | ";
+    << Fmt("%.2f", Median(row.system_cpu_s)) << " | " << Fmt("%.2f", Median(row.cpu_refused_s))
+    << " | " << Fmt("%.2f", max_cpu) << " | ";
   for (std::size_t i = 0; i < kNumPairColumns; ++i) {
     s << Fmt(kPairColumns[i].format,
              i < row.pair_values.size() ? Median(row.pair_values[i]) : std::nan(""))
@@ -458,25 +478,27 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   std::ostringstream table;
   table << "| map | res (m) | overlap req / achieved | occupied voxels A / B | free voxels A / B | "
            "method | right | wrong | refused | errors | median rot err (deg) | median trans err "
-           "(voxels) | median stage times (s) | median total (s) | median CPU (s) | median CPU "
-           "of refusals (s) | max CPU (s) | ";
+           "(voxels) | median stage times (s) | median total (s) | median CPU (s) | median system "
+           "CPU (s) | median CPU of refusals (s) | max CPU (s) | ";
   for (const PairColumn& column : kPairColumns) table << column.header << " | ";
   table << "peak RSS (MiB) |\n|";
-  for (std::size_t i = 0; i < 18 + kNumPairColumns; ++i) table << "---|";
+  for (std::size_t i = 0; i < 19 + kNumPairColumns; ++i) table << "---|";
   table << "\n";
   for (const Row& r : rows) table << RowToMarkdown(r);
   if (std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.baseline_runs > 0; })) {
     table << "\nAgainst --baseline (paired on the same crops, alternating order):\n\n"
              "| map | overlap | method | outcomes differing | median CPU, baseline (s) | "
-             "median CPU, this build (s) | median CPU ratio, this / baseline |\n"
-             "|---|---|---|---|---|---|---|\n";
+             "median CPU, this build (s) | median CPU ratio, this / baseline | median user "
+             "CPU ratio |\n"
+             "|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
       if (r.baseline_runs == 0) continue;
       table << "| " << r.map << " | "
             << (r.negative ? std::string("none (disjoint)") : Fmt("%.1f", r.overlap)) << " | "
             << r.method << " | " << r.baseline_differs << " of " << r.baseline_runs << " | "
             << Fmt("%.2f", Median(r.baseline_cpu_s)) << " | " << Fmt("%.2f", Median(r.cpu_s))
-            << " | " << Fmt("%.3f", Median(r.cpu_ratio)) << " |\n";
+            << " | " << Fmt("%.3f", Median(r.cpu_ratio)) << " | "
+            << Fmt("%.3f", Median(r.user_cpu_ratio)) << " |\n";
     }
   }
   // The workers inherit the environment: say how their malloc ran (huge
@@ -674,6 +696,10 @@ int main(int argc, char** argv) {
                 w.code != StatusCode::kInternal && base.code != StatusCode::kInternal;
             if (base.code != StatusCode::kInternal) row.baseline_cpu_s.push_back(base.cpu_s);
             if (timed && base.cpu_s > 0) row.cpu_ratio.push_back(w.cpu_s / base.cpu_s);
+            const double user = w.cpu_s - w.system_cpu_s;
+            const double base_user = base.cpu_s - base.system_cpu_s;
+            if (timed && base_user > 0)
+              row.user_cpu_ratio.push_back(user / base_user);  // NaN fails
             std::fprintf(stderr, "  baseline: %s, cpu %.2f s |%s\n",
                          same ? "same outcome" : "DIFFERS", base.cpu_s,
                          same ? "" : base.message.c_str());
@@ -690,6 +716,7 @@ int main(int argc, char** argv) {
             row.stage_s.push_back(w.stage_s);
             row.total_s.push_back(w.total_s);
             row.cpu_s.push_back(w.cpu_s);
+            if (!std::isnan(w.system_cpu_s)) row.system_cpu_s.push_back(w.system_cpu_s);
           }
           std::string verdict;
           if (w.accepted && w.code == StatusCode::kOk) {
