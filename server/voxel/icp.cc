@@ -49,7 +49,8 @@ class NearestTarget {
   NearestTarget(const std::vector<Eigen::Vector3d>& target, double voxel_m, NeighbourSearch search)
       : search_(search) {
     if (search == NeighbourSearch::kVoxelHash) {
-      hash_ = std::make_unique<NearestVoxelIndex>(target, voxel_m);
+      owned_ = std::make_unique<NearestVoxelIndex>(target, voxel_m);
+      hash_ = owned_.get();
       return;
     }
     pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
@@ -59,9 +60,13 @@ class NearestTarget {
     }
     tree_.setInputCloud(cloud);
   }
+  // A shared index of a larger set, asked only for its points inside `within`.
+  NearestTarget(const NearestVoxelIndex* shared, const Box* within)
+      : search_(NeighbourSearch::kVoxelHash), hash_(shared), within_(within) {}
 
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
-    if (search_ == NeighbourSearch::kVoxelHash) return hash_->Nearest(q, max_m, squared_m2);
+    if (search_ == NeighbourSearch::kVoxelHash)
+      return hash_->Nearest(q, max_m, squared_m2, within_);
     const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()),
                           static_cast<float>(q.z()));
     if (tree_.nearestKSearch(p, 1, index_, sq_) < 1 || sq_[0] > max_m * max_m) return -1;
@@ -71,7 +76,9 @@ class NearestTarget {
 
  private:
   NeighbourSearch search_;
-  std::unique_ptr<NearestVoxelIndex> hash_;
+  std::unique_ptr<NearestVoxelIndex> owned_;
+  const NearestVoxelIndex* hash_ = nullptr;
+  const Box* within_ = nullptr;
   pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
   mutable std::vector<int> index_ = std::vector<int>(1);
   mutable std::vector<float> sq_ = std::vector<float>(1);
@@ -136,10 +143,16 @@ Status IcpParams::Validate() const {
   return Status::Ok();
 }
 
-StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
-                              const std::vector<Eigen::Vector3d>& source,
-                              const Eigen::Isometry3d& T_init, double voxel_size_m,
-                              const IcpParams& params) {
+namespace {
+
+// RefineIcp with the target's index either built here, over the target
+// points of the overlap (shared == null), or shared, over all of them and
+// asked within the overlap's box; target_index then counts in `target`.
+StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
+                           const NearestVoxelIndex* shared,
+                           const std::vector<Eigen::Vector3d>& source,
+                           const Eigen::Isometry3d& T_init, double voxel_size_m,
+                           const IcpParams& params) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(voxel_size_m > 0) || !std::isfinite(voxel_size_m)) {
     return Status::InvalidArgument("voxel size must be finite and > 0");
@@ -175,19 +188,24 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
     }
     src.swap(sub);
   }
-  std::vector<Eigen::Vector3d> tgt;
+  std::vector<Eigen::Vector3d> subset;
+  std::size_t in_overlap = 0;
   for (const auto& p : target) {
-    if (source_box.contains(p)) tgt.push_back(p);
+    if (!source_box.contains(p)) continue;
+    ++in_overlap;
+    if (shared == nullptr) subset.push_back(p);
   }
   result.source_points = src.size();
-  result.target_points = tgt.size();
+  result.target_points = in_overlap;
   if (static_cast<int>(src.size()) < params.min_inliers ||
-      static_cast<int>(tgt.size()) < params.min_inliers) {
+      static_cast<int>(in_overlap) < params.min_inliers) {
     return Status::FailedPrecondition(
         "ICP: the maps do not overlap (" + std::to_string(src.size()) + " source and " +
-        std::to_string(tgt.size()) + " target points in the overlap)");
+        std::to_string(in_overlap) + " target points in the overlap)");
   }
-  const NearestTarget tree(tgt, voxel_size_m, params.search);
+  const std::vector<Eigen::Vector3d>& tgt = shared == nullptr ? subset : target;
+  const NearestTarget tree = shared == nullptr ? NearestTarget(tgt, voxel_size_m, params.search)
+                                               : NearestTarget(shared, &source_box);
   double previous_rms = -1.0;
 
   Eigen::Isometry3d T = T_init;
@@ -236,6 +254,37 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
   result.inliers = static_cast<int>(pairs.source_index.size());
   result.rms_residual_m = std::sqrt(sum / static_cast<double>(result.inliers));
   return result;
+}
+
+}  // namespace
+
+IcpTarget::IcpTarget(const std::vector<Eigen::Vector3d>* points, double voxel_size_m)
+    : points_(points), voxel_size_m_(voxel_size_m) {
+  if (!(voxel_size_m > 0) || !std::isfinite(voxel_size_m)) {
+    status_ = Status::InvalidArgument("voxel size must be finite and > 0");
+  } else if (!AllFinite(*points)) {
+    status_ = Status::InvalidArgument("ICP input is not finite");
+  } else {
+    index_ = std::make_unique<NearestVoxelIndex>(*points, voxel_size_m);
+  }
+}
+
+IcpTarget::~IcpTarget() = default;
+
+StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
+                              const std::vector<Eigen::Vector3d>& source,
+                              const Eigen::Isometry3d& T_init, double voxel_size_m,
+                              const IcpParams& params) {
+  return Refine(target, nullptr, source, T_init, voxel_size_m, params);
+}
+
+StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
+                              const Eigen::Isometry3d& T_init, const IcpParams& params) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  MAPD_RETURN_IF_ERROR(target.status());
+  const bool shared = params.search == NeighbourSearch::kVoxelHash;
+  return Refine(target.points(), shared ? &target.index() : nullptr, source, T_init,
+                target.voxel_size_m(), params);
 }
 
 }  // namespace mapd::voxel

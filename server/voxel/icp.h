@@ -29,9 +29,11 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "common/status.h"
+#include "voxel/nearest_voxel.h"
 
 namespace mapd::voxel {
 
@@ -75,6 +77,37 @@ struct IcpResult {
   std::size_t target_points = 0;  // target points in the k-d tree
 };
 
+// A target point set with its kVoxelHash index, built once for many RefineIcp
+// calls against one map: a merge refines a dozen or more hypotheses against
+// the same submap, and building the index in every call was 2-5 % of a merge
+// (docs/voxel-merge.md). Each call still pairs only with the target points
+// of its own overlap (the index is asked within a box), so its result is the
+// vector overload's, bit for bit. kKdTree calls build their tree per call, as
+// the vector overload does.
+class IcpTarget {
+ public:
+  // `points` must outlive this. A voxel size that is not finite and > 0, or
+  // non-finite points, leave no index: every RefineIcp call with this target
+  // then returns InvalidArgument, as the vector overload would.
+  IcpTarget(const std::vector<Eigen::Vector3d>* points, double voxel_size_m);
+  ~IcpTarget();
+  IcpTarget(const IcpTarget&) = delete;
+  IcpTarget& operator=(const IcpTarget&) = delete;
+
+  const std::vector<Eigen::Vector3d>& points() const { return *points_; }
+  double voxel_size_m() const { return voxel_size_m_; }
+  // Ok, or why no index was built.
+  const Status& status() const { return status_; }
+  // REQUIRES: status().ok().
+  const NearestVoxelIndex& index() const { return *index_; }
+
+ private:
+  const std::vector<Eigen::Vector3d>* points_;
+  double voxel_size_m_;
+  Status status_;
+  std::unique_ptr<NearestVoxelIndex> index_;
+};
+
 // Refines T_target_source, starting from T_init. Only the overlap takes part:
 // source points whose initial image lies within the target's bounding box
 // grown by half a voxel (source points beyond a cut end of the target would
@@ -86,6 +119,10 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
                               const std::vector<Eigen::Vector3d>& source,
                               const Eigen::Isometry3d& T_init, double voxel_size_m,
                               const IcpParams& params = {});
+
+// The same against a target indexed once (voxel size: the target's).
+StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
+                              const Eigen::Isometry3d& T_init, const IcpParams& params = {});
 
 }  // namespace mapd::voxel
 

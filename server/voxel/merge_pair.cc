@@ -58,8 +58,8 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
     screen_params.max_source_points = params.icp_screen_points;
     screen_params.max_iterations =
         std::min(params.icp_screen_iterations, params.icp.max_iterations);
-    auto screen = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_initial,
-                            finest_resolution_m, screen_params);
+    auto screen = RefineIcp(a.features->IcpIndex(finest_resolution_m), b.grid->occupied_centres(),
+                            T_initial, screen_params);
     if (screen.ok()) {
       const double screen_voxels = screen->rms_residual_m / gate_voxel_m;
       if (screen_voxels > params.icp_screen_residual_factor * params.max_residual_voxels) {
@@ -75,8 +75,8 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
       T_start = screen->T_target_source;
     }
   }
-  auto icp = RefineIcp(a.grid->occupied_centres(), b.grid->occupied_centres(), T_start,
-                       finest_resolution_m, params.icp);
+  auto icp = RefineIcp(a.features->IcpIndex(finest_resolution_m), b.grid->occupied_centres(),
+                       T_start, params.icp);
   if (!icp.ok()) {
     times->alignment_s += SecondsSince(start);
     if (icp.status().code() != StatusCode::kFailedPrecondition) return icp.status();

@@ -114,6 +114,9 @@ void NearestVoxelIndex::OfferCell(std::size_t i, const Eigen::Vector3d& q, Best*
 void NearestVoxelIndex::OfferPoints(int begin, int end, const Eigen::Vector3d& q,
                                     Best* best) const {
   for (int j = begin; j < end; ++j) {
+    if (best->within != nullptr && !best->within->contains(sorted_[static_cast<std::size_t>(j)])) {
+      continue;
+    }
     best->Offer((sorted_[static_cast<std::size_t>(j)] - q).squaredNorm(),
                 order_[static_cast<std::size_t>(j)]);
   }
@@ -157,8 +160,9 @@ void NearestVoxelIndex::ScanCellHashed(const Eigen::Vector3i& cell, const Eigen:
   OfferPoints(it->second.first, it->second.first + it->second.second, q, best);
 }
 
-int NearestVoxelIndex::Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
-  Best best{max_m * max_m};
+int NearestVoxelIndex::Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
+                               const Eigen::AlignedBox3d* within) const {
+  Best best{max_m * max_m, within};
   const Eigen::Vector3i c = Cell(q);
   // A query with no point within kReachCells (most of a wrong alignment's,
   // and those outside the overlap) is answered by one bit. The reach in
@@ -169,8 +173,8 @@ int NearestVoxelIndex::Nearest(const Eigen::Vector3d& q, double max_m, float* sq
   }
   // Points beyond ring r are at least (r + margin) cells away, margin being
   // q's distance to the nearest face of its own cell, in cells.
-  const Eigen::Vector3d within = q / cell_m_ - c.cast<double>();
-  const double margin = within.cwiseMin(Eigen::Vector3d::Ones() - within).minCoeff();
+  const Eigen::Vector3d in_cell = q / cell_m_ - c.cast<double>();
+  const double margin = in_cell.cwiseMin(Eigen::Vector3d::Ones() - in_cell).minCoeff();
   const int max_ring = static_cast<int>(std::ceil(max_m / cell_m_));
   const Eigen::Vector3i o = c - occupied_.lo;
   for (int ring = 0; ring <= max_ring; ++ring) {

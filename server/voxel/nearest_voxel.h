@@ -15,11 +15,17 @@
 // Ties (two points at exactly the same distance) go to the lower index, so
 // the answer does not depend on the scan order.
 //
+// A query may be limited to the points inside a box: the answer is then
+// the one an index of just those points would give (index for index, in
+// the order given), so one index of a map serves every ICP run against it
+// (icp.h, IcpTarget), each with its own overlap.
+//
 // Thread compatible: const methods may be called concurrently.
 #ifndef MAPD_VOXEL_NEAREST_VOXEL_H_
 #define MAPD_VOXEL_NEAREST_VOXEL_H_
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
@@ -41,8 +47,10 @@ class NearestVoxelIndex {
   NearestVoxelIndex(const std::vector<Eigen::Vector3d>& points, double cell_m);
 
   // Index of the nearest point within max_m of q (-1 if none) and its
-  // squared distance (max_m^2 when none).
-  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const;
+  // squared distance (max_m^2 when none). Only points inside `within`
+  // (AlignedBox3d::contains, bounds included) count when it is non-null.
+  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
+              const Eigen::AlignedBox3d* within = nullptr) const;
 
   // Whether the bit sets are kept (false: the hash answers).
   bool dense() const { return !occupied_.empty(); }
@@ -51,6 +59,7 @@ class NearestVoxelIndex {
   // The best point so far: the nearest, ties to the lower index.
   struct Best {
     double squared_m2;
+    const Eigen::AlignedBox3d* within;  // null: every point counts
     int index = -1;
     void Offer(double d, int i) {
       if (d < squared_m2 || (d == squared_m2 && (index < 0 || i < index))) {

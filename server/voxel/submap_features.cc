@@ -51,6 +51,13 @@ const OverlapIndex& SubmapFeatures::Overlap() {
   return *overlap_;
 }
 
+const IcpTarget& SubmapFeatures::IcpIndex(double voxel_size_m) {
+  if (icp_target_ == nullptr || icp_target_->voxel_size_m() != voxel_size_m) {
+    icp_target_ = std::make_unique<IcpTarget>(&grid_->occupied_centres(), voxel_size_m);
+  }
+  return *icp_target_;
+}
+
 const Eigen::Vector3d& SubmapFeatures::OccupiedCentroid() {
   if (!centroid_.has_value()) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();

@@ -2,15 +2,18 @@
 // corners (docs/algorithms.md B.1-B.3) and its gravity frame (B.9). Each is
 // computed on first use and kept for every pair the submap is in, so a merge
 // that the correlation generator settles never extracts corners, and a
-// submap in several pairs is levelled once. Also its overlap index. Internal to merge*.cc.
+// submap in several pairs is levelled once. Also its overlap and ICP
+// indexes. Internal to merge*.cc.
 #ifndef MAPD_VOXEL_SUBMAP_FEATURES_H_
 #define MAPD_VOXEL_SUBMAP_FEATURES_H_
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 
 #include "common/status.h"
 #include "voxel/corner.h"
+#include "voxel/icp.h"
 #include "voxel/merge.h"
 #include "voxel/merge_overlap.h"
 #include "voxel/normals_grid.h"
@@ -42,6 +45,11 @@ class SubmapFeatures {
   // This submap as the A of overlap scores (merge_overlap.h), built on first use.
   const OverlapIndex& Overlap();
 
+  // The occupied voxel centres as ICP's target with their index at
+  // `voxel_size_m` (the merge's finest resolution), built on first use (again
+  // if asked at another size).
+  const IcpTarget& IcpIndex(double voxel_size_m);
+
   // The mean of the occupied voxel centres, metres (zero for an empty grid):
   // where two transforms of this submap are compared (DistinctTransforms).
   const Eigen::Vector3d& OccupiedCentroid();
@@ -55,6 +63,7 @@ class SubmapFeatures {
   std::optional<internal::GridSurface> surface_;
   std::optional<OverlapIndex> overlap_;
   std::optional<Eigen::Vector3d> centroid_;
+  std::unique_ptr<IcpTarget> icp_target_;
 };
 
 }  // namespace mapd::voxel

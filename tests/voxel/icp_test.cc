@@ -137,6 +137,67 @@ TEST(IcpTest, VoxelHashAndKdTreeFindTheSameNeighbours) {
   }
 }
 
+// A target indexed once (IcpTarget) gives every run the result of the vector
+// overload, bit for bit: from several starts, so that each run's overlap box
+// leaves out a different part of the target (B is a crop of another part of
+// the room, turned a little), with either neighbour search.
+TEST(IcpTest, AnIndexedTargetGivesTheVectorOverloadsResultsBitForBit) {
+  const Eigen::Isometry3d T_a_b = Pose(3, 1, -1, Eigen::Vector3d(0.4, -0.3, 0.1));
+  const auto a =
+      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(-0.5, 5.6),
+                                       Eigen::Isometry3d::Identity(), kRoomResolutionM));
+  const auto b = Centres(testing::RasteriseSubmap(
+      testing::FurnishedRoom(), testing::RoomCropX(3.5, 9.5), T_a_b, kRoomResolutionM));
+  const IcpTarget target(&a, kRoomResolutionM);
+  ASSERT_TRUE(target.status().ok());
+  for (const NeighbourSearch search : {NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree}) {
+    IcpParams params;
+    params.search = search;
+    params.max_source_points = 3000;
+    for (const Eigen::Isometry3d& start :
+         {Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b,
+          Pose(-4, 1, 0, Eigen::Vector3d(-0.3, 0.2, 0.1)) * T_a_b,
+          Pose(8, 0, 0, Eigen::Vector3d(0.5, 0.0, 0.0)) * T_a_b,
+          Pose(0, 0, 0, Eigen::Vector3d(0.25, 0.0, 0.0)) * T_a_b,
+          Pose(0, 0, 0, Eigen::Vector3d(0.2, 0.1, 0.0)) * T_a_b}) {
+      const auto want = RefineIcp(a, b, start, kRoomResolutionM, params);
+      const auto got = RefineIcp(target, b, start, params);
+      ASSERT_EQ(got.ok(), want.ok());
+      if (!want.ok()) {
+        EXPECT_EQ(got.status().ToString(), want.status().ToString());
+        continue;
+      }
+      EXPECT_LT(want->target_points, a.size());  // the box left some of a out
+      EXPECT_EQ(got->target_points, want->target_points);
+      EXPECT_EQ(got->source_points, want->source_points);
+      EXPECT_EQ(got->iterations, want->iterations);
+      EXPECT_EQ(got->inliers, want->inliers);
+      EXPECT_EQ(got->rms_residual_m, want->rms_residual_m);
+      EXPECT_EQ(got->T_target_source.matrix(), want->T_target_source.matrix());
+    }
+  }
+}
+
+TEST(IcpTest, AnIndexedTargetRejectsWhatTheVectorOverloadRejects) {
+  std::vector<Eigen::Vector3d> points(20, Eigen::Vector3d::Ones());
+  const IcpTarget no_size(&points, 0.0);
+  auto result = RefineIcp(no_size, points, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(result.status().message().find("voxel size"), std::string::npos);
+  std::vector<Eigen::Vector3d> bad = points;
+  bad[3].x() = std::nan("");
+  const IcpTarget not_finite(&bad, kRoomResolutionM);
+  result = RefineIcp(not_finite, points, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+  const IcpTarget good(&points, kRoomResolutionM);
+  result = RefineIcp(good, bad, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(result.status().code(), StatusCode::kInvalidArgument);
+  IcpParams params;
+  params.min_inliers = 0;
+  result = RefineIcp(good, points, Eigen::Isometry3d::Identity(), params);
+  EXPECT_NE(result.status().message().find("icp.min_inliers"), std::string::npos);
+}
+
 TEST(IcpTest, NoOverlapIsAFailedPrecondition) {
   const std::vector<Eigen::Vector3d> target(50, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> source;

@@ -10,12 +10,14 @@ namespace {
 
 constexpr double kCellM = 0.1;
 
-// The nearest point within max_m by brute force, ties to the lower index.
+// The nearest point within max_m (and inside `within`, if given) by brute
+// force, ties to the lower index.
 int BruteNearest(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& q, double max_m,
-                 double* squared_m2) {
+                 double* squared_m2, const Eigen::AlignedBox3d* within = nullptr) {
   int best = -1;
   double best_d = max_m * max_m;
   for (std::size_t i = 0; i < points.size(); ++i) {
+    if (within != nullptr && !within->contains(points[i])) continue;
     const double d = (points[i] - q).squaredNorm();
     if (d < best_d || (d == best_d && best < 0)) {
       best_d = d;
@@ -44,15 +46,15 @@ std::vector<Eigen::Vector3d> Scene(std::mt19937* rng) {
 
 void ExpectSameAsBruteForce(const std::vector<Eigen::Vector3d>& points,
                             const std::vector<Eigen::Vector3d>& queries, double max_m,
-                            bool expect_dense) {
+                            bool expect_dense, const Eigen::AlignedBox3d* within = nullptr) {
   const NearestVoxelIndex index(points, kCellM);
   EXPECT_EQ(index.dense(), expect_dense);
   int found = 0;
   for (const Eigen::Vector3d& q : queries) {
     double want_d = 0;
-    const int want = BruteNearest(points, q, max_m, &want_d);
+    const int want = BruteNearest(points, q, max_m, &want_d, within);
     float got_d = 0;
-    const int got = index.Nearest(q, max_m, &got_d);
+    const int got = index.Nearest(q, max_m, &got_d, within);
     if (want < 0) {
       EXPECT_EQ(got, -1) << q.transpose();
       continue;
@@ -63,8 +65,11 @@ void ExpectSameAsBruteForce(const std::vector<Eigen::Vector3d>& points,
     EXPECT_EQ(got, want) << q.transpose() << " max " << max_m;
     EXPECT_FLOAT_EQ(got_d, static_cast<float>(want_d));
   }
-  // The test tests something: most queries lie within 0.3 m of a point.
-  EXPECT_GT(found, static_cast<int>(queries.size()) / (max_m < 0.3 ? 100 : 4));
+  // The test tests something: most queries lie within 0.3 m of a point (the
+  // boxed test counts its own).
+  if (within == nullptr) {
+    EXPECT_GT(found, static_cast<int>(queries.size()) / (max_m < 0.3 ? 100 : 4));
+  }
 }
 
 TEST(NearestVoxelIndexTest, MatchesBruteForceWithinEveryReach) {
@@ -92,6 +97,41 @@ TEST(NearestVoxelIndexTest, AHugeSparseBoxFallsBackToTheHashWithTheSameAnswers) 
   queries.push_back(Eigen::Vector3d(1e3, 1e3, 1e3 + 0.05));
   for (const double max_m : {0.3, 0.75}) {
     ExpectSameAsBruteForce(points, queries, max_m, /*expect_dense=*/false);
+  }
+}
+
+// Limited to a box, the index answers as brute force over the points inside
+// it: queries just outside the box's faces have their nearest points
+// outside, and must get the nearest inside or none (ICP's shared target,
+// icp.h). With the bit set and with the hash.
+TEST(NearestVoxelIndexTest, ABoxLimitsTheAnswerToThePointsInside) {
+  for (const bool far_point : {false, true}) {
+    SCOPED_TRACE(far_point ? "hash" : "bit set");
+    std::mt19937 rng(5);
+    std::vector<Eigen::Vector3d> points = Scene(&rng);
+    if (far_point) points.push_back(Eigen::Vector3d(1e3, 1e3, 1e3));
+    // Cuts the walls y = 0 and y = 40 cells across, at x 1.02 and 4.0 m and
+    // z 0.31 m; leaves out the wall x = 0. The queries are around it.
+    const Eigen::AlignedBox3d box(Eigen::Vector3d(1.02, -1.0, 0.31),
+                                  Eigen::Vector3d(4.0, 4.5, 9.0));
+    std::uniform_real_distribution<double> ux(0.5, 4.5), uy(-0.3, 4.4), uz(0.0, 1.5);
+    std::vector<Eigen::Vector3d> queries;
+    for (int i = 0; i < 3000; ++i) queries.emplace_back(ux(rng), uy(rng), uz(rng));
+    // The test tests something: many queries find a point inside, and many
+    // have their nearest point overall outside (of those, some find another
+    // inside, some none).
+    int inside = 0, cut_off = 0;
+    for (const Eigen::Vector3d& q : queries) {
+      double d = 0;
+      inside += BruteNearest(points, q, 0.3, &d, &box) >= 0 ? 1 : 0;
+      const int any = BruteNearest(points, q, 0.3, &d);
+      cut_off += any >= 0 && !box.contains(points[static_cast<std::size_t>(any)]) ? 1 : 0;
+    }
+    EXPECT_GT(inside, 500);
+    EXPECT_GT(cut_off, 300);
+    for (const double max_m : {0.3, 0.75}) {
+      ExpectSameAsBruteForce(points, queries, max_m, /*expect_dense=*/!far_point, &box);
+    }
   }
 }
 
