@@ -133,15 +133,15 @@ StatusOr<VoxelGrid> VoxelGrid::FromKeys(double resolution, const std::vector<Vox
 }
 
 bool VoxelGrid::IsOccupied(const VoxelKey& key) const {
-  return InRange(key) && occupied_.count(Pack(key, 0)) > 0;
+  return InRange(key) && occupied_.contains(Pack(key, 0));
 }
 
 VoxelState VoxelGrid::State(const VoxelKey& key) const {
   if (!InRange(key)) return VoxelState::kUnknown;
-  if (occupied_.count(Pack(key, 0)) > 0) return VoxelState::kOccupied;
+  if (occupied_.contains(Pack(key, 0))) return VoxelState::kOccupied;
   for (int level = 0; level < kLevels; ++level) {
     const auto& cubes = free_[static_cast<std::size_t>(level)];
-    if (!cubes.empty() && cubes.count(Pack(key, level)) > 0) return VoxelState::kFree;
+    if (!cubes.empty() && cubes.contains(Pack(key, level))) return VoxelState::kFree;
   }
   return VoxelState::kUnknown;
 }
@@ -149,7 +149,7 @@ VoxelState VoxelGrid::State(const VoxelKey& key) const {
 void VoxelGrid::ForEachFreeCube(
     const std::function<void(const VoxelKey& min_key, int edge)>& fn) const {
   for (int level = 0; level < kLevels; ++level) {
-    for (std::uint64_t packed : free_[static_cast<std::size_t>(level)])
+    for (std::uint64_t packed : free_[static_cast<std::size_t>(level)].keys())
       fn(Unpack(packed, level), 1 << level);
   }
 }

@@ -16,10 +16,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <unordered_set>
 #include <vector>
 
 #include "common/status.h"
+#include "voxel/packed_key_set.h"
 
 namespace octomap {
 class OcTree;
@@ -83,7 +83,8 @@ class VoxelGrid {
   VoxelKey PointToKey(const Eigen::Vector3d& point) const;
 
   // Calls fn(min_key, edge) for every free cube: the voxels min_key + [0, edge)
-  // per axis (edge = 2^level voxels). Order unspecified. For views that need
+  // per axis (edge = 2^level voxels), smallest cubes first, each size in the
+  // order the map gave them (FromOcTree: its leaves'). For views that need
   // free space per region (mapctl occupancy-grid) without probing key by key.
   void ForEachFreeCube(const std::function<void(const VoxelKey& min_key, int edge)>& fn) const;
   // At least one free voxel (maps built from points alone carry none).
@@ -103,9 +104,9 @@ class VoxelGrid {
   double resolution_ = 1.0;
   std::vector<VoxelKey> occupied_keys_;
   std::vector<Eigen::Vector3d> occupied_centres_;
-  std::unordered_set<std::uint64_t> occupied_;  // packed keys
+  PackedKeySet occupied_;  // packed keys
   // free_[level] holds packed (key >> level) of free cubes of that level.
-  std::array<std::unordered_set<std::uint64_t>, kLevels> free_;
+  std::array<PackedKeySet, kLevels> free_;
   VoxelKey min_key_ = VoxelKey::Zero();
   VoxelKey max_key_ = VoxelKey::Zero();
 };
