@@ -104,15 +104,18 @@ Eigen::Vector3i NearestVoxelIndex::Cell(const Eigen::Vector3d& p) const {
   return s.cast<int>();
 }
 
-void NearestVoxelIndex::OfferCell(std::size_t i, const Eigen::Vector3d& q, Best* best) const {
+[[gnu::always_inline]] inline void NearestVoxelIndex::OfferCell(std::size_t i,
+                                                                const Eigen::Vector3d& q,
+                                                                Best* best) const {
   const std::uint64_t below = (std::uint64_t{1} << (i & 63)) - 1;
   const std::size_t k = rank_[i >> 6] + static_cast<std::size_t>(
                                             __builtin_popcountll(occupied_.words[i >> 6] & below));
   OfferPoints(first_[k], first_[k + 1], q, best);
 }
 
-void NearestVoxelIndex::OfferPoints(int begin, int end, const Eigen::Vector3d& q,
-                                    Best* best) const {
+[[gnu::always_inline]] inline void NearestVoxelIndex::OfferPoints(int begin, int end,
+                                                                  const Eigen::Vector3d& q,
+                                                                  Best* best) const {
   for (int j = begin; j < end; ++j) {
     if (best->within != nullptr && !best->within->contains(sorted_[static_cast<std::size_t>(j)])) {
       continue;
@@ -122,8 +125,10 @@ void NearestVoxelIndex::OfferPoints(int begin, int end, const Eigen::Vector3d& q
   }
 }
 
-void NearestVoxelIndex::ScanRow(int x0, int x1, int y, int z, bool ends_only,
-                                const Eigen::Vector3d& q, Best* best) const {
+[[gnu::always_inline]] inline void NearestVoxelIndex::ScanRow(int x0, int x1, int y, int z,
+                                                              bool ends_only,
+                                                              const Eigen::Vector3d& q,
+                                                              Best* best) const {
   const Eigen::Vector3i& size = occupied_.size;
   if (y < 0 || z < 0 || y >= size.y() || z >= size.z()) return;
   const std::size_t row = occupied_.Index(Eigen::Vector3i(0, y, z));
@@ -160,8 +165,16 @@ void NearestVoxelIndex::ScanCellHashed(const Eigen::Vector3i& cell, const Eigen:
   OfferPoints(it->second.first, it->second.first + it->second.second, q, best);
 }
 
-int NearestVoxelIndex::Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
-                               const Eigen::AlignedBox3d* within) const {
+[[gnu::target_clones("popcnt", "default")]] int NearestVoxelIndex::Nearest(
+    const Eigen::Vector3d& q, double max_m, float* squared_m2,
+    const Eigen::AlignedBox3d* within) const {
+  // The box need not be asked point by point when it holds every point that
+  // could be accepted: those within max_m of q (grown by a micrometre, far
+  // above rounding, so none at max_m is left out by it).
+  if (within != nullptr) {
+    const Eigen::Vector3d reach = Eigen::Vector3d::Constant(max_m + 1e-6);
+    if (within->contains(Eigen::AlignedBox3d(q - reach, q + reach))) within = nullptr;
+  }
   Best best{max_m * max_m, within};
   const Eigen::Vector3i c = Cell(q);
   // A query with no point within kReachCells (most of a wrong alignment's,
