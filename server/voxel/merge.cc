@@ -220,6 +220,14 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
     outcome.alignments.push_back(alignment);
   }
 
+  // The grids and their features are done with: fusion works on the trees.
+  // Freed first, fusion's merged tree and leaf lists reuse their memory (the
+  // merge's peak was in fusion, with them still held).
+  for (Submap& submap : submaps) {
+    submap.features.reset();
+    submap.grid = VoxelGrid();
+  }
+
   // B.6: fusion into the first input's frame, breadth-first along the tree.
   stage_start = Clock::now();
   progress.Report("fusion", 0.8);
