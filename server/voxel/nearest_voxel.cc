@@ -165,6 +165,11 @@ void NearestVoxelIndex::ScanCellHashed(const Eigen::Vector3i& cell, const Eigen:
   OfferPoints(it->second.first, it->second.first + it->second.second, q, best);
 }
 
+// Built twice, the right one picked when the program loads: Debian builds
+// for the baseline x86-64, which has no popcount instruction, so elsewhere
+// __builtin_popcountll is a call into libgcc, once per cell offered (OfferCell's
+// rank). With the scan forced inline, each build has its own copy. Measured by
+// callgrind on an fr_078_tidyup merge: 4 % fewer instructions in all.
 [[gnu::target_clones("popcnt", "default")]] int NearestVoxelIndex::Nearest(
     const Eigen::Vector3d& q, double max_m, float* squared_m2,
     const Eigen::AlignedBox3d* within) const {

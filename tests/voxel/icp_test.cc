@@ -32,6 +32,19 @@ std::vector<Eigen::Vector3d> Centres(const std::string& bytes) {
   return grid->occupied_centres();
 }
 
+// The furnished room's occupied centres, A cropped to x in [-0.5, 5.6] m,
+// B to [b_min_x, 9.5] m and rasterised in its own frame, T_a_b from A.
+struct RoomPair {
+  std::vector<Eigen::Vector3d> a, b;
+};
+RoomPair RasterisedRoomPair(const Eigen::Isometry3d& T_a_b, double b_min_x) {
+  return {
+      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(-0.5, 5.6),
+                                       Eigen::Isometry3d::Identity(), kRoomResolutionM)),
+      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(b_min_x, 9.5),
+                                       T_a_b, kRoomResolutionM))};
+}
+
 class IcpSearchTest : public ::testing::TestWithParam<NeighbourSearch> {};
 
 std::string SearchName(const ::testing::TestParamInfo<NeighbourSearch>& param) {
@@ -42,11 +55,7 @@ std::string SearchName(const ::testing::TestParamInfo<NeighbourSearch>& param) {
 // from a start 1 deg and ~1 voxel off lands within a fraction of a voxel.
 TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
   const Eigen::Isometry3d T_a_b = Pose(23, 6, -4, Eigen::Vector3d(0.7, -1.2, 0.3));
-  const auto a =
-      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(-0.5, 5.6),
-                                       Eigen::Isometry3d::Identity(), kRoomResolutionM));
-  const auto b = Centres(testing::RasteriseSubmap(
-      testing::FurnishedRoom(), testing::RoomCropX(2.2, 9.5), T_a_b, kRoomResolutionM));
+  const auto [a, b] = RasterisedRoomPair(T_a_b, 2.2);
   const Eigen::Isometry3d start =
       Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b;  // 1 deg, ~1 voxel at the origin
   IcpParams params;
@@ -143,11 +152,7 @@ TEST(IcpTest, VoxelHashAndKdTreeFindTheSameNeighbours) {
 // the room, turned a little), with either neighbour search.
 TEST(IcpTest, AnIndexedTargetGivesTheVectorOverloadsResultsBitForBit) {
   const Eigen::Isometry3d T_a_b = Pose(3, 1, -1, Eigen::Vector3d(0.4, -0.3, 0.1));
-  const auto a =
-      Centres(testing::RasteriseSubmap(testing::FurnishedRoom(), testing::RoomCropX(-0.5, 5.6),
-                                       Eigen::Isometry3d::Identity(), kRoomResolutionM));
-  const auto b = Centres(testing::RasteriseSubmap(
-      testing::FurnishedRoom(), testing::RoomCropX(3.5, 9.5), T_a_b, kRoomResolutionM));
+  const auto [a, b] = RasterisedRoomPair(T_a_b, 3.5);
   const IcpTarget target(&a, kRoomResolutionM);
   ASSERT_TRUE(target.status().ok());
   for (const NeighbourSearch search : {NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree}) {
