@@ -2,12 +2,13 @@
 // table: open addressing with linear probing, at most half full, plus the
 // keys in the order they were first inserted (for iteration).
 //
-// Why not std::unordered_set: a 150k-voxel submap carries up to a million
-// free cubes, and a node per key (a malloc each, a pointer chase per lookup
-// and per step of iteration) made building and walking a VoxelGrid a tenth
-// of a merge (docs/voxel-merge.md). Iteration in insertion order also makes
-// the order of VoxelGrid::ForEachFreeCube the map's own (its leaves' order),
-// not the hash table's.
+// Why not std::unordered_set: a 150k-voxel submap carries 0.1-0.7M free
+// cubes (the benchmark's indoor and campus crops), and a node per key (a
+// malloc each, a pointer chase per lookup and per step of iteration) made
+// building and walking a VoxelGrid a tenth of a merge (docs/voxel-merge.md).
+// Iteration in insertion order also makes the order of
+// VoxelGrid::ForEachFreeCube the map's own (its leaves' order), not the hash
+// table's.
 //
 // Thread compatible: const methods may be called concurrently.
 #ifndef MAPD_VOXEL_PACKED_KEY_SET_H_
