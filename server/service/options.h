@@ -93,6 +93,11 @@ struct SubmapOptions {
   // carry free space (= voxel::MergeParams; 0 = off): a placement that only
   // puts one map's wall on the other's shares none.
   double min_shared_free_ratio = 1.0;
+  // Restarts of ICP turned 1.5 deg about each axis may end at most this far
+  // from the answer at B's corners, voxels of the coarser map (=
+  // voxel::MergeParams; 0 = off): further, the overlap does not fix the
+  // alignment.
+  double max_restart_spread_voxels = 4.0;
   double max_merge_seconds = 60.0;    // budget of one merge, seconds
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule

@@ -27,6 +27,7 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.max_residual_voxels = o.max_residual_voxels;
   p.min_overlap_score = o.min_overlap_score;
   p.min_shared_free_ratio = o.min_shared_free_ratio;
+  p.max_restart_spread_voxels = o.max_restart_spread_voxels;
   p.max_seconds = o.max_merge_seconds;
   p.resolution_policy = o.resample_resolutions ? voxel::ResolutionPolicy::kResampleToFinest
                                                : voxel::ResolutionPolicy::kRefuse;

@@ -139,6 +139,20 @@ struct MergeParams {
   // of 8 cells lower); 30 refused a right new_college merge whose corner
   // solution needed more iterations.
   int icp_screen_iterations = 60;
+  // Local uniqueness, the last gate: ICP is restarted from the answer turned
+  // by +-restart_turn_deg about each axis (about the centre of B's voxels in
+  // A's box), on icp_screen_points points, and, only if those spread beyond
+  // the limit, on to the full ICP. If a restart that ends within
+  // max_residual_voxels lies more than max_restart_spread_voxels (voxels of
+  // the coarser map) from the answer at a corner of B's bounding box, the
+  // overlap does not fix the alignment and the pair is refused (0 = off).
+  // The uniqueness gate only sees rivals 3 deg or 4 voxels apart: at 10 %
+  // overlap on geb079 ICP had three minima within 1.6 deg (0.46-0.51 voxels
+  // of residual, the truth among them) and the merge was accepted 1.56 deg
+  // off, its restarts 7.2 voxels apart; right merges' restarts ended
+  // 0.6-2.6 voxels apart (docs/voxel-merge.md, "Larger samples").
+  double restart_turn_deg = 1.5;
+  double max_restart_spread_voxels = 4.0;
   // B's voxels scored per candidate transform in the corner search's tie-break
   // (the paper: the transform making the most voxels coincide); 0 = all.
   std::size_t tie_break_points = 20'000;
@@ -225,6 +239,9 @@ struct PairReport {
   // without free space, or a hypothesis refused by an earlier gate).
   double shared_free_ratio = -1.0;
   int icp_iterations = 0;
+  // See MergeParams::max_restart_spread_voxels; -1 when not measured (gate
+  // off, or a hypothesis refused by an earlier gate).
+  double restart_spread_voxels = -1.0;
   // Which generator gave T_a_b: "corner solution N" or "correlation ...".
   std::string source;
   // The best hypothesis distinct from T_a_b (uniqueness gate thresholds) that

@@ -30,6 +30,96 @@ std::string ResidualReason(double residual_m, double residual_voxels, double max
          " voxels) above " + Fixed(max_voxels, 2) + " voxels";
 }
 
+// Where a restart is turned about: the centre of b's voxels that land in
+// a's occupied box under T (the overlap), so the turned start keeps the
+// overlap in place; b's centroid when none do.
+Eigen::Vector3d OverlapCentre(const VoxelGrid& a, const VoxelGrid& b, const Eigen::Isometry3d& T) {
+  const Eigen::AlignedBox3d box(a.min_corner(), a.max_corner());
+  Eigen::Vector3d in_box = Eigen::Vector3d::Zero(), all = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (const Eigen::Vector3d& c : b.occupied_centres()) {
+    const Eigen::Vector3d p = T * c;
+    all += p;
+    if (box.contains(p)) {
+      in_box += p;
+      ++n;
+    }
+  }
+  if (n > 0) return in_box / static_cast<double>(n);
+  return all / static_cast<double>(std::max<std::size_t>(1, b.num_occupied()));
+}
+
+// MergeParams::max_restart_spread_voxels: how far (metres, at a corner of b's
+// bounding box) the restarts that pass the residual gate end from T. Like the
+// ICP of a hypothesis, first on icp_screen_points: a subsample's fit is noisy
+// (right merges at 10 % overlap ended up to 4.4 voxels apart), so only when
+// the screens spread beyond the limit are the restarts refined on all points
+// (from where their screens ended) and judged again.
+StatusOr<double> RestartSpread(const PairSide& a, const PairSide& b, const MergeParams& params,
+                               const Eigen::Isometry3d& T, double finest_resolution_m,
+                               double gate_voxel_m) {
+  const IcpTarget& target = a.features->IcpIndex(finest_resolution_m);
+  const std::vector<Eigen::Vector3d>& source = b.grid->occupied_centres();
+  const Eigen::Vector3d lo = b.grid->min_corner(), hi = b.grid->max_corner();
+  // How far `restarts` end from T; the failed and the refused do not count.
+  const auto spread = [&](const std::vector<StatusOr<IcpResult>>& restarts) {
+    double spread_m = 0.0;
+    for (const StatusOr<IcpResult>& r : restarts) {
+      if (!r.ok() || !r->converged ||
+          r->rms_residual_m / gate_voxel_m > params.max_residual_voxels) {
+        continue;
+      }
+      for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d q((c & 1) != 0 ? hi.x() : lo.x(), (c & 2) != 0 ? hi.y() : lo.y(),
+                                (c & 4) != 0 ? hi.z() : lo.z());
+        spread_m = std::max(spread_m, (r->T_target_source * q - T * q).norm());
+      }
+    }
+    return spread_m;
+  };
+  // Runs ICP from each start; FailedPrecondition (the overlap lost) is no
+  // rival, any other error is returned.
+  const auto run = [&](const std::vector<Eigen::Isometry3d>& starts, const IcpParams& icp_params,
+                       std::vector<StatusOr<IcpResult>>* out) -> Status {
+    out->clear();
+    for (const Eigen::Isometry3d& start : starts) {
+      out->push_back(RefineIcp(target, source, start, icp_params));
+      const Status& status = out->back().status();
+      if (!status.ok() && status.code() != StatusCode::kFailedPrecondition) return status;
+    }
+    return Status::Ok();
+  };
+
+  const Eigen::Vector3d pivot = OverlapCentre(*a.grid, *b.grid, T);
+  const double angle = params.restart_turn_deg * M_PI / 180.0;
+  std::vector<Eigen::Isometry3d> starts;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const double sign : {-1.0, 1.0}) {
+      Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+      turn.linear() = Eigen::AngleAxisd(sign * angle, Eigen::Vector3d::Unit(axis)).matrix();
+      turn.translation() = pivot - turn.linear() * pivot;
+      starts.push_back(turn * T);
+    }
+  }
+  std::vector<StatusOr<IcpResult>> restarts;
+  const bool screen =
+      params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points;
+  if (screen) {
+    IcpParams screen_params = params.icp;
+    screen_params.max_source_points = params.icp_screen_points;
+    screen_params.max_iterations =
+        std::min(params.icp_screen_iterations, params.icp.max_iterations);
+    MAPD_RETURN_IF_ERROR(run(starts, screen_params, &restarts));
+    if (spread(restarts) <= params.max_restart_spread_voxels * gate_voxel_m)
+      return spread(restarts);
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+      if (restarts[i].ok()) starts[i] = restarts[i]->T_target_source;
+    }
+  }
+  MAPD_RETURN_IF_ERROR(run(starts, params.icp, &restarts));
+  return spread(restarts);
+}
+
 }  // namespace
 
 Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& params,
@@ -136,6 +226,23 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
                        Fixed(params.min_shared_free_ratio, 2) +
                        " (B's surfaces lie on A's, but the space in front of them that one map "
                        "saw as free the other did not see)";
+      return Status::Ok();
+    }
+  }
+  // Last: a right merge reaches this once or twice, and it costs six ICP
+  // screens.
+  if (params.max_restart_spread_voxels > 0) {
+    const auto start_spread = std::chrono::steady_clock::now();
+    auto spread_m = RestartSpread(a, b, params, report->T_a_b, finest_resolution_m, gate_voxel_m);
+    times->alignment_s += SecondsSince(start_spread);
+    if (!spread_m.ok()) return spread_m.status();
+    report->restart_spread_voxels = *spread_m / gate_voxel_m;
+    if (report->restart_spread_voxels > params.max_restart_spread_voxels) {
+      report->reason = "ICP restarts turned by " + Fixed(params.restart_turn_deg, 1) +
+                       " deg end up to " + Fixed(report->restart_spread_voxels, 2) +
+                       " voxels apart at B's corners, above " +
+                       Fixed(params.max_restart_spread_voxels, 2) + gate_unit +
+                       " (the overlap does not fix the alignment)";
       return Status::Ok();
     }
   }

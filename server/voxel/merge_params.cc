@@ -45,6 +45,12 @@ Status MergeParams::Validate() const {
   if (icp_screen_iterations < 1) {
     return Status::InvalidArgument("icp_screen_iterations must be >= 1");
   }
+  if (!(restart_turn_deg > 0 && restart_turn_deg <= 10)) {
+    return Status::InvalidArgument("restart_turn_deg must be in (0, 10]");
+  }
+  if (!(max_restart_spread_voxels >= 0) || !std::isfinite(max_restart_spread_voxels)) {
+    return Status::InvalidArgument("max_restart_spread_voxels must be finite and >= 0");
+  }
   for (std::size_t i = 0; i < looser_tolerances.size(); ++i) {
     const MatchTolerances& t = looser_tolerances[i];
     if (!(t.signature_deg >= 0 && t.signature_deg <= 180) ||

@@ -131,11 +131,11 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       Parse({"--limits.max_submap_bytes", "1048576", "--limits.max_concurrent_merges=2",
              "--limits.max_queued_merges=0", "--merge.min_matched_corners=6",
              "--merge.max_residual_voxels=1.5", "--merge.min_overlap_score=0.5",
-             "--merge.min_shared_free_ratio=0", "--merge.max_seconds=10",
-             "--merge.resolution_policy=resample", "--merge.fusion_rule=log_odds",
-             "--merge.correlation=false", "--merge.correlation_check_accepted=no",
-             "--merge.correlation_after_corner_stages=0", "--merge.correlation_max_cells=4000000",
-             "--merge.correlation_looser_stages=yes"},
+             "--merge.min_shared_free_ratio=0", "--merge.max_restart_spread_voxels=0",
+             "--merge.max_seconds=10", "--merge.resolution_policy=resample",
+             "--merge.fusion_rule=log_odds", "--merge.correlation=false",
+             "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0",
+             "--merge.correlation_max_cells=4000000", "--merge.correlation_looser_stages=yes"},
             &c)
           .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -145,6 +145,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_EQ(c.submaps.max_residual_voxels, 1.5);
   EXPECT_EQ(c.submaps.min_overlap_score, 0.5);
   EXPECT_EQ(c.submaps.min_shared_free_ratio, 0.0);
+  EXPECT_EQ(c.submaps.max_restart_spread_voxels, 0.0);
   EXPECT_EQ(c.submaps.max_merge_seconds, 10.0);
   EXPECT_TRUE(c.submaps.resample_resolutions);
   EXPECT_TRUE(c.submaps.log_odds_fusion);
@@ -166,6 +167,7 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       {"--merge.max_residual_voxels=0", "merge.max_residual_voxels"},
       {"--merge.min_overlap_score=1.5", "merge.min_overlap_score"},
       {"--merge.min_shared_free_ratio=-1", "merge.min_shared_free_ratio"},
+      {"--merge.max_restart_spread_voxels=-1", "merge.max_restart_spread_voxels"},
       {"--merge.max_seconds=-1", "merge.max_seconds"},
       {"--merge.resolution_policy=guess", "merge.resolution_policy"},
       {"--merge.fusion_rule=max", "merge.fusion_rule"},

@@ -509,6 +509,7 @@ TEST(SubmapOptionsTest, MergeDefaultsAreTheVoxelLibrarys) {
   EXPECT_EQ(options.max_residual_voxels, params.max_residual_voxels);
   EXPECT_EQ(options.min_overlap_score, params.min_overlap_score);
   EXPECT_EQ(options.min_shared_free_ratio, params.min_shared_free_ratio);
+  EXPECT_EQ(options.max_restart_spread_voxels, params.max_restart_spread_voxels);
 }
 
 }  // namespace

@@ -364,6 +364,12 @@ TEST(MergeTest, ValidateNamesTheBadField) {
     params = MergeParams{};
     params.min_shared_free_ratio = bad;
     EXPECT_NE(params.Validate().message().find("min_shared_free_ratio"), std::string::npos);
+    params = MergeParams{};
+    params.max_restart_spread_voxels = bad;
+    EXPECT_NE(params.Validate().message().find("max_restart_spread_voxels"), std::string::npos);
+    params = MergeParams{};
+    params.restart_turn_deg = bad;
+    EXPECT_NE(params.Validate().message().find("restart_turn_deg"), std::string::npos);
   }
   params = MergeParams{};
   params.icp.trim_fraction = 0.0;

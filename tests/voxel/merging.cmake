@@ -23,3 +23,11 @@ mapd_add_test(voxel_crops_test
   LIBS voxel ${OCTOMAP_LIBRARIES})
 target_include_directories(voxel_crops_test PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_include_directories(voxel_crops_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
+
+# The merge on crops of the real maps, for cases the benchmark found (skipped
+# without $MAPD_SHARED_DIR/data/octomap).
+mapd_add_test(voxel_merge_real_map_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/merge_real_map_test.cc ${PROJECT_SOURCE_DIR}/tests/bench/voxel_crops.cc
+  LIBS voxel ${OCTOMAP_LIBRARIES})
+target_include_directories(voxel_merge_real_map_test PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_include_directories(voxel_merge_real_map_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
