@@ -379,8 +379,8 @@ const std::vector<Setting>& Settings() {
            [](C& c) -> auto& { return c.submaps.min_shared_free_ratio; }, {0, 1000}),
       Real("merge.max_restart_spread_voxels", "ICP restarted from the answer turned 1.5 deg about each "
            "axis may end at most this far from it at B's corners, voxels of the coarser map; further, "
-           "the overlap does not fix the alignment and the pair is refused (right merges of real maps "
-           "0.5-2.6, a wrong one at 10 % overlap 7.2); 0 = off",
+           "the overlap does not fix the alignment and the pair is refused (every right merge of the "
+           "real-map benchmark below it, a wrong one at 10 % overlap 7.3); 0 = off",
            [](C& c) -> auto& { return c.submaps.max_restart_spread_voxels; }, {0, 1000}),
       Real("merge.max_seconds", "time budget of one merge, seconds",
            [](C& c) -> auto& { return c.submaps.max_merge_seconds; }, {0, 86400, true}),

@@ -149,8 +149,9 @@ struct MergeParams {
   // The uniqueness gate only sees rivals 3 deg or 4 voxels apart: at 10 %
   // overlap on geb079 ICP had three minima within 1.6 deg (0.46-0.51 voxels
   // of residual, the truth among them) and the merge was accepted 1.56 deg
-  // off, its restarts 7.2 voxels apart; right merges' restarts ended
-  // 0.6-2.6 voxels apart (docs/voxel-merge.md, "Larger samples").
+  // off, its restarts 7.3 voxels apart; right merges' screened restarts
+  // ended up to 4.4 voxels apart at 10 % overlap, below 4 on all points
+  // (docs/voxel-merge.md, "Larger samples").
   double restart_turn_deg = 1.5;
   double max_restart_spread_voxels = 4.0;
   // B's voxels scored per candidate transform in the corner search's tie-break
