@@ -110,8 +110,8 @@ StatusOr<double> RestartSpread(const PairSide& a, const PairSide& b, const Merge
     screen_params.max_iterations =
         std::min(params.icp_screen_iterations, params.icp.max_iterations);
     MAPD_RETURN_IF_ERROR(run(starts, screen_params, &restarts));
-    if (spread(restarts) <= params.max_restart_spread_voxels * gate_voxel_m)
-      return spread(restarts);
+    const double screened_m = spread(restarts);
+    if (screened_m <= params.max_restart_spread_voxels * gate_voxel_m) return screened_m;
     for (std::size_t i = 0; i < starts.size(); ++i) {
       if (restarts[i].ok()) starts[i] = restarts[i]->T_target_source;
     }
