@@ -64,9 +64,11 @@ class NearestTarget {
   NearestTarget(const NearestVoxelIndex* shared, const Box* within)
       : search_(NeighbourSearch::kVoxelHash), hash_(shared), within_(within) {}
 
-  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2) const {
+  // others_m2 (kVoxelHash only, else null): see NearestVoxelIndex::Nearest.
+  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
+              double* others_m2 = nullptr) const {
     if (search_ == NeighbourSearch::kVoxelHash)
-      return hash_->Nearest(q, max_m, squared_m2, within_);
+      return hash_->Nearest(q, max_m, squared_m2, within_, others_m2);
     const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()),
                           static_cast<float>(q.z()));
     if (tree_.nearestKSearch(p, 1, index_, sq_) < 1 || sq_[0] > max_m * max_m) return -1;
@@ -84,6 +86,34 @@ class NearestTarget {
   mutable std::vector<float> sq_ = std::vector<float>(1);
 };
 
+// A source point's last searched pairing: the query it was searched for,
+// the target found (-1: none, or not searched yet) and a lower bound on the
+// squared distance from that query of every other target that counts.
+struct Pairing {
+  Eigen::Vector3d query;
+  int target = -1;
+  double others_m2 = 0.0;
+};
+
+// Whether `pairing` still holds for the query q, exactly: when q has moved by
+// s from the query searched for, every other target is at least
+// sqrt(others_m2) - s from q, so the paired target at distance d < that is
+// still the nearest (strictly: no tie to break). Late ICP iterations move the
+// source by hundredths of a voxel, and most pairs are kept without a search:
+// a search is ~3,000 instructions (rings of cells), this test ~30.
+// The squared distance is computed as the search computes it, bit for bit.
+bool StillNearest(const Pairing& pairing, const Eigen::Vector3d& q,
+                  const std::vector<Eigen::Vector3d>& target, double max_m, float* squared_m2) {
+  if (pairing.target < 0) return false;
+  const double d2 = (target[static_cast<std::size_t>(pairing.target)] - q).squaredNorm();
+  if (!(d2 < max_m * max_m * (1 - 1e-9))) return false;
+  const double moved = (q - pairing.query).norm();
+  // The margins cover rounding, far below any gap that matters.
+  if (!((std::sqrt(d2) + moved) * (1 + 1e-9) + 1e-12 < std::sqrt(pairing.others_m2))) return false;
+  *squared_m2 = static_cast<float>(d2);
+  return true;
+}
+
 struct Pairs {
   std::vector<int> source_index;
   std::vector<int> target_index;
@@ -91,14 +121,31 @@ struct Pairs {
 };
 
 // Nearest target of every source point under T, within max_distance_m, then
-// the closest trim_fraction of them.
-Pairs Correspond(const NearestTarget& nearest, const std::vector<Eigen::Vector3d>& source,
-                 const Eigen::Isometry3d& T, double max_distance_m, double trim_fraction) {
+// the closest trim_fraction of them. With `pairings` (one per source point,
+// kept between calls; null for kKdTree), a pairing that provably still holds
+// is kept without a search (StillNearest): the same pairs either way.
+Pairs Correspond(const NearestTarget& nearest, const std::vector<Eigen::Vector3d>& target,
+                 const std::vector<Eigen::Vector3d>& source, const Eigen::Isometry3d& T,
+                 double max_distance_m, double trim_fraction, std::vector<Pairing>* pairings,
+                 std::size_t* searches) {
   std::vector<std::pair<float, std::pair<int, int>>> found;
   found.reserve(source.size());
   for (std::size_t i = 0; i < source.size(); ++i) {
     float sq = 0.0f;
-    const int index = nearest.Nearest(T * source[i], max_distance_m, &sq);
+    const Eigen::Vector3d q = T * source[i];
+    int index = -1;
+    if (pairings == nullptr) {
+      index = nearest.Nearest(q, max_distance_m, &sq);
+      ++*searches;
+    } else if (Pairing& pairing = (*pairings)[i];
+               StillNearest(pairing, q, target, max_distance_m, &sq)) {
+      index = pairing.target;
+    } else {
+      index = nearest.Nearest(q, max_distance_m, &sq, &pairing.others_m2);
+      pairing.query = q;
+      pairing.target = index;
+      ++*searches;
+    }
     if (index < 0) continue;
     found.push_back({sq, {static_cast<int>(i), index}});
   }
@@ -207,10 +254,16 @@ StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
   const NearestTarget tree = shared == nullptr ? NearestTarget(tgt, voxel_size_m, params.search)
                                                : NearestTarget(shared, &source_box);
   double previous_rms = -1.0;
+  std::vector<Pairing> pairings;
+  if (params.search == NeighbourSearch::kVoxelHash && params.reuse_pairings) {
+    pairings.resize(src.size());
+  }
+  std::vector<Pairing>* reuse = pairings.empty() ? nullptr : &pairings;
 
   Eigen::Isometry3d T = T_init;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
-    const Pairs pairs = Correspond(tree, src, T, max_distance_m, params.trim_fraction);
+    const Pairs pairs = Correspond(tree, tgt, src, T, max_distance_m, params.trim_fraction, reuse,
+                                   &result.searches);
     const int n = static_cast<int>(pairs.source_index.size());
     if (n < params.min_inliers) {
       return Status::FailedPrecondition("ICP: only " + std::to_string(n) +
@@ -244,7 +297,8 @@ StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
     }
   }
   // Final evaluation with the final transform.
-  const Pairs pairs = Correspond(tree, src, T, max_distance_m, params.trim_fraction);
+  const Pairs pairs =
+      Correspond(tree, tgt, src, T, max_distance_m, params.trim_fraction, reuse, &result.searches);
   if (static_cast<int>(pairs.source_index.size()) < params.min_inliers) {
     return Status::FailedPrecondition("ICP: too few correspondences after refinement");
   }

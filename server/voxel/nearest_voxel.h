@@ -26,6 +26,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
@@ -50,7 +52,16 @@ class NearestVoxelIndex {
   // squared distance (max_m^2 when none). Only points inside `within`
   // (AlignedBox3d::contains, bounds included) count when it is non-null.
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
-              const Eigen::AlignedBox3d* within = nullptr) const;
+              const Eigen::AlignedBox3d* within = nullptr) const {
+    return Nearest(q, max_m, squared_m2, within, nullptr);
+  }
+  // The same, and when a point is found, a lower bound on the squared
+  // distance from q of every other point that counts (those within max_m and
+  // beyond: the nearest other point the scan met, or the distance beyond
+  // which it did not look). ICP uses it to keep a pairing exactly while its
+  // query moves less than half the gap (icp.cc, Correspond).
+  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
+              const Eigen::AlignedBox3d* within, double* others_m2) const;
 
   // Whether the bit sets are kept (false: the hash answers).
   bool dense() const { return !occupied_.empty(); }
@@ -61,10 +72,14 @@ class NearestVoxelIndex {
     double squared_m2;
     const Eigen::AlignedBox3d* within;  // null: every point counts
     int index = -1;
+    double others_m2 = HUGE_VAL;  // the nearest point offered but not kept
     void Offer(double d, int i) {
       if (d < squared_m2 || (d == squared_m2 && (index < 0 || i < index))) {
+        if (index >= 0) others_m2 = std::min(others_m2, squared_m2);
         squared_m2 = d;
         index = i;
+      } else {
+        others_m2 = std::min(others_m2, d);
       }
     }
   };

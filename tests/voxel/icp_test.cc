@@ -183,6 +183,53 @@ TEST(IcpTest, AnIndexedTargetGivesTheVectorOverloadsResultsBitForBit) {
   }
 }
 
+// Keeping pairings that provably still hold (IcpParams::reuse_pairings)
+// changes no pair, so no result, bit for bit: from near and far starts, with
+// either overload, trimmed or not. And it keeps most pairings: the test
+// tests something only if the runs take several iterations.
+TEST(IcpTest, KeptPairingsGiveTheSameResultsBitForBit) {
+  const Eigen::Isometry3d T_a_b = Pose(3, 1, -1, Eigen::Vector3d(0.4, -0.3, 0.1));
+  const auto [a, b] = RasterisedRoomPair(T_a_b, 3.5);
+  const IcpTarget target(&a, kRoomResolutionM);
+  ASSERT_TRUE(target.status().ok());
+  int iterations = 0;
+  std::size_t searches_kept = 0, searches_all = 0;
+  for (const double trim : {1.0, 0.8}) {
+    IcpParams searched;
+    searched.trim_fraction = trim;
+    searched.reuse_pairings = false;
+    IcpParams kept = searched;
+    kept.reuse_pairings = true;
+    for (const Eigen::Isometry3d& start :
+         {Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b,
+          Pose(-4, 1, 0, Eigen::Vector3d(-0.3, 0.2, 0.1)) * T_a_b,
+          Pose(8, 0, 0, Eigen::Vector3d(0.5, 0.0, 0.0)) * T_a_b,
+          Pose(0, 2, 0, Eigen::Vector3d(0.2, 0.1, 0.0)) * T_a_b}) {
+      const auto want = RefineIcp(a, b, start, kRoomResolutionM, searched);
+      for (const auto& got :
+           {RefineIcp(a, b, start, kRoomResolutionM, kept), RefineIcp(target, b, start, kept)}) {
+        ASSERT_EQ(got.ok(), want.ok());
+        if (!want.ok()) {
+          EXPECT_EQ(got.status().ToString(), want.status().ToString());
+          continue;
+        }
+        EXPECT_EQ(got->iterations, want->iterations);
+        EXPECT_EQ(got->inliers, want->inliers);
+        EXPECT_EQ(got->rms_residual_m, want->rms_residual_m);
+        EXPECT_EQ(got->T_target_source.matrix(), want->T_target_source.matrix());
+      }
+      if (!want.ok()) continue;
+      iterations += want->iterations;
+      EXPECT_EQ(want->searches, want->source_points * (want->iterations + 1));
+      const auto got = RefineIcp(target, b, start, kept);
+      searches_kept += got->searches;
+      searches_all += want->searches;
+    }
+  }
+  EXPECT_GT(iterations, 40);
+  EXPECT_LT(searches_kept, searches_all * 3 / 4);
+}
+
 TEST(IcpTest, AnIndexedTargetRejectsWhatTheVectorOverloadRejects) {
   std::vector<Eigen::Vector3d> points(20, Eigen::Vector3d::Ones());
   const IcpTarget no_size(&points, 0.0);

@@ -49,7 +49,7 @@ void ExpectSameAsBruteForce(const std::vector<Eigen::Vector3d>& points,
                             bool expect_dense, const Eigen::AlignedBox3d* within = nullptr) {
   const NearestVoxelIndex index(points, kCellM);
   EXPECT_EQ(index.dense(), expect_dense);
-  int found = 0;
+  int found = 0, gaps = 0;
   for (const Eigen::Vector3d& q : queries) {
     double want_d = 0;
     const int want = BruteNearest(points, q, max_m, &want_d, within);
@@ -64,7 +64,23 @@ void ExpectSameAsBruteForce(const std::vector<Eigen::Vector3d>& points,
     // are rare but the answer must not depend on the scan order.
     EXPECT_EQ(got, want) << q.transpose() << " max " << max_m;
     EXPECT_FLOAT_EQ(got_d, static_cast<float>(want_d));
+    // The bound on the other points (ICP keeps a pairing by it): every other
+    // point that counts is at least that far, and the answer no farther.
+    double others_m2 = -1;
+    float again_d = 0;
+    EXPECT_EQ(index.Nearest(q, max_m, &again_d, within, &others_m2), got);
+    EXPECT_EQ(again_d, got_d);
+    EXPECT_GE(others_m2, want_d);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (static_cast<int>(i) == want || (within != nullptr && !within->contains(points[i]))) {
+        continue;
+      }
+      ASSERT_GE((points[i] - q).squaredNorm(), others_m2) << q.transpose() << " point " << i;
+    }
+    // ... and it is a gap, not a bound of zero: most queries could move.
+    gaps += others_m2 > want_d * 1.1 ? 1 : 0;
   }
+  EXPECT_GT(gaps, found / 2);
   // The test tests something: most queries lie within 0.3 m of a point (the
   // boxed test counts its own).
   if (within == nullptr) {
