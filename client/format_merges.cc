@@ -75,6 +75,11 @@ nlohmann::ordered_json AlignmentJson(const pb::SubmapAlignment& a) {
   j["matched_corners"] = a.matched_corners();
   j["residual_m"] = a.residual_m();
   j["overlap_score"] = a.overlap_score();
+  j["source"] = a.source();  // the rest: -1 where not measured (SubmapAlignment)
+  j["support_fraction"] = a.support_fraction();
+  j["shared_free_ratio"] = a.shared_free_ratio();
+  j["restart_spread_voxels"] = a.restart_spread_voxels();
+  j["second_residual_m"] = a.second_residual_m();
   j["matched"] = nlohmann::ordered_json::array();
   for (const pb::MatchedCorner& c : a.matched()) {
     j["matched"].push_back(
@@ -108,11 +113,21 @@ std::string FormatAlignment(const pb::SubmapAlignment& a) {
   const RigidTransform T = ToRigidTransform(a.t_reference_submap());
   double yaw = 0, pitch = 0, roll = 0;
   T.YawPitchRollDeg(&yaw, &pitch, &roll);
-  return Printf(
+  std::string out = Printf(
       "  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
       "%u matched corners, residual %.3f m, overlap %.2f\n",
       static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
       a.matched_corners(), a.residual_m(), a.overlap_score());
+  // The rest of the placing edge's evidence, when the server recorded it (the
+  // reference input and merges from before it have none).
+  if (a.source().empty()) return out;
+  const auto figure = [](double v, int digits, const char* unit) {
+    return v < 0 ? std::string("-") : Printf("%.*f%s", digits, v, unit);
+  };
+  return out + "    placed by " + a.source() + ": support " + figure(a.support_fraction(), 3, "") +
+         ", shared free " + figure(a.shared_free_ratio(), 2, "") + ", restart spread " +
+         figure(a.restart_spread_voxels(), 2, " voxels") + ", runner-up residual " +
+         figure(a.second_residual_m(), 3, " m") + "\n";
 }
 
 RigidTransform ToRigidTransform(const pb::Rigid3& T) {

@@ -181,6 +181,16 @@ const std::vector<const char*>& Migrations() {
       R"sql(
       ALTER TABLE merge_inputs ADD COLUMN matched_points BLOB;
       )sql",
+      // 7 -> 8: the rest of the placing edge's gate figures (MergeInputRecord),
+      // for operators reviewing a merge. NULL in merges recorded before this
+      // version: they read as not measured (-1) and no source.
+      R"sql(
+      ALTER TABLE merge_inputs ADD COLUMN source TEXT;
+      ALTER TABLE merge_inputs ADD COLUMN support_fraction REAL;
+      ALTER TABLE merge_inputs ADD COLUMN shared_free_ratio REAL;
+      ALTER TABLE merge_inputs ADD COLUMN restart_spread_voxels REAL;
+      ALTER TABLE merge_inputs ADD COLUMN second_residual_m REAL;
+      )sql",
   };
   return kMigrations;
 }

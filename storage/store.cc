@@ -540,8 +540,9 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   StatusOr<Statement> in = Statement::Prepare(
       w,
       "INSERT INTO merge_inputs (merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, matched_corners, "
-      "residual_m, overlap_score, matched_points) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+      "residual_m, overlap_score, matched_points, source, support_fraction, shared_free_ratio, "
+      "restart_spread_voxels, second_residual_m) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)");
   if (!in.ok()) return in.status();
   for (const MergeInputRecord& i : r.inputs) {
     in->Bind(1, ids.merge_id).Bind(2, i.submap_id);
@@ -552,6 +553,11 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
           .Bind(11, i.residual_m)
           .Bind(12, i.overlap_score);
       if (!matched.empty()) in->BindBlob(13, matched.data(), matched.size());
+      in->Bind(14, i.source)
+          .Bind(15, i.support_fraction)
+          .Bind(16, i.shared_free_ratio)
+          .Bind(17, i.restart_spread_voxels)
+          .Bind(18, i.second_residual_m);
     }
     MAPD_RETURN_IF_ERROR(in->Run());
   }
@@ -879,7 +885,9 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
   StatusOr<Statement> in = Statement::Prepare(
       reader_.get(),
       "SELECT merge_id, submap_id, qw, qx, qy, qz, tx, ty, tz, coalesce(matched_corners, 0), "
-      "coalesce(residual_m, 0), coalesce(overlap_score, 0), qw IS NOT NULL, matched_points "
+      "coalesce(residual_m, 0), coalesce(overlap_score, 0), qw IS NOT NULL, matched_points, "
+      "coalesce(source, ''), coalesce(support_fraction, -1), coalesce(shared_free_ratio, -1), "
+      "coalesce(restart_spread_voxels, -1), coalesce(second_residual_m, -1) "
       "FROM merge_inputs "
       "ORDER BY merge_id, rowid");
   if (!in.ok()) return in.status();
@@ -899,6 +907,11 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
     i.residual_m = in->ColumnDouble(10);
     i.overlap_score = in->ColumnDouble(11);
     MAPD_RETURN_IF_ERROR(DecodeMatched(in->ColumnBlob(13), out[it->second].id, &i.matched));
+    i.source = in->ColumnText(14);
+    i.support_fraction = in->ColumnDouble(15);
+    i.shared_free_ratio = in->ColumnDouble(16);
+    i.restart_spread_voxels = in->ColumnDouble(17);
+    i.second_residual_m = in->ColumnDouble(18);
     out[it->second].inputs.push_back(std::move(i));
   }
 }

@@ -207,6 +207,15 @@ struct MergeInputRecord {
   // The corner pairs behind matched_corners (empty for the first input, and
   // for merges recorded before schema 7).
   std::vector<MatchedCornerRecord> matched;
+  // The rest of the placing edge's gate figures (voxel::Alignment): its
+  // generator ("" when unknown), support fraction, shared free ratio, restart
+  // spread (voxels of the coarser map) and the runner-up's residual (metres);
+  // -1 where not measured, and for merges recorded before schema 8.
+  std::string source;
+  double support_fraction = -1;
+  double shared_free_ratio = -1;
+  double restart_spread_voxels = -1;
+  double second_residual_m = -1;
 };
 
 // = mapserver.v1.MergeState. Stored as text ('proposed', ...; MergeStateName).

@@ -114,25 +114,31 @@ Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& p
   return Status::Ok();
 }
 
+void ToProto(const storage::MergeInputRecord& in, bool with_matched, pb::SubmapAlignment* a) {
+  a->set_submap_id(static_cast<uint64_t>(in.submap_id));
+  if (!in.aligned) return;
+  ToProto(in.T_reference_submap, a->mutable_t_reference_submap());
+  a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
+  a->set_residual_m(in.residual_m);
+  a->set_overlap_score(in.overlap_score);
+  a->set_source(in.source);
+  a->set_support_fraction(in.support_fraction);
+  a->set_shared_free_ratio(in.shared_free_ratio);
+  a->set_restart_spread_voxels(in.restart_spread_voxels);
+  a->set_second_residual_m(in.second_residual_m);
+  if (!with_matched) return;
+  for (const storage::MatchedCornerRecord& m : in.matched) {
+    pb::MatchedCorner* c = a->add_matched();
+    ToProto(m.in_submap, c->mutable_in_submap());
+    ToProto(m.in_reference, c->mutable_in_reference());
+  }
+}
+
 // with_matched: the corner pairs (GetMerge only; see SubmapAlignment.matched).
 void ToProto(const storage::MergeRecord& r, bool with_matched, pb::MergeRecord* out) {
   out->set_id(static_cast<uint64_t>(r.id));
   out->set_state(static_cast<pb::MergeState>(static_cast<int>(r.state)));
-  for (const storage::MergeInputRecord& in : r.inputs) {
-    pb::SubmapAlignment* a = out->add_inputs();
-    a->set_submap_id(static_cast<uint64_t>(in.submap_id));
-    if (!in.aligned) continue;
-    ToProto(in.T_reference_submap, a->mutable_t_reference_submap());
-    a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
-    a->set_residual_m(in.residual_m);
-    a->set_overlap_score(in.overlap_score);
-    if (!with_matched) continue;
-    for (const storage::MatchedCornerRecord& m : in.matched) {
-      pb::MatchedCorner* c = a->add_matched();
-      ToProto(m.in_submap, c->mutable_in_submap());
-      ToProto(m.in_reference, c->mutable_in_reference());
-    }
-  }
+  for (const storage::MergeInputRecord& in : r.inputs) ToProto(in, with_matched, out->add_inputs());
   out->set_reason(r.reason);
   out->set_merged_submap_id(static_cast<uint64_t>(r.merged_submap_id));
   out->set_requested_by(r.requested_by);

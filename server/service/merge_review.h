@@ -35,6 +35,9 @@ Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& p
 // decisions; ListMerges leaves them out, see SubmapAlignment.matched).
 void ToProto(const storage::MergeRecord& record, bool with_matched,
              mapserver::v1::MergeRecord* out);
+// One input of a merge record (the above, and MergeSubmaps' last message).
+void ToProto(const storage::MergeInputRecord& in, bool with_matched,
+             mapserver::v1::SubmapAlignment* out);
 
 // A decision on proposed merge `id` by `caller` (authorized already):
 // approve when `reject_reason` is empty (ties its frames), else reject. On

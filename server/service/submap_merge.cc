@@ -133,6 +133,11 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
     in.matched_corners = it->matched_corners;
     in.residual_m = it->residual_m;
     in.overlap_score = it->overlap_score;
+    in.source = it->source;
+    in.support_fraction = it->support_fraction;
+    in.shared_free_ratio = it->shared_free_ratio;
+    in.restart_spread_voxels = it->restart_spread_voxels;
+    in.second_residual_m = it->second_residual_m;
     for (const voxel::MatchedCorner& m : it->matched) {
       in.matched.push_back({m.in_submap, m.in_reference});
     }
@@ -167,12 +172,7 @@ pb::MergeProgress ResultMessage(const storage::MergeIds& stored,
   result->set_state(record.state == storage::MergeState::kProposed ? pb::MERGE_STATE_PROPOSED
                                                                    : pb::MERGE_STATE_ACCEPTED);
   for (const storage::MergeInputRecord& in : record.inputs) {
-    pb::SubmapAlignment* a = result->add_alignments();
-    a->set_submap_id(static_cast<uint64_t>(in.submap_id));
-    ToProto(in.T_reference_submap, a->mutable_t_reference_submap());
-    a->set_matched_corners(static_cast<uint32_t>(std::max(0, in.matched_corners)));
-    a->set_residual_m(in.residual_m);
-    a->set_overlap_score(in.overlap_score);
+    ToProto(in, /*with_matched=*/false, result->add_alignments());
   }
   return last;
 }

@@ -205,6 +205,10 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
         alignment.residual_m = pair.residual_m;
         alignment.overlap_score = pair.overlap_score;
         alignment.source = pair.source;
+        alignment.support_fraction = pair.support_fraction;
+        alignment.shared_free_ratio = pair.shared_free_ratio;
+        alignment.restart_spread_voxels = pair.restart_spread_voxels;
+        alignment.second_residual_m = pair.second_residual_m;
         // The parent's corner goes into the reference frame by the parent's placement.
         const Eigen::Isometry3d& T_root_parent =
             placement.T_root_node[static_cast<std::size_t>(parent)];

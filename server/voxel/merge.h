@@ -211,6 +211,13 @@ struct Alignment {
   // The generator of the tree edge that placed it: "corner solution N" or
   // "correlation ..." (then matched_corners is 0); empty for the first input.
   std::string source;
+  // The rest of that edge's gate figures (PairReport; -1 where not measured,
+  // and for the first input): for operators judging a merge, how far each
+  // gate was from refusing it, and how close the runner-up came.
+  double support_fraction = -1.0;
+  double shared_free_ratio = -1.0;
+  double restart_spread_voxels = -1.0;
+  double second_residual_m = -1.0;
   // The corner pairs of the tree edge that placed it (matched_corners of
   // them); empty for the first input. T_reference_submap maps in_submap onto
   // in_reference up to the corners' own error (ICP refined past them).

@@ -212,6 +212,8 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
     params.correlation.after_corner_stages = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_SHARED_FREE_RATIO"))
     params.min_shared_free_ratio = std::atof(v);
+  if (const char* v = std::getenv("MAPD_BENCH_MAX_RESTART_SPREAD_VOXELS"))
+    params.max_restart_spread_voxels = std::atof(v);
   if (const char* v = std::getenv("MAPD_BENCH_MIN_MATCHED_CORNERS"))
     params.min_matched_corners = std::atoi(v);
   if (const char* v = std::getenv("MAPD_BENCH_TOP_K")) params.matching.top_k = std::atoi(v);
@@ -253,7 +255,8 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
     }
     for (const auto& pair : r->pairs) {
       if (!pair.accepted) continue;
-      out.message += " shared_free=" + std::to_string(pair.shared_free_ratio);
+      out.message += " shared_free=" + std::to_string(pair.shared_free_ratio) +
+                     " restart_spread=" + std::to_string(pair.restart_spread_voxels);
       for (const PairColumn& column : kPairColumns) {
         out.pair_values.push_back(column.value(pair, r->resolution));
       }

@@ -56,5 +56,32 @@ TEST(FormatMergeRecordTest, JsonHasEveryMatchedCorner) {
   EXPECT_EQ(matched[6]["in_reference"], nlohmann::json({16.0, 0.0, 2.25}));
 }
 
+// The rest of the placing edge's evidence: a line under each placed input,
+// "-" for a figure not measured; nothing for the reference input, nor for a
+// merge recorded before the server kept it (no source).
+TEST(FormatMergeRecordTest, ShowsThePlacingEdgesGateFigures) {
+  pb::MergeRecord m = MergeWithCorners(0);
+  pb::SubmapAlignment* b = m.mutable_inputs(1);
+  b->set_source("correlation yaw 58.6 deg, peak 1");
+  b->set_support_fraction(0.5312);
+  b->set_shared_free_ratio(-1);
+  b->set_restart_spread_voxels(1.234);
+  b->set_second_residual_m(0.0613);
+  const std::string text = FormatMergeRecord(m);
+  EXPECT_NE(text.find("    placed by correlation yaw 58.6 deg, peak 1: support 0.531, shared free "
+                      "-, restart spread 1.23 voxels, runner-up residual 0.061 m\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("placed by"), text.rfind("placed by"));  // not for the reference
+
+  const auto j = nlohmann::json::parse(FormatMergeRecordJson(m));
+  EXPECT_EQ(j["inputs"][1]["source"], "correlation yaw 58.6 deg, peak 1");
+  EXPECT_DOUBLE_EQ(j["inputs"][1]["restart_spread_voxels"].get<double>(), 1.234);
+  EXPECT_DOUBLE_EQ(j["inputs"][1]["shared_free_ratio"].get<double>(), -1);
+
+  b->clear_source();
+  EXPECT_EQ(FormatMergeRecord(m).find("placed by"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace mapd::client

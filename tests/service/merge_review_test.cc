@@ -216,6 +216,12 @@ TEST_F(MergeReviewTest, GetMergeServesMatchedCornersThatTheTransformMapsOntoEach
     const pb::SubmapAlignment& b = r.inputs(1);
     ASSERT_GE(b.matched_corners(), 4u);
     ASSERT_EQ(static_cast<uint32_t>(b.matched_size()), b.matched_corners());
+    // The rest of the evidence is stored with them (and survives a restart).
+    EXPECT_EQ(b.source(), proposed.alignments(1).source());
+    EXPECT_FALSE(b.source().empty());
+    EXPECT_EQ(b.support_fraction(), proposed.alignments(1).support_fraction());
+    EXPECT_GT(b.support_fraction(), 0.05);
+    EXPECT_TRUE(r.inputs(0).source().empty());
     const pb::Rigid3& T = b.t_reference_submap();
     const Eigen::Isometry3d T_ref_b =
         Eigen::Translation3d(T.translation().x(), T.translation().y(), T.translation().z()) *

@@ -336,6 +336,10 @@ TEST_F(SubmapServiceTest, MergesOverlappingSubmapsWithTheKnownTransform) {
   EXPECT_LT(RotationErrorDeg(r.alignments(1).t_reference_submap(), T_map_b_), 1.0);
   EXPECT_GE(r.alignments(1).matched_corners(), 4u);
   EXPECT_GT(r.alignments(1).overlap_score(), 0.3);
+  // The rest of the placing edge's evidence, as the merge library reported it.
+  EXPECT_FALSE(r.alignments(1).source().empty());
+  EXPECT_GT(r.alignments(1).support_fraction(), 0.05);
+  EXPECT_TRUE(r.alignments(0).source().empty());  // the reference
 
   // The merged map is stored, listed under "@merged" and served as the global map.
   std::string global, merged;

@@ -7,6 +7,14 @@
 namespace mapd::storage {
 namespace {
 
+// SQL that turns schema 8's merge_inputs back into schema 7's.
+constexpr const char* kDropGateFigures =
+    "ALTER TABLE merge_inputs DROP COLUMN source; "
+    "ALTER TABLE merge_inputs DROP COLUMN support_fraction; "
+    "ALTER TABLE merge_inputs DROP COLUMN shared_free_ratio; "
+    "ALTER TABLE merge_inputs DROP COLUMN restart_spread_voxels; "
+    "ALTER TABLE merge_inputs DROP COLUMN second_residual_m; ";
+
 class SubmapStoreTest : public testing::StoreFixture {
  protected:
   NewSubmap Submap(const std::string& robot, const std::string& name, const std::string& data,
@@ -78,6 +86,11 @@ class SubmapStoreTest : public testing::StoreFixture {
     ib.residual_m = 0.04;
     ib.overlap_score = 0.8;
     ib.matched = {{{0.5, 1, 2}, {1.25, -0.5, 2.25}}, {{-3, 4.5, 0.125}, {-7, 8, 0.375}}};
+    ib.source = "correlation yaw 12.0 deg";
+    ib.support_fraction = 0.5;
+    ib.shared_free_ratio = 7.25;
+    ib.restart_spread_voxels = -1;  // not measured
+    ib.second_residual_m = 0.09;
     m.record.inputs = {ia, ib};
     m.merged = Submap("", "", merged_bytes);
     return m;
@@ -193,6 +206,11 @@ TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) 
   EXPECT_TRUE(record->inputs[1].aligned);
   EXPECT_EQ(record->inputs[1].matched_corners, 9);
   EXPECT_DOUBLE_EQ(record->inputs[1].overlap_score, 0.8);
+  EXPECT_EQ(record->inputs[1].source, "correlation yaw 12.0 deg");
+  EXPECT_EQ(record->inputs[1].support_fraction, 0.5);
+  EXPECT_EQ(record->inputs[1].shared_free_ratio, 7.25);
+  EXPECT_EQ(record->inputs[1].restart_spread_voxels, -1);
+  EXPECT_EQ(record->inputs[1].second_residual_m, 0.09);
   EXPECT_TRUE(record->inputs[0].matched.empty());
   ASSERT_EQ(record->inputs[1].matched.size(), 2u);
   EXPECT_EQ(record->inputs[1].matched[0].in_submap, Eigen::Vector3d(0.5, 1, 2));
@@ -329,8 +347,9 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
                      "ALTER TABLE merges DROP COLUMN requested_by; "
                      "ALTER TABLE merges DROP COLUMN decided_by; "
                      "ALTER TABLE merges DROP COLUMN decided_ns; "
-                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; "
-                     "DELETE FROM schema_version WHERE version >= 6")
+                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
+                         std::string(kDropGateFigures) +
+                         "DELETE FROM schema_version WHERE version >= 6")
                     .ok());
   }
   Reopen();
@@ -345,6 +364,40 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   EXPECT_EQ(store_->LatestGlobalMap()->id, accepted->merged_submap_id);
 }
 
+// A database of schema 7 (merges without the rest of their gate figures)
+// opens, its merges read as not measured (-1, no source), and new merges
+// store theirs.
+TEST_F(SubmapStoreTest, MergesBeforeGateFiguresReadAsNotMeasured) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  auto old_merge = Record(Accepted(a, b, "OLD"));
+  ASSERT_TRUE(old_merge.ok());
+  store_.reset();
+  {
+    auto db = OpenDatabase(dir_.File("map.db"), false);
+    ASSERT_TRUE(db.ok());
+    ASSERT_TRUE(Exec(db->get(), std::string(kDropGateFigures) +
+                                    "DELETE FROM schema_version WHERE version >= 8")
+                    .ok());
+  }
+  Reopen();
+  auto old_record = store_->GetMerge(old_merge->merge_id);
+  ASSERT_TRUE(old_record.ok()) << old_record.status().ToString();
+  ASSERT_EQ(old_record->inputs.size(), 2u);
+  EXPECT_EQ(old_record->inputs[1].matched_corners, 9);
+  EXPECT_EQ(old_record->inputs[1].matched.size(), 2u);
+  EXPECT_EQ(old_record->inputs[1].source, "");
+  EXPECT_EQ(old_record->inputs[1].support_fraction, -1);
+  EXPECT_EQ(old_record->inputs[1].shared_free_ratio, -1);
+  EXPECT_EQ(old_record->inputs[1].second_residual_m, -1);
+
+  auto new_merge = Record(Accepted(a, b, "NEW"));
+  ASSERT_TRUE(new_merge.ok()) << new_merge.status().ToString();
+  auto new_record = store_->GetMerge(new_merge->merge_id);
+  ASSERT_TRUE(new_record.ok());
+  EXPECT_EQ(new_record->inputs[1].shared_free_ratio, 7.25);
+}
+
 // A database of schema 6 (merges without their matched corner pairs) opens,
 // its merges keep their evidence counts and read as no pairs, and new merges
 // store their pairs.
@@ -357,9 +410,9 @@ TEST_F(SubmapStoreTest, MergesBeforeMatchedCornersOpenWithoutPairs) {
   {
     auto db = OpenDatabase(dir_.File("map.db"), false);
     ASSERT_TRUE(db.ok());
-    ASSERT_TRUE(Exec(db->get(),
-                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; "
-                     "DELETE FROM schema_version WHERE version >= 7")
+    ASSERT_TRUE(Exec(db->get(), "ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
+                                    std::string(kDropGateFigures) +
+                                    "DELETE FROM schema_version WHERE version >= 7")
                     .ok());
   }
   Reopen();
