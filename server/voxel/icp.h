@@ -24,8 +24,8 @@
 // fr_078_tidyup.bt (288k, 5 cm), 10k points 0.79 vs 0.92. Same results.
 // Between iterations a source point keeps its target without a search while
 // it provably stays the nearest (reuse_pairings; exact): on the benchmark's
-// crops 40-60 % of the searches of a merge's ICP runs, and 5-13 % of an
-// indoor merge's CPU (docs/voxel-merge.md, "Kept ICP pairings").
+// crops 35-63 % of the searches of a merge's ICP runs, and 7-13 % of an
+// fr_078_tidyup merge's CPU (docs/voxel-merge.md, "Kept ICP pairings").
 // Pure function; thread compatible.
 #ifndef MAPD_VOXEL_ICP_H_
 #define MAPD_VOXEL_ICP_H_

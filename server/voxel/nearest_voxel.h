@@ -51,17 +51,13 @@ class NearestVoxelIndex {
   // Index of the nearest point within max_m of q (-1 if none) and its
   // squared distance (max_m^2 when none). Only points inside `within`
   // (AlignedBox3d::contains, bounds included) count when it is non-null.
-  int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
-              const Eigen::AlignedBox3d* within = nullptr) const {
-    return Nearest(q, max_m, squared_m2, within, nullptr);
-  }
-  // The same, and when a point is found, a lower bound on the squared
+  // With others_m2, when a point is found: a lower bound on the squared
   // distance from q of every other point that counts (those within max_m and
   // beyond: the nearest other point the scan met, or the distance beyond
   // which it did not look). ICP uses it to keep a pairing exactly while its
-  // query moves less than half the gap (icp.cc, Correspond).
+  // query moves less than the gap (icp.cc, StillNearest).
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
-              const Eigen::AlignedBox3d* within, double* others_m2) const;
+              const Eigen::AlignedBox3d* within = nullptr, double* others_m2 = nullptr) const;
 
   // Whether the bit sets are kept (false: the hash answers).
   bool dense() const { return !occupied_.empty(); }
