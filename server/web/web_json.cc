@@ -76,6 +76,13 @@ Json ToJson(const storage::MergeRecord& r) {
       i["matched_corners"] = in.matched_corners;
       i["residual_m"] = Number(in.residual_m);
       i["overlap_score"] = Number(in.overlap_score);
+      // The rest of the placing edge's gate figures (-1: not measured; source
+      // empty for the reference and for merges recorded before schema 8).
+      i["source"] = in.source;
+      i["support_fraction"] = Number(in.support_fraction);
+      i["shared_free_ratio"] = Number(in.shared_free_ratio);
+      i["restart_spread_voxels"] = Number(in.restart_spread_voxels);
+      i["second_residual_m"] = Number(in.second_residual_m);
     }
     inputs.push_back(std::move(i));
   }

@@ -169,6 +169,15 @@ int64_t RecordProposal(service::Core* core) {
     m.merged.meta.name = "proposal";
     m.merged.meta.resolution_m = 0.1;
     m.merged.data = "not a map: never read";
+    storage::MergeInputRecord reference, placed;
+    reference.submap_id = 1;
+    reference.aligned = true;
+    placed.submap_id = 2;
+    placed.aligned = true;
+    placed.residual_m = 0.04;
+    placed.source = "correlation yaw 58.6 deg, peak 1";
+    placed.restart_spread_voxels = 2.5;
+    m.record.inputs = {reference, placed};
     StatusOr<storage::MergeIds> ids = txn->RecordMerge(m);
     if (ids.ok()) id = ids->merge_id;
     return ids.status();
@@ -191,6 +200,12 @@ TEST_F(WebFixture, MergesAreListedAndDecidedOnlyWhenProposed) {
   ASSERT_EQ(doc["merges"].size(), 1u);
   EXPECT_EQ(doc["merges"][0]["id"], id);
   EXPECT_EQ(doc["merges"][0]["state"], "proposed");
+  // The evidence a reviewer decides by (the page's evidence column).
+  const json& placed = doc["merges"][0]["inputs"][1];
+  EXPECT_EQ(placed["source"], "correlation yaw 58.6 deg, peak 1");
+  EXPECT_EQ(placed["restart_spread_voxels"], 2.5);
+  EXPECT_EQ(placed["second_residual_m"], -1);  // not measured
+  EXPECT_EQ(doc["merges"][0]["inputs"][0]["source"], "");
   const std::string base = "/api/merges/" + std::to_string(id);
 
   httplib::Result r = Post(Client(), base + "/reject", "{}");
