@@ -30,6 +30,18 @@ std::string ResidualReason(double residual_m, double residual_voxels, double max
          " voxels) above " + Fixed(max_voxels, 2) + " voxels";
 }
 
+// The ICP screen's params (a subsample, fewer iterations), or none when
+// MergeParams turns screening off.
+std::optional<IcpParams> ScreenParams(const MergeParams& params) {
+  if (params.icp_screen_points == 0 || params.icp_screen_points >= params.icp.max_source_points) {
+    return std::nullopt;
+  }
+  IcpParams screen = params.icp;
+  screen.max_source_points = params.icp_screen_points;
+  screen.max_iterations = std::min(params.icp_screen_iterations, params.icp.max_iterations);
+  return screen;
+}
+
 // Where a restart is turned about: the centre of b's voxels that land in
 // a's occupied box under T (the overlap), so the turned start keeps the
 // overlap in place; b's centroid when none do.
@@ -102,14 +114,8 @@ StatusOr<double> RestartSpread(const PairSide& a, const PairSide& b, const Merge
     }
   }
   std::vector<StatusOr<IcpResult>> restarts;
-  const bool screen =
-      params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points;
-  if (screen) {
-    IcpParams screen_params = params.icp;
-    screen_params.max_source_points = params.icp_screen_points;
-    screen_params.max_iterations =
-        std::min(params.icp_screen_iterations, params.icp.max_iterations);
-    MAPD_RETURN_IF_ERROR(run(starts, screen_params, &restarts));
+  if (const std::optional<IcpParams> screen_params = ScreenParams(params)) {
+    MAPD_RETURN_IF_ERROR(run(starts, *screen_params, &restarts));
     const double screened_m = spread(restarts);
     if (screened_m <= params.max_restart_spread_voxels * gate_voxel_m) return screened_m;
     for (std::size_t i = 0; i < starts.size(); ++i) {
@@ -143,13 +149,9 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
   // for up to max_iterations, at a fifth of the cost; only a screen ending
   // within icp_screen_residual_factor of the gate is refined on all points.
   Eigen::Isometry3d T_start = T_initial;
-  if (params.icp_screen_points > 0 && params.icp_screen_points < params.icp.max_source_points) {
-    IcpParams screen_params = params.icp;
-    screen_params.max_source_points = params.icp_screen_points;
-    screen_params.max_iterations =
-        std::min(params.icp_screen_iterations, params.icp.max_iterations);
+  if (const std::optional<IcpParams> screen_params = ScreenParams(params)) {
     auto screen = RefineIcp(a.features->IcpIndex(finest_resolution_m), b.grid->occupied_centres(),
-                            T_initial, screen_params);
+                            T_initial, *screen_params);
     if (screen.ok()) {
       const double screen_voxels = screen->rms_residual_m / gate_voxel_m;
       if (screen_voxels > params.icp_screen_residual_factor * params.max_residual_voxels) {
