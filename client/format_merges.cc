@@ -1,5 +1,6 @@
 // The stored merges (ListMerges, GetMerge) for people and for other tools.
 #include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "client/format.h"
@@ -122,7 +123,7 @@ std::string FormatAlignment(const pb::SubmapAlignment& a) {
   // reference input and merges from before it have none).
   if (a.source().empty()) return out;
   const auto figure = [](double v, int digits, const char* unit) {
-    return v < 0 ? std::string("-") : Printf("%.*f%s", digits, v, unit);
+    return !(v >= 0) || !std::isfinite(v) ? std::string("-") : Printf("%.*f%s", digits, v, unit);
   };
   return out + "    placed by " + a.source() + ": support " + figure(a.support_fraction(), 3, "") +
          ", shared free " + figure(a.shared_free_ratio(), 2, "") + ", restart spread " +

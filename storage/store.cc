@@ -4,6 +4,7 @@
 #include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "storage/observation_codec.h"
@@ -553,11 +554,13 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
           .Bind(11, i.residual_m)
           .Bind(12, i.overlap_score);
       if (!matched.empty()) in->BindBlob(13, matched.data(), matched.size());
+      // A figure that is not a number is stored as not measured.
+      const auto figure = [](double v) { return std::isfinite(v) ? v : -1.0; };
       in->Bind(14, i.source)
-          .Bind(15, i.support_fraction)
-          .Bind(16, i.shared_free_ratio)
-          .Bind(17, i.restart_spread_voxels)
-          .Bind(18, i.second_residual_m);
+          .Bind(15, figure(i.support_fraction))
+          .Bind(16, figure(i.shared_free_ratio))
+          .Bind(17, figure(i.restart_spread_voxels))
+          .Bind(18, figure(i.second_residual_m));
     }
     MAPD_RETURN_IF_ERROR(in->Run());
   }

@@ -2,6 +2,8 @@
 // in text, all of them in --json).
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -78,6 +80,12 @@ TEST(FormatMergeRecordTest, ShowsThePlacingEdgesGateFigures) {
   EXPECT_EQ(j["inputs"][1]["source"], "correlation yaw 58.6 deg, peak 1");
   EXPECT_DOUBLE_EQ(j["inputs"][1]["restart_spread_voxels"].get<double>(), 1.234);
   EXPECT_DOUBLE_EQ(j["inputs"][1]["shared_free_ratio"].get<double>(), -1);
+
+  // A figure that is not a number (a bad or old server) shows as not measured.
+  b->set_support_fraction(std::nan(""));
+  b->set_second_residual_m(std::numeric_limits<double>::infinity());
+  EXPECT_NE(FormatMergeRecord(m).find("support -, shared free -"), std::string::npos);
+  EXPECT_NE(FormatMergeRecord(m).find("runner-up residual -\n"), std::string::npos);
 
   b->clear_source();
   EXPECT_EQ(FormatMergeRecord(m).find("placed by"), std::string::npos);

@@ -1,6 +1,9 @@
 // Submaps, merges and session ties in the store (storage/store.h).
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "storage/store.h"
 #include "storage/support/store_fixture.h"
 
@@ -366,6 +369,24 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   EXPECT_EQ((*merges)[1].state, MergeState::kRefused);
   EXPECT_EQ((*merges)[1].reason, "no overlap");
   EXPECT_EQ(store_->LatestGlobalMap()->id, accepted->merged_submap_id);
+}
+
+// Gate figures that are not numbers (NaN, infinite) are stored as not
+// measured (-1), not as garbage, and the merge is recorded whole.
+TEST_F(SubmapStoreTest, GateFiguresThatAreNotNumbersReadAsNotMeasured) {
+  const int64_t a = *Insert(Submap("r1", "a", "A"));
+  const int64_t b = *Insert(Submap("r2", "b", "B"));
+  NewMerge m = Accepted(a, b, "M");
+  m.record.inputs[1].support_fraction = std::nan("");
+  m.record.inputs[1].second_residual_m = std::numeric_limits<double>::infinity();
+  auto ids = Record(m);
+  ASSERT_TRUE(ids.ok()) << ids.status().ToString();
+  auto record = store_->GetMerge(ids->merge_id);
+  ASSERT_TRUE(record.ok()) << record.status().ToString();
+  EXPECT_EQ(record->inputs[1].support_fraction, -1);
+  EXPECT_EQ(record->inputs[1].second_residual_m, -1);
+  EXPECT_EQ(record->inputs[1].shared_free_ratio, 7.25);  // the others as given
+  EXPECT_EQ(*store_->GetSubmapData(record->merged_submap_id), "M");
 }
 
 // A database of schema 7 (merges without the rest of their gate figures)
