@@ -376,7 +376,8 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
 TEST_F(SubmapStoreTest, GateFiguresThatAreNotNumbersReadAsNotMeasured) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
-  NewMerge m = Accepted(a, b, "M");
+  const std::string merged_bytes = "M";  // NewSubmap::data views it
+  NewMerge m = Accepted(a, b, merged_bytes);
   m.record.inputs[1].support_fraction = std::nan("");
   m.record.inputs[1].second_residual_m = std::numeric_limits<double>::infinity();
   auto ids = Record(m);
