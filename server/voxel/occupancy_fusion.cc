@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "voxel/aligned_box.h"
+#include "voxel/octree_leaves.h"
 
 namespace mapd::voxel {
 namespace {
@@ -25,30 +26,35 @@ struct Leaf {
   octomap::OcTreeKey key;
 };
 
+// The tree's leaves, free ones smallest first (so that the cap on free voxels
+// drops the big open cubes), each level in the leaf order (ForEachLeaf).
+// Counted per level first and then written in place: collecting and then
+// sorting the leaves (a 56-byte struct, over 600k of them on a campus crop)
+// cost two more arrays of them in fresh memory, the first walk's page faults
+// half of it (docs/voxel-merge.md, "Leaf walks by recursion").
 std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
-  std::vector<Leaf> leaves;
   const int depth = static_cast<int>(tree.getTreeDepth());
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+  std::vector<std::size_t> start(static_cast<std::size_t>(depth) + 2, 0);
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode&, const octomap::OcTreeKey&, unsigned d) {
+    ++start[static_cast<std::size_t>(depth - static_cast<int>(d)) + 1];
+  });
+  for (std::size_t level = 1; level < start.size(); ++level) start[level] += start[level - 1];
+  std::vector<Leaf> leaves(start.back());
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey& key,
+                        unsigned d) {
     Leaf leaf;
-    leaf.edge_m = it.getSize();
-    const octomap::point3d c = it.getCoordinate();
+    // As leaf_iterator's getSize() and getCoordinate() (a float point).
+    leaf.edge_m = tree.getNodeSize(d);
+    const octomap::point3d c = tree.keyToCoord(key, d);
     leaf.min_m =
         Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
-    leaf.log_odds = it->getLogOdds();
-    leaf.occupied = tree.isNodeOccupied(*it);
-    leaf.level = depth - static_cast<int>(it.getDepth());
-    leaf.key = it.getKey();
-    leaves.push_back(leaf);
-  }
-  // Free leaves smallest first, so that the cap drops the big open cubes: a
-  // stable counting sort by level (a merge sort of the leaves was a quarter
-  // of the fusion's CPU on a 5 cm crop).
-  std::vector<std::size_t> start(static_cast<std::size_t>(depth) + 2, 0);
-  for (const Leaf& leaf : leaves) ++start[static_cast<std::size_t>(leaf.level) + 1];
-  for (std::size_t level = 1; level < start.size(); ++level) start[level] += start[level - 1];
-  std::vector<Leaf> sorted(leaves.size());
-  for (const Leaf& leaf : leaves) sorted[start[static_cast<std::size_t>(leaf.level)]++] = leaf;
-  return sorted;
+    leaf.log_odds = node.getLogOdds();
+    leaf.occupied = tree.isNodeOccupied(node);
+    leaf.level = depth - static_cast<int>(d);
+    leaf.key = key;
+    leaves[start[static_cast<std::size_t>(leaf.level)]++] = leaf;
+  });
+  return leaves;
 }
 
 Box BoundsOf(const std::vector<Leaf>& leaves) {
@@ -292,10 +298,9 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
 std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree) {
   std::uint64_t count = 0;
   const int depth = static_cast<int>(tree.getTreeDepth());
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (tree.isNodeOccupied(*it))
-      count += std::uint64_t{1} << (3 * (depth - static_cast<int>(it.getDepth())));
-  }
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey&, unsigned d) {
+    if (tree.isNodeOccupied(node)) count += std::uint64_t{1} << (3 * (depth - static_cast<int>(d)));
+  });
   return count;
 }
 

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <string>
 
+#include "voxel/octree_leaves.h"
+
 namespace mapd::voxel {
 namespace {
 
@@ -71,33 +73,33 @@ StatusOr<VoxelGrid> VoxelGrid::FromOcTree(const octomap::OcTree& tree,
   // First pass: count the occupied voxels before expanding anything.
   std::uint64_t occupied = 0;
   std::array<std::size_t, kLevels> free_cubes{};  // per level, to size the sets once
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const int level = max_depth - static_cast<int>(it.getDepth());
-    if (!tree.isNodeOccupied(*it)) {
+  // (The leaves' volumes sum to at most the key space's 2^48 voxels: no overflow.)
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey&, unsigned d) {
+    const int level = max_depth - static_cast<int>(d);
+    if (!tree.isNodeOccupied(node)) {
       if (level < kLevels) ++free_cubes[static_cast<std::size_t>(level)];
-      continue;
+      return;
     }
     occupied += std::uint64_t{1} << (3 * level);
-    if (occupied > limits.max_occupied_voxels) {
-      return Status::ResourceExhausted("octree has more than " +
-                                       std::to_string(limits.max_occupied_voxels) +
-                                       " occupied voxels at the finest resolution");
-    }
+  });
+  if (occupied > limits.max_occupied_voxels) {
+    return Status::ResourceExhausted("octree has more than " +
+                                     std::to_string(limits.max_occupied_voxels) +
+                                     " occupied voxels at the finest resolution");
   }
   grid.occupied_keys_.reserve(occupied);
   for (std::size_t level = 0; level < free_cubes.size(); ++level) {
     grid.free_[level].reserve(free_cubes[level]);
   }
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const int level = max_depth - static_cast<int>(it.getDepth());
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey& k, unsigned d) {
+    const int level = max_depth - static_cast<int>(d);
     // A leaf of depth d covers the aligned cube of edge 2^level that holds its key.
-    const octomap::OcTreeKey& k = it.getKey();
     const VoxelKey min_key((static_cast<int>(k[0]) >> level << level) - kKeyOffset,
                            (static_cast<int>(k[1]) >> level << level) - kKeyOffset,
                            (static_cast<int>(k[2]) >> level << level) - kKeyOffset);
-    if (!tree.isNodeOccupied(*it)) {
+    if (!tree.isNodeOccupied(node)) {
       grid.AddFreeCube(min_key, level);
-      continue;
+      return;
     }
     const int edge = 1 << level;
     for (int dx = 0; dx < edge; ++dx) {
@@ -107,7 +109,7 @@ StatusOr<VoxelGrid> VoxelGrid::FromOcTree(const octomap::OcTree& tree,
         }
       }
     }
-  }
+  });
   grid.Finish();
   return grid;
 }

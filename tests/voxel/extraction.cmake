@@ -3,6 +3,7 @@
 mapd_add_test(voxel_extraction_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/octree_reader_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/voxel_grid_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/octree_leaves_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/packed_key_set_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/corner_extraction_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/corner_components_test.cc
