@@ -70,11 +70,13 @@ class CoarseGrid {
   CoarseGrid(const std::array<int, 3>& n, const Eigen::Vector3d& origin, double cell)
       : n_(n), occ_lo_(n), occ_hi_{-1, -1, -1}, origin_(origin), cell_(cell) {
     const std::size_t size = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-    occ_.assign(size, 0);
-    free_.assign(size, 0.0F);
-    dilated_.assign(size, 0);
-    cover_.assign(size, 0);
-    pass_.assign(size, 0);
+    // Zeros never written: a map's content fills a fifth of the padded
+    // grid or less, and only those pages are touched.
+    occ_ = ZeroedLargeArray<std::uint8_t>(size);
+    free_ = ZeroedLargeArray<float>(size);
+    dilated_ = ZeroedLargeArray<std::uint8_t>(size);
+    cover_ = ZeroedLargeArray<std::uint8_t>(size);
+    pass_ = ZeroedLargeArray<std::uint8_t>(size);
   }
   // Empties the grid and moves it to `origin`; keeps its buffers (every yaw
   // of b reuses one grid: fresh 16M-cell buffers cost page faults). Every
@@ -130,12 +132,12 @@ class CoarseGrid {
   // in every buffer (for RealFft::ForwardInBox).
   const std::array<int, 2>& extent() const { return extent_; }
   std::size_t occupied_cells() const { return occupied_cells_; }
-  const LargeVector<std::uint8_t>& occ() const { return occ_; }
-  const LargeVector<std::uint8_t>& dilated_occ() const { return dilated_; }
+  const ZeroedLargeArray<std::uint8_t>& occ() const { return occ_; }
+  const ZeroedLargeArray<std::uint8_t>& dilated_occ() const { return dilated_; }
   // Where this map has data: within cover_radius cells of an occupied cell,
   // or free.
-  const LargeVector<std::uint8_t>& cover() const { return cover_; }
-  const LargeVector<float>& free() const { return free_; }
+  const ZeroedLargeArray<std::uint8_t>& cover() const { return cover_; }
+  const ZeroedLargeArray<float>& free() const { return free_; }
 
  private:
   // Binary dilation of occ_ (1 where an occupied cell lies within `radius`
@@ -145,8 +147,8 @@ class CoarseGrid {
   // the axis that remember the nearest set cell behind and ahead, so it
   // costs O(cells) whatever the radius, and the innermost loop runs over
   // contiguous memory (z) on every axis.
-  void Dilate(int radius, LargeVector<std::uint8_t>* result) {
-    LargeVector<std::uint8_t>& out = *result;  // zero outside the box below
+  void Dilate(int radius, ZeroedLargeArray<std::uint8_t>* result) {
+    ZeroedLargeArray<std::uint8_t>& out = *result;  // zero outside the box below
     if (occ_hi_[0] < 0) return;                // nothing occupied
     std::array<int, 3> lo{}, hi{};
     for (std::size_t k = 0; k < 3; ++k) {
@@ -159,8 +161,8 @@ class CoarseGrid {
     const int wz = hi[2] - lo[2] + 1;
     std::vector<int> nearest;
     // The pass along `axis` reads `in` and sets `to` (cleared in the box).
-    const auto pass = [&](std::size_t axis, const LargeVector<std::uint8_t>& in,
-                          LargeVector<std::uint8_t>* to) {
+    const auto pass = [&](std::size_t axis, const ZeroedLargeArray<std::uint8_t>& in,
+                          ZeroedLargeArray<std::uint8_t>* to) {
       for (int x = lo[0]; x <= hi[0]; ++x) {
         for (int y = lo[1]; y <= hi[1]; ++y) std::fill_n(to->begin() + index(x, y, lo[2]), wz, 0);
       }
@@ -229,9 +231,9 @@ class CoarseGrid {
   std::size_t occupied_cells_ = 0;
   Eigen::Vector3d origin_;
   double cell_;
-  LargeVector<std::uint8_t> occ_, dilated_, cover_;
-  LargeVector<float> free_;
-  LargeVector<std::uint8_t> pass_;  // Dilate's scratch
+  ZeroedLargeArray<std::uint8_t> occ_, dilated_, cover_;
+  ZeroedLargeArray<float> free_;
+  ZeroedLargeArray<std::uint8_t> pass_;  // Dilate's scratch
 };
 
 struct Peak {
@@ -401,9 +403,10 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   RealFft fft({n[0], n[1], n[2]});
   std::array<int, 3> size{};  // of the spectra below; none yet
   LargeVector<Complex> occ_a, hit_a, cover_a, occ_b;
-  LargeVector<float> weight;  // 1 / normaliser, 0 where no peak may be
   for (auto* v : {&occ_a, &hit_a, &cover_a, &occ_b}) v->reserve(fft.complex_size());
-  weight.reserve(fft.real_size());
+  // 1 / normaliser, 0 where no peak may be; read and written only at the
+  // shifts where the grids meet (for_each_cell below), so never cleared.
+  ZeroedLargeArray<float> weight(fft.real_size());
   LargeVector<std::pair<float, std::size_t>> positive;  // (score, cell), ascending cells
   for (std::size_t y = 0; y < yaws.size(); ++y) {
     const double yaw = yaws[y];
@@ -444,7 +447,6 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       spectrum_of(hit_rows_a, &hit_a);
       spectrum_of(cover_rows_a, &cover_a);
       occ_b.resize(fft.complex_size());
-      weight.assign(fft.real_size(), 0.0F);
     }
     const std::size_t spectrum_size = fft.complex_size();
     // b's rows, copied from the grid (laid out for n) into the transform's.

@@ -13,7 +13,10 @@
 #define MAPD_VOXEL_LARGE_ARRAY_H_
 
 #include <cstddef>
+#include <cstring>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace mapd::voxel {
@@ -51,6 +54,48 @@ struct LargeArrayAllocator {
 
 template <typename T>
 using LargeVector = std::vector<T, LargeArrayAllocator<T>>;
+
+// A fixed number of zeros of a trivial type in AllocateLarge's memory, for
+// padded grids of which a merge touches a part. A block of a huge page or
+// more is a fresh mapping, which the kernel zeroes page by page on first
+// touch, so the pages never touched cost nothing; LargeVector's assign(n, 0)
+// writes, and so faults in, every page. (A campus crop's 11.5M-cell
+// correlation grid holds its content in a fifth of it: docs/voxel-merge.md,
+// "Leaf walks by recursion; untouched zeros".) Smaller blocks are zeroed
+// here. Move-only.
+template <typename T>
+class ZeroedLargeArray {
+  static_assert(std::is_trivial_v<T>, "zero bytes must be a value of T");
+
+ public:
+  ZeroedLargeArray() = default;
+  explicit ZeroedLargeArray(std::size_t n)
+      : data_(LargeArrayAllocator<T>().allocate(n)), size_(n) {
+    if (n * sizeof(T) < internal::kHugePageBytes) std::memset(data_, 0, n * sizeof(T));
+  }
+  ~ZeroedLargeArray() { LargeArrayAllocator<T>().deallocate(data_, size_); }
+  ZeroedLargeArray(ZeroedLargeArray&& other) noexcept
+      : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+  ZeroedLargeArray& operator=(ZeroedLargeArray&& other) noexcept {
+    std::swap(data_, other.data_);
+    std::swap(size_, other.size_);
+    return *this;
+  }
+  ZeroedLargeArray(const ZeroedLargeArray&) = delete;
+  ZeroedLargeArray& operator=(const ZeroedLargeArray&) = delete;
+
+  T* data() { return data_; }
+  const T* data() const { return data_; }
+  T* begin() { return data_; }
+  const T* begin() const { return data_; }
+  std::size_t size() const { return size_; }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  T* data_ = nullptr;
+  std::size_t size_ = 0;
+};
 
 }  // namespace mapd::voxel
 

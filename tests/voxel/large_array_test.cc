@@ -1,6 +1,8 @@
 #include "voxel/large_array.h"
 
 #include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <fstream>
@@ -8,6 +10,8 @@
 #include <numeric>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace mapd::voxel {
 namespace {
@@ -69,6 +73,36 @@ TEST(LargeArrayTest, AFreedLargeBlockIsUnmapped) {
     ASSERT_TRUE(IsMapped(data));
   }
   EXPECT_FALSE(IsMapped(data));
+}
+
+// Zeros that are never written cost no memory: only the pages a grid's
+// content touches are resident (mincore: 4 KiB pages, or 2 MiB ones under
+// transparent huge pages).
+TEST(LargeArrayTest, ZeroedArraysAreZerosAndTouchOnlyWhatIsWritten) {
+  const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const std::size_t bytes = std::size_t{64} << 20;
+  ZeroedLargeArray<float> big(bytes / sizeof(float));
+  ASSERT_EQ(big.size(), bytes / sizeof(float));
+  big[12345] = 2.0F;  // one page (or one huge page) written
+  std::vector<unsigned char> resident(bytes / page);
+  ASSERT_EQ(mincore(big.data(), bytes, resident.data()), 0);
+  std::size_t pages = 0;
+  for (unsigned char r : resident) pages += r & 1U;
+  EXPECT_GE(pages, 1U);
+  EXPECT_LE(pages * page, internal::kHugePageBytes);
+  for (std::size_t i = 0; i < big.size(); i += 4099) EXPECT_EQ(big[i], i == 12345 ? 2.0F : 0.0F);
+  EXPECT_EQ(big[12345], 2.0F);
+
+  // Small ones come from the heap, zeroed all the same; moves hand over the block.
+  ZeroedLargeArray<std::uint8_t> small(1000);
+  for (std::size_t i = 0; i < small.size(); ++i) ASSERT_EQ(small[i], 0) << i;
+  small[999] = 9;
+  ZeroedLargeArray<std::uint8_t> moved(std::move(small));
+  EXPECT_EQ(moved.size(), 1000U);
+  EXPECT_EQ(moved[999], 9);
+  moved = ZeroedLargeArray<std::uint8_t>(3);
+  EXPECT_EQ(moved.size(), 3U);
+  EXPECT_EQ(moved[2], 0);
 }
 
 }  // namespace
