@@ -149,7 +149,7 @@ class CoarseGrid {
   // contiguous memory (z) on every axis.
   void Dilate(int radius, ZeroedLargeArray<std::uint8_t>* result) {
     ZeroedLargeArray<std::uint8_t>& out = *result;  // zero outside the box below
-    if (occ_hi_[0] < 0) return;                // nothing occupied
+    if (occ_hi_[0] < 0) return;                     // nothing occupied
     std::array<int, 3> lo{}, hi{};
     for (std::size_t k = 0; k < 3; ++k) {
       lo[k] = std::max(0, occ_lo_[k] - radius);

@@ -69,8 +69,7 @@ class ZeroedLargeArray {
 
  public:
   ZeroedLargeArray() = default;
-  explicit ZeroedLargeArray(std::size_t n)
-      : data_(LargeArrayAllocator<T>().allocate(n)), size_(n) {
+  explicit ZeroedLargeArray(std::size_t n) : data_(LargeArrayAllocator<T>().allocate(n)), size_(n) {
     if (n * sizeof(T) < internal::kHugePageBytes) std::memset(data_, 0, n * sizeof(T));
   }
   ~ZeroedLargeArray() { LargeArrayAllocator<T>().deallocate(data_, size_); }

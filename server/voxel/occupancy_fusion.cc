@@ -40,20 +40,20 @@ std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
   });
   for (std::size_t level = 1; level < start.size(); ++level) start[level] += start[level - 1];
   std::vector<Leaf> leaves(start.back());
-  ForEachLeaf(tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey& key,
-                        unsigned d) {
-    Leaf leaf;
-    // As leaf_iterator's getSize() and getCoordinate() (a float point).
-    leaf.edge_m = tree.getNodeSize(d);
-    const octomap::point3d c = tree.keyToCoord(key, d);
-    leaf.min_m =
-        Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
-    leaf.log_odds = node.getLogOdds();
-    leaf.occupied = tree.isNodeOccupied(node);
-    leaf.level = depth - static_cast<int>(d);
-    leaf.key = key;
-    leaves[start[static_cast<std::size_t>(leaf.level)]++] = leaf;
-  });
+  ForEachLeaf(
+      tree, [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey& key, unsigned d) {
+        Leaf leaf;
+        // As leaf_iterator's getSize() and getCoordinate() (a float point).
+        leaf.edge_m = tree.getNodeSize(d);
+        const octomap::point3d c = tree.keyToCoord(key, d);
+        leaf.min_m =
+            Eigen::Vector3d(c.x(), c.y(), c.z()) - Eigen::Vector3d::Constant(0.5 * leaf.edge_m);
+        leaf.log_odds = node.getLogOdds();
+        leaf.occupied = tree.isNodeOccupied(node);
+        leaf.level = depth - static_cast<int>(d);
+        leaf.key = key;
+        leaves[start[static_cast<std::size_t>(leaf.level)]++] = leaf;
+      });
   return leaves;
 }
 
