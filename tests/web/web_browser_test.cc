@@ -2,7 +2,8 @@
 // ingested walls are drawn (SVG lines with data-id), once without the event
 // stream (?live=0) and, after a wall is ingested, with it (the stream's
 // resync replaces what the page drew; changes on an open stream are checked
-// in web_server_test). Skipped with a message when Chromium is not installed
+// in web_server_test), and a proposed merge in the merge table with its
+// evidence and decision buttons. Skipped with a message when Chromium is not installed
 // (Debian: apt-get install chromium; deploy/install-deps.sh installs it).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -58,6 +59,9 @@ class WebBrowserTest : public ::testing::Test {
       GTEST_SKIP() << "chromium is not installed (apt-get install chromium, or set MAPD_CHROMIUM): "
                       "the browser test is skipped";
     port_ = FreePort();
+  }
+  // mapd on the test's database, with the web view on port_.
+  void Start() {
     mapd_ = StartMapd(dir_.File("map.db"), {"--http.port", std::to_string(port_)});
     ASSERT_NE(mapd_.port, 0) << mapd_.log();
     stub_ = pb::MapService::NewStub(
@@ -110,6 +114,7 @@ class WebBrowserTest : public ::testing::Test {
 };
 
 TEST_F(WebBrowserTest, ThePageDrawsTheFusedMapAndItsUpdates) {
+  Start();
   Ingest(RoomBatches("r1", 8));
   const std::set<std::string> room = FeatureIds();
   ASSERT_EQ(room.size(), 4u);
@@ -125,6 +130,26 @@ TEST_F(WebBrowserTest, ThePageDrawsTheFusedMapAndItsUpdates) {
   const std::string live = DumpDom("");
   EXPECT_EQ(DataIds(live), all);
   EXPECT_THAT(live, ::testing::HasSubstr("5 features · 0 planes · live"));
+}
+
+// A proposed merge is listed with the evidence a reviewer decides by and the
+// buttons to decide it (recorded in the database before mapd opens it).
+TEST_F(WebBrowserTest, TheMergeTableShowsEachPlacementsEvidence) {
+  {
+    auto store = storage::Store::Open(dir_.File("map.db"), storage::StoreOptions{});
+    ASSERT_TRUE(store.ok()) << store.status().ToString();
+    auto txn = (*store)->BeginWrite();
+    ASSERT_TRUE(txn.ok()) << txn.status().ToString();
+    ASSERT_TRUE((*txn)->RecordMerge(ProposedMerge()).ok());
+    ASSERT_TRUE((*txn)->Commit().ok());
+  }
+  Start();
+  const std::string dom = DumpDom("?live=0");
+  EXPECT_THAT(dom, ::testing::HasSubstr(
+                       "submap 2: correlation yaw 58.6 deg, peak 1, residual 0.040 m, overlap "
+                       "0.99, restart spread 2.50 vox, runner-up -"))
+      << dom.substr(0, 4000);
+  EXPECT_THAT(dom, ::testing::HasSubstr("<button>approve</button>"));
 }
 
 // mapd itself (no browser needed): a taken http.port stops it at start with

@@ -18,6 +18,7 @@
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/server.h"
 #include "service/token.h"
+#include "storage/store.h"
 #include "web/http.h"
 #include "web/web_server.h"
 
@@ -54,6 +55,31 @@ inline std::vector<pb::ObservationBatch> FarWallBatches(const std::string& robot
     out.push_back(b);
   }
   return out;
+}
+
+// A proposed merge of submaps 1 and 2 as a merge run records one (proposals
+// need the voxel library): submap 2 placed by the correlation generator, its
+// runner-up not measured. The merged map's bytes are never read.
+inline storage::NewMerge ProposedMerge() {
+  storage::NewMerge m;
+  m.record.state = storage::MergeState::kProposed;
+  m.record.created_ns = 1;
+  m.record.requested_by = "test";
+  m.merged.meta.robot = storage::kMergedRobot;
+  m.merged.meta.name = "proposal";
+  m.merged.meta.resolution_m = 0.1;
+  m.merged.data = "not a map: never read";
+  storage::MergeInputRecord reference, placed;
+  reference.submap_id = 1;
+  reference.aligned = true;
+  placed.submap_id = 2;
+  placed.aligned = true;
+  placed.residual_m = 0.04;
+  placed.overlap_score = 0.99;
+  placed.source = "correlation yaw 58.6 deg, peak 1";
+  placed.restart_spread_voxels = 2.5;
+  m.record.inputs = {reference, placed};
+  return m;
 }
 
 class WebFixture : public ::testing::Test {

@@ -161,24 +161,7 @@ TEST_F(WebFixture, MetricsAreValidPrometheusText) {
 int64_t RecordProposal(service::Core* core) {
   int64_t id = 0;
   const Status s = core->ExecuteWrite([&](storage::WriteTransaction* txn) {
-    storage::NewMerge m;
-    m.record.state = storage::MergeState::kProposed;
-    m.record.created_ns = 1;
-    m.record.requested_by = "test";
-    m.merged.meta.robot = storage::kMergedRobot;
-    m.merged.meta.name = "proposal";
-    m.merged.meta.resolution_m = 0.1;
-    m.merged.data = "not a map: never read";
-    storage::MergeInputRecord reference, placed;
-    reference.submap_id = 1;
-    reference.aligned = true;
-    placed.submap_id = 2;
-    placed.aligned = true;
-    placed.residual_m = 0.04;
-    placed.source = "correlation yaw 58.6 deg, peak 1";
-    placed.restart_spread_voxels = 2.5;
-    m.record.inputs = {reference, placed};
-    StatusOr<storage::MergeIds> ids = txn->RecordMerge(m);
+    StatusOr<storage::MergeIds> ids = txn->RecordMerge(ProposedMerge());
     if (ids.ok()) id = ids->merge_id;
     return ids.status();
   });
