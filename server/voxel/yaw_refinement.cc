@@ -213,10 +213,16 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   const Eigen::Vector2d origin_b = -Eigen::Vector2d::Constant(radius_b + pixel);
   LargeVector<float> weight(fft.real_size());
   int scored = 0;
+  const Eigen::Vector2d origin_a = box_a.min() - Eigen::Vector2d::Constant(pixel);
+  const int columns_a = static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2;
+  const int rows_a = static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2;
+  // The shift of the last score's best: b's pixel j on a's pixel j + shift.
+  std::array<int, 2> best_shift{0, 0};
   // The best normalised correlation over all shifts (as in
   // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)).
   const auto score = [&](double yaw) {
     ++scored;
+    best_shift = {0, 0};
     image_b.Rasterise(points_b, yaw, origin_b, params);
     if (image_b.structures() == 0) return 0.0;
     Transform(fft, image_b.structure(), &structure_b);
@@ -235,33 +241,51 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     }
     const float* hits = Correlate(fft, dilated_a, structure_b);
     double best = 0;
+    std::size_t best_i = 0;
     for (std::size_t i = 0; i < weight.size(); ++i) {
-      best = std::max(best, static_cast<double>(hits[i] * weight[i]));
+      const auto value = static_cast<double>(hits[i] * weight[i]);
+      if (value > best) best = value, best_i = i;
     }
+    // Circular shifts: a's content is [0, columns_a) x [0, rows_a), so the
+    // shifts where the images meet are below those or negative.
+    const int ix = static_cast<int>(best_i / static_cast<std::size_t>(ny));
+    const int iy = static_cast<int>(best_i % static_cast<std::size_t>(ny));
+    best_shift = {ix < columns_a ? ix : ix - nx, iy < rows_a ? iy : iy - ny};
     return best;
+  };
+  // score's best shift for `yaw` as the translation of x_a' = Rz(yaw) R_b x_b + t.
+  const auto translation = [&](double yaw) -> Eigen::Vector2d {
+    const Eigen::Vector2d turned_centroid =
+        Eigen::Rotation2Dd(yaw) * Eigen::Vector2d(centroid_b.x(), centroid_b.y());
+    return origin_a - origin_b + pixel * Eigen::Vector2d(best_shift[0], best_shift[1]) -
+           turned_centroid;
   };
 
   std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
   const int steps = static_cast<int>(std::floor(params.window_deg / params.coarse_step_deg));
-  std::vector<double> candidate_scores, window_scores;
+  std::vector<double> candidate_scores, window_scores, window_yaws;
+  std::vector<Eigen::Vector2d> window_shifts;
   for (double yaw : yaws) {
     double best_offset = 0, best_score = score(yaw);
+    Eigen::Vector2d best_t = translation(yaw);
     candidate_scores.push_back(best_score);
-    for (int k = -steps; k <= steps; ++k) {
-      if (k == 0) continue;
-      const double offset = k * params.coarse_step_deg;
+    const auto consider = [&](double offset) {
       const double s = score(yaw + offset * kDeg);
-      if (s > best_score) best_offset = offset, best_score = s;
+      if (s > best_score)
+        best_offset = offset, best_score = s, best_t = translation(yaw + offset * kDeg);
+    };
+    for (int k = -steps; k <= steps; ++k) {
+      if (k != 0) consider(k * params.coarse_step_deg);
     }
     const double coarse_best = best_offset;
     for (double d = 1; d < params.coarse_step_deg; ++d) {
       for (double offset : {coarse_best - d, coarse_best + d}) {
-        if (std::abs(offset) > params.window_deg) continue;
-        const double s = score(yaw + offset * kDeg);
-        if (s > best_score) best_offset = offset, best_score = s;
+        if (std::abs(offset) <= params.window_deg) consider(offset);
       }
     }
     window_scores.push_back(best_score);
+    window_yaws.push_back(yaw + best_offset * kDeg);
+    window_shifts.push_back(best_t);
     if (std::abs(best_offset) >= params.min_change_deg) {
       refined.emplace_back(best_score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
     }
@@ -276,6 +300,8 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     stats->yaws_added = static_cast<int>(refined.size());
     stats->candidate_scores = candidate_scores;
     stats->window_scores = window_scores;
+    stats->window_yaws = window_yaws;
+    stats->window_shifts_m = window_shifts;
   }
   std::vector<double> out = yaws;
   for (const auto& scored_yaw : refined) out.push_back(scored_yaw.second);

@@ -73,6 +73,12 @@ struct YawRefinementStats {
   // Per input yaw: the 2D score at it and the best in its window (empty
   // when nothing was scored).
   std::vector<double> candidate_scores, window_scores;
+  // Per input yaw: the window's best yaw and the plan-view shift that
+  // scored best there, as the horizontal translation t (metres) of
+  // x_a' = Rz(yaw) R_b x_b + t in a's levelled frame (x and y only). For
+  // diagnostics (tests/bench/voxel_correlation_diag): the merge does not use it.
+  std::vector<double> window_yaws;
+  std::vector<Eigen::Vector2d> window_shifts_m;
 };
 
 // R_a, R_b level each map (R * up = +z); a yaw turns levelled b about +z, as

@@ -90,6 +90,20 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < refinement.window_scores.size(); ++k) {
       std::printf(" %.3f/%.3f", refinement.candidate_scores[k], refinement.window_scores[k]);
     }
+    // Where the window's best plan-view shift puts B's centroid, horizontally,
+    // against the truth (in a's levelled frame): could the plan view alone
+    // start ICP?
+    std::printf(
+        "\n  plan-view placements (window's best yaw: yaw err, horizontal err at B's centroid):");
+    const Eigen::Vector3d truth = fa->R_up * (pair->T_a_b * pair->centroid_b);
+    for (std::size_t k = 0; k < refinement.window_yaws.size(); ++k) {
+      const double y = refinement.window_yaws[k];
+      const Eigen::Vector3d turned =
+          Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * (fb->R_up * pair->centroid_b);
+      const Eigen::Vector2d placed = turned.head<2>() + refinement.window_shifts_m[k];
+      std::printf(" %.1f deg / %.2f m", Deg(std::remainder(y - yaw_true, 2 * M_PI)),
+                  (placed - truth.head<2>()).norm());
+    }
     std::printf("\n");
     if (std::getenv("DIAG_PLAN_ONLY") != nullptr) return;
     // With the true yaw too, to see whether the translation search finds the truth given it.

@@ -62,6 +62,20 @@ TEST_F(YawRefinementTest, AddsTheBestYawNearAnOffCandidate) {
   EXPECT_EQ(stats.yaws_added, 1);
   EXPECT_DOUBLE_EQ(stats.pixel_m, 2 * kGroveResolutionM);
   EXPECT_GT(stats.yaws_scored, 20);
+  // Each window's best yaw and plan-view shift: the true window's put b's
+  // centroid within two columns of where the truth puts it.
+  ASSERT_EQ(stats.window_yaws.size(), 2u);
+  ASSERT_EQ(stats.window_shifts_m.size(), 2u);
+  EXPECT_LE(DegreesBetween(stats.window_yaws[1], truth), 1.0);
+  Eigen::Vector3d centroid_b = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : b_->occupied_centres()) centroid_b += c;
+  centroid_b /= static_cast<double>(b_->num_occupied());
+  const Eigen::Vector3d true_place = Pose(30, 0, 0, Eigen::Vector3d(14.3, -2.2, 0.4)) * centroid_b;
+  const Eigen::Vector2d placed =
+      (Eigen::AngleAxisd(stats.window_yaws[1], Eigen::Vector3d::UnitZ()) * centroid_b).head<2>() +
+      stats.window_shifts_m[1];
+  EXPECT_LE((placed - true_place.head<2>()).norm(), 2 * stats.pixel_m)
+      << placed.transpose() << " vs " << true_place.head<2>().transpose();
 
   // A small image cap makes the columns coarser, not the call fail.
   YawRefinementParams small;
