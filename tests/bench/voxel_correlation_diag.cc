@@ -13,9 +13,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "bench/voxel_crops.h"
 #include "voxel/correlation_search.h"
@@ -27,6 +30,44 @@ using namespace mapd;
 using namespace mapd::voxel;
 
 static double Deg(double rad) { return rad * 180.0 / M_PI; }
+
+// A height for a plan-view placement (x_a' = Rz(yaw) R_b x_b + t, t's x and
+// y given): the median, over the columns (pixel_m squares) where both
+// levelled maps have occupied voxels, of a's lowest voxel minus b's placed
+// lowest voxel. What a plan-view merge path would start ICP from.
+static double PlacedHeight(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
+                           const Eigen::Matrix3d& R_b, double yaw, const Eigen::Vector2d& t,
+                           double pixel_m) {
+  std::unordered_map<std::int64_t, double> lowest_a, lowest_b;
+  const auto column = [&](const Eigen::Vector3d& p) {
+    const auto ix = static_cast<std::int64_t>(std::floor(p.x() / pixel_m));
+    const auto iy = static_cast<std::int64_t>(std::floor(p.y() / pixel_m));
+    return (ix << 32) ^ (iy & 0xffffffff);
+  };
+  const auto lower = [](std::unordered_map<std::int64_t, double>* m, std::int64_t k, double z) {
+    auto [it, added] = m->emplace(k, z);
+    if (!added) it->second = std::min(it->second, z);
+  };
+  for (const Eigen::Vector3d& c : a.occupied_centres()) {
+    const Eigen::Vector3d p = R_a * c;
+    lower(&lowest_a, column(p), p.z());
+  }
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
+  for (const Eigen::Vector3d& c : b.occupied_centres()) {
+    Eigen::Vector3d p = R * c;
+    p.head<2>() += t;
+    lower(&lowest_b, column(p), p.z());
+  }
+  std::vector<double> dz;
+  for (const auto& [k, z] : lowest_b) {
+    const auto found = lowest_a.find(k);
+    if (found != lowest_a.end()) dz.push_back(found->second - z);
+  }
+  if (dz.empty()) return std::nan("");
+  std::nth_element(dz.begin(), dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2), dz.end());
+  return dz[dz.size() / 2];
+}
 
 int main(int argc, char** argv) {
   if (argc < 4) return 2;
@@ -91,8 +132,9 @@ int main(int argc, char** argv) {
       std::printf(" %.3f/%.3f", refinement.candidate_scores[k], refinement.window_scores[k]);
     }
     // Where the window's best plan-view shift puts B's centroid, horizontally,
-    // against the truth (in a's levelled frame): could the plan view alone
-    // start ICP?
+    // against the truth (in a's levelled frame), and the height from the
+    // columns' lowest voxels (PlacedHeight) against the truth's: could the
+    // plan view alone start ICP?
     std::printf(
         "\n  plan-view placements (window's best yaw: yaw err, horizontal err at B's centroid):");
     const Eigen::Vector3d truth = fa->R_up * (pair->T_a_b * pair->centroid_b);
@@ -101,8 +143,10 @@ int main(int argc, char** argv) {
       const Eigen::Vector3d turned =
           Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * (fb->R_up * pair->centroid_b);
       const Eigen::Vector2d placed = turned.head<2>() + refinement.window_shifts_m[k];
-      std::printf(" %.1f deg / %.2f m", Deg(std::remainder(y - yaw_true, 2 * M_PI)),
-                  (placed - truth.head<2>()).norm());
+      const double height = PlacedHeight(a, fa->R_up, b, fb->R_up, y, refinement.window_shifts_m[k],
+                                         refinement.pixel_m);
+      std::printf(" %.1f deg / %.2f m / height %.2f m", Deg(std::remainder(y - yaw_true, 2 * M_PI)),
+                  (placed - truth.head<2>()).norm(), turned.z() + height - truth.z());
     }
     std::printf("\n");
     if (std::getenv("DIAG_PLAN_ONLY") != nullptr) return;
