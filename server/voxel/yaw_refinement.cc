@@ -197,12 +197,13 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   }
   if (stats != nullptr) stats->pixel_m = pixel;
 
+  const Eigen::Vector2d origin_a = box_a.min() - Eigen::Vector2d::Constant(pixel);
   RealFft fft({nx, ny});
   LargeVector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
   double structures_a = 0;
   {
     ColumnImage image(nx, ny, pixel);
-    image.Rasterise(points_a, 0.0, box_a.min() - Eigen::Vector2d::Constant(pixel), params);
+    image.Rasterise(points_a, 0.0, origin_a, params);
     Transform(fft, image.structure(), &structure_a);
     Transform(fft, image.Dilated(image.structure(), 1), &dilated_a);
     Transform(fft, image.Dilated(image.data(), kDataRadius), &data_a);
@@ -213,18 +214,21 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   const Eigen::Vector2d origin_b = -Eigen::Vector2d::Constant(radius_b + pixel);
   LargeVector<float> weight(fft.real_size());
   int scored = 0;
-  const Eigen::Vector2d origin_a = box_a.min() - Eigen::Vector2d::Constant(pixel);
   const int columns_a = static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2;
   const int rows_a = static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2;
-  // The shift of the last score's best: b's pixel j on a's pixel j + shift.
-  std::array<int, 2> best_shift{0, 0};
   // The best normalised correlation over all shifts (as in
-  // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)).
+  // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)),
+  // and the shift that gives it as the translation t of
+  // x_a' = Rz(yaw) R_b x_b + t (NaN when b has no structure column).
+  struct Scored {
+    double score = 0;
+    Eigen::Vector2d t_m = Eigen::Vector2d::Constant(std::nan(""));
+  };
   const auto score = [&](double yaw) {
     ++scored;
-    best_shift = {0, 0};
+    Scored out;
     image_b.Rasterise(points_b, yaw, origin_b, params);
-    if (image_b.structures() == 0) return 0.0;
+    if (image_b.structures() == 0) return out;
     Transform(fft, image_b.structure(), &structure_b);
     Transform(fft, image_b.Dilated(image_b.data(), kDataRadius), &data_b);
     const double min_pixels =
@@ -240,25 +244,21 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
                       : 0.0F;
     }
     const float* hits = Correlate(fft, dilated_a, structure_b);
-    double best = 0;
     std::size_t best_i = 0;
     for (std::size_t i = 0; i < weight.size(); ++i) {
       const auto value = static_cast<double>(hits[i] * weight[i]);
-      if (value > best) best = value, best_i = i;
+      if (value > out.score) out.score = value, best_i = i;
     }
-    // Circular shifts: a's content is [0, columns_a) x [0, rows_a), so the
-    // shifts where the images meet are below those or negative.
+    // b's pixel j lands on a's pixel j + shift. Circular shifts: a's content
+    // is [0, columns_a) x [0, rows_a), so the shifts where the images meet
+    // are below those or negative.
     const int ix = static_cast<int>(best_i / static_cast<std::size_t>(ny));
     const int iy = static_cast<int>(best_i % static_cast<std::size_t>(ny));
-    best_shift = {ix < columns_a ? ix : ix - nx, iy < rows_a ? iy : iy - ny};
-    return best;
-  };
-  // score's best shift for `yaw` as the translation of x_a' = Rz(yaw) R_b x_b + t.
-  const auto translation = [&](double yaw) -> Eigen::Vector2d {
-    const Eigen::Vector2d turned_centroid =
-        Eigen::Rotation2Dd(yaw) * Eigen::Vector2d(centroid_b.x(), centroid_b.y());
-    return origin_a - origin_b + pixel * Eigen::Vector2d(best_shift[0], best_shift[1]) -
-           turned_centroid;
+    const Eigen::Vector2d shift(ix < columns_a ? ix : ix - nx, iy < rows_a ? iy : iy - ny);
+    // b's points were turned about its levelled centroid.
+    out.t_m = origin_a - origin_b + pixel * shift -
+              Eigen::Rotation2Dd(yaw) * Eigen::Vector2d(centroid_b.x(), centroid_b.y());
+    return out;
   };
 
   std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
@@ -266,13 +266,12 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   std::vector<double> candidate_scores, window_scores, window_yaws;
   std::vector<Eigen::Vector2d> window_shifts;
   for (double yaw : yaws) {
-    double best_offset = 0, best_score = score(yaw);
-    Eigen::Vector2d best_t = translation(yaw);
-    candidate_scores.push_back(best_score);
+    double best_offset = 0;
+    Scored best = score(yaw);
+    candidate_scores.push_back(best.score);
     const auto consider = [&](double offset) {
-      const double s = score(yaw + offset * kDeg);
-      if (s > best_score)
-        best_offset = offset, best_score = s, best_t = translation(yaw + offset * kDeg);
+      const Scored s = score(yaw + offset * kDeg);
+      if (s.score > best.score) best_offset = offset, best = s;
     };
     for (int k = -steps; k <= steps; ++k) {
       if (k != 0) consider(k * params.coarse_step_deg);
@@ -283,11 +282,11 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
         if (std::abs(offset) <= params.window_deg) consider(offset);
       }
     }
-    window_scores.push_back(best_score);
+    window_scores.push_back(best.score);
     window_yaws.push_back(yaw + best_offset * kDeg);
-    window_shifts.push_back(best_t);
+    window_shifts.push_back(best.t_m);
     if (std::abs(best_offset) >= params.min_change_deg) {
-      refined.emplace_back(best_score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
+      refined.emplace_back(best.score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
     }
   }
   std::stable_sort(refined.begin(), refined.end(),

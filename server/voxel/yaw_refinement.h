@@ -75,7 +75,8 @@ struct YawRefinementStats {
   std::vector<double> candidate_scores, window_scores;
   // Per input yaw: the window's best yaw and the plan-view shift that
   // scored best there, as the horizontal translation t (metres) of
-  // x_a' = Rz(yaw) R_b x_b + t in a's levelled frame (x and y only). For
+  // x_a' = Rz(yaw) R_b x_b + t in a's levelled frame (x and y only; NaN
+  // when b had no structure column at that yaw). For
   // diagnostics (tests/bench/voxel_correlation_diag): the merge does not use it.
   std::vector<double> window_yaws;
   std::vector<Eigen::Vector2d> window_shifts_m;

@@ -38,13 +38,15 @@ static double Deg(double rad) { return rad * 180.0 / M_PI; }
 static double PlacedHeight(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
                            const Eigen::Matrix3d& R_b, double yaw, const Eigen::Vector2d& t,
                            double pixel_m) {
-  std::unordered_map<std::int64_t, double> lowest_a, lowest_b;
-  const auto column = [&](const Eigen::Vector3d& p) {
-    const auto ix = static_cast<std::int64_t>(std::floor(p.x() / pixel_m));
-    const auto iy = static_cast<std::int64_t>(std::floor(p.y() / pixel_m));
-    return (ix << 32) ^ (iy & 0xffffffff);
+  std::unordered_map<std::uint64_t, double> lowest_a, lowest_b;
+  const auto column = [&](const Eigen::Vector3d& p) {  // both indices in one key, no sign shift
+    const auto ix =
+        static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.x() / pixel_m)));
+    const auto iy =
+        static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.y() / pixel_m)));
+    return (ix << 32) ^ (iy & 0xffffffffU);
   };
-  const auto lower = [](std::unordered_map<std::int64_t, double>* m, std::int64_t k, double z) {
+  const auto lower = [](std::unordered_map<std::uint64_t, double>* m, std::uint64_t k, double z) {
     auto [it, added] = m->emplace(k, z);
     if (!added) it->second = std::min(it->second, z);
   };
