@@ -105,5 +105,15 @@ TEST(LargeArrayTest, ZeroedArraysAreZerosAndTouchOnlyWhatIsWritten) {
   EXPECT_EQ(moved[2], 0);
 }
 
+// Empty and impossible sizes: an empty array, and bad_alloc as LargeVector
+// (never a write through a null or short block).
+TEST(LargeArrayTest, ZeroedArraysOfNoneOrImpossibleSizes) {
+  const ZeroedLargeArray<float> none(0);
+  EXPECT_EQ(none.size(), 0U);
+  EXPECT_THROW(ZeroedLargeArray<float>(static_cast<std::size_t>(-1) / sizeof(float) + 1),
+               std::bad_array_new_length);
+  EXPECT_THROW(ZeroedLargeArray<std::uint8_t>(std::size_t{1} << 60), std::bad_alloc);
+}
+
 }  // namespace
 }  // namespace mapd::voxel
