@@ -180,6 +180,16 @@ struct MergeParams {
   // support): a symmetric building's twin has the same support, a placement
   // that shares one room corner with A has a fraction of it.
   double ambiguous_support_ratio = 0.5;
+  // ... or when its overlap score is at least this much higher than the
+  // best one's, whatever its support: it puts fewer of B's surfaces on space
+  // A saw as free. A corridor's 180 deg flip can end with more support than
+  // the truth (its walls and a shared box coincide with A's) while putting
+  // B's boxes in A's free space: on the generated corridor, started at the
+  // flip, ICP ended there with support 0.958 and overlap 0.958 and passed
+  // every gate, and the truth (support 0.450, overlap 1.000) was no rival by
+  // support alone (docs/voxel-merge.md). No accepted merge of the benchmark
+  // can be refused by this: their overlap scores were all >= 0.991.
+  double ambiguous_overlap_margin = 0.02;
   // Corner solutions tried after an accepted one (its pairs excluded) to look
   // for a distinct second one. Each costs a clique search and an ICP screen.
   int uniqueness_corner_attempts = 1;

@@ -31,6 +31,11 @@ bool DistinctTransforms(const Eigen::Isometry3d& x, const Eigen::Isometry3d& y,
   return angle > params.distinct_rotation_deg || offset > params.distinct_translation_voxels;
 }
 
+bool IsRival(const PairReport& best, const PairReport& h, const MergeParams& params) {
+  return h.support_fraction >= params.ambiguous_support_ratio * best.support_fraction ||
+         h.overlap_score >= best.overlap_score + params.ambiguous_overlap_margin;
+}
+
 std::string DescribeHypothesis(const TriedHypothesis& h, double finest_resolution_m) {
   const PairReport& r = h.report;
   const double angle = Eigen::AngleAxisd(r.T_a_b.linear()).angle() * 180.0 / M_PI;

@@ -43,6 +43,12 @@ bool DistinctTransforms(const Eigen::Isometry3d& x, const Eigen::Isometry3d& y,
                         const Eigen::Vector3d& centroid_b, const MergeParams& params,
                         double finest_resolution_m);
 
+// The uniqueness gate's test of `h` against the answer `best` (both passed
+// every gate, and they are distinct): `h` makes the pair ambiguous when its
+// support is at least ambiguous_support_ratio of the best's, or its overlap
+// score at least ambiguous_overlap_margin above the best's (merge.h).
+bool IsRival(const PairReport& best, const PairReport& h, const MergeParams& params);
+
 // e.g. "corner solution 1 (rotation 93.2 deg, translation (1.20, -3.40, 0.02) m,
 // residual 0.62 voxels, overlap 0.97)"
 std::string DescribeHypothesis(const TriedHypothesis& h, double finest_resolution_m);

@@ -504,9 +504,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     const TriedHypothesis* rival = nullptr;
     for (const TriedHypothesis& h : tried) {
       if (&h == &best || h.report.residual_m <= 0 || !distinct(h.report, best.report)) continue;
-      if (h.report.accepted && rival == nullptr &&
-          h.report.support_fraction >=
-              params.ambiguous_support_ratio * best.report.support_fraction) {
+      if (h.report.accepted && rival == nullptr && IsRival(best.report, h.report, params)) {
         rival = &h;
       }
       if (second == nullptr || h.report.residual_m < second->report.residual_m) second = &h;

@@ -20,6 +20,9 @@ Status MergeParams::Validate() const {
     return Status::InvalidArgument(
         "min_support_fraction and ambiguous_support_ratio must be in [0, 1]");
   }
+  if (!(ambiguous_overlap_margin >= 0 && ambiguous_overlap_margin <= 1)) {
+    return Status::InvalidArgument("ambiguous_overlap_margin must be in [0, 1]");
+  }
   if (!(min_shared_free_ratio >= 0) || !std::isfinite(min_shared_free_ratio)) {
     return Status::InvalidArgument("min_shared_free_ratio must be finite and >= 0");
   }

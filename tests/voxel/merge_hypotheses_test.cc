@@ -1,4 +1,6 @@
 // The correlation generator and the uniqueness gate inside MergeSubmaps.
+#include "voxel/merge_hypotheses.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -6,6 +8,8 @@
 #include <vector>
 
 #include "voxel/merge.h"
+#include "voxel/merge_pair.h"
+#include "voxel/submap_features.h"
 #include "voxel/support/corner_scene.h"
 #include "voxel/support/corridor_scene.h"
 #include "voxel/support/voxel_scene.h"
@@ -179,6 +183,71 @@ TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   EXPECT_LE(corner_solutions(reordered), params.max_match_attempts) << reordered;
 }
 
+// The corridor's 180 deg flip that lays B over A's half passes every gate
+// when ICP starts near it, with more support than the truth: B's walls and
+// the box both maps see land on A's walls and boxes, and only the box B alone
+// sees lands in A's free space. The full merge never starts there
+// (CorrelationMergesACorridor... above); were it to, the truth, refined too,
+// must make the pair ambiguous: its support is under half the flip's, but
+// its overlap score is higher by more than ambiguous_overlap_margin.
+TEST(MergeHypothesesTest, UniquenessGateCountsTheCorridorsTruthAsRivalToItsFlip) {
+  const Corridors c = MakeCorridors();
+  const VoxelGrid a = testing::GridOf(c.a), b = testing::GridOf(c.b);
+  MergeParams params;
+  SubmapFeatures features_a(1, &a, &params), features_b(2, &b, &params);
+  const PairSide side_a{1, &a, &features_a}, side_b{2, &b, &features_b};
+  // B turned about its vertical through its centroid, then moved 4.5 m back
+  // along the corridor (scene x): over A's half.
+  const Eigen::Vector3d centroid_b = features_b.OccupiedCentroid();
+  const Eigen::Vector3d up_b = c.T_a_b.linear().transpose() * Eigen::Vector3d::UnitZ();
+  const Eigen::Isometry3d flipped =
+      Eigen::Translation3d(-4.5, 0, 0) * c.T_a_b * Eigen::Translation3d(centroid_b) *
+      Eigen::AngleAxisd(M_PI, up_b) * Eigen::Translation3d(-centroid_b);
+  StageTimes times;
+  PairReport truth, flip;
+  ASSERT_TRUE(
+      RefineAndGate(side_a, side_b, params, c.T_a_b, kRoomResolutionM, &times, &truth).ok());
+  ASSERT_TRUE(RefineAndGate(side_a, side_b, params, flipped, kRoomResolutionM, &times, &flip).ok());
+  ASSERT_TRUE(truth.accepted) << truth.reason;
+  ASSERT_TRUE(flip.accepted) << flip.reason;  // every gate, one by one, lets it through
+  EXPECT_GT(testing::RotationErrorDeg(flip.T_a_b, c.T_a_b), 170.0);
+  EXPECT_TRUE(DistinctTransforms(flip.T_a_b, truth.T_a_b, centroid_b, params, kRoomResolutionM));
+  // The flip has the most support, so it would be the answer ...
+  EXPECT_GT(flip.support_fraction, truth.support_fraction);
+  EXPECT_LT(truth.support_fraction, params.ambiguous_support_ratio * flip.support_fraction);
+  // ... and the truth is its rival by the overlap score alone.
+  EXPECT_GE(truth.overlap_score, flip.overlap_score + params.ambiguous_overlap_margin)
+      << truth.overlap_score << " " << flip.overlap_score;
+  EXPECT_TRUE(IsRival(flip, truth, params));
+  EXPECT_TRUE(IsRival(truth, flip, params));  // by support
+  MergeParams by_support_alone = params;
+  by_support_alone.ambiguous_overlap_margin = 1;
+  EXPECT_FALSE(IsRival(flip, truth, by_support_alone));
+}
+
+// IsRival's two rules at their edges.
+TEST(MergeHypothesesTest, ARivalHasHalfTheSupportOrAHigherOverlapScore) {
+  MergeParams params;
+  PairReport best;
+  best.support_fraction = 0.8;
+  best.overlap_score = 0.95;
+  PairReport h;
+  h.support_fraction = 0.4;  // half
+  h.overlap_score = 0.90;
+  EXPECT_TRUE(IsRival(best, h, params));
+  h.support_fraction = 0.39;
+  EXPECT_FALSE(IsRival(best, h, params));
+  h.overlap_score = 0.95 + params.ambiguous_overlap_margin;
+  EXPECT_TRUE(IsRival(best, h, params));
+  h.overlap_score = 0.95 + 0.5 * params.ambiguous_overlap_margin;
+  EXPECT_FALSE(IsRival(best, h, params));
+  // Accepted merges of the benchmark score >= 0.991: no rival can be higher
+  // by the margin.
+  best.overlap_score = 0.991;
+  h.overlap_score = 1.0;
+  EXPECT_FALSE(IsRival(best, h, params));
+}
+
 TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
   MergeParams params;
   params.distinct_rotation_deg = 0;
@@ -189,6 +258,9 @@ TEST(MergeHypothesesTest, UniquenessParamsAreValidated) {
   params = MergeParams{};
   params.correlation.after_corner_stages = -1;
   EXPECT_NE(params.Validate().message().find("after_corner_stages"), std::string::npos);
+  params = MergeParams{};
+  params.ambiguous_overlap_margin = -0.1;
+  EXPECT_NE(params.Validate().message().find("ambiguous_overlap_margin"), std::string::npos);
 }
 
 }  // namespace
