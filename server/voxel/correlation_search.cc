@@ -271,7 +271,70 @@ std::vector<Peak> TopPeaks(LargeVector<std::pair<float, std::size_t>>* pairs,
   return peaks;
 }
 
+// a levelled; b levelled and turned by each yaw, in the box of its occupied
+// voxels (the grid holds the largest of these boxes; a cylinder about b's
+// centroid, which holds any yaw, made the outdoor grids up to a third
+// larger).
+struct Boxes {
+  CellBox a;
+  std::vector<CellBox> b;    // per yaw
+  Eigen::Vector3d extent_a;  // of a's box
+  Eigen::Vector3d extent_b;  // the largest of b's boxes per axis
+};
+
+Boxes BoxesOf(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
+              const Eigen::Matrix3d& R_b, const std::vector<double>& yaws) {
+  Boxes boxes;
+  for (const Eigen::Vector3d& c : a.occupied_centres()) {
+    const Eigen::Vector3d p = R_a * c;
+    boxes.a.lo = boxes.a.lo.cwiseMin(p);
+    boxes.a.hi = boxes.a.hi.cwiseMax(p);
+  }
+  boxes.b.resize(yaws.size());
+  boxes.extent_b = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < yaws.size(); ++k) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(yaws[k], Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
+    for (const Eigen::Vector3d& c : b.occupied_centres()) {
+      const Eigen::Vector3d p = R * c;
+      boxes.b[k].lo = boxes.b[k].lo.cwiseMin(p);
+      boxes.b[k].hi = boxes.b[k].hi.cwiseMax(p);
+    }
+    boxes.extent_b = boxes.extent_b.cwiseMax(boxes.b[k].hi - boxes.b[k].lo);
+  }
+  boxes.extent_a = boxes.a.hi - boxes.a.lo;
+  return boxes;
+}
+
+// The padded grid for cells of `cell` metres: a's cells, b's, and the FFT
+// size of every shift where they meet, per axis.
+struct GridDims {
+  std::array<int, 3> na{}, nb{}, n{};
+  std::size_t cells() const {
+    return static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
+           static_cast<std::size_t>(n[2]);
+  }
+};
+
+GridDims DimsOf(const Boxes& boxes, double cell) {
+  GridDims d;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const auto axis = static_cast<Eigen::Index>(k);
+    d.na[k] = static_cast<int>(std::ceil(boxes.extent_a[axis] / cell)) + 2;
+    d.nb[k] = static_cast<int>(std::ceil(boxes.extent_b[axis] / cell)) + 2;
+    d.n[k] = FftSize(d.na[k] + d.nb[k]);
+  }
+  return d;
+}
+
 }  // namespace
+
+std::size_t CorrelationGridCells(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
+                                 const Eigen::Matrix3d& R_b, const std::vector<double>& yaws,
+                                 double finest_resolution_m, const CorrelationParams& params) {
+  if (a.empty() || b.empty() || yaws.empty() || !(finest_resolution_m > 0)) return 0;
+  return DimsOf(BoxesOf(a, R_a, b, R_b, yaws), params.cell_voxels * finest_resolution_m).cells();
+}
 
 Status CorrelationParams::Validate() const {
   if (after_corner_stages < 0 || after_corner_stages > 100) {
@@ -309,48 +372,21 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
   if (a.empty() || b.empty() || yaws.empty()) return std::vector<CorrelationHypothesis>{};
 
-  // Extents: a levelled; b levelled and turned by each yaw, in the box of
-  // its occupied voxels (the grid holds the largest of these boxes; a
-  // cylinder about b's centroid, which holds any yaw, made the outdoor grids
-  // up to a third larger).
-  CellBox box_a;
-  for (const Eigen::Vector3d& c : a.occupied_centres()) {
-    const Eigen::Vector3d p = R_a * c;
-    box_a.lo = box_a.lo.cwiseMin(p);
-    box_a.hi = box_a.hi.cwiseMax(p);
-  }
-  std::vector<CellBox> boxes_b(yaws.size());
-  Eigen::Vector3d extent_b = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < yaws.size(); ++k) {
-    const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(yaws[k], Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
-    for (const Eigen::Vector3d& c : b.occupied_centres()) {
-      const Eigen::Vector3d p = R * c;
-      boxes_b[k].lo = boxes_b[k].lo.cwiseMin(p);
-      boxes_b[k].hi = boxes_b[k].hi.cwiseMax(p);
-    }
-    extent_b = extent_b.cwiseMax(boxes_b[k].hi - boxes_b[k].lo);
-  }
-  const Eigen::Vector3d extent_a = box_a.hi - box_a.lo;
-
+  const Boxes boxes = BoxesOf(a, R_a, b, R_b, yaws);
+  const CellBox& box_a = boxes.a;
+  const std::vector<CellBox>& boxes_b = boxes.b;
   double cell = params.cell_voxels * finest_resolution_m;
-  std::array<int, 3> na{}, nb{}, n{};
-  for (int attempt = 0;; ++attempt) {
-    std::size_t total = 1;
-    for (int k = 0; k < 3; ++k) {
-      na[static_cast<std::size_t>(k)] = static_cast<int>(std::ceil(extent_a[k] / cell)) + 2;
-      nb[static_cast<std::size_t>(k)] = static_cast<int>(std::ceil(extent_b[k] / cell)) + 2;
-      n[static_cast<std::size_t>(k)] =
-          FftSize(na[static_cast<std::size_t>(k)] + nb[static_cast<std::size_t>(k)]);
-      total *= static_cast<std::size_t>(n[static_cast<std::size_t>(k)]);
-    }
-    if (total <= params.max_cells) break;
+  GridDims dims = DimsOf(boxes, cell);
+  for (int attempt = 0; dims.cells() > params.max_cells; ++attempt) {
     if (attempt >= 64) {
       return Status::ResourceExhausted("correlation grid above max_cells = " +
                                        std::to_string(params.max_cells));
     }
-    cell *= std::max(1.05, std::cbrt(static_cast<double>(total) / params.max_cells));
+    cell *= std::max(1.05, std::cbrt(static_cast<double>(dims.cells()) / params.max_cells));
+    dims = DimsOf(boxes, cell);
   }
+  const std::array<int, 3>& na = dims.na;
+  const std::array<int, 3>& n = dims.n;
   if (stats != nullptr) {
     stats->yaws = static_cast<int>(yaws.size());
     stats->cell_m = cell;

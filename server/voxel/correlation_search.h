@@ -99,6 +99,17 @@ struct CorrelationParams {
   // the two maps are added to them (yaw_refinement.h; RunCorrelation in
   // merge_hypotheses.cc tries their peaks after the candidates').
   YawRefinementParams yaw_refinement;
+  // Pairs whose grid at cell_voxels would exceed this many cells (the
+  // benchmark's campus crops: 11.5-16M; its indoor crops: 0.9-1.9M) are
+  // placed by the plan view first: each window's best placement
+  // (YawRefinementStats::window_shifts_m, with PlanViewHeights) goes through
+  // the ICP screen and the gates, and if one passes, the 3D search runs at
+  // its yaw and that yaw's 180 deg twin alone, for the uniqueness gate (a
+  // slide at the answer's yaw, a flip at the twin); if none passes, at every
+  // yaw as below. Outdoors the plan view starts ICP as near the truth as the
+  // 3D search's peaks, and the search is most of a merge's CPU
+  // (docs/voxel-merge.md). 0: every pair.
+  std::size_t plan_view_first_min_cells = 6'000'000;
 
   Status Validate() const;
 };
@@ -115,6 +126,13 @@ struct CorrelationStats {
   double cell_m = 0.0;
   std::size_t grid_cells = 0;  // padded FFT grid
 };
+
+// The cells of SearchTranslations' padded grid for these maps and yaws at
+// params.cell_voxels, before max_cells coarsens it (0 for an empty map or no
+// yaw).
+std::size_t CorrelationGridCells(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
+                                 const Eigen::Matrix3d& R_b, const std::vector<double>& yaws,
+                                 double finest_resolution_m, const CorrelationParams& params);
 
 // R_a, R_b level each map (R * up = +z); every yaw turns levelled b about +z.
 // Hypotheses best first, at most max_hypotheses. InvalidArgument for bad

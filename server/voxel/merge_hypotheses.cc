@@ -62,18 +62,76 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   }
   const auto start = std::chrono::steady_clock::now();
   const std::vector<double> candidates = YawCandidates(*frame_a, *frame_b, params.gravity);
+  YawRefinementStats refinement;
   auto yaws = RefineYaws(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, candidates,
-                         finest_resolution_m, params.correlation.yaw_refinement, nullptr);
+                         finest_resolution_m, params.correlation.yaw_refinement, &refinement);
   if (!yaws.ok()) {
     times->correlation_s += SecondsSince(start);
     return yaws.status();
   }
-  run.yaws = static_cast<int>(yaws->size());
+  const Eigen::Vector3d& centroid_b = b.features->OccupiedCentroid();
+  std::vector<Eigen::Isometry3d> known = accepted;
+  // Whether a start lies where an accepted answer already is.
+  const auto agrees = [&](const Eigen::Isometry3d& T) {
+    return std::any_of(known.begin(), known.end(), [&](const Eigen::Isometry3d& answer) {
+      return !DistinctTransforms(answer, T, centroid_b, params, finest_resolution_m);
+    });
+  };
+
+  // Outdoors, the plan view first (CorrelationParams::plan_view_first_min_cells).
+  std::vector<double> search_yaws = *yaws;
+  bool plan_view_ran = false, plan_view_placed = false;
+  if (CorrelationGridCells(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, *yaws,
+                           finest_resolution_m,
+                           params.correlation) > params.correlation.plan_view_first_min_cells) {
+    const std::vector<double> heights =
+        PlanViewHeights(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, refinement.window_yaws,
+                        refinement.window_shifts_m, refinement.pixel_m);
+    std::vector<std::size_t> order(heights.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+      return refinement.window_scores[x] > refinement.window_scores[y];
+    });
+    times->correlation_s += SecondsSince(start);  // RefineAndGate counts its own
+    plan_view_ran = true;
+    double best_support = -1;  // of the accepted placements
+    for (const std::size_t k : order) {
+      if (!std::isfinite(heights[k])) continue;  // no structure, or no shared column
+      const double yaw = refinement.window_yaws[k];
+      const Eigen::Matrix3d R =
+          Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * frame_b->R_up;
+      const Eigen::Vector3d t(refinement.window_shifts_m[k].x(), refinement.window_shifts_m[k].y(),
+                              heights[k]);
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      T.linear() = frame_a->R_up.transpose() * R;  // x_a = R_a^T (R x_b + t)
+      T.translation() = frame_a->R_up.transpose() * t;
+      if (agrees(T)) {
+        ++run.agreeing;
+        continue;
+      }
+      TriedHypothesis tried;
+      tried.label = "plan view yaw " + Format("%.1f", yaw * 180.0 / M_PI, 0, 0) + " deg";
+      tried.report.id_a = a.id;
+      tried.report.id_b = b.id;
+      MAPD_RETURN_IF_ERROR(
+          RefineAndGate(a, b, params, T, finest_resolution_m, times, &tried.report));
+      if (tried.report.accepted) known.push_back(tried.report.T_a_b);
+      if (tried.report.accepted && tried.report.support_fraction > best_support) {
+        best_support = tried.report.support_fraction;
+        search_yaws = {yaw, std::remainder(yaw + M_PI, 2 * M_PI)};
+        plan_view_placed = true;
+      }
+      run.tried.push_back(std::move(tried));
+    }
+  }
+
+  const auto search_start = std::chrono::steady_clock::now();
+  run.yaws = static_cast<int>(search_yaws.size());
   CorrelationParams search = params.correlation;
   search.max_hypotheses = 1000;  // every peak (the most Validate allows); capped below
-  auto all = SearchTranslations(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, *yaws,
+  auto all = SearchTranslations(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, search_yaws,
                                 finest_resolution_m, search, nullptr);
-  times->correlation_s += SecondsSince(start);
+  times->correlation_s += SecondsSince(plan_view_ran ? search_start : start);
   if (!all.ok()) return all.status();
   // The candidates' best max_hypotheses first, then the best peak of each
   // yaw the refinement added. The added yaws are extras: ranked with the
@@ -81,11 +139,12 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   // candidate out of the first 12 (fr_078_tidyup at 10 % overlap: 5/6 -> 2/6
   // right), and with all their peaks kept a lower one slid the generated
   // corridor along itself past every gate. Given a right yaw the true shift
-  // was the best peak in 5 of 6 campus pairs (docs/voxel-merge.md).
+  // was the best peak in 5 of 6 campus pairs (docs/voxel-merge.md). After a
+  // plan-view placement, every peak of its two yaws.
   std::vector<CorrelationHypothesis> hypotheses, added;
   for (const CorrelationHypothesis& h : *all) {
-    const bool from_candidate =
-        std::find(candidates.begin(), candidates.end(), h.yaw_rad) != candidates.end();
+    const bool from_candidate = plan_view_placed || std::find(candidates.begin(), candidates.end(),
+                                                              h.yaw_rad) != candidates.end();
     if (!from_candidate) {
       const bool first_of_yaw =
           std::none_of(added.begin(), added.end(),
@@ -98,8 +157,6 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   hypotheses.insert(hypotheses.end(), added.begin(), added.end());
   run.generated = static_cast<int>(hypotheses.size());
 
-  const Eigen::Vector3d& centroid_b = b.features->OccupiedCentroid();
-  std::vector<Eigen::Isometry3d> known = accepted;
   // Hypotheses are refined best first. Once an answer is accepted (here or
   // by corner matching) only the best distinct peak of each yaw is that was
   // not refined before (peaks refused before the answer do not count): enough
@@ -109,11 +166,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   std::vector<double> yaws_checked;  // a peak refined while an answer was known
   for (std::size_t i = 0; i < hypotheses.size(); ++i) {
     const CorrelationHypothesis& h = hypotheses[i];
-    bool near = false;
-    for (const Eigen::Isometry3d& T : known) {
-      near = near || !DistinctTransforms(T, h.T_a_b, centroid_b, params, finest_resolution_m);
-    }
-    if (near) {
+    if (agrees(h.T_a_b)) {
       ++run.agreeing;
       continue;
     }

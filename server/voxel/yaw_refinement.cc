@@ -307,4 +307,64 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
   return out;
 }
 
+std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
+                                    const VoxelGrid& b, const Eigen::Matrix3d& R_b,
+                                    const std::vector<double>& yaws,
+                                    const std::vector<Eigen::Vector2d>& t_m, double pixel_m) {
+  std::vector<double> heights(yaws.size(), std::nan(""));
+  if (!(pixel_m > 0) || a.empty() || b.empty()) return heights;
+  // Column (ix, iy) as one key: both indices to 32 bits, no shift of a
+  // negative number.
+  const auto column = [&](const Eigen::Vector3d& p) {
+    const auto ix = static_cast<std::uint32_t>(
+        static_cast<std::int32_t>(std::clamp(std::floor(p.x() / pixel_m), -2e9, 2e9)));
+    const auto iy = static_cast<std::uint32_t>(
+        static_cast<std::int32_t>(std::clamp(std::floor(p.y() / pixel_m), -2e9, 2e9)));
+    return (static_cast<std::uint64_t>(ix) << 32) | iy;
+  };
+  // (column, lowest height) of a map, sorted by column.
+  using Lowest = std::vector<std::pair<std::uint64_t, double>>;
+  const auto lowest_of = [&](Lowest* points) {
+    std::sort(points->begin(), points->end());  // lowest first within a column
+    points->erase(std::unique(points->begin(), points->end(),
+                              [](const auto& x, const auto& y) { return x.first == y.first; }),
+                  points->end());
+  };
+  Lowest lowest_a;
+  lowest_a.reserve(a.num_occupied());
+  for (const Eigen::Vector3d& c : a.occupied_centres()) {
+    const Eigen::Vector3d p = R_a * c;
+    lowest_a.emplace_back(column(p), p.z());
+  }
+  lowest_of(&lowest_a);
+  Lowest lowest_b;
+  std::vector<double> dz;
+  for (std::size_t k = 0; k < yaws.size() && k < t_m.size(); ++k) {
+    if (!std::isfinite(yaws[k]) || !t_m[k].allFinite()) continue;
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(yaws[k], Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
+    lowest_b.clear();
+    lowest_b.reserve(b.num_occupied());
+    for (const Eigen::Vector3d& c : b.occupied_centres()) {
+      Eigen::Vector3d p = R * c;
+      p.head<2>() += t_m[k];
+      lowest_b.emplace_back(column(p), p.z());
+    }
+    lowest_of(&lowest_b);
+    dz.clear();
+    auto in_a = lowest_a.begin();
+    for (const auto& [key, z] : lowest_b) {
+      in_a = std::lower_bound(in_a, lowest_a.end(), key,
+                              [](const auto& x, std::uint64_t k_) { return x.first < k_; });
+      if (in_a == lowest_a.end()) break;
+      if (in_a->first == key) dz.push_back(in_a->second - z);
+    }
+    if (dz.empty()) continue;
+    const auto middle = dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2);
+    std::nth_element(dz.begin(), middle, dz.end());
+    heights[k] = *middle;
+  }
+  return heights;
+}
+
 }  // namespace mapd::voxel

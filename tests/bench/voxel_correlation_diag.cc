@@ -17,7 +17,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "bench/voxel_crops.h"
@@ -25,51 +24,12 @@
 #include "voxel/gravity_alignment.h"
 #include "voxel/merge.h"
 #include "voxel/voxel_grid.h"
+#include "voxel/yaw_refinement.h"
 
 using namespace mapd;
 using namespace mapd::voxel;
 
 static double Deg(double rad) { return rad * 180.0 / M_PI; }
-
-// A height for a plan-view placement (x_a' = Rz(yaw) R_b x_b + t, t's x and
-// y given): the median, over the columns (pixel_m squares) where both
-// levelled maps have occupied voxels, of a's lowest voxel minus b's placed
-// lowest voxel. What a plan-view merge path would start ICP from.
-static double PlacedHeight(const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b,
-                           const Eigen::Matrix3d& R_b, double yaw, const Eigen::Vector2d& t,
-                           double pixel_m) {
-  std::unordered_map<std::uint64_t, double> lowest_a, lowest_b;
-  const auto column = [&](const Eigen::Vector3d& p) {  // both indices in one key, no sign shift
-    const auto ix =
-        static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.x() / pixel_m)));
-    const auto iy =
-        static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.y() / pixel_m)));
-    return (ix << 32) ^ (iy & 0xffffffffU);
-  };
-  const auto lower = [](std::unordered_map<std::uint64_t, double>* m, std::uint64_t k, double z) {
-    auto [it, added] = m->emplace(k, z);
-    if (!added) it->second = std::min(it->second, z);
-  };
-  for (const Eigen::Vector3d& c : a.occupied_centres()) {
-    const Eigen::Vector3d p = R_a * c;
-    lower(&lowest_a, column(p), p.z());
-  }
-  const Eigen::Matrix3d R =
-      Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
-  for (const Eigen::Vector3d& c : b.occupied_centres()) {
-    Eigen::Vector3d p = R * c;
-    p.head<2>() += t;
-    lower(&lowest_b, column(p), p.z());
-  }
-  std::vector<double> dz;
-  for (const auto& [k, z] : lowest_b) {
-    const auto found = lowest_a.find(k);
-    if (found != lowest_a.end()) dz.push_back(found->second - z);
-  }
-  if (dz.empty()) return std::nan("");
-  std::nth_element(dz.begin(), dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2), dz.end());
-  return dz[dz.size() / 2];
-}
 
 int main(int argc, char** argv) {
   if (argc < 4) return 2;
@@ -145,8 +105,8 @@ int main(int argc, char** argv) {
       const Eigen::Vector3d turned =
           Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * (fb->R_up * pair->centroid_b);
       const Eigen::Vector2d placed = turned.head<2>() + refinement.window_shifts_m[k];
-      const double height = PlacedHeight(a, fa->R_up, b, fb->R_up, y, refinement.window_shifts_m[k],
-                                         refinement.pixel_m);
+      const double height = PlanViewHeights(a, fa->R_up, b, fb->R_up, {y},
+                                            {refinement.window_shifts_m[k]}, refinement.pixel_m)[0];
       std::printf(" %.1f deg / %.2f m / height %.2f m", Deg(std::remainder(y - yaw_true, 2 * M_PI)),
                   (placed - truth.head<2>()).norm(), turned.z() + height - truth.z());
     }

@@ -225,6 +225,29 @@ TEST(MergeHypothesesTest, UniquenessGateCountsTheCorridorsTruthAsRivalToItsFlip)
   EXPECT_FALSE(IsRival(flip, truth, by_support_alone));
 }
 
+// The plan view first, forced on the corridor (its grid is small, so by
+// default the 3D search runs at every yaw). The plan view places the flip,
+// which passes every gate; the 3D search at its twin yaw then finds the
+// truth, a rival by its overlap score: refused, not merged wrong. Without the
+// overlap rule it merges 180 deg wrong.
+TEST(MergeHypothesesTest, PlanViewFirstRefusesTheCorridorRatherThanMergeItsFlip) {
+  const Corridors c = MakeCorridors();
+  MergeParams params;
+  params.correlation.plan_view_first_min_cells = 0;
+  auto outcome = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_FALSE(outcome.ok()) << "merged: " << outcome->pairs.front().source;
+  const std::string& message = outcome.status().message();
+  EXPECT_NE(message.find("ambiguous: two distinct alignments pass every gate: plan view yaw"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("overlap 1.00"), std::string::npos) << message;
+
+  params.ambiguous_overlap_margin = 1;  // the rival by support alone, as before
+  auto wrong = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_TRUE(wrong.ok()) << wrong.status().ToString();
+  EXPECT_GT(testing::RotationErrorDeg(wrong->alignments[1].T_reference_submap, c.T_a_b), 170.0);
+}
+
 // IsRival's two rules at their edges.
 TEST(MergeHypothesesTest, ARivalHasHalfTheSupportOrAHigherOverlapScore) {
   MergeParams params;

@@ -102,6 +102,30 @@ TEST_F(YawRefinementTest, AddsTheBestYawNearAnOffCandidate) {
   EXPECT_DOUBLE_EQ(same->front(), truth + 8 * kRadPerDeg);
 }
 
+// The height that completes a placement: at the true yaw and horizontal
+// shift, the grove's ground puts b within a voxel of its true height (0.4 m);
+// a placement that shares no column, or is not finite, has none.
+TEST_F(YawRefinementTest, PlanViewHeightsPutTheGroundOnTheGround) {
+  const double truth = 30 * kRadPerDeg;
+  const std::vector<double> heights =
+      PlanViewHeights(*a_, kUpright, *b_, kUpright, {truth, truth, std::nan("")},
+                      {Eigen::Vector2d(14.3, -2.2), Eigen::Vector2d(500, 0), Eigen::Vector2d(0, 0)},
+                      2 * kGroveResolutionM);
+  ASSERT_EQ(heights.size(), 3u);
+  EXPECT_NEAR(heights[0], 0.4, kGroveResolutionM);
+  EXPECT_TRUE(std::isnan(heights[1]));
+  EXPECT_TRUE(std::isnan(heights[2]));
+  // The same crop with its frame 2 m lower (x_a = R x_b + t, t.z 2.4 m).
+  const VoxelGrid raised = GridOf(RasteriseSubmap(
+      testing::Grove(),
+      Eigen::AlignedBox3d(Eigen::Vector3d(16, 0.5, -1), Eigen::Vector3d(39.5, 39.5, 6)),
+      Pose(30, 0, 0, Eigen::Vector3d(14.3, -2.2, 2.4)), kGroveResolutionM));
+  const std::vector<double> lower =
+      PlanViewHeights(*a_, kUpright, raised, kUpright, {truth}, {Eigen::Vector2d(14.3, -2.2)},
+                      2 * kGroveResolutionM);
+  EXPECT_NEAR(lower[0], 2.4, kGroveResolutionM);
+}
+
 // A map with no column of upright structure (the lower 1.5 m of a wall: no
 // voxel 2 m over its column's lowest) keeps the candidates.
 TEST_F(YawRefinementTest, NoStructureKeepsTheCandidates) {
