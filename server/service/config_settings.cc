@@ -401,6 +401,11 @@ const std::vector<Setting>& Settings() {
             "per running merge); a map too large for cells of 3 voxels gets coarser ones, and outdoors those "
             "place fewer maps (campus maps 71-132 m across at 0.2 m need 11.5-16M cells)",
             [](C& c) -> auto& { return c.submaps.correlation_max_cells; }, 1000, 200'000'000),
+      Count("merge.correlation_plan_view_first_cells", "pairs whose correlation grid would exceed this many "
+            "cells (outdoor maps; indoor submaps need 0.9-1.9M) are placed by the plan view first, and the 3D "
+            "search runs at an accepted placement's yaw and its 180 deg twin alone (campus merges at 20-50 % "
+            "overlap: a third less CPU); 0 = every pair, 200000000 = never",
+            [](C& c) -> auto& { return c.submaps.correlation_plan_view_first_cells; }, 0, 200'000'000),
       Flag("merge.correlation_check_accepted", "when corner matching goes first "
            "(merge.correlation_after_corner_stages >= 1): also run the correlation generator after an accepted "
            "corner solution, so that the uniqueness gate sees the other yaws (on geb079 0.6-0.8 s of the "

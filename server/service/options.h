@@ -115,6 +115,9 @@ struct SubmapOptions {
   bool correlation_looser_stages_after_refusal = false;
   // Cap on its FFT grid (voxel::CorrelationParams::max_cells; ~40 bytes a cell).
   size_t correlation_max_cells = 16'000'000;
+  // Pairs whose grid would exceed this are placed by the plan view first
+  // (voxel::CorrelationParams::plan_view_first_min_cells; 0 = every pair).
+  size_t correlation_plan_view_first_cells = 6'000'000;
   // Every merge the gates accept waits for ApproveMerge (PROPOSED), as if
   // each request set MergeSubmapsRequest.review.
   bool merge_review = false;

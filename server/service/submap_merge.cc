@@ -36,6 +36,7 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.correlation.after_corner_stages = o.correlation_after_corner_stages;
   p.correlation.check_corner_solutions = o.correlation_check_accepted;
   p.correlation.max_cells = o.correlation_max_cells;
+  p.correlation.plan_view_first_min_cells = o.correlation_plan_view_first_cells;
   p.correlation.looser_stages_after_refusal = o.correlation_looser_stages_after_refusal;
   return p;
 }

@@ -135,7 +135,8 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
              "--merge.max_seconds=10", "--merge.resolution_policy=resample",
              "--merge.fusion_rule=log_odds", "--merge.correlation=false",
              "--merge.correlation_check_accepted=no", "--merge.correlation_after_corner_stages=0",
-             "--merge.correlation_max_cells=4000000", "--merge.correlation_looser_stages=yes"},
+             "--merge.correlation_max_cells=4000000", "--merge.correlation_looser_stages=yes",
+             "--merge.correlation_plan_view_first_cells=0"},
             &c)
           .ok());
   EXPECT_EQ(c.submaps.max_submap_bytes, 1048576u);
@@ -154,10 +155,12 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_EQ(c.submaps.correlation_after_corner_stages, 0);
   EXPECT_EQ(c.submaps.correlation_max_cells, 4'000'000u);
   EXPECT_TRUE(c.submaps.correlation_looser_stages_after_refusal);
+  EXPECT_EQ(c.submaps.correlation_plan_view_first_cells, 0u);
   const ServerConfig defaults;
   EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 0);
   EXPECT_TRUE(defaults.submaps.correlation);
   EXPECT_EQ(defaults.submaps.correlation_max_cells, 16'000'000u);  // = voxel::CorrelationParams
+  EXPECT_EQ(defaults.submaps.correlation_plan_view_first_cells, 6'000'000u);  // = the same
   EXPECT_FALSE(defaults.submaps.correlation_looser_stages_after_refusal);
 
   const std::vector<std::pair<std::string, std::string>> bad = {
@@ -174,6 +177,8 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
       {"--merge.correlation_after_corner_stages=101", "merge.correlation_after_corner_stages"},
       {"--merge.correlation=maybe", "merge.correlation"},
       {"--merge.correlation_max_cells=999", "merge.correlation_max_cells"},
+      {"--merge.correlation_plan_view_first_cells=300000000",
+       "merge.correlation_plan_view_first_cells"},
   };
   for (const auto& [flag, name] : bad) {
     ServerConfig d;
