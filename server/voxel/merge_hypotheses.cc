@@ -110,6 +110,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
         continue;
       }
       TriedHypothesis tried;
+      ++run.plan_view;
       tried.label = "plan view yaw " + Format("%.1f", yaw * 180.0 / M_PI, 0, 0) + " deg";
       tried.report.id_a = a.id;
       tried.report.id_b = b.id;

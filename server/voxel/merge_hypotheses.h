@@ -22,15 +22,19 @@ struct TriedHypothesis {
 
 struct CorrelationRun {
   std::vector<TriedHypothesis> tried;
+  int plan_view = 0;    // plan-view placements refined (large grids)
   int generated = 0;    // hypotheses from the FFT search
-  int yaws = 0;         // yaw candidates
+  int yaws = 0;         // yaws the FFT search ran at
   int agreeing = 0;     // skipped: they start where an accepted answer already is
   std::string not_run;  // why the generator could not run (no floor, no walls)
 };
 
 // Levels both maps, takes the yaw candidates and the FFT translation peaks,
 // and refines every peak not already near one of `accepted` (uniqueness
-// thresholds) with RefineAndGate. Adds its seconds to times->correlation_s
+// thresholds) with RefineAndGate. On grids above
+// correlation.plan_view_first_min_cells the plan view's placements are
+// refined first, and once one passes, the FFT search runs at its yaw and
+// that yaw's 180 deg twin alone. Adds its seconds to times->correlation_s
 // (and ICP's to alignment_s).
 StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
                                         const MergeParams& params, double finest_resolution_m,

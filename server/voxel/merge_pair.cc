@@ -543,8 +543,12 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
         best = &tried[i];
       }
     }
-    about_correlation = "correlation: " + std::to_string(correlation.generated) +
-                        " hypotheses from " + std::to_string(correlation.yaws) + " yaws";
+    about_correlation = "correlation: ";
+    if (correlation.plan_view > 0) {
+      about_correlation += std::to_string(correlation.plan_view) + " plan-view placements, ";
+    }
+    about_correlation += std::to_string(correlation.generated) + " hypotheses from " +
+                         std::to_string(correlation.yaws) + " yaws";
     if (best != nullptr) {
       about_correlation += ", best " + DescribeHypothesis(*best, finest_resolution_m) +
                            " refused: " + best->report.reason;

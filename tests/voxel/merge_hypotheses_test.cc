@@ -181,6 +181,17 @@ TEST(MergeHypothesesTest, RefusalNamesEveryStage) {
   // ... and corner matching's strict stage ran after it.
   EXPECT_GE(corner_solutions(reordered), 1) << reordered;
   EXPECT_LE(corner_solutions(reordered), params.max_match_attempts) << reordered;
+  EXPECT_EQ(reordered.find("plan-view"), std::string::npos) << reordered;
+
+  // The plan view first (forced: the corridor's grid is small): its placements
+  // are counted, then the search at every yaw, as nothing passed.
+  params.correlation.plan_view_first_min_cells = 0;
+  auto plan_view = MergeSubmaps({{1, c.a}, {2, c.b}}, params);
+  ASSERT_FALSE(plan_view.ok());
+  const std::string& counted = plan_view.status().message();
+  EXPECT_NE(counted.find("not merged: correlation: "), std::string::npos) << counted;
+  EXPECT_NE(counted.find(" plan-view placements, "), std::string::npos) << counted;
+  EXPECT_NE(counted.find(" hypotheses from "), std::string::npos) << counted;
 }
 
 // The corridor's 180 deg flip that lays B over A's half passes every gate
