@@ -13,7 +13,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -95,20 +94,21 @@ int main(int argc, char** argv) {
     }
     // Where the window's best plan-view shift puts B's centroid, horizontally,
     // against the truth (in a's levelled frame), and the height from the
-    // columns' lowest voxels (PlacedHeight) against the truth's: could the
+    // columns' lowest voxels (PlanViewHeights) against the truth's: could the
     // plan view alone start ICP?
     std::printf(
         "\n  plan-view placements (window's best yaw: yaw err, horizontal err at B's centroid):");
     const Eigen::Vector3d truth = fa->R_up * (pair->T_a_b * pair->centroid_b);
+    const std::vector<double> heights =
+        PlanViewHeights(a, fa->R_up, b, fb->R_up, refinement.window_yaws,
+                        refinement.window_shifts_m, refinement.pixel_m);
     for (std::size_t k = 0; k < refinement.window_yaws.size(); ++k) {
       const double y = refinement.window_yaws[k];
       const Eigen::Vector3d turned =
           Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * (fb->R_up * pair->centroid_b);
       const Eigen::Vector2d placed = turned.head<2>() + refinement.window_shifts_m[k];
-      const double height = PlanViewHeights(a, fa->R_up, b, fb->R_up, {y},
-                                            {refinement.window_shifts_m[k]}, refinement.pixel_m)[0];
       std::printf(" %.1f deg / %.2f m / height %.2f m", Deg(std::remainder(y - yaw_true, 2 * M_PI)),
-                  (placed - truth.head<2>()).norm(), turned.z() + height - truth.z());
+                  (placed - truth.head<2>()).norm(), turned.z() + heights[k] - truth.z());
     }
     std::printf("\n");
     if (std::getenv("DIAG_PLAN_ONLY") != nullptr) return;
