@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "voxel/support/corridor_scene.h"
 #include "voxel/support/voxel_scene.h"
@@ -124,6 +126,32 @@ TEST_F(YawRefinementTest, PlanViewHeightsPutTheGroundOnTheGround) {
       PlanViewHeights(*a_, kUpright, raised, kUpright, {truth}, {Eigen::Vector2d(14.3, -2.2)},
                       2 * kGroveResolutionM);
   EXPECT_NEAR(lower[0], 2.4, kGroveResolutionM);
+}
+
+// Bad input gives NaN heights, one per placement, not a crash: a non-finite
+// shift, a column edge that is zero or NaN, an empty map, fewer shifts than
+// yaws.
+TEST_F(YawRefinementTest, PlanViewHeightsOfBadInputAreNaN) {
+  const double truth = 30 * kRadPerDeg;
+  const double nan = std::nan("");
+  const Eigen::Vector2d right(14.3, -2.2);
+  const auto all_nan = [](const std::vector<double>& heights, std::size_t count) {
+    return heights.size() == count &&
+           std::all_of(heights.begin(), heights.end(), [](double h) { return std::isnan(h); });
+  };
+  EXPECT_TRUE(all_nan(
+      PlanViewHeights(*a_, kUpright, *b_, kUpright, {truth}, {Eigen::Vector2d(nan, 0)}, 0.5), 1));
+  EXPECT_TRUE(all_nan(
+      PlanViewHeights(*a_, kUpright, *b_, kUpright, {truth, truth}, {right, right}, 0.0), 2));
+  EXPECT_TRUE(all_nan(PlanViewHeights(*a_, kUpright, *b_, kUpright, {truth}, {right}, nan), 1));
+  const VoxelGrid empty;
+  EXPECT_TRUE(all_nan(PlanViewHeights(empty, kUpright, *b_, kUpright, {truth}, {right}, 0.5), 1));
+  const std::vector<double> short_shifts =
+      PlanViewHeights(*a_, kUpright, *b_, kUpright, {truth, truth}, {right}, 0.5);
+  ASSERT_EQ(short_shifts.size(), 2u);
+  EXPECT_NEAR(short_shifts[0], 0.4, kGroveResolutionM);
+  EXPECT_TRUE(std::isnan(short_shifts[1]));
+  EXPECT_TRUE(PlanViewHeights(*a_, kUpright, *b_, kUpright, {}, {}, 0.5).empty());
 }
 
 // A map with no column of upright structure (the lower 1.5 m of a wall: no
