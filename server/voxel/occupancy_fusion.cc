@@ -170,7 +170,122 @@ void ClearNode(octomap::OcTree* tree, const octomap::OcTreeKey& key, unsigned de
   if (root != nullptr && ClearRecurs(tree, root, 0, key, depth)) tree->clear();
 }
 
+// internal::MortonCode's bit spreading.
+std::uint64_t Spread(unsigned v) {  // the 16 bits of v to every third bit
+  std::uint64_t x = v & 0xFFFFu;
+  x = (x | x << 16) & 0x0000FF0000FFull;
+  x = (x | x << 8) & 0x00F00F00F00Full;
+  x = (x | x << 4) & 0x0C30C30C30C3ull;
+  x = (x | x << 2) & 0x249249249249ull;
+  return x;
+}
+unsigned Gather(std::uint64_t x) {  // Spread's inverse
+  x &= 0x249249249249ull;
+  x = (x | x >> 2) & 0x0C30C30C30C3ull;
+  x = (x | x >> 4) & 0x00F00F00F00Full;
+  x = (x | x >> 8) & 0x0000FF0000FFull;
+  x = (x | x >> 16) & 0xFFFFull;
+  return static_cast<unsigned>(x);
+}
+octomap::OcTreeKey KeyOf(std::uint64_t code) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(Gather(code)),
+                            static_cast<octomap::key_type>(Gather(code >> 1)),
+                            static_cast<octomap::key_type>(Gather(code >> 2)));
+}
+
+// Sets the voxels below inner node `node` (a cube of 8^levels voxels) that
+// no leaf covers to log_odds: each missing child is made a leaf whole.
+// Returns how many voxels it set.
+std::uint64_t FillUnknownBelow(octomap::OcTree* tree, octomap::OcTreeNode* node, unsigned levels,
+                               float log_odds) {
+  std::uint64_t written = 0;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!tree->nodeChildExists(node, i)) {
+      tree->createNodeChild(node, i)->setLogOdds(log_odds);
+      written += std::uint64_t{1} << (3 * (levels - 1));
+    } else if (octomap::OcTreeNode* child = tree->getNodeChild(node, i);
+               tree->nodeHasChildren(child)) {
+      written += FillUnknownBelow(tree, child, levels - 1, log_odds);
+    }  // else a leaf: known
+  }
+  return written;
+}
+
+// Sets the voxels of the node at `depth` on key's path (a cube of
+// 8^(tree depth - depth) voxels) that no leaf of `tree` covers (those
+// tree->search finds nothing for) to log_odds, as few nodes as that takes.
+// Returns how many voxels it set. REQUIRES: the tree has a root. Inner
+// nodes' values are left to updateInnerOccupancy (lazy, as setNodeValue's
+// lazy_eval).
+std::uint64_t FillUnknown(octomap::OcTree* tree, const octomap::OcTreeKey& key, unsigned depth,
+                          float log_odds) {
+  const unsigned tree_depth = tree->getTreeDepth();
+  octomap::OcTreeNode* node = tree->getRoot();
+  for (unsigned d = 0; d < depth; ++d) {
+    if (!tree->nodeHasChildren(node)) return 0;  // a leaf covers the cube
+    const auto level = [&](unsigned at) { return static_cast<int>(tree_depth - 1 - at); };
+    const unsigned pos = octomap::computeChildIdx(key, level(d));
+    if (!tree->nodeChildExists(node, pos)) {  // nothing below: the cube is unknown
+      node = tree->createNodeChild(node, pos);
+      for (++d; d < depth; ++d)
+        node = tree->createNodeChild(node, octomap::computeChildIdx(key, level(d)));
+      node->setLogOdds(log_odds);
+      return std::uint64_t{1} << (3 * (tree_depth - depth));
+    }
+    node = tree->getNodeChild(node, pos);
+  }
+  if (!tree->nodeHasChildren(node)) return 0;
+  return FillUnknownBelow(tree, node, tree_depth - depth, log_odds);
+}
+
+// Collapses every node but the root whose eight children are leaves of one
+// value, bottom up in one walk (OcTree::prune never collapses the root
+// either). OcTree::prune walks the tree once per level and stops at the
+// first level where it collapsed nothing, so a tree with new leaves above
+// the finest level (WriteUnknownVoxels') could keep collapsible nodes there.
+void PruneFully(octomap::OcTree* tree, octomap::OcTreeNode* node, bool is_root) {
+  if (!tree->nodeHasChildren(node)) return;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (tree->nodeChildExists(node, i)) PruneFully(tree, tree->getNodeChild(node, i), false);
+  }
+  if (!is_root) tree->pruneNode(node);  // when collapsible
+}
+
 }  // namespace
+
+namespace internal {
+
+std::uint64_t MortonCode(const octomap::OcTreeKey& key) {
+  return Spread(key[0]) | Spread(key[1]) << 1 | Spread(key[2]) << 2;
+}
+
+std::uint64_t WriteUnknownVoxels(std::vector<std::uint64_t>* codes, float log_odds,
+                                 octomap::OcTree* tree) {
+  if (codes->empty()) return 0;
+  std::sort(codes->begin(), codes->end());
+  codes->erase(std::unique(codes->begin(), codes->end()), codes->end());
+  std::uint64_t written = 0;
+  if (tree->getRoot() == nullptr) {  // an empty tree: setNodeValue makes the root
+    tree->setNodeValue(KeyOf(codes->front()), log_odds, true);
+    written = 1;
+  }
+  const unsigned tree_depth = tree->getTreeDepth();
+  const std::vector<std::uint64_t>& c = *codes;
+  for (std::size_t i = 0; i < c.size();) {
+    unsigned level = 0;  // the largest node that starts at c[i] and that c fills
+    while (level < tree_depth) {
+      const std::uint64_t size = std::uint64_t{1} << (3 * (level + 1));
+      if ((c[i] & (size - 1)) != 0 || c.size() - i < size || c[i + size - 1] != c[i] + size - 1)
+        break;
+      ++level;
+    }
+    written += FillUnknown(tree, KeyOf(c[i]), tree_depth - level, log_odds);
+    i += std::size_t{1} << (3 * level);
+  }
+  return written;
+}
+
+}  // namespace internal
 
 Status FusionParams::Validate() const {
   if (rule != FusionRule::kOverlapRule && rule != FusionRule::kLogOdds) {
@@ -280,19 +395,22 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
   // 3. Free in the submap, outside the merged map's box (so outside the
   // overlap), and not written yet: free. Inside the box it is free in both
   // (already free), occupied in the merged map, or unknown there (unknown).
+  // Gathered first and written as whole nodes where they fill one
+  // (internal::WriteUnknownVoxels): a campus crop pair's ~1M such voxels one
+  // at a time were 0.18 s of a 0.4 s fusion, and the pruning after it 0.04 s.
+  std::vector<std::uint64_t> free_codes;
   for (const Leaf& leaf : submap_leaves) {
     if (leaf.occupied) continue;
     const bool done = Rasterise(leaf, T_merged_submap, T_submap_merged, *merged, &budget,
                                 [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
-                                  if (merged_box.contains(centre) || merged->search(key) != nullptr)
-                                    return;
-                                  merged->setNodeValue(key, free_log_odds, true);
-                                  ++stats->free_written;
+                                  if (!merged_box.contains(centre))
+                                    free_codes.push_back(internal::MortonCode(key));
                                 });
     if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
   }
+  stats->free_written += internal::WriteUnknownVoxels(&free_codes, free_log_odds, merged);
   merged->updateInnerOccupancy();
-  merged->prune();
+  if (merged->getRoot() != nullptr) PruneFully(merged, merged->getRoot(), true);
   return Status::Ok();
 }
 

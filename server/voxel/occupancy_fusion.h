@@ -38,9 +38,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 #include "voxel/octree_reader.h"
+
+namespace octomap {
+class OcTreeKey;
+}  // namespace octomap
 
 namespace mapd::voxel {
 
@@ -83,6 +88,25 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
 
 // Occupied voxels of the tree at its finest resolution.
 std::uint64_t CountOccupiedVoxels(const octomap::OcTree& tree);
+
+namespace internal {
+// The Morton code of a key: bit l of x, y and z at bits 3l, 3l + 1 and
+// 3l + 2, so that (code >> 3l) & 7 is the child index at level l (OctoMap's
+// computeChildIdx) and the voxels of a node of level l (8^l of them) are
+// the consecutive codes from a multiple of 8^l.
+std::uint64_t MortonCode(const octomap::OcTreeKey& key);
+
+// Sets the voxels of `codes` (Morton codes, any order; sorted and made
+// unique here) that `tree` does not know (tree->search finds nothing) to
+// log_odds; returns how many it set. The same voxels and values as
+// setNodeValue(key, log_odds, true) on each unknown one, and after a full
+// prune the same tree, but each run of codes that fills a node is written as
+// that node: a submap's free space is mostly large cubes, and a voxel at a
+// time cost a walk from the root and a new node each (over a million for a
+// campus crop pair). Inner nodes' values are left to updateInnerOccupancy.
+std::uint64_t WriteUnknownVoxels(std::vector<std::uint64_t>* codes, float log_odds,
+                                 octomap::OcTree* tree);
+}  // namespace internal
 
 }  // namespace mapd::voxel
 

@@ -4,9 +4,13 @@
 #include <octomap/OcTree.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
+#include "voxel/octree_leaves.h"
 #include "voxel/octree_reader.h"
 
 namespace mapd::voxel {
@@ -247,6 +251,194 @@ TEST(OccupancyFusionTest, FreeSpaceBeyondTheCapIsLeftUnknownAndCounted) {
   EXPECT_EQ(stats.free_voxels_skipped, 0u);
   EXPECT_EQ(stats.free_written, 512u);
   EXPECT_EQ(StateOf(**merged, 17, 1, 1), S::kFree);
+}
+
+// Morton codes of the voxels of [x0, x0 + n)^3 (keys as Key()).
+std::vector<std::uint64_t> CubeCodes(int x0, int n) {
+  std::vector<std::uint64_t> codes;
+  for (int x = x0; x < x0 + n; ++x)
+    for (int y = x0; y < x0 + n; ++y)
+      for (int z = x0; z < x0 + n; ++z) codes.push_back(internal::MortonCode(Key(x, y, z)));
+  return codes;
+}
+
+// What the tree knows is kept: an occupied voxel, a pruned free 4^3 leaf
+// and the voxels under a pruned leaf are left as they are; the rest of the
+// cube is written (as whole nodes), in any order and with repeats.
+TEST(OccupancyFusionTest, WriteUnknownVoxelsKeepsWhatTheTreeKnows) {
+  octomap::OcTree tree(kTreeRes);
+  SetFreeBlock(&tree);  // [0, 4)^3, one leaf after prune
+  Set(&tree, 5, S::kOccupied, 6, 7);
+  Set(&tree, 16, S::kOccupied);  // outside the cube
+  tree.prune();
+  std::vector<std::uint64_t> codes = CubeCodes(0, 8);
+  std::reverse(codes.begin(), codes.end());
+  codes.push_back(codes.front());  // a repeat
+  const float occupied = tree.getClampingThresMaxLog();
+  EXPECT_EQ(internal::WriteUnknownVoxels(&codes, occupied, &tree), 512u - 64u - 1u);
+  tree.updateInnerOccupancy();
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 8; ++z) {
+        const bool kept_free = x < 4 && y < 4 && z < 4;
+        EXPECT_EQ(StateOf(tree, x, y, z), kept_free ? S::kFree : S::kOccupied) << x << y << z;
+      }
+  EXPECT_EQ(StateOf(tree, 8, 8, 8), S::kUnknown);
+  // Inside a leaf, or the leaf itself: nothing to write.
+  for (int n : {2, 4}) {
+    std::vector<std::uint64_t> inside = CubeCodes(0, n);
+    EXPECT_EQ(internal::WriteUnknownVoxels(&inside, occupied, &tree), 0u);
+    EXPECT_EQ(StateOf(tree, 1, 1, 1), S::kFree);
+  }
+  // An empty tree takes every voxel: a 2^3 node less one voxel, with a
+  // repeat (eight codes that are not a whole node), and a 4^3 node.
+  octomap::OcTree empty(kTreeRes);
+  std::vector<std::uint64_t> seven = CubeCodes(-8, 2);
+  std::sort(seven.begin(), seven.end());
+  seven[3] = seven[5];  // child 3 of the node: x and y + 1
+  EXPECT_EQ(internal::WriteUnknownVoxels(&seven, occupied, &empty), 7u);
+  EXPECT_EQ(StateOf(empty, -7, -7, -8), S::kUnknown);
+  EXPECT_EQ(StateOf(empty, -8, -7, -7), S::kOccupied);
+  std::vector<std::uint64_t> all = CubeCodes(-4, 4);
+  EXPECT_EQ(internal::WriteUnknownVoxels(&all, occupied, &empty), 64u);
+  EXPECT_EQ(StateOf(empty, -1, -2, -3), S::kOccupied);
+  EXPECT_EQ(StateOf(empty, 0, 0, 0), S::kUnknown);
+}
+
+// b's free cube [0, 4)^3 beside a's free [0, 2)^3 leaf: written as seven
+// 2^3 nodes, it makes one free 4^3 leaf with a's. OcTree::prune would stop
+// at the finest level, where it finds nothing to collapse.
+TEST(OccupancyFusionTest, FreeSpaceBesideTheMergedMapPrunesIntoOneLeaf) {
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
+  for (int x = 0; x < 2; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 2; ++z) Set(&a, x, S::kFree, y, z);
+  SetFreeBlock(&b);
+  a.prune();
+  b.prune();
+  FusionStats stats;
+  auto merged = FuseAtIdentity(a, b, &stats);
+  ASSERT_TRUE(merged.ok()) << merged.status().ToString();
+  EXPECT_EQ(stats.free_written, 56u);
+  int leaves = 0;
+  ForEachLeaf(**merged,
+              [&](const octomap::OcTreeNode& node, const octomap::OcTreeKey&, unsigned d) {
+                ++leaves;
+                EXPECT_EQ(d, (*merged)->getTreeDepth() - 2);
+                EXPECT_FALSE((*merged)->isNodeOccupied(node));
+              });
+  EXPECT_EQ(leaves, 1);
+}
+
+// A random submap of voxels in [-16, 16)^3: free boxes (some of them
+// aligned 8^3 cubes, which prune to one leaf) and occupied voxels, pruned.
+octomap::OcTree RandomSubmap(std::mt19937* random) {
+  octomap::OcTree tree(kTreeRes);
+  std::uniform_int_distribution<int> at(-16, 15), edge(1, 10), cube(-2, 1);
+  for (int k = 0; k < 6; ++k) {
+    const bool aligned = k < 2;
+    const int x0 = aligned ? 8 * cube(*random) : at(*random);
+    const int y0 = aligned ? 8 * cube(*random) : at(*random);
+    const int z0 = aligned ? 8 * cube(*random) : at(*random);
+    const int ex = aligned ? 8 : edge(*random), ey = aligned ? 8 : edge(*random),
+              ez = aligned ? 8 : edge(*random);
+    for (int x = x0; x < x0 + ex; ++x)
+      for (int y = y0; y < y0 + ey; ++y)
+        for (int z = z0; z < z0 + ez; ++z) Set(&tree, x, S::kFree, y, z);
+  }
+  for (int k = 0; k < 60; ++k) Set(&tree, at(*random), S::kOccupied, at(*random), at(*random));
+  tree.updateInnerOccupancy();
+  tree.prune();
+  return tree;
+}
+
+// The box of a tree's leaves (voxel faces, metres, the tree's frame).
+Eigen::AlignedBox3d LeafBox(const octomap::OcTree& tree) {
+  Eigen::AlignedBox3d box;
+  ForEachLeaf(tree, [&](const octomap::OcTreeNode&, const octomap::OcTreeKey& key, unsigned d) {
+    const double half = 0.5 * tree.getNodeSize(d);
+    const octomap::point3d c = tree.keyToCoord(key, d);
+    box.extend(Eigen::Vector3d(c.x() - half, c.y() - half, c.z() - half));
+    box.extend(Eigen::Vector3d(c.x() + half, c.y() + half, c.z() + half));
+  });
+  return box;
+}
+
+// Whether a node below the root still has eight leaf children of one value.
+bool HasCollapsibleNode(const octomap::OcTree& tree, const octomap::OcTreeNode* node, bool root) {
+  if (!tree.nodeHasChildren(node)) return false;
+  if (!root && tree.isNodeCollapsible(node)) return true;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (tree.nodeChildExists(node, i) &&
+        HasCollapsibleNode(tree, tree.getNodeChild(node, i), false))
+      return true;
+  }
+  return false;
+}
+
+// Every voxel of the merged map against the rule (docs/algorithms.md B.6),
+// worked out from a and b alone: occupied in either -> occupied; free in
+// both -> free; free in one and unknown in the other -> unknown inside the
+// overlap (a's leaf box and b's, each in its own frame), free outside it.
+// Random submaps with free cubes that fuse into whole nodes, turned by a
+// random yaw or moved by whole cubes. The merged tree must also be pruned
+// as far as it goes (OcTree::prune's own result on per-voxel writes).
+TEST(OccupancyFusionTest, EveryVoxelFollowsTheRuleOnRandomSubmaps) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    std::mt19937 random(seed);
+    const octomap::OcTree a = RandomSubmap(&random), b = RandomSubmap(&random);
+    std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+    // Odd seeds: a yaw and a shift of a fraction of a voxel; even seeds: a
+    // shift by whole 8-voxel cubes, so b's cubes land on whole nodes.
+    Eigen::Isometry3d T_a_b = seed % 2 == 1
+                                  ? Eigen::Translation3d(0.23, -0.61, 0.07) *
+                                        Eigen::AngleAxisd(angle(random), Eigen::Vector3d::UnitZ())
+                                  : Eigen::Isometry3d(Eigen::Translation3d(1.6, -0.8, 0.8));
+    FusionStats stats;
+    auto merged = FuseTrees(a, b, T_a_b, FusionParams{}, &stats);
+    ASSERT_TRUE(merged.ok()) << merged.status().ToString();
+    const Eigen::AlignedBox3d box_a = LeafBox(a), box_b = LeafBox(b);
+    const Eigen::Isometry3d T_b_a = T_a_b.inverse();
+    int checked = 0, near_a_face = 0, free_from_b = 0;
+    for (int x = -48; x < 48; ++x) {
+      for (int y = -48; y < 48; ++y) {
+        for (int z = -40; z < 40; ++z) {
+          const Eigen::Vector3d c = (Eigen::Vector3d(x, y, z).array() + 0.5) * kTreeRes;
+          const Eigen::Vector3d q = T_b_a * c;
+          // Float leaf corners decide centres that map within 1e-4 m of one
+          // of b's voxel faces; those are not checked.
+          const Eigen::Vector3d in_voxel = q / kTreeRes - (q / kTreeRes).array().floor().matrix();
+          if ((in_voxel.array() < 1e-3).any() || (in_voxel.array() > 1 - 1e-3).any()) {
+            ++near_a_face;
+            continue;
+          }
+          const S in_a = StateOf(a, x, y, z);
+          const octomap::OcTreeNode* node_b = b.search(q.x(), q.y(), q.z());
+          const S in_b = node_b == nullptr ? S::kUnknown
+                                           : (b.isNodeOccupied(node_b) ? S::kOccupied : S::kFree);
+          S expected = S::kUnknown;
+          if (in_a == S::kOccupied || in_b == S::kOccupied) {
+            expected = S::kOccupied;
+          } else if (in_a == S::kFree && in_b == S::kFree) {
+            expected = S::kFree;
+          } else if (in_a == S::kFree) {
+            expected = box_b.contains(q) ? S::kUnknown : S::kFree;
+          } else if (in_b == S::kFree) {
+            expected = box_a.contains(c) ? S::kUnknown : S::kFree;
+            free_from_b += expected == S::kFree ? 1 : 0;
+          }
+          ASSERT_EQ(StateOf(**merged, x, y, z), expected)
+              << "seed " << seed << " voxel " << x << " " << y << " " << z;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_GT(checked, 600000);
+    EXPECT_GT(free_from_b, 100) << "seed " << seed;  // b's free space outside a's box was written
+    EXPECT_GE(stats.free_written, static_cast<std::uint64_t>(free_from_b)) << "seed " << seed;
+    EXPECT_LE(stats.free_written, static_cast<std::uint64_t>(free_from_b + near_a_face));
+    EXPECT_FALSE(HasCollapsibleNode(**merged, (*merged)->getRoot(), true)) << "seed " << seed;
+  }
 }
 
 }  // namespace
