@@ -3,6 +3,7 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <utility>
@@ -169,6 +170,58 @@ void ClearNode(octomap::OcTree* tree, const octomap::OcTreeKey& key, unsigned de
   octomap::OcTreeNode* root = tree->getRoot();
   if (root != nullptr && ClearRecurs(tree, root, 0, key, depth)) tree->clear();
 }
+
+// tree.search(x, y, z) for runs of nearby points: it remembers the cube the
+// last point's key fell in (the leaf found, or the missing child of an
+// inner node where the search failed), and a point whose key lies in the
+// same cube has the same answer without a walk from the root. The fusion's
+// first step looks up a submap voxel by voxel along the rows of the merged
+// map's free leaves, so most lookups land in the cube of the one before.
+class CachedSearch {
+ public:
+  explicit CachedSearch(const octomap::OcTree& tree) : tree_(tree) {}
+
+  const octomap::OcTreeNode* Search(const Eigen::Vector3d& q) {
+    octomap::OcTreeKey key;
+    if (!tree_.coordToKeyChecked(q.x(), q.y(), q.z(), key)) return nullptr;
+    const auto prefix = [&](unsigned a) { return static_cast<unsigned>(key[a]) >> shift_; };
+    if (valid_ && prefix(0) == prefix_[0] && prefix(1) == prefix_[1] && prefix(2) == prefix_[2])
+      return found_;
+    Walk(key);
+    valid_ = true;
+    for (unsigned a = 0; a < 3; ++a) prefix_[a] = prefix(a);
+    return found_;
+  }
+
+ private:
+  // OcTreeBaseImpl::search(key) at the finest depth, which also sets shift_:
+  // the key bits below the cube that decided the answer.
+  void Walk(const octomap::OcTreeKey& key) {
+    const int tree_depth = static_cast<int>(tree_.getTreeDepth());
+    const octomap::OcTreeNode* node = tree_.getRoot();
+    shift_ = static_cast<unsigned>(tree_depth);
+    found_ = nullptr;
+    if (node == nullptr) return;  // nothing anywhere
+    for (int i = tree_depth - 1; i >= 0; --i) {
+      const unsigned pos = octomap::computeChildIdx(key, i);
+      if (!tree_.nodeChildExists(node, pos)) {
+        const bool leaf = !tree_.nodeHasChildren(node);
+        found_ = leaf ? node : nullptr;
+        shift_ = static_cast<unsigned>(leaf ? i + 1 : i);  // the node's cube, or the child's
+        return;
+      }
+      node = tree_.getNodeChild(node, pos);
+    }
+    found_ = node;
+    shift_ = 0;
+  }
+
+  const octomap::OcTree& tree_;
+  bool valid_ = false;
+  unsigned shift_ = 0;
+  std::array<unsigned, 3> prefix_{};
+  const octomap::OcTreeNode* found_ = nullptr;
+};
 
 // internal::MortonCode's bit spreading.
 std::uint64_t Spread(unsigned v) {  // the 16 bits of v to every third bit
@@ -360,6 +413,7 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
   // crop pair at 20 % overlap; the tree ends the same).
   const unsigned tree_depth = merged->getTreeDepth();
   std::vector<std::pair<octomap::OcTreeKey, unsigned>> to_clear;
+  CachedSearch submap_lookup(submap);
   for (const Leaf& leaf : merged_leaves) {
     if (leaf.occupied) continue;
     const Box cube(leaf.min_m, leaf.min_m + Eigen::Vector3d::Constant(leaf.edge_m));
@@ -369,7 +423,7 @@ Status FuseInto(const octomap::OcTree& submap, const Eigen::Isometry3d& T_merged
                                 [&](const octomap::OcTreeKey& key, const Eigen::Vector3d& centre) {
                                   const Eigen::Vector3d q = T_submap_merged * centre;
                                   if (!submap_box.contains(q)) return;
-                                  if (submap.search(q.x(), q.y(), q.z()) == nullptr)
+                                  if (submap_lookup.Search(q) == nullptr)
                                     to_clear.emplace_back(key, tree_depth);
                                 });
     if (!done) stats->free_voxels_skipped += LeafVoxels(leaf);
