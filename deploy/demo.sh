@@ -18,11 +18,20 @@ MAPCTL=build/client/mapctl
 GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build/server/mapd/mapd --listen "$MAPD_SERVER" 2> "$MAPD_DATA_DIR/mapd.log" &
 MAPD_PID=$!
 trap 'kill -TERM $MAPD_PID 2>/dev/null || true' EXIT
-for _ in $(seq 50); do
-  grep -q "event=serving" "$MAPD_DATA_DIR/mapd.log" && break
+# Up to 60 s: mapd serves within a second, but once, right after a CI run on
+# this 2-core machine, it had written nothing after 5 s (the old limit) and
+# the demo went on to a connection refused.
+serving=false
+for _ in $(seq 600); do
+  grep -q "event=serving" "$MAPD_DATA_DIR/mapd.log" && { serving=true; break; }
   kill -0 $MAPD_PID 2>/dev/null || { cat "$MAPD_DATA_DIR/mapd.log"; exit 1; }
   sleep 0.1
 done
+if [ "$serving" != true ]; then
+  echo "demo: mapd did not report event=serving within 60 s; its log so far:" >&2
+  cat "$MAPD_DATA_DIR/mapd.log" >&2
+  exit 1
+fi
 echo "== mapd serving on $MAPD_SERVER, database $MAPD_DATA_DIR/map.db"
 
 echo "== two simulated robots stream their laser line features"
