@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "common/clock.h"
 #include "voxel/correlation_search.h"
@@ -77,6 +78,18 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
       return !DistinctTransforms(answer, T, centroid_b, params, finest_resolution_m);
     });
   };
+  // Refines one start (ICP screen, ICP, every gate) into run.tried; an
+  // accepted one becomes known.
+  const auto refine = [&](std::string label, const Eigen::Isometry3d& T) -> Status {
+    TriedHypothesis tried;
+    tried.label = std::move(label);
+    tried.report.id_a = a.id;
+    tried.report.id_b = b.id;
+    MAPD_RETURN_IF_ERROR(RefineAndGate(a, b, params, T, finest_resolution_m, times, &tried.report));
+    if (tried.report.accepted) known.push_back(tried.report.T_a_b);
+    run.tried.push_back(std::move(tried));
+    return Status::Ok();
+  };
 
   // Outdoors, the plan view first (CorrelationParams::plan_view_first_min_cells).
   std::vector<double> search_yaws = *yaws;
@@ -109,20 +122,15 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
         ++run.agreeing;
         continue;
       }
-      TriedHypothesis tried;
       ++run.plan_view;
-      tried.label = "plan view yaw " + Format("%.1f", yaw * 180.0 / M_PI, 0, 0) + " deg";
-      tried.report.id_a = a.id;
-      tried.report.id_b = b.id;
       MAPD_RETURN_IF_ERROR(
-          RefineAndGate(a, b, params, T, finest_resolution_m, times, &tried.report));
-      if (tried.report.accepted) known.push_back(tried.report.T_a_b);
-      if (tried.report.accepted && tried.report.support_fraction > best_support) {
-        best_support = tried.report.support_fraction;
+          refine("plan view yaw " + Format("%.1f", yaw * 180.0 / M_PI, 0, 0) + " deg", T));
+      const PairReport& report = run.tried.back().report;
+      if (report.accepted && report.support_fraction > best_support) {
+        best_support = report.support_fraction;
         search_yaws = {yaw, std::remainder(yaw + M_PI, 2 * M_PI)};
         plan_view_placed = true;
       }
-      run.tried.push_back(std::move(tried));
     }
   }
 
@@ -177,15 +185,10 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
       }
       yaws_checked.push_back(h.yaw_rad);
     }
-    TriedHypothesis tried;
-    tried.label = "correlation yaw " + Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) +
-                  " deg, peak " + std::to_string(i + 1);
-    tried.report.id_a = a.id;
-    tried.report.id_b = b.id;
-    MAPD_RETURN_IF_ERROR(
-        RefineAndGate(a, b, params, h.T_a_b, finest_resolution_m, times, &tried.report));
-    if (tried.report.accepted) known.push_back(tried.report.T_a_b);
-    run.tried.push_back(std::move(tried));
+    MAPD_RETURN_IF_ERROR(refine("correlation yaw " +
+                                    Format("%.1f", h.yaw_rad * 180.0 / M_PI, 0, 0) + " deg, peak " +
+                                    std::to_string(i + 1),
+                                h.T_a_b));
   }
   return run;
 }

@@ -273,10 +273,10 @@ std::uint64_t FillUnknownBelow(octomap::OcTree* tree, octomap::OcTreeNode* node,
 std::uint64_t FillUnknown(octomap::OcTree* tree, const octomap::OcTreeKey& key, unsigned depth,
                           float log_odds) {
   const unsigned tree_depth = tree->getTreeDepth();
+  const auto level = [&](unsigned d) { return static_cast<int>(tree_depth - 1 - d); };
   octomap::OcTreeNode* node = tree->getRoot();
   for (unsigned d = 0; d < depth; ++d) {
     if (!tree->nodeHasChildren(node)) return 0;  // a leaf covers the cube
-    const auto level = [&](unsigned at) { return static_cast<int>(tree_depth - 1 - at); };
     const unsigned pos = octomap::computeChildIdx(key, level(d));
     if (!tree->nodeChildExists(node, pos)) {  // nothing below: the cube is unknown
       node = tree->createNodeChild(node, pos);
