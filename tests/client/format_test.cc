@@ -1,3 +1,5 @@
+// mapctl's output formats of the fused map: GeoJSON, SVG, table, JSON, the
+// change-feed lines, and the format chosen from a file's extension.
 #include "client/format.h"
 
 #include <google/protobuf/struct.pb.h>

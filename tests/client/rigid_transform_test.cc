@@ -1,3 +1,5 @@
+// The client's rigid transform: application order, quaternion normalisation,
+// and the identity for a zero or non-finite quaternion.
 #include "client/rigid_transform.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// The simulated laser robot of the demo and `mapctl simulate`: seeded batches,
+// ray casting, segments extracted on the true walls.
 #include "client/sim_robot.h"
 
 #include <gtest/gtest.h>

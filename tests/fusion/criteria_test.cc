@@ -1,3 +1,5 @@
+// The paper's three criteria one by one (included angle, overlap of the
+// feature circles, centre distance) and their conjunction, symmetric bit for bit.
 #include "fusion/criteria.h"
 
 #include <gtest/gtest.h>

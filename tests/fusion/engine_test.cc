@@ -1,3 +1,5 @@
+// FusionEngine on small hand-made scenes: fusing, publication at min_support,
+// refused input, the change feed, corner snapping and the chain guard.
 #include "fusion/engine.h"
 
 #include <gmock/gmock.h>

@@ -1,3 +1,5 @@
+// FusionParams validation (each refusal names its field, boundaries accepted)
+// and the names of the corner modes and pairings.
 #include "fusion/params.h"
 
 #include <gmock/gmock.h>

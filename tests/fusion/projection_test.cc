@@ -1,3 +1,5 @@
+// Projection of line and plane observations to ground-plane segments
+// (yaw, translation, height ranges, tilted planes kept apart, bad input refused).
 #include "fusion/projection.h"
 
 #include <gmock/gmock.h>

@@ -1,3 +1,5 @@
+// SupportCounter: distinct observations counted exactly up to its cap, then
+// by count alone.
 #include "fusion/support_counter.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// Wall consolidation (pieces of one wall published as one feature, gaps wider
+// than wall_gap kept) and its interplay with corner snapping.
 #include "fusion/wall_consolidation.h"
 
 #include <gtest/gtest.h>

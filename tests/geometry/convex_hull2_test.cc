@@ -1,3 +1,5 @@
+// The 2D convex hull: collinear and interior points, degenerate inputs,
+// extreme projections at a vertex.
 #include "geometry/convex_hull2.h"
 
 #include <gtest/gtest.h>

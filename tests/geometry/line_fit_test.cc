@@ -1,3 +1,5 @@
+// The total-least-squares line fit (Eq. 16-18): vertical and diagonal walls,
+// mergeable moments, canonical direction, extreme projections.
 #include "geometry/line_fit.h"
 
 #include <gtest/gtest.h>

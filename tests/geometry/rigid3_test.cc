@@ -1,3 +1,4 @@
+// Rigid3: rotation then translation, inverse, composition of frames.
 #include "geometry/rigid3.h"
 
 #include <gtest/gtest.h>

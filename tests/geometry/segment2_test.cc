@@ -1,3 +1,4 @@
+// Point-to-segment distance, clamped to the endpoints and for degenerate segments.
 #include "geometry/segment2.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// Split-and-merge line extraction from a laser scan: splits at corners, never
+// bridges gaps, drops short pieces, rejoins needless cuts.
 #include "geometry/split_and_merge.h"
 
 #include <gtest/gtest.h>

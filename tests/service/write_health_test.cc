@@ -1,3 +1,5 @@
+// WriteHealth: how failed commits, a full disk and the probe's verdict set
+// mapd's writability and the retry backoff.
 #include "service/write_health.h"
 
 #include <gmock/gmock.h>

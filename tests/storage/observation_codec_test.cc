@@ -1,3 +1,5 @@
+// The stored observation blob: round trip, and every truncation or absurd
+// count refused without reading past the end or allocating.
 #include "storage/observation_codec.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// CellBits, the bit grid of the correlation search: cells and rows set and
+// read back across word boundaries, and the size cap.
 #include "voxel/cell_bits.h"
 
 #include <gtest/gtest.h>

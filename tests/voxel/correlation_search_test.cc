@@ -1,3 +1,5 @@
+// The FFT correlation search: a known shift found, in clutter at its own cell,
+// the free-space penalty against a flipped corridor, parameter checks.
 #include "voxel/correlation_search.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// The real FFT helpers against whole-grid transforms: forward in a box,
+// inverse on rows, reshaping to a new size.
 #include "voxel/fft_support.h"
 
 #include <gtest/gtest.h>

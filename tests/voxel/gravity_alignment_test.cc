@@ -1,3 +1,5 @@
+// Gravity alignment: the up vector of a tilted room (and of a ramp floor,
+// corrected by the walls), yaw candidates, and the refusal without a floor.
 #include "voxel/gravity_alignment.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// Point-to-point ICP: exact transforms, the voxel-hash neighbour search against
+// PCL's k-d tree, indexed targets and kept pairings bit for bit, bad input.
 #include "voxel/icp.h"
 
 #include <gtest/gtest.h>

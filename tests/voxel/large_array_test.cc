@@ -1,3 +1,5 @@
+// LargeArray: huge-page alignment and unmapping of large blocks, zeroed arrays
+// that touch only what is written, and impossible sizes.
 #include "voxel/large_array.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// The maximum clique search against brute force on random graphs, ties,
+// planted cliques, and its budget.
 #include "voxel/max_clique.h"
 
 #include <gtest/gtest.h>

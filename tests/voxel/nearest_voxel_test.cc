@@ -1,3 +1,5 @@
+// NearestVoxelIndex against brute force at every reach, its hash fallback for
+// huge sparse boxes, box limits and empty queries.
 #include "voxel/nearest_voxel.h"
 
 #include <gtest/gtest.h>

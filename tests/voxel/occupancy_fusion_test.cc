@@ -1,3 +1,5 @@
+// Occupancy fusion of a placed submap into the merged map, checked voxel by
+// voxel against the rule worked out from the two inputs alone.
 #include "voxel/occupancy_fusion.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// ForEachLeaf against OctoMap's own leaf iterator: same leaves, keys, depths
+// and order.
 #include "voxel/octree_leaves.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// PackedKeySet against std::set: contents, insertion order, empty and cleared sets.
 #include "voxel/packed_key_set.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// The closed-form rigid fit of point pairs: transform and inverse, residual
+// under noise, degenerate input refused.
 #include "voxel/rigid_fit.h"
 
 #include <gtest/gtest.h>

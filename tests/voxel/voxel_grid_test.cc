@@ -1,3 +1,5 @@
+// VoxelGrid, the dense view of an octree: occupied, free and unknown as OctoMap
+// says, coarse leaves expanded, huge ones and bad keys refused.
 #include "voxel/voxel_grid.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// The plan-view yaw refinement: the best yaw near an off candidate, plan-view
+// heights, no structure, non-finite yaws and bad parameters.
 #include "voxel/yaw_refinement.h"
 
 #include <gtest/gtest.h>
