@@ -1,3 +1,5 @@
+// The SQLite store: idempotent batches, frame kinds, transactions, reopening,
+// the database stamp (newer mapd, foreign files) and the size cap.
 #include "storage/store.h"
 
 #include <gtest/gtest.h>
@@ -58,15 +60,28 @@ TEST_F(StoreTest, StoresABatchOnceAndReportsTheDuplicate) {
 }
 
 TEST_F(StoreTest, SameSeqInAnotherSessionOrRobotIsNew) {
-  ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1)).ok());
-  EXPECT_TRUE(InsertOne(Batch("r1", "s2", 1))->stored);
-  EXPECT_TRUE(InsertOne(Batch("r2", "s1", 1))->stored);
+  auto first = InsertOne(Batch("r1", "s1", 1));
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  EXPECT_TRUE(first->stored);
+  auto other_session = InsertOne(Batch("r1", "s2", 1));
+  auto other_robot = InsertOne(Batch("r2", "s1", 1));
+  ASSERT_TRUE(other_session.ok() && other_robot.ok());
+  EXPECT_TRUE(other_session->stored);
+  EXPECT_TRUE(other_robot->stored);
+  // Three rows, not one row found three times.
+  EXPECT_NE(other_session->observation_id, first->observation_id);
+  EXPECT_NE(other_robot->observation_id, first->observation_id);
+  EXPECT_NE(other_robot->observation_id, other_session->observation_id);
+  EXPECT_EQ(store_->Counts()->observations, 3u);
   auto robots = store_->ListRobots();
   ASSERT_TRUE(robots.ok());
   ASSERT_EQ(robots->size(), 2u);
   EXPECT_EQ((*robots)[0].name, "r1");
   EXPECT_EQ((*robots)[0].batches, 2u);
   EXPECT_EQ((*robots)[0].sessions, 2u);
+  EXPECT_EQ((*robots)[1].name, "r2");
+  EXPECT_EQ((*robots)[1].batches, 1u);
+  EXPECT_EQ((*robots)[1].sessions, 1u);
 }
 
 TEST_F(StoreTest, RefusesAFrameKindThatDisagreesWithTheSession) {
@@ -83,6 +98,7 @@ TEST_F(StoreTest, UncommittedTransactionLeavesNothing) {
     ASSERT_TRUE((*txn)->InsertObservation(Batch("ghost", "s", 1)).ok());
   }  // rolled back here
   auto counts = store_->Counts();
+  ASSERT_TRUE(counts.ok()) << counts.status().ToString();
   EXPECT_EQ(counts->robots, 0u);
   EXPECT_EQ(counts->observations, 0u);
   // The rolled-back robot must not linger in the cache either.
@@ -112,13 +128,20 @@ TEST_F(StoreTest, EverythingSurvivesAReopen) {
                   })
                   .ok());
   ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[0].seq, 1u);
   EXPECT_EQ(seen[1].seq, 2u);
-  EXPECT_EQ(seen[0].features.lines.size(), 2u);
+  EXPECT_LT(seen[0].id, seen[1].id);
+  ASSERT_EQ(seen[0].features.lines.size(), 2u);
+  EXPECT_EQ(seen[0].features.lines[1].b, Eigen::Vector3d(3, 1, 0));
   EXPECT_EQ(seen[0].features.T_frame_sensor.translation, Eigen::Vector3d(1, 2, 0));
   auto fused = store_->LoadFused();
   ASSERT_TRUE(fused.ok());
   ASSERT_EQ(fused->size(), 1u);
+  EXPECT_EQ((*fused)[0].id, 7u);
+  EXPECT_EQ((*fused)[0].segment.a, Eigen::Vector2d(0, 0));
   EXPECT_EQ((*fused)[0].segment.b, Eigen::Vector2d(3, 0));
+  EXPECT_EQ((*fused)[0].support, 2u);
+  EXPECT_EQ((*fused)[0].robots, "r1");
   // And a duplicate is still recognised after the restart.
   EXPECT_FALSE(InsertOne(Batch("r1", "s1", 2))->stored);
 }
@@ -132,6 +155,9 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerMapd) {
   }
   auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
   EXPECT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(opened.status().message().find("database schema version 999 is newer than this mapd"),
+            std::string::npos)
+      << opened.status().message();
 }
 
 TEST_F(StoreTest, RefusesAFileThatIsNotADatabase) {
@@ -140,7 +166,10 @@ TEST_F(StoreTest, RefusesAFileThatIsNotADatabase) {
   fputs("this is not an SQLite database, just some text long enough to be read as a header...", f);
   fclose(f);
   auto opened = Store::Open(dir_.File("junk.db"), StoreOptions{});
-  EXPECT_FALSE(opened.ok());
+  ASSERT_FALSE(opened.ok());
+  // SQLite's own words, so that the operator knows it is the file, not mapd.
+  EXPECT_NE(opened.status().message().find("file is not a database"), std::string::npos)
+      << opened.status().message();
 }
 
 }  // namespace
@@ -230,6 +259,7 @@ TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted
     if (failure.ok()) committed = seq;
   }
   EXPECT_EQ(failure.code(), StatusCode::kResourceExhausted) << failure.message();
+  EXPECT_NE(failure.message().find("full"), std::string::npos) << failure.message();
   EXPECT_GT(committed, 0u);
   EXPECT_EQ((*store)->ProbeWrite().code(), StatusCode::kResourceExhausted);
   store->reset();
