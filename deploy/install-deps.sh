@@ -5,7 +5,8 @@
 # every CI build), Ninja (CI's generator), clang-format and clang-tidy (lint
 # job), systemd (systemd-analyze verify of deploy/mapd.service).
 # --build-only (the container's build stage) leaves out what only the tests
-# use: Chromium, which runs the web view's page in tests/web.
+# use: Chromium, which runs the web view's page in tests/web, and the openssl
+# tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc).
 set -euo pipefail
 
 PACKAGES=(
@@ -17,7 +18,7 @@ PACKAGES=(
   python3-grpcio python3-protobuf python3-pytest
 )
 if [ "${1:-}" != "--build-only" ]; then
-  PACKAGES+=(chromium)
+  PACKAGES+=(chromium openssl)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

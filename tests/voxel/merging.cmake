@@ -18,7 +18,7 @@ mapd_add_test(voxel_merging_test
 target_include_directories(voxel_merging_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
 
 # The crop-and-move generator of the real-map merge benchmark (tests/bench/voxel_crops.h).
-mapd_add_test(voxel_crops_test
+mapd_add_test(voxel_crops_test TEST_CODE
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/voxel_crops_test.cc ${PROJECT_SOURCE_DIR}/tests/bench/voxel_crops.cc
   LIBS voxel ${OCTOMAP_LIBRARIES})
 target_include_directories(voxel_crops_test PRIVATE ${PROJECT_SOURCE_DIR}/tests)
