@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <queue>
 #include <set>
+#include <utility>
 
 #include "fusion/criteria.h"
 #include "fusion/wall_consolidation.h"
@@ -179,6 +181,112 @@ std::vector<std::vector<size_t>> Components(size_t n, Linked linked) {
   return out;
 }
 
+// Free-space evidence, from docs/algorithms.md A.11 ("Free-space evidence"):
+// a cell of 0.25 m is seen free when at least wall_free_min_count visibility
+// triangles (sensor, a, b) contain its centre in their interior eroded by
+// 0.3 m from both rays and 0.4 m from the segment.
+class SeenFree {
+ public:
+  static constexpr double kCellM = 0.25;
+  static constexpr double kRayErosionM = 0.3;
+  static constexpr double kSegmentErosionM = 0.4;
+  // Samples along a line at most this far apart (docs: "every 0.125 m").
+  static constexpr double kSampleStepM = 0.125;
+
+  SeenFree(const std::vector<BatchObservation>& observations, uint32_t min_count)
+      : min_count_(min_count) {
+    for (const BatchObservation& o : observations) {
+      if (!o.has_sensor) continue;
+      for (const GroundFeature& f : o.features) Count(o.sensor_xy_m, f.segment.a, f.segment.b);
+    }
+  }
+
+  bool IsFree(const Vec2& p) const {
+    const auto it = counts_.find({Cell(p.x()), Cell(p.y())});
+    return it != counts_.end() && it->second >= min_count_;
+  }
+  size_t free_cells() const {
+    size_t n = 0;
+    for (const auto& [cell, count] : counts_) n += count >= min_count_;
+    return n;
+  }
+  // Whether any point from p + t0 u to p + t1 u, sampled at most kSampleStepM
+  // apart with both ends included, lies in a seen-free cell.
+  bool AnyFree(const Vec2& p, const Vec2& u, double t0, double t1) const {
+    const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / kSampleStepM)));
+    for (int i = 0; i <= steps; ++i) {
+      if (IsFree(p + (t0 + (t1 - t0) * i / steps) * u)) return true;
+    }
+    return false;
+  }
+
+ private:
+  static int64_t Cell(double x) { return static_cast<int64_t>(std::floor(x / kCellM)); }
+  // Signed distance of p from the line x -> y, positive on its left.
+  static double Left(const Vec2& x, const Vec2& y, const Vec2& p) {
+    return geometry::Cross(y - x, p - x) / (y - x).norm();
+  }
+  void Count(const Vec2& o, Vec2 a, Vec2 b) {
+    const double twice_area = geometry::Cross(a - o, b - o);
+    if (twice_area == 0.0) return;          // no interior
+    if (twice_area < 0.0) std::swap(a, b);  // counter-clockwise: the interior is on the left
+    const auto inside = [&](const Vec2& p) {
+      return Left(o, a, p) >= kRayErosionM && Left(a, b, p) >= kSegmentErosionM &&
+             Left(b, o, p) >= kRayErosionM;
+    };
+    for (int64_t cx = Cell(std::min({o.x(), a.x(), b.x()}));
+         cx <= Cell(std::max({o.x(), a.x(), b.x()})); ++cx) {
+      for (int64_t cy = Cell(std::min({o.y(), a.y(), b.y()}));
+           cy <= Cell(std::max({o.y(), a.y(), b.y()})); ++cy) {
+        if (inside(Vec2((cx + 0.5) * kCellM, (cy + 0.5) * kCellM))) ++counts_[{cx, cy}];
+      }
+    }
+  }
+
+  const uint32_t min_count_;
+  std::map<std::pair<int64_t, int64_t>, uint32_t> counts_;
+};
+
+// A piece is pierced when a sample of its fitted segment, 0.5 m at each end
+// aside, lies in a seen-free cell: it then lies on one wall with no other piece.
+bool PiercedRef(const Segment2& s, const SeenFree& seen) {
+  const double length = s.length();
+  if (!(length > 1.0)) return false;
+  return seen.AnyFree(s.a, s.direction() / length, 0.5, length - 0.5);
+}
+
+enum class GapJoin { kNone, kJoined, kVetoed };
+
+// Rule (a) extended by the evidence: L the longer piece (ties: the smaller
+// id), S the other; the included angle <= delta, both ends of S within
+// wall_offset_m of L's line, a gap along L beyond wall_gap_m but at most
+// wall_occluded_gap_m and wall_occluded_gap_ratio times S's length: they lie
+// on one wall unless a sample of the gap on L's line is seen free.
+GapJoin OccludedGap(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
+                    const FusionParams& params, const SeenFree& seen) {
+  const bool p_longer = p.length() > q.length() || (p.length() == q.length() && p_id < q_id);
+  const Segment2& l = p_longer ? p : q;
+  const Segment2& s = p_longer ? q : p;
+  const Vec2 u = l.direction().normalized();
+  const Vec2 v = s.direction().normalized();
+  if (std::abs(geometry::Cross(u, v)) > std::sin(params.delta_rad)) return GapJoin::kNone;
+  if (std::abs(geometry::Cross(u, s.a - l.a)) > params.wall_offset_m ||
+      std::abs(geometry::Cross(u, s.b - l.a)) > params.wall_offset_m) {
+    return GapJoin::kNone;
+  }
+  const double ta = u.dot(s.a - l.a), tb = u.dot(s.b - l.a);
+  const double before = -std::max(ta, tb);             // S ends before L starts
+  const double after = std::min(ta, tb) - l.length();  // S starts after L ends
+  const double gap = std::max(before, after);
+  if (!(gap > params.wall_gap_m) || gap > params.wall_occluded_gap_m ||
+      gap > params.wall_occluded_gap_ratio * s.length()) {
+    return GapJoin::kNone;
+  }
+  const bool seen_through = before > after ? seen.AnyFree(l.a, u, -before, 0.0)
+                                           : seen.AnyFree(l.a, u, l.length(), l.length() + after);
+  return seen_through ? GapJoin::kVetoed : GapJoin::kJoined;
+}
+
 }  // namespace
 
 BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
@@ -243,11 +351,40 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
 
   // Consolidation (fusion/wall_consolidation.h): components of OnOneWall
   // over the published clusters, through the guard with clusters as units.
+  // With free-space evidence: pierced pieces join nothing, and pieces also
+  // join across an occluded gap that nothing was seen through.
+  bool any_sensor = false;
+  for (const BatchObservation& o : observations) any_sensor |= o.has_sensor && !o.features.empty();
+  result.evidence.on = params.consolidate && params.wall_occluded_gap_m > 0.0 && any_sensor;
+  const SeenFree seen(result.evidence.on ? observations : std::vector<BatchObservation>(),
+                      params.wall_free_min_count);
+  std::vector<bool> pierced(published.size(), false);
+  std::vector<std::vector<GapJoin>> gap_join(published.size(),
+                                             std::vector<GapJoin>(published.size()));
+  if (result.evidence.on) {
+    result.evidence.free_cells = seen.free_cells();
+    for (size_t i = 0; i < published.size(); ++i) {
+      pierced[i] = PiercedRef(result.clusters[published[i]].fitted, seen);
+      result.evidence.pierced += pierced[i];
+    }
+    for (size_t i = 0; i < published.size(); ++i) {
+      for (size_t j = i + 1; j < published.size(); ++j) {
+        const BatchCluster& p = result.clusters[published[i]];
+        const BatchCluster& q = result.clusters[published[j]];
+        gap_join[i][j] = gap_join[j][i] = OccludedGap(p.fitted, p.id, q.fitted, q.id, params, seen);
+        if (pierced[i] || pierced[j]) continue;
+        result.evidence.occluded_joins += gap_join[i][j] == GapJoin::kJoined;
+        result.evidence.seen_free_vetoes += gap_join[i][j] == GapJoin::kVetoed;
+      }
+    }
+  }
   const std::vector<std::vector<size_t>> walls_of =
       Components(published.size(), [&](size_t i, size_t j) {
         const BatchCluster& p = result.clusters[published[i]];
         const BatchCluster& q = result.clusters[published[j]];
-        return i != j && params.consolidate && OnOneWall(p.fitted, p.id, q.fitted, q.id, params);
+        if (i == j || !params.consolidate || pierced[i] || pierced[j]) return false;
+        return OnOneWall(p.fitted, p.id, q.fitted, q.id, params) ||
+               gap_join[i][j] == GapJoin::kJoined;
       });
   std::vector<Fit> fits;
   for (const std::vector<size_t>& component : walls_of) {
@@ -264,12 +401,13 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
       index[k] = k;
     }
     // Consolidation's guard may not cut between near-identical pieces
-    // (fusion/wall_consolidation.h, rule b).
+    // (fusion/wall_consolidation.h, rule b: endpoints within wall_offset_m).
     const auto twins = [&](const std::vector<size_t>& head, const std::vector<size_t>& tail) {
       for (size_t i : head) {
         for (size_t j : tail) {
           if (NearIdentical(result.clusters[published[component[i]]].fitted,
-                            result.clusters[published[component[j]]].fitted, params.eta_m)) {
+                            result.clusters[published[component[j]]].fitted,
+                            params.wall_offset_m)) {
             return true;
           }
         }
