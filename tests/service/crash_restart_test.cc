@@ -1,10 +1,13 @@
 // The durability contract with the real binary: robots stream, mapd is killed
 // with SIGKILL mid-stream, restarted on the same database; every batch that
-// was acknowledged is there, and the served map is exactly a batch
-// recomputation from the stored raw observations.
+// was acknowledged is there, and the served map is exactly a recomputation
+// from the stored raw observations: by a fresh engine fed as mapd feeds its
+// own (a deterministic restart), and by the independent batch reference
+// (tests/fusion/batch_reference.h: a correct one).
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <map>
 #include <mutex>
@@ -15,6 +18,7 @@
 #include "common/batches.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
+#include "fusion/batch_reference.h"
 #include "fusion/engine.h"
 #include "fusion/projection.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -152,6 +156,7 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   // 3. Recompute the map from the raw observations in the database, in
   //    commit (= id) order, the order mapd fused them in (the default bounded
   //    engine is deterministic but not order independent), and compare.
+  //    Fed as mapd's fuser feeds it (MapCore::Fuse): with the sensor origin.
   auto store = storage::Store::Open(db, {});
   ASSERT_TRUE(store.ok()) << store.status().ToString();
   std::vector<storage::StoredObservation> observations;
@@ -163,15 +168,20 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
                   .ok());
   EXPECT_EQ(observations.size(), static_cast<size_t>(kRobots * kBatchesPerRobot));
   fusion::FusionEngine engine{fusion::FusionParams{}};
+  std::vector<fusion::testing::BatchObservation> batch;  // the same input, for the reference
   for (const auto& o : observations) {
     auto projected = fusion::ProjectToGround(
         o.features, geometry::Rigid3::Identity(),
         static_cast<fusion::FeatureId>(o.id) << service::kFeatureIdBits, engine.params());
     ASSERT_TRUE(projected.ok());
     ASSERT_TRUE(engine
-                    .Add(static_cast<fusion::ObservationId>(o.id),
-                         static_cast<fusion::RobotId>(o.robot_id), projected->ground)
+                    .AddFrom(static_cast<fusion::ObservationId>(o.id),
+                             static_cast<fusion::RobotId>(o.robot_id), projected->sensor_xy_m,
+                             projected->ground)
                     .ok());
+    batch.push_back({static_cast<fusion::ObservationId>(o.id),
+                     static_cast<fusion::RobotId>(o.robot_id), projected->ground,
+                     /*has_sensor=*/true, projected->sensor_xy_m});
   }
   const std::vector<fusion::FusedFeature> expected = engine.Published();
   ASSERT_EQ(served.size(), expected.size());
@@ -183,6 +193,34 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
     EXPECT_NEAR(served[i].b().x(), expected[i].segment.b.x(), 1e-9);
     EXPECT_NEAR(served[i].b().y(), expected[i].segment.b.y(), 1e-9);
   }
+
+  // 4. The independent batch reference on the same stored observations, with
+  //    the server's parameters. It models exact mode; the server runs the
+  //    default bounded mode, whose promise (docs/algorithms.md A.5;
+  //    tests/fusion/property_test.cc, "Bounded mode") is the reference's map
+  //    wherever folding dropped no link that mattered, with support past 32
+  //    never below the reference's. Here every view covers 80-95 % of its wall
+  //    and links to every other view of it, so no link hangs on one feature:
+  //    the served map must be the reference's.
+  const fusion::testing::BatchResult reference = fusion::testing::BatchFuse(batch, engine.params());
+  ASSERT_TRUE(reference.evidence.on) << "mapd feeds sensor origins: the reference must model them";
+  ASSERT_EQ(reference.walls.size(), 4u) << "the room has four walls";
+  ASSERT_EQ(served.size(), reference.walls.size());
+  for (size_t i = 0; i < reference.walls.size(); ++i) {
+    const fusion::testing::BatchCluster& wall = reference.walls[i];
+    EXPECT_EQ(served[i].id(), wall.id);
+    EXPECT_EQ(served[i].member_count(), wall.members.size()) << wall.id;
+    EXPECT_EQ(wall.support, static_cast<uint32_t>(kRobots * kBatchesPerRobot)) << wall.id;
+    EXPECT_GE(served[i].support(), wall.support) << wall.id;  // bounded: may overcount past 32
+    // The same endpoints (the reference does not orient its segments).
+    const geometry::Vec2 a(served[i].a().x(), served[i].a().y());
+    const geometry::Vec2 b(served[i].b().x(), served[i].b().y());
+    const double apart_m =
+        std::min(std::max((a - wall.segment.a).norm(), (b - wall.segment.b).norm()),
+                 std::max((a - wall.segment.b).norm(), (b - wall.segment.a).norm()));
+    EXPECT_LE(apart_m, 1e-9) << wall.id;
+  }
+
   // The persisted fused table agrees with the served map too.
   auto rows = (*store)->LoadFused();
   ASSERT_TRUE(rows.ok());
