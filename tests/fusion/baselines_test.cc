@@ -72,6 +72,11 @@ TEST_P(EveryFuserTest, SeparatesParallelWallsTwoMetresApart) {
   AddThreeViewsOfOneWall(fuser.get(), 2.0, 11);
   const std::vector<FusedFeature> map = fuser->Published();
   ASSERT_EQ(map.size(), 2u);
+  // Each wall is its own three views, named by its first feature.
+  EXPECT_EQ(map[0].id, 1u);
+  EXPECT_EQ(map[0].member_count, 3u);
+  EXPECT_EQ(map[1].id, 11u);
+  EXPECT_EQ(map[1].member_count, 3u);
   EXPECT_NEAR(map[0].segment.midpoint().y(), 0.0, 0.02);
   EXPECT_NEAR(map[1].segment.midpoint().y(), 2.0, 0.02);
 }
@@ -91,6 +96,10 @@ TEST_P(EveryFuserTest, SeparatesPerpendicularWallsAndJoinsTheirCorner) {
   }
   const std::vector<FusedFeature> map = fuser->Published();
   ASSERT_EQ(map.size(), 2u);
+  EXPECT_EQ(map[0].id, 1u);  // the horizontal views
+  EXPECT_EQ(map[0].member_count, 3u);
+  EXPECT_EQ(map[1].id, 2u);  // the vertical ones
+  EXPECT_EQ(map[1].member_count, 3u);
   // Both fused walls end at the corner optimisation's joint point, near (10, 0).
   int at_corner = 0;
   for (const FusedFeature& f : map) {
@@ -99,28 +108,58 @@ TEST_P(EveryFuserTest, SeparatesPerpendicularWallsAndJoinsTheirCorner) {
   EXPECT_EQ(at_corner, 2);
 }
 
+// Refused with InvalidArgument and a message that names the fault.
+void ExpectRefused(const Status& status, const std::string& what) {
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << status.ToString();
+  EXPECT_NE(status.message().find(what), std::string::npos) << status.ToString();
+}
+
 TEST_P(EveryFuserTest, RefusesBadInputUnchanged) {
   std::unique_ptr<Fuser> fuser = Make(GetParam());
   ASSERT_TRUE(fuser->Add(1, 0, {Wall(1, {0, 0}, {5, 0})}, nullptr).ok());
-  EXPECT_FALSE(fuser->Add(1, 0, {Wall(2, {0, 0}, {5, 0})}, nullptr).ok());  // observation reused
-  EXPECT_FALSE(fuser->Add(2, 0, {Wall(1, {0, 0}, {5, 0})}, nullptr).ok());  // feature id reused
-  EXPECT_FALSE(fuser->Add(3, 0, {Wall(3, {0, 0}, {0, 0})}, nullptr).ok());  // zero length
-  EXPECT_FALSE(fuser->Add(4, 0, {Wall(4, {0, 0}, {NAN, 0})}, nullptr).ok());
-  EXPECT_EQ(fuser->Published().size(), 1u);
+  ExpectRefused(fuser->Add(1, 0, {Wall(2, {0, 0}, {5, 0})}, nullptr), "observation 1 was added");
+  ExpectRefused(fuser->Add(2, 0, {Wall(1, {0, 0}, {5, 0})}, nullptr),
+                "features[0]: feature id 1 is not unique");
+  ExpectRefused(fuser->Add(3, 0, {Wall(3, {0, 0}, {0, 0})}, nullptr),
+                "features[0] has zero length");
+  ExpectRefused(fuser->Add(4, 0, {Wall(4, {0, 0}, {NAN, 0})}, nullptr), "not finite");
+  // A batch with one bad feature is refused whole: its good feature is not kept.
+  ExpectRefused(fuser->Add(5, 0, {Wall(5, {0, 1}, {5, 1}), Wall(6, {0, 0}, {0, 0})}, nullptr),
+                "features[1] has zero length");
+  // Unchanged: the one wall of the first batch, as it was.
+  const std::vector<FusedFeature> map = fuser->Published();
+  ASSERT_EQ(map.size(), 1u);
+  EXPECT_EQ(map[0].id, 1u);
+  EXPECT_EQ(map[0].member_count, 1u);
+  EXPECT_EQ(map[0].support, 1u);
+  EXPECT_NEAR(std::min(map[0].segment.a.x(), map[0].segment.b.x()), 0.0, 1e-9);
+  EXPECT_NEAR(std::max(map[0].segment.a.x(), map[0].segment.b.x()), 5.0, 1e-9);
+  // The refused ids are still free.
+  EXPECT_TRUE(fuser->Add(5, 0, {Wall(5, {20, 20}, {25, 20})}, nullptr).ok());
+  EXPECT_EQ(fuser->Published().size(), 2u);
 }
 
 TEST_P(EveryFuserTest, ReportsChanges) {
   std::unique_ptr<Fuser> fuser = Make(GetParam());
   ChangeFeed feed;
   ASSERT_TRUE(fuser->Add(1, 0, {Wall(5, {0, 0}, {10, 0})}, &feed).ok());
-  ASSERT_EQ(feed.added.size(), 1u);
-  EXPECT_EQ(feed.added[0], 5u);
+  EXPECT_EQ(feed.added, std::vector<ClusterId>{5});
+  EXPECT_TRUE(feed.updated.empty());
+  EXPECT_TRUE(feed.removed.empty());
   ASSERT_TRUE(fuser->Add(2, 0, {Wall(3, {0, 0.01}, {10, 0.01})}, &feed).ok());
   // The cluster is now named by its smallest member: 5 is gone, 3 is new.
-  ASSERT_EQ(feed.added.size(), 1u);
-  EXPECT_EQ(feed.added[0], 3u);
-  ASSERT_EQ(feed.removed.size(), 1u);
-  EXPECT_EQ(feed.removed[0], 5u);
+  EXPECT_EQ(feed.added, std::vector<ClusterId>{3});
+  EXPECT_TRUE(feed.updated.empty());
+  EXPECT_EQ(feed.removed, std::vector<ClusterId>{5});
+  // A third view 3 cm off moves the wall (and is close enough to be no second
+  // wall for the chain guard): an update of 3.
+  ASSERT_TRUE(fuser->Add(3, 0, {Wall(7, {0, 0.03}, {10, 0.03})}, &feed).ok());
+  EXPECT_TRUE(feed.added.empty());
+  EXPECT_EQ(feed.updated, std::vector<ClusterId>{3});
+  EXPECT_TRUE(feed.removed.empty());
+  // A failed Add reports nothing.
+  EXPECT_FALSE(fuser->Add(3, 0, {Wall(8, {0, 0}, {10, 0})}, &feed).ok());
+  EXPECT_TRUE(feed.empty());
 }
 
 INSTANTIATE_TEST_SUITE_P(AllStrategies, EveryFuserTest,
@@ -130,16 +169,34 @@ TEST(FuserRegistryTest, UnknownNameIsRefusedWithTheKnownOnes) {
   auto fuser = MakeFuser("hough", FuserOptions());
   ASSERT_FALSE(fuser.ok());
   EXPECT_EQ(fuser.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(fuser.status().message().find("mean_shift"), std::string::npos);
+  EXPECT_EQ(fuser.status().message(),
+            "unknown fusion strategy \"hough\" (known: three_criteria, mean_shift, density)");
 }
 
 TEST(FuserRegistryTest, InvalidBaselineParametersAreRefused) {
+  // Each refusal names the parameter at fault.
   FuserOptions options;
   options.mean_shift.centre.bandwidth_m = 0.0;
-  EXPECT_FALSE(MakeFuser("mean_shift", options).ok());
+  ExpectRefused(MakeFuser("mean_shift", options).status(), "mean_shift.centre.bandwidth_m");
+  options = FuserOptions();
+  options.mean_shift.post.snap_m = -1.0;
+  ExpectRefused(MakeFuser("mean_shift", options).status(), "mean_shift.post.snap_m");
   options = FuserOptions();
   options.density.orientation.bandwidth_rad = -1.0;
-  EXPECT_FALSE(MakeFuser("density", options).ok());
+  ExpectRefused(MakeFuser("density", options).status(), "density.orientation.bandwidth_rad");
+  options = FuserOptions();
+  options.density.orientation.bin_rad = 2.0 * options.density.orientation.bandwidth_rad;
+  ExpectRefused(MakeFuser("density", options).status(), "density.orientation.bin_rad");
+  options = FuserOptions();
+  options.density.min_pts = 0;
+  ExpectRefused(MakeFuser("density", options).status(), "density.min_pts");
+  options = FuserOptions();
+  options.three_criteria.gamma = 2.0;
+  ExpectRefused(MakeFuser("three_criteria", options).status(), "gamma");
+  // The defaults are valid.
+  for (const std::string& name : FuserNames()) {
+    EXPECT_TRUE(MakeFuser(name, FuserOptions()).ok()) << name;
+  }
 }
 
 TEST(MeanShiftTest, OrientationModesWrapAroundPi) {
@@ -149,10 +206,17 @@ TEST(MeanShiftTest, OrientationModesWrapAroundPi) {
   const baselines::Modes modes =
       baselines::OrientationModes(theta, std::vector<double>(theta.size(), 1.0), {});
   ASSERT_EQ(modes.mode.size(), 2u);
+  ASSERT_EQ(modes.label.size(), theta.size());
   EXPECT_EQ(modes.label[0], modes.label[1]);
   EXPECT_EQ(modes.label[0], modes.label[2]);
   EXPECT_EQ(modes.label[3], modes.label[4]);
   EXPECT_NE(modes.label[0], modes.label[3]);
+  // Where the modes are: the wrapped mean of 1, -1 and 0.5 deg, near 0 (or pi),
+  // and between 90 and 91 deg.
+  const double near_zero = modes.mode[modes.label[0]];
+  EXPECT_LT(std::min(near_zero, M_PI - near_zero), 1.0 * deg) << near_zero / deg;
+  EXPECT_GT(modes.mode[modes.label[3]], 90 * deg - 1e-9);
+  EXPECT_LT(modes.mode[modes.label[3]], 91 * deg + 1e-9);
 }
 
 TEST(MeanShiftTest, CentreModesFindTwoBlobs) {
@@ -162,8 +226,13 @@ TEST(MeanShiftTest, CentreModesFindTwoBlobs) {
   std::vector<Vec2> modes;
   const std::vector<uint32_t> label = baselines::CentreModes(points, {}, &modes);
   ASSERT_EQ(modes.size(), 2u);
+  ASSERT_EQ(label.size(), points.size());
   for (int k = 1; k < 10; ++k) EXPECT_EQ(label[static_cast<size_t>(k)], label[0]);
+  for (int k = 11; k < 20; ++k) EXPECT_EQ(label[static_cast<size_t>(k)], label[10]);
   EXPECT_NE(label[0], label[10]);
+  // The modes are the blobs' centres (flat kernel: each blob's mean).
+  EXPECT_LT((modes[label[0]] - Vec2(0.45, 0.0)).norm(), 1e-9);
+  EXPECT_LT((modes[label[10]] - Vec2(10.45, 0.0)).norm(), 1e-9);
 }
 
 TEST(DensityTest, NeighbourTestIsLateralAndLongitudinal) {
