@@ -32,7 +32,15 @@ TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
   EXPECT_FALSE(grid.IsFree(Vec2(0.0, -0.2))) << "within the segment margin";
   EXPECT_FALSE(grid.IsFree(Vec2(0.0, 3.0))) << "behind the wall";
   EXPECT_FALSE(grid.IsFree(Vec2(6.0, -5.0))) << "beside the triangle";
-  EXPECT_FALSE(grid.IsFree(Vec2(2.6, -5.0))) << "within the erosion of a ray";
+  EXPECT_FALSE(grid.IsFree(Vec2(2.6, -5.0))) << "outside the ray (x = 2.5 at y = -5)";
+  // The margins, on cell centres (cells of 0.25 m, centres at odd multiples
+  // of 0.125) inside the triangle: the ray to (5, 0) crosses y = -4.875 at
+  // x = 2.5625 and runs at 63.4 deg, so a centre dx left of it lies
+  // 0.894 dx from it.
+  EXPECT_FALSE(grid.IsFree(Vec2(2.375, -4.875))) << "0.17 m from the ray: within its 0.3 m";
+  EXPECT_TRUE(grid.IsFree(Vec2(2.125, -4.875))) << "0.39 m from the ray";
+  EXPECT_FALSE(grid.IsFree(Vec2(0.125, -0.375))) << "0.375 m before the segment: within 0.4 m";
+  EXPECT_TRUE(grid.IsFree(Vec2(0.125, -0.625))) << "0.625 m before the segment";
   const std::vector<uint64_t> newly = grid.TakeNewlyFree();
   EXPECT_GT(newly.size(), 100u);
   EXPECT_TRUE(std::is_sorted(newly.begin(), newly.end()));
