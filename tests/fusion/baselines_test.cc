@@ -211,8 +211,12 @@ TEST(MeanShiftTest, OrientationModesWrapAroundPi) {
   EXPECT_EQ(modes.label[0], modes.label[2]);
   EXPECT_EQ(modes.label[3], modes.label[4]);
   EXPECT_NE(modes.label[0], modes.label[3]);
-  // Where the modes are: the wrapped mean of 1, -1 and 0.5 deg, near 0 (or pi),
-  // and between 90 and 91 deg.
+  // Where the modes are: in [0, pi); the wrapped mean of 1, -1 and 0.5 deg,
+  // near 0 (or pi), and between 90 and 91 deg.
+  for (double mode : modes.mode) {
+    EXPECT_GE(mode, 0.0);
+    EXPECT_LT(mode, M_PI);
+  }
   const double near_zero = modes.mode[modes.label[0]];
   EXPECT_LT(std::min(near_zero, M_PI - near_zero), 1.0 * deg) << near_zero / deg;
   EXPECT_GT(modes.mode[modes.label[3]], 90 * deg - 1e-9);

@@ -666,7 +666,8 @@ Scene MakeStreet(uint32_t seed, FusionMode mode, bool guard) {
   const auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(rng); };
   const double yaw = uniform(0, 2 * M_PI);
   const Eigen::Rotation2Dd rotation(yaw);
-  const Vec2 shift(uniform(-50, 50), uniform(-50, 50));
+  const double shift_x = uniform(-50, 50);  // not as two arguments: their order is unspecified
+  const Vec2 shift(shift_x, uniform(-50, 50));
   const auto world = [&](double x, double y) -> Vec2 { return shift + rotation * Vec2(x, y); };
 
   constexpr double kWidthM = 32.0, kFenceY = -2.5;
