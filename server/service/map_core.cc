@@ -57,6 +57,7 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   });
   core->fuser_ = std::thread([c = core.get()] {
     pthread_setname_np(pthread_self(), "mapd-fuser");
+    c->HoldFuserForTest();
     c->Recover();
     c->FuserLoop();
   });
@@ -418,9 +419,17 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   }
 }
 
+void MapCore::HoldFuserForTest() {
+  if (!options_.hold_fuser_for_test) return;
+  std::unique_lock<std::mutex> lock(fuse_mu_);
+  while (!fuser_stopping_ && options_.hold_fuser_for_test())
+    fuse_cv_.wait_for(lock, std::chrono::milliseconds(5));
+}
+
 void MapCore::FuserLoop() {
   std::deque<ToFuse> work;
   for (;;) {
+    HoldFuserForTest();
     {
       std::unique_lock<std::mutex> lock(fuse_mu_);
       // Wakes at least once a second when idle, so that snapshot.max_age_s

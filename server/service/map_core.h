@@ -77,6 +77,13 @@ struct MapCoreOptions {
   // acknowledged; the fused rows are recomputed at the next start), seconds.
   double stop_flush_s = 5.0;
   WatchOptions watch;  // the change feed (watch_hub.h)
+  // Tests only; empty (the default) in mapd. While it returns true the fuser
+  // thread neither starts recovering nor takes committed observations; Stop()
+  // ends the hold (the held work is then left, as any backlog at a stop).
+  // It lets a test look at a recovering core, or build a fusion backlog, on
+  // a machine of any speed. Polled every few milliseconds, with a lock of the
+  // core held: it must not call the core.
+  std::function<bool()> hold_fuser_for_test;
 };
 
 class MapCore final : public Core {
@@ -184,6 +191,9 @@ class MapCore final : public Core {
   void AbandonQueuedWrites(std::unique_lock<std::mutex>& lock);
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
   void FuserLoop();
+  // Fuser thread: waits while options_.hold_fuser_for_test() says so, until
+  // Stop() tells the fuser to stop.
+  void HoldFuserForTest();
   // Fuser thread, after each round: what `delta` changed, read from the
   // engines, to the watchers (watch_hub.h); the version moves on even if
   // nothing published changed.
