@@ -4,7 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <functional>
+#include <future>
 #include <string>
 #include <thread>
 #include <vector>
@@ -106,7 +109,10 @@ class SubmapServiceTest : public ServerFixture {
     return stub_->DeleteSubmap(&ctx, request, &response);
   }
 
-  MergeCall Merge(const std::vector<uint64_t>& ids) {
+  // `first_progress`, if given, is called as the first MergeProgress arrives
+  // (the merge is running on the server then).
+  MergeCall Merge(const std::vector<uint64_t>& ids,
+                  const std::function<void()>& first_progress = {}) {
     grpc::ClientContext ctx;
     pb::MergeSubmapsRequest request;
     for (uint64_t id : ids) request.add_submap_ids(id);
@@ -114,6 +120,7 @@ class SubmapServiceTest : public ServerFixture {
     MergeCall call;
     pb::MergeProgress p;
     while (reader->Read(&p)) {
+      if (call.progress.empty() && first_progress) first_progress();
       call.progress.push_back(p);
       if (p.has_result()) {
         call.result = p.result();
@@ -485,17 +492,56 @@ TEST_F(SubmapServiceTest, FirstTieOfTwoLocalSessionsMakesTheReferenceFrameTheMap
 // --- Shutdown with a merge in flight.
 
 TEST_F(SubmapServiceTest, ShutdownDoesNotWaitForAMergeInFlight) {
-  const uint64_t a = UploadOk(Header("r1", "west"), West());
-  const uint64_t b = UploadOk(Header("r2", "east"), East());
-  grpc::Status status;
-  std::thread client([&] { status = Merge({a, b}).status; });
-  // Whether the merge is still running when the server stops or has just
-  // finished, shutdown completes and the call ends (OK or UNAVAILABLE).
+  config_.shutdown_grace_s = 600;  // a shutdown that waited for the merge would show
+  Restart();
+  // A larger room at 5 cm: a merge of about a second here (the usual pair
+  // takes 0.2 s), long enough to tell a shutdown that waits from one that
+  // does not.
+  RoomScene big;
+  big.size_x_m = 14;
+  big.size_y_m = 10;
+  big.resolution_m = 0.05;
+  const uint64_t a =
+      UploadOk(Header("r1", "west"), RoomSubmap(big, 0, 11, Eigen::Isometry3d::Identity()));
+  const uint64_t b = UploadOk(Header("r2", "east"), RoomSubmap(big, 3, 14, T_map_b_));
+  // How long this merge takes here, run to the end once, and when its first
+  // progress message comes.
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  std::chrono::duration<double> first_s{0};
+  const MergeCall full = Merge({a, b}, [&] { first_s = Clock::now() - t0; });
+  const std::chrono::duration<double> merge_s = Clock::now() - t0;
+  ASSERT_TRUE(full.status.ok()) << full.status.error_message();
+  ASSERT_GE(full.progress.size(), 2u);
+  // Most of the merge runs after its first progress message, so a shutdown
+  // that waited for it would take more than half a merge.
+  ASSERT_LT(first_s.count(), merge_s.count() / 2)
+      << "first progress after " << first_s.count() << " s of " << merge_s.count();
+  ASSERT_EQ(MergeRows().size(), 1u);
+  ASSERT_EQ(List().size(), 3u);
+
+  // The same merge again; shut down once it is running (its first progress).
+  std::promise<void> running;
+  MergeCall call;
+  std::thread client([&] { call = Merge({a, b}, [&] { running.set_value(); }); });
+  const bool ran =
+      running.get_future().wait_for(std::chrono::seconds(120)) == std::future_status::ready;
+  const auto t1 = Clock::now();
   server_->Shutdown();
+  const std::chrono::duration<double> shutdown_s = Clock::now() - t1;
   client.join();
-  EXPECT_TRUE(status.ok() || status.error_code() == grpc::StatusCode::UNAVAILABLE ||
-              status.error_code() == grpc::StatusCode::CANCELLED)
-      << status.error_code() << " " << status.error_message();
+  ASSERT_TRUE(ran) << "the second merge never reported progress";
+  EXPECT_LT(shutdown_s.count(), merge_s.count() / 2)
+      << "shutdown took " << shutdown_s.count() << " s, a whole merge " << merge_s.count() << " s";
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::UNAVAILABLE) << call.status.error_message();
+  EXPECT_THAT(call.status.error_message(), HasSubstr("shutting down"));
+  EXPECT_THAT(call.status.error_message(), HasSubstr("nothing was stored"));
+  EXPECT_FALSE(call.has_result);
+
+  // Nothing of the abandoned merge was stored.
+  Restart();
+  EXPECT_EQ(MergeRows().size(), 1u);
+  EXPECT_EQ(List().size(), 3u);
 }
 
 }  // namespace
@@ -514,6 +560,19 @@ TEST(SubmapOptionsTest, MergeDefaultsAreTheVoxelLibrarys) {
   EXPECT_EQ(options.min_overlap_score, params.min_overlap_score);
   EXPECT_EQ(options.min_shared_free_ratio, params.min_shared_free_ratio);
   EXPECT_EQ(options.max_restart_spread_voxels, params.max_restart_spread_voxels);
+  EXPECT_EQ(options.max_merge_seconds, params.max_seconds);
+  EXPECT_EQ(options.resample_resolutions,
+            params.resolution_policy == voxel::ResolutionPolicy::kResampleToFinest);
+  EXPECT_EQ(options.log_odds_fusion, params.fusion_rule == voxel::FusionRule::kLogOdds);
+  // The correlation generator's (voxel::CorrelationParams).
+  const voxel::CorrelationParams& correlation = params.correlation;
+  EXPECT_EQ(options.correlation, correlation.enabled);
+  EXPECT_EQ(options.correlation_after_corner_stages, correlation.after_corner_stages);
+  EXPECT_EQ(options.correlation_check_accepted, correlation.check_corner_solutions);
+  EXPECT_EQ(options.correlation_looser_stages_after_refusal,
+            correlation.looser_stages_after_refusal);
+  EXPECT_EQ(options.correlation_max_cells, correlation.max_cells);
+  EXPECT_EQ(options.correlation_plan_view_first_cells, correlation.plan_view_first_min_cells);
 }
 
 }  // namespace
