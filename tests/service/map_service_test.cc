@@ -48,14 +48,29 @@ TEST_F(ServerFixture, AcknowledgesEveryBatchAsStoredAndFusesTheRoom) {
 TEST_F(ServerFixture, CornersOfTheFusedRoomLandOnTheTrueCorners) {
   Stream(Walk("r1", 12));
   const std::vector<Eigen::Vector2d> corners = {{0, 0}, {10, 0}, {10, 8}, {0, 8}};
-  for (const auto& f : Features()) {
+  const std::vector<pb::FusedFeature> walls = Features();
+  ASSERT_EQ(walls.size(), 4u) << "the room has four walls";
+  // Each wall's endpoints are two different true corners, and together the
+  // four walls' eight endpoints hit every corner twice.
+  std::vector<int> hits(corners.size(), 0);
+  for (const auto& f : walls) {
+    std::vector<size_t> ends;
     for (const auto& p : {f.a(), f.b()}) {
-      double best = 1e9;
-      for (const auto& c : corners)
-        best = std::min(best, (Eigen::Vector2d(p.x(), p.y()) - c).norm());
-      EXPECT_LT(best, 0.05) << "endpoint (" << p.x() << ", " << p.y() << ") far from every corner";
+      size_t best = 0;
+      for (size_t c = 1; c < corners.size(); ++c) {
+        if ((Eigen::Vector2d(p.x(), p.y()) - corners[c]).norm() <
+            (Eigen::Vector2d(p.x(), p.y()) - corners[best]).norm())
+          best = c;
+      }
+      EXPECT_LT((Eigen::Vector2d(p.x(), p.y()) - corners[best]).norm(), 0.05)
+          << "endpoint (" << p.x() << ", " << p.y() << ") far from every corner";
+      ++hits[best];
+      ends.push_back(best);
     }
+    EXPECT_NE(ends[0], ends[1]) << f.ShortDebugString();
   }
+  for (size_t c = 0; c < corners.size(); ++c)
+    EXPECT_EQ(hits[c], 2) << "corner (" << corners[c].x() << ", " << corners[c].y() << ")";
 }
 
 TEST_F(ServerFixture, ResentBatchesAreDuplicatesAndNotAppliedTwice) {
