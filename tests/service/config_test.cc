@@ -1,3 +1,5 @@
+// mapd's configuration: defaults (the libraries' own), the config file and
+// flags, ranges and rules, and the generated help and example file.
 #include "service/config.h"
 
 #include <gmock/gmock.h>
@@ -5,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <utility>
@@ -12,6 +15,8 @@
 
 #include "common/temp_dir.h"
 #include "mapd/command_line.h"
+#include "service/map_core.h"
+#include "storage/store.h"
 
 namespace mapd::service {
 namespace {
@@ -43,6 +48,33 @@ TEST(ConfigTest, DefaultsAreValidAndLoopback) {
   ServerConfig c;
   EXPECT_TRUE(c.Validate().ok());
   EXPECT_EQ(c.listen, "127.0.0.1:50051");
+}
+
+// mapd's defaults are the libraries' own: the option structs it fills
+// (MapCore's, the store's, the fusion parameters) default to the same values,
+// so a default changed on one side and not the other fails here. (The merge
+// thresholds against voxel::MergeParams: submap_service_test.cc, built with
+// the voxel library.)
+TEST(ConfigTest, DefaultsAreThoseOfTheOptionStructsTheyFill) {
+  const ServerConfig c;
+  EXPECT_EQ(fusion::FusionParamsKey(c.fusion), fusion::FusionParamsKey(fusion::FusionParams{}));
+  EXPECT_EQ(fusion::PlaneFusionParamsKey(c.planes),
+            fusion::PlaneFusionParamsKey(fusion::PlaneFusionParams{}));
+  const MapCoreOptions core;
+  EXPECT_EQ(fusion::FusionParamsKey(c.fusion), fusion::FusionParamsKey(core.fusion));
+  EXPECT_EQ(c.max_group_batches, core.max_group_batches);
+  EXPECT_EQ(c.snapshot_every_observations, core.snapshot_every_observations);
+  EXPECT_EQ(c.snapshot_max_age_s, core.snapshot_max_age_s);
+  EXPECT_EQ(c.raw_retention_days, core.raw_retention_days);
+  EXPECT_EQ(c.shutdown_flush_s, core.stop_flush_s);
+  EXPECT_EQ(c.watch.history, core.watch.history);
+  EXPECT_EQ(c.watch.queue, core.watch.queue);
+  EXPECT_EQ(c.watch.max_watchers, core.watch.max_watchers);
+  const storage::StoreOptions store;
+  EXPECT_EQ(c.sync_full, store.synchronous_full);
+  EXPECT_EQ(c.busy_timeout_ms, store.busy_timeout_ms);
+  EXPECT_EQ(c.max_db_bytes, store.max_db_bytes);
+  EXPECT_EQ(c.busy_timeout_ms, core.store.busy_timeout_ms);
 }
 
 TEST(ConfigTest, FlagsOverrideTheConfigFileWhateverTheirOrder) {
@@ -156,12 +188,19 @@ TEST(ConfigTest, SubmapAndMergeSettingsParseAndAreValidated) {
   EXPECT_EQ(c.submaps.correlation_max_cells, 4'000'000u);
   EXPECT_TRUE(c.submaps.correlation_looser_stages_after_refusal);
   EXPECT_EQ(c.submaps.correlation_plan_view_first_cells, 0u);
-  const ServerConfig defaults;
-  EXPECT_EQ(defaults.submaps.correlation_after_corner_stages, 0);
-  EXPECT_TRUE(defaults.submaps.correlation);
-  EXPECT_EQ(defaults.submaps.correlation_max_cells, 16'000'000u);  // = voxel::CorrelationParams
-  EXPECT_EQ(defaults.submaps.correlation_plan_view_first_cells, 6'000'000u);  // = the same
-  EXPECT_FALSE(defaults.submaps.correlation_looser_stages_after_refusal);
+  // Every value above differs from its default, so each flag was applied.
+  // (The defaults are voxel::CorrelationParams's: submap_service_test.cc.)
+  const SubmapOptions defaults;
+  EXPECT_NE(c.submaps.correlation, defaults.correlation);
+  EXPECT_NE(c.submaps.correlation_check_accepted, defaults.correlation_check_accepted);
+  EXPECT_NE(c.submaps.correlation_max_cells, defaults.correlation_max_cells);
+  EXPECT_NE(c.submaps.correlation_plan_view_first_cells,
+            defaults.correlation_plan_view_first_cells);
+  EXPECT_NE(c.submaps.correlation_looser_stages_after_refusal,
+            defaults.correlation_looser_stages_after_refusal);
+  EXPECT_NE(c.submaps.min_matched_corners, defaults.min_matched_corners);
+  EXPECT_NE(c.submaps.max_residual_voxels, defaults.max_residual_voxels);
+  EXPECT_NE(c.submaps.min_overlap_score, defaults.min_overlap_score);
 
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--limits.max_concurrent_merges=0", "limits.max_concurrent_merges"},
@@ -233,11 +272,22 @@ TEST(ConfigTest, HelpShowsTheRealDefaults) {
   ServerConfig c;
   std::string help;
   ASSERT_TRUE(Parse({}, &c, nullptr, &help).ok());
+  // `--key <number>=value` then a space or a line end, value as the code has
+  // it (the settings table prints 15 significant digits).
+  auto shows = [&](const std::string& key, double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.15g", value);
+    std::string pattern = "--" + key + " <number>=" + text;
+    for (size_t i = 0; (i = pattern.find('.', i)) != std::string::npos; i += 2)
+      pattern.insert(i, "\\");
+    EXPECT_THAT(help, ::testing::ContainsRegex(pattern + "[[:space:]]")) << key << " = " << text;
+  };
   // These two once showed 2 and 0.3 while the code used 0.75 and 0.9.
-  using ::testing::ContainsRegex;
-  EXPECT_THAT(help, ContainsRegex("--merge\\.max_residual_voxels <number>=0\\.75[[:space:]]"));
-  EXPECT_THAT(help, ContainsRegex("--merge\\.min_overlap_score <number>=0\\.9[[:space:]]"));
-  EXPECT_THAT(help, ContainsRegex("--fusion\\.delta_deg <number>=5[[:space:]]"));
+  const SubmapOptions submaps;
+  shows("merge.max_residual_voxels", submaps.max_residual_voxels);
+  shows("merge.min_overlap_score", submaps.min_overlap_score);
+  shows("fusion.delta_deg", fusion::FusionParams().delta_rad * 180.0 / M_PI);
+  shows("fusion.gamma", fusion::FusionParams().gamma);
   EXPECT_THAT(help, HasSubstr("--sync <normal|full>=normal "));
 }
 

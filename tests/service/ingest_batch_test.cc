@@ -1,3 +1,5 @@
+// ValidateBatch: what it accepts (normalised) and what it refuses, naming
+// the field, the limit and the value; IngestLimits' own range.
 #include "service/ingest_batch.h"
 
 #include <gmock/gmock.h>
@@ -98,16 +100,62 @@ TEST_F(ValidateBatchTest, OverLimitBatchIsResourceExhausted) {
   auto b = Good();
   limits_.max_features_per_batch = 3;
   EXPECT_EQ(Check(b).code(), StatusCode::kResourceExhausted);
-  EXPECT_THAT(Check(b).message(), HasSubstr("limit is 3"));
+  EXPECT_EQ(Check(b).message(),
+            "batch has 4 features (lines + planes); the limit is 3 (max_features_per_batch): "
+            "split it");
+}
+
+// At the limit accepted, one over refused, lines and planes counted together:
+// at the default and at the hard limit (kMaxFeaturesPerBatchHard, the feature
+// id space).
+TEST_F(ValidateBatchTest, TheFeatureLimitIsExactLinesAndPlanesTogether) {
+  auto with = [&](int lines, int planes) {
+    auto b = Good();
+    b.clear_lines();
+    for (int i = 0; i < lines; ++i) *b.add_lines() = Good().lines(0);
+    for (int i = 0; i < planes; ++i) {
+      auto* p = b.add_planes();
+      p->mutable_normal()->set_x(1);
+      for (int k = 0; k < 3; ++k) p->add_boundary()->set_y(k);
+    }
+    return b;
+  };
+  for (const uint32_t limit : {IngestLimits().max_features_per_batch, kMaxFeaturesPerBatchHard}) {
+    SCOPED_TRACE(limit);
+    limits_.max_features_per_batch = limit;
+    ASSERT_TRUE(limits_.Validate().ok());
+    const int n = static_cast<int>(limit);
+    StatusOr<IngestBatch> at = ValidateBatch(with(n - 1, 1), limits_);
+    ASSERT_TRUE(at.ok()) << at.status().ToString();
+    EXPECT_EQ(at->features.lines.size() + at->features.planes.size(), limit);
+    for (const auto& [lines, planes] : {std::pair{n + 1, 0}, {n, 1}, {0, n + 1}}) {
+      const Status over = Check(with(lines, planes));
+      EXPECT_EQ(over.code(), StatusCode::kResourceExhausted) << lines << " + " << planes;
+      EXPECT_THAT(over.message(),
+                  HasSubstr("batch has " + std::to_string(limit + 1) + " features"));
+      EXPECT_THAT(over.message(),
+                  HasSubstr("the limit is " + std::to_string(limit) + " (max_features_per_batch)"));
+    }
+  }
 }
 
 TEST_F(ValidateBatchTest, OverLimitPlaneBoundaryIsResourceExhausted) {
-  auto b = Good();
   limits_.max_boundary_points = 4;
-  auto* p = b.add_planes();
-  p->mutable_normal()->set_x(1);
-  for (int i = 0; i < 5; ++i) p->add_boundary()->set_y(i);
-  EXPECT_EQ(Check(b).code(), StatusCode::kResourceExhausted);
+  auto with_points = [&](int n) {
+    auto b = Good();
+    auto* p = b.add_planes();
+    p->mutable_normal()->set_x(1);
+    for (int i = 0; i < n; ++i) p->add_boundary()->set_y(i);
+    return b;
+  };
+  StatusOr<IngestBatch> at = ValidateBatch(with_points(4), limits_);
+  ASSERT_TRUE(at.ok()) << at.status().ToString();
+  ASSERT_EQ(at->features.planes.size(), 1u);
+  EXPECT_EQ(at->features.planes[0].boundary.size(), 4u);
+  const Status over = Check(with_points(5));
+  EXPECT_EQ(over.code(), StatusCode::kResourceExhausted);
+  EXPECT_THAT(over.message(), HasSubstr("planes[0].boundary has 5 points; the limit is 4 "
+                                        "(max_boundary_points)"));
 }
 
 TEST_F(ValidateBatchTest, RefusesBadIdsAndSeqZero) {
@@ -125,8 +173,18 @@ TEST_F(ValidateBatchTest, RefusesBadIdsAndSeqZero) {
 TEST(IngestLimitsTest, RefusesLimitsBeyondTheFeatureIdSpace) {
   IngestLimits l;
   EXPECT_TRUE(l.Validate().ok());
-  l.max_features_per_batch = kMaxFeaturesPerBatchHard + 1;
-  EXPECT_FALSE(l.Validate().ok());
+  // The feature id space: (observation id << kFeatureIdBits) | index.
+  EXPECT_EQ(kMaxFeaturesPerBatchHard, 1u << kFeatureIdBits);
+  l.max_features_per_batch = kMaxFeaturesPerBatchHard;
+  EXPECT_TRUE(l.Validate().ok());
+  const std::string range =
+      "max_features_per_batch must be in [1, " + std::to_string(kMaxFeaturesPerBatchHard) + "]";
+  for (const uint32_t bad : {kMaxFeaturesPerBatchHard + 1, 0u}) {
+    l.max_features_per_batch = bad;
+    const Status s = l.Validate();
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << bad;
+    EXPECT_EQ(s.message(), range) << bad;
+  }
 }
 
 }  // namespace
