@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -21,8 +22,11 @@ namespace mapd::testing {
 class WatchClient {
  public:
   // Opens the call at once; with read = false nothing is read until Read().
+  // A non-empty `token` is sent as the call's bearer token.
   WatchClient(mapserver::v1::MapService::Stub* stub,
-              const mapserver::v1::WatchFeatureMapRequest& request, bool read = true) {
+              const mapserver::v1::WatchFeatureMapRequest& request, bool read = true,
+              const std::string& token = "") {
+    if (!token.empty()) ctx_.AddMetadata("authorization", "Bearer " + token);
     reader_ = stub->WatchFeatureMap(&ctx_, request);
     if (read) Read();
   }

@@ -7,6 +7,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -14,12 +15,15 @@
 #include "fake_core.h"
 #include "server_fixture.h"
 #include "service/map_service.h"
+#include "service/proto_convert.h"
+#include "service/watch_hub.h"
 #include "watch_client.h"
 
 namespace mapd::testing {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::UnorderedElementsAreArray;
 
 pb::WatchFeatureMapRequest Since(uint64_t version) {
   pb::WatchFeatureMapRequest r;
@@ -57,6 +61,79 @@ class WatchTest : public ServerFixture {
     return version;
   }
 
+  std::set<uint64_t> FeatureIds() {
+    std::set<uint64_t> ids;
+    for (const pb::FusedFeature& f : Features()) ids.insert(f.id());
+    return ids;
+  }
+
+  // The server's own record of every change after `since` (the core's change
+  // feed, watch_hub.h): what a watch resumed from `since` must be sent.
+  std::vector<service::ChangePtr> ChangesSince(uint64_t since) {
+    service::WatchHub& hub = server_->core()->watch_hub();
+    StatusOr<service::WatchHub::Subscription> sub = hub.Subscribe(since, [] {});
+    EXPECT_TRUE(sub.ok()) << sub.status().ToString();
+    if (!sub.ok()) return {};
+    hub.Unsubscribe(sub->watcher);
+    EXPECT_FALSE(sub->resync) << "the history does not reach back to version " << since;
+    return sub->replay;
+  }
+
+  // `messages` are `changes`, each exactly once and in order, as an
+  // unfiltered client holding the ids `held` is sent them: a feature new to it
+  // added, one it holds updated, one gone removed (with `loose`, a resume's
+  // catch-up, whether held or not). No change is missing or repeated, no id
+  // appears twice in one message, versions strictly increase.
+  static void ExpectExactly(const std::vector<pb::FeatureMapDelta>& messages,
+                            const std::vector<service::ChangePtr>& changes, std::set<uint64_t> held,
+                            bool loose) {
+    size_t next = 0;
+    for (const service::ChangePtr& c : changes) {
+      SCOPED_TRACE("the change to version " + std::to_string(c->to_version));
+      ASSERT_TRUE(c->planes.empty() && c->planes_gone.empty()) << "no planes in the room";
+      std::vector<std::string> added, updated;
+      std::vector<uint64_t> removed;
+      for (const service::FusedView& v : c->lines) {
+        pb::FusedFeature f;
+        service::ToProto(v, &f);
+        (held.insert(v.feature.id).second ? added : updated).push_back(f.SerializeAsString());
+      }
+      for (fusion::ClusterId id : c->lines_gone) {
+        if (held.erase(id) > 0 || loose) removed.push_back(id);
+      }
+      if (added.empty() && updated.empty() && removed.empty()) continue;  // nothing to send
+      ASSERT_LT(next, messages.size()) << "not sent";
+      const pb::FeatureMapDelta& m = messages[next++];
+      EXPECT_EQ(m.map_version(), c->to_version);
+      EXPECT_FALSE(m.resync());
+      EXPECT_FALSE(m.more());
+      std::vector<std::string> got_added, got_updated;
+      for (const auto& f : m.added()) got_added.push_back(f.SerializeAsString());
+      for (const auto& f : m.updated()) got_updated.push_back(f.SerializeAsString());
+      EXPECT_THAT(got_added, UnorderedElementsAreArray(added));
+      EXPECT_THAT(got_updated, UnorderedElementsAreArray(updated));
+      EXPECT_THAT(m.removed(), UnorderedElementsAreArray(removed));
+    }
+    EXPECT_EQ(next, messages.size()) << "messages beyond the changes";
+    ExpectWellFormed(messages);
+  }
+
+  // Versions strictly increase (no message repeated) and no id appears twice
+  // in one message.
+  static void ExpectWellFormed(const std::vector<pb::FeatureMapDelta>& messages) {
+    for (size_t i = 0; i < messages.size(); ++i) {
+      const pb::FeatureMapDelta& m = messages[i];
+      ASSERT_FALSE(m.more()) << "a change in several messages: not expected here";
+      if (i > 0) {
+        EXPECT_GT(m.map_version(), messages[i - 1].map_version()) << "message " << i;
+      }
+      std::set<uint64_t> ids;
+      for (const auto& f : m.added()) EXPECT_TRUE(ids.insert(f.id()).second) << f.id();
+      for (const auto& f : m.updated()) EXPECT_TRUE(ids.insert(f.id()).second) << f.id();
+      for (uint64_t id : m.removed()) EXPECT_TRUE(ids.insert(id).second) << id;
+    }
+  }
+
   // The client's map equals GetFeatureMap's (same filter), feature by feature.
   void ExpectSameMap(WatchClient& watch, const pb::FeatureMapRequest& request = {}) {
     const uint64_t version = MapVersion();
@@ -80,16 +157,19 @@ TEST_F(WatchTest, AWatcherSeesFeaturesAddedThenUpdatedWithIncreasingVersions) {
   ASSERT_GE(messages.size(), 2u);
   EXPECT_TRUE(messages[0].resync());
   EXPECT_EQ(messages[0].added_size(), 0) << "the map was empty";
-  int added = 0, updated = 0;
+  ExpectWellFormed(messages);
+  // Every id is added once, before it is updated; nothing is removed.
+  std::set<uint64_t> added;
+  int updated = 0;
   for (size_t i = 1; i < messages.size(); ++i) {
     EXPECT_FALSE(messages[i].resync());
-    EXPECT_GT(messages[i].map_version(), messages[i - 1].map_version());
-    // Every id is added once, before it is updated.
-    for (const auto& f : messages[i].updated()) EXPECT_GT(added, 0) << f.id();
-    added += messages[i].added_size();
+    for (const auto& f : messages[i].updated()) EXPECT_EQ(added.count(f.id()), 1u) << f.id();
+    for (const auto& f : messages[i].added()) EXPECT_TRUE(added.insert(f.id()).second) << f.id();
+    EXPECT_EQ(messages[i].removed_size(), 0);
     updated += messages[i].updated_size();
   }
-  EXPECT_EQ(added, 4) << "four walls";
+  EXPECT_EQ(added, FeatureIds()) << "the four walls, each added once";
+  EXPECT_EQ(added.size(), 4u);
   EXPECT_GT(updated, 0);
   EXPECT_EQ(watch.Features().size(), 4u);
 }
@@ -99,13 +179,21 @@ TEST_F(WatchTest, AWatchOpenedLaterStartsWithTheFullMap) {
   const uint64_t version = MapVersion();
   WatchClient watch(stub_.get(), {});
   ASSERT_TRUE(watch.WaitForVersion(version));
-  const auto first = watch.Messages().front();
-  EXPECT_TRUE(first.resync());
-  EXPECT_EQ(first.map_version(), version);
-  EXPECT_EQ(first.added_size(), 4);
+  const auto messages = watch.Messages();
+  ASSERT_EQ(messages.size(), 1u) << "the map, once, and nothing since";
+  EXPECT_TRUE(messages[0].resync());
+  EXPECT_EQ(messages[0].map_version(), version);
+  EXPECT_EQ(messages[0].added_size(), 4);
+  ExpectWellFormed(messages);
 }
 
 TEST_F(WatchTest, AResumeGetsExactlyTheMissedChanges) {
+  server_.reset();
+  config_.watch.max_watchers = 8;  // the witness and the hub's record below too
+  StartServer();
+  // A witness watches throughout: the live feed of every change, for
+  // comparison with what the resumed watch is sent from the history.
+  WatchClient witness(stub_.get(), {});
   WatchClient first(stub_.get(), {});
   OneByOne(Walk("r1", 4));
   const uint64_t v1 = MapVersion();
@@ -122,6 +210,32 @@ TEST_F(WatchTest, AResumeGetsExactlyTheMissedChanges) {
   for (const auto& m : missed) {
     EXPECT_FALSE(m.resync());
     EXPECT_GT(m.map_version(), v1);
+  }
+  // Exactly the changes after v1, each once: the resume took the ids of the
+  // map as it is now (nothing changed since), and its catch-up reports every
+  // id gone (watch_service.cc, StartFrom).
+  const std::vector<service::ChangePtr> changes = ChangesSince(v1);
+  ASSERT_GE(changes.size(), 7u) << "seven batches, each fused in a round of its own";
+  ExpectExactly(missed, changes, FeatureIds(), /*loose=*/true);
+  EXPECT_EQ(missed.back().map_version(), MapVersion());
+  // The same changes as the witness got live after v1: versions, and the
+  // features' states (a live client is told added or updated by what it held,
+  // so only the union is compared).
+  ASSERT_TRUE(witness.WaitForVersion(missed.back().map_version()));
+  std::vector<pb::FeatureMapDelta> live;
+  for (const auto& m : witness.Messages()) {
+    if (m.map_version() > v1) live.push_back(m);
+  }
+  ASSERT_EQ(live.size(), missed.size());
+  auto states = [](const pb::FeatureMapDelta& m) {
+    std::vector<std::string> out;
+    for (const auto& f : m.added()) out.push_back(f.SerializeAsString());
+    for (const auto& f : m.updated()) out.push_back(f.SerializeAsString());
+    return out;
+  };
+  for (size_t i = 0; i < live.size(); ++i) {
+    EXPECT_EQ(missed[i].map_version(), live[i].map_version()) << i;
+    EXPECT_THAT(states(missed[i]), UnorderedElementsAreArray(states(live[i]))) << i;
   }
   // Applied to what the first watch held, the missed changes give the map.
   std::map<uint64_t, pb::FusedFeature> held = first.features_;
@@ -148,6 +262,13 @@ TEST_F(WatchTest, AResumeFromTheCurrentVersionSendsNothingUntilTheMapChanges) {
   ASSERT_FALSE(messages.empty());
   EXPECT_FALSE(messages.front().resync());
   EXPECT_GT(messages.front().map_version(), v);
+  // Exactly the change since v, to a client that holds the four walls.
+  const std::vector<service::ChangePtr> changes = ChangesSince(v);
+  ASSERT_EQ(changes.size(), 1u) << "one batch, one round";
+  ExpectExactly(messages, changes, FeatureIds(), /*loose=*/false);
+  ASSERT_EQ(messages.size(), 1u);
+  EXPECT_EQ(messages[0].added_size(), 0);
+  EXPECT_EQ(messages[0].updated_size(), 4);
 }
 
 TEST_F(WatchTest, AVersionOlderThanTheHistoryGetsAResyncFirst) {
@@ -159,7 +280,10 @@ TEST_F(WatchTest, AVersionOlderThanTheHistoryGetsAResyncFirst) {
   OneByOne(Walk("r1", 5, 4));  // five changes: more than the history keeps
   WatchClient watch(stub_.get(), Since(old));
   ExpectSameMap(watch);
-  EXPECT_TRUE(watch.Messages().front().resync());
+  const auto messages = watch.Messages();
+  ASSERT_EQ(messages.size(), 1u) << "the map, once, and nothing since";
+  EXPECT_TRUE(messages[0].resync());
+  EXPECT_EQ(messages[0].added_size(), 4);
 }
 
 TEST_F(WatchTest, AVersionFromBeforeARestartGetsAResync) {
@@ -169,7 +293,10 @@ TEST_F(WatchTest, AVersionFromBeforeARestartGetsAResync) {
   Restart();
   WatchClient watch(stub_.get(), Since(old));
   ExpectSameMap(watch);
-  EXPECT_TRUE(watch.Messages().front().resync());
+  const auto messages = watch.Messages();
+  ASSERT_EQ(messages.size(), 1u) << "the map, once, and nothing since";
+  EXPECT_TRUE(messages[0].resync());
+  EXPECT_EQ(messages[0].added_size(), 4);
 }
 
 TEST_F(WatchTest, FiltersByBboxKindAndRobot) {
