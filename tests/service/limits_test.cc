@@ -98,16 +98,29 @@ TEST_F(LimitsTest, FloodOfStreamOpensLeavesHealthAndARobotAnswering) {
   ASSERT_EQ(acks.size(), batches.size());
   for (const auto& a : acks) EXPECT_EQ(a.result(), pb::IngestAck::STORED) << a.message();
 
-  // Idle uploads: at most max_concurrent_uploads were admitted; every one
-  // ends (refused at once, or ended by the idle timeout), none is stored.
-  int refused = 0;
+  // Idle uploads: every one ends, refused at once (RESOURCE_EXHAUSTED: more
+  // than limits.max_concurrent_uploads at a time, or the stream limits) or
+  // ended by the idle timeout; none is stored. How many of each depends on
+  // how fast the server took the opens beside the flood: an admitted upload
+  // idles out after a second and frees its place (a loaded run saw 16
+  // refused, not 18). Only 2 places for 20 uploads opened back to back:
+  // some are refused unless the opens took over 9 idle timeouts.
+  int refused = 0, expired = 0;
   for (auto& u : uploads) {
     const grpc::Status s = u->Finish();
-    EXPECT_FALSE(s.ok());
-    refused += s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED ||
-               s.error_code() == grpc::StatusCode::UNIMPLEMENTED;
+    if (s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED ||
+        s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+      ++refused;
+    } else if (s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED &&
+               s.error_message().find("limits.upload_idle_timeout_s") != std::string::npos) {
+      ++expired;
+    } else {
+      ADD_FAILURE() << "an idle upload ended with " << s.error_code() << ": " << s.error_message();
+    }
   }
-  EXPECT_GE(refused, 18);
+  EXPECT_EQ(refused + expired, 20);
+  EXPECT_GT(refused, 0);
+  EXPECT_EQ(Stats().submaps(), 0u);
 
   // Afterwards: health, reads and a new robot stream all work; nothing lost.
   EXPECT_TRUE(CheckHealth(channel_, std::chrono::seconds(30)) == Health::kServing);
