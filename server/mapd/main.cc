@@ -1,7 +1,10 @@
 // mapd: the multi-robot map server.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <string>
 #include <thread>
@@ -62,6 +65,15 @@ int main(int argc, char** argv) {
     return 0;
   }
   SetLogLevel(ParseLevel(config.log_level));
+  // Tests only (tests/service/mapd_process_test.cc): while this file exists
+  // the fuser waits, recovery included, so that a test can look at a
+  // recovering mapd on a machine of any speed. Logged, so that it is never
+  // on unnoticed.
+  if (const char* hold = std::getenv("MAPD_TEST_HOLD_FUSER_FILE"); hold != nullptr && *hold) {
+    const std::string path = hold;
+    config.hold_fuser_for_test = [path] { return access(path.c_str(), F_OK) == 0; };
+    Log(LogLevel::kWarn, "fuser_held_for_test", {{"while_exists", path}});
+  }
 
   // SIGTERM/SIGINT are taken by one thread with sigwait: no work in a signal handler.
   sigset_t signals;

@@ -8,6 +8,7 @@
 #ifndef MAPD_SERVICE_CONFIG_H_
 #define MAPD_SERVICE_CONFIG_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ struct ServerConfig {
   bool auth_required = false;
   std::string tls_client_ca;       // PEM CA: clients must present a certificate it signed
   std::string log_level = "info";  // debug, info, warn, error
+  // Tests only, never set by a flag or a file: MapCoreOptions::hold_fuser_for_test.
+  // mapd sets it from $MAPD_TEST_HOLD_FUSER_FILE (server/mapd/main.cc).
+  std::function<bool()> hold_fuser_for_test;
 
   // Every setting's range (the table), the libraries' own checks, and the
   // rules between settings (TLS off loopback).

@@ -67,6 +67,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.snapshot_max_age_s = config.snapshot_max_age_s;
   core_options.raw_retention_days = config.raw_retention_days;
   core_options.watch = config.watch;
+  core_options.hold_fuser_for_test = config.hold_fuser_for_test;
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();

@@ -43,12 +43,18 @@ inline int DecodeWaitStatus(int status) {
 
 namespace internal {
 
-// fork + execv(argv) with the child's stdin/stdout/stderr on the given fds
-// (-1: /dev/null). Returns the pid, or -1.
-inline pid_t Spawn(const std::vector<std::string>& argv, int in_fd, int out_fd, int err_fd) {
+// fork + execve(argv) with the child's stdin/stdout/stderr on the given fds
+// (-1: /dev/null), in this process's environment plus `extra_env`
+// ("NAME=value" each). Returns the pid, or -1.
+inline pid_t Spawn(const std::vector<std::string>& argv, int in_fd, int out_fd, int err_fd,
+                   const std::vector<std::string>& extra_env = {}) {
   std::vector<char*> cargv;
   for (const std::string& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
   cargv.push_back(nullptr);
+  std::vector<char*> cenv;  // built before fork: the child may only make async-signal-safe calls
+  for (char** e = environ; *e != nullptr; ++e) cenv.push_back(*e);
+  for (const std::string& e : extra_env) cenv.push_back(const_cast<char*>(e.c_str()));
+  cenv.push_back(nullptr);
   const pid_t pid = fork();
   if (pid != 0) return pid;
   // Child: only async-signal-safe calls from here on.
@@ -56,7 +62,7 @@ inline pid_t Spawn(const std::vector<std::string>& argv, int in_fd, int out_fd, 
   dup2(in_fd >= 0 ? in_fd : null_fd, STDIN_FILENO);
   dup2(out_fd >= 0 ? out_fd : null_fd, STDOUT_FILENO);
   dup2(err_fd >= 0 ? err_fd : null_fd, STDERR_FILENO);
-  execv(cargv[0], cargv.data());
+  execve(cargv[0], cargv.data(), cenv.data());
   _exit(127);
 }
 
@@ -81,20 +87,22 @@ struct MapdProcess {
 // in `log_path` (default `db_path + ".log"`) and waits (up to `timeout`) for its
 // `event=<ready_event> address=HOST:PORT` line: "serving" (the map is
 // recovered, the default) or "listening" (the port is open). On failure port
-// is 0 and the child, if still running, is killed.
+// is 0 and the child, if still running, is killed. `extra_env` ("NAME=value")
+// is added to the environment it inherits.
 inline MapdProcess StartMapd(const std::string& db_path,
                              const std::vector<std::string>& extra_args = {},
                              const std::string& binary = kDefaultMapdBinary,
                              std::chrono::milliseconds timeout = std::chrono::seconds(20),
                              const std::string& ready_event = "serving",
-                             const std::string& log_path = "") {
+                             const std::string& log_path = "",
+                             const std::vector<std::string>& extra_env = {}) {
   MapdProcess p;
   p.log_path = log_path.empty() ? db_path + ".log" : log_path;
   std::vector<std::string> argv = {binary, "--db", db_path, "--listen", "127.0.0.1:0"};
   argv.insert(argv.end(), extra_args.begin(), extra_args.end());
   const int log_fd = open(p.log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (log_fd < 0) return p;
-  p.pid = internal::Spawn(argv, -1, log_fd, log_fd);
+  p.pid = internal::Spawn(argv, -1, log_fd, log_fd, extra_env);
   close(log_fd);
   if (p.pid < 0) return p;
 

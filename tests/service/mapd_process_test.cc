@@ -181,16 +181,20 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0);
 }
 
-// A restart with a long replay: mapd listens at once, says NOT_SERVING and
-// refuses ingest (UNAVAILABLE, nothing stored) while it recovers, then SERVING.
+// A restart whose replay is held (MAPD_TEST_HOLD_FUSER_FILE, so that recovery
+// cannot finish before the test looks, on a machine of any speed): mapd listens
+// at once, says NOT_SERVING and refuses ingest (UNAVAILABLE, nothing stored)
+// while it recovers, then SERVING once let go, every observation replayed.
 TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
   TempDir dir;
   const std::string db = dir.File("map.db");
   // No snapshots: the restart replays every stored observation.
   const std::vector<std::string> args = {"--snapshot.every_observations", "0"};
+  constexpr uint64_t kBatches = 1000;
   MapdProcess mapd = StartMapd(db, args);
   ASSERT_GT(mapd.port, 0) << mapd.log();
   EXPECT_EQ(CheckHealth(mapd.address), Health::kServing);
+  std::mt19937_64 rng(5);
   {
     auto stub = pb::MapService::NewStub(
         grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
@@ -201,56 +205,54 @@ TEST(MapdProcessTest, ListensAtOnceAndIsNotServingWhileRecovering) {
       while (stream->Read(&ack)) {
       }
     });
-    std::mt19937_64 rng(5);
-    for (uint64_t seq = 1; seq <= 8000; ++seq) {
+    for (uint64_t seq = 1; seq <= kBatches; ++seq) {
       ASSERT_TRUE(
           stream->Write(RoomBatch("r1", "s1", seq, 5, 4, 0.001 * static_cast<double>(seq), &rng)));
     }
     stream->WritesDone();
     reader.join();
     ASSERT_TRUE(stream->Finish().ok());
-    // Let the fuser catch up first: a stop fuses everything committed, and a
-    // sanitizer build is slow.
-    for (int i = 0; i < 1200; ++i) {
-      grpc::ClientContext stats_ctx;
-      pb::Stats stats;
-      if (stub->GetStats(&stats_ctx, {}, &stats).ok() && stats.fusion_backlog() == 0) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
   }
   ASSERT_EQ(Stop(mapd.pid, SIGTERM, std::chrono::seconds(120)), 0) << mapd.log();
 
-  mapd = StartMapd(db, args, kDefaultMapdBinary, std::chrono::seconds(20), "listening");
+  const std::string hold = dir.File("hold-fuser");
+  std::ofstream(hold) << "held\n";
+  mapd = StartMapd(db, args, kDefaultMapdBinary, std::chrono::seconds(20), "listening", "",
+                   {"MAPD_TEST_HOLD_FUSER_FILE=" + hold});
   ASSERT_GT(mapd.port, 0) << mapd.log();
-  const Health early = CheckHealth(mapd.address);
-  if (mapd.log().find("event=serving") != std::string::npos) {
-    GTEST_SKIP() << "recovery finished before the test could look";
-  }
-  EXPECT_EQ(early, Health::kNotServing);
+  EXPECT_THAT(mapd.log(), HasSubstr("event=fuser_held_for_test"));
+  EXPECT_EQ(CheckHealth(mapd.address), Health::kNotServing);
   {
     auto stub = pb::MapService::NewStub(
         grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
     grpc::ClientContext ctx;
-    // Recovery may finish between the health check and this call; the stream
-    // is then accepted, and without WritesDone the Read below would wait forever.
     ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
     auto stream = stub->Ingest(&ctx);
+    stream->Write(RoomBatch("r1", "s1", kBatches + 1, 5, 4, 0.0, &rng));  // may find it closed
     stream->WritesDone();
     pb::IngestAck ack;
-    EXPECT_FALSE(stream->Read(&ack));
+    EXPECT_FALSE(stream->Read(&ack)) << "acknowledged while recovering: " << ack.DebugString();
     const grpc::Status s = stream->Finish();
-    if (mapd.log().find("event=serving") == std::string::npos) {
-      EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE);
-      EXPECT_THAT(s.error_message(), HasSubstr("recovering"));
-    }
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE) << s.error_message();
+    EXPECT_THAT(s.error_message(), HasSubstr("recovering"));
   }
+  EXPECT_THAT(mapd.log(), ::testing::Not(HasSubstr("event=serving")));
+
+  ASSERT_EQ(unlink(hold.c_str()), 0);
   Health now = Health::kNotServing;
   for (int i = 0; i < 6000 && now != Health::kServing; ++i) {  // up to 2 min (sanitizers)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     now = CheckHealth(mapd.address);
   }
   EXPECT_EQ(now, Health::kServing) << mapd.log();
-  EXPECT_THAT(mapd.log(), HasSubstr("event=map_recovered from=scratch replayed=8000"));
+  EXPECT_THAT(mapd.log(),
+              HasSubstr("event=map_recovered from=scratch replayed=" + std::to_string(kBatches)));
+  auto stub = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  grpc::ClientContext ctx;
+  pb::Stats stats;
+  ASSERT_TRUE(stub->GetStats(&ctx, {}, &stats).ok());
+  EXPECT_EQ(stats.batches(), kBatches);  // the batch sent while recovering was not stored
   EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0);
 }
 
