@@ -23,6 +23,22 @@ class Mapd:
         self.address = ""
 
     def start(self, listen: str = "127.0.0.1:0", extra=()) -> str:
+        """Starts mapd and returns its address. A restart on a port it had
+        (a crash test) retries for up to 10 s while the port is taken: the
+        port was an ephemeral one, and between the crash and the restart a
+        client's reconnect (a TCP self-connect) or another test's socket may
+        hold it for a moment."""
+        deadline = time.monotonic() + 10
+        while True:
+            try:
+                return self._start_once(listen, extra)
+            except RuntimeError as e:
+                if (listen.endswith(":0") or "address in use" not in str(e)
+                        or time.monotonic() > deadline):
+                    raise
+                time.sleep(0.2)
+
+    def _start_once(self, listen: str, extra) -> str:
         log = open(self.log_path, "ab")
         start_at = log.tell()
         self.process = subprocess.Popen(
@@ -40,7 +56,10 @@ class Mapd:
             if self.process.poll() is not None:
                 break
             time.sleep(0.02)
-        raise RuntimeError("mapd did not come up:\n" + self.log())
+        with open(self.log_path, "rb") as f:
+            f.seek(start_at)
+            this_run = f.read().decode(errors="replace")
+        raise RuntimeError("mapd did not come up:\n" + this_run)
 
     def kill(self) -> None:
         """SIGKILL: a crash, nothing drained."""
