@@ -30,6 +30,19 @@ HalfPlane Inward(const Vec2& p, const Vec2& q, double erosion_m) {
   return {n, n.dot(p) + erosion_m};
 }
 
+// The side of the triangle along the ray from the origin o through q, inside
+// being on the left of p->q (p, q: the side's ends in counter-clockwise
+// order, one of them o), eroded by k times the range along the ray:
+// n . (x - o) >= k u . (x - o), i.e. (n - k u) . x >= (n - k u) . o.
+HalfPlane InwardRay(const Vec2& p, const Vec2& q, const Vec2& o, double k) {
+  const Vec2 d = q - p;
+  const Vec2 n = Vec2(-d.y(), d.x()) / d.norm();
+  const Vec2 far = p == o ? q : p;
+  const Vec2 u = (far - o) / (far - o).norm();
+  const Vec2 m = n - k * u;
+  return {m, m.dot(o)};
+}
+
 }  // namespace
 
 uint64_t FreeSpaceGrid::TileKey(int64_t tx, int64_t ty) {
@@ -42,8 +55,9 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   const double twice_area = geometry::Cross(a - origin, b - origin);
   if (std::abs(twice_area) < kMinDoubleAreaM2) return;
   if (twice_area < 0.0) std::swap(a, b);  // (origin, a, b) counter-clockwise
-  const HalfPlane planes[3] = {Inward(origin, a, kSideErosionM), Inward(a, b, kSegmentMarginM),
-                               Inward(b, origin, kSideErosionM)};
+  const HalfPlane planes[3] = {InwardRay(origin, a, origin, kSideErosionPerM),
+                               Inward(a, b, kSegmentMarginM),
+                               InwardRay(b, origin, origin, kSideErosionPerM)};
   const double y_lo = std::min({origin.y(), a.y(), b.y()});
   const double y_hi = std::max({origin.y(), a.y(), b.y()});
   const double x_lo = std::min({origin.x(), a.x(), b.x()});

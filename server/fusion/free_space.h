@@ -9,11 +9,17 @@
 // such visibility triangles covered it; a cell with at least min_count is
 // "observed free".
 //
-// A triangle marks a cell only if the cell's centre lies at least
-// kSideErosionM inside both rays (a ray grazing a building corner, misplaced
-// by pose noise, must not mark the corner's wall) and at least kSegmentMarginM
-// in front of the observed segment (a wall's own observations, noisy along
-// their normal, never mark its line). Cells are kCellM square, in tiles of
+// A triangle marks a cell only if the cell's centre lies inside both rays by
+// at least kSideErosionPerM times its distance from the origin along the ray
+// (a ray grazing a building corner, misplaced by angular pose noise, must not
+// mark the corner's wall; the misplacement grows with range, and near the
+// sensor, where the robot itself stood, there is none to fear) and at least
+// kSegmentMarginM in front of the observed segment (a wall's own
+// observations, noisy along their normal, never mark its line). A constant
+// 0.3 m side erosion (before issue 40) erased the whole apex of every narrow
+// triangle, so crossings the robot drove through and doorways it looked
+// through stayed "unseen" and consolidation bridged them (docs/algorithms.md
+// A.11 has the measurements). Cells are kCellM square, in tiles of
 // kTileCells x kTileCells created on first touch; counts saturate at 255, so
 // they, and which cells are free, are a function of the set of triangles
 // added, whatever their order.
@@ -33,7 +39,7 @@ namespace mapd::fusion {
 class FreeSpaceGrid {
  public:
   static constexpr double kCellM = 0.25;
-  static constexpr double kSideErosionM = 0.3;
+  static constexpr double kSideErosionPerM = 0.005;  // metres per metre of range (0.3 deg)
   static constexpr double kSegmentMarginM = 0.4;
   static constexpr int kTileCells = 32;
   using Tile = std::array<uint8_t, kTileCells * kTileCells>;

@@ -1,7 +1,7 @@
 # Real laser logs (shared/data/laser) through the fusion engine: ./laser_bench
 # (issue item 9; figures in docs/fusion-real-data.md). Run on demand, not by ctest.
 find_package(ZLIB REQUIRED)
-add_executable(laser_bench laser_bench.cc carmen.cc)
+add_executable(laser_bench laser_bench.cc carmen.cc seen_through.cc)
 target_include_directories(laser_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_link_libraries(laser_bench PRIVATE fusion ZLIB::ZLIB)
 target_compile_definitions(laser_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "bench/carmen.h"
+#include "bench/seen_through.h"
 #include "fusion/engine.h"
 #include "fusion/grid_index.h"
 
@@ -89,10 +90,12 @@ struct RunResult {
   size_t identical_pairs = 0;  // published features with the same segment
   double engine_s = 0.0;
   Coverage coverage;
+  SeenThroughGrid::Totals seen;  // seen-through / published wall length, metres
   std::vector<Segment2> segments;
 };
 
-RunResult Fuse(const std::vector<ScanLines>& scans, const FusionParams& params) {
+RunResult Fuse(const std::vector<ScanLines>& scans, const SeenThroughGrid& seen,
+               const FusionParams& params) {
   FusionEngine engine(params);
   uint64_t next_id = 1;
   const auto start = std::chrono::steady_clock::now();
@@ -126,6 +129,18 @@ RunResult Fuse(const std::vector<ScanLines>& scans, const FusionParams& params) 
     }
   }
   r.coverage = MeasureCoverage(scans, r.segments);
+  r.seen = seen.Measure(r.segments);
+  if (std::getenv("MAPD_BENCH_WORST") != nullptr) {  // debugging: the worst walls
+    std::vector<std::pair<double, size_t>> worst;
+    for (size_t i = 0; i < r.segments.size(); ++i)
+      worst.push_back({seen.SeenThroughLength(r.segments[i]), i});
+    std::sort(worst.rbegin(), worst.rend());
+    for (size_t k = 0; k < std::min<size_t>(8, worst.size()); ++k) {
+      const Segment2& s = r.segments[worst[k].second];
+      std::fprintf(stderr, "  %.2f m seen through: (%.2f %.2f)-(%.2f %.2f) len %.2f\n",
+                   worst[k].first, s.a.x(), s.a.y(), s.b.x(), s.b.y(), s.length());
+    }
+  }
   return r;
 }
 
@@ -147,10 +162,11 @@ void Window(const std::vector<ScanLines>& scans, Vec2* lo, Vec2* hi) {
   *hi = Vec2(quantile(xs, 0.995), quantile(ys, 0.995)) + Vec2(1, 1);
 }
 
-// Two panels side by side: guard off, guard on. Scan points (10 cm cells) faint,
-// fused segments bold.
+// Two panels side by side: the paper, the defaults. Seen-through cells (laser
+// beams passed there: an opening) pale green, scan points (10 cm cells) faint,
+// fused segments bold, in black where they lie on seen-through cells.
 bool WriteSvg(const std::string& path, const std::string& log, const std::vector<ScanLines>& scans,
-              const RunResult& off, const RunResult& on) {
+              const SeenThroughGrid& seen, const RunResult& off, const RunResult& on) {
   Vec2 lo, hi;
   Window(scans, &lo, &hi);
   const double span = std::max(hi.x() - lo.x(), hi.y() - lo.y());
@@ -171,6 +187,25 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
       dots += buf;
     }
   }
+  std::string open_cells;  // runs of seen-through cells along each row
+  for (double y = lo.y(); y < hi.y(); y += kCellM) {
+    for (double x = lo.x(); x < hi.x(); x += kCellM) {
+      if (!seen.SeenThrough(Vec2(x + 0.5 * kCellM, y + 0.5 * kCellM))) continue;
+      double end = x + kCellM;
+      while (end < hi.x() && seen.SeenThrough(Vec2(end + 0.5 * kCellM, y + 0.5 * kCellM))) {
+        end += kCellM;
+      }
+      char buf[80];
+      std::snprintf(buf, sizeof(buf), "M%.1f %.1fh%.1fv%.1fh-%.1fz", (x - lo.x()) * scale,
+                    h - (y - lo.y() + kCellM) * scale, (end - x) * scale, kCellM * scale,
+                    (end - x) * scale);
+      open_cells += buf;
+      x = end;
+    }
+  }
+  const auto to_px = [&](const Vec2& p) {
+    return Vec2((p.x() - lo.x()) * scale, h - (p.y() - lo.y()) * scale);
+  };
   std::ofstream out(path);
   if (!out) return false;
   const double panel = w + 20.0;
@@ -183,17 +218,19 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
                            "default (guard, consolidation)"};
   for (int k = 0; k < 2; ++k) {
     const RunResult& r = *runs[k];
-    char title[256];
+    char title[320];
     std::snprintf(title, sizeof(title),
-                  "%s, %s: %zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm", log.c_str(),
-                  titles[k], r.published, 100.0 * r.coverage.within_5cm,
-                  100.0 * r.coverage.within_10cm);
+                  "%s, %s: %zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm, "
+                  "%.1f of %.1f m seen through",
+                  log.c_str(), titles[k], r.published, 100.0 * r.coverage.within_5cm,
+                  100.0 * r.coverage.within_10cm, r.seen.seen_through_m, r.seen.published_m);
     out << "<g transform=\"translate(" << 10 + k * panel << ",40)\">\n"
         << "<text x=\"0\" y=\"-14\">" << title << "</text>\n"
         << "<clipPath id=\"panel" << k << "\"><rect width=\"" << w << "\" height=\"" << h
         << "\"/></clipPath>\n"
         << "<rect width=\"" << w << "\" height=\"" << h << "\" fill=\"none\" stroke=\"#ccc\"/>\n"
         << "<g clip-path=\"url(#panel" << k << ")\">\n"
+        << "<path fill=\"#bfe8b0\" d=\"" << open_cells << "\"/>\n"
         << "<path fill=\"#9ab\" fill-opacity=\"0.5\" d=\"" << dots << "\"/>\n"
         << "<path fill=\"none\" stroke=\"#c22\" stroke-width=\"2\" stroke-linecap=\"round\" d=\"";
     for (const Segment2& s : r.segments) {
@@ -202,6 +239,20 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
                     h - (s.a.y() - lo.y()) * scale, (s.b.x() - lo.x()) * scale,
                     h - (s.b.y() - lo.y()) * scale);
       out << buf;
+    }
+    // The stretches on seen-through cells, over the segments.
+    out << "\"/>\n<path fill=\"none\" stroke=\"#000\" stroke-width=\"3\" d=\"";
+    for (const Segment2& s : r.segments) {
+      const int steps = std::max(1, static_cast<int>(std::ceil(s.length() / 0.02)));
+      for (int i = 0; i < steps; ++i) {
+        const Vec2 p = s.a + ((i + 0.5) / steps) * (s.b - s.a);
+        if (!seen.SeenThrough(p)) continue;
+        const Vec2 a = to_px(s.a + (static_cast<double>(i) / steps) * (s.b - s.a));
+        const Vec2 b = to_px(s.a + ((i + 1.0) / steps) * (s.b - s.a));
+        char buf[96];
+        std::snprintf(buf, sizeof(buf), "M%.1f %.1fL%.1f %.1f", a.x(), a.y(), b.x(), b.y());
+        out << buf;
+      }
     }
     out << "\"/>\n</g>\n</g>\n";
   }
@@ -219,18 +270,21 @@ struct Row {
 std::string Table(const std::vector<Row>& rows) {
   std::ostringstream t;
   t << "| log | scans | valid points | raw lines | method | fused (published) | clusters | "
-       "identical pairs | within 5 cm | within 10 cm | engine s | raw lines/s |\n"
-    << "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
+       "identical pairs | within 5 cm | within 10 cm | seen-through m / published m | "
+       "engine s | raw lines/s |\n"
+    << "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   char buf[512];
   for (const Row& r : rows) {
     for (int k = 0; k < 2; ++k) {
       const RunResult& run = k == 0 ? r.off : r.on;
       std::snprintf(
           buf, sizeof(buf),
-          "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %.1f%% | %.1f%% | %.3f | %.0f |\n",
+          "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %.1f%% | %.1f%% | %.1f / %.1f | %.3f | "
+          "%.0f |\n",
           r.log.c_str(), r.scans, r.points, r.raw, k == 0 ? "paper" : "default", run.published,
           run.clusters, run.identical_pairs, 100.0 * run.coverage.within_5cm,
-          100.0 * run.coverage.within_10cm, run.engine_s,
+          100.0 * run.coverage.within_10cm, run.seen.seen_through_m, run.seen.published_m,
+          run.engine_s,
           static_cast<double>(r.raw) / run.engine_s);
       t << buf;
     }
@@ -264,12 +318,17 @@ int main(int argc, char** argv) {
       on.wall_offset_m = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--occluded-gap") && i + 1 < argc) {
       on.wall_occluded_gap_m = std::atof(argv[++i]);  // 0: no free-space evidence
+    } else if (!std::strcmp(argv[i], "--consolidate") && i + 1 < argc) {
+      on.consolidate = std::atoi(argv[++i]) != 0;
+    } else if (!std::strcmp(argv[i], "--free-min-count") && i + 1 < argc) {
+      on.wall_free_min_count = static_cast<uint32_t>(std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--occluded-ratio") && i + 1 < argc) {
       on.wall_occluded_gap_ratio = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: %s [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] "
-                   "[--guard-ratio R] [--wall-offset M] [--occluded-gap M] [--occluded-ratio R]\n",
+                   "[--guard-ratio R] [--wall-offset M] [--occluded-gap M] [--occluded-ratio R] "
+                   "[--consolidate 0|1] [--free-min-count N]\n",
                    argv[0]);
       return 2;
     }
@@ -305,14 +364,17 @@ int main(int argc, char** argv) {
       row.points += s.points.size();
       row.raw += s.lines.size();
     }
-    row.off = Fuse(lines, off);
-    row.on = Fuse(lines, on);
+    std::vector<BeamFan> fans;
+    for (const ScanLines& s : lines) fans.push_back({s.sensor_xy_m, &s.points});
+    const SeenThroughGrid seen(fans);
+    row.off = Fuse(lines, seen, off);
+    row.on = Fuse(lines, seen, on);
     std::printf("%s: %zu scans, %zu points, %zu raw lines (read %.2f s, extract %.2f s)\n",
                 spec.name, row.scans, row.points, row.raw, row.read_s, row.extract_s);
     std::fflush(stdout);
     if (write) {
       const std::string svg = docs_dir + "/fusion-laser-" + spec.name + ".svg";
-      if (!WriteSvg(svg, spec.name, lines, row.off, row.on)) {
+      if (!WriteSvg(svg, spec.name, lines, seen, row.off, row.on)) {
         std::fprintf(stderr, "cannot write %s\n", svg.c_str());
         return 1;
       }

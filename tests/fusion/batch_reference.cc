@@ -184,11 +184,11 @@ std::vector<std::vector<size_t>> Components(size_t n, Linked linked) {
 // Free-space evidence, from docs/algorithms.md A.11 ("Free-space evidence"):
 // a cell of 0.25 m is seen free when at least wall_free_min_count visibility
 // triangles (sensor, a, b) contain its centre in their interior eroded by
-// 0.3 m from both rays and 0.4 m from the segment.
+// 0.005 m per metre of range from both rays and 0.4 m from the segment.
 class SeenFree {
  public:
   static constexpr double kCellM = 0.25;
-  static constexpr double kRayErosionM = 0.3;
+  static constexpr double kRayErosionPerM = 0.005;  // times the range along the ray
   static constexpr double kSegmentErosionM = 0.4;
   // Samples along a line at most this far apart (docs: "every 0.125 m").
   static constexpr double kSampleStepM = 0.125;
@@ -231,8 +231,9 @@ class SeenFree {
     if (twice_area == 0.0) return;          // no interior
     if (twice_area < 0.0) std::swap(a, b);  // counter-clockwise: the interior is on the left
     const auto inside = [&](const Vec2& p) {
-      return Left(o, a, p) >= kRayErosionM && Left(a, b, p) >= kSegmentErosionM &&
-             Left(b, o, p) >= kRayErosionM;
+      const auto range = [&](const Vec2& end) { return (end - o).normalized().dot(p - o); };
+      return Left(o, a, p) >= kRayErosionPerM * range(a) && Left(a, b, p) >= kSegmentErosionM &&
+             Left(b, o, p) >= kRayErosionPerM * range(b);
     };
     for (int64_t cx = Cell(std::min({o.x(), a.x(), b.x()}));
          cx <= Cell(std::max({o.x(), a.x(), b.x()})); ++cx) {

@@ -37,8 +37,8 @@ TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
   // of 0.125) inside the triangle: the ray to (5, 0) crosses y = -4.875 at
   // x = 2.5625 and runs at 63.4 deg, so a centre dx left of it lies
   // 0.894 dx from it.
-  EXPECT_FALSE(grid.IsFree(Vec2(2.375, -4.875))) << "0.17 m from the ray: within its 0.3 m";
-  EXPECT_TRUE(grid.IsFree(Vec2(2.125, -4.875))) << "0.39 m from the ray";
+  EXPECT_TRUE(grid.IsFree(Vec2(2.375, -4.875))) << "0.17 m from the ray at 5.7 m range";
+  EXPECT_FALSE(grid.IsFree(Vec2(2.625, -4.875))) << "beyond the ray";
   EXPECT_FALSE(grid.IsFree(Vec2(0.125, -0.375))) << "0.375 m before the segment: within 0.4 m";
   EXPECT_TRUE(grid.IsFree(Vec2(0.125, -0.625))) << "0.625 m before the segment";
   const std::vector<uint64_t> newly = grid.TakeNewlyFree();
@@ -46,6 +46,20 @@ TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
   EXPECT_TRUE(std::is_sorted(newly.begin(), newly.end()));
   for (uint64_t cell : newly) EXPECT_TRUE(grid.IsFree(FreeSpaceGrid::CellCentre(cell)));
   EXPECT_TRUE(grid.TakeNewlyFree().empty());
+}
+
+// The rays are eroded by 0.005 m per metre of range: near the sensor (where
+// the robot stood) a cell close to the ray is free, far along it one is not,
+// so angular pose noise does not carry a ray into a corner's wall.
+TEST(FreeSpaceGridTest, TheRaysErosionGrowsWithRange) {
+  FreeSpaceGrid grid(1);
+  grid.AddView(Vec2(0.0, -40.0), {Vec2(-5.0, 0.0), Vec2(5.0, 0.0)});
+  // Cell centres 0.0465 m inside the ray to (5, 0), at ranges 7.4 m and 9.4 m.
+  EXPECT_TRUE(grid.IsFree(Vec2(0.875, -32.625))) << "erosion 0.037 m at 7.4 m";
+  EXPECT_FALSE(grid.IsFree(Vec2(1.125, -30.625))) << "erosion 0.047 m at 9.4 m";
+  // 0.14 m inside the ray at 38.4 m range: within its 0.19 m.
+  EXPECT_FALSE(grid.IsFree(Vec2(4.625, -1.875)));
+  EXPECT_TRUE(grid.IsFree(Vec2(0.125, -38.625))) << "0.047 m inside, 1.4 m from the sensor";
 }
 
 TEST(FreeSpaceGridTest, AGrazingViewMarksNothingOnItsLine) {
