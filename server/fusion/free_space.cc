@@ -102,8 +102,8 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
       } else {
         tile = &TileAt(tx, ty);
       }
-      const uint32_t run = (last == kTileCells - 1 ? ~0u : (1u << (last + 1)) - 1u) &
-                           ~((1u << first) - 1u);
+      const uint32_t run =
+          (last == kTileCells - 1 ? ~0u : (1u << (last + 1)) - 1u) & ~((1u << first) - 1u);
       // Saturated counts stay as they are: still a function of the triangle set.
       uint32_t todo = run & ~tile->saturated[row];
       while (todo != 0) {
