@@ -9,3 +9,8 @@ bash deploy/install-deps.sh
 bash deploy/build.sh
 ctest --preset release -j"$(nproc)" --output-junit "$PWD/build/ctest-junit.xml"
 bash deploy/check-skips.sh ${MAPD_STRICT_SKIPS:+--strict} build/ctest-junit.xml
+# The fuser's CPU guard (tests/bench/fusion_cpu_guard.cc): fused features per
+# CPU-second with free-space evidence on, against docs/long-running.md. Run
+# here, alone after the suite, not as a ctest: a measurement beside other
+# tests on the same cores would be a flaky unit test.
+build/tests/bench/fusion_cpu_guard

@@ -50,6 +50,12 @@ uint64_t FreeSpaceGrid::TileKey(int64_t tx, int64_t ty) {
          static_cast<uint64_t>(static_cast<uint32_t>(ty));
 }
 
+FreeSpaceGrid::TileData& FreeSpaceGrid::TileAt(int64_t tx, int64_t ty) {
+  std::unique_ptr<TileData>& tile = tiles_[TileKey(tx, ty)];
+  if (!tile) tile = std::make_unique<TileData>();
+  return *tile;
+}
+
 void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   Vec2 a = segment.a, b = segment.b;
   const double twice_area = geometry::Cross(a - origin, b - origin);
@@ -62,6 +68,13 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   const double y_hi = std::max({origin.y(), a.y(), b.y()});
   const double x_lo = std::min({origin.x(), a.x(), b.x()});
   const double x_hi = std::max({origin.x(), a.x(), b.x()});
+  // Consecutive rows mostly fall in the same tiles: the tiles of the current
+  // tile row are looked up once each (row_tiles_, by column from tx_base; a
+  // column outside it, which rounding could give, is looked up directly).
+  const int64_t tx_base = FloorDiv(CellIndex(x_lo), kTileCells);
+  const int64_t tx_count = FloorDiv(CellIndex(x_hi), kTileCells) - tx_base + 1;
+  bool has_row = false;
+  int64_t row_ty = 0;
   for (int64_t cy = CellIndex(y_lo); cy <= CellIndex(y_hi); ++cy) {
     const double y = (static_cast<double>(cy) + 0.5) * kCellM;
     double lo = x_lo, hi = x_hi;
@@ -79,18 +92,41 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
     // Cells whose centre (cx + 0.5) * kCellM lies in [lo, hi].
     const int64_t cx_first = static_cast<int64_t>(std::ceil(lo / kCellM - 0.5));
     const int64_t cx_last = static_cast<int64_t>(std::floor(hi / kCellM - 0.5));
+    if (cx_first > cx_last) continue;
+    const int64_t ty = FloorDiv(cy, kTileCells);
+    if (!has_row || ty != row_ty) {
+      row_tiles_.assign(static_cast<size_t>(tx_count), nullptr);
+      row_ty = ty;
+      has_row = true;
+    }
+    const size_t row = static_cast<size_t>(cy - ty * kTileCells);
     for (int64_t cx = cx_first; cx <= cx_last;) {
-      // One tile lookup per run of cells in the same tile.
-      const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
+      // One run of cells per tile: a mask of the run's columns in the row.
+      const int64_t tx = FloorDiv(cx, kTileCells);
       const int64_t run_end = std::min(cx_last, (tx + 1) * kTileCells - 1);
-      std::unique_ptr<Tile>& tile = tiles_[TileKey(tx, ty)];
-      if (!tile) tile = std::make_unique<Tile>(Tile{});
-      const int64_t row = (cy - ty * kTileCells) * kTileCells;
-      for (; cx <= run_end; ++cx) {
-        uint8_t& count = (*tile)[static_cast<size_t>(row + cx - tx * kTileCells)];
-        if (count == 255) continue;  // saturated: still a function of the triangle set
+      const int first = static_cast<int>(cx - tx * kTileCells);
+      const int last = static_cast<int>(run_end - tx * kTileCells);
+      cx = run_end + 1;
+      TileData* tile = nullptr;
+      const int64_t column = tx - tx_base;
+      if (column >= 0 && column < tx_count) {
+        TileData*& cached = row_tiles_[static_cast<size_t>(column)];
+        if (cached == nullptr) cached = &TileAt(tx, ty);
+        tile = cached;
+      } else {
+        tile = &TileAt(tx, ty);
+      }
+      const uint32_t run =
+          (last == kTileCells - 1 ? ~0u : (1u << (last + 1)) - 1u) & ~((1u << first) - 1u);
+      // Saturated counts stay as they are: still a function of the triangle set.
+      uint32_t todo = run & ~tile->saturated[row];
+      while (todo != 0) {
+        const int bit = __builtin_ctz(todo);
+        todo &= todo - 1u;
+        uint8_t& count = tile->counts[row * kTileCells + static_cast<size_t>(bit)];
         ++count;
-        if (count == min_count_) newly_free_.push_back(TileKey(cx, cy));
+        if (count == min_count_) newly_free_.push_back(TileKey(tx * kTileCells + bit, cy));
+        if (count == 255) tile->saturated[row] |= 1u << bit;
       }
     }
   }
@@ -102,7 +138,7 @@ bool FreeSpaceGrid::Probe::IsFree(const Vec2& p) {
   const uint64_t key = TileKey(tx, ty);
   if (!has_tile_ || key != tile_key_) {
     auto it = grid_.tiles_.find(key);
-    tile_ = it == grid_.tiles_.end() ? nullptr : it->second.get();
+    tile_ = it == grid_.tiles_.end() ? nullptr : &it->second->counts;
     tile_key_ = key;
     has_tile_ = true;
   }
@@ -131,13 +167,18 @@ Vec2 FreeSpaceGrid::CellCentre(uint64_t cell_key) {
 std::vector<std::pair<uint64_t, const FreeSpaceGrid::Tile*>> FreeSpaceGrid::SortedTiles() const {
   std::vector<std::pair<uint64_t, const Tile*>> out;
   out.reserve(tiles_.size());
-  for (const auto& [key, tile] : tiles_) out.emplace_back(key, tile.get());
+  for (const auto& [key, tile] : tiles_) out.emplace_back(key, &tile->counts);
   std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   return out;
 }
 
 void FreeSpaceGrid::RestoreTile(uint64_t key, const Tile& tile) {
-  tiles_[key] = std::make_unique<Tile>(tile);
+  auto data = std::make_unique<TileData>();
+  data->counts = tile;
+  for (size_t i = 0; i < tile.size(); ++i) {
+    if (tile[i] == 255) data->saturated[i / kTileCells] |= 1u << (i % kTileCells);
+  }
+  tiles_[key] = std::move(data);
 }
 
 }  // namespace mapd::fusion

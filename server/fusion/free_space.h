@@ -73,7 +73,7 @@ class FreeSpaceGrid {
   static geometry::Vec2 CellCentre(uint64_t cell_key);
 
   size_t tile_count() const { return tiles_.size(); }
-  size_t memory_bytes() const { return tiles_.size() * (sizeof(Tile) + 48); }
+  size_t memory_bytes() const { return tiles_.size() * (sizeof(TileData) + 48); }
 
   // Snapshots: tiles by key, and restoring one (REQUIRES: key not present).
   // A restored grid has no newly free cells.
@@ -81,10 +81,23 @@ class FreeSpaceGrid {
   void RestoreTile(uint64_t key, const Tile& tile);
 
  private:
+  // A tile's counts and, per row, one bit per cell whose count is saturated
+  // (255). A saturated count never changes again, so AddView skips those
+  // cells with one mask test per row and tile: a revisited area costs the
+  // triangle's rows, not its cells. Derived from the counts (not in snapshots).
+  struct TileData {
+    Tile counts{};
+    std::array<uint32_t, kTileCells> saturated{};
+  };
+  static_assert(kTileCells == 32, "one uint32_t mask per tile row");
+
   static uint64_t TileKey(int64_t tx, int64_t ty);
+  TileData& TileAt(int64_t tx, int64_t ty);
 
   const uint32_t min_count_;
-  std::unordered_map<uint64_t, std::unique_ptr<Tile>> tiles_;
+  std::unordered_map<uint64_t, std::unique_ptr<TileData>> tiles_;
+  // AddView's scratch: the tiles of the tile row it is in, by column.
+  std::vector<TileData*> row_tiles_;
   std::vector<uint64_t> newly_free_;  // cell keys (TileKey packing of cell indices)
 };
 

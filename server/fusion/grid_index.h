@@ -3,6 +3,7 @@
 #ifndef MAPD_FUSION_GRID_INDEX_H_
 #define MAPD_FUSION_GRID_INDEX_H_
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
@@ -98,17 +99,26 @@ class UniformGrid {
         static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
     // A cell meets the band if its centre is within radius + half its diagonal.
     const double reach_m = radius_m + 0.7072 * cell_m_;
+    // geometry::PointSegmentDistance's arithmetic, with the segment's terms
+    // computed once: the same cells, without a call per cell.
+    const geometry::Vec2 d = s.direction();
+    const double len2 = d.squaredNorm();
+    const auto beyond = [&](const geometry::Vec2& p) {
+      if (len2 == 0.0) return (p - s.a).norm() > reach_m;
+      const double t = std::clamp((p - s.a).dot(d) / len2, 0.0, 1.0);
+      return (p - (s.a + t * d)).norm() > reach_m;
+    };
     if (box_cells > static_cast<double>(cells_.size())) {
       for (const auto& [key, items] : cells_) {
         if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
-        if (geometry::PointSegmentDistance(CentreOf(key), s) > reach_m) continue;
+        if (beyond(CentreOf(key))) continue;
         for (const T& item : items) fn(item);
       }
       return;
     }
     for (int64_t x = lo.x; x <= hi.x; ++x) {
       for (int64_t y = lo.y; y <= hi.y; ++y) {
-        if (geometry::PointSegmentDistance(CentreOf({x, y}), s) > reach_m) continue;
+        if (beyond(CentreOf({x, y}))) continue;
         auto it = cells_.find({x, y});
         if (it == cells_.end()) continue;
         for (const T& item : it->second) fn(item);

@@ -43,15 +43,35 @@ bool AnySample(const Vec2& p, const Vec2& u, double t0, double t1, Fn&& fn) {
   return false;
 }
 
+int FilingSteps(const Segment2& s) {
+  return std::max(1, static_cast<int>(std::ceil(s.length() / kPieceStepM)));
+}
+
+Vec2 FiledPoint(const Segment2& s, int i, int steps) {
+  return s.a + (static_cast<double>(i) / steps) * (s.b - s.a);
+}
+
 std::vector<Vec2> FiledPoints(const Segment2& s) {
-  const double length = s.length();
-  const int steps = std::max(1, static_cast<int>(std::ceil(length / kPieceStepM)));
+  const int steps = FilingSteps(s);
   std::vector<Vec2> points;
   points.reserve(steps + 1);
-  for (int i = 0; i <= steps; ++i) {
-    points.push_back(s.a + (static_cast<double>(i) / steps) * (s.b - s.a));
-  }
+  for (int i = 0; i <= steps; ++i) points.push_back(FiledPoint(s, i, steps));
   return points;
+}
+
+// Whether s and t are filed in the same index cells, point by point. A
+// piece's refit moves it by millimetres on most updates: then its index
+// entries stay as they are (readers of the index sort what they find, so the
+// order of entries within a cell does not matter).
+bool SameFiledCells(const UniformGrid<ClusterId>& index, const Segment2& s, const Segment2& t) {
+  const int steps = FilingSteps(s);
+  if (FilingSteps(t) != steps) return false;
+  for (int i = 0; i <= steps; ++i) {
+    if (!(index.KeyOf(FiledPoint(s, i, steps)) == index.KeyOf(FiledPoint(t, i, steps)))) {
+      return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace
@@ -139,6 +159,7 @@ void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
 }
 
 bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit) {
+  bool reindex = true;
   auto it = pieces_.find(stats.id);
   if (it != pieces_.end()) {
     const ClusterStats& old = piece_stats_.at(stats.id);
@@ -146,7 +167,8 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
         it->second.fit.segment.a == fit.segment.a && it->second.fit.segment.b == fit.segment.b) {
       return false;
     }
-    Index(stats.id, it->second.fit.segment, false);
+    reindex = !SameFiledCells(index_, it->second.fit.segment, fit.segment);
+    if (reindex) Index(stats.id, it->second.fit.segment, false);
     if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
     it->second.fit = fit;
   } else {
@@ -155,7 +177,7 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
   }
   it->second.pierced = free_space_ != nullptr && Pierced(fit.segment, *free_space_);
   piece_stats_[stats.id] = stats;
-  Index(stats.id, fit.segment, true);
+  if (reindex) Index(stats.id, fit.segment, true);
   touched_pieces_.push_back(stats.id);
   return true;
 }

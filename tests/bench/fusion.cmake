@@ -12,3 +12,10 @@ endif()
 add_executable(fusion_throughput fusion_throughput.cc)
 target_link_libraries(fusion_throughput PRIVATE fusion)
 mapd_set_warnings(fusion_throughput)
+
+# CPU guard (issue 40): fused features per CPU-second on the soak's city with
+# free-space evidence on; fails below half the figure of docs/long-running.md.
+# Run by deploy/test.sh after ctest (not a ctest: see the program's header).
+add_executable(fusion_cpu_guard fusion_cpu_guard.cc)
+target_link_libraries(fusion_cpu_guard PRIVATE city_sim)
+mapd_set_warnings(fusion_cpu_guard)
