@@ -99,13 +99,21 @@ std::vector<pb::ObservationBatch> CityPool(int robot, int robots, bool local) {
     b.set_robot_id((local ? "late-" : "r") + std::to_string(robot));
     b.set_session_id(local ? "own-frame" : "map");
     if (local) b.set_session_frame(pb::SESSION_FRAME_LOCAL);
+    // The sensor where the scan was taken (its estimated position), the lines
+    // relative to it: mapd's free-space evidence runs from the sensor to each
+    // line, as it does for a real robot. (Before 2026-12-04 every batch put
+    // the sensor at the map origin, so each visibility triangle ran up to
+    // 270 m across the city: wrong evidence and a worst case for its cost.)
+    const mapd::geometry::Vec2 sensor = scan.estimated_pose.t;
     b.mutable_t_frame_sensor()->mutable_rotation()->set_w(1.0);
-    for (const mapd::fusion::GroundFeature& f : scan.features) {  // map frame, sensor at the origin
+    b.mutable_t_frame_sensor()->mutable_translation()->set_x(sensor.x());
+    b.mutable_t_frame_sensor()->mutable_translation()->set_y(sensor.y());
+    for (const mapd::fusion::GroundFeature& f : scan.features) {  // map frame
       pb::LineSegment* line = b.add_lines();
-      line->mutable_a()->set_x(f.segment.a.x());
-      line->mutable_a()->set_y(f.segment.a.y());
-      line->mutable_b()->set_x(f.segment.b.x());
-      line->mutable_b()->set_y(f.segment.b.y());
+      line->mutable_a()->set_x(f.segment.a.x() - sensor.x());
+      line->mutable_a()->set_y(f.segment.a.y() - sensor.y());
+      line->mutable_b()->set_x(f.segment.b.x() - sensor.x());
+      line->mutable_b()->set_y(f.segment.b.y() - sensor.y());
     }
     if (b.lines_size() > 0) pool.push_back(std::move(b));
   }
