@@ -4,13 +4,15 @@
 // pose, fed to FusionEngine one observation per scan, as the paper (no chain
 // guard, no wall consolidation) and with the defaults (both on). Reports raw and fused feature
 // counts and the share of valid scan points (range < max range) within 5 cm and 10 cm of a fused
-// segment (a markdown table on stdout, for docs/fusion-real-data.md); writes
+// segment, and the published wall length on cells laser beams passed through
+// (seen_through.h: issue 40's measure of walls the building does not have); a
+// markdown table on stdout, for docs/fusion-real-data.md; writes
 // docs/fusion-laser-<log>.svg.
 //
 //   laser_bench [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] [--guard-ratio R]
-//               [--wall-offset M]
-// (they set the default run's chain_max_rms_m, chain_max_sse_ratio and
-// wall_offset_m; otherwise FusionParams' defaults.)
+//               [--wall-offset M] [--occluded-gap M] [--occluded-ratio R]
+//               [--consolidate 0|1] [--free-min-count N]
+// (they set the default run's FusionParams of those names; otherwise the defaults.)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -284,8 +286,7 @@ std::string Table(const std::vector<Row>& rows) {
           r.log.c_str(), r.scans, r.points, r.raw, k == 0 ? "paper" : "default", run.published,
           run.clusters, run.identical_pairs, 100.0 * run.coverage.within_5cm,
           100.0 * run.coverage.within_10cm, run.seen.seen_through_m, run.seen.published_m,
-          run.engine_s,
-          static_cast<double>(r.raw) / run.engine_s);
+          run.engine_s, static_cast<double>(r.raw) / run.engine_s);
       t << buf;
     }
   }
