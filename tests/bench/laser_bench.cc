@@ -13,6 +13,8 @@
 //               [--wall-offset M] [--occluded-gap M] [--occluded-ratio R]
 //               [--consolidate 0|1] [--free-min-count N]
 // (they set the default run's FusionParams of those names; otherwise the defaults.)
+// With MAPD_BENCH_WORST set, each run also prints its 8 published segments with
+// the most seen-through length on stderr (where to look in the pictures).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
