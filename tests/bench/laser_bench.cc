@@ -214,7 +214,7 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
   if (!out) return false;
   const double panel = w + 20.0;
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << static_cast<int>(2 * panel + 20)
-      << "\" height=\"" << static_cast<int>(h + 60)
+      << "\" height=\"" << static_cast<int>(h + 76)
       << "\" font-family=\"sans-serif\" font-size=\"14\">\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   const RunResult* runs[2] = {&off, &on};
@@ -222,14 +222,16 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
                            "default (guard, consolidation)"};
   for (int k = 0; k < 2; ++k) {
     const RunResult& r = *runs[k];
-    char title[320];
-    std::snprintf(title, sizeof(title),
-                  "%s, %s: %zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm, "
+    char title[160], figures[200];
+    std::snprintf(title, sizeof(title), "%s, %s", log.c_str(), titles[k]);
+    std::snprintf(figures, sizeof(figures),
+                  "%zu fused, %.1f%% / %.1f%% of points within 5 / 10 cm, "
                   "%.1f of %.1f m seen through",
-                  log.c_str(), titles[k], r.published, 100.0 * r.coverage.within_5cm,
-                  100.0 * r.coverage.within_10cm, r.seen.seen_through_m, r.seen.published_m);
-    out << "<g transform=\"translate(" << 10 + k * panel << ",40)\">\n"
-        << "<text x=\"0\" y=\"-14\">" << title << "</text>\n"
+                  r.published, 100.0 * r.coverage.within_5cm, 100.0 * r.coverage.within_10cm,
+                  r.seen.seen_through_m, r.seen.published_m);
+    out << "<g transform=\"translate(" << 10 + k * panel << ",56)\">\n"
+        << "<text x=\"0\" y=\"-30\">" << title << "</text>\n"
+        << "<text x=\"0\" y=\"-12\">" << figures << "</text>\n"
         << "<clipPath id=\"panel" << k << "\"><rect width=\"" << w << "\" height=\"" << h
         << "\"/></clipPath>\n"
         << "<rect width=\"" << w << "\" height=\"" << h << "\" fill=\"none\" stroke=\"#ccc\"/>\n"
