@@ -21,9 +21,9 @@ constexpr double kMinCellM = 1e-3;
 
 }  // namespace
 
-Vec2 CornerPoint(const Vec2& p, const Line2& lp, const Vec2& q, const Line2& lq, double snap_m,
-                 CornerMode mode) {
-  const Vec2 midpoint = 0.5 * (p + q);
+CornerJoint CornerPoint(const Vec2& p, const Line2& lp, const Vec2& q, const Line2& lq,
+                        double snap_m, CornerMode mode) {
+  const CornerJoint midpoint{0.5 * (p + q), false};
   if (mode == CornerMode::kMidpoint) return midpoint;
   const double sin_angle = Cross(lp.direction, lq.direction);  // unit directions
   if (std::abs(sin_angle) <= std::sin(kMinCornerAngleRad)) return midpoint;
@@ -31,7 +31,7 @@ Vec2 CornerPoint(const Vec2& p, const Line2& lp, const Vec2& q, const Line2& lq,
   const double t = Cross(lq.point - lp.point, lq.direction) / sin_angle;
   const Vec2 x = lp.point + t * lp.direction;
   if ((x - p).norm() > snap_m || (x - q).norm() > snap_m) return midpoint;
-  return x;
+  return {x, true};
 }
 
 CornerSnapper::CornerSnapper(double snap_m, CornerMode mode, CornerPairing pairing)
@@ -88,8 +88,11 @@ Vec2 CornerSnapper::Joint(const EndRef& e, const EndRef& other) const {
   const Line2& le = entries_.at(e.id).line;
   const Line2& lo = entries_.at(other.id).line;
   // Evaluate in (cluster id) order so that both partners get the same point.
-  return e.id < other.id ? CornerPoint(e.p, le, other.p, lo, snap_m_, mode_)
-                         : CornerPoint(other.p, lo, e.p, le, snap_m_, mode_);
+  const CornerJoint joint = e.id < other.id ? CornerPoint(e.p, le, other.p, lo, snap_m_, mode_)
+                                            : CornerPoint(other.p, lo, e.p, le, snap_m_, mode_);
+  if (mode_ == CornerMode::kMidpoint || joint.intersection) return joint.point;
+  // No usable intersection: the foot of the midpoint on e's own line.
+  return le.point + (joint.point - le.point).dot(le.direction) * le.direction;
 }
 
 void CornerSnapper::CollectAffected(const std::vector<Vec2>& points, double slack_m,

@@ -244,7 +244,10 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot, const Vec
                              const std::vector<GroundFeature>& features, ChangeFeed* changes) {
   if (sensor_xy_m != nullptr) {
     // Evidence first: the walls resolved below see this observation's views.
-    for (const GroundFeature& f : features) consolidator_.AddView(*sensor_xy_m, f.segment);
+    std::vector<Segment2> segments;
+    segments.reserve(features.size());
+    for (const GroundFeature& f : features) segments.push_back(f.segment);
+    consolidator_.AddObservation(*sensor_xy_m, segments);
   }
   if (!bounded_) observations_.insert(observation);
   last_observation_ = observation;

@@ -167,13 +167,19 @@ Status FusionEngine::SaveState(std::string* out) const {
   const bool evidence_on = e.params_.consolidate && e.params_.wall_occluded_gap_m > 0.0;
   const FreeSpaceGrid* free_space = e.consolidator_.free_space();
   if (evidence_on) w.U8(free_space != nullptr ? 1 : 0);
-  if (free_space != nullptr) {
-    const auto tiles = free_space->SortedTiles();
+  const auto write_tiles = [&w](const FreeSpaceGrid& grid) {
+    const auto tiles = grid.SortedTiles();
     w.U64(tiles.size());
     for (const auto& [key, tile] : tiles) {
       w.U64(key);
       w.Str(std::string_view(reinterpret_cast<const char*>(tile->data()), tile->size()));
     }
+  };
+  if (free_space != nullptr) {
+    write_tiles(*free_space);
+    // The proofs of occlusion exist with the evidence when wall_proof_gap_m > 0
+    // (in the params key, so the layout follows from the params).
+    if (e.consolidator_.proof() != nullptr) write_tiles(*e.consolidator_.proof());
   }
   w.U64(Fnv1a(*out));
   return Status::Ok();
@@ -261,20 +267,26 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   if (evidence_on && r.U8() != 0) {
     FreeSpaceGrid* free_space = e.consolidator_.EnableFreeSpace();
     if (free_space == nullptr) return Corrupt("free-space evidence with it off");
-    const uint64_t tiles = r.Count(8 + 8 + sizeof(FreeSpaceGrid::Tile));
-    uint64_t previous_key = 0;
-    for (uint64_t i = 0; i < tiles && r.ok(); ++i) {
-      const uint64_t key = r.U64();
-      const std::string bytes = r.Str();
-      if (!r.ok()) break;
-      if (bytes.size() != sizeof(FreeSpaceGrid::Tile) || (i > 0 && key <= previous_key)) {
-        return Corrupt("a free-space tile");
+    const auto read_tiles = [&r](FreeSpaceGrid* grid) {
+      const uint64_t tiles = r.Count(8 + 8 + sizeof(FreeSpaceGrid::Tile));
+      uint64_t previous_key = 0;
+      for (uint64_t i = 0; i < tiles && r.ok(); ++i) {
+        const uint64_t key = r.U64();
+        const std::string bytes = r.Str();
+        if (!r.ok()) break;
+        if (bytes.size() != sizeof(FreeSpaceGrid::Tile) || (i > 0 && key <= previous_key)) {
+          return false;
+        }
+        previous_key = key;
+        FreeSpaceGrid::Tile tile;
+        std::memcpy(tile.data(), bytes.data(), tile.size());
+        grid->RestoreTile(key, tile);
       }
-      previous_key = key;
-      FreeSpaceGrid::Tile tile;
-      std::memcpy(tile.data(), bytes.data(), tile.size());
-      free_space->RestoreTile(key, tile);
-    }
+      return true;
+    };
+    if (!read_tiles(free_space)) return Corrupt("a free-space tile");
+    FreeSpaceGrid* proof = e.consolidator_.mutable_proof();
+    if (proof != nullptr && !read_tiles(proof)) return Corrupt("a proof-of-occlusion tile");
   }
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
   for (const ClusterStats& stats : piece_stats) e.consolidator_.Upsert(stats, stats.Refit());

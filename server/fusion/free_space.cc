@@ -132,6 +132,31 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   }
 }
 
+void FreeSpaceGrid::AddLine(const Segment2& line) {
+  const int steps = std::max(1, static_cast<int>(std::ceil(line.length() / (0.25 * kCellM))));
+  std::vector<uint64_t> cells;
+  cells.reserve(static_cast<size_t>(steps) + 1);
+  for (int i = 0; i <= steps; ++i) {
+    const Vec2 p = line.a + (static_cast<double>(i) / steps) * (line.b - line.a);
+    cells.push_back(TileKey(CellIndex(p.x()), CellIndex(p.y())));
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  for (uint64_t cell : cells) {
+    const Vec2 centre = CellCentre(cell);
+    const int64_t cx = CellIndex(centre.x()), cy = CellIndex(centre.y());
+    const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
+    TileData& tile = TileAt(tx, ty);
+    const size_t row = static_cast<size_t>(cy - ty * kTileCells);
+    const int bit = static_cast<int>(cx - tx * kTileCells);
+    uint8_t& count = tile.counts[row * kTileCells + static_cast<size_t>(bit)];
+    if (count == 255) continue;
+    ++count;
+    if (count == min_count_) newly_free_.push_back(cell);
+    if (count == 255) tile.saturated[row] |= 1u << bit;
+  }
+}
+
 bool FreeSpaceGrid::Probe::IsFree(const Vec2& p) {
   const int64_t cx = CellIndex(p.x()), cy = CellIndex(p.y());
   const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);

@@ -50,6 +50,11 @@ class FreeSpaceGrid {
   // Adds the visibility triangle of `segment`, observed from `origin` (map frame).
   void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment);
 
+  // Counts one in every cell the segment crosses (sampled every kCellM / 4,
+  // each cell once): proofs of occlusion (occlusion_proof.h) use a grid of
+  // their own this way.
+  void AddLine(const geometry::Segment2& line);
+
   // Whether the cell that contains p is observed free.
   bool IsFree(const geometry::Vec2& p) const { return Probe(*this).IsFree(p); }
 

@@ -32,6 +32,8 @@ Status FusionParams::Validate() const {
       CheckParamRange("fusion params", "wall_occluded_gap_m", wall_occluded_gap_m, 0.0, HUGE_VAL));
   MAPD_RETURN_IF_ERROR(CheckParamRange("fusion params", "wall_occluded_gap_ratio",
                                        wall_occluded_gap_ratio, 0.0, 1000.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "wall_proof_gap_m", wall_proof_gap_m, 0.0, 1000.0));
   if (wall_occluded_gap_ratio == 0.0) {
     return Status::InvalidArgument("fusion params: wall_occluded_gap_ratio must be > 0");
   }
@@ -65,8 +67,10 @@ std::string FusionParamsKey(const FusionParams& p) {
   // Appended only when on, so that snapshots taken without it stay loadable.
   if (p.wall_occluded_gap_m > 0.0) {
     std::snprintf(text, sizeof(text),
-                  " wall_occluded_gap_m=%.17g wall_occluded_gap_ratio=%.17g wall_free_min_count=%u",
-                  p.wall_occluded_gap_m, p.wall_occluded_gap_ratio, p.wall_free_min_count);
+                  " wall_occluded_gap_m=%.17g wall_occluded_gap_ratio=%.17g wall_free_min_count=%u"
+                  " evidence_model=2 wall_proof_gap_m=%.17g",
+                  p.wall_occluded_gap_m, p.wall_occluded_gap_ratio, p.wall_free_min_count,
+                  p.wall_proof_gap_m);
     key += text;
   }
   return key;

@@ -89,6 +89,13 @@ struct FusionParams {
   // more wall on seen-through cells), while a wrongly free cell only costs a
   // join (a wall published in two pieces).
   uint32_t wall_free_min_count = 1;
+  // ... and a gap up to this long joins only where an observation proved it
+  // occluded: one that saw both pieces with a segment of its own in front of
+  // the gap (occlusion_proof.h). Indoors an unseen gap of a few metres is
+  // more often a doorway or a crossing corridor seen through to clutter (which
+  // leaves no segment, so no visibility triangle) than an occlusion (issue 40,
+  // docs/fusion-real-data.md). Metres, in [0, 1000]; 0: no proof needed.
+  double wall_proof_gap_m = 4.0;
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

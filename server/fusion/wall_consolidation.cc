@@ -5,6 +5,7 @@
 #include <unordered_set>
 
 #include "fusion/chain_guard.h"
+#include "fusion/occlusion_proof.h"
 
 namespace mapd::fusion {
 
@@ -94,7 +95,7 @@ bool Pierced(const Segment2& s, const FreeSpaceGrid& free_space) {
 
 bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
                const FusionParams& params, const FreeSpaceGrid* free_space,
-               std::vector<Vec2>* gap_samples) {
+               std::vector<Vec2>* gap_samples, const FreeSpaceGrid* proof) {
   const double offset_m = params.wall_offset_m;
   if (NearIdentical(p, q, offset_m)) return true;  // b.
   // a. Collinear within delta and the offset, overlapping or within the gap.
@@ -127,6 +128,18 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
   if (AnySample(l.a, u, t0, t1, [&](const Vec2& x) { return probe.IsFree(x); })) {
     return false;
   }
+  if (gap <= params.wall_proof_gap_m) {
+    // A short unseen gap may be an opening seen through to clutter: join only
+    // where an observation proved it occluded. The ends (a cell each) may
+    // fall outside the proof: pieces' fitted ends are not the observed ones.
+    if (proof == nullptr) return false;
+    FreeSpaceGrid::Probe proven(*proof);
+    const double trim = FreeSpaceGrid::kCellM;
+    const auto unproven = [&](const Vec2& x) { return !proven.IsFree(x); };
+    const bool missing = t1 - t0 > 2.0 * trim ? AnySample(l.a, u, t0 + trim, t1 - trim, unproven)
+                                              : unproven(l.a + 0.5 * (t0 + t1) * u);
+    if (missing) return false;
+  }
   if (gap_samples != nullptr) {
     AnySample(l.a, u, t0, t1, [&](const Vec2& x) {
       gap_samples->push_back(x);
@@ -144,8 +157,18 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
     // Pieces filed so far were checked without evidence: none is pierced yet,
     // and the grid starts empty, so that still holds.
     free_space_ = std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count);
+    if (params_.wall_proof_gap_m > 0.0) proof_ = std::make_unique<FreeSpaceGrid>(1);
   }
   return free_space_.get();
+}
+
+void WallConsolidator::AddObservation(const Vec2& origin, const std::vector<Segment2>& segments) {
+  if (EnableFreeSpace() == nullptr) return;
+  for (const Segment2& s : segments) free_space_->AddView(origin, s);
+  if (!proof_) return;
+  for (const Segment2& stretch : OccludedStretches(origin, segments, params_)) {
+    proof_->AddLine(stretch);
+  }
 }
 
 void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
@@ -226,7 +249,7 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
                              if (q.pierced) return true;
                              gap_samples.clear();
                              if (!OnOneWall(s, id, q.fit.segment, other, params_, free_space_.get(),
-                                            &gap_samples)) {
+                                            &gap_samples, proof_.get())) {
                                return true;
                              }
                              // Bridged an occluded gap: watch its cells.
@@ -250,6 +273,25 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
 
 void WallConsolidator::TakeEvidence() {
   if (!free_space_) return;
+  if (proof_) {
+    // Newly proven cells can only join pieces across a gap of up to
+    // wall_proof_gap_m: re-resolve every piece filed within reach of one.
+    const double reach_m =
+        0.5 * params_.wall_proof_gap_m + params_.wall_offset_m + 0.71 * kPieceStepM + kSlackM;
+    uint64_t last_key = 0;
+    bool has_last = false;
+    for (uint64_t cell : proof_->TakeNewlyFree()) {
+      const Vec2 centre = FreeSpaceGrid::CellCentre(cell);
+      const uint64_t key = IndexCellKey(centre);
+      if (has_last && key == last_key) continue;  // one query per run of cells in one index cell
+      last_key = key;
+      has_last = true;
+      const Vec2 corner = FreeSpaceGrid::CellCentre(key) - Vec2(0.5, 0.5) * FreeSpaceGrid::kCellM;
+      const Vec2 index_centre = (corner / FreeSpaceGrid::kCellM + Vec2(0.5, 0.5)) * kPieceStepM;
+      index_.ForEachNear(index_centre, reach_m + 0.71 * kPieceStepM,
+                         [&](ClusterId id) { touched_pieces_.push_back(id); });
+    }
+  }
   const std::vector<uint64_t> cells = free_space_->TakeNewlyFree();
   if (cells.empty()) return;
   // The new free cells by index cell.

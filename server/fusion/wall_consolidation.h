@@ -63,10 +63,13 @@ bool NearIdentical(const geometry::Segment2& p, const geometry::Segment2& q, dou
 // `free_space` (null: no evidence) enables the occluded-gap join; when it
 // joins across such a gap, the gap's samples on L's line are appended to
 // `gap_samples` if not null.
+// `proof` (cells an observation proved occluded, occlusion_proof.h; null:
+// none) must cover a gap of up to params.wall_proof_gap_m for it to join.
 bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segment2& q,
                ClusterId q_id, const FusionParams& params,
                const FreeSpaceGrid* free_space = nullptr,
-               std::vector<geometry::Vec2>* gap_samples = nullptr);
+               std::vector<geometry::Vec2>* gap_samples = nullptr,
+               const FreeSpaceGrid* proof = nullptr);
 
 // Whether an observed-free cell lies on `s` (its ends trimmed, see above).
 bool Pierced(const geometry::Segment2& s, const FreeSpaceGrid& free_space);
@@ -88,11 +91,20 @@ class WallConsolidator {
   void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment) {
     if (EnableFreeSpace() != nullptr) free_space_->AddView(origin, segment);
   }
-  // Creates the (empty) grid if wall_occluded_gap_m > 0 and returns it, else
-  // null. Snapshots restore a grid through it.
+  // Free-space evidence and proofs of occlusion from one observation: the
+  // visibility triangle of each segment (AddView) and the stretches its
+  // segments prove occluded (occlusion_proof.h; with wall_proof_gap_m > 0).
+  void AddObservation(const geometry::Vec2& origin,
+                      const std::vector<geometry::Segment2>& segments);
+  // Creates the (empty) grids if wall_occluded_gap_m > 0 and returns the
+  // free-space one, else null. Snapshots restore the grids through it.
   FreeSpaceGrid* EnableFreeSpace();
   // Null before the first view, or with wall_occluded_gap_m = 0.
   const FreeSpaceGrid* free_space() const { return free_space_.get(); }
+  // The proofs of occlusion: a cell counts once proven. Null as free_space(),
+  // and with wall_proof_gap_m = 0.
+  const FreeSpaceGrid* proof() const { return proof_.get(); }
+  FreeSpaceGrid* mutable_proof() { return proof_.get(); }
   // All pieces, ascending id (snapshots).
   const std::map<ClusterId, ClusterStats>& pieces() const { return piece_stats_; }
 
@@ -136,6 +148,7 @@ class WallConsolidator {
   std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
   UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
   std::unique_ptr<FreeSpaceGrid> free_space_;  // see AddView
+  std::unique_ptr<FreeSpaceGrid> proof_;       // see AddObservation
   // Index cells (kPieceStepM) of bridged occluded gaps -> the pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;

@@ -265,6 +265,10 @@ const std::vector<Setting>& Settings() {
       Count("fusion.wall_free_min_count", "wall consolidation with free-space evidence: visibility triangles "
             "(sensor to observed segment) that must cover a 0.25 m cell before it counts as seen free",
             [](C& c) -> auto& { return c.fusion.wall_free_min_count; }, 1, 255),
+      Real("fusion.wall_proof_gap_m", "wall consolidation with free-space evidence: an occluded gap up "
+           "to this long joins only where an observation saw something in front of it (indoors a short "
+           "unseen gap is more often a doorway seen through to clutter); metres, 0 = no proof needed",
+           [](C& c) -> auto& { return c.fusion.wall_proof_gap_m; }, {0, 1000}),
 
       // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
       Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",

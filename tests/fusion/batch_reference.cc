@@ -41,15 +41,18 @@ Fit FitEndpoints(const std::vector<Vec2>& points) {
 Vec2 Joint(const Vec2& p, const Fit& lp, const Vec2& q, const Fit& lq, const FusionParams& params) {
   const Vec2 mid = (p + q) / 2.0;
   if (params.corner_mode == CornerMode::kMidpoint) return mid;
+  // Without a usable intersection, p slides along its own line to the point
+  // nearest the midpoint.
+  const Vec2 foot = lp.point + (mid - lp.point).dot(lp.direction) * lp.direction;
   const double angle = std::acos(std::min(1.0, std::abs(lp.direction.dot(lq.direction))));
-  if (angle <= 10.0 * 3.14159265358979323846 / 180.0) return mid;
+  if (angle <= 10.0 * 3.14159265358979323846 / 180.0) return foot;
   // lp.point + t * lp.direction = lq.point + s * lq.direction
   Eigen::Matrix2d a;
   a.col(0) = lp.direction;
   a.col(1) = -lq.direction;
   const Eigen::Vector2d ts = a.colPivHouseholderQr().solve(lq.point - lp.point);
   const Vec2 x = lp.point + ts(0) * lp.direction;
-  if ((x - p).norm() > params.snap_m || (x - q).norm() > params.snap_m) return mid;
+  if ((x - p).norm() > params.snap_m || (x - q).norm() > params.snap_m) return foot;
   return x;
 }
 
@@ -248,6 +251,141 @@ class SeenFree {
   std::map<std::pair<int64_t, int64_t>, uint32_t> counts_;
 };
 
+// Proofs of occlusion, from docs/algorithms.md A.11 ("Proof of occlusion"):
+// in one observation, two features on one line (the longer one's, L: within
+// delta, the shorter's ends within wall_offset_m of it) with a gap along L of
+// more than wall_gap_m and at most wall_occluded_gap_m, seen from more than
+// wall_offset_m off L's line, at most 4 apart in the order of their
+// midpoints' bearings from the sensor: every other feature with a point
+// strictly inside the triangle (sensor, the gap's ends moved wall_offset_m
+// towards the sensor) proves occluded its shadow on L's line (where the rays
+// through its ends meet it), within the gap. The cells of a proven stretch
+// are those of its points every 0.0625 m, both ends included.
+class ProvenOccluded {
+ public:
+  static constexpr double kCellM = 0.25;
+  static constexpr double kMarkStepM = 0.0625;
+  static constexpr double kSampleStepM = 0.125;
+
+  ProvenOccluded(const std::vector<BatchObservation>& observations, const FusionParams& params) {
+    for (const BatchObservation& o : observations) {
+      if (!o.has_sensor) continue;
+      const size_t n = o.features.size();
+      std::vector<std::pair<double, size_t>> by_bearing;
+      for (size_t i = 0; i < n; ++i) {
+        const Vec2 m = o.features[i].segment.midpoint() - o.sensor_xy_m;
+        by_bearing.push_back({std::atan2(m.y(), m.x()), i});
+      }
+      std::sort(by_bearing.begin(), by_bearing.end());
+      for (size_t x = 0; x < n; ++x) {
+        for (size_t y = x + 1; y < n && y <= x + 4; ++y) {
+          Pair(o, by_bearing[x].second, by_bearing[y].second, params);
+        }
+      }
+    }
+  }
+
+  bool Proven(const Vec2& p) const { return cells_.count({Cell(p.x()), Cell(p.y())}) != 0; }
+  // Whether every sample from p + t0 u to p + t1 u (every kSampleStepM, both
+  // ends included) is proven.
+  bool AllProven(const Vec2& p, const Vec2& u, double t0, double t1) const {
+    const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / kSampleStepM)));
+    for (int i = 0; i <= steps; ++i) {
+      if (!Proven(p + (t0 + (t1 - t0) * i / steps) * u)) return false;
+    }
+    return true;
+  }
+
+ private:
+  static int64_t Cell(double x) { return static_cast<int64_t>(std::floor(x / kCellM)); }
+
+  void Pair(const BatchObservation& o, size_t i, size_t j, const FusionParams& params) {
+    const Segment2& p = o.features[i].segment;
+    const Segment2& q = o.features[j].segment;
+    const Segment2& l = p.length() >= q.length() ? p : q;
+    const Segment2& s = p.length() >= q.length() ? q : p;
+    const Vec2 u = l.direction().normalized();
+    if (std::abs(geometry::Cross(u, s.direction().normalized())) > std::sin(params.delta_rad))
+      return;
+    const Vec2 n(-u.y(), u.x());
+    if (std::abs(n.dot(s.a - l.a)) > params.wall_offset_m ||
+        std::abs(n.dot(s.b - l.a)) > params.wall_offset_m) {
+      return;
+    }
+    const double ta = u.dot(s.a - l.a), tb = u.dot(s.b - l.a);
+    double t0, t1;
+    if (std::min(ta, tb) > l.length()) {
+      t0 = l.length();
+      t1 = std::min(ta, tb);
+    } else if (std::max(ta, tb) < 0.0) {
+      t0 = std::max(ta, tb);
+      t1 = 0.0;
+    } else {
+      return;
+    }
+    if (!(t1 - t0 > params.wall_gap_m) || t1 - t0 > params.wall_occluded_gap_m) return;
+    const Vec2& o_xy = o.sensor_xy_m;
+    const double side = n.dot(o_xy - l.a);
+    if (!(std::abs(side) > params.wall_offset_m)) return;
+    const Vec2 toward = (side > 0.0 ? 1.0 : -1.0) * params.wall_offset_m * n;
+    const Vec2 g0 = l.a + t0 * u + toward, g1 = l.a + t1 * u + toward;
+    for (size_t k = 0; k < o.features.size(); ++k) {
+      if (k == i || k == j) continue;
+      const Segment2& occluder = o.features[k].segment;
+      if (!Inside(occluder, o_xy, g0, g1)) continue;
+      double sa, sb;
+      if (!Shadow(o_xy, occluder.a, l.a, u, &sa) || !Shadow(o_xy, occluder.b, l.a, u, &sb))
+        continue;
+      const double lo = std::max(t0, std::min(sa, sb)), hi = std::min(t1, std::max(sa, sb));
+      if (!(hi > lo)) continue;
+      const int steps = std::max(1, static_cast<int>(std::ceil((hi - lo) / kMarkStepM)));
+      const Vec2 a = l.a + lo * u, b = l.a + hi * u;
+      for (int m = 0; m <= steps; ++m) {
+        const Vec2 x = a + (static_cast<double>(m) / steps) * (b - a);
+        cells_.insert({Cell(x.x()), Cell(x.y())});
+      }
+    }
+  }
+
+  // Whether some point of s lies strictly inside the triangle (o, p, q):
+  // s clipped to the triangle's three open half-planes is not empty.
+  static bool Inside(const Segment2& s, const Vec2& o, const Vec2& p, const Vec2& q) {
+    const double orient = geometry::Cross(p - o, q - o);
+    if (orient == 0.0) return false;
+    const Vec2 corners[3] = {o, p, q};
+    double lo = 0.0, hi = 1.0;
+    for (int e = 0; e < 3; ++e) {
+      const Vec2& x = corners[e];
+      const Vec2& y = corners[(e + 1) % 3];
+      // f(t) = orient-signed cross of the edge with s(t) - x, > 0 inside.
+      const double f0 = (orient > 0 ? 1.0 : -1.0) * geometry::Cross(y - x, s.a - x);
+      const double f1 = (orient > 0 ? 1.0 : -1.0) * geometry::Cross(y - x, s.b - x);
+      if (f0 <= 0.0 && f1 <= 0.0) return false;
+      if (f0 > 0.0 && f1 > 0.0) continue;
+      const double t = f0 / (f0 - f1);  // where f crosses zero
+      if (f0 > 0.0)
+        hi = std::min(hi, t);
+      else
+        lo = std::max(lo, t);
+    }
+    return lo < hi;
+  }
+
+  // Where the ray from o through x meets the line la + t u, going forward.
+  static bool Shadow(const Vec2& o, const Vec2& x, const Vec2& la, const Vec2& u, double* t) {
+    Eigen::Matrix2d m;
+    m.col(0) = x - o;
+    m.col(1) = -u;
+    if (std::abs(m.determinant()) < 1e-12) return false;
+    const Eigen::Vector2d st = m.colPivHouseholderQr().solve(la - o);
+    if (!(st(0) > 0.0)) return false;
+    *t = st(1);
+    return true;
+  }
+
+  std::set<std::pair<int64_t, int64_t>> cells_;
+};
+
 // A piece is pierced when a sample of its fitted segment, 0.5 m at each end
 // aside, lies in a seen-free cell: it then lies on one wall with no other piece.
 bool PiercedRef(const Segment2& s, const SeenFree& seen) {
@@ -256,7 +394,7 @@ bool PiercedRef(const Segment2& s, const SeenFree& seen) {
   return seen.AnyFree(s.a, s.direction() / length, 0.5, length - 0.5);
 }
 
-enum class GapJoin { kNone, kJoined, kVetoed };
+enum class GapJoin { kNone, kJoined, kVetoed, kUnproven };
 
 // Rule (a) extended by the evidence: L the longer piece (ties: the smaller
 // id), S the other; the included angle <= delta, both ends of S within
@@ -264,7 +402,8 @@ enum class GapJoin { kNone, kJoined, kVetoed };
 // wall_occluded_gap_m and wall_occluded_gap_ratio times S's length: they lie
 // on one wall unless a sample of the gap on L's line is seen free.
 GapJoin OccludedGap(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
-                    const FusionParams& params, const SeenFree& seen) {
+                    const FusionParams& params, const SeenFree& seen,
+                    const ProvenOccluded& proven) {
   const bool p_longer = p.length() > q.length() || (p.length() == q.length() && p_id < q_id);
   const Segment2& l = p_longer ? p : q;
   const Segment2& s = p_longer ? q : p;
@@ -285,7 +424,17 @@ GapJoin OccludedGap(const Segment2& p, ClusterId p_id, const Segment2& q, Cluste
   }
   const bool seen_through = before > after ? seen.AnyFree(l.a, u, -before, 0.0)
                                            : seen.AnyFree(l.a, u, l.length(), l.length() + after);
-  return seen_through ? GapJoin::kVetoed : GapJoin::kJoined;
+  if (seen_through) return GapJoin::kVetoed;
+  if (gap <= params.wall_proof_gap_m) {
+    // Up to wall_proof_gap_m, only where proven occluded, a cell at each end aside.
+    const double t0 = before > after ? -before : l.length();
+    const double t1 = before > after ? 0.0 : l.length() + after;
+    const double trim = ProvenOccluded::kCellM;
+    const bool all = t1 - t0 > 2.0 * trim ? proven.AllProven(l.a, u, t0 + trim, t1 - trim)
+                                          : proven.Proven(l.a + 0.5 * (t0 + t1) * u);
+    if (!all) return GapJoin::kUnproven;
+  }
+  return GapJoin::kJoined;
 }
 
 }  // namespace
@@ -359,6 +508,10 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
   result.evidence.on = params.consolidate && params.wall_occluded_gap_m > 0.0 && any_sensor;
   const SeenFree seen(result.evidence.on ? observations : std::vector<BatchObservation>(),
                       params.wall_free_min_count);
+  const ProvenOccluded proven(result.evidence.on && params.wall_proof_gap_m > 0.0
+                                  ? observations
+                                  : std::vector<BatchObservation>(),
+                              params);
   std::vector<bool> pierced(published.size(), false);
   std::vector<std::vector<GapJoin>> gap_join(published.size(),
                                              std::vector<GapJoin>(published.size()));
@@ -372,7 +525,8 @@ BatchResult BatchFuse(const std::vector<BatchObservation>& observations,
       for (size_t j = i + 1; j < published.size(); ++j) {
         const BatchCluster& p = result.clusters[published[i]];
         const BatchCluster& q = result.clusters[published[j]];
-        gap_join[i][j] = gap_join[j][i] = OccludedGap(p.fitted, p.id, q.fitted, q.id, params, seen);
+        gap_join[i][j] = gap_join[j][i] =
+            OccludedGap(p.fitted, p.id, q.fitted, q.id, params, seen, proven);
         if (pierced[i] || pierced[j]) continue;
         result.evidence.occluded_joins += gap_join[i][j] == GapJoin::kJoined;
         result.evidence.seen_free_vetoes += gap_join[i][j] == GapJoin::kVetoed;

@@ -205,6 +205,28 @@ INSTANTIATE_TEST_SUITE_P(BothModes, CornerTest,
                            return std::string(CornerModeName(param_info.param));
                          });
 
+// Intersection corners without a usable intersection (near-parallel walls)
+// keep each wall on its own line: the ends slide along their lines to the
+// foot of their midpoint, instead of both moving to the midpoint, which
+// tilted each wall by up to snap_m / 2 (issue 40: a real corridor wall drawn
+// 13 cm into the corridor).
+TEST(FusionEngineTest, ANearParallelCornerKeepsEachWallOnItsLine) {
+  FusionParams params = Support(1);
+  params.corner_mode = CornerMode::kIntersection;
+  FusionEngine engine(params);
+  ASSERT_TRUE(engine.Add(1, 0, {Wall(1, {0, 0}, {5, 0}), Wall(2, {5.3, 0.3}, {10, 0.3})}).ok());
+  const std::vector<FusedFeature> walls = engine.Published();
+  ASSERT_EQ(walls.size(), 2u);
+  const auto ends = [](const FusedFeature& f) {
+    return f.segment.a.x() < f.segment.b.x() ? std::make_pair(f.segment.a, f.segment.b)
+                                             : std::make_pair(f.segment.b, f.segment.a);
+  };
+  ExpectNear(ends(walls[0]).first, {0, 0}, 1e-9);
+  ExpectNear(ends(walls[0]).second, {5.15, 0}, 1e-9);
+  ExpectNear(ends(walls[1]).first, {5.15, 0.3}, 1e-9);
+  ExpectNear(ends(walls[1]).second, {10, 0.3}, 1e-9);
+}
+
 // Six walls end on the x axis, at A (wall 1) -0.02, B 0.3, C 0.5, D 0.95, E 1.3,
 // F 1.55 (wall 6), each going off in its own direction; snap_m = 0.5. Mutual
 // nearest: B-C and E-F snap (each the other's nearest), A and D stay. Greedy in

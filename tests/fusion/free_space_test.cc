@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fusion/engine.h"
+#include "fusion/evidence_scenes.h"
 #include "fusion/params.h"
 
 namespace mapd::fusion {
@@ -73,25 +74,10 @@ TEST(FreeSpaceGridTest, AGrazingViewMarksNothingOnItsLine) {
 // from sensors at y = -10; the 6 m between them either behind a fence
 // (y = -3, x in [11, 15]: no ray reaches it) or open (seen through to a back
 // wall at y = 10).
-struct Obs {
-  ObservationId id;
-  Vec2 origin;
-  std::vector<GroundFeature> features;
-};
-
 std::vector<Obs> Street(bool fence, bool open_gap) {
-  std::vector<Obs> out;
-  FeatureId next_id = 1;
-  ObservationId next_obs = 1;
+  SceneBuilder scene;
   const auto add = [&](Vec2 origin, std::vector<Segment2> segments) {
-    Obs o{next_obs++, origin, {}};
-    for (const Segment2& s : segments) {
-      GroundFeature f;
-      f.id = next_id++;
-      f.segment = s;
-      o.features.push_back(f);
-    }
-    out.push_back(std::move(o));
+    scene.Add(origin, segments);
   };
   for (int k = 0; k < 4; ++k) {
     const double jitter = 0.002 * k;
@@ -101,7 +87,7 @@ std::vector<Obs> Street(bool fence, bool open_gap) {
     if (open_gap)
       add(Vec2(13.0 + k, -10.0), {{Vec2(8.0, 10.0 + jitter), Vec2(18.0, 10.0 + jitter)}});
   }
-  return out;
+  return scene.Take();
 }
 
 FusionParams WithEvidence(double occluded_gap_m, FusionMode mode = FusionMode::kExact) {
@@ -110,24 +96,6 @@ FusionParams WithEvidence(double occluded_gap_m, FusionMode mode = FusionMode::k
   p.wall_occluded_gap_m = occluded_gap_m;
   p.wall_free_min_count = 2;  // the street shows each opening to four views
   return p;
-}
-
-void Feed(FusionEngine* engine, const std::vector<Obs>& observations) {
-  for (const Obs& o : observations) {
-    ASSERT_TRUE(engine->AddFrom(o.id, 1, o.origin, o.features).ok());
-  }
-}
-
-// The published features on the line y = 0, as x extents, ascending.
-std::vector<std::pair<double, double>> OnWallLine(const FusionEngine& engine) {
-  std::vector<std::pair<double, double>> out;
-  for (const FusedFeature& f : engine.Published()) {
-    if (std::abs(f.fitted.a.y()) > 0.05 || std::abs(f.fitted.b.y()) > 0.05) continue;
-    out.push_back(
-        {std::min(f.fitted.a.x(), f.fitted.b.x()), std::max(f.fitted.a.x(), f.fitted.b.x())});
-  }
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 TEST(OccludedGapTest, AGapBehindAnOccluderJoins) {
@@ -211,20 +179,6 @@ TEST(OccludedGapTest, APieceSpanningASeenFreeStretchJoinsNothing) {
   FusionEngine engine(WithEvidence(10.0));
   Feed(&engine, observations);
   EXPECT_EQ(OnWallLine(engine).size(), 3u) << "both pieces and the pierced one, apart";
-}
-
-// Ids, counts and endpoints to the micrometre (moment sums are rounded
-// differently in another order; the partition is what must not change).
-std::string Describe(const std::vector<FusedFeature>& fused) {
-  std::string out;
-  char line[256];
-  for (const FusedFeature& f : fused) {
-    std::snprintf(line, sizeof(line), "%llu %.6f %.6f %.6f %.6f %u %u\n",
-                  static_cast<unsigned long long>(f.id), f.segment.a.x(), f.segment.a.y(),
-                  f.segment.b.x(), f.segment.b.y(), f.support, f.member_count);
-    out += line;
-  }
-  return out;
 }
 
 TEST(OccludedGapTest, TheMapDoesNotDependOnArrivalOrder) {
