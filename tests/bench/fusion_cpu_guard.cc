@@ -7,9 +7,10 @@
 // fresh pose jitter per scan, bounded mode, default settings, every scan
 // added with its sensor origin), and measures fused raw features per
 // CPU-second of this process (getrusage: the machine's other load does not
-// count, unlike wall time). It fails (exit 1) below half the figure the doc
-// states for the soak's fuser thread: a regression of the kind that made the
-// soak 5x slower fails it on any machine within 2x of the doc's.
+// count, unlike wall time). It fails (exit 1) when three runs in a row are
+// each below half the figure the doc states for the soak's fuser thread: a
+// regression of the kind that made the soak 5x slower fails it on any machine
+// within 2x of the doc's, and one run slowed by a busy host does not.
 //
 // The engine alone does less than the soak's fuser thread (no projection, no
 // database rows), so on the doc's machine the guard measures well above the
@@ -58,6 +59,78 @@ struct PoolScan {
   std::vector<GroundFeature> features;
 };
 
+constexpr int kRobots = 8;  // the soak's
+
+struct RunResult {
+  bool ok = false;
+  uint64_t added = 0;
+  double cpu_s = 0.0;
+  size_t published = 0;
+  uint64_t digest = 0;
+};
+
+// One run of the workload in a fresh engine, timed in CPU seconds.
+RunResult RunOnce(const std::vector<PoolScan>& pool, uint64_t target, bool soak_origin,
+                  bool no_origin) {
+  RunResult result;
+  const size_t n = pool.size();
+  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on
+  mapd::fusion::FusionEngine engine(fusion);
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> jitter(0.0, 0.01);
+  uint64_t added = 0, observation = 0;
+  std::vector<GroundFeature> features;
+  // The whole loop is timed (a per-call getrusage would sum rounding errors);
+  // the copy and jitter of each scan are a small part of it.
+  const double c0 = CpuSeconds();
+  for (size_t lap = 0; added < target; ++lap) {
+    for (int robot = 0; robot < kRobots && added < target; ++robot) {
+      const PoolScan& scan = pool[(lap + static_cast<size_t>(robot) * n / kRobots) % n];
+      // As the soak: the jitter moves the whole scan, features and sensor.
+      const Vec2 shift(jitter(rng), jitter(rng));
+      features = scan.features;
+      ++observation;
+      for (size_t k = 0; k < features.size(); ++k) {
+        features[k].id = (observation << 10) | k;
+        features[k].segment.a += shift;
+        features[k].segment.b += shift;
+      }
+      const Vec2 sensor = soak_origin ? shift : Vec2(scan.sensor + shift);
+      const auto robot_id = static_cast<mapd::fusion::RobotId>(robot);
+      const mapd::Status s = no_origin ? engine.Add(observation, robot_id, features)
+                                       : engine.AddFrom(observation, robot_id, sensor, features);
+      if (!s.ok()) {
+        std::fprintf(stderr, "fusion_cpu_guard: %s\n", s.ToString().c_str());
+        return result;
+      }
+      added += features.size();
+    }
+  }
+  const double cpu_s = CpuSeconds() - c0;
+  // A digest of the published map (ids, support, members, endpoints' bits):
+  // a speed-up must leave it as it was.
+  uint64_t digest = 1469598103934665603ULL;
+  const auto mix = [&](const void* p, size_t bytes) {
+    for (size_t i = 0; i < bytes; ++i) {
+      digest = (digest ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ULL;
+    }
+  };
+  for (const mapd::fusion::FusedFeature& f : engine.Published()) {
+    mix(&f.id, sizeof f.id);
+    mix(&f.support, sizeof f.support);
+    mix(&f.member_count, sizeof f.member_count);
+    for (const Vec2& p : {f.segment.a, f.segment.b, f.fitted.a, f.fitted.b}) {
+      mix(p.data(), 2 * sizeof(double));
+    }
+  }
+  result.ok = true;
+  result.added = added;
+  result.cpu_s = cpu_s;
+  result.published = engine.published_count();
+  result.digest = digest;
+  return result;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -99,65 +172,25 @@ int main(int argc, char** argv) {
     sc::Scan scan = sim.Simulate(k);
     if (!scan.features.empty()) pool.push_back({scan.estimated_pose.t, std::move(scan.features)});
   }
-  constexpr int kRobots = 8;
-  const size_t n = pool.size();
 
-  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on
-  mapd::fusion::FusionEngine engine(fusion);
-  std::mt19937_64 rng(1);
-  std::normal_distribution<double> jitter(0.0, 0.01);
-  uint64_t added = 0, observation = 0;
-  std::vector<GroundFeature> features;
-  // The whole loop is timed (a per-call getrusage would sum rounding errors);
-  // the copy and jitter of each scan are a small part of it.
-  const double c0 = CpuSeconds();
-  for (size_t lap = 0; added < target; ++lap) {
-    for (int robot = 0; robot < kRobots && added < target; ++robot) {
-      const PoolScan& scan = pool[(lap + static_cast<size_t>(robot) * n / kRobots) % n];
-      // As the soak: the jitter moves the whole scan, features and sensor.
-      const Vec2 shift(jitter(rng), jitter(rng));
-      features = scan.features;
-      ++observation;
-      for (size_t k = 0; k < features.size(); ++k) {
-        features[k].id = (observation << 10) | k;
-        features[k].segment.a += shift;
-        features[k].segment.b += shift;
-      }
-      const Vec2 sensor = soak_origin ? shift : Vec2(scan.sensor + shift);
-      const auto robot_id = static_cast<mapd::fusion::RobotId>(robot);
-      const mapd::Status s = no_origin ? engine.Add(observation, robot_id, features)
-                                       : engine.AddFrom(observation, robot_id, sensor, features);
-      if (!s.ok()) {
-        std::fprintf(stderr, "fusion_cpu_guard: %s\n", s.ToString().c_str());
-        return 1;
-      }
-      added += features.size();
-    }
+  // CPU time still varies with what shares the host (a 2-core VM measured
+  // 56,000-90,000 for the same build): the guard fails only if three runs in
+  // a row are all below the bar, so one slow run is no alarm.
+  constexpr int kAttempts = 3;
+  for (int attempt = 1; attempt <= kAttempts; ++attempt) {
+    const RunResult r = RunOnce(pool, target, soak_origin, no_origin);
+    if (!r.ok) return 1;
+    const double measured = static_cast<double>(r.added) / r.cpu_s;
+    const double ratio = measured / kStatedFeaturesPerCpuS;
+    std::printf(
+        "fusion_cpu_guard: %llu raw features in %.2f CPU s, %zu published (digest %016llx); "
+        "measured %.0f features/CPU-s, stated %.0f (docs/long-running.md), ratio %.2f (fails "
+        "below %.2f; run %d of at most %d)\n",
+        static_cast<unsigned long long>(r.added), r.cpu_s, r.published,
+        static_cast<unsigned long long>(r.digest), measured, kStatedFeaturesPerCpuS, ratio,
+        min_ratio, attempt, kAttempts);
+    std::fflush(stdout);
+    if (ratio >= min_ratio) return 0;
   }
-  const double cpu_s = CpuSeconds() - c0;
-  const double measured = static_cast<double>(added) / cpu_s;
-  const double ratio = measured / kStatedFeaturesPerCpuS;
-  // A digest of the published map (ids, support, members, endpoints' bits):
-  // a speed-up must leave it as it was.
-  uint64_t digest = 1469598103934665603ULL;
-  const auto mix = [&](const void* p, size_t n) {
-    for (size_t i = 0; i < n; ++i) {
-      digest = (digest ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ULL;
-    }
-  };
-  for (const mapd::fusion::FusedFeature& f : engine.Published()) {
-    mix(&f.id, sizeof f.id);
-    mix(&f.support, sizeof f.support);
-    mix(&f.member_count, sizeof f.member_count);
-    for (const Vec2& p : {f.segment.a, f.segment.b, f.fitted.a, f.fitted.b}) {
-      mix(p.data(), 2 * sizeof(double));
-    }
-  }
-  std::printf(
-      "fusion_cpu_guard: %llu raw features in %.2f CPU s, %zu published (digest %016llx); "
-      "measured %.0f features/CPU-s, stated %.0f (docs/long-running.md), ratio %.2f (fails "
-      "below %.2f)\n",
-      static_cast<unsigned long long>(added), cpu_s, engine.published_count(),
-      static_cast<unsigned long long>(digest), measured, kStatedFeaturesPerCpuS, ratio, min_ratio);
-  return ratio < min_ratio ? 1 : 0;
+  return 1;
 }
