@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -70,10 +72,7 @@ std::vector<std::vector<uint32_t>> FusionEngine::Impl::GroupNodes(uint32_t root)
   }
   // A cut never leaves a piece below min_support (chain_guard.h, step 4).
   const auto publishable = [&](const std::vector<uint32_t>& subset) {
-    std::vector<uint32_t> subset_nodes;
-    subset_nodes.reserve(subset.size());
-    for (uint32_t i : subset) subset_nodes.push_back(nodes[i]);
-    return StatsOf(subset_nodes).support() >= params_.min_support;
+    return ReachesMinSupport(nodes, subset);
   };
   std::vector<std::vector<uint32_t>> groups =
       SplitChain(members, params_.chain_max_rms_m, params_.chain_max_sse_ratio,
@@ -113,6 +112,28 @@ ClusterStats FusionEngine::Impl::StatsOf(const std::vector<uint32_t>& nodes) con
   std::sort(s.robots.begin(), s.robots.end());
   s.robots.erase(std::unique(s.robots.begin(), s.robots.end()), s.robots.end());
   return s;
+}
+
+bool FusionEngine::Impl::ReachesMinSupport(const std::vector<uint32_t>& nodes,
+                                           const std::vector<uint32_t>& subset) const {
+  // StatsOf(subset).support() >= min_support without the hulls and moments:
+  // the chain guard asks this of every candidate cut, and on a long component
+  // the hulls made regrouping cost O(n^2 log n) (issue 46's profile: 45 % of
+  // the fuser in ConvexHull). Merging the same counters in the same order
+  // gives StatsOf's count, and counts never fall as counters merge
+  // (support_counter.h), so stopping at min_support gives the same answer.
+  SupportCounter support;
+  for (uint32_t i : subset) {
+    const uint32_t n = nodes[i];
+    if (bounded_ && folded_[n]) {
+      SupportCounter copy = folded_[n]->observations;
+      support.Merge(std::move(copy), support_cap_);
+    } else {
+      support.Add(observation_of_[n], support_cap_);
+    }
+    if (support.count() >= params_.min_support) return true;
+  }
+  return false;
 }
 
 void FusionEngine::Impl::FileInGrid(uint32_t node, const Segment2& segment) {
@@ -191,6 +212,7 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
   // so this search finds every candidate.
   const double band_m = params_.eta_m + kSearchSlackM;
   uint32_t root = Find(node);
+  const size_t max_candidates = bounded_ ? params_.max_link_candidates : SIZE_MAX;
   grid_.ForEachNearSegment(f.segment, band_m, [&](const IndexedFeature& g) {
     const double bound_m = std::min(circle.radius_m, g.radius_m) + params_.eta_m + kSearchSlackM;
     if ((g.centre - circle.centre).squaredNorm() > bound_m * bound_m) return;
@@ -198,8 +220,18 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
     if (other_root == root) return;  // an edge inside a component changes nothing
     if (geometry::PointSegmentDistance(g.centre, f.segment) > band_m) return;
     if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
+    if (std::getenv("DBG")) fprintf(stderr, "node %u g %u root %u(%u) other %u(%u) may %d\n", node, g.node, root, size_[root], other_root, size_[other_root], (int)MayLink(root, other_root));
+    if (bounded_ && !MayLink(root, other_root)) return;
     root = Union(root, other_root, merged_ids);
-  });
+  }, max_candidates);
+}
+
+bool FusionEngine::Impl::MayLink(uint32_t a, uint32_t b) const {
+  if (size_[a] + size_[b] <= params_.max_component_nodes) return true;
+  // Past the cap only a component the guard will not regroup may grow.
+  geometry::PointMoments2 both = stats_[a]->moments;
+  both.Merge(stats_[b]->moments);
+  return !guard_on_ || !ChainMayNeedSplit(both, params_.chain_max_rms_m);
 }
 
 uint32_t FusionEngine::Impl::NewNode(const GroundFeature& f, ObservationId observation,
@@ -236,7 +268,7 @@ bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const
     best_sq = d_sq;
     *node = g.node;
     found = true;
-  });
+  }, params_.max_link_candidates);
   return found;
 }
 
@@ -478,6 +510,13 @@ size_t FusionEngine::feature_count() const { return impl_->raw_feature_count_; }
 size_t FusionEngine::node_count() const { return impl_->parent_.size(); }
 size_t FusionEngine::cluster_count() const { return impl_->cluster_count_ + impl_->extra_groups_; }
 size_t FusionEngine::published_count() const { return impl_->published_.size(); }
+size_t FusionEngine::largest_component_nodes() const {
+  size_t largest = impl_->parent_.empty() ? 0 : 1;
+  for (uint32_t n = 0; n < impl_->parent_.size(); ++n) {
+    if (impl_->parent_[n] == n) largest = std::max<size_t>(largest, impl_->size_[n]);
+  }
+  return largest;
+}
 const FusionParams& FusionEngine::params() const { return impl_->params_; }
 
 }  // namespace mapd::fusion

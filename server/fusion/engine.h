@@ -127,6 +127,8 @@ class FusionEngine {
   size_t node_count() const;
   size_t cluster_count() const;  // clusters (the guard's groups), published or not
   size_t published_count() const;
+  // Nodes of the largest component ever formed (a component never shrinks).
+  size_t largest_component_nodes() const;
   const FusionParams& params() const;
 
  private:

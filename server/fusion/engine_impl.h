@@ -130,6 +130,9 @@ class FusionEngine::Impl {
   // The guard's groups of the component at `root`, as member nodes and stats.
   std::vector<std::vector<uint32_t>> GroupNodes(uint32_t root) const;
   ClusterStats StatsOf(const std::vector<uint32_t>& nodes) const;
+  // StatsOf({nodes[i] : i in subset}).support() >= min_support, cheaply.
+  bool ReachesMinSupport(const std::vector<uint32_t>& nodes,
+                         const std::vector<uint32_t>& subset) const;
   // Guard on: everything node `n` stands for (its feature, and in bounded
   // mode what was folded into it).
   ClusterStats NodeStats(uint32_t n) const {
@@ -143,6 +146,7 @@ class FusionEngine::Impl {
   uint32_t Find(uint32_t x);
   // Returns the surviving root; records the ids of both clusters in `merged_ids`.
   uint32_t Union(uint32_t a, uint32_t b, std::vector<ClusterId>* merged_ids);
+  bool MayLink(uint32_t a, uint32_t b) const;
   uint32_t NewNode(const GroundFeature& f, ObservationId observation, RobotId robot);
   // Bounded mode: the representative `f` folds into (both endpoints within
   // cover_m, criteria met; the nearest, ties by node), or false.

@@ -10,6 +10,7 @@
 // The grid and the snapper's index are refiled from the nodes, in node order
 // (the order the live engine filed them), so candidate scans visit the same
 // items in the same order.
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -133,8 +134,16 @@ Status FusionEngine::SaveState(std::string* out) const {
   w.U64(e.raw_feature_count_);
   w.U64(e.last_observation_);
   w.U8(e.has_last_observation_ ? 1 : 0);
+  // By id: the map's iteration order depends on its insertion history, and
+  // equal engines must give equal bytes (a restored engine's map was filled
+  // in another order).
+  std::vector<ClusterId> split_ids;
+  split_ids.reserve(e.split_.size());
+  for (const auto& entry : e.split_) split_ids.push_back(entry.first);
+  std::sort(split_ids.begin(), split_ids.end());
   w.U64(e.split_.size());
-  for (const auto& [id, record] : e.split_) {
+  for (ClusterId id : split_ids) {
+    const Impl::SplitRecord& record = e.split_.at(id);
     w.U64(id);
     w.U32(record.group_count);
     w.Ids(record.published);

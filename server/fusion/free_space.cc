@@ -64,10 +64,11 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   const HalfPlane planes[3] = {InwardRay(origin, a, origin, kSideErosionPerM),
                                Inward(a, b, kSegmentMarginM),
                                InwardRay(b, origin, origin, kSideErosionPerM)};
-  const double y_lo = std::min({origin.y(), a.y(), b.y()});
-  const double y_hi = std::max({origin.y(), a.y(), b.y()});
-  const double x_lo = std::min({origin.x(), a.x(), b.x()});
-  const double x_hi = std::max({origin.x(), a.x(), b.x()});
+  // The triangle's bounding box, clipped to the evidence range.
+  const double y_lo = std::max(std::min({origin.y(), a.y(), b.y()}), origin.y() - range_m_);
+  const double y_hi = std::min(std::max({origin.y(), a.y(), b.y()}), origin.y() + range_m_);
+  const double x_lo = std::max(std::min({origin.x(), a.x(), b.x()}), origin.x() - range_m_);
+  const double x_hi = std::min(std::max({origin.x(), a.x(), b.x()}), origin.x() + range_m_);
   // Consecutive rows mostly fall in the same tiles: the tiles of the current
   // tile row are looked up once each (row_tiles_, by column from tx_base; a
   // column outside it, which rounding could give, is looked up directly).
@@ -75,7 +76,11 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   const int64_t tx_count = FloorDiv(CellIndex(x_hi), kTileCells) - tx_base + 1;
   bool has_row = false;
   int64_t row_ty = 0;
-  for (int64_t cy = CellIndex(y_lo); cy <= CellIndex(y_hi); ++cy) {
+  // Rows whose centre lies in [y_lo, y_hi] (the others are outside the
+  // triangle or the range).
+  const int64_t cy_first = static_cast<int64_t>(std::ceil(y_lo / kCellM - 0.5));
+  const int64_t cy_last = static_cast<int64_t>(std::floor(y_hi / kCellM - 0.5));
+  for (int64_t cy = cy_first; cy <= cy_last; ++cy) {
     const double y = (static_cast<double>(cy) + 0.5) * kCellM;
     double lo = x_lo, hi = x_hi;
     for (const HalfPlane& h : planes) {

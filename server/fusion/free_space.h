@@ -44,10 +44,13 @@ class FreeSpaceGrid {
   static constexpr int kTileCells = 32;
   using Tile = std::array<uint8_t, kTileCells * kTileCells>;
 
-  // REQUIRES: 1 <= min_count <= 255.
-  explicit FreeSpaceGrid(uint32_t min_count) : min_count_(min_count) {}
+  // REQUIRES: 1 <= min_count <= 255, range_m > 0.
+  FreeSpaceGrid(uint32_t min_count, double range_m) : min_count_(min_count), range_m_(range_m) {}
 
-  // Adds the visibility triangle of `segment`, observed from `origin` (map frame).
+  // Adds the visibility triangle of `segment`, observed from `origin` (map
+  // frame), clipped to the square of half width range_m around `origin`: the
+  // cells one view writes are at most (2 range_m / kCellM)^2, however far
+  // and long the segment (FusionParams::evidence_range_m).
   void AddView(const geometry::Vec2& origin, const geometry::Segment2& segment);
 
   // Counts one in every cell the segment crosses (sampled every kCellM / 4,
@@ -100,6 +103,7 @@ class FreeSpaceGrid {
   TileData& TileAt(int64_t tx, int64_t ty);
 
   const uint32_t min_count_;
+  const double range_m_;
   std::unordered_map<uint64_t, std::unique_ptr<TileData>> tiles_;
   // AddView's scratch: the tiles of the tile row it is in, by column.
   std::vector<TileData*> row_tiles_;

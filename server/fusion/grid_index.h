@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <unordered_map>
 #include <utility>
@@ -43,6 +44,13 @@ class UniformGrid {
 
   void Insert(const geometry::Vec2& p, T item) { cells_[KeyOf(p)].push_back(std::move(item)); }
 
+  // Items filed in the cell that contains p.
+  size_t CountAt(const geometry::Vec2& p) const {
+    auto it = cells_.find(KeyOf(p));
+    return it == cells_.end() ? 0 : it->second.size();
+  }
+
+
   // Removes the items filed at p for which pred(item) holds (order not kept).
   template <typename Pred>
   void EraseIf(const geometry::Vec2& p, Pred pred) {
@@ -61,72 +69,93 @@ class UniformGrid {
   }
 
   // Calls fn(item) for every item in the cells that meet the square of half
-  // width radius_m around p (a superset of the disc: callers filter by distance).
+  // width radius_m around p (a superset of the disc: callers filter by
+  // distance). At most max_items items: whole cells, in ascending (x, y)
+  // order, up to the first cell that would take the count past it; so which
+  // items are visited depends on what is filed where, not on the order it
+  // was filed in. Returns false if cells were left out.
   template <typename Fn>
-  void ForEachNear(const geometry::Vec2& p, double radius_m, Fn&& fn) const {
+  bool ForEachNear(const geometry::Vec2& p, double radius_m, Fn&& fn,
+                   size_t max_items = SIZE_MAX) const {
     const CellKey lo = KeyOf(p - geometry::Vec2(radius_m, radius_m));
     const CellKey hi = KeyOf(p + geometry::Vec2(radius_m, radius_m));
-    const double box_cells =
-        static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
-    if (box_cells > static_cast<double>(cells_.size())) {
-      // A huge query (long feature, large threshold): scanning the occupied
-      // cells is cheaper than probing empty ones.
-      for (const auto& [key, items] : cells_) {
-        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
-        for (const T& item : items) fn(item);
-      }
-      return;
-    }
-    for (int64_t x = lo.x; x <= hi.x; ++x) {
-      for (int64_t y = lo.y; y <= hi.y; ++y) {
-        auto it = cells_.find({x, y});
-        if (it == cells_.end()) continue;
-        for (const T& item : it->second) fn(item);
-      }
-    }
+    return VisitCells(lo, hi, [](const CellKey&) { return true; }, fn, max_items);
   }
 
   // Calls fn(item) for every item in the cells that come within radius_m of
-  // segment s (a superset of the items within radius_m of s: callers filter).
-  // For a long segment this probes a thin band of cells, not the square
-  // around its whole length that ForEachNear would.
+  // segment s (a superset of the items within radius_m of s: callers filter),
+  // at most max_items as ForEachNear. For a long segment this probes a thin
+  // band of cells, not the square around its whole length that ForEachNear would.
   template <typename Fn>
-  void ForEachNearSegment(const geometry::Segment2& s, double radius_m, Fn&& fn) const {
+  bool ForEachNearSegment(const geometry::Segment2& s, double radius_m, Fn&& fn,
+                          size_t max_items = SIZE_MAX) const {
     const geometry::Vec2 r(radius_m, radius_m);
     const CellKey lo = KeyOf(s.a.cwiseMin(s.b) - r);
     const CellKey hi = KeyOf(s.a.cwiseMax(s.b) + r);
-    const double box_cells =
-        static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
     // A cell meets the band if its centre is within radius + half its diagonal.
     const double reach_m = radius_m + 0.7072 * cell_m_;
     // geometry::PointSegmentDistance's arithmetic, with the segment's terms
     // computed once: the same cells, without a call per cell.
     const geometry::Vec2 d = s.direction();
     const double len2 = d.squaredNorm();
-    const auto beyond = [&](const geometry::Vec2& p) {
-      if (len2 == 0.0) return (p - s.a).norm() > reach_m;
-      const double t = std::clamp((p - s.a).dot(d) / len2, 0.0, 1.0);
-      return (p - (s.a + t * d)).norm() > reach_m;
+    const auto near = [&](const CellKey& key) {
+      const geometry::Vec2 c = CentreOf(key);
+      if (len2 == 0.0) return (c - s.a).norm() <= reach_m;
+      const double t = std::clamp((c - s.a).dot(d) / len2, 0.0, 1.0);
+      return (c - (s.a + t * d)).norm() <= reach_m;
     };
-    if (box_cells > static_cast<double>(cells_.size())) {
-      for (const auto& [key, items] : cells_) {
-        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
-        if (beyond(CentreOf(key))) continue;
-        for (const T& item : items) fn(item);
-      }
-      return;
-    }
-    for (int64_t x = lo.x; x <= hi.x; ++x) {
-      for (int64_t y = lo.y; y <= hi.y; ++y) {
-        if (beyond(CentreOf({x, y}))) continue;
-        auto it = cells_.find({x, y});
-        if (it == cells_.end()) continue;
-        for (const T& item : it->second) fn(item);
-      }
-    }
+    return VisitCells(lo, hi, near, fn, max_items);
   }
 
  private:
+  // The cells of the box [lo, hi] for which wanted(key) holds, in ascending
+  // (x, y) order, whole, while the item count stays within max_items.
+  template <typename Wanted, typename Fn>
+  bool VisitCells(const CellKey& lo, const CellKey& hi, const Wanted& wanted, Fn& fn,
+                  size_t max_items) const {
+    size_t visited = 0;
+    const auto visit = [&](const std::vector<T>& items) {
+      if (items.size() > max_items - visited) return false;
+      visited += items.size();
+      for (const T& item : items) fn(item);
+      return true;
+    };
+    const double box_cells =
+        static_cast<double>(hi.x - lo.x + 1) * static_cast<double>(hi.y - lo.y + 1);
+    if (box_cells > static_cast<double>(cells_.size())) {
+      // A huge query (long feature, large threshold): scanning the occupied
+      // cells is cheaper than probing empty ones; sorted, so that a cut-off
+      // falls where it would in the probing order below.
+      std::vector<std::pair<CellKey, const std::vector<T>*>> hits;
+      for (const auto& [key, items] : cells_) {
+        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
+        if (!wanted(key)) continue;
+        if (max_items == SIZE_MAX) {
+          for (const T& item : items) fn(item);  // no cut-off: any order will do
+        } else {
+          hits.emplace_back(key, &items);
+        }
+      }
+      std::sort(hits.begin(), hits.end(), [](const auto& u, const auto& v) {
+        return u.first.x != v.first.x ? u.first.x < v.first.x : u.first.y < v.first.y;
+      });
+      for (const auto& hit : hits) {
+        if (!visit(*hit.second)) return false;
+      }
+      return true;
+    }
+    for (int64_t x = lo.x; x <= hi.x; ++x) {
+      for (int64_t y = lo.y; y <= hi.y; ++y) {
+        const CellKey key{x, y};
+        if (!wanted(key)) continue;
+        auto it = cells_.find(key);
+        if (it == cells_.end()) continue;
+        if (!visit(it->second)) return false;
+      }
+    }
+    return true;
+  }
+
   geometry::Vec2 CentreOf(const CellKey& k) const {
     return {(static_cast<double>(k.x) + 0.5) * cell_m_, (static_cast<double>(k.y) + 0.5) * cell_m_};
   }

@@ -40,6 +40,17 @@ Status FusionParams::Validate() const {
   if (wall_free_min_count < 1 || wall_free_min_count > 255) {
     return Status::InvalidArgument("fusion params: wall_free_min_count must be in [1, 255]");
   }
+  if (max_component_nodes < 16 || max_component_nodes > (1u << 20)) {
+    return Status::InvalidArgument("fusion params: max_component_nodes must be in [16, 1048576]");
+  }
+  if (max_link_candidates < 16 || max_link_candidates > (1u << 20)) {
+    return Status::InvalidArgument("fusion params: max_link_candidates must be in [16, 1048576]");
+  }
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "evidence_range_m", evidence_range_m, 0.0, 1000.0));
+  if (evidence_range_m == 0.0) {
+    return Status::InvalidArgument("fusion params: evidence_range_m must be > 0");
+  }
   if (min_support == 0) {
     return Status::InvalidArgument("fusion params: min_support must be at least 1");
   }
@@ -68,9 +79,16 @@ std::string FusionParamsKey(const FusionParams& p) {
   if (p.wall_occluded_gap_m > 0.0) {
     std::snprintf(text, sizeof(text),
                   " wall_occluded_gap_m=%.17g wall_occluded_gap_ratio=%.17g wall_free_min_count=%u"
-                  " evidence_model=2 wall_proof_gap_m=%.17g",
+                  " evidence_model=2 wall_proof_gap_m=%.17g evidence_range_m=%.17g",
                   p.wall_occluded_gap_m, p.wall_occluded_gap_ratio, p.wall_free_min_count,
-                  p.wall_proof_gap_m);
+                  p.wall_proof_gap_m, p.evidence_range_m);
+    key += text;
+  }
+  // Bounded mode only (exact mode makes every link); changes results only
+  // on maps with a component past the cap.
+  if (p.mode == FusionMode::kBounded) {
+    std::snprintf(text, sizeof(text), " max_component_nodes=%u max_link_candidates=%u",
+                  p.max_component_nodes, p.max_link_candidates);
     key += text;
   }
   return key;

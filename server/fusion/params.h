@@ -41,6 +41,27 @@ struct FusionParams {
   // matching endpoints of a representative it meets the criteria with is
   // folded into it, metres. 0 folds exact duplicates only.
   double cover_m = 0.02;
+  // Limits on the work one feature can cause, whatever came before
+  // (docs/reliability.md, "Fusion cost per observation"; issue 46). Bounded
+  // mode only: the exact mode is the unbounded reference.
+  //
+  // A link is not made if it would give a component of more than
+  // max_component_nodes representatives that the chain guard has to regroup
+  // (its endpoints further than chain_max_rms_m from one line): the guard
+  // regroups a whole component each time an observation touches it, in
+  // O(n log n) per cut. Junk (random walls all over a site) chained such
+  // components across the map, and every later observation paid for them
+  // (139,000 -> 1,400 fused features per CPU-second). A straight wall, which
+  // the guard never regroups, may grow past the cap. On the real logs the
+  // largest regrouped component had 1,038 representatives; 256 changes the
+  // published map there by at most 5 % (docs/fusion-real-data.md). In
+  // [16, 1048576].
+  uint32_t max_component_nodes = 256;
+  // Earlier representatives one new feature is compared with at most, in
+  // its link search and (separately) its fold search: whole grid cells in a
+  // fixed order, so which are left out depends on the map, not on arrival
+  // order. The real logs need at most 1,467. In [16, 1048576].
+  uint32_t max_link_candidates = 4096;
   double delta_rad = 5.0 * 3.14159265358979323846 / 180.0;  // criterion 1: max included angle
   // Criterion 2: min feature-circle overlap ratio, in [0, 1]. 0 is allowed (criterion 2
   // off): the engine's candidate search is bounded by criterion 3, not by the circles.
@@ -96,6 +117,12 @@ struct FusionParams {
   // leaves no segment, so no visibility triangle) than an occlusion (issue 40,
   // docs/fusion-real-data.md). Metres, in [0, 1000]; 0: no proof needed.
   double wall_proof_gap_m = 4.0;
+  // Free-space evidence reaches at most this far from the sensor along
+  // either axis (a visibility triangle is clipped to that square): a valid
+  // but absurd view (a 2 km wall 1 km away) would otherwise write millions
+  // of cells. Lasers indoors see 30-80 m; the synthetic city, 40 m. Metres,
+  // in (0, 1000].
+  double evidence_range_m = 80.0;
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

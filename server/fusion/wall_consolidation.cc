@@ -156,8 +156,11 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
   if (!free_space_ && params_.consolidate && params_.wall_occluded_gap_m > 0.0) {
     // Pieces filed so far were checked without evidence: none is pierced yet,
     // and the grid starts empty, so that still holds.
-    free_space_ = std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count);
-    if (params_.wall_proof_gap_m > 0.0) proof_ = std::make_unique<FreeSpaceGrid>(1);
+    free_space_ =
+        std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count, params_.evidence_range_m);
+    if (params_.wall_proof_gap_m > 0.0) {
+      proof_ = std::make_unique<FreeSpaceGrid>(1, params_.evidence_range_m);
+    }
   }
   return free_space_.get();
 }

@@ -269,6 +269,16 @@ const std::vector<Setting>& Settings() {
            "to this long joins only where an observation saw something in front of it (indoors a short "
            "unseen gap is more often a doorway seen through to clutter); metres, 0 = no proof needed",
            [](C& c) -> auto& { return c.fusion.wall_proof_gap_m; }, {0, 1000}),
+      Real("fusion.evidence_range_m", "free-space evidence reaches at most this far from the sensor (a "
+           "view of a farther segment is clipped); bounds the cells one observation writes, metres",
+           [](C& c) -> auto& { return c.fusion.evidence_range_m; }, {0, 1000, true}),
+      Count("fusion.max_component_nodes", "bounded mode: a link that would give a cluster the chain guard "
+            "regroups more than this many representatives is not made; bounds the work one observation "
+            "can cause (docs/reliability.md)",
+            [](C& c) -> auto& { return c.fusion.max_component_nodes; }, 16, 1048576),
+      Count("fusion.max_link_candidates", "bounded mode: earlier representatives one new feature is "
+            "compared with at most (whole grid cells in a fixed order); bounds the work per feature",
+            [](C& c) -> auto& { return c.fusion.max_link_candidates; }, 16, 1048576),
 
       // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
       Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",

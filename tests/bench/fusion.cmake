@@ -19,3 +19,10 @@ mapd_set_warnings(fusion_throughput)
 add_executable(fusion_cpu_guard fusion_cpu_guard.cc)
 target_link_libraries(fusion_cpu_guard PRIVATE city_sim)
 mapd_set_warnings(fusion_cpu_guard)
+
+# Adversarial workloads (issue 46): fused features per CPU-second and the
+# slowest observation for hostile but valid input, next to the revisited
+# floor: ./fusion_adversarial_bench [--workload NAME]
+add_executable(fusion_adversarial_bench fusion_adversarial_bench.cc)
+target_link_libraries(fusion_adversarial_bench PRIVATE fusion)
+mapd_set_warnings(fusion_adversarial_bench)

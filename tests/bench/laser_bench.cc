@@ -11,8 +11,10 @@
 //
 //   laser_bench [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] [--guard-ratio R]
 //               [--wall-offset M] [--occluded-gap M] [--occluded-ratio R]
-//               [--consolidate 0|1] [--free-min-count N]
-// (they set the default run's FusionParams of those names; otherwise the defaults.)
+//               [--consolidate 0|1] [--free-min-count N] [--bounded] [--max-component-nodes N]
+// (they set the default run's FusionParams of those names; otherwise the defaults.
+// Both runs use the exact mode, the reference, unless --bounded: mapd's mode,
+// with its cost caps.)
 // With MAPD_BENCH_WORST set, each run also prints its 8 published segments with
 // the most seen-through length on stderr (where to look in the pictures).
 #include <algorithm>
@@ -313,6 +315,10 @@ int main(int argc, char** argv) {
       data_dir = argv[++i];
     } else if (!std::strcmp(argv[i], "--docs") && i + 1 < argc) {
       docs_dir = argv[++i];
+    } else if (!std::strcmp(argv[i], "--bounded")) {
+      on.mode = mapd::fusion::FusionMode::kBounded;  // mapd's mode, its cost caps included
+    } else if (!std::strcmp(argv[i], "--max-component-nodes") && i + 1 < argc) {
+      on.max_component_nodes = static_cast<uint32_t>(std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--no-write")) {
       write = false;
     } else if (!std::strcmp(argv[i], "--guard-rms") && i + 1 < argc) {
@@ -331,7 +337,8 @@ int main(int argc, char** argv) {
       on.wall_occluded_gap_ratio = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr,
-                   "usage: %s [--data DIR] [--docs DIR] [--no-write] [--guard-rms M] "
+                   "usage: %s [--data DIR] [--docs DIR] [--no-write] [--bounded] "
+                   "[--max-component-nodes N] [--guard-rms M] "
                    "[--guard-ratio R] [--wall-offset M] [--occluded-gap M] [--occluded-ratio R] "
                    "[--consolidate 0|1] [--free-min-count N]\n",
                    argv[0]);

@@ -328,6 +328,72 @@ TEST(FusionEngineTest, ChainGuardCutsACurvedWallIntoPieces) {
   EXPECT_EQ(pieces.front().id, 1u);
 }
 
+// Bounded mode's cost caps (params.h; issue 46): what one observation can
+// cost stays bounded whatever came before.
+FusionParams Capped(uint32_t max_component_nodes) {
+  FusionParams p;  // bounded, the default
+  p.min_support = 2;
+  p.max_component_nodes = max_component_nodes;
+  return p;
+}
+
+TEST(FusionEngineCapsTest, AComponentTheGuardRegroupsStopsAtTheCap) {
+  FusionEngine uncapped(Capped(1u << 20));
+  FeatureId id = 1;
+  AddArc(&uncapped, 4, &id);
+  ASSERT_GT(uncapped.largest_component_nodes(), 16u) << "the arc must chain past the cap";
+
+  FusionEngine capped(Capped(16));
+  id = 1;
+  AddArc(&capped, 4, &id);
+  EXPECT_LE(capped.largest_component_nodes(), 16u);
+  EXPECT_EQ(capped.node_count(), uncapped.node_count()) << "nothing is dropped";
+  // Still the wall: every piece follows the circle (see the guard's test).
+  ASSERT_GE(capped.published_count(), 3u);
+  for (const FusedFeature& f : capped.Published()) {
+    EXPECT_NEAR(f.fitted.a.norm(), 5.0, 0.12);
+    EXPECT_NEAR(f.fitted.b.norm(), 5.0, 0.12);
+    EXPECT_NEAR(f.fitted.midpoint().norm(), 5.0, 0.12);
+  }
+}
+
+TEST(FusionEngineCapsTest, AStraightWallGrowsPastTheCap) {
+  // The guard never regroups a straight wall, so the cap does not split it.
+  FusionEngine engine(Capped(16));
+  for (int s = 0; s < 30; ++s) {
+    const double shift = 0.03 * s;  // no two alike: every feature a node
+    ASSERT_TRUE(engine.Add(100 + s, 0, {Wall(s + 1, Vec2(shift, 0.0), Vec2(4.0 + shift, 0.0))}).ok());
+  }
+  EXPECT_EQ(engine.node_count(), 30u);
+  EXPECT_EQ(engine.largest_component_nodes(), 30u);
+  EXPECT_EQ(engine.published_count(), 1u);
+}
+
+TEST(FusionEngineCapsTest, ALinkSearchComparesWithAtMostTheCandidateCap) {
+  // 30 views of one short wall, all filed in one 1 m cell of the link index.
+  const auto feed = [](FusionEngine* engine) {
+    for (int s = 0; s < 30; ++s) {
+      const double shift = 0.01 * s;
+      ASSERT_TRUE(
+          engine->Add(100 + s, 0, {Wall(s + 1, Vec2(0.2 + shift, 0.5), Vec2(0.8 + shift, 0.5))})
+              .ok());
+    }
+  };
+  FusionEngine open(Capped(256));
+  feed(&open);
+  EXPECT_EQ(open.cluster_count(), 1u);
+
+  FusionParams p = Capped(256);
+  p.max_link_candidates = 16;
+  FusionEngine capped(p);
+  feed(&capped);
+  // Once the cell holds more than 16, a new feature compares with none of
+  // them (whole cells or nothing) and starts a cluster of its own.
+  EXPECT_EQ(capped.node_count(), 30u);
+  EXPECT_EQ(capped.largest_component_nodes(), 17u);
+  EXPECT_EQ(capped.cluster_count(), 1u + 13u);
+}
+
 // Four observations, one 1.5 m chord each, 0.6 m apart along a wall curved
 // with radius 8 m: they chain into one cluster of support 4 that bends too
 // much for one line.

@@ -19,8 +19,10 @@ namespace {
 using geometry::Segment2;
 using geometry::Vec2;
 
+constexpr double kRangeM = 80.0;  // FusionParams::evidence_range_m's default
+
 TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
-  FreeSpaceGrid grid(2);
+  FreeSpaceGrid grid(2, kRangeM);
   const Vec2 origin(0.0, -10.0);
   const Segment2 wall{Vec2(-5.0, 0.0), Vec2(5.0, 0.0)};
   grid.AddView(origin, wall);
@@ -53,7 +55,7 @@ TEST(FreeSpaceGridTest, MarksTheTriangleInsideItsMargins) {
 // the robot stood) a cell close to the ray is free, far along it one is not,
 // so angular pose noise does not carry a ray into a corner's wall.
 TEST(FreeSpaceGridTest, TheRaysErosionGrowsWithRange) {
-  FreeSpaceGrid grid(1);
+  FreeSpaceGrid grid(1, kRangeM);
   grid.AddView(Vec2(0.0, -40.0), {Vec2(-5.0, 0.0), Vec2(5.0, 0.0)});
   // Cell centres 0.0465 m inside the ray to (5, 0), at ranges 7.4 m and 9.4 m.
   EXPECT_TRUE(grid.IsFree(Vec2(0.875, -32.625))) << "erosion 0.037 m at 7.4 m";
@@ -63,8 +65,29 @@ TEST(FreeSpaceGridTest, TheRaysErosionGrowsWithRange) {
   EXPECT_TRUE(grid.IsFree(Vec2(0.125, -38.625))) << "0.047 m inside, 1.4 m from the sensor";
 }
 
+// A valid but absurd view, a 2 km wall 1 km from the sensor, writes only the
+// cells within the evidence range (issue 46: unclipped it was ~3e7 cells).
+TEST(FreeSpaceGridTest, AViewIsClippedToTheEvidenceRange) {
+  FreeSpaceGrid grid(1, 20.0);
+  const Vec2 origin(3.0, 4.0);
+  grid.AddView(origin, {Vec2(-1000.0, 1004.0), Vec2(1000.0, 1004.0)});
+  EXPECT_TRUE(grid.IsFree(origin + Vec2(0.0, 10.0))) << "inside the range";
+  EXPECT_TRUE(grid.IsFree(origin + Vec2(-15.0, 19.0))) << "inside the square";
+  EXPECT_FALSE(grid.IsFree(origin + Vec2(0.0, 21.0))) << "beyond the range";
+  EXPECT_FALSE(grid.IsFree(origin + Vec2(500.0, 900.0)));
+  // (2 * 20 m / 0.25 m + 1)^2 cells touch at most 36 tiles of 32 x 32.
+  EXPECT_LE(grid.tile_count(), 36u);
+  const std::vector<uint64_t> newly = grid.TakeNewlyFree();
+  EXPECT_GT(newly.size(), 1000u);
+  EXPECT_LE(newly.size(), 161u * 161u);
+  for (uint64_t cell : newly) {
+    const Vec2 c = FreeSpaceGrid::CellCentre(cell) - origin;
+    EXPECT_LE(c.cwiseAbs().maxCoeff(), 20.0) << c.transpose();
+  }
+}
+
 TEST(FreeSpaceGridTest, AGrazingViewMarksNothingOnItsLine) {
-  FreeSpaceGrid grid(1);
+  FreeSpaceGrid grid(1, kRangeM);
   // The sensor almost on the wall's line: the triangle is a sliver.
   for (int k = 0; k < 5; ++k) grid.AddView(Vec2(40.0, 0.05), {Vec2(0.0, 0.0), Vec2(20.0, 0.0)});
   for (double x = -5.0; x <= 45.0; x += 0.1) EXPECT_FALSE(grid.IsFree(Vec2(x, 0.0))) << x;

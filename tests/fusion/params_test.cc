@@ -48,6 +48,35 @@ TEST(FusionParamsTest, RefusalsNameTheField) {
   p = FusionParams();
   p.chain_max_sse_ratio = 1.5;
   EXPECT_THAT(p.Validate().message(), HasSubstr("chain_max_sse_ratio"));
+
+  p = FusionParams();
+  p.max_component_nodes = 15;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("max_component_nodes"));
+
+  p = FusionParams();
+  p.max_link_candidates = (1u << 20) + 1;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("max_link_candidates"));
+
+  p = FusionParams();
+  p.evidence_range_m = 0.0;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("evidence_range_m"));
+  p.evidence_range_m = 1001.0;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("evidence_range_m"));
+}
+
+// The cost caps change bounded results (on maps that reach them): a snapshot
+// taken under other caps must not load.
+TEST(FusionParamsTest, TheCostCapsAreInTheKey) {
+  const FusionParams defaults;
+  FusionParams p = defaults;
+  p.max_component_nodes = 512;
+  EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
+  p = defaults;
+  p.max_link_candidates = 512;
+  EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
+  p = defaults;
+  p.evidence_range_m = 40.0;
+  EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
 }
 
 TEST(FusionParamsTest, BoundaryValuesAreAccepted) {
