@@ -1,6 +1,8 @@
-// The project's two clocks, so that every binary reads time the same way.
+// The project's clocks, so that every binary reads time the same way.
 #ifndef MAPD_COMMON_CLOCK_H_
 #define MAPD_COMMON_CLOCK_H_
+
+#include <time.h>
 
 #include <chrono>
 #include <cstdint>
@@ -26,6 +28,14 @@ inline int64_t SteadyNowNs() {
 // Seconds of std::chrono::steady_clock since `start` (stage times, budgets).
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// CPU time of the calling thread, seconds: what the thread itself spent,
+// whatever else the machine ran meanwhile (costs, not latencies).
+inline double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 }  // namespace mapd

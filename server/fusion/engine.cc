@@ -189,6 +189,10 @@ Status FusionEngine::Impl::Validate(ObservationId observation,
     if (!(f.segment.length() >= kMinSegmentLengthM)) {
       return Status::InvalidArgument(name + " has zero length");
     }
+    if (f.segment.length() > params_.max_wall_length_m) {
+      return Status::InvalidArgument(name + " is longer than max_wall_length_m (" +
+                                     std::to_string(params_.max_wall_length_m) + " m)");
+    }
     if (!std::isfinite(f.z_min_m) || !std::isfinite(f.z_max_m) ||
         std::abs(f.z_min_m) > kMaxAbsCoordinateM || std::abs(f.z_max_m) > kMaxAbsCoordinateM ||
         f.z_min_m > f.z_max_m) {
@@ -227,6 +231,12 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
 }
 
 bool FusionEngine::Impl::MayLink(uint32_t a, uint32_t b) const {
+  // The extent cap (params.h): the hulls' bounding box, a few vertices each.
+  Vec2 lo = Vec2::Constant(HUGE_VAL), hi = -lo;
+  for (const std::vector<Vec2>* hull : {&stats_[a]->hull, &stats_[b]->hull}) {
+    for (const Vec2& p : *hull) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  }
+  if ((hi - lo).norm() > params_.max_wall_length_m) return false;
   if (size_[a] + size_[b] <= params_.max_component_nodes) return true;
   // Past the cap only a component the guard will not regroup may grow.
   geometry::PointMoments2 both = stats_[a]->moments;

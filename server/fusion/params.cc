@@ -48,6 +48,8 @@ Status FusionParams::Validate() const {
   }
   MAPD_RETURN_IF_ERROR(
       CheckParamRange("fusion params", "evidence_range_m", evidence_range_m, 0.0, 1000.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "max_wall_length_m", max_wall_length_m, 1.0, 1e6));
   if (evidence_range_m == 0.0) {
     return Status::InvalidArgument("fusion params: evidence_range_m must be > 0");
   }
@@ -87,8 +89,9 @@ std::string FusionParamsKey(const FusionParams& p) {
   // Bounded mode only (exact mode makes every link); changes results only
   // on maps with a component past the cap.
   if (p.mode == FusionMode::kBounded) {
-    std::snprintf(text, sizeof(text), " max_component_nodes=%u max_link_candidates=%u",
-                  p.max_component_nodes, p.max_link_candidates);
+    std::snprintf(text, sizeof(text),
+                  " max_component_nodes=%u max_link_candidates=%u max_wall_length_m=%.17g",
+                  p.max_component_nodes, p.max_link_candidates, p.max_wall_length_m);
     key += text;
   }
   return key;

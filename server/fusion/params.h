@@ -62,6 +62,14 @@ struct FusionParams {
   // fixed order, so which are left out depends on the map, not on arrival
   // order. The real logs need at most 1,467. In [16, 1048576].
   uint32_t max_link_candidates = 4096;
+  // No wall is longer than this, metres: a longer feature is refused (Add),
+  // and a link is not made that would give a component a wider extent (the
+  // diagonal of its endpoints' bounding box). A straight component is never
+  // regrouped, so nothing else bounds it: a robot sending one line over and
+  // over along a 200 km strip made a single 200 km wall whose every update
+  // rewrote the consolidation index along its length (issue 46). In both
+  // modes for features, bounded mode for links. In [1, 1e6].
+  double max_wall_length_m = 1000.0;
   double delta_rad = 5.0 * 3.14159265358979323846 / 180.0;  // criterion 1: max included angle
   // Criterion 2: min feature-circle overlap ratio, in [0, 1]. 0 is allowed (criterion 2
   // off): the engine's candidate search is bounded by criterion 3, not by the circles.

@@ -83,6 +83,11 @@ Status ServerConfig::Validate() const {
   if (!pl.ok()) return Status::InvalidArgument("planes: " + pl.message());
   Status l = ingest.limits.Validate();
   if (!l.ok()) return Status::InvalidArgument("limits: " + l.message());
+  if (ingest.limits.max_feature_length_m > fusion.max_wall_length_m) {
+    // Else a batch would be acknowledged that the fuser then refuses.
+    return Status::InvalidArgument(
+        "limits.max_feature_length_m must be at most fusion.max_wall_length_m");
+  }
   if (listen.empty() || listen.find(':') == std::string::npos) {
     return Status::InvalidArgument("listen: '" + listen + "' is not host:port");
   }

@@ -33,6 +33,11 @@ struct ServerConfig {
   WebOptions web;      // the web view's HTTP port (off by default)
   size_t max_message_bytes = 16u << 20;          // largest gRPC message accepted
   size_t max_group_batches = 4096;               // batches per group commit at most
+  // A robot keeping the fuser busy (service/fusion_share.h): shares are
+  // enforced once this much fusion work waits, seconds (0: never), and a
+  // robot may keep this many times the other robots' average waiting.
+  double fusion_share_after_s = 1.0;
+  double fusion_share_factor = 2.0;
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)
   double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
   double raw_retention_days = 0.0;               // 0: keep raw observations forever

@@ -272,6 +272,9 @@ const std::vector<Setting>& Settings() {
       Real("fusion.evidence_range_m", "free-space evidence reaches at most this far from the sensor (a "
            "view of a farther segment is clipped); bounds the cells one observation writes, metres",
            [](C& c) -> auto& { return c.fusion.evidence_range_m; }, {0, 1000, true}),
+      Real("fusion.max_wall_length_m", "no wall is longer than this: a longer feature is refused and "
+           "clusters do not grow past it (bounds the work one observation can cause), metres",
+           [](C& c) -> auto& { return c.fusion.max_wall_length_m; }, {1, 1e6}),
       Count("fusion.max_component_nodes", "bounded mode: a link that would give a cluster the chain guard "
             "regroups more than this many representatives is not made; bounds the work one observation "
             "can cause (docs/reliability.md)",
@@ -304,6 +307,9 @@ const std::vector<Setting>& Settings() {
       Real("limits.max_abs_coordinate_m", "a coordinate farther than this from the origin is refused as a unit "
            "or frame error, metres",
            [](C& c) -> auto& { return c.ingest.limits.max_abs_coordinate_m; }, {0, 1e6, true}),
+      Real("limits.max_feature_length_m", "a line longer than this, or a plane whose boundary spans more, "
+           "is refused; at most fusion.max_wall_length_m, metres",
+           [](C& c) -> auto& { return c.ingest.limits.max_feature_length_m; }, {0, 1e6, true}),
       Real("limits.quaternion_tolerance", "accepted | |q| - 1 | of a pose quaternion or a plane normal",
            [](C& c) -> auto& { return c.ingest.limits.quaternion_tolerance; }, {0, 0.49, true}),
       Count("limits.max_in_flight", "unacknowledged batches per stream before reading pauses",
@@ -312,6 +318,14 @@ const std::vector<Setting>& Settings() {
             [](C& c) -> auto& { return c.max_message_bytes; }, 1024, 1u << 30),
       Count("limits.max_group_batches", "batches committed in one transaction at most",
             [](C& c) -> auto& { return c.max_group_batches; }, 1, 1000000),
+      Real("limits.fusion_share_after_s", "once this much fusion work (estimated fuser seconds) waits, "
+           "a robot keeping more than limits.fusion_share_factor times the other robots' average "
+           "waiting gets RESOURCE_EXHAUSTED for its batches (nothing stored), so the others keep "
+           "being acknowledged; 0 = never",
+           [](C& c) -> auto& { return c.fusion_share_after_s; }, {0, 3600}),
+      Real("limits.fusion_share_factor", "how many times the other robots' average waiting fusion work "
+           "one robot may keep waiting (see limits.fusion_share_after_s)",
+           [](C& c) -> auto& { return c.fusion_share_factor; }, {1, 1000}),
       Count("limits.max_submap_bytes", "largest submap file UploadSubmap accepts, bytes",
             [](C& c) -> auto& { return c.submaps.max_submap_bytes; }, 64, uint64_t{1} << 34),
       Count("limits.max_concurrent_merges", "submap merges computed at once",

@@ -83,6 +83,16 @@ struct CoreStats {
   uint64_t plane_nodes = 0;         // the plane engine's nodes
   std::string write_failure;        // why the database refuses writes now; empty: it takes them
   HistogramSnapshot ack_latency;    // Submit to acknowledgement of stored batches, seconds
+  // Batches refused because their robot kept the fuser busy (fusion_share.h),
+  // and the robots with observations waiting for fusion or refusals.
+  uint64_t fusion_share_refused = 0;
+  struct RobotShare {
+    std::string robot;
+    uint64_t pending = 0;         // observations committed, not fused
+    double cost_per_obs_s = 0.0;  // the fuser's recent CPU per observation
+    uint64_t refused = 0;
+  };
+  std::vector<RobotShare> fusion_shares;
 };
 
 using WriteFunction = std::function<Status(storage::WriteTransaction*)>;

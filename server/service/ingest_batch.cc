@@ -1,6 +1,7 @@
 #include "service/ingest_batch.h"
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace mapd::service {
@@ -42,6 +43,12 @@ Status CheckUnitNorm(double norm, const std::string& field, double tol) {
 }
 
 }  // namespace
+
+std::string Metres(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.6g m", v);
+  return text;
+}
 
 bool ValidId(const std::string& id, uint32_t max_length) {
   if (id.empty() || id.size() > max_length) return false;
@@ -111,8 +118,15 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
     geometry::LineFeature3& l = f.lines[static_cast<size_t>(i)];
     MAPD_RETURN_IF_ERROR(ConvertVec(in.lines(i).a(), field + ".a", max_abs, &l.a));
     MAPD_RETURN_IF_ERROR(ConvertVec(in.lines(i).b(), field + ".b", max_abs, &l.b));
-    if ((l.a - l.b).norm() < 1e-9) {
+    const double length_m = (l.a - l.b).norm();
+    if (length_m < 1e-9) {
       return Status::InvalidArgument(field + " has zero length (a == b)");
+    }
+    if (length_m > limits.max_feature_length_m) {
+      return Status::InvalidArgument(field + " is " + Metres(length_m) +
+                                     " long; the limit is " +
+                                     Metres(limits.max_feature_length_m) +
+                                     " (limits.max_feature_length_m): no wall is that long");
     }
   }
   f.planes.resize(static_cast<size_t>(in.planes_size()));
@@ -137,9 +151,19 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
           " (max_boundary_points): send its convex hull");
     }
     out_p.boundary.resize(static_cast<size_t>(p.boundary_size()));
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
     for (int k = 0; k < p.boundary_size(); ++k) {
+      Eigen::Vector3d& corner = out_p.boundary[static_cast<size_t>(k)];
       MAPD_RETURN_IF_ERROR(ConvertVec(p.boundary(k), field + ".boundary[" + std::to_string(k) + "]",
-                                      max_abs, &out_p.boundary[static_cast<size_t>(k)]));
+                                      max_abs, &corner));
+      lo = lo.cwiseMin(corner);
+      hi = hi.cwiseMax(corner);
+    }
+    if (const double span_m = (hi - lo).norm(); span_m > limits.max_feature_length_m) {
+      return Status::InvalidArgument(field + ".boundary spans " + Metres(span_m) +
+                                     "; the limit is " +
+                                     Metres(limits.max_feature_length_m) +
+                                     " (limits.max_feature_length_m)");
     }
   }
   out.robot = in.robot_id();

@@ -165,6 +165,11 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
     done({BatchOutcome::Kind::kRejected, writable});
     return;
   }
+  // A robot keeping the fuser far busier than the others waits, not them.
+  if (Status fair = fusion_share_.Admit(batch.robot); !fair.ok()) {
+    done({BatchOutcome::Kind::kRejected, fair});
+    return;
+  }
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     if (!stopping_) {
@@ -403,6 +408,8 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
         ToFuse t;
         t.observation_id = result.observation_id;
         t.robot_id = result.frame.robot_id;
+        t.robot = group[index].batch.robot;
+        fusion_share_.Committed(t.robot);
         t.T_map_frame = result.frame.T_map_frame;
         t.features = std::move(group[index].batch.features);
         fuse_queue_.push_back(std::move(t));
@@ -455,9 +462,13 @@ void MapCore::FuserLoop() {
         continue;
       }
       // Locked per observation, so queries never wait for a whole backlog.
-      std::unique_lock<std::shared_mutex> lock(engine_mu_);
-      Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
-      ++map_version_;
+      const double cpu_before_s = ThreadCpuSeconds();
+      {
+        std::unique_lock<std::shared_mutex> lock(engine_mu_);
+        Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
+        ++map_version_;
+      }
+      fusion_share_.Fused(t.robot, ThreadCpuSeconds() - cpu_before_s);
       fused_through_id_ = std::max(fused_through_id_, t.observation_id);
       ++fused_since_snapshot_;
     }
@@ -737,6 +748,10 @@ CoreStats MapCore::Stats() const {
   {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     s.fusion_backlog = committed_count_ - fused_count_;
+  }
+  s.fusion_share_refused = fusion_share_.refused_total();
+  for (const FusionShare::RobotShare& r : fusion_share_.Shares()) {
+    s.fusion_shares.push_back({r.robot, r.pending, r.cost_per_obs_s, r.refused});
   }
   s.ack_latency = ack_latency_.Snapshot();
   s.recovering = !ready_.load();

@@ -47,6 +47,7 @@
 #include "fusion/plane_engine.h"
 #include "geometry/box2.h"
 #include "service/core.h"
+#include "service/fusion_share.h"
 #include "service/ingest_batch.h"
 #include "service/latency_histogram.h"
 #include "service/watch_hub.h"
@@ -62,6 +63,9 @@ struct MapCoreOptions {
   fusion::PlaneFusionParams planes;   // non-vertical planes (fusion/plane_engine.h)
   size_t max_group_batches = 4096;    // batches in one commit at most
   size_t max_fusion_backlog = 50000;  // committed, not yet fused observations at most
+  // Before that: a robot keeping the fuser far busier than the others has its
+  // batches refused (fusion_share.h), so that the others keep being acknowledged.
+  FusionShareOptions fusion_share;
   double max_query_wait_s = 5.0;      // a query waits this long for the fuser at most
   // Snapshots of the fusion state (bounded mode): after this many fused
   // observations, or once the newest is this old and anything changed. A
@@ -244,6 +248,7 @@ class MapCore final : public Core {
   struct ToFuse {
     int64_t observation_id = 0;
     int64_t robot_id = 0;
+    std::string robot;  // its name, for fusion_share_
     geometry::Rigid3 T_map_frame;
     geometry::SensorObservation features;
     // A tie, not an observation: these sessions were tied to the map frame
@@ -293,6 +298,7 @@ class MapCore final : public Core {
   };
   std::deque<RateSample> rate_samples_;  // GUARDED_BY(rate_mu_), one per 250 ms, 10 s deep
   LatencyHistogram ack_latency_;         // stored batches: queued to acknowledged
+  FusionShare fusion_share_{options_.fusion_share};
 };
 
 }  // namespace mapd::service

@@ -175,6 +175,14 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   response->set_fusion_nodes(s.fusion_nodes);
   response->set_fused_planes(s.fused_planes);
   response->set_write_failure(s.write_failure);
+  response->set_fusion_share_refused(s.fusion_share_refused);
+  for (const CoreStats::RobotShare& r : s.fusion_shares) {
+    pb::RobotFusionShare* out = response->add_fusion_shares();
+    out->set_robot_id(r.robot);
+    out->set_pending(r.pending);
+    out->set_cost_per_obs_s(r.cost_per_obs_s);
+    out->set_refused(r.refused);
+  }
   if (counts->raw_features > 0) {
     response->set_bytes_per_raw_feature(static_cast<double>(core_->store().SizeBytes()) /
                                         static_cast<double>(counts->raw_features));

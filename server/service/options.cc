@@ -12,6 +12,8 @@ Status IngestLimits::Validate() const {
   if (max_boundary_points < 3) return Status::InvalidArgument("max_boundary_points must be >= 3");
   if (!(max_abs_coordinate_m > 0))
     return Status::InvalidArgument("max_abs_coordinate_m must be > 0");
+  if (!(max_feature_length_m > 0))
+    return Status::InvalidArgument("max_feature_length_m must be > 0");
   if (!(quaternion_tolerance > 0 && quaternion_tolerance < 0.5)) {
     return Status::InvalidArgument("quaternion_tolerance must be in (0, 0.5)");
   }

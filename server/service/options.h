@@ -19,6 +19,10 @@ struct IngestLimits {
   uint32_t max_features_per_batch = 1024;  // lines + planes; at most kFeatureIdBits allow
   uint32_t max_boundary_points = 1024;     // per plane
   double max_abs_coordinate_m = 1e6;       // anything farther is a unit or frame error
+  // A line longer than this, or a plane whose boundary spans more (bounding
+  // box diagonal), is refused: no wall is that long, and the fuser's work
+  // grows with a feature's length (at most fusion.max_wall_length_m).
+  double max_feature_length_m = 1000.0;
   double quaternion_tolerance = 1e-3;      // accepted | |q| - 1 |
   uint32_t max_id_length = 128;            // robot_id, session_id
 

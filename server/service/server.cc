@@ -63,6 +63,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   core_options.fusion = config.fusion;
   core_options.planes = config.planes;
   core_options.max_group_batches = config.max_group_batches;
+  core_options.fusion_share.after_s = config.fusion_share_after_s;
+  core_options.fusion_share.factor = config.fusion_share_factor;
   core_options.snapshot_every_observations = config.snapshot_every_observations;
   core_options.snapshot_max_age_s = config.snapshot_max_age_s;
   core_options.raw_retention_days = config.raw_retention_days;

@@ -51,6 +51,9 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_ack_latency_seconds_count", static_cast<double>(h.count));
   w.Family("mapd_fusion_backlog", "gauge", "Acknowledged observations not fused yet.");
   w.Sample("mapd_fusion_backlog", static_cast<double>(s.fusion_backlog));
+  w.Family("mapd_fusion_share_refused_total", "counter",
+           "Batches refused because their robot kept the fuser far busier than the others.");
+  w.Sample("mapd_fusion_share_refused_total", static_cast<double>(s.fusion_share_refused));
   w.Family("mapd_map_version", "gauge", "Observations the published map reflects.");
   w.Sample("mapd_map_version", static_cast<double>(s.map_version));
   w.Family("mapd_fused_features", "gauge", "Published fused features (walls).");

@@ -369,6 +369,26 @@ TEST(FusionEngineCapsTest, AStraightWallGrowsPastTheCap) {
   EXPECT_EQ(engine.published_count(), 1u);
 }
 
+TEST(FusionEngineCapsTest, NoWallGrowsPastMaxWallLength) {
+  FusionParams p = Capped(256);
+  p.max_wall_length_m = 10.0;
+  // The clusters; wall consolidation may still publish pieces on one line as
+  // one feature (docs/reliability.md says what that costs).
+  p.consolidate = false;
+  FusionEngine engine(p);
+  // A 4 m line sent again and again, 1 m further each time: one straight
+  // chain, cut where it would pass 10 m.
+  for (int s = 0; s < 30; ++s) {
+    ASSERT_TRUE(engine.Add(100 + s, 0, {Wall(s + 1, Vec2(s, 0.0), Vec2(s + 4.0, 0.0))}).ok());
+  }
+  EXPECT_GT(engine.cluster_count(), 3u);
+  for (const FusedFeature& f : engine.Published()) EXPECT_LE(f.fitted.length(), 10.0 + 1e-9);
+  // A longer feature is refused, naming the limit.
+  const Status s = engine.Add(200, 0, {Wall(1000, Vec2(0.0, 5.0), Vec2(10.5, 5.0))});
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), ::testing::HasSubstr("max_wall_length_m"));
+}
+
 TEST(FusionEngineCapsTest, ALinkSearchComparesWithAtMostTheCandidateCap) {
   // 30 views of one short wall, all filed in one 1 m cell of the link index.
   const auto feed = [](FusionEngine* engine) {

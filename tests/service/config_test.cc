@@ -258,6 +258,37 @@ TEST(ConfigTest, LongRunningSettingsParseAndAreValidated) {
   }
 }
 
+// Issue 46's limits on what one observation can cost.
+TEST(ConfigTest, CostLimitsParseAndAreValidated) {
+  ServerConfig c;
+  ASSERT_TRUE(Parse({"--fusion.max_component_nodes=512", "--fusion.max_link_candidates=100",
+                     "--fusion.evidence_range_m=40", "--fusion.max_wall_length_m=2000",
+                     "--limits.max_feature_length_m=1500", "--limits.fusion_share_after_s=0",
+                     "--limits.fusion_share_factor=3"},
+                    &c)
+                  .ok());
+  EXPECT_EQ(c.fusion.max_component_nodes, 512u);
+  EXPECT_EQ(c.fusion.max_link_candidates, 100u);
+  EXPECT_EQ(c.fusion.evidence_range_m, 40.0);
+  EXPECT_EQ(c.ingest.limits.max_feature_length_m, 1500.0);
+  EXPECT_EQ(c.fusion_share_after_s, 0.0);
+  EXPECT_EQ(c.fusion_share_factor, 3.0);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--fusion.max_component_nodes=8", "fusion.max_component_nodes"},
+      {"--fusion.evidence_range_m=0", "fusion.evidence_range_m"},
+      {"--limits.fusion_share_factor=0.5", "limits.fusion_share_factor"},
+      // A batch the fuser would refuse must not be acknowledged.
+      {"--limits.max_feature_length_m=5000", "at most fusion.max_wall_length_m"},
+  };
+  for (const auto& [flag, name] : bad) {
+    ServerConfig d;
+    Status s = Parse({flag}, &d);
+    if (s.ok()) s = d.Validate();
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << flag;
+    EXPECT_THAT(s.message(), HasSubstr(name)) << flag << ": " << s.message();
+  }
+}
+
 // One source of truth: the example file is what --print-config writes for the
 // defaults (regenerate it with `mapd --print-config > deploy/mapd.conf.example`),
 // and reading it back changes nothing.

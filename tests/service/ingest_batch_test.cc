@@ -65,6 +65,33 @@ TEST_F(ValidateBatchTest, RefusesAZeroLengthSegment) {
   EXPECT_THAT(Check(b).message(), HasSubstr("lines[1] has zero length"));
 }
 
+// Issue 46: the fuser's work grows with a feature's length.
+TEST_F(ValidateBatchTest, RefusesALineOrPlaneLongerThanTheLimit) {
+  limits_.max_feature_length_m = 100.0;
+  auto b = Good();
+  b.mutable_lines(0)->mutable_a()->set_x(0);
+  b.mutable_lines(0)->mutable_b()->set_x(99.0);
+  b.mutable_lines(0)->mutable_a()->set_y(0);
+  b.mutable_lines(0)->mutable_b()->set_y(0);
+  b.mutable_lines(0)->mutable_a()->set_z(0);
+  b.mutable_lines(0)->mutable_b()->set_z(0);
+  EXPECT_TRUE(Check(b).ok()) << Check(b).ToString();
+  b.mutable_lines(0)->mutable_b()->set_x(101.0);
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("lines[0] is 101 m long; the limit is 100 m"));
+  EXPECT_THAT(Check(b).message(), HasSubstr("limits.max_feature_length_m"));
+
+  b = Good();
+  auto* p = b.add_planes();
+  p->mutable_normal()->set_z(1);
+  p->add_boundary()->set_x(0);
+  p->add_boundary()->set_x(60);
+  p->add_boundary()->set_y(90);  // (60, 90): a 108 m diagonal
+  p->mutable_boundary(2)->set_x(60);
+  EXPECT_EQ(Check(b).code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(Check(b).message(), HasSubstr("planes[0].boundary spans 108.167 m"));
+}
+
 TEST_F(ValidateBatchTest, RefusesANonUnitQuaternion) {
   auto b = Good();
   b.mutable_t_frame_sensor()->mutable_rotation()->set_w(2.0);

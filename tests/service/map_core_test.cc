@@ -296,6 +296,49 @@ TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   EXPECT_EQ(Query("SELECT max(id) FROM observations"), 10 + 100 + 40 + 5);
 }
 
+// Issue 46: a robot that keeps the fuser busy is refused, the others are not.
+TEST_F(MapCoreTest, ARobotKeepingTheFuserBusyIsRefusedAndTheOthersAreNot) {
+  options_.fusion_share.after_s = 0.01;  // 10 observations at the unmeasured cost of 1 ms
+  UseFuserHold();
+  Open();
+  HoldTheFuser();
+  std::mt19937_64 rng(46);
+  const auto batch = [&](const std::string& robot, uint64_t seq) {
+    return RoomBatch(robot, "s", seq, 5, 4, 0.01 * static_cast<double>(seq), &rng);
+  };
+  // Alone on the map, a robot is never refused: there is no one to starve.
+  for (uint64_t seq = 1; seq <= 30; ++seq) {
+    ASSERT_EQ(Submit(batch("junk", seq)).kind, BatchOutcome::Kind::kStored) << seq;
+  }
+  ASSERT_EQ(Submit(batch("good", 1)).kind, BatchOutcome::Kind::kStored);
+  // 30 observations waiting against the other robot's 1: junk waits.
+  const BatchOutcome refused = Submit(batch("junk", 31));
+  ASSERT_EQ(refused.kind, BatchOutcome::Kind::kRejected);
+  EXPECT_EQ(refused.status.code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(refused.status.message().find("robot junk keeps the fuser busy"), std::string::npos)
+      << refused.status.message();
+  EXPECT_NE(refused.status.message().find("limits.fusion_share_factor"), std::string::npos);
+  for (uint64_t seq = 2; seq <= 5; ++seq) {
+    EXPECT_EQ(Submit(batch("good", seq)).kind, BatchOutcome::Kind::kStored) << seq;
+  }
+  const CoreStats stats = core_->Stats();
+  EXPECT_EQ(stats.fusion_share_refused, 1u);
+  ASSERT_EQ(stats.fusion_shares.size(), 2u);
+  EXPECT_EQ(stats.fusion_shares[1].robot, "junk");
+  EXPECT_EQ(stats.fusion_shares[1].pending, 30u);
+  EXPECT_EQ(stats.fusion_shares[1].refused, 1u);
+  EXPECT_EQ(Query("SELECT count(*) FROM observations"), 35) << "the refused batch was not stored";
+
+  // Once the fuser caught up, junk's share is back within bounds.
+  hold_fuser_ = false;
+  FeatureQuery wait;
+  wait.max_wait_s = 60;
+  uint64_t version = 0;
+  core_->QueryFeatures(wait, &version);
+  EXPECT_EQ(version, 35u);
+  EXPECT_EQ(Submit(batch("junk", 31)).kind, BatchOutcome::Kind::kStored);
+}
+
 TEST_F(MapCoreTest, StopDoesNotWaitForTheFusionBacklog) {
   UseFuserHold();
   Open();

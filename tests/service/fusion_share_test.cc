@@ -1,0 +1,92 @@
+// FusionShare (service/fusion_share.h): which robot waits when the fuser is
+// behind.
+#include "service/fusion_share.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace mapd::service {
+namespace {
+
+// `n` observations of `robot` committed and not fused.
+void Commit(FusionShare* share, const std::string& robot, int n) {
+  for (int i = 0; i < n; ++i) share->Committed(robot);
+}
+
+// The fuser measured `robot` at cost_s per observation (and is done with them).
+void Measure(FusionShare* share, const std::string& robot, double cost_s) {
+  share->Committed(robot);
+  share->Fused(robot, cost_s);
+}
+
+FusionShareOptions After(double after_s) {
+  FusionShareOptions o;
+  o.after_s = after_s;
+  return o;
+}
+
+TEST(FusionShareTest, EqualLoadsAreNeverRefused) {
+  FusionShare share(After(0.1));
+  for (int r = 0; r < 8; ++r) Commit(&share, "r" + std::to_string(r), 1000 + 100 * r);
+  for (int r = 0; r < 8; ++r) EXPECT_TRUE(share.Admit("r" + std::to_string(r)).ok()) << r;
+  EXPECT_EQ(share.refused_total(), 0u);
+}
+
+TEST(FusionShareTest, ARobotAloneIsNeverRefused) {
+  FusionShare share(After(0.1));
+  Commit(&share, "only", 100000);
+  EXPECT_TRUE(share.Admit("only").ok());
+}
+
+TEST(FusionShareTest, NothingIsRefusedBelowTheThreshold) {
+  FusionShare share(After(1.0));  // 1,000 observations at the unmeasured 1 ms
+  Commit(&share, "busy", 900);
+  Commit(&share, "quiet", 1);
+  EXPECT_TRUE(share.Admit("busy").ok());
+  Commit(&share, "busy", 200);
+  EXPECT_EQ(share.Admit("busy").code(), StatusCode::kResourceExhausted);
+  EXPECT_TRUE(share.Admit("quiet").ok());
+  EXPECT_TRUE(share.Admit("newcomer").ok()) << "nothing waiting, nobody kept waiting";
+}
+
+TEST(FusionShareTest, TheWorkWaitingCountsNotTheObservations) {
+  FusionShare share(After(0.05));
+  Measure(&share, "costly", 0.010);  // 10 ms an observation
+  Measure(&share, "cheap", 0.0001);  // 0.1 ms
+  Commit(&share, "costly", 10);      // 100 ms waiting
+  Commit(&share, "cheap", 100);      // 10 ms waiting, 10x as many observations
+  const Status s = share.Admit("costly");
+  EXPECT_EQ(s.code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(s.message().find("robot costly keeps the fuser busy: 10 of its observations"),
+            std::string::npos)
+      << s.message();
+  EXPECT_TRUE(share.Admit("cheap").ok());
+  ASSERT_EQ(share.Shares().size(), 2u);
+  EXPECT_EQ(share.Shares()[1].robot, "costly");
+  EXPECT_EQ(share.Shares()[1].refused, 1u);
+  EXPECT_NEAR(share.Shares()[1].cost_per_obs_s, 0.010, 1e-12);
+}
+
+TEST(FusionShareTest, ARefusedRobotIsAdmittedOnceTheFuserCaughtUp) {
+  FusionShare share(After(0.005));
+  Commit(&share, "junk", 50);
+  Commit(&share, "good", 2);
+  ASSERT_FALSE(share.Admit("junk").ok());
+  for (int i = 0; i < 46; ++i) share.Fused("junk", 0.001);  // 4 left: 2x the other's 2
+  EXPECT_TRUE(share.Admit("junk").ok());
+  share.Committed("junk");
+  EXPECT_FALSE(share.Admit("junk").ok());  // 5 > 2 x 2
+  share.Reset();  // the fuser restarted: nothing waits
+  EXPECT_TRUE(share.Admit("junk").ok());
+}
+
+TEST(FusionShareTest, ZeroTurnsTheCheckOff) {
+  FusionShare share(After(0.0));
+  Commit(&share, "junk", 100000);
+  Commit(&share, "good", 1);
+  EXPECT_TRUE(share.Admit("junk").ok());
+}
+
+}  // namespace
+}  // namespace mapd::service
