@@ -42,6 +42,10 @@ struct FusionShareOptions {
   // 0 disables the check (then only the backpressure protects the map).
   double after_s = 1.0;
   double factor = 2.0;  // a robot may keep this many times the others' average waiting
+  // A refusal is answered after this long (delayed_calls.h): a robot that
+  // resends at once is throttled instead of costing mapd a refusal per
+  // batch. Seconds; 0 = at once.
+  double refusal_delay_s = 0.25;
 };
 
 class FusionShare {

@@ -47,6 +47,7 @@
 #include "fusion/plane_engine.h"
 #include "geometry/box2.h"
 #include "service/core.h"
+#include "service/delayed_calls.h"
 #include "service/fusion_share.h"
 #include "service/ingest_batch.h"
 #include "service/latency_histogram.h"
@@ -194,6 +195,9 @@ class MapCore final : public Core {
   // is queued (never acknowledged) and drops the fused rows (derived).
   void AbandonQueuedWrites(std::unique_lock<std::mutex>& lock);
   void CommitGroup(std::vector<Pending>& group, FusedDelta& fused);
+  // Writer thread, queue_mu_ held: moves at most max_rows of fused_pending_
+  // into `out` (empty).
+  void TakeFusedRows(size_t max_rows, FusedDelta* out);
   void FuserLoop();
   // Fuser thread: waits while options_.hold_fuser_for_test() says so, until
   // Stop() tells the fuser to stop.
@@ -299,6 +303,7 @@ class MapCore final : public Core {
   std::deque<RateSample> rate_samples_;  // GUARDED_BY(rate_mu_), one per 250 ms, 10 s deep
   LatencyHistogram ack_latency_;         // stored batches: queued to acknowledged
   FusionShare fusion_share_{options_.fusion_share};
+  DelayedCalls delayed_refusals_;  // fusion share refusals, answered late (fusion_share.h)
 };
 
 }  // namespace mapd::service

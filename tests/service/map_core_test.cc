@@ -339,6 +339,44 @@ TEST_F(MapCoreTest, ARobotKeepingTheFuserBusyIsRefusedAndTheOthersAreNot) {
   EXPECT_EQ(Submit(batch("junk", 31)).kind, BatchOutcome::Kind::kStored);
 }
 
+// The writer writes at most 512 fused rows per commit (so that batches queued
+// meanwhile are not held up); a map with more still reaches the table whole.
+TEST_F(MapCoreTest, AFusedMapOfManyRowsReachesTheTableInChunks) {
+  Open();
+  constexpr int kWalls = 1300;
+  for (uint64_t seq = 1; seq <= 3; ++seq) {
+    pb::ObservationBatch b;
+    b.set_robot_id("r1");
+    b.set_session_id("s");
+    b.set_seq(seq);
+    b.mutable_t_frame_sensor()->mutable_rotation()->set_w(1);
+    b.mutable_t_frame_sensor()->mutable_translation()->set_z(0);
+    for (int k = 0; k < kWalls; ++k) {  // 1 m walls on a 5 m grid, far apart
+      auto* line = b.add_lines();
+      line->mutable_a()->set_x(5.0 * (k % 40));
+      line->mutable_a()->set_y(5.0 * (k / 40));
+      line->mutable_b()->set_x(5.0 * (k % 40) + 1.0 + 0.001 * static_cast<double>(seq));
+      line->mutable_b()->set_y(5.0 * (k / 40));
+    }
+    IngestLimits limits;
+    limits.max_features_per_batch = 2000;
+    StatusOr<IngestBatch> batch = ValidateBatch(b, limits);
+    ASSERT_TRUE(batch.ok()) << batch.status().ToString();
+    std::promise<BatchOutcome> done;
+    core_->Submit(*batch, [&](const BatchOutcome& o) { done.set_value(o); });
+    ASSERT_EQ(done.get_future().get().kind, BatchOutcome::Kind::kStored);
+  }
+  uint64_t version = 0;
+  EXPECT_EQ(core_->QueryFeatures(FeatureQuery(), &version).size(), static_cast<size_t>(kWalls));
+  // The writer catches up with the fused rows by itself, commit by commit.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Query("SELECT count(*) FROM fused_features") < kWalls &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(Query("SELECT count(*) FROM fused_features"), kWalls);
+}
+
 TEST_F(MapCoreTest, StopDoesNotWaitForTheFusionBacklog) {
   UseFuserHold();
   Open();
