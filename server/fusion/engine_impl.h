@@ -17,6 +17,7 @@
 #include "fusion/grid_index.h"
 #include "fusion/support_counter.h"
 #include "fusion/wall_consolidation.h"
+#include "geometry/box2.h"
 
 namespace mapd::fusion {
 
@@ -90,6 +91,9 @@ class FusionEngine::Impl {
   std::vector<uint32_t> parent_;
   std::vector<uint32_t> size_;
   std::vector<std::unique_ptr<ClusterStats>> stats_;
+  // Bounded mode, valid at roots: the bounding box of the component's member
+  // endpoints (= of its hull, which is how a snapshot restores it).
+  std::vector<geometry::Box2> bounds_;
   size_t cluster_count_ = 0;        // components
   uint64_t raw_feature_count_ = 0;  // features added, folded ones included
   // Per node, kept when the guard is on or in bounded mode: the node's own

@@ -210,6 +210,7 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   const uint64_t n = r.Count(4 + 4 + 49 + 1);
   e.parent_.resize(n);
   e.size_.resize(n);
+  e.bounds_.resize(n);
   e.anchors_.resize(n);
   e.stats_.resize(n);
   if (e.guard_on_) {
@@ -229,6 +230,15 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
       if (r.U8() != 0) e.folded_[i] = std::make_unique<ClusterStats>(r.Stats());
     }
     if (r.U8() != 0) e.stats_[i] = std::make_unique<ClusterStats>(r.Stats());
+    e.bounds_[i] = geometry::Box2{};
+    if (e.stats_[i] && !e.stats_[i]->hull.empty()) {
+      geometry::Box2& box = e.bounds_[i];
+      box.min = box.max = e.stats_[i]->hull.front();
+      for (const Vec2& p : e.stats_[i]->hull) {
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+      }
+    }
   }
   e.cluster_count_ = r.U64();
   e.raw_feature_count_ = r.U64();

@@ -21,6 +21,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -246,6 +247,7 @@ RunResult Run(const Options& opt, bool with_junk) {
   const auto term = Clock::now();
   r.exit_status = mapd::testing::Stop(mapd.pid, SIGTERM, std::chrono::seconds(120));
   r.stop_s = std::chrono::duration<double>(Clock::now() - term).count();
+  if (std::getenv("JUNK_BENCH_LOG")) std::fprintf(stderr, "%s\n", mapd.log().c_str());
   stop_junk = true;
   if (junk.joinable()) junk.join();
   return r;
