@@ -253,8 +253,14 @@ void MapCore::Stop() {
     if (!s.ok()) Log(LogLevel::kWarn, "fused_table_write_failed", {{"error", s.ToString()}});
   }
   // A snapshot of the final state makes the next start replay nothing.
-  if (store_ && ready_.load() && CheckReady().ok() && write_health_.ok())
+  if (partial_tie_) {
+    if (first_stop) {
+      Log(LogLevel::kInfo, "stop_during_tie",
+          {{"action", "no snapshot of a half-fused tie; the next start replays it"}});
+    }
+  } else if (store_ && ready_.load() && CheckReady().ok() && write_health_.ok()) {
     MaybeSnapshot(/*force=*/true);
+  }
   if (store_) {
     Status s = store_->Checkpoint();
     if (!s.ok()) Log(LogLevel::kWarn, "checkpoint_failed", {{"error", s.ToString()}});
@@ -492,7 +498,14 @@ void MapCore::FuserLoop() {
       if (fuser_abandon_.load()) break;  // Stop(): the rest is replayed at the next start
       ++done;
       if (!t.tied_sessions.empty()) {
-        FuseTiedSessions(t, &delta);
+        if (!FuseTiedSessions(t, &delta)) {
+          // Stop() came in the middle: the engine holds part of the tie. No
+          // snapshot may be taken of it; the next start replays the tie from
+          // the snapshot before.
+          partial_tie_ = true;
+          --done;
+          break;
+        }
         fused_tie_seq_ = std::max(fused_tie_seq_, t.tie_seq);
         fused_through_id_ = std::max(fused_through_id_, t.tied_through_id);
         continue;
@@ -520,6 +533,7 @@ void MapCore::FuserLoop() {
     }
     fuse_cv_.notify_all();
     work.clear();
+    if (partial_tie_) break;  // (see above) and no snapshot
     MaybeSnapshot(false);
   }
 }

@@ -188,7 +188,8 @@ class MapCore final : public Core {
   // Writer thread, after a snapshot is stored: raw retention, in rounds.
   void DropExpiredObservations();
   // Fuser thread: the stored observations of newly tied sessions into engine_.
-  void FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
+  // False if Stop() interrupted it (the engine then holds part of the tie).
+  bool FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
   void RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs);
   void WriterLoop();
   // Writer thread, at Stop() while the database refuses writes: refuses what
@@ -276,6 +277,8 @@ class MapCore final : public Core {
   // up to this sequence number.
   int64_t fused_through_id_ = 0;
   int64_t fused_tie_seq_ = 0;
+  // Fuser thread (read by Stop() after joining it): Stop() interrupted a tie.
+  bool partial_tie_ = false;
   std::chrono::steady_clock::time_point last_snapshot_ = std::chrono::steady_clock::now();
   std::atomic<uint64_t> fused_since_snapshot_{0};
   std::atomic<int64_t> snapshot_created_ns_{0};  // 0: none yet

@@ -244,7 +244,7 @@ Status MapCore::QueueFusedTableSync() {
   return Status::Ok();
 }
 
-void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
+bool MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
   const auto t0 = Clock::now();
   std::unordered_map<int64_t, geometry::Rigid3> frames;
   for (int64_t id : tie.tied_sessions) {
@@ -252,8 +252,14 @@ void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
     if (frame.ok() && frame->tied) frames[id] = frame->T_map_frame;
   }
   uint64_t added = 0;
+  bool interrupted = false;
   Status s = store_->ForEachObservationOfSessions(
       tie.tied_sessions, tie.tied_through_id, [&](const storage::StoredObservation& obs) {
+        // A tie can hold millions of observations: a stop does not wait for it.
+        if (fuser_abandon_.load()) {
+          interrupted = true;
+          return Status::Unavailable("mapd is stopping");
+        }
         auto frame = frames.find(obs.session_id);
         if (frame == frames.end()) return Status::Ok();
         // Locked per observation, so queries never wait for a whole session.
@@ -264,6 +270,11 @@ void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
         return Status::Ok();
       });
   fused_since_snapshot_ += added;
+  if (interrupted) {
+    Log(LogLevel::kInfo, "tied_sessions_fusion_interrupted",
+        {{"observations_fused", std::to_string(added)}, {"action", "replayed at the next start"}});
+    return false;
+  }
   if (!s.ok()) {
     // The ties are committed, so the next start fuses these sessions; until
     // then the map lacks what was not read. Never seen unless storage fails.
@@ -273,6 +284,7 @@ void MapCore::FuseTiedSessions(const ToFuse& tie, FusedDelta* delta) {
       {{"sessions", std::to_string(tie.tied_sessions.size())},
        {"observations", std::to_string(added)},
        {"ms", std::to_string(MsSince(t0))}});
+  return true;
 }
 
 void MapCore::MaybeSnapshot(bool force) {
