@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -228,7 +226,6 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
     if (other_root == root) return;  // an edge inside a component changes nothing
     if (geometry::PointSegmentDistance(g.centre, f.segment) > band_m) return;
     if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
-    if (std::getenv("DBG")) fprintf(stderr, "node %u g %u root %u(%u) other %u(%u) may %d\n", node, g.node, root, size_[root], other_root, size_[other_root], (int)MayLink(root, other_root));
     if (bounded_ && !MayLink(root, other_root)) return;
     root = Union(root, other_root, merged_ids);
   }, max_candidates);

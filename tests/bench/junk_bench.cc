@@ -12,6 +12,7 @@
 //
 // The junk lies 200 m east of the room, so "the same map" has a meaning:
 // the room's published walls with and without the junk robot (--junk 0).
+// JUNK_BENCH_LOG=1 prints each mapd's log after its stop.
 #include <grpcpp/grpcpp.h>
 #include <signal.h>
 
