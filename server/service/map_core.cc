@@ -345,14 +345,15 @@ void MapCore::TakeFusedRows(size_t max_rows, FusedDelta* out) {
     std::swap(*out, fused_pending_);
     return;
   }
-  for (auto* from_to : {&fused_pending_.lines, &fused_pending_.planes}) {
-    std::unordered_set<fusion::ClusterId>& to =
-        from_to == &fused_pending_.lines ? out->lines : out->planes;
-    for (auto it = from_to->begin(); it != from_to->end() && out->size() < max_rows;) {
-      to.insert(*it);
-      it = from_to->erase(it);
+  const auto move_some = [&](std::unordered_set<fusion::ClusterId>* from,
+                             std::unordered_set<fusion::ClusterId>* to) {
+    for (auto it = from->begin(); it != from->end() && out->size() < max_rows;) {
+      to->insert(*it);
+      it = from->erase(it);
     }
-  }
+  };
+  move_some(&fused_pending_.lines, &out->lines);
+  move_some(&fused_pending_.planes, &out->planes);
 }
 
 void MapCore::AbandonQueuedWrites(std::unique_lock<std::mutex>& lock) {
