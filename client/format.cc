@@ -254,10 +254,10 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
   for (const pb::RobotFusionShare& r : s.fusion_shares()) {
     if (r.refused() == 0) continue;
-    row("throttled robot",
-        r.robot_id() + ": " + num(r.refused()) + " batches refused (it kept the fuser busy: " +
-            num(r.pending()) + " observations waiting, " +
-            Printf("%.2f ms", 1e3 * r.cost_per_obs_s()) + " of fusion each)");
+    row("throttled robot", r.robot_id() + ": " + num(r.refused()) +
+                               " batches refused (it kept the fuser busy: " + num(r.pending()) +
+                               " observations waiting, " +
+                               Printf("%.2f ms", 1e3 * r.cost_per_obs_s()) + " of fusion each)");
   }
   row("fused planes", num(s.fused_planes()) + " published (floors, ceilings, ramps)");
   row("fusion nodes", num(s.fusion_nodes()) + " (representatives kept for " +

@@ -219,16 +219,20 @@ void FusionEngine::Impl::LinkToEarlier(uint32_t node, const GroundFeature& f,
   const double band_m = params_.eta_m + kSearchSlackM;
   uint32_t root = Find(node);
   const size_t max_candidates = bounded_ ? params_.max_link_candidates : SIZE_MAX;
-  grid_.ForEachNearSegment(f.segment, band_m, [&](const IndexedFeature& g) {
-    const double bound_m = std::min(circle.radius_m, g.radius_m) + params_.eta_m + kSearchSlackM;
-    if ((g.centre - circle.centre).squaredNorm() > bound_m * bound_m) return;
-    const uint32_t other_root = Find(g.node);
-    if (other_root == root) return;  // an edge inside a component changes nothing
-    if (geometry::PointSegmentDistance(g.centre, f.segment) > band_m) return;
-    if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
-    if (bounded_ && !MayLink(root, other_root)) return;
-    root = Union(root, other_root, merged_ids);
-  }, max_candidates);
+  grid_.ForEachNearSegment(
+      f.segment, band_m,
+      [&](const IndexedFeature& g) {
+        const double bound_m =
+            std::min(circle.radius_m, g.radius_m) + params_.eta_m + kSearchSlackM;
+        if ((g.centre - circle.centre).squaredNorm() > bound_m * bound_m) return;
+        const uint32_t other_root = Find(g.node);
+        if (other_root == root) return;  // an edge inside a component changes nothing
+        if (geometry::PointSegmentDistance(g.centre, f.segment) > band_m) return;
+        if (!MeetsAllCriteria(f.segment, g.segment, params_)) return;
+        if (bounded_ && !MayLink(root, other_root)) return;
+        root = Union(root, other_root, merged_ids);
+      },
+      max_candidates);
 }
 
 bool FusionEngine::Impl::MayLink(uint32_t a, uint32_t b) const {
@@ -272,17 +276,20 @@ bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const
   const double cover_sq = params_.cover_m * params_.cover_m;
   double best_sq = cover_sq;
   bool found = false;
-  cover_grid_.ForEachNear(centre, params_.cover_m + kSearchSlackM, [&](const CoverItem& g) {
-    if ((g.centre - centre).squaredNorm() > cover_sq) return;
-    const Segment2& segment = anchors_[g.node].segment;
-    const double d_sq = EndpointDistanceSq(f.segment, segment);
-    if (d_sq > best_sq || (found && d_sq == best_sq && g.node > *node)) return;
-    if (stats_[FindConst(g.node)]->support() < support_cap_) return;  // not established
-    if (!MeetsAllCriteria(f.segment, segment, params_)) return;
-    best_sq = d_sq;
-    *node = g.node;
-    found = true;
-  }, params_.max_link_candidates);
+  cover_grid_.ForEachNear(
+      centre, params_.cover_m + kSearchSlackM,
+      [&](const CoverItem& g) {
+        if ((g.centre - centre).squaredNorm() > cover_sq) return;
+        const Segment2& segment = anchors_[g.node].segment;
+        const double d_sq = EndpointDistanceSq(f.segment, segment);
+        if (d_sq > best_sq || (found && d_sq == best_sq && g.node > *node)) return;
+        if (stats_[FindConst(g.node)]->support() < support_cap_) return;  // not established
+        if (!MeetsAllCriteria(f.segment, segment, params_)) return;
+        best_sq = d_sq;
+        *node = g.node;
+        found = true;
+      },
+      params_.max_link_candidates);
   return found;
 }
 

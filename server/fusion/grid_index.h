@@ -50,7 +50,6 @@ class UniformGrid {
     return it == cells_.end() ? 0 : it->second.size();
   }
 
-
   // Removes the items filed at p for which pred(item) holds (order not kept).
   template <typename Pred>
   void EraseIf(const geometry::Vec2& p, Pred pred) {
@@ -79,7 +78,8 @@ class UniformGrid {
                    size_t max_items = SIZE_MAX) const {
     const CellKey lo = KeyOf(p - geometry::Vec2(radius_m, radius_m));
     const CellKey hi = KeyOf(p + geometry::Vec2(radius_m, radius_m));
-    return VisitCells(lo, hi, [](const CellKey&) { return true; }, fn, max_items);
+    return VisitCells(
+        lo, hi, [](const CellKey&) { return true; }, fn, max_items);
   }
 
   // Calls fn(item) for every item in the cells that come within radius_m of

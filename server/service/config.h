@@ -31,8 +31,8 @@ struct ServerConfig {
   StreamLimits streams;
   WatchOptions watch;  // WatchFeatureMap: history, per-watcher queue, watchers at once
   WebOptions web;      // the web view's HTTP port (off by default)
-  size_t max_message_bytes = 16u << 20;          // largest gRPC message accepted
-  size_t max_group_batches = 4096;               // batches per group commit at most
+  size_t max_message_bytes = 16u << 20;  // largest gRPC message accepted
+  size_t max_group_batches = 4096;       // batches per group commit at most
   // A robot keeping the fuser busy (service/fusion_share.h): shares are
   // enforced once this much fusion work waits, seconds (0: never), and a
   // robot may keep this many times the other robots' average waiting.

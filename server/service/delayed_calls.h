@@ -36,7 +36,8 @@ class DelayedCalls {
   std::mutex mu_;
   std::condition_variable cv_;
   // By deadline; equal deadlines in the order posted.
-  std::multimap<std::chrono::steady_clock::time_point, std::function<void()>> calls_;  // GUARDED_BY(mu_)
+  std::multimap<std::chrono::steady_clock::time_point, std::function<void()>>
+      calls_;              // GUARDED_BY(mu_)
   bool stopping_ = false;  // GUARDED_BY(mu_)
   std::thread thread_;
 };

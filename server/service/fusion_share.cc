@@ -66,9 +66,7 @@ Status FusionShare::Admit(const std::string& robot) {
     r.last_logged = now;
   }
   Log(LogLevel::kWarn, "fusion_share_exceeded",
-      {{"robot", robot.substr(0, 64)},
-       {"refused", std::to_string(refused)},
-       {"reason", message}});
+      {{"robot", robot.substr(0, 64)}, {"refused", std::to_string(refused)}, {"reason", message}});
   return Status::ResourceExhausted(message);
 }
 

@@ -64,9 +64,9 @@ class FusionShare {
 
   struct RobotShare {
     std::string robot;
-    uint64_t pending = 0;          // committed, not fused
-    double cost_per_obs_s = 0.0;   // the fuser's CPU per observation, recent average
-    uint64_t refused = 0;          // batches refused since the start
+    uint64_t pending = 0;         // committed, not fused
+    double cost_per_obs_s = 0.0;  // the fuser's CPU per observation, recent average
+    uint64_t refused = 0;         // batches refused since the start
   };
   // Robots with observations pending or batches refused, by name.
   std::vector<RobotShare> Shares() const;

@@ -123,8 +123,7 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
       return Status::InvalidArgument(field + " has zero length (a == b)");
     }
     if (length_m > limits.max_feature_length_m) {
-      return Status::InvalidArgument(field + " is " + Metres(length_m) +
-                                     " long; the limit is " +
+      return Status::InvalidArgument(field + " is " + Metres(length_m) + " long; the limit is " +
                                      Metres(limits.max_feature_length_m) +
                                      " (limits.max_feature_length_m): no wall is that long");
     }
@@ -161,8 +160,7 @@ StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const Ingest
     }
     if (const double span_m = (hi - lo).norm(); span_m > limits.max_feature_length_m) {
       return Status::InvalidArgument(field + ".boundary spans " + Metres(span_m) +
-                                     "; the limit is " +
-                                     Metres(limits.max_feature_length_m) +
+                                     "; the limit is " + Metres(limits.max_feature_length_m) +
                                      " (limits.max_feature_length_m)");
     }
   }

@@ -1,10 +1,9 @@
 #include "service/map_core.h"
 
+#include <pthread.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
-
-#include <pthread.h>
 
 #include <algorithm>
 
@@ -184,7 +183,9 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
     delayed_refusals_.Post(
         std::chrono::duration_cast<Clock::duration>(
             std::chrono::duration<double>(options_.fusion_share.refusal_delay_s)),
-        [done = std::move(done), fair] { done({BatchOutcome::Kind::kRejected, fair}); });
+        [done = std::move(done), fair] {
+          done({BatchOutcome::Kind::kRejected, fair});
+        });
     return;
   }
   {
@@ -202,7 +203,7 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
 void MapCore::Stop() {
   cancel_recovery_ = true;
   delayed_refusals_.Stop();  // the refusals still waiting are answered now
-  watch_hub_.Close();  // watches end at once (MapServer closes them earlier)
+  watch_hub_.Close();        // watches end at once (MapServer closes them earlier)
   {
     // Lifts the writer's backpressure: what is queued gets committed now.
     std::lock_guard<std::mutex> lock(fuse_mu_);

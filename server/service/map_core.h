@@ -67,7 +67,7 @@ struct MapCoreOptions {
   // Before that: a robot keeping the fuser far busier than the others has its
   // batches refused (fusion_share.h), so that the others keep being acknowledged.
   FusionShareOptions fusion_share;
-  double max_query_wait_s = 5.0;      // a query waits this long for the fuser at most
+  double max_query_wait_s = 5.0;  // a query waits this long for the fuser at most
   // Snapshots of the fusion state (bounded mode): after this many fused
   // observations, or once the newest is this old and anything changed. A
   // restart loads the newest and replays only what came after it. 0 = never.

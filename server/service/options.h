@@ -23,8 +23,8 @@ struct IngestLimits {
   // box diagonal), is refused: no wall is that long, and the fuser's work
   // grows with a feature's length (at most fusion.max_wall_length_m).
   double max_feature_length_m = 1000.0;
-  double quaternion_tolerance = 1e-3;      // accepted | |q| - 1 |
-  uint32_t max_id_length = 128;            // robot_id, session_id
+  double quaternion_tolerance = 1e-3;  // accepted | |q| - 1 |
+  uint32_t max_id_length = 128;        // robot_id, session_id
 
   Status Validate() const;
 };

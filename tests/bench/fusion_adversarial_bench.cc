@@ -70,8 +70,7 @@ Vec2 RoomCentre() { return {kRoomW / 2, kRoomH / 2}; }
 
 std::vector<Workload> Workloads() {
   std::vector<Workload> w;
-  w.push_back({"floor", "the 10 x 8 m room, revisited (the reference)",
-               [](std::mt19937& rng, int) {
+  w.push_back({"floor", "the 10 x 8 m room, revisited (the reference)", [](std::mt19937& rng, int) {
                  Observation o{RoomCentre(), {}};
                  AddRoom(rng, &o.segments);
                  return o;
@@ -99,12 +98,12 @@ std::vector<Workload> Workloads() {
                  }
                  return o;
                }});
-  w.push_back({"same_wall", "one 5 m wall, identical, 8 times per observation",
-               [](std::mt19937&, int) {
-                 Observation o{{0, -3}, {}};
-                 for (int i = 0; i < 8; ++i) o.segments.push_back({{-2.5, 0}, {2.5, 0}});
-                 return o;
-               }});
+  w.push_back(
+      {"same_wall", "one 5 m wall, identical, 8 times per observation", [](std::mt19937&, int) {
+         Observation o{{0, -3}, {}};
+         for (int i = 0; i < 8; ++i) o.segments.push_back({{-2.5, 0}, {2.5, 0}});
+         return o;
+       }});
   w.push_back({"limits", "the room moved to the corner of the coordinate range (+-1e6 m)",
                [](std::mt19937& rng, int k) {
                  const Vec2 corner = (k % 2 ? 1.0 : -1.0) * Vec2(999980.0, 999980.0);
@@ -113,7 +112,8 @@ std::vector<Workload> Workloads() {
                  for (Segment2& s : o.segments) s = {s.a + corner, s.b + corner};
                  return o;
                }});
-  w.push_back({"far_sight", "the room plus one 20 m wall 1e6 m from the sensor (longest sight line)",
+  w.push_back({"far_sight",
+               "the room plus one 20 m wall 1e6 m from the sensor (longest sight line)",
                [](std::mt19937& rng, int) {
                  std::uniform_real_distribution<double> along(-1e5, 1e5);
                  Observation o{RoomCentre(), {}};
@@ -154,8 +154,8 @@ Result Run(const Workload& w, int max_observations, double cpu_budget_s,
       features.push_back(f);
     }
     const double t0 = CpuNow();
-    const mapd::Status s = engine.AddFrom(static_cast<uint64_t>(k) + 1, 1 + k % 4, o.sensor_xy_m,
-                                          features);
+    const mapd::Status s =
+        engine.AddFrom(static_cast<uint64_t>(k) + 1, 1 + k % 4, o.sensor_xy_m, features);
     const double dt = CpuNow() - t0;
     if (!s.ok()) {
       std::fprintf(stderr, "%s: observation %d refused: %s\n", w.name, k, s.ToString().c_str());
@@ -205,8 +205,9 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::printf("| workload | observations | features | CPU s | fused/CPU-s | first 10 %% | last 10 %% "
-              "| slowest obs ms | representatives | published |\n");
+  std::printf(
+      "| workload | observations | features | CPU s | fused/CPU-s | first 10 %% | last 10 %% "
+      "| slowest obs ms | representatives | published |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   bool found = false;
   for (const Workload& w : Workloads()) {

@@ -81,8 +81,7 @@ pb::ObservationBatch JunkBatch(std::mt19937_64& rng, uint64_t seq) {
   for (const mapd::testing::Wall& w : mapd::testing::RoomWalls()) {
     const Eigen::Vector2d d = w.b - w.a;
     const Eigen::Vector2d a = w.a + 0.1 * d, c = w.a + 0.9 * d;
-    add(200 + a.x() + noise(rng), a.y() + noise(rng), 200 + c.x() + noise(rng),
-        c.y() + noise(rng));
+    add(200 + a.x() + noise(rng), a.y() + noise(rng), 200 + c.x() + noise(rng), c.y() + noise(rng));
   }
   for (int i = 0; i < 4; ++i) {
     const double x = 200 + pos(rng), y = pos(rng);
@@ -128,9 +127,9 @@ void Stream(const std::shared_ptr<grpc::Channel>& channel, double rate_hz, int w
   const auto start = Clock::now();
   for (uint64_t seq = 1; !stop.load(); ++seq) {
     if (rate_hz > 0) {
-      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(
-                                                    static_cast<double>(seq - 1) / rate_hz)));
+      std::this_thread::sleep_until(
+          start + std::chrono::duration_cast<Clock::duration>(
+                      std::chrono::duration<double>(static_cast<double>(seq - 1) / rate_hz)));
     }
     {
       std::unique_lock<std::mutex> lock(mu);
@@ -204,11 +203,12 @@ RunResult Run(const Options& opt, bool with_junk) {
       std::mt19937_64 rng(100 + static_cast<uint64_t>(i));
       std::uniform_real_distribution<double> x(2, 8), y(2, 6), yaw(-M_PI, M_PI);
       const std::string robot = "floor-" + std::to_string(i);
-      Stream(channel, opt.rate_hz, 64,
-             [&](uint64_t seq) {
-               return mapd::testing::RoomBatch(robot, "s", seq, x(rng), y(rng), yaw(rng), &rng);
-             },
-             stop_floor, &floor[static_cast<size_t>(i)]);
+      Stream(
+          channel, opt.rate_hz, 64,
+          [&](uint64_t seq) {
+            return mapd::testing::RoomBatch(robot, "s", seq, x(rng), y(rng), yaw(rng), &rng);
+          },
+          stop_floor, &floor[static_cast<size_t>(i)]);
     });
   }
   std::thread junk;
@@ -216,8 +216,8 @@ RunResult Run(const Options& opt, bool with_junk) {
     auto channel = grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials());
     junk = std::thread([&, channel] {
       std::mt19937_64 rng(46);
-      Stream(channel, 0, 256, [&](uint64_t seq) { return JunkBatch(rng, seq); }, stop_junk,
-             &r.junk);
+      Stream(
+          channel, 0, 256, [&](uint64_t seq) { return JunkBatch(rng, seq); }, stop_junk, &r.junk);
     });
   }
   auto stats_channel = grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials());
@@ -279,7 +279,8 @@ int main(int argc, char** argv) {
     } else if (k == "--mapd-arg") {
       opt.mapd_args.push_back(v);
     } else {
-      std::fprintf(stderr, "usage: junk_bench [--seconds S] [--rate-hz R] [--junk 0|1] [--mapd PATH] "
+      std::fprintf(stderr,
+                   "usage: junk_bench [--seconds S] [--rate-hz R] [--junk 0|1] [--mapd PATH] "
                    "[--mapd-arg ARG]...\n");
       return 2;
     }

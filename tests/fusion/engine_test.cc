@@ -362,7 +362,8 @@ TEST(FusionEngineCapsTest, AStraightWallGrowsPastTheCap) {
   FusionEngine engine(Capped(16));
   for (int s = 0; s < 30; ++s) {
     const double shift = 0.03 * s;  // no two alike: every feature a node
-    ASSERT_TRUE(engine.Add(100 + s, 0, {Wall(s + 1, Vec2(shift, 0.0), Vec2(4.0 + shift, 0.0))}).ok());
+    ASSERT_TRUE(
+        engine.Add(100 + s, 0, {Wall(s + 1, Vec2(shift, 0.0), Vec2(4.0 + shift, 0.0))}).ok());
   }
   EXPECT_EQ(engine.node_count(), 30u);
   EXPECT_EQ(engine.largest_component_nodes(), 30u);

@@ -77,7 +77,7 @@ TEST(FusionShareTest, ARefusedRobotIsAdmittedOnceTheFuserCaughtUp) {
   EXPECT_TRUE(share.Admit("junk").ok());
   share.Committed("junk");
   EXPECT_FALSE(share.Admit("junk").ok());  // 5 > 2 x 2
-  share.Reset();  // the fuser restarted: nothing waits
+  share.Reset();                           // the fuser restarted: nothing waits
   EXPECT_TRUE(share.Admit("junk").ok());
 }
 
