@@ -14,12 +14,11 @@ constexpr auto kLogEvery = std::chrono::seconds(10);
 
 }  // namespace
 
-double FusionShare::CostOf(const Robot& r) const {
-  if (r.cost_s > 0.0) return r.cost_s;
+double FusionShare::UnmeasuredCost() const {
   double sum = 0.0;
   int measured = 0;
-  for (const auto& [name, other] : robots_) {
-    if (other.cost_s > 0.0) sum += other.cost_s, ++measured;
+  for (const auto& [name, r] : robots_) {
+    if (r.cost_s > 0.0) sum += r.cost_s, ++measured;
   }
   return measured > 0 ? sum / measured : kDefaultCostS;
 }
@@ -33,11 +32,13 @@ Status FusionShare::Admit(const std::string& robot) {
     auto self = robots_.find(robot);
     // A robot with nothing waiting keeps nobody waiting.
     if (self == robots_.end() || self->second.pending == 0) return Status::Ok();
+    const double unmeasured_s = UnmeasuredCost();  // once, not per robot
     double total_s = 0.0, own_s = 0.0;
     int others = 0;
     for (const auto& [name, r] : robots_) {
       if (r.pending == 0) continue;
-      const double waiting_s = static_cast<double>(r.pending) * CostOf(r);
+      const double waiting_s =
+          static_cast<double>(r.pending) * (r.cost_s > 0.0 ? r.cost_s : unmeasured_s);
       total_s += waiting_s;
       if (name == robot) {
         own_s = waiting_s;
@@ -90,9 +91,10 @@ void FusionShare::Reset() {
 std::vector<FusionShare::RobotShare> FusionShare::Shares() const {
   std::lock_guard<std::mutex> lock(mu_);
   std::vector<RobotShare> out;
+  const double unmeasured_s = UnmeasuredCost();
   for (const auto& [name, r] : robots_) {
     if (r.pending == 0 && r.refused == 0) continue;
-    out.push_back({name, r.pending, CostOf(r), r.refused});
+    out.push_back({name, r.pending, r.cost_s > 0.0 ? r.cost_s : unmeasured_s, r.refused});
   }
   return out;
 }

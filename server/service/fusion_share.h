@@ -84,7 +84,9 @@ class FusionShare {
     uint64_t refused = 0;
     std::chrono::steady_clock::time_point last_logged{};  // of a refusal
   };
-  double CostOf(const Robot& r) const;  // REQUIRES: mu_ held
+  // The cost assumed for a robot not measured yet: the measured robots'
+  // average, else kDefaultCostS. REQUIRES: mu_ held.
+  double UnmeasuredCost() const;
 
   const FusionShareOptions options_;
   mutable std::mutex mu_;
