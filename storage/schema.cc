@@ -191,6 +191,26 @@ const std::vector<const char*>& Migrations() {
       ALTER TABLE merge_inputs ADD COLUMN restart_spread_voxels REAL;
       ALTER TABLE merge_inputs ADD COLUMN second_residual_m REAL;
       )sql",
+      // 8 -> 9: snapshots in parts. A fusion state of tens of MB written in
+      // one transaction held the database for 350 ms, and every robot's
+      // acknowledgement waited (issue 46). Its bytes (state, then plane_state)
+      // now go in parts of about 1 MiB, each committed on its own between other
+      // writes; the fusion_snapshots row, written last, names them (parts > 0,
+      // state empty, plane_state an empty blob if there is one). Parts that no
+      // row names (a stop or crash mid-write, a pruned snapshot) are deleted
+      // after the next snapshot.
+      R"sql(
+      ALTER TABLE fusion_snapshots ADD COLUMN parts INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE fusion_snapshots ADD COLUMN parts_key INTEGER;
+      ALTER TABLE fusion_snapshots ADD COLUMN state_bytes INTEGER;
+      CREATE TABLE fusion_snapshot_parts (
+        id        INTEGER PRIMARY KEY,
+        parts_key INTEGER NOT NULL,
+        part      INTEGER NOT NULL,
+        bytes     BLOB NOT NULL,
+        UNIQUE (parts_key, part)
+      );
+      )sql",
   };
   return kMigrations;
 }

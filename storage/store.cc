@@ -384,19 +384,30 @@ StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before
   return dropped;
 }
 
-Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep) {
+Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep,
+                                        SnapshotParts parts) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
       w,
       "INSERT INTO fusion_snapshots (created_ns, map_version, through_observation, "
-      "through_tie_seq, params, state, plane_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+      "through_tie_seq, params, state, plane_state, parts, parts_key, state_bytes) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
   if (!q.ok()) return q.status();
   q->Bind(1, snapshot.created_ns).Bind(2, static_cast<int64_t>(snapshot.map_version));
   q->Bind(3, snapshot.through_observation).Bind(4, snapshot.through_tie_seq);
-  q->Bind(5, std::string_view(snapshot.params))
-      .BindBlob(6, snapshot.state.data(), snapshot.state.size());
-  if (snapshot.has_plane_state)
-    q->BindBlob(7, snapshot.plane_state.data(), snapshot.plane_state.size());
+  q->Bind(5, std::string_view(snapshot.params));
+  if (parts.count > 0) {
+    // The bytes are in the parts; an empty plane_state blob says there is one.
+    q->BindBlob(6, "", 0);
+    if (snapshot.has_plane_state) q->BindBlob(7, "", 0);
+    q->Bind(8, static_cast<int64_t>(parts.count)).Bind(9, parts.key);
+    q->Bind(10, static_cast<int64_t>(snapshot.state.size()));
+  } else {
+    q->BindBlob(6, snapshot.state.data(), snapshot.state.size());
+    if (snapshot.has_plane_state)
+      q->BindBlob(7, snapshot.plane_state.data(), snapshot.plane_state.size());
+    q->Bind(8, int64_t{0});
+  }
   MAPD_RETURN_IF_ERROR(q->Run());
   StatusOr<Statement> prune =
       Statement::Prepare(w,
@@ -405,6 +416,38 @@ Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep
   if (!prune.ok()) return prune.status();
   prune->Bind(1, static_cast<int64_t>(keep));
   return prune->Run();
+}
+
+Status WriteTransaction::InsertSnapshotPart(int64_t key, int index, std::string_view bytes) {
+  StatusOr<Statement> q = Statement::Prepare(
+      store_->writer_.get(),
+      "INSERT INTO fusion_snapshot_parts (parts_key, part, bytes) VALUES (?1, ?2, ?3)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, key).Bind(2, static_cast<int64_t>(index)).BindBlob(3, bytes.data(), bytes.size());
+  return q->Run();
+}
+
+StatusOr<int> WriteTransaction::DeleteUnusedSnapshotParts(int limit) {
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> q = Statement::Prepare(
+      w,
+      "DELETE FROM fusion_snapshot_parts WHERE id IN (SELECT id FROM fusion_snapshot_parts "
+      "WHERE parts_key NOT IN (SELECT parts_key FROM fusion_snapshots WHERE parts_key IS NOT "
+      "NULL) LIMIT ?1)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, static_cast<int64_t>(limit));
+  MAPD_RETURN_IF_ERROR(q->Run());
+  return sqlite3_changes(w);
+}
+
+std::vector<std::string_view> SnapshotPartsOf(const FusionSnapshot& snapshot, size_t part_bytes) {
+  std::vector<std::string_view> out;
+  for (const std::string* bytes : {&snapshot.state, &snapshot.plane_state}) {
+    const std::string_view all(*bytes);
+    for (size_t at = 0; at < all.size(); at += part_bytes)
+      out.push_back(all.substr(at, part_bytes));
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------------------
@@ -723,8 +766,9 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
-      "SELECT id, created_ns, map_version, through_observation, through_tie_seq, "
-      "params, state, plane_state FROM fusion_snapshots ORDER BY id DESC LIMIT 1 OFFSET ?1");
+      "SELECT id, created_ns, map_version, through_observation, through_tie_seq, params, state, "
+      "plane_state, parts, parts_key, state_bytes FROM fusion_snapshots ORDER BY id DESC "
+      "LIMIT 1 OFFSET ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(skip));
   StatusOr<bool> row = q->Step();
@@ -740,6 +784,33 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   snap.state = std::string(q->ColumnBlob(6));
   snap.has_plane_state = !q->ColumnIsNull(7);
   if (snap.has_plane_state) snap.plane_state = std::string(q->ColumnBlob(7));
+  const int64_t parts = q->ColumnInt(8);
+  if (parts == 0) return snap;
+  // In parts (InsertSnapshotPart): state, then plane_state.
+  const int64_t key = q->ColumnInt(9);
+  const int64_t state_bytes = q->ColumnInt(10);
+  StatusOr<Statement> p = Statement::Prepare(
+      reader_.get(),
+      "SELECT part, bytes FROM fusion_snapshot_parts WHERE parts_key = ?1 ORDER BY part");
+  if (!p.ok()) return p.status();
+  p->Bind(1, key);
+  std::string bytes;
+  int64_t next = 0;
+  for (;;) {
+    StatusOr<bool> part = p->Step();
+    if (!part.ok()) return part.status();
+    if (!*part || p->ColumnInt(0) != next) break;
+    bytes.append(p->ColumnBlob(1));
+    ++next;
+  }
+  const auto have = static_cast<int64_t>(bytes.size());
+  if (next != parts || have < state_bytes || (!snap.has_plane_state && have != state_bytes)) {
+    return Status::Internal("fusion snapshot " + std::to_string(snap.id) + " has " +
+                            std::to_string(next) + " of its " + std::to_string(parts) +
+                            " parts in order (" + std::to_string(have) + " bytes)");
+  }
+  snap.state = bytes.substr(0, static_cast<size_t>(state_bytes));
+  if (snap.has_plane_state) snap.plane_state = bytes.substr(static_cast<size_t>(state_bytes));
   return snap;
 }
 

@@ -77,6 +77,20 @@ struct FusionSnapshot {
   bool has_plane_state = false;
 };
 
+// A snapshot written in parts: its bytes (state, then plane_state) in `count`
+// parts named by `key`, each stored in a transaction of its own
+// (WriteTransaction::InsertSnapshotPart), so that no commit holds the
+// database for long; the snapshot exists once its row is stored
+// (WriteTransaction::InsertSnapshot with these parts).
+struct SnapshotParts {
+  int64_t key = 0;  // unique per snapshot
+  int count = 0;    // 0: the bytes are in the row itself
+};
+
+// `snapshot`'s bytes cut into the parts InsertSnapshot expects: state, then
+// plane_state, in slices of at most `part_bytes` (> 0); views into `snapshot`.
+std::vector<std::string_view> SnapshotPartsOf(const FusionSnapshot& snapshot, size_t part_bytes);
+
 // One batch to store.
 struct NewObservation {
   std::string robot;
@@ -318,8 +332,17 @@ class WriteTransaction {
   // observation), then returns the freed pages to the file system (new
   // databases; see Store::Open). Returns how many were deleted.
   StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit);
-  // Stores a snapshot and deletes all but the `keep` newest.
-  Status InsertSnapshot(const FusionSnapshot& snapshot, int keep);
+  // Stores a snapshot and deletes the rows of all but the `keep` newest (their
+  // parts stay until DeleteUnusedSnapshotParts). With parts.count > 0, the
+  // bytes are the parts stored before under parts.key, and only the sizes of
+  // state and plane_state are taken from `snapshot`.
+  Status InsertSnapshot(const FusionSnapshot& snapshot, int keep, SnapshotParts parts = {});
+  // Part `index` (0, 1, ...) of the snapshot that will name `key`.
+  Status InsertSnapshotPart(int64_t key, int index, std::string_view bytes);
+  // Deletes up to `limit` parts that no stored snapshot names (a pruned
+  // snapshot's, or those of one a stop or crash interrupted); returns how many.
+  // Not while a snapshot's parts are being written: they are not named yet.
+  StatusOr<int> DeleteUnusedSnapshotParts(int limit);
   // True once TieSession() succeeded in this transaction.
   bool ties_sessions() const { return !new_ties_.empty(); }
   // The sequence number of this transaction's ties (0 if it tied none).
@@ -385,7 +408,8 @@ class Store {
                                    const std::function<Status(const StoredObservation&)>& fn);
   // The newest stored observation id (0 if none).
   StatusOr<int64_t> NewestObservationId();
-  // The newest snapshot (skip = 1: the one before it); NotFound if none.
+  // The newest snapshot (skip = 1: the one before it), its parts put back
+  // together; NotFound if none, Internal if its parts are not all there.
   StatusOr<FusionSnapshot> LatestSnapshot(int skip = 0);
   // The stored observations of `session_ids` with id <= max_id, in id order.
   Status ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,

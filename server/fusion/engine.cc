@@ -530,6 +530,11 @@ std::vector<FusedFeature> FusionEngine::Published() const {
 }
 
 std::optional<FusedFeature> FusionEngine::Get(ClusterId id) const { return impl_->Get(id); }
+std::optional<FusedFeature> FusionEngine::GetPublished(ClusterId id) const {
+  auto it = impl_->published_.find(id);
+  if (it == impl_->published_.end()) return std::nullopt;
+  return it->second;
+}
 size_t FusionEngine::feature_count() const { return impl_->raw_feature_count_; }
 size_t FusionEngine::node_count() const { return impl_->parent_.size(); }
 size_t FusionEngine::cluster_count() const { return impl_->cluster_count_ + impl_->extra_groups_; }

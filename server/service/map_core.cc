@@ -43,6 +43,8 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (!params.ok()) return Status::InvalidArgument("fusion parameters: " + params.message());
   params = options.planes.Validate();
   if (!params.ok()) return Status::InvalidArgument("plane fusion parameters: " + params.message());
+  if (options.snapshot_part_bytes == 0)
+    return Status::InvalidArgument("snapshot_part_bytes must be > 0");
   std::unique_ptr<MapCore> core(new MapCore(options));
   StatusOr<std::unique_ptr<storage::Store>> store =
       storage::Store::Open(options.db_path, options.store);
@@ -132,6 +134,20 @@ void MapCore::SubmitWrite(std::function<Status(storage::WriteTransaction*)> writ
   queue_cv_.notify_one();
 }
 
+void MapCore::SubmitBackgroundWrite(std::function<Status(storage::WriteTransaction*)> write,
+                                    std::function<void(const Status&)> done) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    if (!stopping_) {
+      background_jobs_.push_back(
+          std::make_shared<WriteJob>(WriteJob{std::move(write), std::move(done)}));
+      queue_cv_.notify_one();
+      return;
+    }
+  }
+  done(Status::Unavailable("mapd is shutting down"));
+}
+
 void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
   for (const std::shared_ptr<WriteJob>& job : jobs) {
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
@@ -210,14 +226,20 @@ void MapCore::Stop() {
     stop_requested_ = true;
     fuse_cv_.notify_all();
   }
+  std::deque<std::shared_ptr<WriteJob>> background;
   {
     std::lock_guard<std::mutex> lock(queue_mu_);
     stopping_ = true;
     stop_flush_deadline_ =
         std::chrono::steady_clock::now() +
         std::chrono::milliseconds(static_cast<int64_t>(options_.stop_flush_s * 1000));
+    background.swap(background_jobs_);
     queue_cv_.notify_all();
   }
+  // Background writes are not waited for: a stop writes its own snapshot, and
+  // retention goes on after the next one.
+  for (const std::shared_ptr<WriteJob>& job : background)
+    job->done(Status::Unavailable("mapd is shutting down"));
   // Every queued batch is committed and acknowledged, or, if the database
   // still refuses writes after stop_flush_s, refused (never acknowledged).
   if (writer_.joinable()) writer_.join();
@@ -288,7 +310,8 @@ void MapCore::WriterLoop() {
       std::unique_lock<std::mutex> lock(queue_mu_);
       // While backlogged, queued batches are not work (see above).
       const auto has_work = [&] {
-        return (!backlogged && !queue_.empty()) || !fused_pending_.empty() || !write_jobs_.empty();
+        return (!backlogged && !queue_.empty()) || !fused_pending_.empty() ||
+               !write_jobs_.empty() || !background_jobs_.empty();
       };
       if (!write_health_.ok()) {
         // A failing database is retried after a pause, not in a tight loop;
@@ -302,7 +325,8 @@ void MapCore::WriterLoop() {
           break;
         }
         // Nothing to retry: probe whether writes work again.
-        probe = queue_.empty() && fused_pending_.empty() && write_jobs_.empty();
+        probe = queue_.empty() && fused_pending_.empty() && write_jobs_.empty() &&
+                background_jobs_.empty();
         if (probe && stopping_) break;
       } else {
         if (backlogged) {
@@ -318,6 +342,11 @@ void MapCore::WriterLoop() {
       }
       if (!probe) {
         jobs.swap(write_jobs_);
+        // One background write per round, after this round's batches.
+        if (!background_jobs_.empty()) {
+          jobs.push_back(std::move(background_jobs_.front()));
+          background_jobs_.pop_front();
+        }
         const size_t n = backlogged ? 0 : std::min(queue_.size(), options_.max_group_batches);
         group.reserve(n);
         for (size_t i = 0; i < n; ++i) {
@@ -553,7 +582,7 @@ void MapCore::PublishChange(const FusedDelta& delta) {
     {
       std::shared_lock<std::shared_mutex> lock(engine_mu_);
       for (fusion::ClusterId id : delta.lines) {
-        std::optional<fusion::FusedFeature> f = engine_->Get(id);
+        std::optional<fusion::FusedFeature> f = engine_->GetPublished(id);
         if (f && f->support >= options_.fusion.min_support) {
           lines.push_back(std::move(*f));
         } else {
@@ -594,7 +623,7 @@ Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransacti
   {
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
     for (fusion::ClusterId id : delta.lines) {
-      std::optional<fusion::FusedFeature> f = engine_->Get(id);
+      std::optional<fusion::FusedFeature> f = engine_->GetPublished(id);
       if (f && f->support >= options_.fusion.min_support) {
         upserts.push_back(ToRow(*f));
       } else {

@@ -73,6 +73,10 @@ struct MapCoreOptions {
   // restart loads the newest and replays only what came after it. 0 = never.
   uint64_t snapshot_every_observations = 20000;
   double snapshot_max_age_s = 60.0;
+  // A snapshot's bytes are written in parts of this size, each in a commit of
+  // its own between the batches' commits (one 35 MB commit held every robot's
+  // acknowledgement for 350 ms); bytes, > 0.
+  size_t snapshot_part_bytes = size_t{1} << 20;
   // Raw retention: observations received longer ago than this are deleted
   // once every kept snapshot reflects them (never those of a session not yet
   // tied to the map frame). 0 = keep them forever. Days.
@@ -187,6 +191,15 @@ class MapCore final : public Core {
   void MaybeSnapshot(bool force);
   // Writer thread, after a snapshot is stored: raw retention, in rounds.
   void DropExpiredObservations();
+  // Writer thread, after a snapshot is stored: the parts no snapshot names
+  // any more, in rounds; then raw retention.
+  void DropUnusedSnapshotParts();
+  // A write nobody waits for and that may wait (snapshot parts, retention):
+  // the writer runs at most one per round, after the batches, so that each
+  // commits on its own between them. At Stop() the queued ones end with
+  // Unavailable, not run.
+  void SubmitBackgroundWrite(std::function<Status(storage::WriteTransaction*)> write,
+                             std::function<void(const Status&)> done);
   // Fuser thread: the stored observations of newly tied sessions into engine_.
   // False if Stop() interrupted it (the engine then holds part of the tie).
   bool FuseTiedSessions(const ToFuse& tie, FusedDelta* delta);
@@ -241,8 +254,9 @@ class MapCore final : public Core {
   std::condition_variable
       queue_cv_;               // the writer waits for work or for the fuser's backlog to drop
   std::deque<Pending> queue_;  // GUARDED_BY(queue_mu_)
-  std::deque<std::shared_ptr<WriteJob>> write_jobs_;  // GUARDED_BY(queue_mu_)
-  bool stopping_ = false;                             // GUARDED_BY(queue_mu_)
+  std::deque<std::shared_ptr<WriteJob>> write_jobs_;       // GUARDED_BY(queue_mu_)
+  std::deque<std::shared_ptr<WriteJob>> background_jobs_;  // GUARDED_BY(queue_mu_)
+  bool stopping_ = false;                                  // GUARDED_BY(queue_mu_)
   FusedDelta fused_pending_;  // GUARDED_BY(queue_mu_), fused by the fuser, not yet written
   std::chrono::steady_clock::time_point
       stop_flush_deadline_;  // GUARDED_BY(queue_mu_), set by Stop()

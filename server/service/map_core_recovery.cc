@@ -323,12 +323,9 @@ void MapCore::MaybeSnapshot(bool force) {
   const size_t bytes = snap.state.size();
   const int64_t created_ns = snap.created_ns;
   auto shared = std::make_shared<const storage::FusionSnapshot>(std::move(snap));
-  const auto write = [shared](storage::WriteTransaction* txn) {
-    return txn->InsertSnapshot(*shared, kSnapshotsKept);
-  };
   const auto done = [this, bytes, created_ns, encode_ms, covered, t0](const Status& s) {
-    snapshot_in_flight_ = false;
     if (!s.ok()) {
+      snapshot_in_flight_ = false;
       // Still to replay after a restart; the next snapshot is due at once.
       fused_since_snapshot_ += covered;
       // Unavailable: mapd is stopping, and Stop() writes a snapshot itself.
@@ -342,17 +339,67 @@ void MapCore::MaybeSnapshot(bool force) {
         {{"bytes", std::to_string(bytes)},
          {"encode_ms", std::to_string(encode_ms)},
          {"ms", std::to_string(MsSince(t0))}});
-    if (options_.raw_retention_days > 0) DropExpiredObservations();
+    DropUnusedSnapshotParts();  // then retention, and the next snapshot may begin
   };
-  if (force) {  // Stop(): the writer is gone, this thread writes
+  if (force) {  // Stop(): the writer is gone, this thread writes, in one commit
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
-    Status s = txn.ok() ? write(txn->get()) : txn.status();
+    Status s = txn.ok() ? (*txn)->InsertSnapshot(*shared, kSnapshotsKept) : txn.status();
     if (s.ok()) s = (*txn)->Commit();
     done(s);
     return;
   }
+  // In parts, each committed on its own between the batches' commits; the
+  // snapshot's row, written last, makes it one. A part that fails ends the
+  // rest (they are then deleted after the next snapshot).
   snapshot_in_flight_ = true;
-  SubmitWrite(write, done);
+  const std::vector<std::string_view> parts =
+      storage::SnapshotPartsOf(*shared, options_.snapshot_part_bytes);
+  const storage::SnapshotParts where{created_ns, static_cast<int>(parts.size())};
+  auto failed = std::make_shared<Status>();  // writer thread only
+  for (size_t i = 0; i < parts.size(); ++i) {
+    SubmitBackgroundWrite(
+        [shared, failed, key = where.key, index = static_cast<int>(i),
+         part = parts[i]](storage::WriteTransaction* txn) {
+          if (!failed->ok()) return *failed;
+          return txn->InsertSnapshotPart(key, index, part);
+        },
+        [failed](const Status& s) {
+          if (!s.ok() && failed->ok()) *failed = s;
+        });
+  }
+  SubmitBackgroundWrite(
+      [shared, failed, where](storage::WriteTransaction* txn) {
+        if (!failed->ok()) return *failed;
+        return txn->InsertSnapshot(*shared, kSnapshotsKept, where);
+      },
+      done);
+}
+
+// Runs while snapshot_in_flight_ is true, and ends it; then raw retention.
+void MapCore::DropUnusedSnapshotParts() {
+  constexpr int kPerRound = 8;  // parts (MiB) per transaction: keeps commits short
+  auto deleted = std::make_shared<int>(0);
+  SubmitBackgroundWrite(
+      [deleted](storage::WriteTransaction* txn) {
+        StatusOr<int> n = txn->DeleteUnusedSnapshotParts(kPerRound);
+        if (!n.ok()) return n.status();
+        *deleted = *n;
+        return Status::Ok();
+      },
+      [this, deleted](const Status& s) {
+        if (!s.ok() && s.code() != StatusCode::kUnavailable) {
+          Log(LogLevel::kWarn, "snapshot_parts_cleanup_failed", {{"error", s.ToString()}});
+        }
+        if (s.ok() && *deleted == kPerRound) {
+          DropUnusedSnapshotParts();  // more to do
+          return;
+        }
+        // Only now: the next snapshot's parts, not named until its row is
+        // written, must not be taken for unused ones.
+        snapshot_in_flight_ = false;
+        // After the parts: its incremental vacuum gives their pages back too.
+        if (s.ok() && options_.raw_retention_days > 0) DropExpiredObservations();
+      });
 }
 
 void MapCore::DropExpiredObservations() {
@@ -360,7 +407,7 @@ void MapCore::DropExpiredObservations() {
   const int64_t cutoff_ns =
       UnixNowNs() - static_cast<int64_t>(options_.raw_retention_days * 86400.0 * 1e9);
   auto dropped = std::make_shared<uint64_t>(0);
-  SubmitWrite(
+  SubmitBackgroundWrite(
       [cutoff_ns, dropped](storage::WriteTransaction* txn) {
         StatusOr<uint64_t> n = txn->DropRawObservations(cutoff_ns, kPerRound);
         if (!n.ok()) return n.status();

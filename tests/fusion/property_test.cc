@@ -356,6 +356,19 @@ void ExpectSameMap(const FusionEngine& engine, const BatchResult& reference, boo
       EXPECT_FALSE(engine.Get(c.id).has_value()) << c.id << " is part of a wall";
     }
   }
+  // GetPublished (what the server writes from) is Published(), by id.
+  for (const FusedFeature& f : published) {
+    const std::optional<FusedFeature> p = engine.GetPublished(f.id);
+    ASSERT_TRUE(p.has_value()) << f.id;
+    EXPECT_EQ(p->segment.a, f.segment.a) << f.id;
+    EXPECT_EQ(p->segment.b, f.segment.b) << f.id;
+    EXPECT_EQ(p->support, f.support) << f.id;
+  }
+  for (const BatchCluster& c : reference.clusters) {
+    if (!std::binary_search(published_ids.begin(), published_ids.end(), c.id)) {
+      EXPECT_FALSE(engine.GetPublished(c.id).has_value()) << c.id;
+    }
+  }
 }
 
 // The arrival orders every scene is fed in: as generated, reversed, and two

@@ -277,6 +277,42 @@ TEST_F(MapCoreTest, ATieAfterTheSnapshotIsReplayedInPlace) {
   EXPECT_EQ(stats.replay_length, 5u + 20 + 5 + 5) << "the replayed tail";
 }
 
+TEST_F(MapCoreTest, ASnapshotWrittenInPartsRestartsTheSameMap) {
+  options_.snapshot_every_observations = 40;
+  options_.snapshot_part_bytes = 256;  // a snapshot of a few KB: many parts
+  Open();
+  Stream("r1", false, 0.0, 1, 100, 1);
+  Stream("r2", false, 0.0, 1, 30, 2);
+  const std::vector<FusedView> before = Map();
+  const uint64_t version_before = version_;
+  // Until a snapshot in parts is stored (the fuser writes them as it goes).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Query("SELECT count(*) FROM fusion_snapshots WHERE parts > 1") == 0 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  Close();
+  // Leaves the newest snapshot in parts (a stop writes one whole: drop it).
+  ASSERT_GE(Query("SELECT count(*) FROM fusion_snapshots WHERE parts > 1"), 1);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(options_.db_path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(db, "DELETE FROM fusion_snapshots WHERE parts = 0", nullptr, nullptr, nullptr),
+      SQLITE_OK);
+  sqlite3_close(db);
+  const int64_t snapshot_version =
+      Query("SELECT map_version FROM fusion_snapshots ORDER BY id DESC LIMIT 1");
+  ASSERT_GE(snapshot_version, 40);
+
+  Open();
+  ExpectIdentical(Map(), before);
+  EXPECT_EQ(version_, version_before);
+  const CoreStats stats = core_->Stats();
+  EXPECT_GT(stats.snapshot_age_s, 0.0) << "no snapshot was loaded";
+  EXPECT_EQ(stats.replay_length, version_before - static_cast<uint64_t>(snapshot_version));
+  Close();
+}
+
 TEST_F(MapCoreTest, RawRetentionDropsWhatSnapshotsHoldAndKeepsTheMap) {
   options_.snapshot_every_observations = 10;
   options_.raw_retention_days = 1e-9;  // everything is old at once

@@ -99,18 +99,6 @@ class SubmapStoreTest : public testing::StoreFixture {
     return m;
   }
 
-  // Closes the store, runs `sql` on its file (to give it an older schema's
-  // shape) and opens it again (which migrates it).
-  void DowngradeAndReopen(const std::string& sql) {
-    store_.reset();
-    {
-      auto db = OpenDatabase(dir_.File("map.db"), false);
-      ASSERT_TRUE(db.ok());
-      ASSERT_TRUE(Exec(db->get(), sql).ok()) << sql;
-    }
-    Reopen();
-  }
-
   static MergeInputRecord Input(int64_t submap_id) {
     MergeInputRecord i;
     i.submap_id = submap_id;
@@ -354,12 +342,13 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   refused.record.reason = "no overlap";
   refused.record.inputs = {Input(a), Input(b)};
   ASSERT_TRUE(Record(refused).ok());
-  DowngradeAndReopen(
-      "ALTER TABLE merges DROP COLUMN requested_by; "
-      "ALTER TABLE merges DROP COLUMN decided_by; "
-      "ALTER TABLE merges DROP COLUMN decided_ns; "
-      "ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
-      std::string(kDropGateFigures) + "DELETE FROM schema_version WHERE version >= 6");
+  DowngradeAndReopen(std::string(testing::kUndoSnapshotParts) +
+                     "ALTER TABLE merges DROP COLUMN requested_by; "
+                     "ALTER TABLE merges DROP COLUMN decided_by; "
+                     "ALTER TABLE merges DROP COLUMN decided_ns; "
+                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
+                     std::string(kDropGateFigures) +
+                     "DELETE FROM schema_version WHERE version >= 6");
   auto merges = store_->ListMerges();
   ASSERT_TRUE(merges.ok()) << merges.status().ToString();
   ASSERT_EQ(merges->size(), 2u);
@@ -398,7 +387,7 @@ TEST_F(SubmapStoreTest, MergesBeforeGateFiguresReadAsNotMeasured) {
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   auto old_merge = Record(Accepted(a, b, "OLD"));
   ASSERT_TRUE(old_merge.ok());
-  DowngradeAndReopen(std::string(kDropGateFigures) +
+  DowngradeAndReopen(std::string(testing::kUndoSnapshotParts) + kDropGateFigures +
                      "DELETE FROM schema_version WHERE version >= 8");
   auto old_record = store_->GetMerge(old_merge->merge_id);
   ASSERT_TRUE(old_record.ok()) << old_record.status().ToString();
@@ -425,7 +414,8 @@ TEST_F(SubmapStoreTest, MergesBeforeMatchedCornersOpenWithoutPairs) {
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   auto old_merge = Record(Accepted(a, b, "OLD"));
   ASSERT_TRUE(old_merge.ok());
-  DowngradeAndReopen("ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
+  DowngradeAndReopen(std::string(testing::kUndoSnapshotParts) +
+                     "ALTER TABLE merge_inputs DROP COLUMN matched_points; " +
                      std::string(kDropGateFigures) +
                      "DELETE FROM schema_version WHERE version >= 7");
   auto old_record = store_->GetMerge(old_merge->merge_id);

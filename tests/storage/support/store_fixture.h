@@ -5,12 +5,22 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "common/temp_dir.h"
+#include "storage/sqlite.h"
 #include "storage/store.h"
 
 namespace mapd::storage::testing {
+
+// SQL that turns schema 9's snapshot tables back into schema 8's (the
+// downgrades below schema 9 start with it).
+constexpr const char* kUndoSnapshotParts =
+    "DROP TABLE fusion_snapshot_parts; "
+    "ALTER TABLE fusion_snapshots DROP COLUMN parts; "
+    "ALTER TABLE fusion_snapshots DROP COLUMN parts_key; "
+    "ALTER TABLE fusion_snapshots DROP COLUMN state_bytes; ";
 
 class StoreFixture : public ::testing::Test {
  protected:
@@ -22,6 +32,18 @@ class StoreFixture : public ::testing::Test {
     auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
     ASSERT_TRUE(opened.ok()) << opened.status().ToString();
     store_ = std::move(opened).value();
+  }
+
+  // Closes the store, runs `sql` on its file (to give it an older schema's
+  // shape) and opens it again (which migrates it).
+  void DowngradeAndReopen(const std::string& sql) {
+    store_.reset();
+    {
+      auto db = OpenDatabase(dir_.File("map.db"), false);
+      ASSERT_TRUE(db.ok());
+      ASSERT_TRUE(Exec(db->get(), sql).ok()) << sql;
+    }
+    Reopen();
   }
 
   // Runs `fn` in one write transaction and commits it when fn succeeds.
