@@ -37,7 +37,7 @@ struct ServerConfig {
   // enforced once this much fusion work waits, seconds (0: never), and a
   // robot may keep this many times the other robots' average waiting.
   double fusion_share_after_s = 1.0;
-  double fusion_share_factor = 2.0;
+  double fusion_share_factor = 4.0;
   uint64_t snapshot_every_observations = 20000;  // fusion snapshot cadence (0: never)
   double snapshot_max_age_s = 60.0;              // ... or once the newest is this old
   double raw_retention_days = 0.0;               // 0: keep raw observations forever

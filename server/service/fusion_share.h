@@ -41,7 +41,12 @@ struct FusionShareOptions {
   // Estimated fuser seconds waiting (all robots) before shares are enforced;
   // 0 disables the check (then only the backpressure protects the map).
   double after_s = 1.0;
-  double factor = 2.0;  // a robot may keep this many times the others' average waiting
+  // A robot may keep this many times the others' average waiting. Honest
+  // robots differ: in the city soak, where every robot streams at full rate,
+  // those in the costlier streets keep 2-3x the average waiting, and with 2
+  // they were refused 47,000-67,000 times in 10M features (4: 177); a junk
+  // robot keeps hundreds of times the average.
+  double factor = 4.0;
   // A refusal is answered after this long (delayed_calls.h): a robot that
   // resends at once is throttled instead of costing mapd a refusal per
   // batch. Seconds; 0 = at once.

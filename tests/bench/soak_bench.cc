@@ -11,7 +11,7 @@
 //
 //   soak_bench [--world floor|city] [--robots 8] [--total 10000000]
 //              [--every 1000000] [--restart-at 1000000,5000000,10000000]
-//              [--mapd PATH] [--keep DIR]
+//              [--mapd PATH] [--mapd-arg ARG]... [--keep DIR]
 //
 // Run on demand (docs/long-running.md); never by ctest.
 #include <grpcpp/grpcpp.h>
@@ -53,7 +53,8 @@ struct Options {
   uint64_t every = 1'000'000;
   std::vector<uint64_t> restart_at = {1'000'000, 5'000'000, 10'000'000};
   std::string mapd = MAPD_BINARY;
-  std::string keep;  // keep the database here instead of a temporary directory
+  std::string keep;                    // keep the database here instead of a temporary directory
+  std::vector<std::string> mapd_args;  // --mapd-arg, repeated
 };
 
 double Seconds(Clock::time_point t0) {
@@ -206,6 +207,20 @@ void RunRobot(const std::string& address, Robot* robot, Shared* shared) {
 
 // --- The server.
 
+// "snapshot, replayed N in T ms" from mapd's map_recovered log line.
+std::string RecoveredFrom(const std::string& log) {
+  const size_t at = log.find("event=map_recovered");
+  if (at == std::string::npos) return "?";
+  const std::string line = log.substr(at, log.find('\n', at) - at);
+  const auto field = [&](const std::string& key) {
+    const size_t k = line.find(" " + key + "=");
+    if (k == std::string::npos) return std::string("?");
+    const size_t v = k + key.size() + 2;
+    return line.substr(v, line.find(' ', v) - v);
+  };
+  return field("from") + ", replayed " + field("replayed") + " in " + field("ms") + " ms";
+}
+
 pb::Stats GetStats(pb::MapService::Stub* stub) {
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
@@ -350,6 +365,8 @@ int main(int argc, char** argv) {
       opt.mapd = argv[++i];
     else if (a == "--keep" && v)
       opt.keep = argv[++i];
+    else if (a == "--mapd-arg" && v)
+      opt.mapd_args.push_back(argv[++i]);
     else if (a == "--restart-at" && v) {
       opt.restart_at.clear();
       std::stringstream list(argv[++i]);
@@ -358,7 +375,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--world floor|city] [--robots N] [--total N] [--every N] "
-                   "[--restart-at A,B,..] [--mapd PATH] [--keep DIR]\n",
+                   "[--restart-at A,B,..] [--mapd PATH] [--mapd-arg ARG]... [--keep DIR]\n",
                    argv[0]);
       return 2;
     }
@@ -382,7 +399,7 @@ int main(int argc, char** argv) {
   }
   const std::string late_name = robots.back().pool.front().robot_id();
 
-  mapd::testing::MapdProcess mapd = mapd::testing::StartMapd(db, {}, opt.mapd);
+  mapd::testing::MapdProcess mapd = mapd::testing::StartMapd(db, opt.mapd_args, opt.mapd);
   if (mapd.port == 0) {
     std::fprintf(stderr, "mapd did not start\n%s", mapd.log().c_str());
     return 1;
@@ -462,7 +479,8 @@ int main(int argc, char** argv) {
       mapd::testing::Stop(mapd.pid, SIGKILL);
       const auto t0 = Clock::now();
       // Back as soon as it listens (it recovers the map after that).
-      mapd = mapd::testing::StartMapd(db, {}, opt.mapd, std::chrono::seconds(120), "listening");
+      mapd = mapd::testing::StartMapd(db, opt.mapd_args, opt.mapd, std::chrono::seconds(120),
+                                      "listening");
       const std::string address = mapd.address;
       stub =
           pb::MapService::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
@@ -473,12 +491,13 @@ int main(int argc, char** argv) {
           const MapSnapshot after = GetMap(stub.get());
           if (after.ok && after.version >= before.version) {
             full_s = Seconds(t0);
-            char line[256];
+            char line[512];
             std::snprintf(line, sizeof(line),
-                          "| %.2fM | %.3f | %.3f | %s (%zu features, map_version %llu) |",
+                          "| %.2fM | %.3f | %.3f | %s (%zu features, map_version %llu) | %s |",
                           raw / 1e6, serving_s, full_s,
                           after.features == before.features ? "identical" : "DIFFERENT",
-                          after.features.size(), static_cast<unsigned long long>(after.version));
+                          after.features.size(), static_cast<unsigned long long>(after.version),
+                          RecoveredFrom(mapd.log()).c_str());
             restarts.push_back(line);
             break;
           }
@@ -497,8 +516,9 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(shared.rejected.load()));
   std::printf(
       "\nRestarts (SIGKILL, then restart on the same database):\n\n"
-      "| raw features | to SERVING (s) | to the full map (s) | map after vs before |\n"
-      "|---|---|---|---|\n");
+      "| raw features | to SERVING (s) | to the full map (s) | map after vs before | "
+      "recovered from |\n"
+      "|---|---|---|---|---|\n");
   for (const std::string& r : restarts) std::printf("%s\n", r.c_str());
   std::printf("\n");
   const double tie_s = TieLateRobot(stub.get(), mapd.log_path, late_name);

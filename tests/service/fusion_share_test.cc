@@ -33,6 +33,19 @@ TEST(FusionShareTest, EqualLoadsAreNeverRefused) {
   EXPECT_EQ(share.refused_total(), 0u);
 }
 
+// The city soak's shape: every robot at full rate (equal observations
+// waiting), the ones in costlier streets at up to 3x the others' cost.
+TEST(FusionShareTest, HonestDifferencesInCostAreNotRefused) {
+  FusionShare share(FusionShareOptions{});
+  for (int r = 0; r < 8; ++r) {
+    const std::string robot = "r" + std::to_string(r);
+    Measure(&share, robot, r < 2 ? 0.0003 : 0.0001);  // r0, r1: 3x
+    Commit(&share, robot, 5000);                       // 4 s of work waiting in all
+  }
+  for (int r = 0; r < 8; ++r) EXPECT_TRUE(share.Admit("r" + std::to_string(r)).ok()) << r;
+  EXPECT_EQ(share.refused_total(), 0u);
+}
+
 TEST(FusionShareTest, ARobotAloneIsNeverRefused) {
   FusionShare share(After(0.1));
   Commit(&share, "only", 100000);
@@ -73,10 +86,10 @@ TEST(FusionShareTest, ARefusedRobotIsAdmittedOnceTheFuserCaughtUp) {
   Commit(&share, "junk", 50);
   Commit(&share, "good", 2);
   ASSERT_FALSE(share.Admit("junk").ok());
-  for (int i = 0; i < 46; ++i) share.Fused("junk", 0.001);  // 4 left: 2x the other's 2
+  for (int i = 0; i < 42; ++i) share.Fused("junk", 0.001);  // 8 left: 4x the other's 2
   EXPECT_TRUE(share.Admit("junk").ok());
   share.Committed("junk");
-  EXPECT_FALSE(share.Admit("junk").ok());  // 5 > 2 x 2
+  EXPECT_FALSE(share.Admit("junk").ok());  // 9 > 4 x 2
   share.Reset();                           // the fuser restarted: nothing waits
   EXPECT_TRUE(share.Admit("junk").ok());
 }
