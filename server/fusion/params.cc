@@ -46,6 +46,9 @@ Status FusionParams::Validate() const {
   if (max_link_candidates < 16 || max_link_candidates > (1u << 20)) {
     return Status::InvalidArgument("fusion params: max_link_candidates must be in [16, 1048576]");
   }
+  if (max_wall_pieces < 16 || max_wall_pieces > (1u << 20)) {
+    return Status::InvalidArgument("fusion params: max_wall_pieces must be in [16, 1048576]");
+  }
   MAPD_RETURN_IF_ERROR(
       CheckParamRange("fusion params", "evidence_range_m", evidence_range_m, 0.0, 1000.0));
   MAPD_RETURN_IF_ERROR(
@@ -90,8 +93,10 @@ std::string FusionParamsKey(const FusionParams& p) {
   // on maps with a component past the cap.
   if (p.mode == FusionMode::kBounded) {
     std::snprintf(text, sizeof(text),
-                  " max_component_nodes=%u max_link_candidates=%u max_wall_length_m=%.17g",
-                  p.max_component_nodes, p.max_link_candidates, p.max_wall_length_m);
+                  " max_component_nodes=%u max_link_candidates=%u max_wall_length_m=%.17g"
+                  " max_wall_pieces=%u",
+                  p.max_component_nodes, p.max_link_candidates, p.max_wall_length_m,
+                  p.max_wall_pieces);
     key += text;
   }
   return key;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
 
 #include "fusion/chain_guard.h"
@@ -150,7 +151,16 @@ bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q
 }
 
 WallConsolidator::WallConsolidator(const FusionParams& params, uint32_t support_cap)
-    : params_(params), support_cap_(support_cap), index_(kPieceStepM) {}
+    : params_(params),
+      support_cap_(support_cap),
+      max_wall_pieces_(params.mode == FusionMode::kBounded ? params.max_wall_pieces
+                                                           : std::numeric_limits<size_t>::max()),
+      index_(kPieceStepM) {}
+
+void WallConsolidator::TouchNeighboursIfOversized(ClusterId id) {
+  if (!pieces_.at(id).oversized) return;
+  for (ClusterId other : Neighbours(id)) touched_pieces_.push_back(other);
+}
 
 FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
   if (!free_space_ && params_.consolidate && params_.wall_occluded_gap_m > 0.0) {
@@ -193,6 +203,7 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
         it->second.fit.segment.a == fit.segment.a && it->second.fit.segment.b == fit.segment.b) {
       return false;
     }
+    TouchNeighboursIfOversized(stats.id);
     reindex = !SameFiledCells(index_, it->second.fit.segment, fit.segment);
     if (reindex) Index(stats.id, it->second.fit.segment, false);
     if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
@@ -211,6 +222,7 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
 void WallConsolidator::Erase(ClusterId piece) {
   auto it = pieces_.find(piece);
   if (it == pieces_.end()) return;
+  TouchNeighboursIfOversized(piece);
   Index(piece, it->second.fit.segment, false);
   if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
   pieces_.erase(it);
@@ -340,6 +352,7 @@ void WallConsolidator::TakeEvidence() {
   for (ClusterId id : recheck) {
     Piece& piece = pieces_.at(id);
     if (!Pierced(piece.fit.segment, *free_space_)) continue;
+    TouchNeighboursIfOversized(id);
     piece.pierced = true;
     touched_pieces_.push_back(id);
   }
@@ -411,27 +424,72 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
 
   // Connected components of OnOneWall from the touched pieces. A piece
   // reached that belonged to another wall drags that wall's pieces in too.
+  // A walk stops past max_wall_pieces_ pieces, or on reaching a piece of an
+  // oversized component found before: then every piece it reached is a wall
+  // of its own, and so is every piece of the smaller components it swallowed
+  // (found through pieces not oversized before, or touched).
+  const std::unordered_set<ClusterId> touched(work.begin(), work.end());
   std::unordered_set<ClusterId> visited;
+  std::unordered_set<ClusterId> oversized_now;
   std::vector<std::vector<ClusterId>> components;
+  std::vector<ClusterId> singles;  // pieces of oversized components reached
+  const auto drag = [&](ClusterId id) {
+    const Piece& piece = pieces_.at(id);
+    if (piece.has_wall && affected.insert(piece.wall).second) {
+      auto it = walls_.find(piece.wall);
+      if (it != walls_.end()) work.insert(work.end(), it->second.begin(), it->second.end());
+    }
+  };
   for (size_t next = 0; next < work.size(); ++next) {
     if (!visited.insert(work[next]).second) continue;
     std::vector<ClusterId> component;
     std::vector<ClusterId> stack{work[next]};
-    while (!stack.empty()) {
+    bool oversized = false;
+    while (!stack.empty() && !oversized) {
       const ClusterId id = stack.back();
       stack.pop_back();
       component.push_back(id);
-      const Piece& piece = pieces_.at(id);
-      if (piece.has_wall && affected.insert(piece.wall).second) {
-        auto it = walls_.find(piece.wall);
-        if (it != walls_.end()) work.insert(work.end(), it->second.begin(), it->second.end());
+      drag(id);
+      if (component.size() > max_wall_pieces_) {
+        oversized = true;
+        break;
       }
       for (ClusterId other : Neighbours(id)) {
-        if (visited.insert(other).second) stack.push_back(other);
+        if (visited.insert(other).second) {
+          stack.push_back(other);
+        } else if (oversized_now.count(other) != 0) {
+          oversized = true;
+        }
       }
     }
-    std::sort(component.begin(), component.end());
-    components.push_back(std::move(component));
+    if (!oversized) {
+      std::sort(component.begin(), component.end());
+      components.push_back(std::move(component));
+      continue;
+    }
+    for (ClusterId id : stack) {
+      component.push_back(id);
+      drag(id);
+    }
+    std::vector<ClusterId> expand;
+    for (ClusterId id : component) {
+      oversized_now.insert(id);
+      if (!pieces_.at(id).oversized || touched.count(id) != 0) expand.push_back(id);
+    }
+    while (!expand.empty()) {
+      const ClusterId id = expand.back();
+      expand.pop_back();
+      for (ClusterId other : Neighbours(id)) {
+        // An untouched piece oversized before stays a wall of its own.
+        if (pieces_.at(other).oversized && touched.count(other) == 0) continue;
+        if (!visited.insert(other).second) continue;
+        component.push_back(other);
+        oversized_now.insert(other);
+        drag(other);
+        expand.push_back(other);
+      }
+    }
+    singles.insert(singles.end(), component.begin(), component.end());
   }
 
   for (ClusterId wall : affected) walls_.erase(wall);
@@ -440,6 +498,13 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     const size_t first = walls->size();
     WallsOf(component, walls);
     for (size_t w = first; w < walls->size(); ++w) now.insert((*walls)[w].stats.id);
+    for (ClusterId id : component) pieces_.at(id).oversized = false;
+  }
+  std::sort(singles.begin(), singles.end());
+  for (ClusterId id : singles) {
+    WallsOf({id}, walls);
+    now.insert(id);
+    pieces_.at(id).oversized = true;
   }
   // Record membership: every piece of a component belongs to one of its walls.
   for (const Wall& wall : *walls) {

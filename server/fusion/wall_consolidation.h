@@ -39,8 +39,15 @@
 // gaps it bridged), and a piece near a newly free cell is re-checked for
 // piercing.
 //
+// Bounded (FusionParams::max_wall_pieces, bounded mode): a component of more
+// than max_wall_pieces pieces is not consolidated; each of its pieces is a wall
+// of its own. Still a function of the piece set (and evidence); the point is
+// that Resolve() then stops walking a component after max_wall_pieces pieces.
+//
 // Incremental: the engine reports pieces that appeared, changed or vanished;
 // Resolve() recomputes only the walls those pieces belonged to or now reach.
+// A piece of an oversized component that changes or vanishes also touches
+// its former neighbours (what is left of the component may now be small).
 #ifndef MAPD_FUSION_WALL_CONSOLIDATION_H_
 #define MAPD_FUSION_WALL_CONSOLIDATION_H_
 
@@ -124,7 +131,13 @@ class WallConsolidator {
     ClusterId wall = 0;
     bool has_wall = false;
     bool pierced = false;  // an observed-free cell on its fitted segment: joins nothing
+    // Its component had more than max_wall_pieces pieces at the last Resolve()
+    // (it is then a wall of its own).
+    bool oversized = false;
   };
+  // A piece of an oversized component is about to change or vanish: its
+  // current neighbours are resolved again.
+  void TouchNeighboursIfOversized(ClusterId id);
   void Index(ClusterId id, const geometry::Segment2& s, bool insert);
   // Pieces on one wall with `id`, ascending.
   // Records the cells of the occluded gaps it bridges (gap_watch_).
@@ -141,6 +154,7 @@ class WallConsolidator {
 
   const FusionParams params_;
   const uint32_t support_cap_;
+  const size_t max_wall_pieces_;  // max_wall_pieces in bounded mode, else no limit
   std::map<ClusterId, ClusterStats> piece_stats_;
   std::unordered_map<ClusterId, Piece> pieces_;
   std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending

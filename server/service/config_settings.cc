@@ -282,6 +282,10 @@ const std::vector<Setting>& Settings() {
       Count("fusion.max_link_candidates", "bounded mode: earlier representatives one new feature is "
             "compared with at most (whole grid cells in a fixed order); bounds the work per feature",
             [](C& c) -> auto& { return c.fusion.max_link_candidates; }, 16, 1048576),
+      Count("fusion.max_wall_pieces", "bounded mode: wall consolidation joins the pieces of a connected "
+            "set of at most this many; those of a larger one stay walls of their own (bounds the work "
+            "one observation can cause)",
+            [](C& c) -> auto& { return c.fusion.max_wall_pieces; }, 16, 1048576),
 
       // Non-vertical planes (fusion/plane_engine.h, docs/fusion.md "Non-vertical planes").
       Real("planes.max_normal_angle_deg", "plane criterion 1: max angle between normals, degrees",
