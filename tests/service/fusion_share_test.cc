@@ -40,7 +40,7 @@ TEST(FusionShareTest, HonestDifferencesInCostAreNotRefused) {
   for (int r = 0; r < 8; ++r) {
     const std::string robot = "r" + std::to_string(r);
     Measure(&share, robot, r < 2 ? 0.0003 : 0.0001);  // r0, r1: 3x
-    Commit(&share, robot, 5000);                       // 4 s of work waiting in all
+    Commit(&share, robot, 5000);                      // 4 s of work waiting in all
   }
   for (int r = 0; r < 8; ++r) EXPECT_TRUE(share.Admit("r" + std::to_string(r)).ok()) << r;
   EXPECT_EQ(share.refused_total(), 0u);
