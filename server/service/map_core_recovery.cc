@@ -87,11 +87,15 @@ void MapCore::Recover() {
              {"action", skip + 1 < kSnapshotsKept ? "trying the one before"
                                                   : "replaying every stored observation"}});
       }
-    } else {
-      if (snap.status().code() != StatusCode::kNotFound) {
-        Log(LogLevel::kWarn, "snapshot_unreadable", {{"error", snap.status().ToString()}});
-      }
+    } else if (snap.status().code() == StatusCode::kNotFound) {
       break;
+    } else {
+      // E.g. a part of it missing: the one before may still be whole.
+      had_snapshot = true;
+      Log(LogLevel::kWarn, "snapshot_unreadable",
+          {{"error", snap.status().ToString()},
+           {"action", skip + 1 < kSnapshotsKept ? "trying the one before"
+                                                : "replaying every stored observation"}});
     }
   }
   // Retention may have dropped what only the unusable snapshots reflected.
