@@ -5,7 +5,8 @@
 // the 4 robots' acknowledgement latency, what the junk robot was told, how
 // far the fuser fell behind, whether the 4 robots' map is the one they get
 // without the junk robot, and how long SIGTERM takes to end mapd with the
-// junk still streaming. A benchmark, not a test: figures go to
+// junk still streaming, and whether every batch acknowledged as stored is in
+// the database after the stop. A benchmark, not a test: figures go to
 // docs/reliability.md.
 //
 //   junk_bench [--seconds 40] [--rate-hz 20] [--junk 1] [--mapd PATH] [--mapd-arg ARG]...
@@ -183,7 +184,30 @@ struct RunResult {
   int exit_status = 0;
   std::string floor_final;
   double floor_final_s = 0;
+  // After the stop, from a restarted mapd: batches stored per robot.
+  std::map<std::string, uint64_t> stored_after;
+  std::map<std::string, uint64_t> acked;  // acknowledged STORED or DUPLICATE
 };
+
+// Batches stored per robot, from a mapd started on the database `db`.
+std::map<std::string, uint64_t> StoredBatches(const std::string& db, const Options& opt) {
+  std::map<std::string, uint64_t> out;
+  const mapd::testing::MapdProcess mapd = mapd::testing::StartMapd(db, opt.mapd_args, opt.mapd);
+  if (mapd.port == 0) return out;
+  auto stub = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  for (int attempt = 0; attempt < 1200 && out.empty(); ++attempt) {
+    grpc::ClientContext ctx;
+    pb::ListRobotsResponse robots;
+    if (stub->ListRobots(&ctx, {}, &robots).ok()) {
+      for (const pb::RobotInfo& r : robots.robots()) out[r.robot_id()] = r.batches();
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
+  mapd::testing::Stop(mapd.pid, SIGTERM, std::chrono::seconds(120));
+  return out;
+}
 
 RunResult Run(const Options& opt, bool with_junk) {
   mapd::testing::TempDir dir;
@@ -251,6 +275,12 @@ RunResult Run(const Options& opt, bool with_junk) {
   if (std::getenv("JUNK_BENCH_LOG")) std::fprintf(stderr, "%s\n", mapd.log().c_str());
   stop_junk = true;
   if (junk.joinable()) junk.join();
+  // Nothing acknowledged is lost: every batch acknowledged as stored is in
+  // the database a new mapd opens.
+  for (int i = 0; i < 4; ++i)
+    r.acked["floor-" + std::to_string(i)] = floor[static_cast<size_t>(i)].stored;
+  if (with_junk) r.acked["junk"] = r.junk.stored;
+  r.stored_after = StoredBatches(dir.File("map.db"), opt);
   return r;
 }
 
@@ -300,6 +330,16 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(run->max_backlog), run->floor_final.c_str(),
         run->floor_final_s);
     std::printf("  SIGTERM to exit: %.2f s (status %d)\n", run->stop_s, run->exit_status);
+    std::string lost;
+    for (const auto& [robot, acked] : run->acked) {
+      const auto it = run->stored_after.find(robot);
+      const uint64_t stored = it == run->stored_after.end() ? 0 : it->second;
+      std::printf("  %s: %llu acknowledged as stored, %llu in the database after a restart\n",
+                  robot.c_str(), static_cast<unsigned long long>(acked),
+                  static_cast<unsigned long long>(stored));
+      if (stored < acked) lost += " " + robot;
+    }
+    std::printf("  acknowledged and lost: %s\n", lost.empty() ? "none" : lost.c_str());
     if (run == &base && !opt.junk) break;
   }
   if (opt.junk) {

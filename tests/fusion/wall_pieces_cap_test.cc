@@ -12,7 +12,8 @@
 
 #include "fusion/engine.h"
 
-namespace mapd::fusion {
+// Named, so that a unity build with the other fusion tests sees no clash.
+namespace mapd::fusion::wall_pieces_cap_test {
 namespace {
 
 using geometry::Vec2;
@@ -192,4 +193,4 @@ TEST(WallPiecesCapTest, RandomStretchesKeepTheWallsAFunctionOfThePieces) {
 }
 
 }  // namespace
-}  // namespace mapd::fusion
+}  // namespace mapd::fusion::wall_pieces_cap_test
