@@ -236,13 +236,14 @@ void MapCore::Stop() {
     background.swap(background_jobs_);
     queue_cv_.notify_all();
   }
-  // Background writes are not waited for: a stop writes its own snapshot, and
-  // retention goes on after the next one.
-  for (const std::shared_ptr<WriteJob>& job : background)
-    job->done(Status::Unavailable("mapd is shutting down"));
   // Every queued batch is committed and acknowledged, or, if the database
   // still refuses writes after stop_flush_s, refused (never acknowledged).
   if (writer_.joinable()) writer_.join();
+  // Background writes are not waited for: a stop writes its own snapshot, and
+  // retention goes on after the next one. Told only now: their callbacks share
+  // state with the job the writer may have been running (a snapshot's parts).
+  for (const std::shared_ptr<WriteJob>& job : background)
+    job->done(Status::Unavailable("mapd is shutting down"));
   {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     fuser_stopping_ = true;

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <map>
+#include <mutex>
 
 #include "common/clock.h"
 #include "service/log.h"
@@ -24,6 +25,25 @@ namespace mapd::service {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The first failure among a snapshot's part writes; the parts after it skip.
+// The writer runs the parts, but a part refused at a stop is told on the
+// thread that submitted it.
+class FirstFailure {
+ public:
+  void Record(const Status& s) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!s.ok() && status_.ok()) status_ = s;
+  }
+  Status Get() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return status_;
+  }
+
+ private:
+  mutable std::mutex mu_;
+  Status status_;  // GUARDED_BY(mu_)
+};
 
 int64_t MsSince(Clock::time_point t0) {
   return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
@@ -359,21 +379,19 @@ void MapCore::MaybeSnapshot(bool force) {
   const std::vector<std::string_view> parts =
       storage::SnapshotPartsOf(*shared, options_.snapshot_part_bytes);
   const storage::SnapshotParts where{created_ns, static_cast<int>(parts.size())};
-  auto failed = std::make_shared<Status>();  // writer thread only
+  auto failed = std::make_shared<FirstFailure>();
   for (size_t i = 0; i < parts.size(); ++i) {
     SubmitBackgroundWrite(
         [shared, failed, key = where.key, index = static_cast<int>(i),
          part = parts[i]](storage::WriteTransaction* txn) {
-          if (!failed->ok()) return *failed;
+          if (Status before = failed->Get(); !before.ok()) return before;
           return txn->InsertSnapshotPart(key, index, part);
         },
-        [failed](const Status& s) {
-          if (!s.ok() && failed->ok()) *failed = s;
-        });
+        [failed](const Status& s) { failed->Record(s); });
   }
   SubmitBackgroundWrite(
       [shared, failed, where](storage::WriteTransaction* txn) {
-        if (!failed->ok()) return *failed;
+        if (Status before = failed->Get(); !before.ok()) return before;
         return txn->InsertSnapshot(*shared, kSnapshotsKept, where);
       },
       done);
