@@ -58,6 +58,12 @@ TEST(FusionParamsTest, RefusalsNameTheField) {
   EXPECT_THAT(p.Validate().message(), HasSubstr("max_link_candidates"));
 
   p = FusionParams();
+  p.max_wall_pieces = 15;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("max_wall_pieces"));
+  p.max_wall_pieces = (1u << 20) + 1;
+  EXPECT_THAT(p.Validate().message(), HasSubstr("max_wall_pieces"));
+
+  p = FusionParams();
   p.evidence_range_m = 0.0;
   EXPECT_THAT(p.Validate().message(), HasSubstr("evidence_range_m"));
   p.evidence_range_m = 1001.0;
@@ -76,6 +82,9 @@ TEST(FusionParamsTest, TheCostCapsAreInTheKey) {
   EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
   p = defaults;
   p.evidence_range_m = 40.0;
+  EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
+  p = defaults;
+  p.max_wall_pieces = 512;
   EXPECT_NE(FusionParamsKey(p), FusionParamsKey(defaults));
 }
 

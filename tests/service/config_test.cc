@@ -264,7 +264,7 @@ TEST(ConfigTest, CostLimitsParseAndAreValidated) {
   ASSERT_TRUE(Parse({"--fusion.max_component_nodes=512", "--fusion.max_link_candidates=100",
                      "--fusion.evidence_range_m=40", "--fusion.max_wall_length_m=2000",
                      "--limits.max_feature_length_m=1500", "--limits.fusion_share_after_s=0",
-                     "--limits.fusion_share_factor=3"},
+                     "--limits.fusion_share_factor=3", "--fusion.max_wall_pieces=64"},
                     &c)
                   .ok());
   EXPECT_EQ(c.fusion.max_component_nodes, 512u);
@@ -273,8 +273,11 @@ TEST(ConfigTest, CostLimitsParseAndAreValidated) {
   EXPECT_EQ(c.ingest.limits.max_feature_length_m, 1500.0);
   EXPECT_EQ(c.fusion_share_after_s, 0.0);
   EXPECT_EQ(c.fusion_share_factor, 3.0);
+  EXPECT_EQ(c.fusion.max_wall_pieces, 64u);
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"--fusion.max_component_nodes=8", "fusion.max_component_nodes"},
+      {"--fusion.max_wall_pieces=nan", "fusion.max_wall_pieces"},
+      {"--fusion.max_wall_pieces=2000000", "fusion.max_wall_pieces"},
       {"--fusion.evidence_range_m=0", "fusion.evidence_range_m"},
       {"--limits.fusion_share_factor=0.5", "limits.fusion_share_factor"},
       // A batch the fuser would refuse must not be acknowledged.
