@@ -5,9 +5,9 @@
 #include <sqlite3.h>
 
 #include <chrono>
-#include <thread>
 #include <cmath>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "common/health.h"
