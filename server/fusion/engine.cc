@@ -539,6 +539,16 @@ size_t FusionEngine::feature_count() const { return impl_->raw_feature_count_; }
 size_t FusionEngine::node_count() const { return impl_->parent_.size(); }
 size_t FusionEngine::cluster_count() const { return impl_->cluster_count_ + impl_->extra_groups_; }
 size_t FusionEngine::published_count() const { return impl_->published_.size(); }
+size_t FusionEngine::retired_count() const { return impl_->consolidator_.retired_count(); }
+
+std::vector<FusedFeature> FusionEngine::Retired() const {
+  std::vector<FusedFeature> out;
+  for (ClusterId id : impl_->consolidator_.RetiredPieces()) {
+    const ClusterStats& stats = impl_->consolidator_.pieces().at(id);
+    out.push_back(stats.ToFused(stats.Refit()));
+  }
+  return out;
+}
 size_t FusionEngine::largest_component_nodes() const {
   size_t largest = impl_->parent_.empty() ? 0 : 1;
   for (uint32_t n = 0; n < impl_->parent_.size(); ++n) {

@@ -132,6 +132,13 @@ class FusionEngine {
   size_t node_count() const;
   size_t cluster_count() const;  // clusters (the guard's groups), published or not
   size_t published_count() const;
+  // Published clusters retired because robots saw through them
+  // (FusionParams::retire_views; wall_retirement.h): not in Published().
+  size_t retired_count() const;
+  // Those clusters, ascending by id (as fitted, before corner optimisation):
+  // what the robots saw through. Not published; a view for operators and
+  // benchmarks.
+  std::vector<FusedFeature> Retired() const;
   // Nodes of the largest component ever formed (a component never shrinks).
   size_t largest_component_nodes() const;
   const FusionParams& params() const;

@@ -21,7 +21,10 @@ namespace mapd::fusion {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'F', 'U', 'S', '1'};
-constexpr uint32_t kVersion = 2;  // 2: the consolidator's pieces
+// 2: the consolidator's pieces. Retirement's section (retired pieces, the
+// ledger) follows the evidence only when the params key has retirement on,
+// so the layout without it is unchanged.
+constexpr uint32_t kVersion = 2;
 
 class Writer : public StateWriter {
  public:
@@ -189,6 +192,16 @@ Status FusionEngine::SaveState(std::string* out) const {
     // The proofs of occlusion exist with the evidence when wall_proof_gap_m > 0
     // (in the params key, so the layout follows from the params).
     if (e.consolidator_.proof() != nullptr) write_tiles(*e.consolidator_.proof());
+    // Retirement, with the evidence (the params key says whether it is on).
+    if (const RetirementLedger* ledger = e.consolidator_.ledger(); ledger != nullptr) {
+      w.Ids(e.consolidator_.RetiredPieces());
+      w.U64(ledger->entries().size());
+      for (const auto& [id, entry] : ledger->entries()) {
+        w.U64(id);
+        w.Seg(entry.segment);
+        w.Str(entry.passes);
+      }
+    }
   }
   w.U64(Fnv1a(*out));
   return Status::Ok();
@@ -283,6 +296,14 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   }
   // The evidence before the pieces: whether a piece is pierced depends on it.
   const bool evidence_on = params.consolidate && params.wall_occluded_gap_m > 0.0;
+  bool has_ledger = false;
+  std::vector<ClusterId> retired;
+  struct LedgerEntry {
+    ClusterId id;
+    Segment2 segment;
+    std::string passes;
+  };
+  std::vector<LedgerEntry> ledger_entries;
   if (evidence_on && r.U8() != 0) {
     FreeSpaceGrid* free_space = e.consolidator_.EnableFreeSpace();
     if (free_space == nullptr) return Corrupt("free-space evidence with it off");
@@ -306,9 +327,34 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     if (!read_tiles(free_space)) return Corrupt("a free-space tile");
     FreeSpaceGrid* proof = e.consolidator_.mutable_proof();
     if (proof != nullptr && !read_tiles(proof)) return Corrupt("a proof-of-occlusion tile");
+    has_ledger = e.consolidator_.ledger() != nullptr;
+    if (has_ledger) {
+      retired = r.Ids();
+      const uint64_t entries = r.Count(8 + 32 + 8);
+      for (uint64_t i = 0; i < entries && r.ok(); ++i) {
+        const uint64_t id = r.U64();
+        const Segment2 segment = r.Seg();
+        ledger_entries.push_back({id, segment, r.Str()});
+      }
+    }
   }
   if (!r.ok() || !r.at_end()) return Corrupt("truncated or trailing bytes");
   for (const ClusterStats& stats : piece_stats) e.consolidator_.Upsert(stats, stats.Refit());
+  if (has_ledger) {
+    // Upsert watched every piece afresh: retire and restore what the live one had.
+    for (ClusterId id : retired) {
+      if (!e.consolidator_.HasPiece(id)) return Corrupt("a retired piece that is not a piece");
+      e.consolidator_.Retire(id);
+    }
+    RetirementLedger* ledger = e.consolidator_.mutable_ledger();
+    for (const LedgerEntry& entry : ledger_entries) {
+      if (!e.consolidator_.HasPiece(entry.id) || !ledger->Watches(entry.id) ||
+          !ledger->Restore(entry.id, entry.segment, entry.passes)) {
+        return Corrupt("a retirement entry");
+      }
+    }
+    if (ledger->entries().size() != ledger_entries.size()) return Corrupt("retirement entries");
+  }
 
   // Structure: indices in range, stats exactly at roots, shallow trees.
   size_t roots = 0;

@@ -123,6 +123,9 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
       }
       const uint32_t run =
           (last == kTileCells - 1 ? ~0u : (1u << (last + 1)) - 1u) & ~((1u << first) - 1u);
+      for (uint32_t seen = run & tile->watched[row]; seen != 0; seen &= seen - 1u) {
+        watched_passes_.push_back(TileKey(tx * kTileCells + __builtin_ctz(seen), cy));
+      }
       // Saturated counts stay as they are: still a function of the triangle set.
       uint32_t todo = run & ~tile->saturated[row];
       while (todo != 0) {
@@ -177,6 +180,22 @@ bool FreeSpaceGrid::Probe::IsFree(const Vec2& p) {
                                       tx * kTileCells)] >= grid_.min_count_;
 }
 
+void FreeSpaceGrid::Watch(uint64_t cell_key, bool on) {
+  const auto cx = static_cast<int64_t>(static_cast<int32_t>(static_cast<uint32_t>(cell_key >> 32)));
+  const auto cy =
+      static_cast<int64_t>(static_cast<int32_t>(static_cast<uint32_t>(cell_key & 0xffffffffu)));
+  const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
+  const uint32_t bit = 1u << static_cast<int>(cx - tx * kTileCells);
+  uint32_t& mask = TileAt(tx, ty).watched[static_cast<size_t>(cy - ty * kTileCells)];
+  mask = on ? (mask | bit) : (mask & ~bit);
+}
+
+std::vector<uint64_t> FreeSpaceGrid::TakeWatchedPasses() {
+  std::vector<uint64_t> out;
+  out.swap(watched_passes_);
+  return out;
+}
+
 std::vector<uint64_t> FreeSpaceGrid::TakeNewlyFree() {
   std::vector<uint64_t> out;
   out.swap(newly_free_);
@@ -197,7 +216,13 @@ Vec2 FreeSpaceGrid::CellCentre(uint64_t cell_key) {
 std::vector<std::pair<uint64_t, const FreeSpaceGrid::Tile*>> FreeSpaceGrid::SortedTiles() const {
   std::vector<std::pair<uint64_t, const Tile*>> out;
   out.reserve(tiles_.size());
-  for (const auto& [key, tile] : tiles_) out.emplace_back(key, &tile->counts);
+  for (const auto& [key, tile] : tiles_) {
+    // A tile that only Watch created (no count yet).
+    if (std::all_of(tile->counts.begin(), tile->counts.end(), [](uint8_t c) { return c == 0; })) {
+      continue;
+    }
+    out.emplace_back(key, &tile->counts);
+  }
   std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   return out;
 }

@@ -80,6 +80,15 @@ class FreeSpaceGrid {
   static uint64_t CellKeyOf(const geometry::Vec2& p);
   static geometry::Vec2 CellCentre(uint64_t cell_key);
 
+  // Watched cells (retirement, wall_retirement.h): AddView reports every
+  // watched cell a triangle covers, saturated or not, until taken. Watching
+  // creates the cell's tile (its counts stay zero; SortedTiles leaves tiles
+  // with no count out, so snapshots do not depend on what was watched).
+  void Watch(uint64_t cell_key, bool on);
+  // The watched cells covered since the last call, in the order covered
+  // (a cell once per triangle that covered it); clears the list.
+  std::vector<uint64_t> TakeWatchedPasses();
+
   size_t tile_count() const { return tiles_.size(); }
   size_t memory_bytes() const { return tiles_.size() * (sizeof(TileData) + 48); }
 
@@ -96,6 +105,7 @@ class FreeSpaceGrid {
   struct TileData {
     Tile counts{};
     std::array<uint32_t, kTileCells> saturated{};
+    std::array<uint32_t, kTileCells> watched{};  // see Watch
   };
   static_assert(kTileCells == 32, "one uint32_t mask per tile row");
 
@@ -107,7 +117,8 @@ class FreeSpaceGrid {
   std::unordered_map<uint64_t, std::unique_ptr<TileData>> tiles_;
   // AddView's scratch: the tiles of the tile row it is in, by column.
   std::vector<TileData*> row_tiles_;
-  std::vector<uint64_t> newly_free_;  // cell keys (TileKey packing of cell indices)
+  std::vector<uint64_t> newly_free_;      // cell keys (TileKey packing of cell indices)
+  std::vector<uint64_t> watched_passes_;  // cell keys, see TakeWatchedPasses
 };
 
 }  // namespace mapd::fusion

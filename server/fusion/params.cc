@@ -40,6 +40,14 @@ Status FusionParams::Validate() const {
   if (wall_free_min_count < 1 || wall_free_min_count > 255) {
     return Status::InvalidArgument("fusion params: wall_free_min_count must be in [1, 255]");
   }
+  if (retire_views > 255) {
+    return Status::InvalidArgument("fusion params: retire_views must be in [0, 255]");
+  }
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "retire_fraction", retire_fraction, 0.0, 1.0));
+  if (retire_fraction == 0.0) {
+    return Status::InvalidArgument("fusion params: retire_fraction must be > 0");
+  }
   if (max_component_nodes < 16 || max_component_nodes > (1u << 20)) {
     return Status::InvalidArgument("fusion params: max_component_nodes must be in [16, 1048576]");
   }
@@ -88,6 +96,11 @@ std::string FusionParamsKey(const FusionParams& p) {
                   p.wall_occluded_gap_m, p.wall_occluded_gap_ratio, p.wall_free_min_count,
                   p.wall_proof_gap_m, p.evidence_range_m);
     key += text;
+    if (p.retire_views > 0 && p.consolidate) {
+      std::snprintf(text, sizeof(text), " retire_views=%u retire_fraction=%.17g", p.retire_views,
+                    p.retire_fraction);
+      key += text;
+    }
   }
   // Bounded mode only (exact mode makes every link); changes results only
   // on maps with a component past the cap.

@@ -139,6 +139,16 @@ struct FusionParams {
   // of cells. Lasers indoors see 30-80 m; the synthetic city, 40 m. Metres,
   // in (0, 1000].
   double evidence_range_m = 80.0;
+  // Retirement (wall_retirement.h; docs/algorithms.md A.12): a published
+  // piece that observations saw through since it was last supported leaves
+  // the published map, and comes back when a feature supports it again. A
+  // cell of its fitted segment (0.5 m trimmed at each end) is seen through
+  // once retire_views observations' visibility triangles covered it since
+  // the last support; the piece retires when at least retire_fraction of its
+  // cells are. Needs the free-space evidence (wall_occluded_gap_m > 0).
+  // 0 = off. In [0, 255].
+  uint32_t retire_views = 10;
+  double retire_fraction = 0.5;  // in (0, 1]
 
   // InvalidArgument naming the offending field if any value is out of range
   // (negative thresholds, gamma outside [0, 1], non-finite values, ...).

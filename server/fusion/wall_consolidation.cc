@@ -171,6 +171,14 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
     if (params_.wall_proof_gap_m > 0.0) {
       proof_ = std::make_unique<FreeSpaceGrid>(1, params_.evidence_range_m);
     }
+    if (params_.retire_views > 0) {
+      ledger_ = std::make_unique<RetirementLedger>(params_.retire_views, free_space_.get());
+      // Pieces published before the first view: watched from now on, as if
+      // supported now (nothing saw through them yet).
+      for (const auto& [id, piece] : pieces_) {
+        if (!piece.retired) ledger_->Watch(id, piece.fit.segment, true);
+      }
+    }
   }
   return free_space_.get();
 }
@@ -178,6 +186,7 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
 void WallConsolidator::AddObservation(const Vec2& origin, const std::vector<Segment2>& segments) {
   if (EnableFreeSpace() == nullptr) return;
   for (const Segment2& s : segments) free_space_->AddView(origin, s);
+  if (ledger_) RetireSeenThrough();
   if (!proof_) return;
   for (const Segment2& stretch : OccludedStretches(origin, segments, params_)) {
     proof_->AddLine(stretch);
@@ -196,6 +205,7 @@ void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
 
 bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit) {
   bool reindex = true;
+  bool supported = true;  // a new piece was just supported
   auto it = pieces_.find(stats.id);
   if (it != pieces_.end()) {
     const ClusterStats& old = piece_stats_.at(stats.id);
@@ -203,11 +213,23 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
         it->second.fit.segment.a == fit.segment.a && it->second.fit.segment.b == fit.segment.b) {
       return false;
     }
-    TouchNeighboursIfOversized(stats.id);
-    reindex = !SameFiledCells(index_, it->second.fit.segment, fit.segment);
-    if (reindex) Index(stats.id, it->second.fit.segment, false);
-    if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
-    it->second.fit = fit;
+    // A regrouping by the chain guard can change a piece without a new
+    // feature; only one that adds members or support is a sighting.
+    supported = stats.member_count > old.member_count || stats.support() > old.support();
+    Piece& piece = it->second;
+    if (piece.retired) {
+      piece.fit = fit;
+      piece_stats_[stats.id] = stats;
+      if (!supported) return true;  // still seen through: published nowhere
+      piece.retired = false;        // seen again: back, as a new piece
+      --retired_count_;
+    } else {
+      TouchNeighboursIfOversized(stats.id);
+      reindex = !SameFiledCells(index_, piece.fit.segment, fit.segment);
+      if (reindex) Index(stats.id, piece.fit.segment, false);
+      if (piece.has_wall) touched_walls_.push_back(piece.wall);
+    }
+    piece.fit = fit;
   } else {
     it = pieces_.emplace(stats.id, Piece()).first;
     it->second.fit = fit;
@@ -215,13 +237,72 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
   it->second.pierced = free_space_ != nullptr && Pierced(fit.segment, *free_space_);
   piece_stats_[stats.id] = stats;
   if (reindex) Index(stats.id, fit.segment, true);
+  if (ledger_) ledger_->Watch(stats.id, fit.segment, supported);
   touched_pieces_.push_back(stats.id);
   return true;
+}
+
+void WallConsolidator::RetireSeenThrough() {
+  std::vector<ClusterId> changed;
+  ledger_->AddPasses(free_space_->TakeWatchedPasses(), &changed);
+  // The walls of the pieces with more cells seen through: each is retired
+  // whole if its pieces' cells are, together, seen through on the fraction.
+  std::vector<ClusterId> walls;
+  for (ClusterId id : changed) {
+    const Piece& piece = pieces_.at(id);
+    if (piece.has_wall) walls.push_back(piece.wall);
+  }
+  std::sort(walls.begin(), walls.end());
+  walls.erase(std::unique(walls.begin(), walls.end()), walls.end());
+  for (ClusterId wall : walls) {
+    auto it = walls_.find(wall);
+    if (it == walls_.end()) continue;
+    size_t cells = 0, seen = 0;
+    for (ClusterId id : it->second) {
+      const auto [piece_cells, piece_seen] = ledger_->SeenThrough(id);
+      cells += piece_cells;
+      seen += piece_seen;
+    }
+    if (cells == 0 ||
+        static_cast<double>(seen) < params_.retire_fraction * static_cast<double>(cells)) {
+      continue;
+    }
+    const std::vector<ClusterId> members = it->second;  // Retire() touches walls_'s wall
+    for (ClusterId id : members) Retire(id);
+  }
+}
+
+void WallConsolidator::Retire(ClusterId id) {
+  Piece& piece = pieces_.at(id);
+  if (piece.retired) return;
+  TouchNeighboursIfOversized(id);
+  Index(id, piece.fit.segment, false);
+  if (piece.has_wall) touched_walls_.push_back(piece.wall);
+  piece.has_wall = false;
+  piece.retired = true;
+  ++retired_count_;
+  if (ledger_) ledger_->Unwatch(id);
+}
+
+std::vector<ClusterId> WallConsolidator::RetiredPieces() const {
+  std::vector<ClusterId> out;
+  for (const auto& [id, piece] : pieces_) {
+    if (piece.retired) out.push_back(id);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 void WallConsolidator::Erase(ClusterId piece) {
   auto it = pieces_.find(piece);
   if (it == pieces_.end()) return;
+  if (it->second.retired) {
+    --retired_count_;
+    pieces_.erase(it);
+    piece_stats_.erase(piece);
+    return;
+  }
+  if (ledger_) ledger_->Unwatch(piece);
   TouchNeighboursIfOversized(piece);
   Index(piece, it->second.fit.segment, false);
   if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
@@ -409,14 +490,18 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   TakeEvidence();
   std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
   std::vector<ClusterId> work;
+  const auto live = [this](ClusterId id) {
+    auto it = pieces_.find(id);
+    return it != pieces_.end() && !it->second.retired;
+  };
   for (ClusterId id : touched_pieces_) {
-    if (pieces_.count(id) != 0) work.push_back(id);
+    if (live(id)) work.push_back(id);
   }
   for (ClusterId wall : touched_walls_) {
     auto it = walls_.find(wall);
     if (it == walls_.end()) continue;
     for (ClusterId id : it->second) {
-      if (pieces_.count(id) != 0) work.push_back(id);
+      if (live(id)) work.push_back(id);
     }
   }
   touched_pieces_.clear();

@@ -44,6 +44,12 @@
 // of its own. Still a function of the piece set (and evidence); the point is
 // that Resolve() then stops walking a component after max_wall_pieces pieces.
 //
+// Retirement (FusionParams::retire_views > 0, with the evidence;
+// wall_retirement.h): a wall the robots saw through since its pieces' last
+// supports leaves the published map with all its pieces (they are kept,
+// unpublished, and HasPiece() still names them); an Upsert that adds members
+// or support to a piece brings that piece back.
+//
 // Incremental: the engine reports pieces that appeared, changed or vanished;
 // Resolve() recomputes only the walls those pieces belonged to or now reach.
 // A piece of an oversized component that changes or vanishes also touches
@@ -60,6 +66,7 @@
 #include "fusion/free_space.h"
 #include "fusion/grid_index.h"
 #include "fusion/params.h"
+#include "fusion/wall_retirement.h"
 
 namespace mapd::fusion {
 
@@ -112,8 +119,16 @@ class WallConsolidator {
   // and with wall_proof_gap_m = 0.
   const FreeSpaceGrid* proof() const { return proof_.get(); }
   FreeSpaceGrid* mutable_proof() { return proof_.get(); }
-  // All pieces, ascending id (snapshots).
+  // All pieces, retired ones included, ascending id (snapshots).
   const std::map<ClusterId, ClusterStats>& pieces() const { return piece_stats_; }
+  // Retirement: pieces retired now, ascending; the ledger (null without
+  // retirement or before the first view); and, for snapshots, retiring a
+  // restored piece again (REQUIRES: HasPiece(piece)).
+  std::vector<ClusterId> RetiredPieces() const;
+  size_t retired_count() const { return retired_count_; }
+  const RetirementLedger* ledger() const { return ledger_.get(); }
+  RetirementLedger* mutable_ledger() { return ledger_.get(); }
+  void Retire(ClusterId piece);
 
   struct Wall {
     ClusterStats stats;  // stats.id names the wall
@@ -134,7 +149,14 @@ class WallConsolidator {
     // Its component had more than max_wall_pieces pieces at the last Resolve()
     // (it is then a wall of its own).
     bool oversized = false;
+    // Seen through since its last support (wall_retirement.h): not filed in
+    // the index, on no wall.
+    bool retired = false;
   };
+  // Counts this observation's passes over watched cells (the ledger) and
+  // retires every wall whose pieces are seen through on retire_fraction of
+  // their cells.
+  void RetireSeenThrough();
   // A piece of an oversized component is about to change or vanish: its
   // current neighbours are resolved again.
   void TouchNeighboursIfOversized(ClusterId id);
@@ -163,6 +185,8 @@ class WallConsolidator {
   UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
   std::unique_ptr<FreeSpaceGrid> free_space_;  // see AddView
   std::unique_ptr<FreeSpaceGrid> proof_;       // see AddObservation
+  std::unique_ptr<RetirementLedger> ledger_;   // with free_space_, if retire_views > 0
+  size_t retired_count_ = 0;
   // Index cells (kPieceStepM) of bridged occluded gaps -> the pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;

@@ -272,6 +272,13 @@ const std::vector<Setting>& Settings() {
       Real("fusion.evidence_range_m", "free-space evidence reaches at most this far from the sensor (a "
            "view of a farther segment is clipped); bounds the cells one observation writes, metres",
            [](C& c) -> auto& { return c.fusion.evidence_range_m; }, {0, 1000, true}),
+      Count("fusion.retire_views", "retirement: observations that must see through a cell of a published "
+            "wall piece since it was last supported before the cell counts as seen through; 0 = walls "
+            "never leave (needs fusion.wall_occluded_gap_m > 0)",
+            [](C& c) -> auto& { return c.fusion.retire_views; }, 0, 255),
+      Real("fusion.retire_fraction", "retirement: a piece leaves the published map when at least this "
+           "share of its cells (0.5 m trimmed at each end) are seen through; it comes back when seen again",
+           [](C& c) -> auto& { return c.fusion.retire_fraction; }, {0, 1, true}),
       Real("fusion.max_wall_length_m", "no wall is longer than this: a longer feature is refused and "
            "clusters do not grow past it (bounds the work one observation can cause), metres",
            [](C& c) -> auto& { return c.fusion.max_wall_length_m; }, {1, 1e6}),
