@@ -251,6 +251,10 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   row("batches", num(s.batches()));
   row("raw features", num(s.raw_features()));
   row("fused features", num(s.fused_features()) + " published, " + num(s.clusters()) + " clusters");
+  if (s.retired_walls() > 0) {
+    row("retired walls",
+        num(s.retired_walls()) + " (seen through since last seen; back when seen again)");
+  }
   row("fusion backlog", num(s.fusion_backlog()) + " observations stored, not fused yet");
   for (const pb::RobotFusionShare& r : s.fusion_shares()) {
     if (r.refused() == 0) continue;

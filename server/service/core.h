@@ -70,6 +70,7 @@ struct CoreStats {
   double features_per_s = 0;
   uint64_t fused_features = 0;
   uint64_t clusters = 0;
+  uint64_t retired_walls = 0;  // seen through since last seen (fusion.retire_views)
   uint64_t map_version = 0;
   uint64_t fusion_backlog = 0;  // committed observations not fused yet
   uint64_t commits = 0;         // group commits by this process

@@ -847,6 +847,7 @@ CoreStats MapCore::Stats() const {
   s.fused_raw_features = engine_->feature_count();
   s.fusion_nodes = engine_->node_count();
   s.clusters = engine_->cluster_count();
+  s.retired_walls = engine_->retired_count();
   s.fused_planes = plane_engine_->published_count();
   s.plane_nodes = plane_engine_->node_count();
   s.map_version = map_version_.load();

@@ -158,6 +158,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   response->set_raw_features(counts->raw_features);
   response->set_fused_features(s.fused_features);
   response->set_clusters(s.clusters);
+  response->set_retired_walls(s.retired_walls);
   response->set_ingest_batches_per_s(s.batches_per_s);
   response->set_ingest_features_per_s(s.features_per_s);
   response->set_uptime_s(s.uptime_s);

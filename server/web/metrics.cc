@@ -58,6 +58,9 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_map_version", static_cast<double>(s.map_version));
   w.Family("mapd_fused_features", "gauge", "Published fused features (walls).");
   w.Sample("mapd_fused_features", static_cast<double>(s.fused_features));
+  w.Family("mapd_retired_walls", "gauge",
+           "Published walls retired because robots saw through them since they were last seen.");
+  w.Sample("mapd_retired_walls", static_cast<double>(s.retired_walls));
   w.Family("mapd_fused_planes", "gauge", "Published fused non-vertical planes.");
   w.Sample("mapd_fused_planes", static_cast<double>(s.fused_planes));
   w.Family("mapd_db_size_bytes", "gauge", "Database file plus WAL.");
