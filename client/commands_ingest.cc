@@ -2,6 +2,7 @@
 #include <google/protobuf/util/json_util.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -31,7 +32,58 @@ struct SimulateOptions {
   std::string session;  // empty: sim-<UTC time>
   std::string export_path;
   std::string robot_id;
+  // A change of the world after some laps (SimRobotParams::change).
+  std::vector<size_t> remove_walls;
+  std::vector<std::string> add_walls;  // "x0,y0,x1,y1", metres
+  double change_after_laps = 1.0;
 };
+
+// The world change the flags ask for, or an error naming the bad flag.
+bool ParseWorldChange(const SimulateOptions& flags, bool* has_change, WorldChange* change,
+                      std::string* error) {
+  *has_change = !flags.remove_walls.empty() || !flags.add_walls.empty();
+  change->after_laps = flags.change_after_laps;
+  const size_t walls = DefaultWorld().walls.size();
+  for (size_t index : flags.remove_walls) {
+    if (index >= walls) {
+      *error = Printf("simulate: --remove-wall %zu: the floor has walls 0..%zu (see --help)", index,
+                      walls - 1);
+      return false;
+    }
+    change->remove.push_back(index);
+  }
+  for (const std::string& text : flags.add_walls) {
+    double v[4];
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &tail) != 4 ||
+        !std::isfinite(v[0] + v[1] + v[2] + v[3]) || (v[0] == v[2] && v[1] == v[3])) {
+      *error = "simulate: --add-wall '" + text +
+               "' is not X0,Y0,X1,Y1 (metres, map frame, two different points)";
+      return false;
+    }
+    change->add.push_back({Vec2(v[0], v[1]), Vec2(v[2], v[3])});
+  }
+  return true;
+}
+
+double WorldLoopLengthM() {
+  const SimWorld world = DefaultWorld();
+  double length = 0.0;
+  for (size_t i = 0; i < world.loop.size(); ++i) {
+    length += (world.loop[(i + 1) % world.loop.size()] - world.loop[i]).norm();
+  }
+  return length;
+}
+
+std::string WallList() {
+  std::string text;
+  const SimWorld world = DefaultWorld();
+  for (size_t i = 0; i < world.walls.size(); ++i) {
+    const Segment2& w = world.walls[i];
+    text += Printf("  %2zu  %g,%g,%g,%g\n", i, w.a.x(), w.a.y(), w.b.x(), w.b.y());
+  }
+  return text;
+}
 
 struct Tally {
   IngestCounts counts;
@@ -124,6 +176,12 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   const uint64_t robots = flags.robots, scans = flags.scans, seed = flags.seed;
   const std::string session = flags.session.empty() ? "sim-" + UtcStampForName() : flags.session;
 
+  bool has_change = false;
+  WorldChange change;
+  if (std::string error; !ParseWorldChange(flags, &has_change, &change, &error)) {
+    PrintError(error);
+    return kExitUsage;
+  }
   const int64_t start_ns = UnixNowNs();
   std::vector<SimRobotParams> params(robots);
   for (size_t i = 0; i < robots; ++i) {
@@ -135,6 +193,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
     params[i].seed = seed * 1000003 + i;
     params[i].start_fraction = static_cast<double>(i) / static_cast<double>(robots);
     params[i].start_stamp_ns = start_ns;
+    params[i].has_change = has_change;
+    params[i].change = change;
   }
 
   if (!flags.export_path.empty()) {
@@ -202,6 +262,13 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   std::printf("simulate: %llu robots x %llu scans, session %s, %.1f s: %s\n",
               static_cast<unsigned long long>(robots), static_cast<unsigned long long>(scans),
               session.c_str(), seconds, Summary(total).c_str());
+  if (has_change) {
+    const double laps = static_cast<double>(scans) * SimRobotParams().step_m / WorldLoopLengthM();
+    std::printf(
+        "simulate: the floor changed after %g of each robot's %.1f laps "
+        "(%zu walls removed, %zu added)\n",
+        change.after_laps, laps, change.remove.size(), change.add.size());
+  }
   if (rc != kExitOk) return rc;
   return total.rejected > 0 ? kExitFailed : kExitOk;
 }
@@ -229,7 +296,12 @@ void AddIngestCommands(CLI::App* app, Action* action) {
   simulate->footer(
       "Simulated robots drive a loop through a 20 m x 12 m floor, scan it with a 2D laser\n"
       "(180 beams, 10 m, 1 cm noise), extract wall segments and stream them, one Ingest\n"
-      "stream per robot, concurrently. Deterministic for a seed.");
+      "stream per robot, concurrently. Deterministic for a seed. A loop is 36 m, 180 scans.\n"
+      "\n"
+      "Buildings change: --remove-wall and --add-wall change the floor once each robot has\n"
+      "driven --change-after-laps loops; mapd retires a wall the robots then see through\n"
+      "(fusion.retire_views) and publishes one that appears. The floor's walls, x0,y0,x1,y1:\n" +
+      WallList());
   auto s = BindCommand(simulate, action, RunSimulate);
   simulate->add_option("--robots", s->robots, "number of robots, named sim-robot-1..N")
       ->capture_default_str()
@@ -244,6 +316,15 @@ void AddIngestCommands(CLI::App* app, Action* action) {
   simulate->add_option("--seed", s->seed, "random seed")->capture_default_str();
   simulate->add_option("--session", s->session,
                        "session id (default sim-<UTC time>, so re-runs add data)");
+  simulate->add_option("--remove-wall", s->remove_walls,
+                       "index of a wall (listed below) that is gone after the change; repeatable");
+  simulate->add_option("--add-wall", s->add_walls,
+                       "X0,Y0,X1,Y1: a wall that stands after the change (metres); repeatable");
+  simulate
+      ->add_option("--change-after-laps", s->change_after_laps,
+                   "loops each robot drives before the change")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
   simulate->add_option(
       "--export", s->export_path,
       "write the batches as JSON lines (for 'mapctl ingest') instead of streaming them; - for "

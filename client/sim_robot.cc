@@ -114,6 +114,17 @@ Pose2 SimRobot::PoseAt(double distance_m) const {
 }
 
 pb::ObservationBatch SimRobot::NextBatch() {
+  if (params_.has_change && !changed_ &&
+      driven_m_ >= params_.change.after_laps * loop_length_m_ - 1e-9) {
+    changed_ = true;
+    std::vector<Segment2> walls;
+    for (size_t i = 0; i < world_.walls.size(); ++i) {
+      const auto& gone = params_.change.remove;
+      if (std::find(gone.begin(), gone.end(), i) == gone.end()) walls.push_back(world_.walls[i]);
+    }
+    walls.insert(walls.end(), params_.change.add.begin(), params_.change.add.end());
+    world_.walls = std::move(walls);
+  }
   const Pose2 p = pose();
   const std::vector<double> ranges = CastScan(world_.walls, p, params_.laser, &rng_);
   const std::vector<Segment2> segments = ExtractSegments(ranges, params_.laser, params_.extraction);
@@ -140,6 +151,7 @@ pb::ObservationBatch SimRobot::NextBatch() {
     line->mutable_b()->set_y(s.b.y());
   }
   travelled_m_ += params_.step_m;
+  driven_m_ += params_.step_m;
   ++scans_;
   return batch;
 }

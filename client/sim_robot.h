@@ -52,6 +52,15 @@ struct ExtractionParams {
   double gap_factor = 4.0;
 };
 
+// Buildings change: from the first scan after this robot has driven
+// `after_laps` loops, the walls at indices `remove` (into SimWorld::walls) are
+// gone and the walls `add` stand (a partition taken down, a door closed).
+struct WorldChange {
+  double after_laps = 1.0;
+  std::vector<size_t> remove;
+  std::vector<Segment2> add;
+};
+
 struct SimRobotParams {
   std::string robot_id = "sim-robot-1";
   std::string session_id = "sim";
@@ -63,6 +72,8 @@ struct SimRobotParams {
   int64_t scan_period_ns = 100'000'000;
   LaserParams laser;
   ExtractionParams extraction;
+  bool has_change = false;  // apply `change`
+  WorldChange change;
 };
 
 // Ranges of one scan, beam i at angle -fov/2 + i * fov / (beams - 1) in the
@@ -84,6 +95,8 @@ class SimRobot {
 
   // The pose the next batch will be taken from.
   Pose2 pose() const;
+  // Whether params.change has been applied (before the last batch).
+  bool changed() const { return changed_; }
   const SimWorld& world() const { return world_; }
 
  private:
@@ -94,6 +107,8 @@ class SimRobot {
   std::mt19937_64 rng_;
   double loop_length_m_ = 0;
   double travelled_m_ = 0;
+  double driven_m_ = 0;  // since the first scan (travelled_m_ starts at start_fraction)
+  bool changed_ = false;
   uint64_t scans_ = 0;
 };
 
