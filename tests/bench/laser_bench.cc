@@ -93,7 +93,10 @@ Coverage MeasureCoverage(const std::vector<ScanLines>& scans,
 struct RunResult {
   size_t published = 0;
   size_t clusters = 0;
-  size_t identical_pairs = 0;  // published features with the same segment
+  size_t retired = 0;  // walls retired as seen through (fusion.retire_views)
+  std::vector<Segment2> retired_segments;
+  SeenThroughGrid::Totals retired_seen;  // of the retired walls, by the bench's own measure
+  size_t identical_pairs = 0;            // published features with the same segment
   double engine_s = 0.0;
   Coverage coverage;
   SeenThroughGrid::Totals seen;  // seen-through / published wall length, metres
@@ -127,6 +130,9 @@ RunResult Fuse(const std::vector<ScanLines>& scans, const SeenThroughGrid& seen,
   for (const FusedFeature& f : engine.Published()) r.segments.push_back(f.segment);
   r.published = r.segments.size();
   r.clusters = engine.cluster_count();
+  r.retired = engine.retired_count();
+  for (const FusedFeature& f : engine.Retired()) r.retired_segments.push_back(f.fitted);
+  r.retired_seen = seen.Measure(r.retired_segments);
   for (size_t i = 0; i < r.segments.size(); ++i) {
     for (size_t j = i + 1; j < r.segments.size(); ++j) {
       const Segment2& p = r.segments[i];
@@ -248,6 +254,16 @@ bool WriteSvg(const std::string& path, const std::string& log, const std::vector
                     h - (s.b.y() - lo.y()) * scale);
       out << buf;
     }
+    // Retired walls (seen through by the fusion's own evidence), dashed blue.
+    out << "\"/>\n<path fill=\"none\" stroke=\"#26c\" stroke-width=\"2\" "
+           "stroke-dasharray=\"4 3\" d=\"";
+    for (const Segment2& s : r.retired_segments) {
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), "M%.1f %.1fL%.1f %.1f", (s.a.x() - lo.x()) * scale,
+                    h - (s.a.y() - lo.y()) * scale, (s.b.x() - lo.x()) * scale,
+                    h - (s.b.y() - lo.y()) * scale);
+      out << buf;
+    }
     // The stretches on seen-through cells, over the segments.
     out << "\"/>\n<path fill=\"none\" stroke=\"#000\" stroke-width=\"3\" d=\"";
     for (const Segment2& s : r.segments) {
@@ -277,20 +293,22 @@ struct Row {
 
 std::string Table(const std::vector<Row>& rows) {
   std::ostringstream t;
-  t << "| log | scans | valid points | raw lines | method | fused (published) | clusters | "
+  t << "| log | scans | valid points | raw lines | method | fused (published) | clusters | retired "
+       "| "
        "identical pairs | within 5 cm | within 10 cm | seen-through m / published m | "
        "engine s | raw lines/s |\n"
-    << "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    << "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   char buf[512];
   for (const Row& r : rows) {
     for (int k = 0; k < 2; ++k) {
       const RunResult& run = k == 0 ? r.off : r.on;
       std::snprintf(
           buf, sizeof(buf),
-          "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %.1f%% | %.1f%% | %.1f / %.1f | %.3f | "
+          "| %s | %zu | %zu | %zu | %s | %zu | %zu | %zu | %zu | %.1f%% | %.1f%% | %.1f / %.1f | "
+          "%.3f | "
           "%.0f |\n",
           r.log.c_str(), r.scans, r.points, r.raw, k == 0 ? "paper" : "default", run.published,
-          run.clusters, run.identical_pairs, 100.0 * run.coverage.within_5cm,
+          run.clusters, run.retired, run.identical_pairs, 100.0 * run.coverage.within_5cm,
           100.0 * run.coverage.within_10cm, run.seen.seen_through_m, run.seen.published_m,
           run.engine_s, static_cast<double>(r.raw) / run.engine_s);
       t << buf;
@@ -383,6 +401,10 @@ int main(int argc, char** argv) {
     row.on = Fuse(lines, seen, on);
     std::printf("%s: %zu scans, %zu points, %zu raw lines (read %.2f s, extract %.2f s)\n",
                 spec.name, row.scans, row.points, row.raw, row.read_s, row.extract_s);
+    std::printf(
+        "  default: %zu walls retired (seen through since last seen), %.1f m, of which %.1f m "
+        "lie on cells the beams passed through (this bench's measure)\n",
+        row.on.retired, row.on.retired_seen.published_m, row.on.retired_seen.seen_through_m);
     std::fflush(stdout);
     if (write) {
       const std::string svg = docs_dir + "/fusion-laser-" + spec.name + ".svg";

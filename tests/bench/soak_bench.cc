@@ -511,9 +511,14 @@ int main(int argc, char** argv) {
     if (raw >= opt.total) break;
     start_robots();
   }
-  std::printf("\nsoak: %.0f s to %.2fM raw features, %llu batches rejected\n", Seconds(soak_start),
-              GetStats(stub.get()).raw_features() / 1e6,
-              static_cast<unsigned long long>(shared.rejected.load()));
+  const pb::Stats end_stats = GetStats(stub.get());
+  std::printf(
+      "\nsoak: %.0f s to %.2fM raw features, %llu batches rejected; %llu fused features, %llu "
+      "retired walls (a static world: should be 0)\n",
+      Seconds(soak_start), end_stats.raw_features() / 1e6,
+      static_cast<unsigned long long>(shared.rejected.load()),
+      static_cast<unsigned long long>(end_stats.fused_features()),
+      static_cast<unsigned long long>(end_stats.retired_walls()));
   std::printf(
       "\nRestarts (SIGKILL, then restart on the same database):\n\n"
       "| raw features | to SERVING (s) | to the full map (s) | map after vs before | "
