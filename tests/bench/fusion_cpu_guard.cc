@@ -17,11 +17,13 @@
 // figure; half of it is the alarm, not the target.
 //
 //   fusion_cpu_guard [--features N] [--origin pose|soak|none] [--min-ratio R]
+//                    [--retire-views N]
 //
 // --origin soak feeds the sensor origin the soak's city batches carried
 // before issue 40 (the map origin plus the jitter: the batches' lines were in
 // the map frame, T_frame_sensor the identity), to measure that workload.
 // --origin none adds the scans without one: no evidence, for comparison.
+// --retire-views 0 turns retirement off (fusion.retire_views), for comparison.
 // deploy/test.sh runs it after ctest, with the defaults.
 #include <sys/resource.h>
 
@@ -71,10 +73,11 @@ struct RunResult {
 
 // One run of the workload in a fresh engine, timed in CPU seconds.
 RunResult RunOnce(const std::vector<PoolScan>& pool, uint64_t target, bool soak_origin,
-                  bool no_origin) {
+                  bool no_origin, int retire_views) {
   RunResult result;
   const size_t n = pool.size();
-  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on
+  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on, retirement on
+  if (retire_views >= 0) fusion.retire_views = static_cast<uint32_t>(retire_views);
   mapd::fusion::FusionEngine engine(fusion);
   std::mt19937_64 rng(1);
   std::normal_distribution<double> jitter(0.0, 0.01);
@@ -138,6 +141,7 @@ int main(int argc, char** argv) {
   bool soak_origin = false;
   bool no_origin = false;
   double min_ratio = 0.5;
+  int retire_views = -1;  // the default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--features" && i + 1 < argc) {
@@ -152,8 +156,12 @@ int main(int argc, char** argv) {
       no_origin = v == "none";
     } else if (a == "--min-ratio" && i + 1 < argc) {
       min_ratio = std::atof(argv[++i]);
+    } else if (a == "--retire-views" && i + 1 < argc) {
+      retire_views = std::atoi(argv[++i]);  // 0: retirement off, for comparison
     } else {
-      std::fprintf(stderr, "usage: %s [--features N] [--origin pose|soak|none] [--min-ratio R]\n",
+      std::fprintf(stderr,
+                   "usage: %s [--features N] [--origin pose|soak|none] [--min-ratio R] "
+                   "[--retire-views N]\n",
                    argv[0]);
       return 2;
     }
@@ -178,7 +186,7 @@ int main(int argc, char** argv) {
   // a row are all below the bar, so one slow run is no alarm.
   constexpr int kAttempts = 3;
   for (int attempt = 1; attempt <= kAttempts; ++attempt) {
-    const RunResult r = RunOnce(pool, target, soak_origin, no_origin);
+    const RunResult r = RunOnce(pool, target, soak_origin, no_origin, retire_views);
     if (!r.ok) return 1;
     const double measured = static_cast<double>(r.added) / r.cpu_s;
     const double ratio = measured / kStatedFeaturesPerCpuS;

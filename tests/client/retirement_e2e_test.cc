@@ -31,11 +31,20 @@ constexpr size_t kBoxSouthFace = 8;
 
 class RetirementTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    mapd_ = mapd::testing::StartMapd(dir_.File("map.db"));
+  void SetUp() override { ASSERT_NO_FATAL_FAILURE(Start()); }
+  void Start() {
+    // Snapshots every 500 observations: a restart loads the retirement
+    // ledger from one and replays the rest.
+    mapd_ = mapd::testing::StartMapd(dir_.File("map.db"), {"--snapshot.every_observations", "500"});
     ASSERT_GT(mapd_.port, 0) << mapd_.log();
     channel_ = grpc::CreateChannel(mapd_.address, grpc::InsecureChannelCredentials());
     stub_ = pb::MapService::NewStub(channel_);
+  }
+  // SIGKILL, then a new mapd on the same database, recovered.
+  void Restart() {
+    mapd::testing::Stop(mapd_.pid, SIGKILL);
+    mapd_.pid = -1;
+    ASSERT_NO_FATAL_FAILURE(Start());
   }
   void TearDown() override {
     if (mapd_.pid > 0) mapd::testing::Stop(mapd_.pid, SIGKILL);
@@ -77,6 +86,19 @@ class RetirementTest : public ::testing::Test {
     pb::Stats stats;
     EXPECT_TRUE(stub_->GetStats(&ctx, {}, &stats).ok());
     return stats;
+  }
+
+  // The published map as text, one feature a line (id, ends, support).
+  std::string MapText() {
+    std::string text;
+    for (const pb::FusedFeature& f : Features()) {
+      char line[160];
+      std::snprintf(line, sizeof(line), "%llu %.6f %.6f %.6f %.6f %u\n",
+                    static_cast<unsigned long long>(f.id()), f.a().x(), f.a().y(), f.b().x(),
+                    f.b().y(), f.support());
+      text += line;
+    }
+    return text;
   }
 
   std::vector<pb::FusedFeature> Features() {
@@ -134,6 +156,14 @@ TEST_F(RetirementTest, AWallTakenDownLeavesTheMapWithinALap) {
   for (size_t i = 0; i < world.walls.size(); ++i) {
     if (i != kBoxSouthFace) EXPECT_TRUE(Published(world.walls[i])) << "wall " << i;
   }
+  // A restart (snapshot plus replay) gives the same map, the wall still retired.
+  const std::string before = MapText();
+  const uint64_t retired = Stats().retired_walls();
+  ASSERT_NO_FATAL_FAILURE(Restart());
+  EXPECT_NE(mapd_.log().find("event=map_recovered from=snapshot"), std::string::npos)
+      << mapd_.log();
+  EXPECT_EQ(MapText(), before);
+  EXPECT_EQ(Stats().retired_walls(), retired);
 }
 
 TEST_F(RetirementTest, ADoorThatClosesAppearsAndNothingRetires) {
