@@ -6,7 +6,8 @@
 # job), systemd (systemd-analyze verify of deploy/mapd.service).
 # --build-only (the container's build stage) leaves out what only the tests
 # use: Chromium, which runs the web view's page in tests/web, and the openssl
-# tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc).
+# tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
+# and prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc).
 set -euo pipefail
 
 PACKAGES=(
@@ -18,7 +19,7 @@ PACKAGES=(
   python3-grpcio python3-protobuf python3-pytest
 )
 if [ "${1:-}" != "--build-only" ]; then
-  PACKAGES+=(chromium openssl)
+  PACKAGES+=(chromium openssl prometheus)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

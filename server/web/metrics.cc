@@ -1,17 +1,85 @@
 #include "web/metrics.h"
 
+#include <dirent.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include "service/watch_hub.h"
 
 namespace mapd::web {
 namespace {
 
+// The shortest %g text that reads back as v (0.18, not 0.17999999999999999).
 std::string Num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
   return buf;
+}
+
+// A bucket bound as written in the bucket list (0.005, 10: the shortest
+// fixed-point text that reads back as v), so that a query for le="0.005"
+// matches; before, le="0.0050000000000000001".
+std::string BoundText(double v) {
+  char buf[64];
+  for (int decimals = 0; decimals <= 17; ++decimals) {
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    if (std::strtod(buf, nullptr) == v) return buf;
+  }
+  return Num(v);
+}
+
+// What Prometheus's client libraries export as process_* on Linux, from /proc.
+struct ProcessSample {
+  bool ok = false;
+  double cpu_s = 0;
+  double rss_bytes = 0;
+  double vsize_bytes = 0;
+  double start_time_s = 0;  // Unix time
+  double open_fds = 0;
+  double max_fds = 0;
+};
+
+ProcessSample SampleProcess() {
+  ProcessSample p;
+  std::ifstream stat_file("/proc/self/stat");
+  std::string stat((std::istreambuf_iterator<char>(stat_file)), std::istreambuf_iterator<char>());
+  // Fields after the command (which may hold spaces), from field 3 (state) on.
+  const size_t close = stat.rfind(')');
+  if (close == std::string::npos) return p;
+  std::istringstream fields(stat.substr(close + 2));
+  std::vector<std::string> f;
+  for (std::string x; fields >> x;) f.push_back(x);
+  if (f.size() < 22) return p;  // f[0] is field 3
+  const double ticks = static_cast<double>(sysconf(_SC_CLK_TCK));
+  const double page = static_cast<double>(sysconf(_SC_PAGESIZE));
+  p.cpu_s = (std::stod(f[11]) + std::stod(f[12])) / ticks;  // utime, stime (fields 14, 15)
+  const double start_ticks = std::stod(f[19]);              // starttime (field 22)
+  p.vsize_bytes = std::stod(f[20]);                         // field 23
+  p.rss_bytes = std::stod(f[21]) * page;                    // field 24, pages
+  std::ifstream boot("/proc/stat");
+  for (std::string line; std::getline(boot, line);) {
+    if (line.rfind("btime ", 0) == 0)
+      p.start_time_s = std::stod(line.substr(6)) + start_ticks / ticks;
+  }
+  if (DIR* dir = opendir("/proc/self/fd"); dir != nullptr) {
+    for (dirent* e = readdir(dir); e != nullptr; e = readdir(dir))
+      p.open_fds += e->d_name[0] != '.';
+    closedir(dir);
+    p.open_fds -= 1;  // the directory's own descriptor
+  }
+  rlimit limit{};
+  if (getrlimit(RLIMIT_NOFILE, &limit) == 0) p.max_fds = static_cast<double>(limit.rlim_cur);
+  p.ok = true;
+  return p;
 }
 
 class Writer {
@@ -38,14 +106,12 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_ingest_batches_total", static_cast<double>(s.batches_stored));
   w.Family("mapd_ingest_features_total", "counter", "Raw features stored by this process.");
   w.Sample("mapd_ingest_features_total", static_cast<double>(s.features_stored));
-  w.Family("mapd_ingest_batches_per_second", "gauge", "Batches stored per second, last 10 s.");
-  w.Sample("mapd_ingest_batches_per_second", s.batches_per_s);
   w.Family("mapd_ack_latency_seconds", "histogram",
            "Time from a stored batch's arrival to its (durable) acknowledgement.");
   const service::HistogramSnapshot& h = s.ack_latency;
   for (size_t i = 0; i < h.bounds_s.size(); ++i)
     w.Sample("mapd_ack_latency_seconds_bucket", static_cast<double>(h.counts[i]),
-             "le=\"" + Num(h.bounds_s[i]) + "\"");
+             "le=\"" + BoundText(h.bounds_s[i]) + "\"");
   w.Sample("mapd_ack_latency_seconds_bucket", static_cast<double>(h.count), "le=\"+Inf\"");
   w.Sample("mapd_ack_latency_seconds_sum", h.sum_s);
   w.Sample("mapd_ack_latency_seconds_count", static_cast<double>(h.count));
@@ -78,6 +144,22 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_watchers", static_cast<double>(core.watch_hub().watchers()));
   w.Family("mapd_uptime_seconds", "gauge", "Seconds since mapd started.");
   w.Sample("mapd_uptime_seconds", s.uptime_s);
+  w.Family("mapd_build_info", "gauge", "Always 1; the version of this mapd in its label.");
+  w.Sample("mapd_build_info", 1, "version=\"" MAPD_VERSION "\"");
+  if (const ProcessSample p = SampleProcess(); p.ok) {
+    w.Family("process_cpu_seconds_total", "counter", "User and system CPU time, seconds.");
+    w.Sample("process_cpu_seconds_total", p.cpu_s);
+    w.Family("process_resident_memory_bytes", "gauge", "Resident memory size in bytes.");
+    w.Sample("process_resident_memory_bytes", p.rss_bytes);
+    w.Family("process_virtual_memory_bytes", "gauge", "Virtual memory size in bytes.");
+    w.Sample("process_virtual_memory_bytes", p.vsize_bytes);
+    w.Family("process_start_time_seconds", "gauge", "Start time since the Unix epoch, seconds.");
+    w.Sample("process_start_time_seconds", p.start_time_s);
+    w.Family("process_open_fds", "gauge", "Open file descriptors.");
+    w.Sample("process_open_fds", p.open_fds);
+    w.Family("process_max_fds", "gauge", "Maximum number of open file descriptors.");
+    w.Sample("process_max_fds", p.max_fds);
+  }
   return std::move(w.text());
 }
 

@@ -3,11 +3,13 @@
 // decide them, bad requests, and a port that is taken.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <regex>
 #include <set>
 #include <sstream>
 
+#include "common/process.h"
 #include "web/sse_client.h"
 #include "web/web_fixture.h"
 
@@ -146,15 +148,47 @@ TEST_F(WebFixture, MetricsAreValidPrometheusText) {
   }
   EXPECT_EQ(types["mapd_ingest_batches_total"], "counter");
   EXPECT_EQ(types["mapd_ack_latency_seconds"], "histogram");
-  for (const char* g : {"mapd_fusion_backlog", "mapd_db_size_bytes", "mapd_merges", "mapd_watchers",
-                        "mapd_ingest_batches_per_second"})
+  for (const char* g :
+       {"mapd_fusion_backlog", "mapd_db_size_bytes", "mapd_merges", "mapd_watchers",
+        "mapd_build_info", "process_resident_memory_bytes", "process_virtual_memory_bytes",
+        "process_start_time_seconds", "process_open_fds", "process_max_fds"})
     EXPECT_EQ(types[g], "gauge") << g;
+  EXPECT_EQ(types["process_cpu_seconds_total"], "counter");
+  // A rate is rate()'s job, not a gauge's.
+  EXPECT_EQ(types.count("mapd_ingest_batches_per_second"), 0u);
+  // Bucket bounds as written, so that {le="0.005"} matches (it printed
+  // 0.0050000000000000001 before).
+  EXPECT_EQ(values.count("mapd_ack_latency_seconds_bucket{le=\"0.005\"}"), 1u);
+  EXPECT_EQ(values.count("mapd_ack_latency_seconds_bucket{le=\"10\"}"), 1u);
+  for (const auto& [name, value] : values) {
+    if (name.rfind("mapd_ack_latency_seconds_bucket{", 0) != 0) continue;
+    EXPECT_LE(name.size(), std::string("mapd_ack_latency_seconds_bucket{le=\"0.025\"}").size())
+        << name;
+  }
+  EXPECT_EQ(values["mapd_build_info{version=\"" MAPD_VERSION_FOR_TESTS "\"}"], 1);
+  EXPECT_GT(values["process_resident_memory_bytes"], 1e6);
+  EXPECT_GT(values["process_open_fds"], 3);
+  EXPECT_GT(values["process_start_time_seconds"], 1.7e9);
   EXPECT_EQ(values["mapd_ingest_batches_total"], 6);
   EXPECT_EQ(values["mapd_ack_latency_seconds_count"], 6);
   EXPECT_EQ(values["mapd_ack_latency_seconds_bucket{le=\"+Inf\"}"], 6);
   EXPECT_GT(values["mapd_db_size_bytes"], 0);
   EXPECT_EQ(values["mapd_merges{state=\"proposed\"}"], 0);
   EXPECT_EQ(values["mapd_watchers"], 0);
+}
+
+// Prometheus's own checker (Debian's prometheus package, which the test
+// command installs) accepts the exposition: syntax and its lint rules.
+TEST_F(WebFixture, PromtoolChecksTheMetrics) {
+  constexpr const char* kPromtool = "/usr/bin/promtool";
+  if (access(kPromtool, X_OK) != 0) GTEST_SKIP() << "no " << kPromtool << " (Debian: prometheus)";
+  Start();
+  Ingest(RoomBatches("r1", 6));
+  httplib::Result r = Client().Get("/metrics");
+  ASSERT_TRUE(r);
+  const mapd::testing::CommandResult check =
+      mapd::testing::RunCommand({kPromtool, "check", "metrics"}, r->body);
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err << "\n" << r->body;
 }
 
 // A proposed merge recorded directly (proposals need the voxel library).
