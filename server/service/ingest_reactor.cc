@@ -5,6 +5,7 @@
 #include <grpcpp/support/proto_buffer_writer.h>
 
 #include "service/log.h"
+#include "service/rpc_metrics.h"
 #include "service/status_mapping.h"
 
 namespace mapd::service {
@@ -140,6 +141,7 @@ void IngestReactor::Complete(pb::IngestAck ack) {
       break;
     default:
       ++rejected_;
+      RpcMetrics::Default().RecordRejectedBatch(static_cast<grpc::StatusCode>(ack.code()));
   }
   if (!broken_) acks_.push_back(std::move(ack));
   if (!writing_) StartNextWriteLocked();

@@ -1,9 +1,11 @@
 #include "service/merge_runner.h"
 
+#include <chrono>
 #include <thread>
 #include <utility>
 
 #include "service/log.h"
+#include "service/rpc_metrics.h"
 #include "service/voxel_merge.h"
 
 namespace mapd::service {
@@ -93,10 +95,13 @@ void MergeRunner::Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> j
       std::vector<voxel::SubmapInput> inputs(job->ids_.size());
       for (size_t i = 0; i < inputs.size(); ++i) inputs[i] = {job->ids_[i], job->bytes_[i]};
       MergeJob* j = job.get();
+      const auto start = std::chrono::steady_clock::now();
       StatusOr<voxel::MergeOutcome> result =
           MergeVoxelSubmaps(inputs, job->params_, [j](const std::string& stage, double fraction) {
             j->Publish({stage, fraction});
           });
+      RpcMetrics::Default().RecordMerge(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       job->Finish(std::move(result));
     }
     job.reset();

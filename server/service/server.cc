@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "service/log.h"
+#include "service/rpc_metrics.h"
 
 namespace mapd::service {
 namespace {
@@ -102,6 +103,10 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   grpc::ServerBuilder builder;
   builder.AddListeningPort(config.listen, credentials, &server->port_);
   builder.RegisterService(server->service_.get());
+  // Every call counted by method and code, and timed (rpc_metrics.h, /metrics).
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(RpcMetrics::InterceptorFactory());
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   builder.SetMaxReceiveMessageSize(static_cast<int>(config.max_message_bytes));
   builder.SetMaxSendMessageSize(static_cast<int>(config.max_message_bytes));
   // gRPC sets SO_REUSEPORT by default: a second mapd on the same port would

@@ -10,6 +10,7 @@
 #include <map>
 #include <sstream>
 
+#include "service/rpc_metrics.h"
 #include "service/watch_hub.h"
 
 namespace mapd::web {
@@ -91,11 +92,63 @@ class Writer {
   void Sample(const std::string& name, double value, const std::string& labels = "") {
     out_ += name + (labels.empty() ? "" : "{" + labels + "}") + " " + Num(value) + "\n";
   }
+  // The _bucket, _sum and _count lines of a histogram; `labels` (may be
+  // empty) go before le.
+  void Histogram(const std::string& name, const service::HistogramSnapshot& h,
+                 const std::string& labels = "") {
+    const std::string prefix = labels.empty() ? "" : labels + ",";
+    for (size_t i = 0; i < h.bounds_s.size(); ++i) {
+      Sample(name + "_bucket", static_cast<double>(h.counts[i]),
+             prefix + "le=\"" + BoundText(h.bounds_s[i]) + "\"");
+    }
+    Sample(name + "_bucket", static_cast<double>(h.count), prefix + "le=\"+Inf\"");
+    Sample(name + "_sum", h.sum_s, labels);
+    Sample(name + "_count", static_cast<double>(h.count), labels);
+  }
   std::string& text() { return out_; }
 
  private:
   std::string out_;
 };
+
+// Per-call counters and times (service/rpc_metrics.h), with the names and
+// labels of go-grpc-prometheus; batches rejected inside streams, refused
+// uploads, merge computation time.
+void RpcFamilies(Writer* w) {
+  const service::RpcMetrics& rpc = service::RpcMetrics::Default();
+  const std::vector<service::RpcMetrics::Method> methods = rpc.Methods();
+  const auto labels = [](const service::RpcMetrics::Method& m) {
+    return "grpc_service=\"" + m.service + "\",grpc_method=\"" + m.method + "\"";
+  };
+  w->Family("grpc_server_handled_total", "counter",
+            "gRPC calls completed, by method and status code.");
+  for (const service::RpcMetrics::Method& m : methods) {
+    for (const auto& [code, n] : m.handled) {
+      w->Sample("grpc_server_handled_total", static_cast<double>(n),
+                labels(m) + ",grpc_code=\"" + service::GrpcCodeName(code) + "\"");
+    }
+  }
+  w->Family("grpc_server_handling_seconds", "histogram",
+            "Time from a call's arrival to its status (streams: their whole life), seconds.");
+  for (const service::RpcMetrics::Method& m : methods) {
+    w->Histogram("grpc_server_handling_seconds", m.handling, labels(m));
+  }
+  w->Family("mapd_ingest_batches_rejected_total", "counter",
+            "Batches refused inside Ingest streams (bad input, permission, shutdown), by code.");
+  for (const auto& [code, n] : rpc.RejectedBatches()) {
+    w->Sample("mapd_ingest_batches_rejected_total", static_cast<double>(n),
+              std::string("grpc_code=\"") + service::GrpcCodeName(code) + "\"");
+  }
+  w->Family("mapd_submap_uploads_refused_total", "counter",
+            "UploadSubmap calls that stored nothing, by code.");
+  for (const auto& [code, n] : rpc.RefusedUploads()) {
+    w->Sample("mapd_submap_uploads_refused_total", static_cast<double>(n),
+              std::string("grpc_code=\"") + service::GrpcCodeName(code) + "\"");
+  }
+  w->Family("mapd_merge_duration_seconds", "histogram",
+            "Time a voxel merge computed (MergeSubmaps), seconds.");
+  w->Histogram("mapd_merge_duration_seconds", rpc.MergeSeconds());
+}
 
 }  // namespace
 
@@ -108,13 +161,7 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_ingest_features_total", static_cast<double>(s.features_stored));
   w.Family("mapd_ack_latency_seconds", "histogram",
            "Time from a stored batch's arrival to its (durable) acknowledgement.");
-  const service::HistogramSnapshot& h = s.ack_latency;
-  for (size_t i = 0; i < h.bounds_s.size(); ++i)
-    w.Sample("mapd_ack_latency_seconds_bucket", static_cast<double>(h.counts[i]),
-             "le=\"" + BoundText(h.bounds_s[i]) + "\"");
-  w.Sample("mapd_ack_latency_seconds_bucket", static_cast<double>(h.count), "le=\"+Inf\"");
-  w.Sample("mapd_ack_latency_seconds_sum", h.sum_s);
-  w.Sample("mapd_ack_latency_seconds_count", static_cast<double>(h.count));
+  w.Histogram("mapd_ack_latency_seconds", s.ack_latency);
   w.Family("mapd_fusion_backlog", "gauge", "Acknowledged observations not fused yet.");
   w.Sample("mapd_fusion_backlog", static_cast<double>(s.fusion_backlog));
   w.Family("mapd_fusion_share_refused_total", "counter",
@@ -144,6 +191,7 @@ std::string MetricsText(service::Core& core) {
   w.Sample("mapd_watchers", static_cast<double>(core.watch_hub().watchers()));
   w.Family("mapd_uptime_seconds", "gauge", "Seconds since mapd started.");
   w.Sample("mapd_uptime_seconds", s.uptime_s);
+  RpcFamilies(&w);
   w.Family("mapd_build_info", "gauge", "Always 1; the version of this mapd in its label.");
   w.Sample("mapd_build_info", 1, "version=\"" MAPD_VERSION "\"");
   if (const ProcessSample p = SampleProcess(); p.ok) {

@@ -191,6 +191,65 @@ TEST_F(WebFixture, PromtoolChecksTheMetrics) {
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err << "\n" << r->body;
 }
 
+// The value of the sample `name{labels}` in a /metrics text, or -1.
+double MetricValue(const std::string& text, const std::string& sample) {
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(sample + " ", 0) == 0) return std::stod(line.substr(sample.size() + 1));
+  }
+  return -1;
+}
+
+// Calls are counted by method and code and timed (go-grpc-prometheus names);
+// a batch refused inside a stream that ends OK counts as a rejected batch.
+TEST_F(WebFixture, MetricsCountCallsByCodeAndRejectedBatches) {
+  Start();
+  const auto metrics = [this] { return Client().Get("/metrics")->body; };
+  const std::string ingest_ok =
+      "grpc_server_handled_total{grpc_service=\"mapserver.v1.MapService\","
+      "grpc_method=\"Ingest\",grpc_code=\"OK\"}";
+  const std::string rejected = "mapd_ingest_batches_rejected_total{grpc_code=\"INVALID_ARGUMENT\"}";
+  const std::string not_found =
+      "grpc_server_handled_total{grpc_service=\"mapserver.v1.MapService\","
+      "grpc_method=\"DeleteSubmap\",grpc_code=\"NOT_FOUND\"}";
+  const std::string before = metrics();
+  const double ingests = std::max(0.0, MetricValue(before, ingest_ok));
+  const double rejections = std::max(0.0, MetricValue(before, rejected));
+  const double misses = std::max(0.0, MetricValue(before, not_found));
+
+  Ingest(RoomBatches("r1", 3));
+  {  // one bad batch (no robot id) in an otherwise good stream
+    grpc::ClientContext ctx;
+    auto stream = stub_->Ingest(&ctx);
+    pb::ObservationBatch bad = RoomBatches("r1", 1).front();
+    bad.clear_robot_id();
+    ASSERT_TRUE(stream->Write(bad));
+    stream->WritesDone();
+    pb::IngestAck ack;
+    while (stream->Read(&ack)) EXPECT_EQ(ack.result(), pb::IngestAck::REJECTED);
+    ASSERT_TRUE(stream->Finish().ok());
+  }
+  {
+    grpc::ClientContext ctx;
+    pb::DeleteSubmapRequest request;
+    request.set_id(12345);
+    pb::DeleteSubmapResponse response;
+    EXPECT_EQ(stub_->DeleteSubmap(&ctx, request, &response).error_code(),
+              grpc::StatusCode::NOT_FOUND);
+  }
+  const std::string after = metrics();
+  EXPECT_EQ(MetricValue(after, ingest_ok), ingests + 2) << after;
+  EXPECT_EQ(MetricValue(after, rejected), rejections + 1) << after;
+  EXPECT_EQ(MetricValue(after, not_found), misses + 1) << after;
+  EXPECT_GE(
+      MetricValue(after,
+                  "grpc_server_handling_seconds_count{grpc_service=\"mapserver.v1.MapService\","
+                  "grpc_method=\"Ingest\"}"),
+      ingests + 2);
+  EXPECT_NE(after.find("# TYPE mapd_merge_duration_seconds histogram"), std::string::npos);
+  EXPECT_NE(after.find("# TYPE mapd_submap_uploads_refused_total counter"), std::string::npos);
+}
+
 // A proposed merge recorded directly (proposals need the voxel library).
 int64_t RecordProposal(service::Core* core) {
   int64_t id = 0;
