@@ -124,11 +124,45 @@ CLI::Validator PositiveId() {
       "ID");
 }
 
+std::string ServerAddressProblem(const std::string& address) {
+  // gRPC target URIs (unix:/path, dns:///host:port) are passed as they are.
+  if (address.rfind("unix:", 0) == 0 || address.find(":///") != std::string::npos) return "";
+  const size_t colon = address.rfind(':');
+  if (address.empty() || colon == std::string::npos || colon == 0) {
+    return "wants HOST:PORT (e.g. 127.0.0.1:50051)";
+  }
+  const std::string port = address.substr(colon + 1);
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoul(port) == 0 ||
+      std::stoul(port) > 65535) {
+    return "the port '" + port + "' is not a number in 1..65535 (HOST:PORT)";
+  }
+  return "";
+}
+
 int ParseCommandLine(CLI::App* app, int argc, const char* const* argv) {
   try {
     app->parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
+    // `mapctl nonsense --help` printed the top-level help and exited 0.
+    if (app->get_subcommands().empty()) {
+      for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg.rfind("-", 0) == 0) {
+          const CLI::Option* opt =
+              arg.find('=') == std::string::npos ? app->get_option_no_throw(arg) : nullptr;
+          if (opt != nullptr && opt->get_type_size() != 0) ++i;  // its value
+          continue;
+        }
+        if (app->get_subcommands([&arg](CLI::App* c) { return c->check_name(arg); }).empty()) {
+          return UsageError("", "unknown command '" + arg + "'");
+        }
+        break;
+      }
+    }
     return app->exit(e);  // the help of the (sub)command asked about, on stdout, exit 0
+  } catch (const CLI::CallForVersion& e) {
+    return app->exit(e);  // the version on stdout, exit 0
   } catch (const CLI::ParseError& e) {
     if (app->get_subcommands().empty() && !app->remaining().empty()) {
       return UsageError("", "unknown command '" + app->remaining().front() + "'");

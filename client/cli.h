@@ -82,6 +82,10 @@ CLI::Validator PositiveReal();
 // The same for ids: a whole number > 0 ("'abc' is not an id (a whole number > 0)").
 CLI::Validator PositiveId();
 int ParseCommandLine(CLI::App* app, int argc, const char* const* argv);
+// Why `address` is not HOST:PORT with a port in 1..65535 (or a gRPC target
+// URI such as unix:/path), or "" if it is: a missing port was a connection
+// error after the timeout, not a usage error.
+std::string ServerAddressProblem(const std::string& address);
 
 // Whole-string number parsing; false on junk, overflow or a non-finite double.
 bool ParseDouble(const std::string& s, double* out);

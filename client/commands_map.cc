@@ -60,7 +60,14 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
   request.set_without_corner_optimisation(flags.raw_fit);
 
   OutputFormat format = GuessOutputFormat(flags.output, OutputFormat::kTable);
-  if (!flags.format.empty()) ParseOutputFormat(flags.format, &format);  // checked by the parser
+  if (!flags.format.empty()) {
+    ParseOutputFormat(flags.format, &format);  // checked by the parser
+  } else if (flags.output != "-" && !HasOutputExtension(flags.output)) {
+    // `features -o out.xyz` wrote a table into out.xyz.
+    return UsageError("features", "cannot tell the format of '" + flags.output +
+                                      "' from its name (.geojson, .json, .svg, or .txt for the "
+                                      "table); give --format");
+  }
 
   FeatureList features;
   PlaneList planes;

@@ -78,6 +78,16 @@ OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback) {
   return fallback;
 }
 
+bool HasOutputExtension(const std::string& path) {
+  for (const char* suffix : {".geojson", ".json", ".svg", ".txt"}) {
+    const std::string s = suffix;
+    if (path.size() >= s.size() && path.compare(path.size() - s.size(), s.size(), s) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string KindName(pb::FeatureKind kind) {
   switch (kind) {
     case pb::FEATURE_KIND_LINE:

@@ -26,6 +26,8 @@ enum class OutputFormat { kTable, kJson, kGeoJson, kSvg };
 bool ParseOutputFormat(const std::string& name, OutputFormat* out);
 // From a file name's extension (.json, .geojson, .svg); `fallback` otherwise.
 OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback);
+// Whether the name ends in .json, .geojson, .svg, or .txt (a table).
+bool HasOutputExtension(const std::string& path);
 
 // Any message in the protobuf JSON mapping, with the .proto field names
 // (snake_case), default values printed and two-space indentation. Note that

@@ -49,8 +49,9 @@ int main(int argc, char** argv) {
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_option("--server", ctx.server,
                  "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051)")
-      ->check(CLI::Validator([](std::string& v) { return v.empty() ? "wants HOST:PORT" : ""; },
+      ->check(CLI::Validator([](std::string& v) { return mapd::client::ServerAddressProblem(v); },
                              "HOST:PORT"));
+  app.set_version_flag("--version", std::string("mapctl ") + MAPD_VERSION);
   app.add_option("--timeout", ctx.timeout_s, "seconds to wait for an answer")
       ->capture_default_str()
       ->check(mapd::client::PositiveReal());
@@ -77,6 +78,9 @@ int main(int argc, char** argv) {
   mapd::client::AddRenderCommand(&app, &action);
   mapd::client::AddAuthCommands(&app, &action);
   if (int rc = mapd::client::ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;
+  if (std::string problem = mapd::client::ServerAddressProblem(ctx.server); !problem.empty()) {
+    return UsageError("", "server '" + ctx.server + "' (--server or $MAPD_SERVER): " + problem);
+  }
 
   // The channel connects lazily, on the first call: --help needs no server.
   // A restarted server is found again within 2 s (gRPC's default backoff grows to 120 s).

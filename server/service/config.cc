@@ -91,6 +91,15 @@ Status ServerConfig::Validate() const {
   if (listen.empty() || listen.find(':') == std::string::npos) {
     return Status::InvalidArgument("listen: '" + listen + "' is not host:port");
   }
+  {  // gRPC would take the port modulo 65536 (99999 listened on 34463)
+    const std::string port = listen.substr(listen.rfind(':') + 1);
+    const bool digits = !port.empty() && port.size() <= 5 &&
+                        port.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoul(port) > 65535) {
+      return Status::InvalidArgument("listen: '" + listen + "': the port '" + port +
+                                     "' is not a number in 0..65535");
+    }
+  }
   if (tls_cert.empty() != tls_key.empty()) {
     return Status::InvalidArgument("tls_cert and tls_key must be given together");
   }

@@ -50,10 +50,18 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   const std::string& db = server->config_.db_path;
   std::error_code ec;
   const auto parent = std::filesystem::path(db).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  if (ec)
-    return Status::FailedPrecondition("cannot create the directory of --db '" + db +
-                                      "': " + ec.message());
+  if (config.db_path.empty()) {
+    // The default path's directory is mapd's own: made on first use.
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    if (ec) {
+      return Status::FailedPrecondition("cannot create the directory of the database '" + db +
+                                        "': " + ec.message());
+    }
+  } else if (!parent.empty() && !std::filesystem::is_directory(parent, ec)) {
+    // A typo in --db must not create a tree of directories and a new, empty map.
+    return Status::FailedPrecondition("--db '" + db + "': the directory '" + parent.string() +
+                                      "' does not exist; create it first (mkdir -p)");
+  }
 
   MapCoreOptions core_options;
   core_options.db_path = db;

@@ -220,6 +220,39 @@ TEST_F(MapctlE2eTest, ServerExitsCleanlyOnSigterm) {
   mapd_.pid = -1;
 }
 
+// Input mistakes are one line on stderr and exit 2 (issue 43 item 10), before
+// anything is sent or written.
+TEST_F(MapctlE2eTest, InputMistakesAreUsageErrors) {
+  const auto expect_usage = [](const CommandResult& r, const std::string& says) {
+    EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+    EXPECT_THAT(r.err, HasSubstr(says));
+    EXPECT_EQ(Count(r.err, "\n"), 1u) << r.err;
+  };
+  // A server address without a port was a connection error after the timeout.
+  expect_usage(RunCommand({MAPCTL_BINARY, "--server", "127.0.0.1", "status"}), "HOST:PORT");
+  expect_usage(RunCommand({MAPCTL_BINARY, "--server", "127.0.0.1:99999", "status"}), "1..65535");
+  // An unknown command with --help printed the top-level help and exited 0.
+  expect_usage(RunCommand({MAPCTL_BINARY, "nonsense", "--help"}), "unknown command 'nonsense'");
+  expect_usage(RunCommand({MAPCTL_BINARY, "--server", mapd_.address, "--timeout", "5", "nonsense",
+                           "--help"}),
+               "unknown command 'nonsense'");
+  // features -o out.xyz wrote a table into out.xyz.
+  const std::string xyz = dir_.File("out.xyz");
+  expect_usage(Mapctl({"features", "-o", xyz}), "--format");
+  EXPECT_FALSE(std::filesystem::exists(xyz));
+  EXPECT_EQ(Mapctl({"features", "-o", dir_.File("out.txt")}).exit_code, 0);
+  EXPECT_EQ(Mapctl({"features", "-o", xyz, "--format", "json"}).exit_code, 0);
+  // The world change of simulate.
+  expect_usage(Mapctl({"simulate", "--remove-wall", "12"}), "walls 0..11");
+  expect_usage(Mapctl({"simulate", "--add-wall", "1,2,3"}), "X0,Y0,X1,Y1");
+  expect_usage(Mapctl({"simulate", "--add-wall", "1,2,1,2"}), "X0,Y0,X1,Y1");
+  // --version, and --help of a real command, still exit 0.
+  const CommandResult version = RunCommand({MAPCTL_BINARY, "--version"});
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_THAT(version.out, HasSubstr("mapctl " MAPD_VERSION_FOR_TESTS));
+  EXPECT_EQ(RunCommand({MAPCTL_BINARY, "features", "--help"}).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace mapd::testing
 

@@ -101,6 +101,22 @@ TEST(ConfigTest, BadValuesAreNamed) {
             "unknown setting 'no-such-thing' (see mapd --help)");
 }
 
+// gRPC took the port modulo 65536: --listen 127.0.0.1:99999 served on 34463.
+TEST(ConfigTest, AListenPortOutsideItsRangeIsRefused) {
+  for (const char* listen : {"127.0.0.1:99999", "127.0.0.1:65536", "127.0.0.1:", "127.0.0.1:x1",
+                             "127.0.0.1:-1", "127.0.0.1:0123456"}) {
+    ServerConfig c;
+    Status s = Parse({"--listen", listen}, &c);
+    if (s.ok()) s = c.Validate();
+    EXPECT_THAT(s.message(), HasSubstr("0..65535")) << listen;
+  }
+  for (const char* listen : {"127.0.0.1:0", "127.0.0.1:65535", "[::1]:50051"}) {
+    ServerConfig c;
+    ASSERT_TRUE(Parse({"--listen", listen}, &c).ok()) << listen;
+    EXPECT_TRUE(c.Validate().ok()) << listen << ": " << c.Validate().ToString();
+  }
+}
+
 // Found while writing tests/fuzz/config_fuzz.cc: the parser before the
 // settings table wrapped integers into their field (4294967300 became 4 for
 // merge.min_matched_corners) and took " -1" as 2^32 - 1.

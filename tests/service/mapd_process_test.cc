@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <thread>
 
@@ -108,6 +109,17 @@ TEST(MapdProcessTest, TheStartLogSaysWhetherMallocUsesHugePages) {
   } else {
     setenv("GLIBC_TUNABLES", before.c_str(), 1);
   }
+}
+
+// A typo in --db once made the directories and a new, empty map there.
+TEST(MapdProcessTest, ADatabaseInADirectoryThatDoesNotExistIsRefused) {
+  TempDir dir;
+  const std::string db = dir.File("no/such/dir/map.db");
+  const CommandResult r = RunCommand({MAPD_BINARY, "--db", db, "--listen", "127.0.0.1:0"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("does not exist"));
+  EXPECT_THAT(r.err, HasSubstr(dir.File("no/such/dir")));
+  EXPECT_FALSE(std::filesystem::exists(dir.File("no")));
 }
 
 TEST(MapdProcessTest, AFileThatIsNotADatabaseIsRefusedAndLeftAlone) {
