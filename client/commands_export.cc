@@ -92,7 +92,16 @@ int RunOccupancyGrid(const Context& ctx, const GridOptions& flags) {
   }
   bool global = true;
   uint64_t id = 0;
-  const std::vector<std::string>& source = flags.source;
+  // "submap 7" as two words, or as one: "submap 7" quoted, submap:7, submap=7.
+  std::vector<std::string> source = flags.source;
+  if (source.size() == 1) {
+    const size_t cut = source[0].find_first_of(" :=");
+    if (cut != std::string::npos) {
+      const size_t rest = source[0].find_first_not_of(" :=", cut);
+      source = {source[0].substr(0, cut),
+                rest == std::string::npos ? std::string() : source[0].substr(rest)};
+    }
+  }
   if (source.size() == 2 && source[0] == "submap") {
     double v = 0;
     if (!ParseDouble(source[1], &v) || v < 1 || v != std::floor(v) || v > 9e15) {
@@ -108,7 +117,15 @@ int RunOccupancyGrid(const Context& ctx, const GridOptions& flags) {
                         "--lines draws the map-frame walls: use it with --source global only");
     }
   } else if (!(source.size() == 1 && source[0] == "global")) {
-    return UsageError("occupancy-grid", "--source wants 'global' or 'submap ID'");
+    return UsageError(
+        "occupancy-grid", "--source wants 'global' or 'submap ID' (also submap:ID), got '" +
+                              [&flags] {
+                                std::string text;
+                                for (const std::string& w : flags.source)
+                                  text += (text.empty() ? "" : " ") + w;
+                                return text;
+                              }() +
+                              "'");
   }
 
   std::string data;
@@ -202,7 +219,8 @@ void AddExportCommands(CLI::App* app, Action* action) {
       ->check(PositiveReal());
   grid->add_flag("--lines", g->lines,
                  "also draw the fused walls (GetFeatureMap, map frame) as occupied cells");
-  grid->add_option("--source", g->source, "global (the merged map, default) or submap ID")
+  grid->add_option("--source", g->source,
+                   "global (the merged map, default) or submap ID (also submap:ID)")
       ->expected(1, 2);
 
   CLI::App* trails =

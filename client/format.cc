@@ -99,15 +99,54 @@ std::string KindName(pb::FeatureKind kind) {
   }
 }
 
+namespace {
+
+// The protobuf JSON mapping writes 64-bit integers as strings ("id": "7");
+// mapctl's other JSON (features, watch) writes numbers. Every --json output
+// writes numbers: this turns the strings of 64-bit fields of `descriptor`
+// back into numbers, in nested messages and repeated fields too.
+void SixtyFourBitFieldsAsNumbers(const google::protobuf::Descriptor* descriptor,
+                                 nlohmann::ordered_json* object) {
+  using google::protobuf::FieldDescriptor;
+  if (!object->is_object()) return;
+  for (int i = 0; i < descriptor->field_count(); ++i) {
+    const FieldDescriptor* field = descriptor->field(i);
+    auto it = object->find(field->name());
+    if (it == object->end()) continue;
+    const auto convert = [field](nlohmann::ordered_json* v) {
+      if (field->cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE) {
+        if (!field->is_map()) SixtyFourBitFieldsAsNumbers(field->message_type(), v);
+        return;
+      }
+      if (!v->is_string()) return;
+      const std::string text = v->get<std::string>();
+      try {
+        if (field->cpp_type() == FieldDescriptor::CPPTYPE_INT64) *v = std::stoll(text);
+        if (field->cpp_type() == FieldDescriptor::CPPTYPE_UINT64) *v = std::stoull(text);
+      } catch (const std::exception&) {
+        // Not a number: left as written.
+      }
+    };
+    if (field->is_repeated() && it->is_array()) {
+      for (auto& element : *it) convert(&element);
+    } else {
+      convert(&*it);
+    }
+  }
+}
+
+}  // namespace
+
 std::string MessageToJson(const google::protobuf::Message& message) {
   google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = true;
   options.always_print_primitive_fields = true;
   options.preserve_proto_field_names = true;
   std::string out;
   if (!google::protobuf::util::MessageToJsonString(message, &out, options).ok()) return "{}\n";
-  if (out.empty() || out.back() != '\n') out += '\n';
-  return out;
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(out, nullptr, false);
+  if (doc.is_discarded()) return out + "\n";
+  SixtyFourBitFieldsAsNumbers(message.GetDescriptor(), &doc);
+  return doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 std::string FormatFeatureTable(const FeatureList& features, const PlaneList& planes) {

@@ -30,8 +30,9 @@ OutputFormat GuessOutputFormat(const std::string& path, OutputFormat fallback);
 bool HasOutputExtension(const std::string& path);
 
 // Any message in the protobuf JSON mapping, with the .proto field names
-// (snake_case), default values printed and two-space indentation. Note that
-// the mapping writes 64-bit integers as strings ("batches": "120").
+// (snake_case), default values printed and two-space indentation, except that
+// 64-bit integers are numbers ("batches": 120; the mapping writes strings), as
+// in every other JSON mapctl writes.
 std::string MessageToJson(const google::protobuf::Message& message);
 
 // One line per feature with a header, then a count; then, if there are

@@ -312,8 +312,14 @@ TEST_F(MapctlSubmapE2eTest, OccupancyGridOfTheGlobalMapAndOfASubmap) {
   r = Mapctl({"occupancy-grid", "-o", sub, "--source", "submap", "999"});
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+  // One word for the source (quoted, or submap:ID) does the same (issue 43 item 10).
+  for (const std::string& one_word : {"submap " + id_b, "submap:" + id_b}) {
+    r = Mapctl({"occupancy-grid", "-o", sub, "--source", one_word, "--resolution", "0.2"});
+    EXPECT_EQ(r.exit_code, 0) << one_word << ": " << r.out << r.err;
+  }
   r = Mapctl({"occupancy-grid", "-o", sub, "--source", "moon"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("got 'moon'"));
   // The fused walls are in the map frame, a submap in its own: not mixed.
   r = Mapctl({"occupancy-grid", "-o", sub, "--source", "submap", id_b, "--lines"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
