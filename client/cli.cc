@@ -7,6 +7,8 @@
 #include <cstring>
 #include <fstream>
 
+#include "client/text_util.h"
+
 namespace mapd::client {
 
 namespace pb = mapserver::v1;
@@ -69,7 +71,7 @@ const char* StatusCodeName(grpc::StatusCode code) {
 }
 
 void PrintError(const std::string& message) {
-  std::fprintf(stderr, "mapctl: %s\n", message.c_str());
+  std::fprintf(stderr, "mapctl: %s\n", Visible(message).c_str());
 }
 
 int ReportRpcError(const Context& ctx, const std::string& what, const grpc::Status& status) {
@@ -82,6 +84,7 @@ int ReportRpcError(const Context& ctx, const std::string& what, const grpc::Stat
   for (char& c : message) {
     if (c == '\n') c = ' ';
   }
+  message = Visible(message);
   const std::string prefix =
       unreachable ? "cannot reach mapd at " + ctx.server + ": " + what : what;
   std::fprintf(stderr, "mapctl: %s: %s (%s)\n", prefix.c_str(), message.c_str(),

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "client/commands.h"
+#include "client/text_util.h"
 
 namespace mapd::client {
 namespace {
@@ -63,9 +64,10 @@ void PrintTokens(const pb::ListTokensResponse& r) {
               "BY", "REVOKED");
   for (const pb::TokenInfo& t : r.tokens()) {
     std::printf("%-5llu %-24s %-9s %-16s %-20s %-20s %s\n", static_cast<unsigned long long>(t.id()),
-                t.name().c_str(), RoleName(t.role()),
-                t.robot_id().empty() ? "-" : t.robot_id().c_str(), Utc(t.created_ns()).c_str(),
-                t.created_by().c_str(), Utc(t.revoked_ns()).c_str());
+                Visible(t.name()).c_str(), RoleName(t.role()),
+                t.robot_id().empty() ? "-" : Visible(t.robot_id()).c_str(),
+                Utc(t.created_ns()).c_str(), Visible(t.created_by()).c_str(),
+                Utc(t.revoked_ns()).c_str());
   }
 }
 
@@ -121,8 +123,9 @@ int RunAudit(const Context& ctx, const AuditOptions& flags) {
               "TARGET", "RESULT");
   for (const pb::AuditEntry& e : response.entries()) {
     std::printf("%-6llu %-20s %-20s %-9s %-14s %-40s %s\n", static_cast<unsigned long long>(e.id()),
-                Utc(e.time_ns()).c_str(), e.who().c_str(), e.role().c_str(), e.action().c_str(),
-                e.target().c_str(), e.result().c_str());
+                Utc(e.time_ns()).c_str(), Visible(e.who()).c_str(), Visible(e.role()).c_str(),
+                Visible(e.action()).c_str(), Visible(e.target()).c_str(),
+                Visible(e.result()).c_str());
   }
   return kExitOk;
 }

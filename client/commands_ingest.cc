@@ -161,8 +161,9 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
     const auto it = line_of.find({r.session_id, r.seq});
     const std::string where = it == line_of.end() ? "a batch" : Printf("line %zu", it->second);
     std::fprintf(stderr, "mapctl: ingest: %s (session %s, seq %llu) rejected: %s (%s)\n",
-                 where.c_str(), r.session_id.c_str(), static_cast<unsigned long long>(r.seq),
-                 r.message.c_str(), StatusCodeName(r.code));
+                 where.c_str(), Visible(r.session_id).c_str(),
+                 static_cast<unsigned long long>(r.seq), Visible(r.message).c_str(),
+                 StatusCodeName(r.code));
   }
   if (!parse_error.empty()) {
     PrintError(parse_error);
@@ -253,7 +254,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
     for (const Rejection& r : tallies[i].rejections) {
       std::fprintf(stderr, "mapctl: simulate: %s seq %llu rejected: %s (%s)\n",
                    params[i].robot_id.c_str(), static_cast<unsigned long long>(r.seq),
-                   r.message.c_str(), StatusCodeName(r.code));
+                   Visible(r.message).c_str(), StatusCodeName(r.code));
     }
     if (!tallies[i].status.ok() && rc == kExitOk) {
       rc = ReportRpcError(ctx, "simulate " + params[i].robot_id, tallies[i].status);

@@ -12,6 +12,7 @@
 
 #include "client/commands.h"
 #include "client/format.h"
+#include "client/text_util.h"
 
 namespace mapd::client {
 namespace {
@@ -132,7 +133,7 @@ int RunWatch(const Context& ctx, const WatchOptions& flags) {
     std::fprintf(stderr,
                  "mapctl: watch: the stream ended (%s: %s); reconnecting in %.1f s from "
                  "map_version %llu\n",
-                 StatusCodeName(status.error_code()), status.error_message().c_str(),
+                 StatusCodeName(status.error_code()), Visible(status.error_message()).c_str(),
                  static_cast<double>(backoff.count()) / 1000.0,
                  static_cast<unsigned long long>(version));
     if (!Pause(backoff)) return kExitOk;

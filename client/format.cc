@@ -288,7 +288,8 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
   auto num = [](uint64_t v) { return std::to_string(v); };
   row("uptime", HumanDuration(s.uptime_s()));
   row("database",
-      s.db_path() + " (" + HumanBytes(s.db_size_bytes()) +
+      (s.db_path().empty() ? std::string("(path shown to operators)") : Visible(s.db_path())) +
+          " (" + HumanBytes(s.db_size_bytes()) +
           (s.raw_features() > 0 ? Printf(", %.0f bytes per raw feature", s.bytes_per_raw_feature())
                                 : std::string()) +
           ")");

@@ -43,7 +43,7 @@ std::string Inputs(const pb::MergeRecord& m) {
   return out;
 }
 
-std::string OrDash(const std::string& s) { return s.empty() ? "-" : s; }
+std::string OrDash(const std::string& s) { return s.empty() ? "-" : Visible(s); }
 
 // The first kShownCorners matched corner pairs of an input (all in --json).
 constexpr int kShownCorners = 5;
@@ -194,7 +194,7 @@ std::string FormatMergeRecord(const pb::MergeRecord& m) {
         Printf("  %s by %s at %s\n", m.state() == pb::MERGE_STATE_REJECTED ? "rejected" : "decided",
                OrDash(m.decided_by()).c_str(), IsoTime(m.decided_ns()).c_str());
   }
-  if (!m.reason().empty()) out += "  reason: " + m.reason() + "\n";
+  if (!m.reason().empty()) out += "  reason: " + Visible(m.reason()) + "\n";
   for (const pb::SubmapAlignment& a : m.inputs()) out += FormatAlignment(a) + MatchedCorners(a);
   if (m.state() == pb::MERGE_STATE_PROPOSED) {
     out += Printf(

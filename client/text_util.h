@@ -7,8 +7,17 @@
 #include <cstdio>
 #include <ctime>
 #include <string>
+#include <string_view>
+
+#include "common/text_escape.h"
 
 namespace mapd::client {
+
+// Text from the server (or a file) for one line of a terminal: control
+// characters, C1 controls and bidi overrides shown escaped, never sent raw
+// (common/text_escape.h). Every free-text field mapctl prints goes through
+// it; ids are validated by mapd but older databases may hold anything.
+inline std::string Visible(std::string_view s) { return EscapeControlChars(s); }
 
 // printf into a std::string, of any length.
 inline std::string Printf(const char* format, ...) __attribute__((format(printf, 1, 2)));

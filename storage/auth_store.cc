@@ -1,6 +1,7 @@
 // Tokens and the audit log: the SQL side of server/service/auth.h.
 // Writes run in the writer's transactions (one writer, as for everything
 // else); reads on the reader connection.
+#include "common/text_escape.h"
 #include "storage/store.h"
 
 namespace mapd::storage {
@@ -69,13 +70,27 @@ Status WriteTransaction::AppendAudit(const AuditEntry& e) {
                                              "INSERT INTO audit_log (time_ns, who, role, action, "
                                              "target, result) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
   if (!q.ok()) return q.status();
+  // Each field is one line of visible text, whatever the caller passed: an
+  // audit row must not be able to forge another in a reader's terminal.
   q->Bind(1, e.time_ns)
-      .Bind(2, e.who)
-      .Bind(3, e.role)
-      .Bind(4, e.action)
-      .Bind(5, e.target)
-      .Bind(6, e.result);
+      .Bind(2, EscapeControlChars(e.who))
+      .Bind(3, EscapeControlChars(e.role))
+      .Bind(4, EscapeControlChars(e.action))
+      .Bind(5, EscapeControlChars(e.target))
+      .Bind(6, EscapeControlChars(e.result));
   return q->Run();
+}
+
+StatusOr<int64_t> WriteTransaction::TrimDeniedAudit(int64_t keep) {
+  sqlite3* w = store_->writer_.get();
+  StatusOr<Statement> q = Statement::Prepare(
+      w,
+      "DELETE FROM audit_log WHERE id IN (SELECT id FROM audit_log WHERE result LIKE 'denied%' "
+      "ORDER BY id DESC LIMIT -1 OFFSET ?1)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, keep);
+  MAPD_RETURN_IF_ERROR(q->Run());
+  return static_cast<int64_t>(sqlite3_changes(w));
 }
 
 StatusOr<TokenRecord> Store::GetToken(int64_t id) {

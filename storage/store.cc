@@ -1,7 +1,9 @@
 #include "storage/store.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -71,6 +73,11 @@ const char* MergeStateName(MergeState state) {
 StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const StoreOptions& options) {
   std::unique_ptr<Store> store(new Store());
   store->path_ = path;
+  // A new database is the owner's only (0600) whatever the umask: it holds
+  // the token hashes. SQLite gives its -wal and -shm files the same mode. (An
+  // empty file is an empty database to SQLite; an existing one is untouched.)
+  if (const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600); fd >= 0)
+    close(fd);
   StatusOr<DbHandle> writer = OpenDatabase(path, /*read_only=*/false);
   if (!writer.ok()) return writer.status();
   store->writer_ = std::move(writer).value();

@@ -358,7 +358,11 @@ class WriteTransaction {
   // Marks a token revoked; NotFound if there is none, FailedPrecondition if
   // it is revoked already.
   Status RevokeToken(int64_t id, int64_t now_ns);
+  // Control characters in `entry`'s fields are stored escaped (one line each).
   Status AppendAudit(const AuditEntry& entry);
+  // Deletes the oldest rows of refused calls (result "denied...") beyond the
+  // newest `keep`; returns how many. Other rows are never deleted.
+  StatusOr<int64_t> TrimDeniedAudit(int64_t keep);
   // Durable once this returns OK (per StoreOptions::synchronous_full).
   Status Commit();
 
@@ -386,6 +390,8 @@ class WriteTransaction {
 
 class Store {
  public:
+  // Opens the database at `path`, creating it owner-only (mode 0600) when it
+  // does not exist, and migrates its schema.
   static StatusOr<std::unique_ptr<Store>> Open(const std::string& path,
                                                const StoreOptions& options);
   ~Store();

@@ -1,4 +1,5 @@
 // mapd: the multi-robot map server.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -36,6 +37,10 @@ int main(int argc, char** argv) {
   using mapd::service::MapServer;
   using mapd::service::ServerConfig;
   using mapd::service::SetLogLevel;
+  // Everything mapd creates (the database, its -wal and -shm, the default
+  // path's directory, snapshots' temporary files) is the owner's only: the
+  // database holds the token hashes (docs/security.md, "Files").
+  umask(077);
   CLI::App app("mapd: serves the mapserver.v1 gRPC API.", "mapd");
   mapd::CommandLine line;
   mapd::AddFlags(&app, &line);
@@ -94,7 +99,7 @@ int main(int argc, char** argv) {
     mapd::web::WebServerOptions options;
     options.address = config.web.address;
     options.port = config.web.port;
-    options.auth = {config.auth_required, !config.tls_client_ca.empty()};
+    options.auth = (*server)->auth();
     mapd::StatusOr<std::unique_ptr<mapd::web::WebServer>> started =
         mapd::web::WebServer::Start((*server)->core(), options);
     if (!started.ok()) {

@@ -6,6 +6,7 @@
 
 #include "common/clock.h"
 #include "service/auth.h"
+#include "service/file_modes.h"
 #include "service/token.h"
 #include "storage/store.h"
 
@@ -46,6 +47,7 @@ storage::AuditEntry OfflineAudit(const std::string& action, const std::string& t
 }
 
 StatusOr<std::unique_ptr<storage::Store>> Open(const TokenOptions& flags) {
+  MAPD_RETURN_IF_ERROR(service::CheckDatabaseFileModes(flags.db));
   return storage::Store::Open(flags.db, storage::StoreOptions{});
 }
 

@@ -97,12 +97,18 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       std::string(options_.client_certs ? " or a client certificate signed by tls_client_ca" : ""));
 }
 
-StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authorization) {
+StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authorization,
+                                                      const std::string& peer) {
   if (authorization != nullptr) {
     const std::string_view value = *authorization;
-    if (value.substr(0, sizeof(kBearer) - 1) != kBearer)
-      return Status::Unauthenticated("the Authorization header must be 'Bearer <token>'");
-    return FromToken(value.substr(sizeof(kBearer) - 1));
+    StatusOr<Principal> p = value.substr(0, sizeof(kBearer) - 1) != kBearer
+                                ? StatusOr<Principal>(Status::Unauthenticated(
+                                      "the Authorization header must be 'Bearer <token>'"))
+                                : FromToken(value.substr(sizeof(kBearer) - 1));
+    if (!p.ok())
+      Log(LogLevel::kWarn, "auth_refused",
+          {{"peer", peer}, {"via", "http"}, {"error", p.status().ToString()}});
+    return p;
   }
   if (!Required()) return AnonymousOperator();
   return Status::Unauthenticated(
@@ -111,10 +117,13 @@ StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authori
 
 StatusOr<Principal> AccessControl::Admit(const grpc::ServerContextBase& context,
                                          Permission permission, const std::string& action,
-                                         const std::string& robot) {
+                                         const std::string& robot, const std::string& target) {
   StatusOr<Principal> p = Authenticate(context);
   if (!p.ok()) return p.status();
-  MAPD_RETURN_IF_ERROR(Check(*p, permission, action, robot, robot.empty() ? "" : "robot " + robot));
+  MAPD_RETURN_IF_ERROR(Check(*p, permission, action, robot,
+                             !target.empty() ? target
+                             : robot.empty() ? ""
+                                             : "robot " + robot));
   return p;
 }
 
@@ -135,8 +144,8 @@ void AccessControl::CheckAsync(const Principal& principal, Permission permission
     return;
   }
   LogDenied(principal, action, target);
-  AuditAsync(Entry(principal, action, target, "denied: " + s.message()),
-             [done = std::move(done), s] { done(s); });
+  AuditDeniedAsync(Entry(principal, action, target, "denied: " + s.message()),
+                   [done = std::move(done), s] { done(s); });
 }
 
 void AccessControl::LogDenied(const Principal& principal, const std::string& action,
@@ -152,6 +161,7 @@ void AccessControl::AuditDenied(const Principal& principal, const std::string& a
                                 const std::string& target, const Status& why) {
   LogDenied(principal, action, target);
   storage::AuditEntry e = Entry(principal, action, target, "denied: " + why.message());
+  if (!denials_->Admit(e, e.time_ns)) return;
   Status s =
       core_->ExecuteWrite([&e](storage::WriteTransaction* txn) { return txn->AppendAudit(e); });
   if (!s.ok()) Log(LogLevel::kWarn, "audit_failed", {{"action", action}, {"error", s.ToString()}});
@@ -167,6 +177,32 @@ storage::AuditEntry AccessControl::Entry(const Principal& principal, const std::
   e.target = target;
   e.result = result;
   return e;
+}
+
+AccessControl::AccessControl(Core* core, AuthOptions options)
+    : core_(core),
+      options_(options),
+      denials_(options.denials ? options.denials
+                               : std::make_shared<DenialAuditLimiter>(options.denials_per_minute)) {
+}
+
+void AccessControl::AuditDeniedAsync(storage::AuditEntry entry, std::function<void()> done) {
+  if (!denials_->Admit(entry, entry.time_ns)) {
+    done();
+    return;
+  }
+  AuditAsync(std::move(entry), std::move(done));
+}
+
+void AccessControl::FlushDenials(bool all) {
+  std::vector<storage::AuditEntry> rows = denials_->TakeSummaries(UnixNowNs(), all);
+  if (rows.empty()) return;
+  const Status s = core_->ExecuteWrite([&rows](storage::WriteTransaction* txn) {
+    for (const storage::AuditEntry& e : rows) MAPD_RETURN_IF_ERROR(txn->AppendAudit(e));
+    return Status::Ok();
+  });
+  if (!s.ok())
+    Log(LogLevel::kWarn, "audit_failed", {{"action", "denials"}, {"error", s.ToString()}});
 }
 
 void AccessControl::AuditAsync(storage::AuditEntry entry, std::function<void()> done) {

@@ -11,8 +11,9 @@
 //      token was ever created in the database. Otherwise UNAUTHENTICATED.
 // Audit rows are written for uploads, merges, deletes, token changes (in the
 // same transaction as the change, by the handlers) and for refused writes
-// (here). Calls without a valid credential are logged, never audited, so
-// that strangers cannot fill the database.
+// (here, at most limits.audit_denials_per_minute rows per identity, the rest
+// counted in summary rows: denial_audit.h). Calls without a valid credential
+// are logged, never audited, so that strangers cannot fill the database.
 //
 // Thread safety: every method may be called from any thread.
 #ifndef MAPD_SERVICE_ACCESS_CONTROL_H_
@@ -22,35 +23,46 @@
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "common/status.h"
 #include "service/auth.h"
 #include "service/core.h"
+#include "service/denial_audit.h"
 
 namespace mapd::service {
 
 struct AuthOptions {
   bool required = false;      // auth.required: no anonymous calls even without tokens
   bool client_certs = false;  // tls_client_ca is set: certificates identify robots
+  // Denial rows per identity and minute (limits.audit_denials_per_minute),
+  // shared by every AccessControl of one map (the gRPC and the web side);
+  // null: one of their own at `denials_per_minute`.
+  double denials_per_minute = 10;
+  std::shared_ptr<DenialAuditLimiter> denials;
 };
 
 class AccessControl {
  public:
-  AccessControl(Core* core, AuthOptions options) : core_(core), options_(options) {}
+  AccessControl(Core* core, AuthOptions options);
 
   // Who is calling (see above): UNAUTHENTICATED naming what is missing or wrong.
   StatusOr<Principal> Authenticate(const grpc::ServerContextBase& context);
 
   // The same for a caller that is not a gRPC call (the web view): an HTTP
   // `Authorization` header's value (null: none sent), then the open mode.
-  // No client certificates there.
-  StatusOr<Principal> AuthenticateHeader(const std::string* authorization);
+  // No client certificates there. A header that is refused is logged with
+  // `peer`, as a refused gRPC credential is (event=auth_refused).
+  StatusOr<Principal> AuthenticateHeader(const std::string* authorization, const std::string& peer);
 
   // Authenticate, then Authorize(permission, robot). A refused write
-  // (permission write, delete, merge, manage_tokens) is audited.
+  // (permission write, delete, merge, manage_tokens) is audited with
+  // `target` (what the call would have acted on, e.g. "merge 7"; default
+  // "robot <robot>").
   StatusOr<Principal> Admit(const grpc::ServerContextBase& context, Permission permission,
-                            const std::string& action, const std::string& robot = "");
+                            const std::string& action, const std::string& robot = "",
+                            const std::string& target = "");
 
   // Authorize once the target is known (a submap's robot, a header's robot
   // id); a refusal is audited with `target`.
@@ -72,6 +84,12 @@ class AccessControl {
                                    const std::string& target, const std::string& result);
   // Appends `entry` in a transaction of its own, then runs `done` (on the writer thread).
   void AuditAsync(storage::AuditEntry entry, std::function<void()> done);
+  // The same for a denial: written only if the identity's denial rows are
+  // within limits.audit_denials_per_minute, otherwise counted (denial_audit.h).
+  void AuditDeniedAsync(storage::AuditEntry entry, std::function<void()> done);
+  // Writes the summary rows of counted denials that are due (mapd calls it
+  // every second; `all` at shutdown).
+  void FlushDenials(bool all = false);
 
  private:
   StatusOr<Principal> FromToken(std::string_view bearer);
@@ -82,6 +100,7 @@ class AccessControl {
 
   Core* const core_;
   const AuthOptions options_;
+  const std::shared_ptr<DenialAuditLimiter> denials_;
   // Once a token exists it always does (rows are never deleted): cached.
   std::atomic<bool> tokens_exist_{false};
 };

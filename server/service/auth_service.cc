@@ -66,7 +66,9 @@ std::string TokenTarget(int64_t id, const std::string& name) {
 grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
                                       const pb::CreateTokenRequest& request,
                                       pb::CreateTokenResponse* response) {
-  StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "CreateToken");
+  StatusOr<Principal> admin = access_->Admit(
+      context, Permission::kManageTokens, "CreateToken", "",
+      "token '" + request.name().substr(0, 128) + "' " + pb::Role_Name(request.role()));
   if (!admin.ok()) return ToGrpcStatus(admin.status());
   NewToken t;
   if (!RoleFromProto(request.role(), &t.role)) {
@@ -111,7 +113,8 @@ grpc::Status AuthService::ListTokens(const grpc::ServerContextBase& context,
 grpc::Status AuthService::RevokeToken(const grpc::ServerContextBase& context,
                                       const pb::RevokeTokenRequest& request,
                                       pb::RevokeTokenResponse* response) {
-  StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "RevokeToken");
+  StatusOr<Principal> admin = access_->Admit(context, Permission::kManageTokens, "RevokeToken", "",
+                                             "token " + std::to_string(request.id()));
   if (!admin.ok()) return ToGrpcStatus(admin.status());
   if (request.id() == 0) return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "id is required");
   const int64_t id = static_cast<int64_t>(request.id());

@@ -1,14 +1,11 @@
 #include "service/config.h"
 
-#include <netdb.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
 #include "service/config_settings.h"
+#include "service/loopback.h"
 
 namespace mapd::service {
 namespace {
@@ -52,25 +49,7 @@ bool ListenIsLoopback(const std::string& listen) {
   if (host.empty()) return false;  // ":50051" listens on every interface
   // The addresses the name stands for, not its text: a host name that
   // resolves to 0.0.0.0 (or to a public address) is not loopback.
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_STREAM;
-  addrinfo* found = nullptr;
-  if (getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || found == nullptr) return false;
-  bool all_loopback = true;
-  for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
-    if (a->ai_family == AF_INET) {
-      const auto* in = reinterpret_cast<const sockaddr_in*>(a->ai_addr);
-      all_loopback &= (ntohl(in->sin_addr.s_addr) >> 24) == 127;
-    } else if (a->ai_family == AF_INET6) {
-      const auto* in6 = reinterpret_cast<const sockaddr_in6*>(a->ai_addr);
-      all_loopback &= IN6_IS_ADDR_LOOPBACK(&in6->sin6_addr) != 0;
-    } else {
-      all_loopback = false;
-    }
-  }
-  freeaddrinfo(found);
-  return all_loopback;
+  return IsLoopbackAddress(host);
 }
 
 Status ServerConfig::Validate() const {

@@ -395,6 +395,13 @@ const std::vector<Setting>& Settings() {
       Count("limits.log_lines_per_s", "log lines per event and second; the rest is counted in one "
             "event=log_suppressed line",
             [](C& c) -> auto& { return c.streams.log_lines_per_s; }, 1, 1000000),
+      Real("limits.audit_denials_per_minute", "audit rows of refused calls per identity (token or "
+           "certificate) and minute, and as many at once; the rest are counted and written as one "
+           "'N more denials of ACTION by WHO' row per action",
+           [](C& c) -> auto& { return c.streams.audit_denials_per_minute; }, {1, 100000}),
+      Count("limits.audit_max_denied_rows", "rows of refused calls kept in the audit log; older ones "
+            "are deleted once a minute (rows of allowed actions are always kept)",
+            [](C& c) -> auto& { return c.streams.audit_max_denied_rows; }, 100, 100000000),
 
       Count("http.port", "the web view (a page, JSON, server-sent events, /metrics) on this TCP port; "
             "0 = off. GETs follow the read rule, approving or rejecting merges needs an operator token "

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "common/text_escape.h"
+
 namespace mapd::service {
 namespace {
 
@@ -63,14 +65,14 @@ bool ValidId(const std::string& id, uint32_t max_length) {
 StatusOr<IngestBatch> ValidateBatch(const pb::ObservationBatch& in, const IngestLimits& limits) {
   IngestBatch out;
   if (!ValidId(in.robot_id(), limits.max_id_length)) {
-    return Status::InvalidArgument("robot_id '" + in.robot_id().substr(0, 64) + "' must be 1-" +
-                                   std::to_string(limits.max_id_length) +
+    return Status::InvalidArgument("robot_id '" + EscapeControlChars(in.robot_id().substr(0, 64)) +
+                                   "' must be 1-" + std::to_string(limits.max_id_length) +
                                    " characters of [A-Za-z0-9_.-]");
   }
   if (!ValidId(in.session_id(), limits.max_id_length)) {
-    return Status::InvalidArgument("session_id '" + in.session_id().substr(0, 64) + "' must be 1-" +
-                                   std::to_string(limits.max_id_length) +
-                                   " characters of [A-Za-z0-9_.-]");
+    return Status::InvalidArgument(
+        "session_id '" + EscapeControlChars(in.session_id().substr(0, 64)) + "' must be 1-" +
+        std::to_string(limits.max_id_length) + " characters of [A-Za-z0-9_.-]");
   }
   if (in.seq() == 0) return Status::InvalidArgument("seq is 0; sequence numbers start at 1");
   if (in.seq() > static_cast<uint64_t>(INT64_MAX)) {

@@ -72,57 +72,53 @@ void IngestReactor::OnReadDone(bool ok) {
     ack.set_code(grpc::StatusCode::UNAVAILABLE);
     ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
     Complete(std::move(ack));
-  } else if (Status may = Authorize(caller_, Permission::kWrite, "Ingest", request_.robot_id());
+  } else if (StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits); !batch.ok()) {
+    // Validated before the authorization, so that a refusal's log line and
+    // audit row only ever name well-formed ids (issue 43: a robot id with a
+    // newline forged an audit row).
+    Log(LogLevel::kWarn, "ingest_rejected",
+        {{"robot", request_.robot_id().substr(0, 64)},
+         {"session", request_.session_id().substr(0, 64)},
+         {"seq", std::to_string(request_.seq())},
+         {"peer", peer_},
+         {"error", batch.status().ToString()}});
+    ack.set_result(pb::IngestAck::REJECTED);
+    ack.set_code(ToGrpcCode(batch.status().code()));
+    ack.set_message(batch.status().message());
+    Complete(std::move(ack));
+  } else if (Status may = Authorize(caller_, Permission::kWrite, "Ingest", batch->robot);
              !may.ok()) {
     ack.set_result(pb::IngestAck::REJECTED);
     ack.set_code(ToGrpcCode(may.code()));
     ack.set_message(may.message());
     if (denied_++ == 0) {
       Log(LogLevel::kWarn, "permission_denied",
-          {{"who", caller_.name},
-           {"action", "Ingest"},
-           {"robot", request_.robot_id().substr(0, 64)},
-           {"peer", peer_}});
-      access_->AuditAsync(
+          {{"who", caller_.name}, {"action", "Ingest"}, {"robot", batch->robot}, {"peer", peer_}});
+      access_->AuditDeniedAsync(
           AccessControl::Entry(caller_, "Ingest",
-                               "robot " + request_.robot_id().substr(0, 128) + " session " +
-                                   request_.session_id().substr(0, 128),
+                               "robot " + batch->robot + " session " + request_.session_id(),
                                "denied: " + may.message()),
           [this, ack]() mutable { Complete(std::move(ack)); });
     } else {
       Complete(std::move(ack));
     }
   } else {
-    StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits);
-    if (!batch.ok()) {
-      Log(LogLevel::kWarn, "ingest_rejected",
-          {{"robot", request_.robot_id().substr(0, 64)},
-           {"session", request_.session_id().substr(0, 64)},
-           {"seq", std::to_string(request_.seq())},
-           {"peer", peer_},
-           {"error", batch.status().ToString()}});
-      ack.set_result(pb::IngestAck::REJECTED);
-      ack.set_code(ToGrpcCode(batch.status().code()));
-      ack.set_message(batch.status().message());
+    core_->Submit(std::move(batch).value(), [this, ack](const BatchOutcome& outcome) mutable {
+      switch (outcome.kind) {
+        case BatchOutcome::Kind::kStored:
+          ack.set_result(pb::IngestAck::STORED);
+          break;
+        case BatchOutcome::Kind::kDuplicate:
+          ack.set_result(pb::IngestAck::DUPLICATE);
+          break;
+        case BatchOutcome::Kind::kRejected:
+          ack.set_result(pb::IngestAck::REJECTED);
+          ack.set_code(ToGrpcCode(outcome.status.code()));
+          ack.set_message(outcome.status.message());
+          break;
+      }
       Complete(std::move(ack));
-    } else {
-      core_->Submit(std::move(batch).value(), [this, ack](const BatchOutcome& outcome) mutable {
-        switch (outcome.kind) {
-          case BatchOutcome::Kind::kStored:
-            ack.set_result(pb::IngestAck::STORED);
-            break;
-          case BatchOutcome::Kind::kDuplicate:
-            ack.set_result(pb::IngestAck::DUPLICATE);
-            break;
-          case BatchOutcome::Kind::kRejected:
-            ack.set_result(pb::IngestAck::REJECTED);
-            ack.set_code(ToGrpcCode(outcome.status.code()));
-            ack.set_message(outcome.status.message());
-            break;
-        }
-        Complete(std::move(ack));
-      });
-    }
+    });
   }
   std::lock_guard<std::mutex> lock(mu_);
   reading_ = false;

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/text_escape.h"
+
 namespace mapd::service {
 namespace {
 
@@ -47,16 +49,22 @@ const char* LevelName(LogLevel l) {
   return "info";
 }
 
+// logfmt: a value is quoted when it is empty or holds a space, '"', '=' or
+// anything EscapeControlChars changes; inside quotes '"' and '\\' are escaped,
+// and so is every control character, so that one Log call is one line and no
+// value can drive a terminal (issue 43: a session id with a newline forged a
+// log line).
 void AppendValue(const std::string& v, std::string* out) {
-  const bool quote = v.empty() || v.find_first_of(" \"=") != std::string::npos;
+  std::string escaped = EscapeControlChars(v, /*escape_backslash=*/true);
+  const bool quote = v.empty() || escaped != v || v.find_first_of(" \"=") != std::string::npos;
   if (!quote) {
     out->append(v);
     return;
   }
   out->push_back('"');
-  for (char c : v) {
-    if (c == '"' || c == '\\') out->push_back('\\');
-    out->push_back(c == '\n' ? ' ' : c);
+  for (char c : escaped) {
+    if (c == '"') out->push_back('\\');
+    out->push_back(c);
   }
   out->push_back('"');
 }

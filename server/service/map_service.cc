@@ -46,6 +46,26 @@ MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options,
       submaps_(core, submap_options, &access_),
       auth_(core, &access_) {}
 
+void MapServiceImpl::Tick() {
+  submaps_.ExpireIdleUploads();
+  access_.FlushDenials();
+  if (++ticks_ % 60 != 0) return;
+  int64_t deleted = 0;
+  const Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
+    StatusOr<int64_t> n = txn->TrimDeniedAudit(stream_limits_.audit_max_denied_rows);
+    if (!n.ok()) return n.status();
+    deleted = *n;
+    return Status::Ok();
+  });
+  if (!s.ok()) {
+    Log(LogLevel::kWarn, "audit_trim_failed", {{"error", s.ToString()}});
+  } else if (deleted > 0) {
+    Log(LogLevel::kInfo, "audit_trimmed",
+        {{"deleted_denials", std::to_string(deleted)},
+         {"kept", std::to_string(stream_limits_.audit_max_denied_rows)}});
+  }
+}
+
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ingest(
     grpc::CallbackServerContext* context) {
   // Recovery first (no database read while the map is rebuilt), then the
@@ -147,8 +167,8 @@ grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::
 
 grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::GetStatsRequest*,
                                       pb::Stats* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetStats"); !p.ok())
-    return ToGrpcStatus(p.status());
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kReadMap, "GetStats");
+  if (!p.ok()) return ToGrpcStatus(p.status());
   StatusOr<storage::StoreCounts> counts = core_->store().Counts();
   if (!counts.ok()) return ToGrpcStatus(counts.status());
   const CoreStats s = core_->Stats();
@@ -165,7 +185,10 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   response->set_db_size_bytes(core_->store().SizeBytes());
   response->set_submaps(counts->submaps);
   response->set_map_version(s.map_version);
-  response->set_db_path(core_->store().path());
+  // Where the database (the trust root) lives is for operators: a reader's
+  // or a robot's token does not learn it (issue 43).
+  if (p->role == Role::kOperator || p->role == Role::kAdmin)
+    response->set_db_path(core_->store().path());
   response->set_version(kVersion);
   response->set_fusion_backlog(s.fusion_backlog);
   response->set_commits(s.commits);
@@ -251,7 +274,10 @@ grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context,
                                           const pb::MergeSubmapsRequest* request,
                                           grpc::ServerWriter<pb::MergeProgress>* writer) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "MergeSubmaps");
+  std::string inputs;
+  for (const uint64_t id : request->submap_ids())
+    inputs += (inputs.empty() ? "submaps " : ",") + std::to_string(id);
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "MergeSubmaps", "", inputs);
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Merge(context, *request, writer, *p);
 }
@@ -280,14 +306,16 @@ grpc::Status MapServiceImpl::GetMerge(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::ApproveMerge(grpc::ServerContext* context,
                                           const pb::ApproveMergeRequest* request,
                                           pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "ApproveMerge");
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "ApproveMerge", "",
+                                        "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.ApproveMerge(*request, *p, response);
 }
 grpc::Status MapServiceImpl::RejectMerge(grpc::ServerContext* context,
                                          const pb::RejectMergeRequest* request,
                                          pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "RejectMerge");
+  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "RejectMerge", "",
+                                        "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.RejectMerge(*request, *p, response);
 }

@@ -30,7 +30,11 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
                  const StreamLimits& stream_limits = {}, AuthOptions auth_options = {});
 
   // Housekeeping, every second: ends idle uploads.
-  void Tick() { submaps_.ExpireIdleUploads(); }
+  // Every second (MapServer's housekeeping): idle uploads expire, counted
+  // denials are written as summary rows, and once a minute the denial rows
+  // beyond limits.audit_max_denied_rows are deleted, oldest first.
+  void Tick();
+  void FlushDenials(bool all) { access_.FlushDenials(all); }
   const StreamLimiter& limiter() const { return limiter_; }
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
@@ -115,6 +119,7 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   std::atomic<bool> draining_{false};
   StreamLimiter limiter_;
   AccessControl access_;
+  int ticks_ = 0;  // Tick() calls, from one thread
   SubmapService submaps_;
   AuthService auth_;
 };

@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "common/clock.h"
+#include "common/text_escape.h"
 #include "service/log.h"
 #include "service/proto_convert.h"
 #include "service/status_mapping.h"
@@ -240,6 +241,12 @@ Status CheckRejectReason(const std::string& reason) {
   if (reason.size() > kMaxReasonChars) {
     return Status::InvalidArgument("reason: " + std::to_string(reason.size()) +
                                    " characters, at most " + std::to_string(kMaxReasonChars));
+  }
+  // One line of text: the reason is shown in `mapctl merges`, the audit log
+  // and the web view, where a newline or an ESC would forge rows.
+  if (const std::string shown = EscapeControlChars(reason); shown != reason) {
+    return Status::InvalidArgument("reason: control characters are not allowed (got '" +
+                                   shown.substr(0, 80) + "'); write it on one line");
   }
   return Status::Ok();
 }

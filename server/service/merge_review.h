@@ -46,7 +46,8 @@ void ToProto(const storage::MergeInputRecord& in, bool with_matched,
 // RejectMerge and the web view's POSTs.
 Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
                    const Principal& caller);
-// InvalidArgument unless `reason` is a valid rejection reason (1-1000 characters).
+// InvalidArgument unless `reason` is a valid rejection reason: 1-1000
+// characters, no control characters (see common/text_escape.h).
 Status CheckRejectReason(const std::string& reason);
 
 }  // namespace mapd::service

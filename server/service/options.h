@@ -59,6 +59,12 @@ struct StreamLimits {
   double read_wait_s = 0.2;
   double max_read_wait_s = 30.0;  // the longest wait a request may ask for
   uint32_t log_lines_per_s = 20;  // per event; the rest is counted in one `log_suppressed` line
+  // Audit rows of refused calls per identity and minute (and as many at
+  // once); the rest are counted in summary rows (denial_audit.h).
+  double audit_denials_per_minute = 10;
+  // Denial rows kept in the database; older ones are deleted once a minute.
+  // Allowed actions' rows are never deleted.
+  uint32_t audit_max_denied_rows = 100000;
 };
 
 // The change feed (WatchFeatureMap, watch_hub.h). Memory: at most

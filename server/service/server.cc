@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "service/file_modes.h"
 #include "service/log.h"
 #include "service/rpc_metrics.h"
 
@@ -52,7 +53,12 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   const auto parent = std::filesystem::path(db).parent_path();
   if (config.db_path.empty()) {
     // The default path's directory is mapd's own: made on first use.
-    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    // Only the last directory is mapd's own, made owner-only (the rest,
+    // e.g. ~/.local/share, belongs to the user's session).
+    if (!parent.empty() && std::filesystem::create_directories(parent, ec) && !ec) {
+      std::filesystem::permissions(parent, std::filesystem::perms::owner_all,
+                                   std::filesystem::perm_options::replace, ec);
+    }
     if (ec) {
       return Status::FailedPrecondition("cannot create the directory of the database '" + db +
                                         "': " + ec.message());
@@ -62,6 +68,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     return Status::FailedPrecondition("--db '" + db + "': the directory '" + parent.string() +
                                       "' does not exist; create it first (mkdir -p)");
   }
+  MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db));
 
   MapCoreOptions core_options;
   core_options.db_path = db;
@@ -82,9 +89,11 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return core.status();
   server->core_ = std::move(core).value();
-  AuthOptions auth;  // docs/security.md
+  AuthOptions& auth = server->auth_;  // docs/security.md
   auth.required = config.auth_required;
   auth.client_certs = !config.tls_client_ca.empty();
+  auth.denials_per_minute = config.streams.audit_denials_per_minute;
+  auth.denials = std::make_shared<DenialAuditLimiter>(auth.denials_per_minute);
   server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest,
                                                       config.submaps, config.streams, auth);
   SetLogRateLimit(config.streams.log_lines_per_s);
@@ -93,6 +102,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   if (!config.tls_cert.empty()) {
     StatusOr<std::string> cert = ReadFile(config.tls_cert);
     if (!cert.ok()) return Status::InvalidArgument("tls_cert: " + cert.status().message());
+    MAPD_RETURN_IF_ERROR(CheckSecretFileMode(config.tls_key, "tls_key"));
     StatusOr<std::string> key = ReadFile(config.tls_key);
     if (!key.ok()) return Status::InvalidArgument("tls_key: " + key.status().message());
     grpc::SslServerCredentialsOptions ssl;
@@ -236,7 +246,8 @@ void MapServer::Shutdown() {
       std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
   server_->Shutdown(deadline);  // returns once every RPC has ended
   StopHousekeeping();
-  core_->Stop();  // commits what is queued, checkpoints
+  service_->FlushDenials(/*all=*/true);  // the counts of the last denials (denial_audit.h)
+  core_->Stop();                         // commits what is queued, checkpoints
   Log(LogLevel::kInfo, "stopped");
 }
 

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "common/status.h"
+#include "service/access_control.h"
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_service.h"
@@ -34,6 +35,9 @@ class MapServer {
   std::string address() const;
   // The core, for what runs beside the gRPC server (the web view).
   Core* core() const { return core_.get(); }
+  // Who may call, for what runs beside it (the web view): the same rules
+  // and the same per-identity limit on denial rows in the audit log.
+  const AuthOptions& auth() const { return auth_; }
 
   // Graceful stop: new batches are refused, streams get shutdown_grace_s to
   // finish, everything accepted is committed, the WAL is checkpointed.
@@ -50,6 +54,7 @@ class MapServer {
   void StopHousekeeping();
 
   ServerConfig config_;
+  AuthOptions auth_;
   std::unique_ptr<MapCore> core_;
   std::unique_ptr<MapServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;

@@ -3,8 +3,10 @@
 #include <cctype>
 #include <chrono>
 
+#include "common/text_escape.h"
 #include "service/auth.h"
 #include "service/log.h"
+#include "service/loopback.h"
 #include "service/merge_review.h"
 #include "web/http.h"
 #include "web/http_util.h"
@@ -69,8 +71,7 @@ StatusOr<uint64_t> ParseId(const std::string& text, const std::string& what) {
 
 WebServer::WebServer(service::Core* core, const WebServerOptions& options)
     : core_(core),
-      loopback_(options.address == "127.0.0.1" || options.address == "localhost" ||
-                options.address == "::1"),
+      loopback_(service::IsLoopbackAddress(options.address)),
       access_(core, options.auth),
       http_(std::make_unique<httplib::Server>()) {}
 
@@ -131,10 +132,9 @@ void WebServer::Route() {
   //   name was rebound to 127.0.0.1 reads nothing (DNS rebinding).
   http_->set_pre_routing_handler([this](const Request& req, Response& res) {
     if (loopback_) {
-      std::string host = req.get_header_value("Host");
-      host = host.substr(0, host.rfind(':') == std::string::npos ? host.size() : host.rfind(':'));
-      if (host != "127.0.0.1" && host != "localhost" && host != "[::1]") {
-        SendError(res, Status::PermissionDenied("Host '" + host.substr(0, 100) +
+      const std::string host = req.get_header_value("Host");
+      if (!service::IsLoopbackHost(host)) {
+        SendError(res, Status::PermissionDenied("Host '" + EscapeControlChars(host.substr(0, 100)) +
                                                 "' is not this loopback web view; open it as "
                                                 "http://127.0.0.1:<http.port>/"));
         return httplib::Server::HandlerResponse::Handled;
@@ -153,7 +153,8 @@ void WebServer::Route() {
                       const std::string& action) -> StatusOr<service::Principal> {
     const std::string* header =
         req.has_header("Authorization") ? &req.headers.find("Authorization")->second : nullptr;
-    StatusOr<service::Principal> who = access_.AuthenticateHeader(header);
+    StatusOr<service::Principal> who =
+        access_.AuthenticateHeader(header, req.remote_addr + ":" + std::to_string(req.remote_port));
     Status s = who.ok() ? access_.Check(*who, permission, action, "", "web") : who.status();
     if (s.ok()) s = core_->CheckReady();
     if (!s.ok()) {

@@ -91,5 +91,22 @@ TEST(FormatMergeRecordTest, ShowsThePlacingEdgesGateFigures) {
   EXPECT_EQ(FormatMergeRecord(m).find("placed by"), std::string::npos);
 }
 
+TEST(FormatMergesTest, FreeTextFromTheServerStaysOnItsLine) {
+  // A reason stored by an older mapd, which did not refuse control characters.
+  pb::MergeRecord m = MergeWithCorners(0);
+  m.set_state(pb::MERGE_STATE_REJECTED);
+  m.set_reason("askew\n9  accepted  1,2\x1b[8m");
+  m.set_decided_by("alice\r");
+  m.set_decided_ns(1);
+  pb::ListMergesResponse list;
+  *list.add_merges() = m;
+  for (const std::string& text : {FormatMergeRecord(m), FormatMerges(list)}) {
+    EXPECT_NE(text.find("askew\\n9  accepted  1,2\\x1b[8m"), std::string::npos) << text;
+    EXPECT_NE(text.find("alice\\r"), std::string::npos) << text;
+    EXPECT_EQ(text.find('\x1b'), std::string::npos);
+    EXPECT_EQ(text.find('\r'), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace mapd::client

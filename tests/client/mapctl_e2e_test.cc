@@ -4,8 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -259,6 +261,24 @@ TEST_F(MapctlE2eTest, InputMistakesAreUsageErrors) {
 namespace mapd::testing {
 namespace {
 
+// Writes an audit row as it is, as an older mapd (which did not escape) or
+// another tool could have: mapctl must still show it on one line.
+void InsertRawAuditRow(const std::string& db, const std::string& target) {
+  sqlite3* conn = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(db.c_str(), &conn, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  sqlite3_busy_timeout(conn, 10000);
+  sqlite3_stmt* stmt = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(conn,
+                               "INSERT INTO audit_log (time_ns, who, role, action, target, "
+                               "result) VALUES (1, 'old', 'robot', 'Ingest', ?1, 'ok')",
+                               -1, &stmt, nullptr),
+            SQLITE_OK);
+  sqlite3_bind_text(stmt, 1, target.data(), static_cast<int>(target.size()), SQLITE_TRANSIENT);
+  EXPECT_EQ(sqlite3_step(stmt), SQLITE_DONE) << sqlite3_errmsg(conn);
+  sqlite3_finalize(stmt);
+  sqlite3_close(conn);
+}
+
 // Bootstrap as docs/security.md describes it: the first admin token from the
 // database file, then everything else through mapctl with tokens.
 TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
@@ -303,6 +323,17 @@ TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
   EXPECT_THAT(r.out, HasSubstr("r1-key"));
   EXPECT_THAT(r.out, HasSubstr("denied"));
   EXPECT_THAT(r.out, HasSubstr("mapd token (offline)"));
+
+  // A row holding a newline and terminal escapes (issue 43) is one line,
+  // its control characters shown, not sent to the terminal.
+  InsertRawAuditRow(dir_.File("map.db"),
+                    "robot r2\n9 2026-12-04T10:00:00Z root admin RevokeToken x ok\x1b[8m");
+  r = Mapctl({"--token", admin, "audit", "--limit", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("robot r2\\n9 2026-12-04T10:00:00Z root admin RevokeToken x "
+                               "ok\\x1b[8m"));
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 2) << r.out;  // header + 1 row
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
 }
 
 // Reads `path` until `pred` holds on its text (bounded: a bug fails, never hangs).

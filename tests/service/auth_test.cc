@@ -15,17 +15,7 @@ namespace {
 using service::Role;
 using ::testing::HasSubstr;
 
-class AuthTest : public AuthFixture {
- protected:
-  // An admin made offline, and one token per role made through the API.
-  void MakeTokens() {
-    admin_ = OfflineToken(Role::kAdmin, "root");
-    reader_ = ApiToken(admin_, pb::ROLE_READER, "dashboard");
-    robot_ = ApiToken(admin_, pb::ROLE_ROBOT, "r1-key", "r1");
-    operator_ = ApiToken(admin_, pb::ROLE_OPERATOR, "alice");
-  }
-  std::string admin_, reader_, robot_, operator_;
-};
+using AuthTest = AuthFixture;
 
 TEST_F(AuthTest, LoopbackWithoutTokensIsOpenButCannotMintTokens) {
   EXPECT_TRUE(StatsAs("").ok());
@@ -267,6 +257,19 @@ TEST_F(AuthTest, RevokedTokenIsRefusedAndTheRevocationIsAudited) {
   int created = 0;
   for (const pb::AuditEntry& e : audit) created += e.action() == "CreateToken";
   EXPECT_EQ(created, 3);
+}
+
+// The database is the trust root: its path is for operators (issue 43).
+TEST_F(AuthTest, OnlyOperatorsAndAdminsSeeTheDatabasePath) {
+  MakeTokens();
+  for (const auto& [token, shown] : std::vector<std::pair<std::string, bool>>{
+           {reader_, false}, {robot_, false}, {operator_, true}, {admin_, true}}) {
+    auto ctx = As(token);
+    pb::Stats stats;
+    ASSERT_TRUE(stub_->GetStats(ctx.get(), {}, &stats).ok());
+    EXPECT_EQ(stats.db_path(), shown ? config_.db_path : "");
+    EXPECT_GT(stats.db_size_bytes(), 0u);
+  }
 }
 
 TEST_F(AuthTest, SecretsNeverReachTheDatabaseFile) {

@@ -257,6 +257,13 @@ TEST_F(MergeReviewTest, ServerSettingMakesReviewTheDefaultAndRejectionHasNoEffec
   EXPECT_EQ(Reject(proposed.merge_id(), "").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(Reject(proposed.merge_id(), std::string(1001, 'x')).error_code(),
             grpc::StatusCode::INVALID_ARGUMENT);
+  // A reason is one line: a newline or an ESC would forge rows in
+  // `mapctl merges` and `mapctl audit` (issue 43).
+  for (const char* forged : {"fine\n7  accepted  1,2", "\x1b[2Jfine", "fine\r"}) {
+    const grpc::Status s = Reject(proposed.merge_id(), forged);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << forged;
+    EXPECT_THAT(s.error_message(), HasSubstr("control characters"));
+  }
   pb::MergeRecord rejected;
   ASSERT_TRUE(Reject(proposed.merge_id(), "walls askew in the picture", &rejected).ok());
   EXPECT_EQ(rejected.state(), pb::MERGE_STATE_REJECTED);

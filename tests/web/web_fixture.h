@@ -94,6 +94,8 @@ class WebFixture : public ::testing::Test {
     server_.reset();
   }
 
+  std::string web_address_ = "127.0.0.1";  // the web view's --http.address
+
   void Start() {
     auto server = service::MapServer::Start(config_);
     ASSERT_TRUE(server.ok()) << server.status().ToString();
@@ -101,6 +103,7 @@ class WebFixture : public ::testing::Test {
     ASSERT_TRUE(server_->WaitUntilServing(std::chrono::seconds(30)));
     web::WebServerOptions options;
     options.auth.required = config_.auth_required;
+    options.address = web_address_;
     auto web = web::WebServer::Start(server_->core(), options);
     ASSERT_TRUE(web.ok()) << web.status().ToString();
     web_ = std::move(web).value();

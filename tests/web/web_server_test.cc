@@ -316,6 +316,38 @@ TEST_F(WebFixture, RequestsAnotherSiteCouldForgeAreRefused) {
   EXPECT_EQ(GetJson("/api/merges?state=proposed")["merges"].size(), 1u);  // still proposed
 }
 
+// The check follows the bound address, however it is spelled (issue 43:
+// 127.1 turned it off and a foreign Host reached the approve handler).
+TEST_F(WebFixture, AnyLoopbackSpellingOfTheAddressKeepsTheHostCheck) {
+  web_address_ = "127.1";
+  Start();
+  const int64_t id = RecordProposal(server_->core());
+  const std::string approve = "/api/merges/" + std::to_string(id) + "/approve";
+  httplib::Headers rebound = {{"Host", "evil.example"}};
+  httplib::Result r = Client().Post(approve.c_str(), rebound, "{}", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 403);
+  EXPECT_THAT(r->body, HasSubstr("not this loopback web view"));
+  EXPECT_EQ(GetJson("/api/merges?state=proposed")["merges"].size(), 1u);  // still proposed
+  // The operator's own spellings of the address pass.
+  for (const std::string host : {"127.1", "127.0.0.1", "localhost", "[::1]"}) {
+    httplib::Headers own = {{"Host", host + ":" + std::to_string(web_->port())}};
+    r = Client().Get("/api/features", own);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << host;
+  }
+}
+
+TEST_F(WebFixture, RefusedTokensAreLogged) {
+  Start();
+  MakeToken(service::Role::kReader, "dashboard");
+  ::testing::internal::CaptureStderr();
+  GetJson("/api/features", 401, "mapd_1_notasecret");
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_THAT(log, HasSubstr("event=auth_refused peer=127.0.0.1:"));
+  EXPECT_THAT(log, HasSubstr("via=http"));
+}
+
 TEST_F(WebFixture, BadMergeRequestsGetAClear4xx) {
   Start();
   httplib::Result r = Post(Client(), "/api/merges/77/approve", "");

@@ -17,6 +17,15 @@ namespace mapd::testing {
 
 class AuthFixture : public ServerFixture {
  protected:
+  // An admin made offline ("root"), and one token per role made through the
+  // API: reader "dashboard", robot "r1-key" of r1, operator "alice".
+  void MakeTokens() {
+    admin_ = OfflineToken(service::Role::kAdmin, "root");
+    reader_ = ApiToken(admin_, pb::ROLE_READER, "dashboard");
+    robot_ = ApiToken(admin_, pb::ROLE_ROBOT, "r1-key", "r1");
+    operator_ = ApiToken(admin_, pb::ROLE_OPERATOR, "alice");
+  }
+
   // A token written straight into the database (the server may run).
   std::string OfflineToken(service::Role role, const std::string& name,
                            const std::string& robot = "") {
@@ -90,6 +99,8 @@ class AuthFixture : public ServerFixture {
     EXPECT_TRUE(stub_->ListRobots(ctx.get(), {}, &response).ok());
     return {response.robots().begin(), response.robots().end()};
   }
+
+  std::string admin_, reader_, robot_, operator_;  // MakeTokens
 };
 
 }  // namespace mapd::testing
