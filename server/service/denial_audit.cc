@@ -56,9 +56,10 @@ std::vector<storage::AuditEntry> DenialAuditLimiter::TakeSummaries(int64_t now_n
         e.who = who;
         e.role = role;
         e.action = action;
-        e.result = "denied: " + Grouped(n) + " more denial" + (n == 1 ? "" : "s") + " of " +
-                   action + " by " + who +
-                   " (not recorded one by one: limits.audit_denials_per_minute)";
+        e.result = "denied: " + Grouped(n) + " more denial" + (n == 1 ? "" : "s");
+        e.result += " of " + action;
+        e.result += " by " + who;
+        e.result += " (not recorded one by one: limits.audit_denials_per_minute)";
         rows.push_back(std::move(e));
       }
       id.suppressed.clear();
