@@ -7,7 +7,8 @@
 # --build-only (the container's build stage) leaves out what only the tests
 # use: Chromium, which runs the web view's page in tests/web, and the openssl
 # tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
-# and prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc).
+# prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc),
+# and python3-venv, in which the Python client's test pip-installs it.
 set -euo pipefail
 
 PACKAGES=(
@@ -19,7 +20,7 @@ PACKAGES=(
   python3-grpcio python3-protobuf python3-pytest
 )
 if [ "${1:-}" != "--build-only" ]; then
-  PACKAGES+=(chromium openssl prometheus)
+  PACKAGES+=(chromium openssl prometheus python3-venv)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

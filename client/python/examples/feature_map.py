@@ -1,20 +1,20 @@
 #!/usr/bin/env python3
 """Prints the fused map (walls and planes) and the server's statistics.
 
-    PYTHONPATH=client/python:build/client/python \
-        python3 client/python/examples/feature_map.py --server 127.0.0.1:50051
+    python3 client/python/examples/feature_map.py     # mapd at $MAPD_SERVER
 """
 import argparse
 
 from mapd_client import MapClient, connect
+from mapd_client.cli import add_connection_arguments, check_map, run_main
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--server", default="127.0.0.1:50051")
-    parser.add_argument("--token", default="")
+    add_connection_arguments(parser)
     parser.add_argument("--bbox", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"))
     args = parser.parse_args()
+    check_map(args.map)
 
     client = MapClient(connect(args.server), token=args.token)
     stats = client.stats()
@@ -31,4 +31,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

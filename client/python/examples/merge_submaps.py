@@ -1,8 +1,7 @@
 #!/usr/bin/env python3
 """Uploads OctoMap submaps, merges them and saves the global map.
 
-    PYTHONPATH=client/python:build/client/python \
-        python3 client/python/examples/merge_submaps.py a.bt:r1 b.bt:r2 -o world.bt
+    python3 client/python/examples/merge_submaps.py a.bt:r1 b.bt:r2 -o world.bt
 """
 import argparse
 import sys
@@ -10,16 +9,17 @@ import sys
 import grpc
 
 from mapd_client import MapClient, connect
+from mapd_client.cli import add_connection_arguments, check_map, describe, run_main
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("submaps", nargs="+", metavar="FILE:ROBOT",
                         help="an OctoMap file (.bt/.ot) and the robot that built it")
-    parser.add_argument("--server", default="127.0.0.1:50051")
-    parser.add_argument("--token", default="")
+    add_connection_arguments(parser)
     parser.add_argument("-o", "--output", default="world.bt")
     args = parser.parse_args()
+    check_map(args.map)
 
     client = MapClient(connect(args.server), token=args.token)
     ids = []
@@ -31,7 +31,7 @@ def main():
     try:
         result = client.merge(ids, progress=lambda stage, f: print(f"  {stage:10s} {100 * f:3.0f}%"))
     except grpc.RpcError as error:  # FAILED_PRECONDITION: too little evidence, with the figure
-        print(f"merge refused: {error.details()} ({error.code().name})", file=sys.stderr)
+        print(f"merge refused: {describe(error)}", file=sys.stderr)
         return 1
     for a in result.alignments:
         t = a.T_reference_submap.translation
@@ -45,4 +45,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main(main)

@@ -1,8 +1,7 @@
 #!/usr/bin/env python3
 """A robot walking through a 10 m x 8 m room, streaming the walls it sees.
 
-    PYTHONPATH=client/python:build/client/python \
-        python3 client/python/examples/stream_robot.py --server 127.0.0.1:50051
+    python3 client/python/examples/stream_robot.py    # mapd at $MAPD_SERVER
 
 Stop mapd in the middle and start it again: the client reconnects and resends
 what was not acknowledged; the server stores each batch once.
@@ -12,6 +11,7 @@ import math
 import time
 
 from mapd_client import RobotClient, connect, pb
+from mapd_client.cli import add_connection_arguments, check_map, run_main
 
 WALLS = [((0, 0), (10, 0)), ((10, 0), (10, 8)), ((10, 8), (0, 8)), ((0, 8), (0, 0))]
 
@@ -32,15 +32,18 @@ def scan(robot, session, seq, x, y, yaw):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--server", default="127.0.0.1:50051")
-    parser.add_argument("--token", default="")
+    add_connection_arguments(parser)
     parser.add_argument("--robot", default="py-robot")
     parser.add_argument("--session", default=time.strftime("run-%Y%m%d-%H%M%S"))
     parser.add_argument("--scans", type=int, default=100)
     parser.add_argument("--period", type=float, default=0.05, help="seconds between scans")
+    parser.add_argument("--give-up-after", type=float, default=30.0,
+                        help="seconds without reaching mapd before giving up")
     args = parser.parse_args()
+    check_map(args.map)
 
-    with RobotClient(connect(args.server), token=args.token) as robot:
+    with RobotClient(connect(args.server), token=args.token,
+                     give_up_after_s=args.give_up_after) as robot:
         for i in range(args.scans):
             t = i / max(1, args.scans - 1)
             robot.send(scan(args.robot, args.session, i + 1, 1.0 + 8.0 * t, 4.0 + math.sin(6 * t),
@@ -52,4 +55,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

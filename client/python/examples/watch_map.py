@@ -1,8 +1,7 @@
 #!/usr/bin/env python3
 """Follows the fused map live (WatchFeatureMap): one line per complete change.
 
-    PYTHONPATH=client/python:build/client/python \
-        python3 client/python/examples/watch_map.py --server 127.0.0.1:50051
+    python3 client/python/examples/watch_map.py       # mapd at $MAPD_SERVER
 
 It reconnects by itself when mapd restarts (from the last complete
 map_version); Ctrl-C ends it.
@@ -10,15 +9,16 @@ map_version); Ctrl-C ends it.
 import argparse
 
 from mapd_client import LiveFeatureMap, MapClient, connect
+from mapd_client.cli import add_connection_arguments, check_map, run_main
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--server", default="127.0.0.1:50051")
-    parser.add_argument("--token", default="")
+    add_connection_arguments(parser)
     parser.add_argument("--bbox", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"))
     parser.add_argument("--robot", default="", help="only what this robot contributed to")
     args = parser.parse_args()
+    check_map(args.map)
 
     live = LiveFeatureMap()
     with MapClient(connect(args.server), token=args.token).watch(
@@ -36,4 +36,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)
