@@ -3,19 +3,26 @@
 # embedded SQLite database, streams two simulated robots, and shows the fused
 # map (a summary here, the picture in demo-map.svg). Stops mapd at the end
 # unless --keep is given.
+#
+# It installs and builds only what it runs (install-deps.sh --demo, the `demo`
+# preset: mapd and mapctl without voxel merging, in one unity build in
+# build-demo/), so that a fresh machine sees a map within minutes;
+# deploy/test.sh installs and builds everything.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash deploy/install-deps.sh
-bash deploy/build.sh
+bash deploy/install-deps.sh --demo
+cmake --preset demo > build-demo.log 2>&1 || { cat build-demo.log; exit 1; }
+cmake --build --preset demo -j"$(nproc)" >> build-demo.log 2>&1 || { tail -50 build-demo.log; exit 1; }
+echo "build: mapd and mapctl in build-demo/ (log in build-demo.log)"
 
 export MAPD_DATA_DIR="${MAPD_DATA_DIR:-$PWD/demo-data}"
 rm -rf "$MAPD_DATA_DIR"
 mkdir -p "$MAPD_DATA_DIR"
 PORT="${MAPD_DEMO_PORT:-50051}"
 export MAPD_SERVER="127.0.0.1:$PORT"
-MAPCTL=build/client/mapctl
+MAPCTL=build-demo/client/mapctl
 
-GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build/server/mapd/mapd --listen "$MAPD_SERVER" 2> "$MAPD_DATA_DIR/mapd.log" &
+GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build-demo/server/mapd/mapd --listen "$MAPD_SERVER" 2> "$MAPD_DATA_DIR/mapd.log" &
 MAPD_PID=$!
 trap 'kill -TERM $MAPD_PID 2>/dev/null || true' EXIT
 # Up to 60 s: mapd serves within a second, but once, right after a CI run on

@@ -4,6 +4,9 @@
 # beyond that: clang and its libFuzzer runtime (ASan and fuzz jobs), lld (links
 # every CI build), Ninja (CI's generator), clang-format and clang-tidy (lint
 # job), systemd (systemd-analyze verify of deploy/mapd.service).
+# --demo installs only what deploy/demo.sh builds: mapd and mapctl without
+# voxel merging, so no PCL (with VTK, Qt, Boost, MPI: 290 MB), no FFTW, no
+# GoogleTest, no Python, no Chromium.
 # --build-only (the container's build stage) leaves out what only the tests
 # use: Chromium, which runs the web view's page in tests/web, and the openssl
 # tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
@@ -11,15 +14,18 @@
 # and python3-venv, in which the Python client's test pip-installs it.
 set -euo pipefail
 
+# What mapd and mapctl need without voxel merging (--demo stops here).
 PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libeigen3-dev libsqlite3-dev liboctomap-dev libpcl-dev libfftw3-dev
+  libeigen3-dev libsqlite3-dev liboctomap-dev
   libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
-  libgtest-dev libgmock-dev
-  python3-grpcio python3-protobuf python3-pytest
 )
-if [ "${1:-}" != "--build-only" ]; then
+if [ "${1:-}" != "--demo" ]; then
+  PACKAGES+=(libpcl-dev libfftw3-dev libgtest-dev libgmock-dev
+             python3-grpcio python3-protobuf python3-pytest)
+fi
+if [ "${1:-}" != "--build-only" ] && [ "${1:-}" != "--demo" ]; then
   PACKAGES+=(chromium openssl prometheus python3-venv)
 fi
 if [ "${1:-}" = "--ci" ]; then
