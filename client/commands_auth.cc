@@ -1,5 +1,6 @@
 // mapctl token create|list|revoke, mapctl audit, mapctl whoami (docs/security.md).
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <string>
 
@@ -112,6 +113,18 @@ int RunTokenRevoke(const Context& ctx, const RevokeOptions& flags) {
   return kExitOk;
 }
 
+// How and from where: "token 10.0.0.7:41234" ("-" for rows from before mapd
+// recorded it).
+std::string Via(const pb::AuditEntry& e) {
+  std::string peer = e.peer();
+  for (const char* scheme : {"ipv4:", "ipv6:"}) {
+    if (peer.rfind(scheme, 0) == 0) peer = peer.substr(std::strlen(scheme));
+  }
+  std::string via = e.credential().empty() ? "-" : e.credential();
+  if (!peer.empty()) via += " " + peer;
+  return Visible(via);
+}
+
 int RunAudit(const Context& ctx, const AuditOptions& flags) {
   pb::ListAuditRequest request;
   request.set_limit(flags.limit);
@@ -119,11 +132,12 @@ int RunAudit(const Context& ctx, const AuditOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListAudit(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "audit", status);
-  std::printf("%-6s %-20s %-20s %-9s %-14s %-40s %s\n", "ID", "TIME", "WHO", "ROLE", "ACTION",
-              "TARGET", "RESULT");
+  std::printf("%-6s %-20s %-20s %-9s %-28s %-14s %-40s %s\n", "ID", "TIME", "WHO", "ROLE", "VIA",
+              "ACTION", "TARGET", "RESULT");
   for (const pb::AuditEntry& e : response.entries()) {
-    std::printf("%-6llu %-20s %-20s %-9s %-14s %-40s %s\n", static_cast<unsigned long long>(e.id()),
-                Utc(e.time_ns()).c_str(), Visible(e.who()).c_str(), Visible(e.role()).c_str(),
+    std::printf("%-6llu %-20s %-20s %-9s %-28s %-14s %-40s %s\n",
+                static_cast<unsigned long long>(e.id()), Utc(e.time_ns()).c_str(),
+                Visible(e.who()).c_str(), Visible(e.role()).c_str(), Via(e).c_str(),
                 Visible(e.action()).c_str(), Visible(e.target()).c_str(),
                 Visible(e.result()).c_str());
   }

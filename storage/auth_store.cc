@@ -68,7 +68,8 @@ Status WriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
 Status WriteTransaction::AppendAudit(const AuditEntry& e) {
   StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(),
                                              "INSERT INTO audit_log (time_ns, who, role, action, "
-                                             "target, result) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+                                             "target, result, peer, credential) "
+                                             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
   if (!q.ok()) return q.status();
   // Each field is one line of visible text, whatever the caller passed: an
   // audit row must not be able to forge another in a reader's terminal.
@@ -77,7 +78,9 @@ Status WriteTransaction::AppendAudit(const AuditEntry& e) {
       .Bind(3, EscapeControlChars(e.role))
       .Bind(4, EscapeControlChars(e.action))
       .Bind(5, EscapeControlChars(e.target))
-      .Bind(6, EscapeControlChars(e.result));
+      .Bind(6, EscapeControlChars(e.result))
+      .Bind(7, EscapeControlChars(e.peer))
+      .Bind(8, EscapeControlChars(e.credential));
   return q->Run();
 }
 
@@ -132,7 +135,8 @@ StatusOr<std::vector<AuditEntry>> Store::ListAudit(int limit) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(reader_.get(),
                                              "SELECT id, time_ns, who, role, action, target, "
-                                             "result FROM audit_log ORDER BY id DESC LIMIT ?1");
+                                             "result, peer, credential FROM audit_log "
+                                             "ORDER BY id DESC LIMIT ?1");
   if (!q.ok()) return q.status();
   q->Bind(1, static_cast<int64_t>(limit));
   std::vector<AuditEntry> out;
@@ -148,6 +152,8 @@ StatusOr<std::vector<AuditEntry>> Store::ListAudit(int limit) {
     e.action = q->ColumnText(4);
     e.target = q->ColumnText(5);
     e.result = q->ColumnText(6);
+    e.peer = q->ColumnText(7);
+    e.credential = q->ColumnText(8);
     out.push_back(std::move(e));
   }
 }

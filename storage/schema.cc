@@ -211,6 +211,13 @@ const std::vector<const char*>& Migrations() {
         UNIQUE (parts_key, part)
       );
       )sql",
+      // 9 -> 10: audit rows name the caller's address and how it proved who
+      // it is ("token", "certificate", "none" in the open mode, "database
+      // file" for `mapd token`); rows from before read as ''.
+      R"sql(
+      ALTER TABLE audit_log ADD COLUMN peer TEXT NOT NULL DEFAULT '';
+      ALTER TABLE audit_log ADD COLUMN credential TEXT NOT NULL DEFAULT '';
+      )sql",
   };
   return kMigrations;
 }

@@ -281,9 +281,11 @@ struct AuditEntry {
   int64_t time_ns = 0;
   std::string who;  // token name or certificate CN
   std::string role;
-  std::string action;  // the RPC, e.g. "UploadSubmap"
-  std::string target;  // what it acted on, e.g. "robot r1 submap 'room'"
-  std::string result;  // "ok", "denied: ...", or the error
+  std::string action;      // the RPC, e.g. "UploadSubmap"
+  std::string target;      // what it acted on, e.g. "robot r1 submap 'room'"
+  std::string result;      // "ok", "denied: ...", or the error
+  std::string peer;        // the caller's address as gRPC or HTTP gives it ('' offline)
+  std::string credential;  // "token", "certificate", "none" (open mode), "database file"
 };
 
 class Store;

@@ -43,6 +43,7 @@ storage::AuditEntry OfflineAudit(const std::string& action, const std::string& t
   e.action = action;
   e.target = target;
   e.result = "ok";
+  e.credential = "database file";
   return e;
 }
 

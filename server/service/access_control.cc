@@ -22,6 +22,7 @@ Principal AnonymousOperator() {
   p.name = "anonymous";
   p.role = Role::kOperator;
   p.anonymous = true;
+  p.credential = "none";
   return p;
 }
 
@@ -56,6 +57,7 @@ StatusOr<Principal> AccessControl::FromToken(std::string_view bearer) {
   Principal p;
   p.name = record->name;
   p.robot_id = record->robot_id;
+  p.credential = "token";
   if (!ParseRole(record->role, &p.role))
     return Status::Internal("token '" + record->name + "' has unknown role");
   tokens_exist_ = true;
@@ -70,9 +72,12 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       return Status::Unauthenticated("the authorization metadata must be 'Bearer <token>'");
     }
     StatusOr<Principal> p = FromToken(value.substr(sizeof(kBearer) - 1));
-    if (!p.ok())
+    if (!p.ok()) {
       Log(LogLevel::kWarn, "auth_refused",
           {{"peer", context.peer()}, {"error", p.status().ToString()}});
+    } else {
+      p->peer = context.peer();
+    }
     return p;
   }
   if (options_.client_certs) {
@@ -84,13 +89,19 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
         p.name = std::string(View(cn));
         p.role = Role::kRobot;
         p.robot_id = p.name;
+        p.credential = "certificate";
+        p.peer = context.peer();
         if (ValidTokenName(p.robot_id)) return p;
         return Status::Unauthenticated("the client certificate's CN '" + p.name.substr(0, 64) +
                                        "' is not a robot id ([A-Za-z0-9_.-], 1-128 characters)");
       }
     }
   }
-  if (!Required()) return AnonymousOperator();
+  if (!Required()) {
+    Principal anonymous = AnonymousOperator();
+    anonymous.peer = context.peer();
+    return anonymous;
+  }
   return Status::Unauthenticated(
       "authentication required: send 'authorization: Bearer <token>' metadata (mapctl --token or "
       "$MAPD_TOKEN)" +
@@ -105,12 +116,19 @@ StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authori
                                 ? StatusOr<Principal>(Status::Unauthenticated(
                                       "the Authorization header must be 'Bearer <token>'"))
                                 : FromToken(value.substr(sizeof(kBearer) - 1));
-    if (!p.ok())
+    if (!p.ok()) {
       Log(LogLevel::kWarn, "auth_refused",
           {{"peer", peer}, {"via", "http"}, {"error", p.status().ToString()}});
+    } else {
+      p->peer = peer;
+    }
     return p;
   }
-  if (!Required()) return AnonymousOperator();
+  if (!Required()) {
+    Principal anonymous = AnonymousOperator();
+    anonymous.peer = peer;
+    return anonymous;
+  }
   return Status::Unauthenticated(
       "authentication required: send an 'Authorization: Bearer <token>' header");
 }
@@ -176,6 +194,8 @@ storage::AuditEntry AccessControl::Entry(const Principal& principal, const std::
   e.action = action;
   e.target = target;
   e.result = result;
+  e.peer = principal.peer;
+  e.credential = principal.credential;
   return e;
 }
 

@@ -34,6 +34,10 @@ struct Principal {
   // No credential, auth not required (loopback, no tokens ever made): the
   // open mode. Acts as an operator, but never manages tokens.
   bool anonymous = false;
+  // For the audit log: how the caller proved who it is ("token",
+  // "certificate", "none") and its address (gRPC's peer, "ipv4:1.2.3.4:5").
+  std::string credential;
+  std::string peer;
 };
 
 const char* RoleName(Role role);  // "reader", "robot", "operator", "admin"

@@ -157,6 +157,8 @@ grpc::Status AuthService::ListAudit(const grpc::ServerContextBase& context,
     out->set_action(e.action);
     out->set_target(e.target);
     out->set_result(e.result);
+    out->set_peer(e.peer);
+    out->set_credential(e.credential);
   }
   return grpc::Status::OK;
 }

@@ -30,6 +30,22 @@ std::string Section(const std::string& key) {
   return dot == std::string::npos ? "" : key.substr(0, dot);
 }
 
+// InvalidArgument naming `key` unless `value` is host:port with a port in 0..65535.
+Status CheckHostPort(const char* key, const std::string& value) {
+  if (value.empty() || value.find(':') == std::string::npos) {
+    return Status::InvalidArgument(std::string(key) + ": '" + value + "' is not host:port");
+  }
+  // gRPC would take the port modulo 65536 (99999 listened on 34463).
+  const std::string port = value.substr(value.rfind(':') + 1);
+  const bool digits = !port.empty() && port.size() <= 5 &&
+                      port.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits || std::stoul(port) > 65535) {
+    return Status::InvalidArgument(std::string(key) + ": '" + value + "': the port '" + port +
+                                   "' is not a number in 0..65535");
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::string DefaultDbPath() {
@@ -67,18 +83,8 @@ Status ServerConfig::Validate() const {
     return Status::InvalidArgument(
         "limits.max_feature_length_m must be at most fusion.max_wall_length_m");
   }
-  if (listen.empty() || listen.find(':') == std::string::npos) {
-    return Status::InvalidArgument("listen: '" + listen + "' is not host:port");
-  }
-  {  // gRPC would take the port modulo 65536 (99999 listened on 34463)
-    const std::string port = listen.substr(listen.rfind(':') + 1);
-    const bool digits = !port.empty() && port.size() <= 5 &&
-                        port.find_first_not_of("0123456789") == std::string::npos;
-    if (!digits || std::stoul(port) > 65535) {
-      return Status::InvalidArgument("listen: '" + listen + "': the port '" + port +
-                                     "' is not a number in 0..65535");
-    }
-  }
+  MAPD_RETURN_IF_ERROR(CheckHostPort("listen", listen));
+  if (!health_listen.empty()) MAPD_RETURN_IF_ERROR(CheckHostPort("health_listen", health_listen));
   if (tls_cert.empty() != tls_key.empty()) {
     return Status::InvalidArgument("tls_cert and tls_key must be given together");
   }
@@ -97,6 +103,11 @@ Status ServerConfig::Validate() const {
         "listen: '" + listen +
         "' is not loopback; set auth.required = true (create tokens with "
         "`mapd token create`) or tls_client_ca");
+  }
+  if (!health_listen.empty() && !ListenIsLoopback(health_listen)) {
+    return Status::InvalidArgument("health_listen: '" + health_listen +
+                                   "' is not a loopback host:port; it is plaintext, for a local "
+                                   "health probe (e.g. 127.0.0.1:50052)");
   }
   // Plain HTTP: off loopback tokens and the map would cross the network in the clear.
   if (web.port != 0 && !allow_insecure_remote &&

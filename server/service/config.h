@@ -50,7 +50,11 @@ struct ServerConfig {
   // Identities (docs/security.md): every call needs a credential even with no
   // token in the database yet. Required off loopback (or tls_client_ca).
   bool auth_required = false;
-  std::string tls_client_ca;       // PEM CA: clients must present a certificate it signed
+  std::string tls_client_ca;  // PEM CA: clients must present a certificate it signed
+  // A second, plaintext port on loopback, for health checks that carry no
+  // client certificate under mTLS; empty = none. Every other RPC on it
+  // follows the usual rules (with tls_client_ca: a token, no open mode).
+  std::string health_listen;
   std::string log_level = "info";  // debug, info, warn, error
   // Tests only, never set by a flag or a file: MapCoreOptions::hold_fuser_for_test.
   // mapd sets it from $MAPD_TEST_HOLD_FUSER_FILE (server/mapd/main.cc).

@@ -193,6 +193,9 @@ const std::vector<Setting>& Settings() {
            [](C& c) -> auto& { return c.auth_required; }),
       Text("tls_client_ca", "PEM CA file: clients must present a certificate it signed; its CN is the robot id "
            "(needs tls_cert)", [](C& c) -> auto& { return c.tls_client_ca; }),
+      Text("health_listen", "a second, plaintext host:port on loopback where health checks (grpc.health.v1) "
+           "need no client certificate under tls_client_ca; other RPCs there need a token; empty = none",
+           [](C& c) -> auto& { return c.health_listen; }),
 
       Count("snapshot.every_observations", "snapshot the fusion state after this many fused observations; "
             "a restart replays only what came after the newest snapshot; 0 = never",

@@ -120,6 +120,10 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   builder.AddListeningPort(config.listen, credentials, &server->port_);
+  if (!config.health_listen.empty()) {  // plaintext, loopback only (config.cc)
+    builder.AddListeningPort(config.health_listen, grpc::InsecureServerCredentials(),
+                             &server->health_port_);
+  }
   builder.RegisterService(server->service_.get());
   // Every call counted by method and code, and timed (rpc_metrics.h, /metrics).
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
@@ -151,9 +155,16 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS, ms(config.shutdown_grace_s));
   }
   server->server_ = builder.BuildAndStart();
-  if (!server->server_ || server->port_ == 0) {
-    return Status::Unavailable("cannot listen on '" + config.listen +
+  if (!server->server_ || server->port_ == 0 ||
+      (!config.health_listen.empty() && server->health_port_ == 0)) {
+    const std::string& where = server->port_ == 0 ? config.listen : config.health_listen;
+    return Status::Unavailable("cannot listen on '" + where +
                                "' (address in use, or not an address of this host?)");
+  }
+  if (server->health_port_ != 0) {
+    const std::string& h = config.health_listen;
+    Log(LogLevel::kInfo, "health_listening",
+        {{"address", h.substr(0, h.rfind(':')) + ":" + std::to_string(server->health_port_)}});
   }
   server->server_->GetHealthCheckService()->SetServingStatus(false);
   Log(LogLevel::kInfo, "listening",

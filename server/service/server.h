@@ -32,6 +32,8 @@ class MapServer {
 
   // The port actually bound (useful with port 0).
   int port() const { return port_; }
+  // The port of health_listen (0 when it is not set).
+  int health_port() const { return health_port_; }
   std::string address() const;
   // The core, for what runs beside the gRPC server (the web view).
   Core* core() const { return core_.get(); }
@@ -59,6 +61,7 @@ class MapServer {
   std::unique_ptr<MapServiceImpl> service_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
+  int health_port_ = 0;
   std::mutex health_mu_;    // shut_down_ and the health status
   bool shut_down_ = false;  // GUARDED_BY(health_mu_)
   std::thread housekeeping_;

@@ -323,6 +323,8 @@ TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
   EXPECT_THAT(r.out, HasSubstr("r1-key"));
   EXPECT_THAT(r.out, HasSubstr("denied"));
   EXPECT_THAT(r.out, HasSubstr("mapd token (offline)"));
+  EXPECT_THAT(r.out, HasSubstr("database file"));     // how the offline admin proved it
+  EXPECT_THAT(r.out, HasSubstr("token 127.0.0.1:"));  // and the API's calls: how and from where
 
   // A row holding a newline and terminal escapes (issue 43) is one line,
   // its control characters shown, not sent to the terminal.

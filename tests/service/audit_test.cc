@@ -119,7 +119,11 @@ TEST_F(AuditTest, DeniedCallsNameWhatTheyWouldHaveActedOn) {
 
   std::map<std::string, std::string> target_of;
   for (const pb::AuditEntry& e : Audit(admin_)) {
-    if (e.result().rfind("denied", 0) == 0) target_of[e.action()] = e.target();
+    if (e.result().rfind("denied", 0) != 0) continue;
+    target_of[e.action()] = e.target();
+    // Who it was is told by how (the credential) and from where.
+    EXPECT_EQ(e.credential(), "token") << e.action();
+    EXPECT_THAT(e.peer(), ::testing::MatchesRegex("ipv[46]:.*:[0-9]+")) << e.action();
   }
   EXPECT_EQ(target_of["MergeSubmaps"], "submaps 4,9");
   EXPECT_EQ(target_of["ApproveMerge"], "merge 7");

@@ -253,6 +253,8 @@ TEST_F(AuthTest, RevokedTokenIsRefusedAndTheRevocationIsAudited) {
   ASSERT_FALSE(audit.empty());
   EXPECT_EQ(audit[0].action(), "RevokeToken");  // newest first
   EXPECT_EQ(audit[0].who(), "root");
+  EXPECT_EQ(audit[0].credential(), "token");
+  EXPECT_FALSE(audit[0].peer().empty());
   EXPECT_THAT(audit[0].target(), HasSubstr("r1-key"));
   int created = 0;
   for (const pb::AuditEntry& e : audit) created += e.action() == "CreateToken";

@@ -117,6 +117,24 @@ TEST(ConfigTest, AListenPortOutsideItsRangeIsRefused) {
   }
 }
 
+// The health port is plaintext: loopback only, and a port in range.
+TEST(ConfigTest, TheHealthPortIsALoopbackHostPort) {
+  for (const auto& [value, why] : std::vector<std::pair<const char*, const char*>>{
+           {"0.0.0.0:50052", "not a loopback host:port"},
+           {"10.1.2.3:50052", "not a loopback host:port"},
+           {"127.0.0.1:70000", "0..65535"},
+           {"127.0.0.1", "is not host:port"}}) {
+    ServerConfig c;
+    Status s = Parse({"--health_listen", value}, &c);
+    if (s.ok()) s = c.Validate();
+    EXPECT_THAT(s.message(), HasSubstr("health_listen: '" + std::string(value))) << value;
+    EXPECT_THAT(s.message(), HasSubstr(why)) << value;
+  }
+  ServerConfig c;
+  ASSERT_TRUE(Parse({"--health_listen", "127.0.0.1:50052"}, &c).ok());
+  EXPECT_TRUE(c.Validate().ok());
+}
+
 // Found while writing tests/fuzz/config_fuzz.cc: the parser before the
 // settings table wrapped integers into their field (4294967300 became 4 for
 // merge.min_matched_corners) and took " -1" as 2^32 - 1.

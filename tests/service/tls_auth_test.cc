@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "common/health.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "service/support/auth_fixture.h"
@@ -38,6 +39,7 @@ class TlsAuthTest : public AuthFixture {
     config_.tls_cert = dir_.File("server.pem");
     config_.tls_key = dir_.File("server.key");
     if (mutual_) config_.tls_client_ca = dir_.File("ca.pem");
+    config_.health_listen = health_listen_;
     StartServer();
   }
 
@@ -96,12 +98,21 @@ class TlsAuthTest : public AuthFixture {
   }
 
   bool mutual_ = false;
+  std::string health_listen_;  // config.health_listen
   std::string openssl_;
 };
 
 class MutualTlsTest : public TlsAuthTest {
  protected:
   MutualTlsTest() { mutual_ = true; }
+};
+
+class MutualTlsHealthPortTest : public TlsAuthTest {
+ protected:
+  MutualTlsHealthPortTest() {
+    mutual_ = true;
+    health_listen_ = "127.0.0.1:0";
+  }
 };
 
 TEST_F(TlsAuthTest, TokensWorkOverTls) {
@@ -162,6 +173,22 @@ TEST_F(MutualTlsTest, UnknownCaOrNoCertificateIsRefused) {
   auto plain = pb::MapService::NewStub(
       grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials()));
   EXPECT_FALSE(WhoAmI(plain.get(), "", &me).ok());
+}
+
+// An orchestrator's probe has no client certificate: the plaintext loopback
+// health port answers it, and gives nothing else away (issue 43).
+TEST_F(MutualTlsHealthPortTest, HealthAnswersWithoutACertificateAndNothingElseDoes) {
+  ASSERT_GT(server_->health_port(), 0);
+  const std::string health = "127.0.0.1:" + std::to_string(server_->health_port());
+  auto channel = grpc::CreateChannel(health, grpc::InsecureChannelCredentials());
+  EXPECT_EQ(CheckHealth(channel, std::chrono::seconds(10)), Health::kServing);
+  auto plain = pb::MapService::NewStub(channel);
+  pb::WhoAmIResponse me;
+  const grpc::Status s = WhoAmI(plain.get(), "", &me);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAUTHENTICATED) << s.error_message();
+  // The TLS port still refuses a call without a certificate.
+  auto none = TlsStub();
+  EXPECT_EQ(WhoAmI(none.get(), "", &me).error_code(), grpc::StatusCode::UNAVAILABLE);
 }
 
 }  // namespace

@@ -17,6 +17,8 @@ TEST_F(AuthStoreTest, AuditFieldsAreStoredAsOneLineOfVisibleText) {
   e.action = "Ingest";
   e.target = "robot r2\n2026-12-04T10:00:00Z root admin RevokeToken ok";
   e.result = "denied: \x1b[2J\r\t\x7f \xc2\x9b tail";
+  e.peer = "ipv4:127.0.0.1:4242";
+  e.credential = "token";
   auto txn = store_->BeginWrite();
   ASSERT_TRUE(txn.ok());
   ASSERT_TRUE((*txn)->AppendAudit(e).ok());
@@ -28,6 +30,8 @@ TEST_F(AuthStoreTest, AuditFieldsAreStoredAsOneLineOfVisibleText) {
   EXPECT_EQ((*rows)[0].who, "r1-key");
   EXPECT_EQ((*rows)[0].target, "robot r2\\n2026-12-04T10:00:00Z root admin RevokeToken ok");
   EXPECT_EQ((*rows)[0].result, "denied: \\x1b[2J\\r\\t\\x7f \\u009b tail");
+  EXPECT_EQ((*rows)[0].peer, "ipv4:127.0.0.1:4242");
+  EXPECT_EQ((*rows)[0].credential, "token");
 }
 
 TEST_F(AuthStoreTest, TrimmingKeepsTheNewestDenialsAndEveryOtherRow) {

@@ -1,7 +1,7 @@
 """Runs the mapd_client pytest suite for ctest.
 
 Exit 77 (ctest: skipped) with the reason when Debian's python3-grpcio,
-python3-protobuf or python3-pytest is missing, or when mapd was not built (a
+python3-protobuf, python3-pytest or python3-venv (the install test) is missing, or when mapd was not built (a
 build of selected targets, like CI's tsan job); any other failure fails.
 """
 import importlib
@@ -12,7 +12,7 @@ import sys
 def main() -> int:
     missing = []
     for module, package in (("grpc", "python3-grpcio"), ("google.protobuf", "python3-protobuf"),
-                            ("pytest", "python3-pytest")):
+                            ("pytest", "python3-pytest"), ("ensurepip", "python3-venv")):
         try:
             importlib.import_module(module)
         except ImportError:

@@ -14,9 +14,12 @@
 
 namespace mapd::storage::testing {
 
-// SQL that turns schema 9's snapshot tables back into schema 8's (the
-// downgrades below schema 9 start with it).
+// SQL that turns schema 10's audit log back into schema 9's, then schema
+// 9's snapshot tables back into schema 8's (the downgrades below schema 9
+// start with it).
 constexpr const char* kUndoSnapshotParts =
+    "ALTER TABLE audit_log DROP COLUMN peer; "
+    "ALTER TABLE audit_log DROP COLUMN credential; "
     "DROP TABLE fusion_snapshot_parts; "
     "ALTER TABLE fusion_snapshots DROP COLUMN parts; "
     "ALTER TABLE fusion_snapshots DROP COLUMN parts_key; "
