@@ -70,12 +70,7 @@ TEST_F(AuditTest, ADeniedBatchIsAuditedWithItsValidatedIds) {
 
 TEST_F(AuditTest, ATokenNameWithControlCharactersIsRefused) {
   MakeTokens();
-  pb::CreateTokenRequest request;
-  request.set_name("ci\nfake row");
-  request.set_role(pb::ROLE_READER);
-  pb::CreateTokenResponse response;
-  auto ctx = As(admin_);
-  const grpc::Status s = stub_->CreateToken(ctx.get(), request, &response);
+  const grpc::Status s = CreateTokenAs(admin_, pb::ROLE_READER, "ci\nfake row");
   EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(s.error_message(), HasSubstr("name must be"));
   ExpectOneLineRows(Audit(admin_));
@@ -109,12 +104,7 @@ TEST_F(AuditTest, DeniedCallsNameWhatTheyWouldHaveActedOn) {
     }
     EXPECT_EQ(s.error_code(), grpc::StatusCode::PERMISSION_DENIED);
   }
-  pb::CreateTokenRequest create;
-  create.set_name("mint");
-  create.set_role(pb::ROLE_ADMIN);
-  pb::CreateTokenResponse created;
-  auto c = As(operator_);
-  EXPECT_EQ(stub_->CreateToken(c.get(), create, &created).error_code(),
+  EXPECT_EQ(CreateTokenAs(operator_, pb::ROLE_ADMIN, "mint").error_code(),
             grpc::StatusCode::PERMISSION_DENIED);
 
   std::map<std::string, std::string> target_of;
@@ -137,12 +127,7 @@ TEST_F(AuditTest, AFloodOfDenialsIsCountedNotRecordedOneByOne) {
   const size_t before = Audit(admin_).size();
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < 500; ++i) {
-    pb::CreateTokenRequest request;
-    request.set_name("x");
-    request.set_role(pb::ROLE_ADMIN);
-    pb::CreateTokenResponse response;
-    auto ctx = As(reader_);
-    ASSERT_EQ(stub_->CreateToken(ctx.get(), request, &response).error_code(),
+    ASSERT_EQ(CreateTokenAs(reader_, pb::ROLE_ADMIN, "x").error_code(),
               grpc::StatusCode::PERMISSION_DENIED);
   }
   // The summary comes when the reader may write a row again (6 s at 10 a

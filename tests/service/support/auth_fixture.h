@@ -41,18 +41,27 @@ class AuthFixture : public ServerFixture {
     return issued.ok() ? issued->token : "";
   }
 
-  // A token made through CreateToken with `admin`'s token.
-  std::string ApiToken(const std::string& admin, pb::Role role, const std::string& name,
-                       const std::string& robot = "") {
+  // CreateToken called with `caller`'s token; the new secret in *secret.
+  grpc::Status CreateTokenAs(const std::string& caller, pb::Role role, const std::string& name,
+                             const std::string& robot = "", std::string* secret = nullptr) {
     pb::CreateTokenRequest request;
     request.set_name(name);
     request.set_role(role);
     request.set_robot_id(robot);
     pb::CreateTokenResponse response;
-    auto ctx = As(admin);
+    auto ctx = As(caller);
     const grpc::Status s = stub_->CreateToken(ctx.get(), request, &response);
+    if (secret != nullptr) *secret = response.token();
+    return s;
+  }
+
+  // A token made through CreateToken with `admin`'s token.
+  std::string ApiToken(const std::string& admin, pb::Role role, const std::string& name,
+                       const std::string& robot = "") {
+    std::string secret;
+    const grpc::Status s = CreateTokenAs(admin, role, name, robot, &secret);
     EXPECT_TRUE(s.ok()) << s.error_message();
-    return response.token();
+    return secret;
   }
 
   static std::unique_ptr<grpc::ClientContext> As(const std::string& token) {
