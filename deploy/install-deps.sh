@@ -11,7 +11,9 @@
 # use: Chromium, which runs the web view's page in tests/web, and the openssl
 # tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
 # prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc),
-# and python3-venv, in which the Python client's test pip-installs it.
+# python3-venv, in which the Python client's test pip-installs it, and
+# haproxy, which the rapid-reset test puts in front of mapd with
+# deploy/haproxy.cfg (tests/service/rapid_reset_test.cc).
 set -euo pipefail
 
 # What mapd and mapctl need without voxel merging (--demo stops here).
@@ -26,7 +28,7 @@ if [ "${1:-}" != "--demo" ]; then
              python3-grpcio python3-protobuf python3-pytest)
 fi
 if [ "${1:-}" != "--build-only" ] && [ "${1:-}" != "--demo" ]; then
-  PACKAGES+=(chromium openssl prometheus python3-venv)
+  PACKAGES+=(chromium openssl prometheus python3-venv haproxy)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

@@ -13,37 +13,42 @@ namespace mapd::service {
 namespace pb = mapserver::v1;
 
 IngestReactor::IngestReactor(grpc::CallbackServerContext* context, Core* core,
-                             const IngestOptions* options, const std::atomic<bool>* draining,
+                             const IngestOptions* options, IngestStreams* streams,
                              AccessControl* access, Principal caller, StreamSlot slot)
     : core_(core),
       options_(options),
-      draining_(draining),
+      streams_(streams),
       peer_(context->peer()),
       access_(access),
       caller_(std::move(caller)),
       slot_(std::move(slot)) {
+  streams_->Add(this);
   std::lock_guard<std::mutex> lock(mu_);
-  reading_ = true;
+  read_pending_ = true;
   StartRead(&read_buffer_);
+  MaybeFinishLocked();  // opened after a drain began: ends at once
 }
 
 void IngestReactor::OnReadDone(bool ok) {
-  if (!ok) {
-    std::lock_guard<std::mutex> lock(mu_);
-    reading_ = false;
-    read_closed_ = true;
-    MaybeFinishLocked();
-    return;
-  }
   {
     std::lock_guard<std::mutex> lock(mu_);
+    read_pending_ = false;
+    // Finished by a drain while this read was outstanding: a batch that came
+    // in meanwhile is dropped unacknowledged (the robot resends it).
+    if (finished_) return;
+    if (!ok) {
+      read_closed_ = true;
+      MaybeFinishLocked();
+      return;
+    }
+    processing_ = true;
     const uint64_t index = messages_read_++;
     request_.Clear();
     grpc::Status parsed =
         grpc::SerializationTraits<pb::ObservationBatch>::Deserialize(&read_buffer_, &request_);
     if (!parsed.ok()) {
       // Stop reading; what was read before is acknowledged, then the stream ends.
-      reading_ = false;
+      processing_ = false;
       read_closed_ = true;
       end_status_ = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                                  "message " + std::to_string(index) +
@@ -62,12 +67,12 @@ void IngestReactor::OnReadDone(bool ok) {
     ++in_flight_;
     if (robot_.empty()) robot_ = request_.robot_id().substr(0, 128);
   }
-  // reading_ stays true while request_ is being processed, so that no one
+  // processing_ stays true while request_ is being handled, so that no one
   // starts another read into it.
   pb::IngestAck ack;
   ack.set_session_id(request_.session_id());
   ack.set_seq(request_.seq());
-  if (draining_->load()) {
+  if (streams_->draining()) {
     ack.set_result(pb::IngestAck::REJECTED);
     ack.set_code(grpc::StatusCode::UNAVAILABLE);
     ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
@@ -121,8 +126,9 @@ void IngestReactor::OnReadDone(bool ok) {
     });
   }
   std::lock_guard<std::mutex> lock(mu_);
-  reading_ = false;
+  processing_ = false;
   MaybeReadLocked();
+  MaybeFinishLocked();
 }
 
 void IngestReactor::Complete(pb::IngestAck ack) {
@@ -176,9 +182,16 @@ void IngestReactor::OnWriteDone(bool ok) {
 }
 
 void IngestReactor::MaybeReadLocked() {
-  if (reading_ || read_closed_ || finished_ || in_flight_ >= options_->max_in_flight) return;
-  reading_ = true;
+  if (read_pending_ || processing_ || read_closed_ || finished_ || streams_->draining() ||
+      in_flight_ >= options_->max_in_flight)
+    return;
+  read_pending_ = true;
   StartRead(&read_buffer_);
+}
+
+void IngestReactor::Drain() {
+  std::lock_guard<std::mutex> lock(mu_);
+  MaybeFinishLocked();
 }
 
 void IngestReactor::OnCancel() {
@@ -188,9 +201,17 @@ void IngestReactor::OnCancel() {
 }
 
 void IngestReactor::MaybeFinishLocked() {
-  // Finish only when no callback of MapCore can still reach this reactor.
-  if (finished_ || !read_closed_ || reading_ || in_flight_ > 0 || writing_ || !acks_.empty())
-    return;
+  // Finish only when no callback of MapCore can still reach this reactor and
+  // every ack is written; and, unless mapd is stopping, once the client has
+  // half-closed. A read still outstanding then completes with ok = false.
+  if (finished_ || processing_ || in_flight_ > 0 || writing_ || !acks_.empty()) return;
+  const bool draining = streams_->draining();
+  if (!draining && !read_closed_) return;
+  if (!read_closed_ && end_status_.ok()) {
+    end_status_ = grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                               "mapd is shutting down; reconnect and resend unacknowledged "
+                               "batches");
+  }
   finished_ = true;
   Log(LogLevel::kInfo, "ingest_stream_closed",
       {{"robot", robot_},
@@ -198,11 +219,32 @@ void IngestReactor::MaybeFinishLocked() {
        {"stored", std::to_string(stored_)},
        {"duplicate", std::to_string(duplicates_)},
        {"rejected", std::to_string(rejected_)},
-       {"client_gone", broken_ ? "true" : "false"}});
+       {"client_gone", broken_ ? "true" : "false"},
+       {"shutdown", draining ? "true" : "false"}});
   slot_.Release();  // before the client sees the status (its next stream must find the place)
   Finish(end_status_);
 }
 
-void IngestReactor::OnDone() { delete this; }
+void IngestReactor::OnDone() {
+  streams_->Remove(this);
+  delete this;
+}
+
+void IngestStreams::Add(IngestReactor* stream) {
+  std::lock_guard<std::mutex> lock(mu_);
+  open_.insert(stream);
+}
+
+void IngestStreams::Remove(IngestReactor* stream) {
+  std::lock_guard<std::mutex> lock(mu_);
+  open_.erase(stream);
+}
+
+void IngestStreams::DrainAll() {
+  // Under mu_: a stream cannot be deleted (OnDone) while it is drained.
+  std::lock_guard<std::mutex> lock(mu_);
+  draining_ = true;
+  for (IngestReactor* stream : open_) stream->Drain();
+}
 
 }  // namespace mapd::service

@@ -15,6 +15,12 @@
 // would end OK with the rest silently unacknowledged. Here a malformed message
 // ends the stream with INVALID_ARGUMENT naming its index (after the batches
 // before it are acknowledged), and a log line.
+//
+// At shutdown (IngestStreams::DrainAll) every stream ends as soon as its
+// batches in flight are acknowledged, with UNAVAILABLE: a robot that keeps
+// its stream open but sends nothing (parked) must not hold mapd's stop for
+// shutdown_grace_s, and a batch that arrives meanwhile is refused, so the
+// robot resends it after reconnecting.
 #ifndef MAPD_SERVICE_INGEST_REACTOR_H_
 #define MAPD_SERVICE_INGEST_REACTOR_H_
 
@@ -24,6 +30,7 @@
 #include <deque>
 #include <mutex>
 #include <string>
+#include <unordered_set>
 
 #include "mapserver/v1/map_service.pb.h"
 #include "service/access_control.h"
@@ -34,17 +41,40 @@
 
 namespace mapd::service {
 
+class IngestReactor;
+
+// The open Ingest streams of a server, so that a shutdown can end them.
+// Thread-safe.
+class IngestStreams {
+ public:
+  // From now on every open stream, and every one opened later, ends once its
+  // batches in flight are acknowledged.
+  void DrainAll();
+  bool draining() const { return draining_.load(); }
+
+ private:
+  friend class IngestReactor;
+  void Add(IngestReactor* stream);
+  void Remove(IngestReactor* stream);
+
+  std::atomic<bool> draining_{false};
+  std::mutex mu_;                            // taken before an IngestReactor's, never after
+  std::unordered_set<IngestReactor*> open_;  // GUARDED_BY(mu_)
+};
+
 // Owned by gRPC; deletes itself in OnDone().
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, Core* core, const IngestOptions* options,
-                const std::atomic<bool>* draining, AccessControl* access, Principal caller,
-                StreamSlot slot);
+                IngestStreams* streams, AccessControl* access, Principal caller, StreamSlot slot);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
   void OnCancel() override;
   void OnDone() override;
+
+  // Shutdown: finish as soon as nothing is in flight (IngestStreams::DrainAll).
+  void Drain();
 
  private:
   void Complete(mapserver::v1::IngestAck ack);  // a batch's outcome is final
@@ -54,7 +84,7 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
 
   Core* const core_;
   const IngestOptions* const options_;
-  const std::atomic<bool>* const draining_;
+  IngestStreams* const streams_;
   const std::string peer_;
   AccessControl* const access_;
   const Principal caller_;
@@ -68,13 +98,14 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   uint64_t messages_read_ = 0;               // GUARDED_BY(mu_), index of the next message
   grpc::Status end_status_;  // GUARDED_BY(mu_), what Finish reports (a malformed message)
   std::deque<mapserver::v1::IngestAck> acks_;  // GUARDED_BY(mu_), waiting to be written
-  uint32_t in_flight_ = 0;    // GUARDED_BY(mu_), batches handed out, outcome pending
-  bool reading_ = false;      // GUARDED_BY(mu_), a read is outstanding or being processed
-  bool writing_ = false;      // GUARDED_BY(mu_)
-  bool read_closed_ = false;  // GUARDED_BY(mu_), the client half-closed or the call ended
-  bool broken_ = false;       // GUARDED_BY(mu_), a write failed: the client is gone
-  bool finished_ = false;     // GUARDED_BY(mu_)
-  std::string robot_;         // for logs, from the first batch
+  uint32_t in_flight_ = 0;     // GUARDED_BY(mu_), batches handed out, outcome pending
+  bool read_pending_ = false;  // GUARDED_BY(mu_), a read is outstanding in gRPC
+  bool processing_ = false;    // GUARDED_BY(mu_), OnReadDone is handling request_
+  bool writing_ = false;       // GUARDED_BY(mu_)
+  bool read_closed_ = false;   // GUARDED_BY(mu_), the client half-closed or the call ended
+  bool broken_ = false;        // GUARDED_BY(mu_), a write failed: the client is gone
+  bool finished_ = false;      // GUARDED_BY(mu_)
+  std::string robot_;          // for logs, from the first batch
   uint64_t stored_ = 0, duplicates_ = 0,
            rejected_ = 0;  // GUARDED_BY(mu_), for the closing log line
   uint64_t denied_ = 0;    // batches refused PERMISSION_DENIED; reader thread only

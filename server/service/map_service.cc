@@ -88,8 +88,8 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
       !may.ok()) {
     return new RefusedIngest(ToGrpcStatus(may));
   }
-  return new IngestReactor(context, core_, &ingest_options_, &draining_, &access_, *std::move(who),
-                           std::move(slot));
+  return new IngestReactor(context, core_, &ingest_options_, &ingest_streams_, &access_,
+                           *std::move(who), std::move(slot));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,

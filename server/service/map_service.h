@@ -42,6 +42,7 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   // Open watches end with UNAVAILABLE and new ones are refused.
   void StartDraining() {
     draining_ = true;
+    ingest_streams_.DrainAll();
     submaps_.StartDraining();
     core_->watch_hub().Close();
   }
@@ -117,6 +118,7 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   const IngestOptions ingest_options_;
   const StreamLimits stream_limits_;
   std::atomic<bool> draining_{false};
+  IngestStreams ingest_streams_;
   StreamLimiter limiter_;
   AccessControl access_;
   int ticks_ = 0;  // Tick() calls, from one thread

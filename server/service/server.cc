@@ -128,6 +128,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   // Every call counted by method and code, and timed (rpc_metrics.h, /metrics).
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
   interceptors.push_back(RpcMetrics::InterceptorFactory());
+  interceptors.push_back(server->calls_.InterceptorFactory());
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
   builder.SetMaxReceiveMessageSize(static_cast<int>(config.max_message_bytes));
   builder.SetMaxSendMessageSize(static_cast<int>(config.max_message_bytes));
@@ -252,10 +253,24 @@ void MapServer::Shutdown() {
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
   server_->GetHealthCheckService()->SetServingStatus(false);
   service_->StartDraining();
-  const auto deadline =
-      std::chrono::system_clock::now() +
+  // The calls in progress get the grace period; then gRPC gets 100 ms more
+  // (for a call that came in just now) before it cancels what is left and
+  // closes the idle connections, which it would otherwise wait for
+  // (calls_in_progress.h).
+  const auto grace =
       std::chrono::milliseconds(static_cast<int64_t>(config_.shutdown_grace_s * 1000));
-  server_->Shutdown(deadline);  // returns once every RPC has ended
+  const auto start = std::chrono::steady_clock::now();
+  const bool calls_ended = calls_.WaitUntilNone(start + grace);
+  const auto left = grace - std::chrono::duration_cast<std::chrono::milliseconds>(
+                                std::chrono::steady_clock::now() - start);
+  const auto linger =
+      std::clamp(left, std::chrono::milliseconds(0), std::chrono::milliseconds(100));
+  if (!calls_ended) {
+    Log(LogLevel::kWarn, "shutdown_grace_over",
+        {{"calls_cancelled", std::to_string(calls_.count())},
+         {"grace_s", std::to_string(config_.shutdown_grace_s)}});
+  }
+  server_->Shutdown(std::chrono::system_clock::now() + linger);  // returns once every RPC has ended
   StopHousekeeping();
   service_->FlushDenials(/*all=*/true);  // the counts of the last denials (denial_audit.h)
   core_->Stop();                         // commits what is queued, checkpoints

@@ -13,6 +13,7 @@
 
 #include "common/status.h"
 #include "service/access_control.h"
+#include "service/calls_in_progress.h"
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_service.h"
@@ -41,8 +42,10 @@ class MapServer {
   // and the same per-identity limit on denial rows in the audit log.
   const AuthOptions& auth() const { return auth_; }
 
-  // Graceful stop: new batches are refused, streams get shutdown_grace_s to
-  // finish, everything accepted is committed, the WAL is checkpointed.
+  // Graceful stop: new batches are refused, streams end once their batches
+  // in flight are acknowledged, calls in progress get shutdown_grace_s to
+  // finish (idle client connections are not waited for), everything
+  // accepted is committed, the WAL is checkpointed.
   void Shutdown();
   // Blocks until the gRPC server has shut down.
   void Wait();
@@ -59,6 +62,7 @@ class MapServer {
   AuthOptions auth_;
   std::unique_ptr<MapCore> core_;
   std::unique_ptr<MapServiceImpl> service_;
+  CallsInProgress calls_;  // before server_: its interceptors point here
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
   int health_port_ = 0;

@@ -26,6 +26,7 @@
 
 #include "common/batches.h"
 #include "common/health.h"
+#include "common/latency_probes.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -34,12 +35,7 @@ namespace {
 
 namespace pb = mapserver::v1;
 using Clock = std::chrono::steady_clock;
-
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-}
+using mapd::testing::Quantile;
 
 // One grpc.health.v1.Health/Check; latency in ms, or -1 on failure.
 double HealthCheck(const std::shared_ptr<grpc::Channel>& channel) {
@@ -91,12 +87,8 @@ int main(int argc, char** argv) {
   std::this_thread::sleep_for(std::chrono::seconds(1));
   const double rss_baseline = mapd::testing::ResidentMiB(mapd.pid);
 
-  std::atomic<bool> flooding{true}, done{false};
+  std::atomic<bool> done{false};
   std::atomic<double> rss_peak{rss_baseline};
-  std::mutex mu;
-  std::vector<double> health_ms, ack_ms;
-  int health_failures = 0;
-  long acks_stored = 0, acks_other = 0;
 
   // RSS sampler.
   std::thread sampler([&] {
@@ -106,57 +98,8 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
   });
-  // Health checker: every 20 ms on a connection of its own.
-  std::thread health([&] {
-    grpc::ChannelArguments a;
-    a.SetInt("mapd.bench.health", 1);
-    auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
-    while (flooding) {
-      const double ms = HealthCheck(ch);
-      std::lock_guard<std::mutex> lock(mu);
-      if (ms < 0)
-        ++health_failures;
-      else
-        health_ms.push_back(ms);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
-  // A normal robot: one stream, a batch every 10 ms, ack latency per batch.
-  std::thread robot([&] {
-    grpc::ChannelArguments a;
-    a.SetInt("mapd.bench.robot", 1);
-    auto ch = grpc::CreateCustomChannel(mapd.address, grpc::InsecureChannelCredentials(), a);
-    auto robot_stub = pb::MapService::NewStub(ch);
-    grpc::ClientContext ctx;
-    auto stream = robot_stub->Ingest(&ctx);
-    std::mt19937_64 rng(7);
-    std::vector<Clock::time_point> sent;
-    std::thread reader([&] {
-      pb::IngestAck ack;
-      while (stream->Read(&ack)) {
-        const auto now = Clock::now();
-        std::lock_guard<std::mutex> lock(mu);
-        if (ack.seq() >= 1 && ack.seq() <= sent.size()) {
-          ack_ms.push_back(
-              std::chrono::duration<double, std::milli>(now - sent[ack.seq() - 1]).count());
-        }
-        (ack.result() == pb::IngestAck::STORED ? acks_stored : acks_other)++;
-      }
-    });
-    for (uint64_t seq = 1; flooding; ++seq) {
-      const pb::ObservationBatch b =
-          mapd::testing::RoomBatch("robot", "s1", seq, 2.0 + 0.01 * seq, 4.0, 0.0, &rng);
-      {
-        std::lock_guard<std::mutex> lock(mu);
-        sent.push_back(Clock::now());
-      }
-      if (!stream->Write(b)) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    stream->WritesDone();
-    reader.join();
-    stream->Finish();
-  });
+  // A normal robot and health checks, each on a connection of its own.
+  mapd::testing::LatencyProbes probes(mapd.address);
 
   // The flood: each thread on its own connection(s), paced to the target rate.
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -187,9 +130,7 @@ int main(int argc, char** argv) {
   }
   for (auto& t : flood) t.join();
   const double flood_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  flooding = false;
-  health.join();
-  robot.join();
+  const mapd::testing::LatencyProbes::Result probed = probes.Stop();
   const double rss_flood_peak = rss_peak;
   std::this_thread::sleep_for(std::chrono::duration<double>(settle));
   const double rss_after = mapd::testing::ResidentMiB(mapd.pid);
@@ -209,14 +150,14 @@ int main(int argc, char** argv) {
       "RESOURCE_EXHAUSTED by the server\n",
       opened.load(), flood_s, opened.load() / flood_s, threads, refused.load());
   std::printf(
-      "health: %zu checks, p50 %.1f ms, p99 %.1f ms, max %.1f ms, %d failed; after the flood %.1f "
+      "health: %zu checks, p50 %.1f ms, p99 %.1f ms, max %.1f ms, %ld failed; after the flood %.1f "
       "ms\n",
-      health_ms.size(), Percentile(health_ms, 0.5), Percentile(health_ms, 0.99),
-      Percentile(health_ms, 1.0), health_failures, health_after);
+      probed.health_ms.size(), Quantile(probed.health_ms, 0.5), Quantile(probed.health_ms, 0.99),
+      Quantile(probed.health_ms, 1.0), probed.health_failures, health_after);
   std::printf(
       "robot: %zu acks (%ld stored, %ld other), ack p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
-      ack_ms.size(), acks_stored, acks_other, Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99),
-      Percentile(ack_ms, 1.0));
+      probed.ack_ms.size(), probed.acks_stored, probed.acks_other, Quantile(probed.ack_ms, 0.5),
+      Quantile(probed.ack_ms, 0.99), Quantile(probed.ack_ms, 1.0));
   std::printf(
       "mapd RSS: baseline %.0f MiB, peak %.0f MiB, %.0f s after the flood %.0f MiB (%.2fx "
       "baseline)\n",

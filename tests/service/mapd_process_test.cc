@@ -193,6 +193,34 @@ TEST(MapdProcessTest, SigtermWhileRobotsStreamLosesNoAcknowledgedBatch) {
   EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0);
 }
 
+// A parked robot keeps its stream open and sends nothing: SIGTERM ends its
+// stream at once with UNAVAILABLE (after acknowledging what it sent) instead
+// of waiting out shutdown_grace_s, which is 60 s here so that the margin is
+// wide on any machine.
+TEST(MapdProcessTest, SigtermEndsAnIdleRobotStreamAtOnce) {
+  TempDir dir;
+  MapdProcess mapd = StartMapd(dir.File("map.db"), {"--shutdown_grace_s", "60"});
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  auto stub = pb::MapService::NewStub(
+      grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()));
+  grpc::ClientContext ctx;
+  auto stream = stub->Ingest(&ctx);
+  std::mt19937_64 rng(4);
+  ASSERT_TRUE(stream->Write(RoomBatch("parked", "s1", 1, 5, 4, 0, &rng)));
+  pb::IngestAck ack;
+  ASSERT_TRUE(stream->Read(&ack));
+  EXPECT_EQ(ack.result(), pb::IngestAck::STORED);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM, std::chrono::seconds(90)), 0) << mapd.log();
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30));
+  EXPECT_FALSE(stream->Read(&ack));
+  const grpc::Status end = stream->Finish();
+  EXPECT_EQ(end.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_THAT(end.error_message(), HasSubstr("shutting down"));
+  EXPECT_THAT(mapd.log(), HasSubstr("shutdown=true"));
+}
+
 // A restart whose replay is held (MAPD_TEST_HOLD_FUSER_FILE, so that recovery
 // cannot finish before the test looks, on a machine of any speed): mapd listens
 // at once, says NOT_SERVING and refuses ingest (UNAVAILABLE, nothing stored)
