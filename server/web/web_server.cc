@@ -82,9 +82,12 @@ StatusOr<std::unique_ptr<WebServer>> WebServer::Start(service::Core* core,
   std::unique_ptr<WebServer> web(new WebServer(core, options));
   httplib::Server& http = *web->http_;
   http.new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
-  // Idle keep-alive connections hold a thread too; a short timeout also
-  // keeps Stop() prompt.
-  http.set_keep_alive_timeout(1);
+  // An idle keep-alive connection holds a worker thread, and Stop() waits for
+  // it to time out (httplib 0.11 checks for a stop only between requests):
+  // with 1 s, a browser's open page added up to 1 s to every mapd stop. 0
+  // keeps a connection only for a request that follows within 10 ms (a page
+  // load's burst); the page's polls, seconds apart, reconnect on loopback.
+  http.set_keep_alive_timeout(0);
   http.set_read_timeout(10);
   // A client that stops reading holds a thread, and Stop(), this long at most.
   http.set_write_timeout(2);

@@ -338,6 +338,22 @@ TEST_F(WebFixture, AnyLoopbackSpellingOfTheAddressKeepsTheHostCheck) {
   }
 }
 
+// A browser's open page keeps its connection alive between polls. httplib
+// 0.11 stops a connection only between requests, so an idle one held mapd's
+// stop for the keep-alive timeout (1 s, added to every SIGTERM): now a
+// connection is kept only for a request that follows within 10 ms.
+TEST_F(WebFixture, AnIdleKeepAliveConnectionDoesNotHoldTheStop) {
+  Start();
+  httplib::Client browser = Client();
+  browser.set_keep_alive(true);
+  httplib::Result r = browser.Get("/api/robots");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  const auto t0 = std::chrono::steady_clock::now();
+  web_->Stop();
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));
+}
+
 TEST_F(WebFixture, RefusedTokensAreLogged) {
   Start();
   MakeToken(service::Role::kReader, "dashboard");
