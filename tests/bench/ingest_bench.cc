@@ -194,23 +194,6 @@ std::string ProcStatus(pid_t pid, const char* key) {
   return "?";
 }
 
-double CpuSeconds(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string s;
-  std::getline(in, s);
-  std::istringstream fields(s.substr(s.rfind(')') + 2));
-  std::string f;
-  double utime = 0, stime = 0;
-  for (int i = 3; fields >> f; ++i) {
-    if (i == 14) utime = std::stod(f);
-    if (i == 15) {
-      stime = std::stod(f);
-      break;
-    }
-  }
-  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
 double Percentile(std::vector<double>& v, double p) {
   if (v.empty()) return 0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())));
@@ -265,7 +248,7 @@ int main(int argc, char** argv) {
     a.SetInt("mapd.bench.robot", i);
     channels.push_back(grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), a));
   }
-  const double cpu0 = pid ? CpuSeconds(pid) : 0;
+  const double cpu0 = pid ? mapd::testing::CpuSeconds(pid) : 0;
   std::vector<RobotResult> results(static_cast<size_t>(opt.robots));
   const auto t0 = Clock::now();
   std::vector<std::thread> threads;
@@ -275,7 +258,7 @@ int main(int argc, char** argv) {
   }
   for (auto& t : threads) t.join();
   const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  const double server_cpu = pid ? CpuSeconds(pid) - cpu0 : 0;
+  const double server_cpu = pid ? mapd::testing::CpuSeconds(pid) - cpu0 : 0;
 
   // Acks wait for durability only; the fused map follows. Time the catch-up.
   auto stats_stub = pb::MapService::NewStub(channels[0]);

@@ -29,23 +29,6 @@ namespace {
 
 namespace t = mapd::testing;
 
-// User + system CPU seconds of a process so far.
-double CpuSeconds(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::istringstream fields(stat.substr(stat.rfind(')') + 2));
-  std::string f;
-  double utime = 0, stime = 0;
-  for (int i = 3; fields >> f; ++i) {
-    if (i == 14) utime = std::stod(f);
-    if (i == 15) {
-      stime = std::stod(f);
-      break;
-    }
-  }
-  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
 // The sum of mapd's grpc_server_handled_total for Ingest, from its web port's
 // /metrics (a plain HTTP/1.0 GET); -1 if it cannot be read.
 double IngestCallsHandled(int web_port) {
@@ -114,7 +97,7 @@ int main(int argc, char** argv) {
 
   t::LatencyProbes probes(front);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const double calls_before = IngestCallsHandled(web_port), cpu_before = CpuSeconds(mapd.pid);
+  const double calls_before = IngestCallsHandled(web_port), cpu_before = t::CpuSeconds(mapd.pid);
   t::RapidResetResult flood;
   {
     t::CpuHogs busy(hogs);
@@ -123,7 +106,7 @@ int main(int argc, char** argv) {
     target.source_host = source;
     flood = t::RunRapidReset(target, std::chrono::duration<double>(seconds));
   }
-  const double cpu_flood = CpuSeconds(mapd.pid) - cpu_before;
+  const double cpu_flood = t::CpuSeconds(mapd.pid) - cpu_before;
   const double calls = IngestCallsHandled(web_port) - calls_before;
   const t::LatencyProbes::Result r = probes.Stop();
   const int proxy_exit = proxy.pid > 0 ? t::Stop(proxy.pid) : 0;

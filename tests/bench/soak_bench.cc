@@ -257,20 +257,7 @@ double ThreadCpuSeconds(pid_t pid, const std::string& name) {
     std::string c;
     std::getline(comm, c);
     if (c != name) continue;
-    std::ifstream stat(task.path() / "stat");
-    std::string s;
-    std::getline(stat, s);
-    std::istringstream fields(s.substr(s.rfind(')') + 2));
-    std::string f;
-    double utime = 0, stime = 0;
-    for (int i = 3; fields >> f; ++i) {
-      if (i == 14) utime = std::stod(f);
-      if (i == 15) {
-        stime = std::stod(f);
-        break;
-      }
-    }
-    return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+    return mapd::testing::CpuSecondsInStat((task.path() / "stat").string());
   }
   return 0;
 }

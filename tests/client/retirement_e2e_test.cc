@@ -154,7 +154,9 @@ TEST_F(RetirementTest, AWallTakenDownLeavesTheMapWithinALap) {
   EXPECT_GE(Stats().retired_walls(), 1u);
   // The other eleven walls stay.
   for (size_t i = 0; i < world.walls.size(); ++i) {
-    if (i != kBoxSouthFace) EXPECT_TRUE(Published(world.walls[i])) << "wall " << i;
+    if (i != kBoxSouthFace) {
+      EXPECT_TRUE(Published(world.walls[i])) << "wall " << i;
+    }
   }
   // A restart (snapshot plus replay) gives the same map, the wall still retired.
   const std::string before = MapText();

@@ -224,6 +224,32 @@ inline double ResidentMiB(pid_t pid) {
   return 0;
 }
 
+// User + system CPU seconds in a /proc/.../stat file (a process's, or a
+// task's under /proc/PID/task); 0 if it cannot be read.
+inline double CpuSecondsInStat(const std::string& stat_path) {
+  std::ifstream in(stat_path);
+  std::string s;
+  std::getline(in, s);
+  const size_t paren = s.rfind(')');
+  if (paren == std::string::npos || paren + 2 > s.size()) return 0;
+  std::istringstream fields(s.substr(paren + 2));
+  std::string f;
+  double utime = 0, stime = 0;
+  for (int i = 3; fields >> f; ++i) {
+    if (i == 14) utime = std::stod(f);
+    if (i == 15) {
+      stime = std::stod(f);
+      break;
+    }
+  }
+  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+// CPU seconds a process has used so far.
+inline double CpuSeconds(pid_t pid) {
+  return CpuSecondsInStat("/proc/" + std::to_string(pid) + "/stat");
+}
+
 inline int Stop(pid_t pid, int signal = SIGTERM,
                 std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
   if (pid <= 0) return -1;
