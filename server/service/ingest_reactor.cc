@@ -227,6 +227,9 @@ void IngestReactor::MaybeFinishLocked() {
 
 void IngestReactor::OnDone() {
   streams_->Remove(this);
+  // Finish() is called with mu_ held; gRPC may run OnDone on another thread
+  // before that caller has let go of it.
+  { std::lock_guard<std::mutex> lock(mu_); }
   delete this;
 }
 
