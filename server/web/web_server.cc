@@ -84,10 +84,12 @@ StatusOr<std::unique_ptr<WebServer>> WebServer::Start(service::Core* core,
   http.new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
   // An idle keep-alive connection holds a worker thread, and Stop() waits for
   // it to time out (httplib 0.11 checks for a stop only between requests):
-  // with 1 s, a browser's open page added up to 1 s to every mapd stop. 0
-  // keeps a connection only for a request that follows within 10 ms (a page
-  // load's burst); the page's polls, seconds apart, reconnect on loopback.
-  http.set_keep_alive_timeout(0);
+  // an open page added up to the timeout to every mapd stop. So every answer
+  // says "Connection: close" (below) and the browser closes the connection
+  // itself. A short timeout instead races the browser's reuse of the
+  // connection ("Failed to fetch"); this timeout only bounds clients that
+  // ignore the header.
+  http.set_keep_alive_timeout(1);
   http.set_read_timeout(10);
   // A client that stops reading holds a thread, and Stop(), this long at most.
   http.set_write_timeout(2);
@@ -133,6 +135,9 @@ void WebServer::Route() {
   //   pass a CORS preflight, which this server never grants;
   // - on a loopback port, a Host other than loopback is refused: a site whose
   //   name was rebound to 127.0.0.1 reads nothing (DNS rebinding).
+  // One request per connection (see Start: an idle connection would hold Stop).
+  http_->set_post_routing_handler(
+      [](const Request&, Response& res) { res.set_header("Connection", "close"); });
   http_->set_pre_routing_handler([this](const Request& req, Response& res) {
     if (loopback_) {
       const std::string host = req.get_header_value("Host");
