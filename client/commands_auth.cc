@@ -5,6 +5,7 @@
 #include <string>
 
 #include "client/commands.h"
+#include "client/format.h"
 #include "client/text_util.h"
 
 namespace mapd::client {
@@ -24,6 +25,7 @@ struct RevokeOptions {
 
 struct AuditOptions {
   uint32_t limit = 100;
+  bool json = false;
 };
 
 struct NoOptions {};
@@ -132,6 +134,10 @@ int RunAudit(const Context& ctx, const AuditOptions& flags) {
   auto call = ctx.NewCallContext();
   const grpc::Status status = ctx.stub->ListAudit(call.get(), request, &response);
   if (!status.ok()) return ReportRpcError(ctx, "audit", status);
+  if (flags.json) {  // for scripts; JSON escapes every control character
+    std::fputs(MessageToJson(response).c_str(), stdout);
+    return kExitOk;
+  }
   std::printf("%-6s %-20s %-20s %-9s %-28s %-14s %-40s %s\n", "ID", "TIME", "WHO", "ROLE", "VIA",
               "ACTION", "TARGET", "RESULT");
   for (const pb::AuditEntry& e : response.entries()) {
@@ -186,9 +192,13 @@ void AddAuthCommands(CLI::App* app, Action* action) {
 
   CLI::App* audit = app->add_subcommand("audit", "the audit log, newest first (operator, admin)");
   audit->footer("Uploads, merges, deletes, token changes and refused writes, with who did them.");
-  audit->add_option("--limit", BindCommand(audit, action, RunAudit)->limit, "entries to show")
+  auto a = BindCommand(audit, action, RunAudit);
+  audit->add_option("--limit", a->limit, "entries to show")
       ->capture_default_str()
       ->check(CLI::Range(1u, 10000u));
+  audit->add_flag("--json", a->json,
+                  "the entries as JSON (ListAuditResponse, .proto field names; ids and times "
+                  "as numbers)");
 
   CLI::App* whoami =
       app->add_subcommand("whoami", "who the server takes this caller for: name, role, robot id");

@@ -336,6 +336,13 @@ TEST_F(MapctlE2eTest, TokensRolesAndAuditEndToEnd) {
                                "ok\\x1b[8m"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 2) << r.out;  // header + 1 row
   EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
+  // For scripts: JSON, its strings escaped by JSON's rules, ids as numbers.
+  r = Mapctl({"--token", admin, "audit", "--limit", "1", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"entries\": ["));
+  EXPECT_THAT(r.out, HasSubstr("robot r2\\n9 2026-12-04T10:00:00Z"));
+  EXPECT_THAT(r.out, ::testing::ContainsRegex("\"id\": [0-9]+,"));
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);
 }
 
 // Reads `path` until `pred` holds on its text (bounded: a bug fails, never hangs).
