@@ -1,6 +1,7 @@
 #include "fusion/wall_consolidation.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <unordered_set>
@@ -26,6 +27,19 @@ constexpr double kSlackM = 1e-6;
 constexpr double kPierceTrimM = 0.5;
 // Evidence is sampled along lines at this step: every cell a line crosses.
 constexpr double kSampleStepM = 0.5 * FreeSpaceGrid::kCellM;
+
+std::atomic<bool> verify_neighbour_cache{false};
+std::atomic<size_t> neighbour_cache_mismatch_count{0};
+
+// Inserts x into the ascending ids if absent; erases it if present.
+void InsertSorted(std::vector<ClusterId>* ids, ClusterId x) {
+  auto it = std::lower_bound(ids->begin(), ids->end(), x);
+  if (it == ids->end() || *it != x) ids->insert(it, x);
+}
+void EraseSorted(std::vector<ClusterId>* ids, ClusterId x) {
+  auto it = std::lower_bound(ids->begin(), ids->end(), x);
+  if (it != ids->end() && *it == x) ids->erase(it);
+}
 
 // The index cell (kPieceStepM square) that contains p, packed as a
 // free-space cell key of its indices.
@@ -168,6 +182,8 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
     // and the grid starts empty, so that still holds.
     free_space_ =
         std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count, params_.evidence_range_m);
+    // Neighbours() searches further with evidence (occluded gaps).
+    all_neighbours_stale_ = true;
     if (params_.wall_proof_gap_m > 0.0) {
       proof_ = std::make_unique<FreeSpaceGrid>(1, params_.evidence_range_m);
     }
@@ -282,6 +298,7 @@ void WallConsolidator::Retire(ClusterId id) {
   piece.retired = true;
   ++retired_count_;
   if (ledger_) ledger_->Unwatch(id);
+  DropNeighbours(id);
 }
 
 std::vector<ClusterId> WallConsolidator::RetiredPieces() const {
@@ -304,13 +321,55 @@ void WallConsolidator::Erase(ClusterId piece) {
   }
   if (ledger_) ledger_->Unwatch(piece);
   TouchNeighboursIfOversized(piece);
+  DropNeighbours(piece);
   Index(piece, it->second.fit.segment, false);
   if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
   pieces_.erase(it);
   piece_stats_.erase(piece);
 }
 
-std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
+void WallConsolidator::SetVerifyNeighbourCache(bool on) { verify_neighbour_cache = on; }
+size_t WallConsolidator::neighbour_cache_mismatches() { return neighbour_cache_mismatch_count; }
+
+void WallConsolidator::RefreshNeighbours(ClusterId id) {
+  std::vector<ClusterId> now = Neighbours(id);
+  std::vector<ClusterId>& cached = neighbours_[id];  // a node: stays valid as others are added
+  for (ClusterId other : cached) {
+    if (!std::binary_search(now.begin(), now.end(), other)) EraseSorted(&neighbours_[other], id);
+  }
+  for (ClusterId other : now) {
+    if (!std::binary_search(cached.begin(), cached.end(), other)) {
+      InsertSorted(&neighbours_[other], id);
+    }
+  }
+  cached = std::move(now);
+}
+
+void WallConsolidator::DropNeighbours(ClusterId id) {
+  auto it = neighbours_.find(id);
+  if (it == neighbours_.end()) return;
+  const std::vector<ClusterId> old = std::move(it->second);
+  neighbours_.erase(it);
+  for (ClusterId other : old) {
+    if (auto o = neighbours_.find(other); o != neighbours_.end()) EraseSorted(&o->second, id);
+  }
+}
+
+const std::vector<ClusterId>& WallConsolidator::CachedNeighbours(ClusterId id) {
+  auto it = neighbours_.find(id);
+  if (it == neighbours_.end()) {
+    // Every live piece is refreshed when it appears; a miss is a bug, and the
+    // search it stands for is still right.
+    ++neighbour_cache_mismatch_count;
+    RefreshNeighbours(id);
+    it = neighbours_.find(id);
+  } else if (verify_neighbour_cache && Neighbours(id, false) != it->second) {
+    ++neighbour_cache_mismatch_count;
+  }
+  return it->second;
+}
+
+std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_gaps) {
   std::vector<ClusterId> out;
   if (!params_.consolidate) return out;
   const Piece& piece = pieces_.at(id);
@@ -345,7 +404,7 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id) {
                              if (q.pierced) return true;
                              gap_samples.clear();
                              if (!OnOneWall(s, id, q.fit.segment, other, params_, free_space_.get(),
-                                            &gap_samples, proof_.get())) {
+                                            record_gaps ? &gap_samples : nullptr, proof_.get())) {
                                return true;
                              }
                              // Bridged an occluded gap: watch its cells.
@@ -504,6 +563,22 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
       if (live(id)) work.push_back(id);
     }
   }
+  // The neighbour cache first: a walk reads lists of untouched pieces, which
+  // must already mirror every touched piece's change.
+  std::vector<ClusterId> refresh;
+  if (all_neighbours_stale_) {
+    for (const auto& [id, piece] : pieces_) {
+      if (!piece.retired) refresh.push_back(id);
+    }
+    all_neighbours_stale_ = false;
+  } else {
+    for (ClusterId id : touched_pieces_) {
+      if (live(id)) refresh.push_back(id);
+    }
+  }
+  std::sort(refresh.begin(), refresh.end());
+  refresh.erase(std::unique(refresh.begin(), refresh.end()), refresh.end());
+  for (ClusterId id : refresh) RefreshNeighbours(id);
   touched_pieces_.clear();
   touched_walls_.clear();
 
@@ -539,7 +614,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
         oversized = true;
         break;
       }
-      for (ClusterId other : Neighbours(id)) {
+      for (ClusterId other : CachedNeighbours(id)) {
         if (visited.insert(other).second) {
           stack.push_back(other);
         } else if (oversized_now.count(other) != 0) {
@@ -564,7 +639,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     while (!expand.empty()) {
       const ClusterId id = expand.back();
       expand.pop_back();
-      for (ClusterId other : Neighbours(id)) {
+      for (ClusterId other : CachedNeighbours(id)) {
         // An untouched piece oversized before stays a wall of its own.
         if (pieces_.at(other).oversized && touched.count(other) == 0) continue;
         if (!visited.insert(other).second) continue;

@@ -140,6 +140,11 @@ class WallConsolidator {
   // piece, changed or not (the caller compares).
   void Resolve(std::vector<ClusterId>* removed, std::vector<Wall>* walls);
 
+  // Test hook: while on, every cached neighbour list Resolve() reads is
+  // compared with a fresh search; mismatches are counted (process-wide).
+  static void SetVerifyNeighbourCache(bool on);
+  static size_t neighbour_cache_mismatches();
+
  private:
   struct Piece {
     ClusterStats::Fit fit;
@@ -161,9 +166,16 @@ class WallConsolidator {
   // current neighbours are resolved again.
   void TouchNeighboursIfOversized(ClusterId id);
   void Index(ClusterId id, const geometry::Segment2& s, bool insert);
-  // Pieces on one wall with `id`, ascending.
-  // Records the cells of the occluded gaps it bridges (gap_watch_).
-  std::vector<ClusterId> Neighbours(ClusterId id);
+  // Pieces on one wall with `id`, ascending, computed from the index.
+  // Records the cells of the occluded gaps it bridges (gap_watch_) if
+  // record_gaps.
+  std::vector<ClusterId> Neighbours(ClusterId id, bool record_gaps = true);
+  // The neighbour cache (neighbours_): recomputes `id`'s list and mirrors the
+  // change into its old and new neighbours' lists; drops a piece that left.
+  void RefreshNeighbours(ClusterId id);
+  void DropNeighbours(ClusterId id);
+  // neighbours_.at(id); with the test hook on, checked against Neighbours().
+  const std::vector<ClusterId>& CachedNeighbours(ClusterId id);
   // Cells that became free: touches the walls that bridged them and the
   // pieces whose piercing they may change.
   void TakeEvidence();
@@ -187,6 +199,15 @@ class WallConsolidator {
   std::unique_ptr<FreeSpaceGrid> proof_;       // see AddObservation
   std::unique_ptr<RetirementLedger> ledger_;   // with free_space_, if retire_views > 0
   size_t retired_count_ = 0;
+  // Neighbours() of every piece resolved since it last changed, ascending.
+  // Symmetric, as OnOneWall is: q is in p's list iff p is in q's. Resolve()
+  // walks components through it, so a wall of k pieces touched by one changed
+  // piece costs one index search, not k. What can change OnOneWall(p, q)
+  // without touching p or q: nothing (a new free cell on a bridged gap, a new
+  // proof near one end and new piercing all touch a piece, see TakeEvidence);
+  // touched pieces are recomputed first, their changes mirrored.
+  std::unordered_map<ClusterId, std::vector<ClusterId>> neighbours_;
+  bool all_neighbours_stale_ = false;  // the evidence appeared: recompute every list
   // Index cells (kPieceStepM) of bridged occluded gaps -> the pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;
