@@ -29,6 +29,106 @@ struct CellKeyHash {
   }
 };
 
+// Cell -> items, by open addressing (linear probing, a power-of-two table at
+// most half full, backward-shift erase). The engine's queries probe many empty
+// cells; std::unordered_map spends a division and a bucket load on each miss
+// (a sixth of the fuser's time in a city soak), this a mask and one slot.
+template <typename T>
+class CellTable {
+ public:
+  size_t size() const { return size_; }
+
+  const std::vector<T>* Find(const CellKey& key) const {
+    if (size_ == 0) return nullptr;
+    for (size_t i = Home(key);; i = (i + 1) & mask_) {
+      const Slot& slot = slots_[i];
+      if (slot.items == kEmpty) return nullptr;
+      if (slot.key == key) return &items_[slot.items];
+    }
+  }
+  std::vector<T>* Find(const CellKey& key) {
+    return const_cast<std::vector<T>*>(static_cast<const CellTable&>(*this).Find(key));
+  }
+
+  std::vector<T>& FindOrAdd(const CellKey& key) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    size_t i = Home(key);
+    for (; slots_[i].items != kEmpty; i = (i + 1) & mask_) {
+      if (slots_[i].key == key) return items_[slots_[i].items];
+    }
+    uint32_t index;
+    if (free_.empty()) {
+      index = static_cast<uint32_t>(items_.size());
+      items_.emplace_back();
+    } else {
+      index = free_.back();
+      free_.pop_back();
+    }
+    slots_[i] = {key, index};
+    ++size_;
+    return items_[index];
+  }
+
+  // REQUIRES: the cell is present and its items empty.
+  void Erase(const CellKey& key) {
+    size_t i = Home(key);
+    while (!(slots_[i].key == key)) i = (i + 1) & mask_;
+    free_.push_back(slots_[i].items);
+    // Backward shift: move later entries of the probe run into the hole, so
+    // lookups never need tombstones.
+    for (size_t j = (i + 1) & mask_; slots_[j].items != kEmpty; j = (j + 1) & mask_) {
+      const size_t home = Home(slots_[j].key);
+      // Whether j's home lies cyclically in (i, j]: then it stays.
+      const bool stays = i <= j ? (i < home && home <= j) : (i < home || home <= j);
+      if (stays) continue;
+      slots_[i] = slots_[j];
+      i = j;
+    }
+    slots_[i].items = kEmpty;
+    --size_;
+  }
+
+  // fn(key, items) for every cell, in table order.
+  template <typename Fn>
+  void ForEach(Fn&& fn) const {
+    for (const Slot& slot : slots_) {
+      if (slot.items != kEmpty) fn(slot.key, items_[slot.items]);
+    }
+  }
+
+ private:
+  static constexpr uint32_t kEmpty = UINT32_MAX;
+  struct Slot {
+    CellKey key;
+    uint32_t items = kEmpty;  // index into items_
+  };
+
+  size_t Home(const CellKey& key) const {
+    uint64_t h = static_cast<uint64_t>(key.x) * 0x9E3779B97F4A7C15ULL ^
+                 static_cast<uint64_t>(key.y) * 0xC2B2AE3D27D4EB4FULL;
+    h ^= h >> 32;
+    return static_cast<size_t>(h) & mask_;
+  }
+
+  void Grow() {
+    std::vector<Slot> old = std::move(slots_);
+    slots_.assign(old.empty() ? 64 : 2 * old.size(), Slot());
+    mask_ = slots_.size() - 1;
+    for (const Slot& slot : old) {
+      if (slot.items == kEmpty) continue;
+      size_t i = Home(slot.key);
+      while (slots_[i].items != kEmpty) i = (i + 1) & mask_;
+      slots_[i] = slot;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  size_t mask_ = 0;
+  size_t size_ = 0;
+  std::vector<std::vector<T>> items_;  // by slot index; reused through free_
+  std::vector<uint32_t> free_;
+};
+
 // Items of type T filed under the cell that contains their point.
 template <typename T>
 class UniformGrid {
@@ -42,20 +142,23 @@ class UniformGrid {
             static_cast<int64_t>(std::floor(p.y() / cell_m_))};
   }
 
-  void Insert(const geometry::Vec2& p, T item) { cells_[KeyOf(p)].push_back(std::move(item)); }
+  void Insert(const geometry::Vec2& p, T item) {
+    cells_.FindOrAdd(KeyOf(p)).push_back(std::move(item));
+  }
 
   // Items filed in the cell that contains p.
   size_t CountAt(const geometry::Vec2& p) const {
-    auto it = cells_.find(KeyOf(p));
-    return it == cells_.end() ? 0 : it->second.size();
+    const std::vector<T>* items = cells_.Find(KeyOf(p));
+    return items == nullptr ? 0 : items->size();
   }
 
   // Removes the items filed at p for which pred(item) holds (order not kept).
   template <typename Pred>
   void EraseIf(const geometry::Vec2& p, Pred pred) {
-    auto it = cells_.find(KeyOf(p));
-    if (it == cells_.end()) return;
-    std::vector<T>& items = it->second;
+    const CellKey key = KeyOf(p);
+    std::vector<T>* found = cells_.Find(key);
+    if (found == nullptr) return;
+    std::vector<T>& items = *found;
     for (size_t i = 0; i < items.size();) {
       if (pred(items[i])) {
         items[i] = std::move(items.back());
@@ -64,7 +167,7 @@ class UniformGrid {
         ++i;
       }
     }
-    if (items.empty()) cells_.erase(it);
+    if (items.empty()) cells_.Erase(key);
   }
 
   // Calls fn(item) for every item in the cells that meet the square of half
@@ -127,15 +230,15 @@ class UniformGrid {
       // cells is cheaper than probing empty ones; sorted, so that a cut-off
       // falls where it would in the probing order below.
       std::vector<std::pair<CellKey, const std::vector<T>*>> hits;
-      for (const auto& [key, items] : cells_) {
-        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) continue;
-        if (!wanted(key)) continue;
+      cells_.ForEach([&](const CellKey& key, const std::vector<T>& items) {
+        if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) return;
+        if (!wanted(key)) return;
         if (max_items == SIZE_MAX) {
           for (const T& item : items) fn(item);  // no cut-off: any order will do
         } else {
           hits.emplace_back(key, &items);
         }
-      }
+      });
       std::sort(hits.begin(), hits.end(), [](const auto& u, const auto& v) {
         return u.first.x != v.first.x ? u.first.x < v.first.x : u.first.y < v.first.y;
       });
@@ -148,9 +251,9 @@ class UniformGrid {
       for (int64_t y = lo.y; y <= hi.y; ++y) {
         const CellKey key{x, y};
         if (!wanted(key)) continue;
-        auto it = cells_.find(key);
-        if (it == cells_.end()) continue;
-        if (!visit(it->second)) return false;
+        const std::vector<T>* items = cells_.Find(key);
+        if (items == nullptr) continue;
+        if (!visit(*items)) return false;
       }
     }
     return true;
@@ -161,7 +264,7 @@ class UniformGrid {
   }
 
   double cell_m_;
-  std::unordered_map<CellKey, std::vector<T>, CellKeyHash> cells_;
+  CellTable<T> cells_;
 };
 
 }  // namespace mapd::fusion
