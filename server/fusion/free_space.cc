@@ -132,9 +132,10 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
         const int bit = __builtin_ctz(todo);
         todo &= todo - 1u;
         uint8_t& count = tile->counts[row * kTileCells + static_cast<size_t>(bit)];
-        ++count;
-        if (count == min_count_) newly_free_.push_back(TileKey(tx * kTileCells + bit, cy));
-        if (count == 255) tile->saturated[row] |= 1u << bit;
+        if (++count == min_count_) {
+          newly_free_.push_back(TileKey(tx * kTileCells + bit, cy));
+          tile->saturated[row] |= 1u << bit;
+        }
       }
     }
   }
@@ -158,10 +159,11 @@ void FreeSpaceGrid::AddLine(const Segment2& line) {
     const size_t row = static_cast<size_t>(cy - ty * kTileCells);
     const int bit = static_cast<int>(cx - tx * kTileCells);
     uint8_t& count = tile.counts[row * kTileCells + static_cast<size_t>(bit)];
-    if (count == 255) continue;
-    ++count;
-    if (count == min_count_) newly_free_.push_back(cell);
-    if (count == 255) tile.saturated[row] |= 1u << bit;
+    if (count >= min_count_) continue;
+    if (++count == min_count_) {
+      newly_free_.push_back(cell);
+      tile.saturated[row] |= 1u << bit;
+    }
   }
 }
 
@@ -231,7 +233,11 @@ void FreeSpaceGrid::RestoreTile(uint64_t key, const Tile& tile) {
   auto data = std::make_unique<TileData>();
   data->counts = tile;
   for (size_t i = 0; i < tile.size(); ++i) {
-    if (tile[i] == 255) data->saturated[i / kTileCells] |= 1u << (i % kTileCells);
+    if (tile[i] < min_count_) continue;
+    // Snapshots written before counts stopped at min_count hold up to 255:
+    // stopped here too, so the next snapshot has a fresh engine's bytes.
+    data->counts[i] = static_cast<uint8_t>(min_count_);
+    data->saturated[i / kTileCells] |= 1u << (i % kTileCells);
   }
   tiles_[key] = std::move(data);
 }

@@ -20,9 +20,15 @@
 // triangle, so crossings the robot drove through and doorways it looked
 // through stayed "unseen" and consolidation bridged them (docs/algorithms.md
 // A.11 has the measurements). Cells are kCellM square, in tiles of
-// kTileCells x kTileCells created on first touch; counts saturate at 255, so
-// they, and which cells are free, are a function of the set of triangles
-// added, whatever their order.
+// kTileCells x kTileCells created on first touch. Counts stop at min_count:
+// nothing reads a count beyond whether it reached min_count, and a cell that
+// did is skipped by every later triangle (one mask test per row of a tile),
+// so a revisited area costs a triangle's rows, not its cells. Counts, and
+// which cells are free, are a function of the set of triangles added,
+// whatever their order. (Until issue 40's cost work counts ran on to 255 and
+// every view of a revisited area incremented each cell it covered: 14 % of a
+// city soak's fusion time. Snapshots written then still load: a count of at
+// least min_count is free either way.)
 #ifndef MAPD_FUSION_FREE_SPACE_H_
 #define MAPD_FUSION_FREE_SPACE_H_
 
@@ -98,10 +104,9 @@ class FreeSpaceGrid {
   void RestoreTile(uint64_t key, const Tile& tile);
 
  private:
-  // A tile's counts and, per row, one bit per cell whose count is saturated
-  // (255). A saturated count never changes again, so AddView skips those
-  // cells with one mask test per row and tile: a revisited area costs the
-  // triangle's rows, not its cells. Derived from the counts (not in snapshots).
+  // A tile's counts and, per row, one bit per cell whose count reached
+  // min_count (saturated: it never changes again, and AddView skips it).
+  // Derived from the counts (not in snapshots).
   struct TileData {
     Tile counts{};
     std::array<uint32_t, kTileCells> saturated{};
