@@ -201,11 +201,12 @@ class UniformGrid {
     // computed once: the same cells, without a call per cell.
     const geometry::Vec2 d = s.direction();
     const double len2 = d.squaredNorm();
+    const double reach2 = reach_m * reach_m;  // squared: no root per cell
     const auto near = [&](const CellKey& key) {
       const geometry::Vec2 c = CentreOf(key);
-      if (len2 == 0.0) return (c - s.a).norm() <= reach_m;
+      if (len2 == 0.0) return (c - s.a).squaredNorm() <= reach2;
       const double t = std::clamp((c - s.a).dot(d) / len2, 0.0, 1.0);
-      return (c - (s.a + t * d)).norm() <= reach_m;
+      return (c - (s.a + t * d)).squaredNorm() <= reach2;
     };
     return VisitCells(lo, hi, near, fn, max_items);
   }
