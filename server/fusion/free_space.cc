@@ -45,11 +45,6 @@ HalfPlane InwardRay(const Vec2& p, const Vec2& q, const Vec2& o, double k) {
 
 }  // namespace
 
-uint64_t FreeSpaceGrid::TileKey(int64_t tx, int64_t ty) {
-  return (static_cast<uint64_t>(static_cast<uint32_t>(tx)) << 32) |
-         static_cast<uint64_t>(static_cast<uint32_t>(ty));
-}
-
 FreeSpaceGrid::TileData& FreeSpaceGrid::TileAt(int64_t tx, int64_t ty) {
   std::unique_ptr<TileData>& tile = tiles_[TileKey(tx, ty)];
   if (!tile) tile = std::make_unique<TileData>();
@@ -165,21 +160,6 @@ void FreeSpaceGrid::AddLine(const Segment2& line) {
       tile.saturated[row] |= 1u << bit;
     }
   }
-}
-
-bool FreeSpaceGrid::Probe::IsFree(const Vec2& p) {
-  const int64_t cx = CellIndex(p.x()), cy = CellIndex(p.y());
-  const int64_t tx = FloorDiv(cx, kTileCells), ty = FloorDiv(cy, kTileCells);
-  const uint64_t key = TileKey(tx, ty);
-  if (!has_tile_ || key != tile_key_) {
-    auto it = grid_.tiles_.find(key);
-    tile_ = it == grid_.tiles_.end() ? nullptr : &it->second->counts;
-    tile_key_ = key;
-    has_tile_ = true;
-  }
-  if (tile_ == nullptr) return false;
-  return (*tile_)[static_cast<size_t>((cy - ty * kTileCells) * kTileCells + cx -
-                                      tx * kTileCells)] >= grid_.min_count_;
 }
 
 void FreeSpaceGrid::Watch(uint64_t cell_key, bool on) {

@@ -33,6 +33,7 @@
 #define MAPD_FUSION_FREE_SPACE_H_
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
@@ -71,7 +72,23 @@ class FreeSpaceGrid {
   class Probe {
    public:
     explicit Probe(const FreeSpaceGrid& grid) : grid_(grid) {}
-    bool IsFree(const geometry::Vec2& p);
+    // Inline: callers probe every half cell along lines (piercing, gaps).
+    bool IsFree(const geometry::Vec2& p) {
+      const auto cx = static_cast<int64_t>(std::floor(p.x() / kCellM));
+      const auto cy = static_cast<int64_t>(std::floor(p.y() / kCellM));
+      const int64_t tx = cx >> kTileShift, ty = cy >> kTileShift;  // floor division
+      const uint64_t key = TileKey(tx, ty);
+      if (!has_tile_ || key != tile_key_) {
+        auto it = grid_.tiles_.find(key);
+        tile_ = it == grid_.tiles_.end() ? nullptr : &it->second->counts;
+        tile_key_ = key;
+        has_tile_ = true;
+      }
+      if (tile_ == nullptr) return false;
+      const auto row = static_cast<size_t>(cy & (kTileCells - 1));
+      const auto column = static_cast<size_t>(cx & (kTileCells - 1));
+      return (*tile_)[row * kTileCells + column] >= grid_.min_count_;
+    }
 
    private:
     const FreeSpaceGrid& grid_;
@@ -113,8 +130,12 @@ class FreeSpaceGrid {
     std::array<uint32_t, kTileCells> watched{};  // see Watch
   };
   static_assert(kTileCells == 32, "one uint32_t mask per tile row");
+  static constexpr int kTileShift = 5;  // kTileCells == 1 << kTileShift
 
-  static uint64_t TileKey(int64_t tx, int64_t ty);
+  static uint64_t TileKey(int64_t tx, int64_t ty) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(tx)) << 32) |
+           static_cast<uint64_t>(static_cast<uint32_t>(ty));
+  }
   TileData& TileAt(int64_t tx, int64_t ty);
 
   const uint32_t min_count_;
