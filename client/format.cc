@@ -294,6 +294,11 @@ std::string FormatStats(const pb::Stats& s, const std::string& server) {
                                 : std::string()) +
           ")");
   if (s.recovering()) row("state", "RECOVERING the fused map (health NOT_SERVING)");
+  if (s.replaying()) {
+    row("state",
+        "SERVING, replaying the observations stored after the last snapshot (the map "
+        "catches up as the fusion backlog falls)");
+  }
   if (!s.write_failure().empty())
     row("state", "NOT WRITABLE (health NOT_SERVING): " + s.write_failure());
   row("robots", num(s.robots()));

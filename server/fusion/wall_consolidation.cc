@@ -372,6 +372,7 @@ const std::vector<ClusterId>& WallConsolidator::CachedNeighbours(ClusterId id) {
 std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_gaps) {
   std::vector<ClusterId> out;
   if (!params_.consolidate) return out;
+  out.reserve(32);  // a piece is filed every 2 m: long walls find each other many times
   const Piece& piece = pieces_.at(id);
   if (piece.pierced) return out;
   const Segment2& s = piece.fit.segment;

@@ -76,6 +76,7 @@ struct CoreStats {
   uint64_t commits = 0;         // group commits by this process
   double uptime_s = 0;
   bool recovering = false;          // the fused map is being rebuilt at start
+  bool replaying = false;           // serving, still replaying what followed the snapshot
   double snapshot_age_s = 0;        // newest snapshot of the fusion state (0: none)
   uint64_t replay_length = 0;       // observations fused since that snapshot
   uint64_t fused_raw_features = 0;  // raw features in the engine (folded ones included)

@@ -73,8 +73,11 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
     // a core). Linux: a thread's nice value is its own.
     setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kFuserNice);
     c->HoldFuserForTest();
-    c->Recover();
-    c->FuserLoop();
+    if (c->Recover()) {
+      c->FuserLoop();
+    } else {
+      c->ParkFuser();
+    }
   });
   return core;
 }
@@ -507,6 +510,11 @@ void MapCore::HoldFuserForTest() {
     fuse_cv_.wait_for(lock, std::chrono::milliseconds(5));
 }
 
+void MapCore::ParkFuser() {
+  std::unique_lock<std::mutex> lock(fuse_mu_);
+  fuse_cv_.wait(lock, [this] { return fuser_stopping_; });
+}
+
 void MapCore::FuserLoop() {
   std::deque<ToFuse> work;
   for (;;) {
@@ -837,6 +845,7 @@ CoreStats MapCore::Stats() const {
   }
   s.ack_latency = ack_latency_.Snapshot();
   s.recovering = !ready_.load();
+  s.replaying = replaying_.load();
   if (Status w = write_health_.status(); !w.ok()) s.write_failure = w.message();
   s.replay_length = fused_since_snapshot_.load();
   if (const int64_t created = snapshot_created_ns_.load(); created > 0) {

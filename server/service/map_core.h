@@ -31,6 +31,7 @@
 #include <deque>
 #include <functional>
 #include <future>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -93,6 +94,9 @@ struct MapCoreOptions {
   // a machine of any speed. Polled every few milliseconds, with a lock of the
   // core held: it must not call the core.
   std::function<bool()> hold_fuser_for_test;
+  // Test hook: a recovery replay that serves (after a snapshot) waits before
+  // each observation while this returns true, until Stop().
+  std::function<bool()> hold_replay_for_test;
 };
 
 class MapCore final : public Core {
@@ -181,10 +185,27 @@ class MapCore final : public Core {
   struct ToFuse;
   // Fuser thread, at start (map_core_recovery.cc): engine_ from the newest
   // snapshot and the observations after it; then the fused table is synced.
-  void Recover();
+  // After a snapshot the core is ready (serving) before the replay, which it
+  // then treats as a fusion backlog. False if the engine is not in step with
+  // the database (a failed or stopped recovery): nothing more may be fused.
+  bool Recover();
+  // Ready (or failed, `s`): the change feed starts at the current version,
+  // OnReady callbacks run.
+  void MarkReady(const Status& s);
+  // What a replay will fuse: the sessions, the newest stored observation id,
+  // the sessions fused as their observations come and the ties still to replay.
+  struct ReplayPlan {
+    std::vector<storage::SessionFrame> sessions;
+    int64_t newest = 0;
+    std::unordered_map<int64_t, geometry::Rigid3> streaming;
+    std::map<std::pair<int64_t, int64_t>, std::vector<int64_t>> ties;  // (T, seq) -> sessions
+  };
+  StatusOr<ReplayPlan> PlanReplay();
   // Fuses, in the live order, every stored tied observation and tie after
-  // (fused_through_id_, fused_tie_seq_).
-  Status Replay();
+  // (fused_through_id_, fused_tie_seq_), as planned. With `counted` (the
+  // replay's part of committed_count_, at most), it also publishes rounds as
+  // the fuser does and moves fused_count_ on, taking from *counted.
+  Status Replay(ReplayPlan plan, uint64_t* counted);
   // Queues the fused-table rows that differ from engine_'s published map.
   Status QueueFusedTableSync();
   // Fuser thread: a snapshot when one is due (MapCoreOptions).
@@ -213,6 +234,8 @@ class MapCore final : public Core {
   // into `out` (empty).
   void TakeFusedRows(size_t max_rows, FusedDelta* out);
   void FuserLoop();
+  // Fuser thread, after a failed recovery: waits for Stop() (see Recover).
+  void ParkFuser();
   // Fuser thread: waits while options_.hold_fuser_for_test() says so, until
   // Stop() tells the fuser to stop.
   void HoldFuserForTest();
@@ -300,6 +323,7 @@ class MapCore final : public Core {
 
   // Recovery (Open, Recover).
   std::atomic<bool> ready_{false};
+  std::atomic<bool> replaying_{false};  // serving, with the recovery replay still going
   std::atomic<bool> cancel_recovery_{false};
   std::atomic<uint64_t> recovery_replayed_{0};
   std::atomic<int64_t> recovery_target_id_{0};

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <map>
 #include <mutex>
+#include <thread>
 
 #include "common/clock.h"
 #include "service/log.h"
@@ -66,10 +67,13 @@ bool SameFusedRow(const storage::FusedRow& a, const storage::FusedRow& b) {
 // newest cannot be used.
 constexpr int kSnapshotsKept = 2;
 constexpr auto kProgressEvery = std::chrono::seconds(2);
+// A serving replay publishes a round every this many observations: the
+// change feed and the fused table move on, readers waiting are woken.
+constexpr uint64_t kReplayRound = 256;
 
 }  // namespace
 
-void MapCore::Recover() {
+bool MapCore::Recover() {
   const auto t0 = Clock::now();
   std::string from = "scratch";
   bool had_snapshot = false;
@@ -124,7 +128,37 @@ void MapCore::Recover() {
         {{"raw_retention_days", std::to_string(options_.raw_retention_days)},
          {"consequence", "walls seen only by dropped observations are missing from the map"}});
   }
-  Status s = Replay();
+  StatusOr<ReplayPlan> plan = PlanReplay();
+  Status s = plan.status();
+  // After a snapshot, mapd serves at once: the observations after it are a
+  // fusion backlog like any other (reads wait for it up to limits.read_wait_s,
+  // the writer's backpressure counts it, the change feed and the fused table
+  // follow it). Without one (a first start, exact mode, an unusable
+  // snapshot) the replay can be the whole history, and mapd serves after it.
+  const bool serve_first = s.ok() && from == "snapshot";
+  uint64_t counted = 0;  // of the replay, in committed_count_
+  if (serve_first) {
+    counted = plan->newest > fused_through_id_
+                  ? static_cast<uint64_t>(plan->newest - fused_through_id_)
+                  : 0;
+    {
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      committed_count_ += counted;
+    }
+    replaying_ = true;
+    MarkReady(Status::Ok());
+    Log(LogLevel::kInfo, "serving_while_replaying",
+        {{"from", from},
+         {"to_replay_at_most", std::to_string(counted)},
+         {"map_version", std::to_string(map_version_.load())},
+         {"ms", std::to_string(MsSince(t0))}});
+  }
+  if (s.ok()) s = Replay(*plan, serve_first ? &counted : nullptr);
+  if (serve_first) {
+    std::lock_guard<std::mutex> lock(fuse_mu_);
+    fused_count_ += counted;  // what the id range over-counted (gaps)
+  }
+  fuse_cv_.notify_all();
   if (s.ok()) s = QueueFusedTableSync();
   last_snapshot_ = Clock::now();
   if (s.ok()) {
@@ -141,6 +175,25 @@ void MapCore::Recover() {
   } else if (!cancel_recovery_.load()) {
     Log(LogLevel::kError, "map_recovery_failed", {{"error", s.ToString()}});
   }
+  if (serve_first) {
+    replaying_ = false;
+    // A replay that failed, or that Stop() cut short, leaves the engine
+    // behind the database: nothing more may be fused onto it or snapshotted
+    // (the next start replays again), and requests get the error.
+    if (!s.ok()) {
+      std::lock_guard<std::mutex> lock(ready_mu_);
+      recovery_status_ =
+          cancel_recovery_.load()
+              ? Status::Unavailable("mapd is shutting down")
+              : Status::Internal("mapd could not recover its fused map: " + s.message());
+    }
+    return s.ok();
+  }
+  MarkReady(s);
+  return s.ok();
+}
+
+void MapCore::MarkReady(const Status& s) {
   std::vector<std::function<void()>> callbacks;
   {
     std::lock_guard<std::mutex> lock(ready_mu_);
@@ -162,34 +215,68 @@ void MapCore::Recover() {
   }
 }
 
-Status MapCore::Replay() {
+StatusOr<MapCore::ReplayPlan> MapCore::PlanReplay() {
+  ReplayPlan plan;
   StatusOr<std::vector<storage::SessionFrame>> sessions = store_->ListSessions();
   if (!sessions.ok()) return sessions.status();
+  plan.sessions = std::move(sessions).value();
   StatusOr<int64_t> newest = store_->NewestObservationId();
   if (!newest.ok()) return newest.status();
+  plan.newest = *newest;
   recovery_target_id_ = *newest;
   // Sessions fused as their observations come (tied at or before the engine's
   // position), and the ties still to replay, in the live order.
-  std::unordered_map<int64_t, geometry::Rigid3> streaming;
-  std::map<std::pair<int64_t, int64_t>, std::vector<int64_t>> ties;  // (T, seq) -> sessions
-  for (const storage::SessionFrame& f : *sessions) {
+  for (const storage::SessionFrame& f : plan.sessions) {
     if (!f.tied) continue;
     if (f.tie_seq <= fused_tie_seq_) {
-      streaming[f.session_id] = f.T_map_frame;
+      plan.streaming[f.session_id] = f.T_map_frame;
     } else {
-      ties[{f.tied_through_observation, f.tie_seq}].push_back(f.session_id);
+      plan.ties[{f.tied_through_observation, f.tie_seq}].push_back(f.session_id);
     }
   }
+  return plan;
+}
+
+Status MapCore::Replay(ReplayPlan plan, uint64_t* counted) {
+  const std::vector<storage::SessionFrame>& sessions = plan.sessions;
+  std::unordered_map<int64_t, geometry::Rigid3>& streaming = plan.streaming;
+  const int64_t* newest = &plan.newest;
   auto last_log = Clock::now();
   const auto t0 = last_log;
+  // Serving (counted != null): rounds as the fuser's, so that readers, the
+  // change feed and the fused table follow the replay.
+  FusedDelta delta;
+  uint64_t in_round = 0;
+  const auto end_round = [&] {
+    PublishChange(delta);
+    if (!delta.empty()) {
+      std::lock_guard<std::mutex> lock(queue_mu_);
+      fused_pending_.Absorb(delta);
+      queue_cv_.notify_one();
+    }
+    delta = FusedDelta();
+    {
+      std::lock_guard<std::mutex> lock(fuse_mu_);
+      const uint64_t n = std::min(in_round, *counted);
+      fused_count_ += n;
+      *counted -= n;
+    }
+    fuse_cv_.notify_all();
+    in_round = 0;
+  };
   const auto fuse = [&](const storage::StoredObservation& obs, const geometry::Rigid3& T) {
+    while (counted != nullptr && options_.hold_replay_for_test && options_.hold_replay_for_test() &&
+           !cancel_recovery_.load()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
     if (cancel_recovery_.load()) return Status::Unavailable("recovery cancelled: mapd is stopping");
     {
       std::unique_lock<std::shared_mutex> lock(engine_mu_);
-      Fuse(obs.features, obs.id, obs.robot_id, T, nullptr);
+      Fuse(obs.features, obs.id, obs.robot_id, T, counted != nullptr ? &delta : nullptr);
+      ++map_version_;
     }
-    ++map_version_;
     ++fused_since_snapshot_;
+    if (counted != nullptr && ++in_round == kReplayRound) end_round();
     const uint64_t done = ++recovery_replayed_;
     if (Clock::now() - last_log >= kProgressEvery) {
       last_log = Clock::now();
@@ -212,20 +299,25 @@ Status MapCore::Replay() {
     if (s.ok()) fused_through_id_ = through_id;
     return s;
   };
-  for (const auto& [at, tied] : ties) {
-    MAPD_RETURN_IF_ERROR(stream_until(at.first));
+  Status s = Status::Ok();
+  for (const auto& [at, tied] : plan.ties) {
+    s = stream_until(at.first);
+    if (!s.ok()) break;
     std::unordered_map<int64_t, geometry::Rigid3> frames;
-    for (const storage::SessionFrame& f : *sessions) {
+    for (const storage::SessionFrame& f : sessions) {
       if (std::find(tied.begin(), tied.end(), f.session_id) != tied.end())
         frames[f.session_id] = f.T_map_frame;
     }
-    MAPD_RETURN_IF_ERROR(store_->ForEachObservationOfSessions(
+    s = store_->ForEachObservationOfSessions(
         tied, at.first,
-        [&](const storage::StoredObservation& obs) { return fuse(obs, frames[obs.session_id]); }));
+        [&](const storage::StoredObservation& obs) { return fuse(obs, frames[obs.session_id]); });
+    if (!s.ok()) break;
     streaming.insert(frames.begin(), frames.end());
     fused_tie_seq_ = at.second;
   }
-  return stream_until(*newest);
+  if (s.ok()) s = stream_until(*newest);
+  if (counted != nullptr && in_round > 0) end_round();
+  return s;
 }
 
 Status MapCore::QueueFusedTableSync() {

@@ -141,9 +141,17 @@ grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
     return ToGrpcStatus(p.status());
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   FeatureFilter filter;
-  Status s = ParseWatchRequest(*request, core_->Stats().map_version, &filter);
+  const CoreStats stats = core_->Stats();
+  pb::WatchFeatureMapRequest effective = *request;
+  // Just restarted from a snapshot, mapd replays what came after it: a client
+  // resuming from a version the replay has not reached yet gets the map as it
+  // is now (a resync), then the replay's changes.
+  if (stats.replaying && effective.since_map_version() > stats.map_version) {
+    effective.set_since_map_version(0);
+  }
+  Status s = ParseWatchRequest(effective, stats.map_version, &filter);
   if (!s.ok()) return ToGrpcStatus(s);
-  return ServeWatch(core_, context, *request, filter, writer);
+  return ServeWatch(core_, context, effective, filter, writer);
 }
 
 grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,
@@ -193,6 +201,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
   response->set_fusion_backlog(s.fusion_backlog);
   response->set_commits(s.commits);
   response->set_recovering(s.recovering);
+  response->set_replaying(s.replaying);
   response->set_snapshot_age_s(s.snapshot_age_s);
   response->set_replay_length(s.replay_length);
   response->set_fused_raw_features(s.fused_raw_features);

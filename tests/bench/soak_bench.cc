@@ -478,6 +478,11 @@ int main(int argc, char** argv) {
           const MapSnapshot after = GetMap(stub.get());
           if (after.ok && after.version >= before.version) {
             full_s = Seconds(t0);
+            // The recovery's summary line follows the replay's last round.
+            for (int i = 0; i < 200 && mapd.log().find("event=map_recovered") == std::string::npos;
+                 ++i) {
+              std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            }
             char line[512];
             std::snprintf(line, sizeof(line),
                           "| %.2fM | %.3f | %.3f | %s (%zu features, map_version %llu) | %s |",
