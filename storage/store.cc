@@ -735,27 +735,34 @@ Status Store::ForEachObservationBetween(int64_t after_id, int64_t through_id,
 Status Store::ForEachObservationWhere(const std::string& condition, int64_t after_id,
                                       int64_t through_id,
                                       const std::function<Status(const StoredObservation&)>& fn) {
-  // Pages of rows (keyset: the next page starts after the last id seen), the
-  // reader lock taken per page: a long replay (recovery, a tie of a large
-  // session) does not hold up other readers (GetStats, ...).
-  constexpr int64_t kPageRows = 4096;
+  // Pages of rows (keyset: the next page starts after the last id seen), each
+  // read under the reader lock and handed to `fn` after it is released: a long
+  // replay (recovery, a tie of a large session) fuses for seconds, and other
+  // readers (GetStats, ...) must not wait for that. (Calling `fn` under the
+  // lock held them for the whole replay: std::mutex is not fair, and the
+  // replay took it again at once for its next page.)
+  constexpr int64_t kPageRows = 1024;
   const std::string sql = std::string(kObservationColumns) + "WHERE " + condition +
                           (condition.empty() ? "" : " AND ") +
                           "o.id > ?1 AND o.id <= ?2 ORDER BY o.id LIMIT ?3";
+  std::vector<StoredObservation> page;
   for (int64_t last = after_id;;) {
-    int64_t rows = 0;
+    page.clear();
     {
       std::lock_guard<std::mutex> lock(reader_mu_);
       StatusOr<Statement> q = Statement::Prepare(reader_.get(), sql);
       if (!q.ok()) return q.status();
       q->Bind(1, last).Bind(2, through_id).Bind(3, kPageRows);
       MAPD_RETURN_IF_ERROR(ForEachObservationRow(*q, [&](const StoredObservation& obs) {
-        last = obs.id;
-        ++rows;
-        return fn(obs);
+        page.push_back(obs);
+        return Status::Ok();
       }));
     }
-    if (rows < kPageRows) return Status::Ok();
+    for (const StoredObservation& obs : page) {
+      last = obs.id;
+      MAPD_RETURN_IF_ERROR(fn(obs));
+    }
+    if (static_cast<int64_t>(page.size()) < kPageRows) return Status::Ok();
   }
 }
 

@@ -411,7 +411,9 @@ class Store {
   // --- Any thread.
   // Every stored observation in id (= arrival) order.
   Status ForEachObservation(const std::function<Status(const StoredObservation&)>& fn);
-  // The stored observations with after_id < id <= through_id, in id order.
+  // The stored observations with after_id < id <= through_id, in id order,
+  // read in pages: `fn` runs without the reader lock (other reads go on), and
+  // rows committed meanwhile past a page are seen (ids only grow).
   Status ForEachObservationBetween(int64_t after_id, int64_t through_id,
                                    const std::function<Status(const StoredObservation&)>& fn);
   // The newest stored observation id (0 if none).
