@@ -352,17 +352,31 @@ std::string FormatRobots(const pb::ListRobotsResponse& robots, int64_t now_ns) {
 }
 
 std::string FormatSubmaps(const pb::ListSubmapsResponse& submaps) {
-  std::string out = Printf("%-6s %-16s %-20s %-4s %7s %10s %10s %10s\n", "ID", "ROBOT", "NAME",
-                           "FMT", "RES m", "OCCUPIED", "FREE", "SIZE");
-  for (const pb::SubmapInfo& m : submaps.submaps()) {
-    out += Printf("%-6llu %-16s %-20s %-4s %7.3f %10llu %10llu %10s\n",
-                  static_cast<unsigned long long>(m.id()), m.robot_id().c_str(), m.name().c_str(),
-                  m.format() == pb::SUBMAP_FORMAT_OCTOMAP_OT ? "ot" : "bt", m.resolution(),
-                  static_cast<unsigned long long>(m.occupied_voxels()),
-                  static_cast<unsigned long long>(m.free_voxels()),
-                  HumanBytes(m.size_bytes()).c_str());
+  // Uploads first; merged maps (merge outputs, never merge inputs) apart.
+  const auto table = [&](bool merged) {
+    std::string out = Printf("%-6s %-16s %-20s %-4s %7s %10s %10s %10s\n", "ID", "ROBOT", "NAME",
+                             "FMT", "RES m", "OCCUPIED", "FREE", "SIZE");
+    int n = 0;
+    for (const pb::SubmapInfo& m : submaps.submaps()) {
+      if (m.merged() != merged) continue;
+      ++n;
+      out += Printf(
+          "%-6llu %-16s %-20s %-4s %7.3f %10llu %10llu %10s\n",
+          static_cast<unsigned long long>(m.id()), Visible(m.robot_id()).c_str(),
+          Visible(m.name()).c_str(), m.format() == pb::SUBMAP_FORMAT_OCTOMAP_OT ? "ot" : "bt",
+          m.resolution(), static_cast<unsigned long long>(m.occupied_voxels()),
+          static_cast<unsigned long long>(m.free_voxels()), HumanBytes(m.size_bytes()).c_str());
+    }
+    return std::make_pair(out, n);
+  };
+  const auto [uploads, n_uploads] = table(false);
+  const auto [merged, n_merged] = table(true);
+  std::string out = uploads;
+  out += Printf("%d uploaded submap%s\n", n_uploads, n_uploads == 1 ? "" : "s");
+  if (n_merged > 0) {
+    out += "\nmerged maps (outputs of merges: downloadable, never merge inputs)\n" + merged;
+    out += Printf("%d merged map%s\n", n_merged, n_merged == 1 ? "" : "s");
   }
-  out += Printf("%d submap%s\n", submaps.submaps_size(), submaps.submaps_size() == 1 ? "" : "s");
   return out;
 }
 

@@ -34,6 +34,7 @@ void ToProto(const storage::SubmapMeta& m, pb::SubmapInfo* out) {
   ToProto(m.bounds_max, out->mutable_bounds_max());
   out->set_size_bytes(m.size_bytes);
   out->set_created_ns(m.created_ns);
+  out->set_merged(m.robot == storage::kMergedRobot);
 }
 
 void ToProto(const FusedView& v, pb::FusedFeature* out) {

@@ -185,6 +185,15 @@ grpc::Status SubmapService::LoadMergeInputs(const pb::MergeSubmapsRequest& reque
   for (uint64_t id : request.submap_ids()) {
     StatusOr<storage::SubmapMeta> meta = core_->store().GetSubmap(static_cast<int64_t>(id));
     if (!meta.ok()) return ToGrpcStatus(meta.status());
+    // A merged map is a product, not an observation: merging it again would
+    // count its inputs twice, and a proposal's output would be merged (and
+    // could become the global map) without anyone having accepted it.
+    if (meta->robot == storage::kMergedRobot) {
+      return InvalidArgument("submap_ids: submap " + std::to_string(id) + " (" + meta->name +
+                             ") is the output of a merge, not an upload; merge the uploaded "
+                             "submaps it came from instead (mapctl merges lists each merge's "
+                             "inputs)");
+    }
     StatusOr<std::string> data = core_->store().GetSubmapData(static_cast<int64_t>(id));
     if (!data.ok()) return ToGrpcStatus(data.status());
     inputs->metas.push_back(*meta);

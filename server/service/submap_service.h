@@ -15,7 +15,10 @@
 //   line and a non-zero header resolution the file's. Only then is it stored.
 // - Delete: refused with FAILED_PRECONDITION while an accepted merge uses the
 //   submap as an input or produced it.
-// - Merge: computed by a MergeRunner (max_concurrent_merges at once, at most
+// - Merge: inputs are uploads; a merged map ("@merged") is refused with
+//   INVALID_ARGUMENT before anything runs (it would count its inputs twice,
+//   and a proposal's output would be merged unreviewed). Computed by a
+//   MergeRunner (max_concurrent_merges at once, at most
 //   max_queued_merges waiting, beyond that RESOURCE_EXHAUSTED); progress is
 //   streamed as it comes. A refusal (weak evidence, no corners, no overlap,
 //   mismatched resolutions, over budget) is recorded as a refused merge with

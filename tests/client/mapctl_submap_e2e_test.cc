@@ -198,6 +198,21 @@ TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
   EXPECT_THAT(r.out, HasSubstr("rendered 2 layers"));
   EXPECT_TRUE(IsValidPng(merge_png));
 
+  // The merged map is listed apart from the uploads and is no merge input.
+  r = Mapctl({"submaps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 uploaded submaps"));
+  const size_t apart = r.out.find("merged maps (outputs of merges");
+  ASSERT_NE(apart, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("@merged", apart), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("@merged"), r.out.find("@merged", apart)) << "only in the merged table";
+  const std::string merged_id = r.out.substr(r.out.find('\n', apart) + 1);
+  const std::string first_row = merged_id.substr(merged_id.find('\n') + 1);
+  const std::string id_merged = first_row.substr(0, first_row.find(' '));
+  r = Mapctl({"merge", id_a, id_merged, "--wait"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("is the output of a merge, not an upload")) << r.out << r.err;
+
   // The global map: a .bt that the server's reader accepts, and its rendering.
   const std::string global_bt = dir_.File("world.bt"), global_svg = dir_.File("world.svg");
   r = Mapctl({"global-map", "-o", global_bt, "--render", global_svg});

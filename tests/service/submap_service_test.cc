@@ -356,6 +356,7 @@ TEST_F(SubmapServiceTest, MergesOverlappingSubmapsWithTheKnownTransform) {
   EXPECT_EQ(global, merged);
   EXPECT_EQ(info.id(), r.merged_submap_id());
   EXPECT_EQ(info.robot_id(), "@merged");
+  EXPECT_TRUE(info.merged());
   EXPECT_NEAR(info.bounds_min().x(), 0.0, 0.15);  // spans the whole room
   EXPECT_NEAR(info.bounds_max().x(), 10.0, 0.15);
   EXPECT_EQ(List().size(), 3u);
@@ -374,6 +375,17 @@ TEST_F(SubmapServiceTest, MergesOverlappingSubmapsWithTheKnownTransform) {
   pb::ListRobotsResponse robots;
   ASSERT_TRUE(stub_->ListRobots(&ctx, {}, &robots).ok());
   for (const auto& robot : robots.robots()) EXPECT_NE(robot.robot_id(), "@merged");
+  // Uploads are listed as such; the merged map is never a merge input (issue
+  // 42: `merge 2 6` once merged a proposal's output without review), and the
+  // refusal stores nothing.
+  for (const pb::SubmapInfo& s : List()) EXPECT_EQ(s.merged(), s.id() == r.merged_submap_id());
+  const MergeCall again = Merge({a, r.merged_submap_id()});
+  EXPECT_EQ(again.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(again.status.error_message().find("is the output of a merge, not an upload"),
+            std::string::npos)
+      << again.status.error_message();
+  EXPECT_FALSE(again.has_result);
+  EXPECT_EQ(MergeRows().size(), 1u);
 }
 
 TEST_F(SubmapServiceTest, RefusesMergesWithoutEnoughEvidenceAndStoresNoMergedMap) {
