@@ -105,8 +105,11 @@ class MapCore final : public Core {
   // then recovers the fused map: the newest usable snapshot, then the stored
   // observations after it, in the order the live server fused them (so the
   // map equals the one served before, bit for bit in bounded mode). Until
-  // that is done, ready() is false: batches and writes are refused with
-  // Unavailable (retryable; nothing is stored) and queries should not be made.
+  // the snapshot is loaded (without one: until the whole replay is done),
+  // ready() is false: batches and writes are refused with Unavailable
+  // (retryable; nothing is stored) and queries should not be made. After a
+  // snapshot the replay runs as a fusion backlog of a ready core
+  // (CoreStats::replaying).
   static StatusOr<std::unique_ptr<MapCore>> Open(const MapCoreOptions& options);
 
   bool ready() const { return ready_.load(); }

@@ -240,7 +240,7 @@ StatusOr<MapCore::ReplayPlan> MapCore::PlanReplay() {
 Status MapCore::Replay(ReplayPlan plan, uint64_t* counted) {
   const std::vector<storage::SessionFrame>& sessions = plan.sessions;
   std::unordered_map<int64_t, geometry::Rigid3>& streaming = plan.streaming;
-  const int64_t* newest = &plan.newest;
+  const int64_t newest = plan.newest;
   auto last_log = Clock::now();
   const auto t0 = last_log;
   // Serving (counted != null): rounds as the fuser's, so that readers, the
@@ -284,7 +284,7 @@ Status MapCore::Replay(ReplayPlan plan, uint64_t* counted) {
       Log(LogLevel::kInfo, "recovering",
           {{"replayed", std::to_string(done)},
            {"at_id", std::to_string(obs.id)},
-           {"newest_id", std::to_string(*newest)},
+           {"newest_id", std::to_string(newest)},
            {"per_s", std::to_string(static_cast<int64_t>(static_cast<double>(done) / s))}});
     }
     return Status::Ok();
@@ -315,7 +315,7 @@ Status MapCore::Replay(ReplayPlan plan, uint64_t* counted) {
     streaming.insert(frames.begin(), frames.end());
     fused_tie_seq_ = at.second;
   }
-  if (s.ok()) s = stream_until(*newest);
+  if (s.ok()) s = stream_until(newest);
   if (counted != nullptr && in_round > 0) end_round();
   return s;
 }
