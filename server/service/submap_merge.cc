@@ -54,40 +54,13 @@ geometry::Rigid3 ToRigid(const Eigen::Isometry3d& iso) {
   return T;
 }
 
-// The library checks its thresholds; this second look keeps a bug there from
-// writing a weak merge as a success.
+// The library checks its thresholds; its second look (voxel::CheckMergeEvidence,
+// the benchmark's too) keeps a bug there from writing a weak merge as a success.
 Status CheckEvidence(const voxel::MergeOutcome& outcome,
                      const std::vector<storage::SubmapMeta>& inputs, const SubmapOptions& o) {
-  if (outcome.alignments.size() != inputs.size()) {
-    return Status::Internal("the merge returned " + std::to_string(outcome.alignments.size()) +
-                            " alignments for " + std::to_string(inputs.size()) + " inputs");
-  }
-  double finest = inputs[0].resolution_m;
-  for (const auto& m : inputs) finest = std::min(finest, m.resolution_m);
-  for (size_t i = 1; i < outcome.alignments.size(); ++i) {
-    const voxel::Alignment& a = outcome.alignments[i];
-    const std::string which = "submap " + std::to_string(a.id);
-    // A correlation hypothesis (docs/algorithms.md B.9) has no corners; it
-    // passed the same residual and overlap gates, checked again below.
-    const bool by_corners = a.source.rfind("correlation", 0) != 0;
-    if (by_corners && a.matched_corners < o.min_matched_corners) {
-      return Status::FailedPrecondition(which + ": " + std::to_string(a.matched_corners) +
-                                        " matched corners, merge.min_matched_corners is " +
-                                        std::to_string(o.min_matched_corners));
-    }
-    if (!(a.overlap_score >= o.min_overlap_score)) {
-      return Status::FailedPrecondition(
-          which + ": overlap score " + std::to_string(a.overlap_score) +
-          " below merge.min_overlap_score " + std::to_string(o.min_overlap_score));
-    }
-    if (!(a.residual_m <= o.max_residual_voxels * finest * (1 + 1e-9))) {
-      return Status::FailedPrecondition(which + ": residual " + std::to_string(a.residual_m) +
-                                        " m above merge.max_residual_voxels " +
-                                        std::to_string(o.max_residual_voxels) + " voxels");
-    }
-  }
-  if (outcome.merged_bt.empty()) return Status::Internal("the merge returned no merged map");
-  return Status::Ok();
+  std::vector<double> resolutions;
+  for (const storage::SubmapMeta& m : inputs) resolutions.push_back(m.resolution_m);
+  return voxel::CheckMergeEvidence(outcome, resolutions, ToMergeParams(o));
 }
 
 grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {

@@ -13,3 +13,12 @@ StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapI
 }
 
 }  // namespace mapd::service
+
+namespace mapd::voxel {
+
+// Never reached (no merge runs), but submap_merge.cc names it.
+Status CheckMergeEvidence(const MergeOutcome&, const std::vector<double>&, const MergeParams&) {
+  return Status::Unimplemented("this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
+}  // namespace mapd::voxel

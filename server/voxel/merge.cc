@@ -205,6 +205,7 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
         alignment.residual_m = pair.residual_m;
         alignment.overlap_score = pair.overlap_score;
         alignment.source = pair.source;
+        alignment.by_corners = pair.by_corners;
         alignment.support_fraction = pair.support_fraction;
         alignment.shared_free_ratio = pair.shared_free_ratio;
         alignment.restart_spread_voxels = pair.restart_spread_voxels;

@@ -218,9 +218,10 @@ struct Alignment {
   int matched_corners = 0;
   double residual_m = 0.0;     // RMS after refinement, metres
   double overlap_score = 0.0;  // [0, 1]
-  // The generator of the tree edge that placed it: "corner solution N" or
-  // "correlation ..." (then matched_corners is 0); empty for the first input.
+  // The generator of the tree edge that placed it (PairReport::source and
+  // by_corners); empty and false for the first input.
   std::string source;
+  bool by_corners = false;
   // The rest of that edge's gate figures (PairReport; -1 where not measured,
   // and for the first input): for operators judging a merge, how far each
   // gate was from refusing it, and how close the runner-up came.
@@ -260,8 +261,13 @@ struct PairReport {
   // See MergeParams::max_restart_spread_voxels; -1 when not measured (gate
   // off, or a hypothesis refused by an earlier gate).
   double restart_spread_voxels = -1.0;
-  // Which generator gave T_a_b: "corner solution N" or "correlation ...".
+  // Which generator gave T_a_b: "corner solution N", "correlation ...",
+  // "plan view ..." or "the 180 deg turn of ...".
   std::string source;
+  // Whether that generator was corner matching: only then do matched_corners
+  // count (the others have no corners of their own; they pass the same
+  // residual, overlap, free-space and uniqueness gates).
+  bool by_corners = false;
   // The best hypothesis distinct from T_a_b (uniqueness gate thresholds) that
   // reached ICP: its residual, overlap score and support, -1 / 0 / 0 when
   // there was none.
@@ -290,6 +296,17 @@ struct MergeOutcome {
   // Free voxels left out of the fusion by max_fusion_free_voxels (left unknown).
   uint64_t free_voxels_skipped = 0;
 };
+
+// The evidence of a merge looked at again, one rule for every caller (the
+// service before it stores a merge, the benchmark before it counts one): one
+// alignment per input; every placed input within max_residual_voxels of the
+// finest of `resolutions_m` (the inputs', in input order) and at
+// min_overlap_score; one placed by corner matching (Alignment::by_corners)
+// with min_matched_corners; a merged map. A bug in the search must not be
+// stored as a merge. FailedPrecondition naming the submap and the figure that
+// failed; Internal for a malformed outcome.
+Status CheckMergeEvidence(const MergeOutcome& outcome, const std::vector<double>& resolutions_m,
+                          const MergeParams& params);
 
 // stage: "corners", "matching", "alignment", "fusion"; fraction in [0, 1] of the whole merge.
 using ProgressCallback = std::function<void(const std::string& stage, double fraction)>;

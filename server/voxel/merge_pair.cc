@@ -372,6 +372,7 @@ Status RunCornerStages(const PairSide& a, const PairSide& b, const MergeParams& 
       if (!report.ok()) return report.status();
       if (run->solutions == 1) run->first = *report;
       if (!used.empty()) {
+        report->by_corners = true;
         run->tried.push_back({"corner solution " + std::to_string(run->solutions), *report});
         accepted = accepted || report->accepted;
       }

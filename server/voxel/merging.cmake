@@ -16,4 +16,5 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/merge_pair.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_params.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge.cc
+  ${CMAKE_CURRENT_LIST_DIR}/merge_evidence.cc
 )

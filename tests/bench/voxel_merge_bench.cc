@@ -244,6 +244,15 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
         t.alignment_s,
         t.fusion_s,
         out.total_s - t.corners_s - t.matching_s - t.correlation_s - t.alignment_s - t.fusion_s};
+    // The service's second look, the same function (issue 42: the two once
+    // decided differently): a merge it would refuse is refused here too.
+    const mapd::Status evidence =
+        mapd::voxel::CheckMergeEvidence(*r, {r->resolution, r->resolution}, params);
+    if (!evidence.ok()) {
+      out.code = evidence.code();
+      out.message = "the second look: " + evidence.message();
+      return out;
+    }
     for (const auto& al : r->alignments) {
       if (al.id == 2) {
         out.accepted = true;

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -59,6 +60,47 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
   EXPECT_EQ(pair.source.rfind("correlation", 0), 0u) << pair.source;
   EXPECT_GT(pair.correlation_hypotheses, 0);
   EXPECT_GE(pair.hypotheses_tried, 1);
+  // No corners of its own: the one rule of service and benchmark accepts it
+  // whatever min_matched_corners says (issue 42: the service once refused
+  // every placement not labelled "correlation" for 0 matched corners).
+  EXPECT_FALSE(pair.by_corners);
+  EXPECT_FALSE(outcome->alignments[1].by_corners);
+  EXPECT_TRUE(CheckMergeEvidence(*outcome, {kRoomResolutionM, kRoomResolutionM}, params).ok());
+}
+
+// The second look (CheckMergeEvidence) on outcomes a buggy search could give.
+TEST(MergeEvidenceTest, RefusesWhatTheGatesRefuseNamingTheFigure) {
+  MergeParams params;
+  MergeOutcome outcome;
+  outcome.merged_bt = "a map";
+  outcome.alignments.resize(2);
+  Alignment& b = outcome.alignments[1];
+  b.id = 7;
+  b.residual_m = 0.05;
+  b.overlap_score = 0.9;
+  const std::vector<double> res = {0.1, 0.1};
+  // A plan-view or 180 deg turn placement: no corners, accepted.
+  b.source = "plan view yaw 12.0 deg";
+  EXPECT_TRUE(CheckMergeEvidence(outcome, res, params).ok());
+  // Placed by corner matching with too few corners.
+  b.by_corners = true;
+  b.matched_corners = params.min_matched_corners - 1;
+  Status s = CheckMergeEvidence(outcome, res, params);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(s.message().find("submap 7: 3 matched corners"), std::string::npos) << s.message();
+  b.matched_corners = params.min_matched_corners;
+  EXPECT_TRUE(CheckMergeEvidence(outcome, res, params).ok());
+  b.residual_m = params.max_residual_voxels * 0.1 * 1.01;
+  s = CheckMergeEvidence(outcome, res, params);
+  EXPECT_NE(s.message().find("residual"), std::string::npos) << s.message();
+  b.residual_m = 0.05;
+  b.overlap_score = std::nan("");
+  EXPECT_NE(CheckMergeEvidence(outcome, res, params).message().find("overlap score"),
+            std::string::npos);
+  b.overlap_score = 0.9;
+  EXPECT_EQ(CheckMergeEvidence(outcome, {0.1}, params).code(), StatusCode::kInternal);
+  outcome.merged_bt.clear();
+  EXPECT_EQ(CheckMergeEvidence(outcome, res, params).code(), StatusCode::kInternal);
 }
 
 // Two crops of a hall's middle: floor and ceiling, no wall, so no yaw to

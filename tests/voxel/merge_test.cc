@@ -98,7 +98,10 @@ TEST_P(MergeKnownTransformTest, RecoversTheTransformAndFuses) {
     EXPECT_LT(testing::TranslationError(b.T_reference_submap, T_a_b), 2 * kRoomResolutionM);
     if (after_corner_stages > 0) {
       EXPECT_GE(b.matched_corners, 4);
+      EXPECT_TRUE(b.by_corners) << b.source;  // its corners count in the second look
     }
+    EXPECT_TRUE(
+        CheckMergeEvidence(*outcome, {kRoomResolutionM, kRoomResolutionM}, MergeParams()).ok());
     EXPECT_GE(b.overlap_score, 0.9);
     EXPECT_LE(b.residual_m, kRoomResolutionM);
     ExpectFusedMapCoversBoth(*outcome, pair.a);
