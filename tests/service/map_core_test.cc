@@ -571,7 +571,10 @@ TEST_F(MapCoreTest, AStopDuringTheServingReplaySnapshotsNothing) {
 
   hold_replay = true;
   Open();
-  while (asked.load() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const auto asked_by = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (asked.load() == 0 && std::chrono::steady_clock::now() < asked_by)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_GT(asked.load(), 0) << "the replay never asked: it did not serve first";
   Close();  // the replay is held at its first observation
   EXPECT_EQ(Query("SELECT count(*) FROM fusion_snapshots"), snapshots);
 
