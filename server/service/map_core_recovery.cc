@@ -17,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include "common/clock.h"
 #include "service/log.h"
@@ -153,7 +154,7 @@ bool MapCore::Recover() {
          {"map_version", std::to_string(map_version_.load())},
          {"ms", std::to_string(MsSince(t0))}});
   }
-  if (s.ok()) s = Replay(*plan, serve_first ? &counted : nullptr);
+  if (s.ok()) s = Replay(std::move(plan).value(), serve_first ? &counted : nullptr);
   if (serve_first) {
     std::lock_guard<std::mutex> lock(fuse_mu_);
     fused_count_ += counted;  // what the id range over-counted (gaps)
