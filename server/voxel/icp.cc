@@ -192,14 +192,14 @@ Status IcpParams::Validate() const {
 
 namespace {
 
-// RefineIcp with the target's index either built here, over the target
+// RefineIcp (EvaluateIcp when !iterate) with the target's index either built here, over the target
 // points of the overlap (shared == null), or shared, over all of them and
 // asked within the overlap's box; target_index then counts in `target`.
 StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
                            const NearestVoxelIndex* shared,
                            const std::vector<Eigen::Vector3d>& source,
                            const Eigen::Isometry3d& T_init, double voxel_size_m,
-                           const IcpParams& params) {
+                           const IcpParams& params, bool iterate) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(voxel_size_m > 0) || !std::isfinite(voxel_size_m)) {
     return Status::InvalidArgument("voxel size must be finite and > 0");
@@ -261,7 +261,8 @@ StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
   std::vector<Pairing>* reuse = pairings.empty() ? nullptr : &pairings;
 
   Eigen::Isometry3d T = T_init;
-  for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
+  if (!iterate) result.converged = true;
+  for (int iteration = 0; iterate && iteration < params.max_iterations; ++iteration) {
     const Pairs pairs = Correspond(tree, tgt, src, T, max_distance_m, params.trim_fraction, reuse,
                                    &result.searches);
     const int n = static_cast<int>(pairs.source_index.size());
@@ -329,7 +330,7 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
                               const std::vector<Eigen::Vector3d>& source,
                               const Eigen::Isometry3d& T_init, double voxel_size_m,
                               const IcpParams& params) {
-  return Refine(target, nullptr, source, T_init, voxel_size_m, params);
+  return Refine(target, nullptr, source, T_init, voxel_size_m, params, /*iterate=*/true);
 }
 
 StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
@@ -338,7 +339,16 @@ StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::
   MAPD_RETURN_IF_ERROR(target.status());
   const bool shared = params.search == NeighbourSearch::kVoxelHash;
   return Refine(target.points(), shared ? &target.index() : nullptr, source, T_init,
-                target.voxel_size_m(), params);
+                target.voxel_size_m(), params, /*iterate=*/true);
+}
+
+StatusOr<IcpResult> EvaluateIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
+                                const Eigen::Isometry3d& T, const IcpParams& params) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  MAPD_RETURN_IF_ERROR(target.status());
+  const bool shared = params.search == NeighbourSearch::kVoxelHash;
+  return Refine(target.points(), shared ? &target.index() : nullptr, source, T,
+                target.voxel_size_m(), params, /*iterate=*/false);
 }
 
 }  // namespace mapd::voxel

@@ -136,6 +136,13 @@ StatusOr<IcpResult> RefineIcp(const std::vector<Eigen::Vector3d>& target,
 StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
                               const Eigen::Isometry3d& T_init, const IcpParams& params = {});
 
+// RefineIcp's residual at T without refining it: the same overlap (judged
+// from T), subsample, correspondences and RMS as its final evaluation, with
+// iterations 0 and converged true. For comparing given transforms on equal
+// terms (voxel/lattice_pose.h).
+StatusOr<IcpResult> EvaluateIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
+                                const Eigen::Isometry3d& T, const IcpParams& params = {});
+
 }  // namespace mapd::voxel
 
 #endif  // MAPD_VOXEL_ICP_H_

@@ -11,6 +11,7 @@
 
 #include "common/clock.h"
 #include "voxel/icp.h"
+#include "voxel/lattice_pose.h"
 #include "voxel/merge_hypotheses.h"
 #include "voxel/merge_overlap.h"
 #include "voxel/submap_features.h"
@@ -126,6 +127,40 @@ StatusOr<double> RestartSpread(const PairSide& a, const PairSide& b, const Merge
   return spread(restarts);
 }
 
+// Issue 42 item 3 (voxel/lattice_pose.h): when the ICP answer lies within
+// lattice_snap_deg of a lattice pose, the lattice poses around it are scored
+// with ICP's own residual and the best replaces the answer if it fits at
+// least as well. A copy merged with itself (or moved by whole voxels) then
+// comes back exact, and its voxels fuse onto voxels without resampling. Every
+// gate still judges the answer that is kept. Only for one resolution: the
+// coarser map's voxel centres lie off the finer lattice.
+void SnapToLattice(const PairSide& a, const PairSide& b, const MergeParams& params, double voxel_m,
+                   PairReport* report) {
+  constexpr double kPi = 3.14159265358979323846;
+  const Eigen::Vector3d pivot_b =
+      report->T_a_b.inverse() * OverlapCentre(*a.grid, *b.grid, report->T_a_b);
+  const std::vector<Eigen::Isometry3d> poses =
+      LatticePosesNear(report->T_a_b, pivot_b, voxel_m, params.lattice_snap_deg * kPi / 180.0);
+  if (poses.empty()) return;
+  const IcpTarget& target = a.features->IcpIndex(voxel_m);
+  // The ICP answer scored on the same terms (the overlap judged from it).
+  const auto answer = EvaluateIcp(target, b.grid->occupied_centres(), report->T_a_b, params.icp);
+  if (!answer.ok()) return;
+  double best_m = answer->rms_residual_m;
+  std::optional<Eigen::Isometry3d> best;
+  for (const Eigen::Isometry3d& pose : poses) {
+    const auto fit = EvaluateIcp(target, b.grid->occupied_centres(), pose, params.icp);
+    if (fit.ok() && fit->inliers >= answer->inliers && fit->rms_residual_m <= best_m) {
+      best_m = fit->rms_residual_m;
+      best = pose;
+    }
+  }
+  if (!best) return;
+  report->T_a_b = *best;
+  report->residual_m = best_m;
+  report->on_lattice = true;
+}
+
 }  // namespace
 
 Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& params,
@@ -178,6 +213,10 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
   report->T_a_b = icp->T_target_source;
   report->residual_m = icp->rms_residual_m;
   report->icp_iterations = icp->iterations;
+  if (icp->converged && params.lattice_snap_deg > 0 &&
+      a.grid->resolution() == b.grid->resolution()) {
+    SnapToLattice(a, b, params, finest_resolution_m, report);
+  }
   const OverlapScore overlap =
       ComputeOverlapScore(a.features->Overlap(), *b.grid, report->T_a_b, params.overlap_points);
   report->overlap_score = overlap.score;

@@ -51,6 +51,9 @@ Status MergeParams::Validate() const {
   if (!(restart_turn_deg > 0 && restart_turn_deg <= 10)) {
     return Status::InvalidArgument("restart_turn_deg must be in (0, 10]");
   }
+  if (!(lattice_snap_deg >= 0 && lattice_snap_deg <= 5)) {
+    return Status::InvalidArgument("lattice_snap_deg must be in [0, 5]");
+  }
   if (!(max_restart_spread_voxels >= 0) || !std::isfinite(max_restart_spread_voxels)) {
     return Status::InvalidArgument("max_restart_spread_voxels must be finite and >= 0");
   }

@@ -3,6 +3,7 @@
 list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/nearest_voxel.cc
   ${CMAKE_CURRENT_LIST_DIR}/icp.cc
+  ${CMAKE_CURRENT_LIST_DIR}/lattice_pose.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_overlap.cc
   ${CMAKE_CURRENT_LIST_DIR}/occupancy_fusion.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_graph.cc

@@ -185,6 +185,30 @@ TEST(IcpTest, AnIndexedTargetGivesTheVectorOverloadsResultsBitForBit) {
   }
 }
 
+// EvaluateIcp scores a given transform without moving it: a map against
+// itself fits at the identity with no residual, and a quarter voxel along x
+// leaves every voxel a quarter voxel from its own (its nearest).
+TEST(IcpTest, EvaluateScoresTheGivenTransformWithoutRefiningIt) {
+  const auto [a, b] = RasterisedRoomPair(Eigen::Isometry3d::Identity(), 3.5);
+  const IcpTarget target(&a, kRoomResolutionM);
+  ASSERT_TRUE(target.status().ok());
+  const auto at_identity = EvaluateIcp(target, a, Eigen::Isometry3d::Identity());
+  ASSERT_TRUE(at_identity.ok()) << at_identity.status().ToString();
+  EXPECT_EQ(at_identity->rms_residual_m, 0.0);
+  EXPECT_EQ(at_identity->iterations, 0);
+  EXPECT_TRUE(at_identity->converged);
+  Eigen::Isometry3d shifted = Eigen::Isometry3d::Identity();
+  shifted.translation().x() = 0.25 * kRoomResolutionM;
+  const auto off = EvaluateIcp(target, a, shifted);
+  ASSERT_TRUE(off.ok()) << off.status().ToString();
+  EXPECT_NEAR(off->rms_residual_m, 0.25 * kRoomResolutionM, 1e-6);
+  EXPECT_EQ(off->T_target_source.matrix(), shifted.matrix());
+  // The same checks as RefineIcp.
+  IcpParams bad;
+  bad.max_iterations = 0;
+  EXPECT_EQ(EvaluateIcp(target, a, shifted, bad).status().code(), StatusCode::kInvalidArgument);
+}
+
 // Keeping pairings that provably still hold (IcpParams::reuse_pairings)
 // changes no pair, so no result, bit for bit: from near and far starts, with
 // either overload, trimmed or not. And it keeps most pairings: the test

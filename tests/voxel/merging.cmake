@@ -11,6 +11,8 @@ mapd_add_test(voxel_merging_test
           ${CMAKE_CURRENT_LIST_DIR}/large_array_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/yaw_refinement_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/merge_hypotheses_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/merge_lattice_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/support/lattice_copy.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corridor_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/voxel_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corner_scene.cc
@@ -28,6 +30,7 @@ target_include_directories(voxel_crops_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIR
 # without $MAPD_SHARED_DIR/data/octomap).
 mapd_add_test(voxel_merge_real_map_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/merge_real_map_test.cc ${PROJECT_SOURCE_DIR}/tests/bench/voxel_crops.cc
+          ${CMAKE_CURRENT_LIST_DIR}/support/lattice_copy.cc
   LIBS voxel ${OCTOMAP_LIBRARIES})
 target_include_directories(voxel_merge_real_map_test PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_include_directories(voxel_merge_real_map_test SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS})
