@@ -36,7 +36,8 @@ void AddRenderCommand(CLI::App* app, Action* action);
 // Reads a DataChunk stream (GetSubmap, GetGlobalMap) to its end: the file's
 // bytes, and the info of the first message.
 grpc::Status ReadChunks(grpc::ClientReader<mapserver::v1::DataChunk>* reader, std::string* data,
-                        mapserver::v1::SubmapInfo* info);
+                        mapserver::v1::SubmapInfo* info,
+                        mapserver::v1::GlobalMapInfo* global = nullptr);
 
 // "XMIN,YMIN,XMAX,YMAX" -> bbox (features, watch); false with `*error` set
 // (naming --bbox) otherwise.

@@ -154,6 +154,19 @@ int RunDelete(const Context& ctx, const DeleteOptions& flags) {
   return kExitOk;
 }
 
+// "global map v3: the union of submaps 1, 2, 5 in the map frame".
+std::string DescribeGlobalMap(const pb::GlobalMapInfo& global) {
+  if (global.version() == 0)
+    return "global map: this mapd is older and names no members (its last merge's output)";
+  std::string ids;
+  for (const pb::GlobalMapMember& m : global.members()) {
+    ids += (ids.empty() ? "" : ", ") + std::to_string(m.submap_id());
+  }
+  return Printf("global map v%llu: the union of submap%s %s in the map frame",
+                static_cast<unsigned long long>(global.version()),
+                global.members_size() == 1 ? "" : "s", ids.c_str());
+}
+
 int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
   const std::string& output = flags.output;
   const std::string& render_path = flags.render;
@@ -165,8 +178,9 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
   auto call = ctx.NewStreamContext();
   std::string data;
   pb::SubmapInfo info;
-  const grpc::Status status =
-      ReadChunks(ctx.stub->GetGlobalMap(call.get(), pb::GetGlobalMapRequest()).get(), &data, &info);
+  pb::GlobalMapInfo global;
+  const grpc::Status status = ReadChunks(
+      ctx.stub->GetGlobalMap(call.get(), pb::GetGlobalMapRequest()).get(), &data, &info, &global);
   if (!status.ok()) return ReportRpcError(ctx, "global-map", status);
   std::string error;
   if (!WriteOutput(output, data, &error)) {
@@ -175,11 +189,12 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
   }
   std::printf("wrote %zu bytes to %s (%s)\n", data.size(), output.c_str(),
               DescribeSubmap(info).c_str());
+  std::printf("%s\n", DescribeGlobalMap(global).c_str());
   std::fflush(stdout);
   if (render_path.empty()) return kExitOk;
   std::vector<VoxelLayer> layers;
   const std::string what =
-      Printf("global map (submap %llu)", static_cast<unsigned long long>(info.id()));
+      Printf("global map v%llu", static_cast<unsigned long long>(global.version()));
   if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue)
     return rc;
   return WriteRendering("global-map", layers, render_path, render_format);
@@ -188,10 +203,11 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
 }  // namespace
 
 grpc::Status ReadChunks(grpc::ClientReader<pb::DataChunk>* reader, std::string* data,
-                        pb::SubmapInfo* info) {
+                        pb::SubmapInfo* info, pb::GlobalMapInfo* global) {
   pb::DataChunk chunk;
   while (reader->Read(&chunk)) {
     if (chunk.has_info()) *info = chunk.info();
+    if (chunk.has_global() && global != nullptr) *global = chunk.global();
     data->append(chunk.data());
   }
   return reader->Finish();

@@ -218,6 +218,31 @@ const std::vector<const char*>& Migrations() {
       ALTER TABLE audit_log ADD COLUMN peer TEXT NOT NULL DEFAULT '';
       ALTER TABLE audit_log ADD COLUMN credential TEXT NOT NULL DEFAULT '';
       )sql",
+      // 10 -> 11: the global map as the union of every placed submap (issue
+      // 42; docs/operations.md, "The global map"). submap_placements: where an
+      // accepted merge put each of its inputs in the map frame (the first
+      // placement stays, like a session tie). global_map: one row, the union
+      // as built last; members = "submap_id qw qx qy qz tx ty tz" lines in the
+      // order they were fused. Older databases start without one: mapd builds
+      // it from their accepted merges' inputs at start.
+      R"sql(
+      CREATE TABLE submap_placements (
+        submap_id INTEGER PRIMARY KEY,
+        merge_id  INTEGER NOT NULL,
+        qw REAL NOT NULL, qx REAL NOT NULL, qy REAL NOT NULL, qz REAL NOT NULL,
+        tx REAL NOT NULL, ty REAL NOT NULL, tz REAL NOT NULL
+      );
+      CREATE TABLE global_map (
+        id          INTEGER PRIMARY KEY CHECK (id = 1),
+        version     INTEGER NOT NULL,
+        built_ns    INTEGER NOT NULL,
+        resolution  REAL NOT NULL,
+        occupied    INTEGER NOT NULL,
+        free        INTEGER NOT NULL,
+        members     TEXT NOT NULL,
+        data        BLOB NOT NULL
+      );
+      )sql",
   };
   return kMigrations;
 }

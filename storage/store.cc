@@ -10,28 +10,11 @@
 #include <cstring>
 
 #include "storage/observation_codec.h"
+#include "storage/pose_columns.h"
 #include "storage/schema.h"
 
 namespace mapd::storage {
 namespace {
-
-void BindPose(Statement& s, int first, const geometry::Rigid3& T) {
-  s.Bind(first, T.rotation.w())
-      .Bind(first + 1, T.rotation.x())
-      .Bind(first + 2, T.rotation.y())
-      .Bind(first + 3, T.rotation.z())
-      .Bind(first + 4, T.translation.x())
-      .Bind(first + 5, T.translation.y())
-      .Bind(first + 6, T.translation.z());
-}
-
-geometry::Rigid3 ColumnPose(const Statement& s, int first) {
-  geometry::Rigid3 T;
-  T.rotation = Eigen::Quaterniond(s.ColumnDouble(first), s.ColumnDouble(first + 1),
-                                  s.ColumnDouble(first + 2), s.ColumnDouble(first + 3));
-  T.translation = {s.ColumnDouble(first + 4), s.ColumnDouble(first + 5), s.ColumnDouble(first + 6)};
-  return T;
-}
 
 uint64_t FileSize(const std::string& path) {
   struct stat st {};
@@ -927,24 +910,6 @@ StatusOr<std::string> Store::GetSubmapData(int64_t id) {
   if (!row.ok()) return row.status();
   if (!*row) return Status::NotFound("no submap with id " + std::to_string(id));
   return std::string(q->ColumnBlob(0));
-}
-
-StatusOr<SubmapMeta> Store::LatestGlobalMap() {
-  int64_t id = 0;
-  {
-    std::lock_guard<std::mutex> lock(reader_mu_);
-    StatusOr<Statement> q = Statement::Prepare(reader_.get(),
-                                               "SELECT merged_submap_id FROM merges WHERE status = "
-                                               "'accepted' AND merged_submap_id IS NOT NULL "
-                                               "ORDER BY decided_ns DESC, id DESC LIMIT 1");
-    if (!q.ok()) return q.status();
-    StatusOr<bool> row = q->Step();
-    if (!row.ok()) return row.status();
-    if (!*row)
-      return Status::NotFound("no global map yet: no merge has been accepted (see MergeSubmaps)");
-    id = q->ColumnInt(0);
-  }
-  return GetSubmap(id);
 }
 
 StatusOr<std::vector<MergeRecord>> Store::ListMerges() {

@@ -198,6 +198,31 @@ struct SubmapMeta {
   uint64_t size_bytes = 0;
 };
 
+// Where an accepted merge placed a submap in the map frame.
+struct SubmapPlacement {
+  int64_t submap_id = 0;
+  int64_t merge_id = 0;
+  geometry::Rigid3 T_map_submap;
+};
+
+// One submap of the global map and the pose it was fused at.
+struct GlobalMapMember {
+  int64_t submap_id = 0;
+  geometry::Rigid3 T_map_submap;
+};
+
+// The global map as built last (service/global_map_builder.h): the union, in
+// the map frame, of `members` fused in that order.
+struct GlobalMapRecord {
+  uint64_t version = 0;  // 1, 2, ... one per change
+  int64_t built_ns = 0;
+  double resolution_m = 0;
+  uint64_t occupied_voxels = 0;
+  uint64_t free_voxels = 0;
+  std::vector<GlobalMapMember> members;
+  std::string data;  // .bt; empty when read without it
+};
+
 struct NewSubmap {
   SubmapMeta meta;        // id, session_id and size_bytes are filled in by the store
   std::string session;    // the robot's session the map is built in; empty = none
@@ -321,6 +346,13 @@ class WriteTransaction {
   // the caller ties the sessions in the same transaction.
   Status DecideMerge(int64_t id, MergeState state, const std::string& who, int64_t now_ns,
                      const std::string& reason);
+  // Records where an accepted merge placed a submap in the map frame; a
+  // submap placed before keeps its first placement (as a tie is never moved).
+  Status PlaceSubmap(int64_t submap_id, int64_t merge_id, const geometry::Rigid3& T_map_submap);
+  // Replaces the global map (global_map_store.cc); DeleteGlobalMap removes it
+  // (no member left).
+  Status PutGlobalMap(const GlobalMapRecord& map);
+  Status DeleteGlobalMap();
   // Ties a session frame to the map frame (T_map_frame). FailedPrecondition
   // if it is tied already: a tie is never moved, so the map stays consistent.
   // The tie is recorded at set_tie_point()'s position in the commit order.
@@ -433,9 +465,11 @@ class Store {
   StatusOr<std::vector<SubmapMeta>> ListSubmaps(const std::string& robot);
   StatusOr<SubmapMeta> GetSubmap(int64_t id);       // NotFound
   StatusOr<std::string> GetSubmapData(int64_t id);  // the stored file; NotFound
-  // The merged map of the merge accepted last (by decision time, then id);
-  // NotFound before the first.
-  StatusOr<SubmapMeta> LatestGlobalMap();
+  // The global map as built last, with its bytes when `with_data`; NotFound
+  // before one was built (global_map_store.cc).
+  StatusOr<GlobalMapRecord> GetGlobalMap(bool with_data);
+  // Every submap placement, by submap id.
+  StatusOr<std::vector<SubmapPlacement>> ListPlacements();
   StatusOr<MergeRecord> GetMerge(int64_t id);       // NotFound
   StatusOr<std::vector<MergeRecord>> ListMerges();  // by id
   StatusOr<std::vector<FusedRow>> LoadFused();

@@ -9,6 +9,7 @@
 
 #include "common/clock.h"
 #include "common/text_escape.h"
+#include "service/global_map_builder.h"
 #include "service/log.h"
 #include "service/proto_convert.h"
 #include "service/status_mapping.h"
@@ -50,9 +51,9 @@ StatusOr<std::vector<storage::SubmapMeta>> StoredInputs(storage::Store& store,
 
 }  // namespace
 
-StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
-    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
-    const std::vector<geometry::Rigid3>& T_ref_input) {
+StatusOr<MergeFrames> FramesOfMerge(storage::Store& store,
+                                    const std::vector<storage::SubmapMeta>& inputs,
+                                    const std::vector<geometry::Rigid3>& T_ref_input) {
   std::vector<std::optional<storage::SessionFrame>> frames(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
     if (inputs[i].session_id == 0) continue;
@@ -60,20 +61,43 @@ StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
     if (!f.ok()) return f.status();
     frames[i] = *f;
   }
+  // Where an input is known to sit in the map frame: its session's tie, or
+  // (a submap uploaded without a session) where an earlier merge placed it.
+  StatusOr<std::vector<storage::SubmapPlacement>> placements = store.ListPlacements();
+  if (!placements.ok()) return placements.status();
+  const auto known_pose = [&](size_t k) -> std::optional<geometry::Rigid3> {
+    if (frames[k]) {
+      if (frames[k]->tied) return frames[k]->T_map_frame;
+      return std::nullopt;
+    }
+    for (const storage::SubmapPlacement& p : *placements)
+      if (p.submap_id == inputs[k].id) return p.T_map_submap;
+    return std::nullopt;
+  };
   geometry::Rigid3 T_map_ref = geometry::Rigid3::Identity();
   for (size_t k = 0; k < inputs.size(); ++k) {
-    if (frames[k] && frames[k]->tied) {
-      T_map_ref = frames[k]->T_map_frame * T_ref_input[k].inverse();
+    if (const std::optional<geometry::Rigid3> T_map_k = known_pose(k)) {
+      T_map_ref = *T_map_k * T_ref_input[k].inverse();
       break;
     }
   }
-  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;
+  MergeFrames out;
   std::unordered_set<int64_t> seen;
   for (size_t i = 0; i < inputs.size(); ++i) {
+    out.placements.emplace_back(inputs[i].id, T_map_ref * T_ref_input[i]);
     if (!frames[i] || frames[i]->tied || !seen.insert(frames[i]->session_id).second) continue;
-    ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
+    out.ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
   }
-  return ties;
+  return out;
+}
+
+Status ApplyMergeFrames(const MergeFrames& frames, int64_t merge_id,
+                        storage::WriteTransaction* txn) {
+  for (const auto& [session_id, T_map_frame] : frames.ties)
+    MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
+  for (const auto& [submap_id, T_map_submap] : frames.placements)
+    MAPD_RETURN_IF_ERROR(txn->PlaceSubmap(submap_id, merge_id, T_map_submap));
+  return Status::Ok();
 }
 
 Status CheckNoLaterConflict(storage::Store& store, const storage::MergeRecord& proposal,
@@ -200,16 +224,14 @@ Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
     std::vector<geometry::Rigid3> T_ref_input;
     for (const storage::MergeInputRecord& in : merge->inputs)
       T_ref_input.push_back(in.T_reference_submap);
-    StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> ties =
-        FrameTies(store, *metas, T_ref_input);
-    if (!ties.ok()) return ties.status();
+    StatusOr<MergeFrames> frames = FramesOfMerge(store, *metas, T_ref_input);
+    if (!frames.ok()) return frames.status();
     MAPD_RETURN_IF_ERROR(
         txn->DecideMerge(id, storage::MergeState::kAccepted, caller.name, UnixNowNs(), ""));
     MAPD_RETURN_IF_ERROR(
         txn->AppendAudit(AccessControl::Entry(caller, action, MergeName(id), "ok")));
-    for (const auto& [session_id, T_map_frame] : *ties)
-      MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
-    tied = ties->size();
+    MAPD_RETURN_IF_ERROR(ApplyMergeFrames(*frames, id, txn));
+    tied = frames->ties.size();
     return Status::Ok();
   });
   const std::string result = outcome.ok() ? "ok" : outcome.ToString();
@@ -265,7 +287,9 @@ grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
   if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
   if (draining_) return ShuttingDown();
   const auto id = static_cast<int64_t>(request.id());
-  return FinishDecision(id, DecideMerge(core_, id, "", caller), response);
+  const Status decided = DecideMerge(core_, id, "", caller);
+  if (decided.ok()) global_->Invalidate();  // its inputs were placed
+  return FinishDecision(id, decided, response);
 }
 
 grpc::Status SubmapService::RejectMerge(const pb::RejectMergeRequest& request,

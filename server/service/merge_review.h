@@ -18,12 +18,21 @@
 
 namespace mapd::service {
 
-// The session ties an accepted merge implies (rules in submap_service.h,
-// "Frames"), with the frames as they are now. T_ref_input[i] maps input i
-// into the reference's (first input's) frame. Call on the writer thread.
-StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> FrameTies(
-    storage::Store& store, const std::vector<storage::SubmapMeta>& inputs,
-    const std::vector<geometry::Rigid3>& T_ref_input);
+// What an accepted merge implies for the map frame (rules in
+// submap_service.h, "Frames"), with the frames as they are now: the session
+// ties, and where each input sits in the map frame (global_map_builder.h).
+struct MergeFrames {
+  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;        // session id, T_map_frame
+  std::vector<std::pair<int64_t, geometry::Rigid3>> placements;  // submap id, T_map_submap
+};
+// T_ref_input[i] maps input i into the reference's (first input's) frame.
+// Call on the writer thread.
+StatusOr<MergeFrames> FramesOfMerge(storage::Store& store,
+                                    const std::vector<storage::SubmapMeta>& inputs,
+                                    const std::vector<geometry::Rigid3>& T_ref_input);
+// Writes them in the merge's transaction.
+Status ApplyMergeFrames(const MergeFrames& frames, int64_t merge_id,
+                        storage::WriteTransaction* txn);
 
 // Why `proposal` (with its inputs' `metas`) can no longer be approved
 // because of a merge accepted since it was proposed: FailedPrecondition

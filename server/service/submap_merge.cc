@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/clock.h"
+#include "service/global_map_builder.h"
 #include "service/log.h"
 #include "service/merge_review.h"
 #include "service/merge_runner.h"
@@ -249,19 +250,17 @@ Status SubmapService::StoreAcceptedMerge(const storage::NewMerge& merge, const M
     }
     const bool proposed = merge.record.state == storage::MergeState::kProposed;
     // A proposal ties nothing until it is approved (ApproveMerge).
-    StatusOr<std::vector<std::pair<int64_t, geometry::Rigid3>>> ties =
-        std::vector<std::pair<int64_t, geometry::Rigid3>>();
-    if (!proposed) ties = FrameTies(core_->store(), inputs.metas, T_ref_input);
-    if (!ties.ok()) return ties.status();
+    StatusOr<MergeFrames> frames = MergeFrames();
+    if (!proposed) frames = FramesOfMerge(core_->store(), inputs.metas, T_ref_input);
+    if (!frames.ok()) return frames.status();
     StatusOr<storage::MergeIds> r = txn->RecordMerge(merge);
     if (!r.ok()) return r.status();
     *stored = *r;
     MAPD_RETURN_IF_ERROR(txn->AppendAudit(
         AccessControl::Entry(caller, "MergeSubmaps", MergeTarget(r->merge_id, inputs.ids),
                              proposed ? "proposed: waits for ApproveMerge" : "ok")));
-    for (const auto& [session_id, T_map_frame] : *ties)
-      MAPD_RETURN_IF_ERROR(txn->TieSession(session_id, T_map_frame));
-    *tied = ties->size();
+    MAPD_RETURN_IF_ERROR(ApplyMergeFrames(*frames, r->merge_id, txn));
+    *tied = frames->ties.size();
     return Status::Ok();
   });
 }
@@ -303,6 +302,7 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
   size_t tied = 0;
   MAPD_RETURN_IF_ERROR_GRPC(
       StoreAcceptedMerge(*merge, inputs, T_ref_input, caller, &stored, &tied));
+  if (!review) global_->Invalidate();  // its inputs were placed
   Log(LogLevel::kInfo, review ? "merge_proposed" : "merge_accepted",
       {{"merge", std::to_string(stored.merge_id)},
        {"merged_submap", std::to_string(stored.merged_submap_id)},

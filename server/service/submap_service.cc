@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/clock.h"
+#include "service/global_map_builder.h"
 #include "service/ingest_batch.h"  // ValidId
 #include "service/log.h"
 #include "service/merge_runner.h"
@@ -27,6 +28,16 @@ namespace pb = mapserver::v1;
 
 constexpr size_t kChunkBytes = size_t{1} << 20;  // the API's chunk size, both ways
 constexpr size_t kMaxNameLength = 256;
+// GetGlobalMap waits this long for a build of a change just committed.
+constexpr int kGlobalMapWaitMs = 20'000;
+// The global map's SubmapInfo.robot_id (like "@merged": not a robot id).
+constexpr char kGlobalRobot[] = "@global";
+
+voxel::FusionParams GlobalFusionParams(const SubmapOptions& o) {
+  voxel::FusionParams p;
+  p.rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;
+  return p;
+}
 constexpr char kMagicBt[] = "# Octomap OcTree binary file";
 constexpr char kMagicOt[] = "# Octomap OcTree file";
 
@@ -73,8 +84,9 @@ SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessCon
     : core_(core),
       options_(options),
       access_(access),
-      merges_(std::make_unique<MergeRunner>(options.max_concurrent_merges,
-                                            options.max_queued_merges)) {}
+      merges_(
+          std::make_unique<MergeRunner>(options.max_concurrent_merges, options.max_queued_merges)),
+      global_(std::make_unique<GlobalMapBuilder>(core, GlobalFusionParams(options))) {}
 
 SubmapService::~SubmapService() {
   // The gRPC server has shut down (every upload is done); store threads may
@@ -86,6 +98,7 @@ SubmapService::~SubmapService() {
 void SubmapService::StartDraining() {
   draining_ = true;
   merges_->Shutdown();
+  global_->Stop();  // after the build in progress: nothing is written later
 }
 
 grpc::Status SubmapService::List(const pb::ListSubmapsRequest& request,
@@ -105,9 +118,38 @@ grpc::Status SubmapService::Get(grpc::ServerContext* context, const pb::GetSubma
 
 grpc::Status SubmapService::GetGlobalMap(grpc::ServerContext* context,
                                          grpc::ServerWriter<pb::DataChunk>* writer) {
-  StatusOr<storage::SubmapMeta> global = core_->store().LatestGlobalMap();
-  if (!global.ok()) return ToGrpcStatus(global.status());
-  return StreamSubmap(context, global->id, writer);
+  // A change just committed (a merge accepted, an upload) is served once built.
+  global_->WaitUntilCurrent(std::chrono::milliseconds(kGlobalMapWaitMs));
+  StatusOr<storage::GlobalMapRecord> global = core_->store().GetGlobalMap(/*with_data=*/true);
+  if (!global.ok()) {
+    const std::string failed = global_->last_error();
+    if (global.status().code() == StatusCode::kNotFound && !failed.empty())
+      return ToGrpcStatus(Status::FailedPrecondition("the global map was not built: " + failed));
+    return ToGrpcStatus(global.status());
+  }
+  pb::DataChunk chunk;
+  pb::SubmapInfo* info = chunk.mutable_info();
+  info->set_robot_id(kGlobalRobot);
+  info->set_name("global");
+  info->set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
+  info->set_resolution(global->resolution_m);
+  info->set_occupied_voxels(global->occupied_voxels);
+  info->set_free_voxels(global->free_voxels);
+  info->set_size_bytes(global->data.size());
+  info->set_created_ns(global->built_ns);
+  info->set_merged(true);
+  if (StatusOr<voxel::SubmapSummary> summary = voxel::InspectSubmap(global->data); summary.ok()) {
+    ToProto(summary->bounds_min, info->mutable_bounds_min());
+    ToProto(summary->bounds_max, info->mutable_bounds_max());
+  }
+  pb::GlobalMapInfo* about = chunk.mutable_global();
+  about->set_version(global->version);
+  for (const storage::GlobalMapMember& m : global->members) {
+    pb::GlobalMapMember* member = about->add_members();
+    member->set_submap_id(static_cast<uint64_t>(m.submap_id));
+    ToProto(m.T_map_submap, member->mutable_t_map_submap());
+  }
+  return StreamChunks(context, &chunk, global->data, writer);
 }
 
 grpc::Status SubmapService::StreamSubmap(grpc::ServerContext* context, int64_t id,
@@ -118,6 +160,14 @@ grpc::Status SubmapService::StreamSubmap(grpc::ServerContext* context, int64_t i
   if (!data.ok()) return ToGrpcStatus(data.status());
   pb::DataChunk chunk;
   ToProto(*meta, chunk.mutable_info());
+  return StreamChunks(context, &chunk, *data, writer);
+}
+
+grpc::Status SubmapService::StreamChunks(grpc::ServerContext* context, pb::DataChunk* first,
+                                         const std::string& bytes,
+                                         grpc::ServerWriter<pb::DataChunk>* writer) {
+  pb::DataChunk& chunk = *first;
+  const std::string* data = &bytes;
   size_t offset = 0;
   do {
     const size_t n = std::min(kChunkBytes, data->size() - offset);
@@ -127,6 +177,7 @@ grpc::Status SubmapService::StreamSubmap(grpc::ServerContext* context, int64_t i
       return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
     }
     chunk.clear_info();
+    chunk.clear_global();
   } while (offset < data->size());
   return grpc::Status::OK;
 }
@@ -146,8 +197,10 @@ grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request,
     MAPD_RETURN_IF_ERROR(txn->DeleteSubmap(id));
     return txn->AppendAudit(AccessControl::Entry(caller, "DeleteSubmap", target, "ok"));
   });
-  if (s.ok())
+  if (s.ok()) {
     Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}, {"by", caller.name}});
+    global_->Invalidate();  // it may have been a member
+  }
   return ToGrpcStatus(s);
 }
 
@@ -300,6 +353,7 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
         caller, "UploadSubmap", UploadTarget(header) + " id " + std::to_string(id), "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);
+  global_->Invalidate();  // an upload in a tied session is a member
   StatusOr<storage::SubmapMeta> stored = core_->store().GetSubmap(id);
   if (!stored.ok()) return ToGrpcStatus(stored.status());
   ToProto(*stored, response);

@@ -30,15 +30,21 @@
 //   nothing is stored.
 // - Frames (docs/algorithms.md A.10, Eq. 21): the first input is the reference R. Its
 //   session frame's pose in the map, T_map_R, is: R's own if R's session is
-//   tied; else T_map_k * T_R_k^-1 from the first input k whose session is
-//   tied; else the identity (the reference's frame becomes the map frame: the
+//   tied; else T_map_k * T_R_k^-1 from the first input k whose pose in the
+//   map is known (its session is tied, or it was uploaded without a session
+//   and an accepted merge placed it); else the identity (the reference's frame becomes the map frame: the
 //   first tie of a fleet that has no map-frame session yet). Every input i
 //   whose session is not tied yet is then tied with T_map_i = T_map_R * T_R_i;
 //   ties are never moved later. Submaps uploaded without a session tie
-//   nothing. The fuser then re-projects every stored observation with the new
+//   nothing. Every input is placed at T_map_R * T_R_i (kept if it was placed
+//   before): the global map's members. The fuser then re-projects every stored observation with the new
 //   frames, so the robots' walls fuse into one feature map.
-// - GetGlobalMap: the merged map of the merge accepted last (by decision
-//   time; NOT_FOUND before the first).
+// - GetGlobalMap: the union, in the map frame, of every upload with a place
+//   there (global_map_builder.h): its session is tied, or an accepted merge
+//   placed it (that merge's FramesOfMerge placements). Rebuilt after an
+//   accepted merge or approval, an upload and a delete; GetGlobalMap waits
+//   up to 20 s for a build in progress. NOT_FOUND before any upload has a
+//   place; merged outputs are never members.
 // - Review (merge_review.cc): with MergeSubmapsRequest.review or
 //   merge.review, a merge the gates accept is stored PROPOSED with its merged
 //   map and its audit row, and ties nothing. ApproveMerge, on the writer
@@ -79,6 +85,7 @@
 
 namespace mapd::service {
 
+class GlobalMapBuilder;
 class MergeJob;
 class MergeRunner;
 class UploadReactor;
@@ -167,12 +174,18 @@ class SubmapService {
   // Streams a stored submap: info on the first chunk, then 1 MiB chunks.
   grpc::Status StreamSubmap(grpc::ServerContext* context, int64_t id,
                             grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
+  // Streams `bytes` in 1 MiB chunks, the first one being *first with its data.
+  grpc::Status StreamChunks(grpc::ServerContext* context, mapserver::v1::DataChunk* first,
+                            const std::string& bytes,
+                            grpc::ServerWriter<mapserver::v1::DataChunk>* writer);
 
   Core* const core_;
   const SubmapOptions options_;
   AccessControl* const access_;
   std::atomic<bool> draining_{false};
   std::unique_ptr<MergeRunner> merges_;
+  // Keeps the stored global map the union of the placed submaps.
+  std::unique_ptr<GlobalMapBuilder> global_;
 
   std::mutex uploads_mu_;
   std::condition_variable uploads_cv_;

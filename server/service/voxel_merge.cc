@@ -11,4 +11,10 @@ StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapI
   return voxel::MergeSubmaps(inputs, params, progress);
 }
 
+StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(
+    std::string_view base_bt, const std::vector<voxel::PlacedSubmap>& members,
+    const voxel::FusionParams& params) {
+  return voxel::ExtendGlobalMap(base_bt, members, params);
+}
+
 }  // namespace mapd::service

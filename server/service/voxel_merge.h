@@ -6,10 +6,12 @@
 #ifndef MAPD_SERVICE_VOXEL_MERGE_H_
 #define MAPD_SERVICE_VOXEL_MERGE_H_
 
+#include <string_view>
 #include <vector>
 
 #include "common/status.h"
-#include "voxel/merge.h"  // types only; the functions live in the voxel library
+#include "voxel/global_map.h"  // types only, as merge.h
+#include "voxel/merge.h"       // types only; the functions live in the voxel library
 
 namespace mapd::service {
 
@@ -20,6 +22,11 @@ bool VoxelMergeBuilt();
 StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapInput>& inputs,
                                                 const voxel::MergeParams& params,
                                                 const voxel::ProgressCallback& progress);
+
+// voxel::ExtendGlobalMap, or Unimplemented without the voxel library.
+StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(
+    std::string_view base_bt, const std::vector<voxel::PlacedSubmap>& members,
+    const voxel::FusionParams& params);
 
 }  // namespace mapd::service
 

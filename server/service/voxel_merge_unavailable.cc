@@ -12,6 +12,13 @@ StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapI
       "MergeSubmaps: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
 }
 
+StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(std::string_view,
+                                                     const std::vector<voxel::PlacedSubmap>&,
+                                                     const voxel::FusionParams&) {
+  return Status::Unimplemented(
+      "no global map: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
 }  // namespace mapd::service
 
 namespace mapd::voxel {

@@ -18,4 +18,5 @@ list(APPEND VOXEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/merge_params.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge.cc
   ${CMAKE_CURRENT_LIST_DIR}/merge_evidence.cc
+  ${CMAKE_CURRENT_LIST_DIR}/global_map.cc
 )

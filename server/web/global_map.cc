@@ -1,7 +1,8 @@
-// GET /api/global-map.png: the merged global map seen from above, drawn
+// GET /api/global-map.png: the global map (the union of the placed submaps,
+// service/global_map_builder.h) seen from above, drawn
 // with cairo: one pixel per voxel column (at most kMaxPixels on a side,
 // columns binned beyond), the highest occupied voxel's height as its
-// brightness. 404 before the first accepted merge. Rendered per request;
+// brightness. 404 before any submap is placed in the map frame. Rendered per request;
 // the page asks only when the map changes.
 #include <cairo.h>
 
@@ -63,15 +64,14 @@ StatusOr<std::string> TopView(const voxel::VoxelGrid& grid) {
 }  // namespace
 
 void ServeGlobalMap(service::Core* core, httplib::Response& res) {
-  StatusOr<storage::SubmapMeta> meta = core->store().LatestGlobalMap();
-  if (!meta.ok()) {
-    return SendError(res, meta.status().code() == StatusCode::kNotFound
-                              ? Status::NotFound("no global map yet (no merge accepted)")
-                              : meta.status());
+  StatusOr<storage::GlobalMapRecord> global = core->store().GetGlobalMap(/*with_data=*/true);
+  if (!global.ok()) {
+    return SendError(res,
+                     global.status().code() == StatusCode::kNotFound
+                         ? Status::NotFound("no global map yet (no submap placed in the map frame)")
+                         : global.status());
   }
-  StatusOr<std::string> data = core->store().GetSubmapData(meta->id);
-  if (!data.ok()) return SendError(res, data.status());
-  StatusOr<voxel::OcTreePtr> tree = voxel::ReadOctree(*data);
+  StatusOr<voxel::OcTreePtr> tree = voxel::ReadOctree(global->data);
   if (!tree.ok()) return SendError(res, tree.status());
   StatusOr<voxel::VoxelGrid> grid = voxel::VoxelGrid::FromOcTree(**tree);
   if (!grid.ok()) return SendError(res, grid.status());
@@ -80,6 +80,7 @@ void ServeGlobalMap(service::Core* core, httplib::Response& res) {
   StatusOr<std::string> png = TopView(*grid);
   if (!png.ok()) return SendError(res, png.status());
   res.set_header("X-Resolution-M", std::to_string(grid->resolution()));
+  res.set_header("X-Global-Map-Version", std::to_string(global->version));
   res.set_header("X-Origin-M", std::to_string(grid->min_corner().x()) + "," +
                                    std::to_string(grid->max_corner().y()));
   res.set_content(*png, "image/png");

@@ -217,6 +217,8 @@ TEST_F(MapctlSubmapE2eTest, UploadMergeRenderAndDownload) {
   const std::string global_bt = dir_.File("world.bt"), global_svg = dir_.File("world.svg");
   r = Mapctl({"global-map", "-o", global_bt, "--render", global_svg});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  // The union of the two uploads the merge placed, not its output.
+  EXPECT_THAT(r.out, HasSubstr("global map v1: the union of submaps " + id_a + ", "));
   const std::string world = ReadAll(global_bt);
   StatusOr<voxel::OctreeSummary> summary = voxel::ValidateOctree(world);
   ASSERT_TRUE(summary.ok()) << summary.status().ToString();

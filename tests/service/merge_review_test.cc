@@ -106,13 +106,40 @@ class MergeReviewTest : public AuthFixture {
     if (out != nullptr) *out = record;
     return s;
   }
-  grpc::Status GlobalMap() {
+  // GetGlobalMap's status; *members gets the submaps it holds.
+  grpc::Status GlobalMap(std::vector<uint64_t>* members = nullptr) {
     grpc::ClientContext ctx;
     auto reader = stub_->GetGlobalMap(&ctx, {});
     pb::DataChunk chunk;
+    bool first = true;
     while (reader->Read(&chunk)) {
+      if (first && members != nullptr) {
+        members->clear();
+        for (const auto& m : chunk.global().members()) members->push_back(m.submap_id());
+      }
+      first = false;
     }
     return reader->Finish();
+  }
+  uint64_t GlobalMapVersion() {
+    grpc::ClientContext ctx;
+    auto reader = stub_->GetGlobalMap(&ctx, {});
+    pb::DataChunk chunk;
+    uint64_t version = 0;
+    while (reader->Read(&chunk)) {
+      if (chunk.has_global()) version = chunk.global().version();
+    }
+    EXPECT_TRUE(reader->Finish().ok());
+    return version;
+  }
+  std::string GlobalMapBytes() {
+    grpc::ClientContext ctx;
+    auto reader = stub_->GetGlobalMap(&ctx, {});
+    pb::DataChunk chunk;
+    std::string bytes;
+    while (reader->Read(&chunk)) bytes += chunk.data();
+    EXPECT_TRUE(reader->Finish().ok());
+    return bytes;
   }
   bool Tied(const std::string& robot) {
     grpc::ClientContext ctx;
@@ -155,11 +182,14 @@ TEST_F(MergeReviewTest, ReviewedMergeChangesNothingUntilApproved) {
   EXPECT_EQ(proposed.state(), pb::MERGE_STATE_PROPOSED);
   ASSERT_EQ(proposed.alignments_size(), 2);
 
-  // Proposed: frames untied, r2's walls not fused, no global map; the merged
-  // map is stored (for rendering) and the record says who asked.
+  // Proposed: frames untied, r2's walls not fused, the global map only r1's
+  // submap (uploaded in the map frame); the merged map is stored (for
+  // rendering) and the record says who asked.
   EXPECT_FALSE(Tied("r2"));
   EXPECT_THAT(WallRobots(), ElementsAre(kR1, kR1, kR1, kR1));
-  EXPECT_EQ(GlobalMap().error_code(), grpc::StatusCode::NOT_FOUND);
+  std::vector<uint64_t> members;
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_));
   pb::MergeRecord r = GetOk(proposed.merge_id());
   EXPECT_EQ(r.state(), pb::MERGE_STATE_PROPOSED);
   EXPECT_EQ(r.requested_by(), "anonymous");
@@ -183,7 +213,8 @@ TEST_F(MergeReviewTest, ReviewedMergeChangesNothingUntilApproved) {
   EXPECT_GE(approved.decided_ns(), approved.created_ns());
   EXPECT_TRUE(Tied("r2"));
   EXPECT_THAT(WallRobots(), ElementsAre(kBoth, kBoth, kBoth, kBoth));
-  EXPECT_TRUE(GlobalMap().ok());
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_, b_));  // r2's submap joined
 
   // Decided once only, with the state named.
   grpc::Status again = Approve(proposed.merge_id());
@@ -272,7 +303,9 @@ TEST_F(MergeReviewTest, ServerSettingMakesReviewTheDefaultAndRejectionHasNoEffec
   EXPECT_EQ(approve.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
   EXPECT_THAT(approve.error_message(), HasSubstr("is rejected"));
   EXPECT_FALSE(Tied("r2"));
-  EXPECT_EQ(GlobalMap().error_code(), grpc::StatusCode::NOT_FOUND);
+  std::vector<uint64_t> members;
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_));  // the rejected proposal placed nothing
 
   Restart();
   const std::vector<pb::MergeRecord> all = List();
@@ -287,6 +320,33 @@ TEST_F(MergeReviewTest, ServerSettingMakesReviewTheDefaultAndRejectionHasNoEffec
   del.set_id(b_);
   pb::DeleteSubmapResponse deleted;
   EXPECT_TRUE(stub_->DeleteSubmap(&ctx, del, &deleted).ok());
+}
+
+// A submap uploaded in a session whose frame is tied (here: a localised
+// robot's) is in the global map at once; deleting it rebuilds the map
+// without it, and the versions count every change.
+TEST_F(MergeReviewTest, SubmapsUploadedInTheMapFrameAreGlobalUntilDeleted) {
+  Stream(Walk("r1", 6));
+  a_ = Upload("r1", "west", RoomSubmap(scene_, 0, 8, Eigen::Isometry3d::Identity()));
+  std::vector<uint64_t> members;
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_));
+  const std::string v1 = GlobalMapBytes();
+  const uint64_t more =
+      Upload("r1", "more", RoomSubmap(scene_, 4, 10, Eigen::Isometry3d::Identity()));
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_, more));
+  EXPECT_EQ(GlobalMapVersion(), 2u);
+
+  grpc::ClientContext ctx;
+  pb::DeleteSubmapRequest del;
+  del.set_id(more);
+  pb::DeleteSubmapResponse deleted;
+  ASSERT_TRUE(stub_->DeleteSubmap(&ctx, del, &deleted).ok());
+  ASSERT_TRUE(GlobalMap(&members).ok());
+  EXPECT_THAT(members, ElementsAre(a_));
+  EXPECT_EQ(GlobalMapVersion(), 3u);
+  EXPECT_TRUE(GlobalMapBytes() == v1) << "the rebuilt map is not the map of its one member";
 }
 
 TEST_F(MergeReviewTest, UnknownAndMissingIdsAreClearErrors) {

@@ -75,7 +75,9 @@ class SubmapServiceTest : public ServerFixture {
   }
 
   // GetSubmap (id != 0) or GetGlobalMap (id == 0): the bytes and the first chunk's info.
-  grpc::Status Download(uint64_t id, std::string* bytes, pb::SubmapInfo* info = nullptr) {
+  // `global` gets GetGlobalMap's GlobalMapInfo.
+  grpc::Status Download(uint64_t id, std::string* bytes, pb::SubmapInfo* info = nullptr,
+                        pb::GlobalMapInfo* global = nullptr) {
     grpc::ClientContext ctx;
     pb::GetSubmapRequest request;
     request.set_id(id);
@@ -85,7 +87,9 @@ class SubmapServiceTest : public ServerFixture {
     bool first = true;
     while (reader->Read(&chunk)) {
       EXPECT_EQ(chunk.has_info(), first);
+      EXPECT_EQ(chunk.has_global(), first && id == 0);
       if (first && info) *info = chunk.info();
+      if (first && global) *global = chunk.global();
       first = false;
       *bytes += chunk.data();
     }
@@ -323,6 +327,55 @@ TEST_F(SubmapServiceTest, RefusesOversizeUploadsAndChunks) {
 
 // --- Merges.
 
+// The global map is the union of every placed submap, not the last merge's
+// output (issue 42 item 4): merging a + b, then b + c places c through b's
+// placement, and the global map holds all three at their places.
+TEST_F(SubmapServiceTest, TheGlobalMapAccumulatesEverySubmapAcceptedMergesPlaced) {
+  const uint64_t a = UploadOk(Header("r1", "west"), West());
+  const uint64_t b = UploadOk(Header("r2", "east"), East());
+  // The east part again, seen by a third robot in a frame of its own.
+  const Eigen::Isometry3d T_map_c = YawTranslation(-M_PI / 2, Eigen::Vector3d(-1.0, 11.0, 0.0));
+  const uint64_t c = UploadOk(Header("r3", "east-again"), RoomSubmap(scene_, 2, 10, T_map_c));
+  std::string bytes;
+  EXPECT_EQ(Download(0, &bytes).error_code(), grpc::StatusCode::NOT_FOUND);  // nothing placed
+
+  const MergeCall first = Merge({a, b});
+  ASSERT_TRUE(first.status.ok()) << first.status.error_message();
+  pb::SubmapInfo info;
+  pb::GlobalMapInfo v1;
+  ASSERT_TRUE(Download(0, &bytes, &info, &v1).ok());
+  EXPECT_EQ(v1.version(), 1u);
+  ASSERT_EQ(v1.members_size(), 2);
+  const uint64_t occupied_ab = info.occupied_voxels();
+
+  // b + c: neither is the map's reference, b is placed, so c lands in the
+  // map frame through b (and would have before: the merge replaced the global
+  // map with its own output of b and c, in b's frame).
+  const MergeCall second = Merge({b, c});
+  ASSERT_TRUE(second.status.ok()) << second.status.error_message();
+  pb::GlobalMapInfo v2;
+  ASSERT_TRUE(Download(0, &bytes, &info, &v2).ok());
+  EXPECT_EQ(v2.version(), 2u);
+  ASSERT_EQ(v2.members_size(), 3);
+  EXPECT_EQ(v2.members(0).submap_id(), a);
+  EXPECT_EQ(v2.members(1).submap_id(), b);
+  EXPECT_EQ(v2.members(2).submap_id(), c);
+  EXPECT_LT(TranslationError(v2.members(2).t_map_submap(), T_map_c), 0.05);
+  EXPECT_LT(RotationErrorDeg(v2.members(2).t_map_submap(), T_map_c), 1.0);
+  // c saw what b saw, at the same place: the union did not grow or thicken.
+  EXPECT_EQ(info.occupied_voxels(), occupied_ab);
+  EXPECT_NEAR(info.bounds_min().x(), 0.0, 0.15);  // still the whole room, map frame
+  EXPECT_NEAR(info.bounds_max().x(), 10.0, 0.15);
+
+  // Built incrementally and stored: a restart serves the same version.
+  Restart();
+  pb::GlobalMapInfo after;
+  std::string again;
+  ASSERT_TRUE(Download(0, &again, nullptr, &after).ok());
+  EXPECT_EQ(after.version(), 2u);
+  EXPECT_TRUE(again == bytes);
+}
+
 TEST_F(SubmapServiceTest, MergesOverlappingSubmapsWithTheKnownTransform) {
   const uint64_t a = UploadOk(Header("r1", "west"), West());
   const uint64_t b = UploadOk(Header("r2", "east"), East());
@@ -348,15 +401,25 @@ TEST_F(SubmapServiceTest, MergesOverlappingSubmapsWithTheKnownTransform) {
   EXPECT_GT(r.alignments(1).support_fraction(), 0.05);
   EXPECT_TRUE(r.alignments(0).source().empty());  // the reference
 
-  // The merged map is stored, listed under "@merged" and served as the global map.
+  // The merged map is stored and listed under "@merged". The global map is
+  // the union of the placed inputs, a at the identity (the reference's
+  // frame became the map frame) and b where the merge put it: here the same
+  // fusion as the merge's, so the same bytes.
   std::string global, merged;
   pb::SubmapInfo info;
-  ASSERT_TRUE(Download(0, &global, &info).ok());
+  pb::GlobalMapInfo about;
+  ASSERT_TRUE(Download(0, &global, &info, &about).ok());
   ASSERT_TRUE(Download(r.merged_submap_id(), &merged).ok());
-  EXPECT_EQ(global, merged);
-  EXPECT_EQ(info.id(), r.merged_submap_id());
-  EXPECT_EQ(info.robot_id(), "@merged");
+  EXPECT_TRUE(global == merged) << "the union of a and b is not the merged map";
+  EXPECT_EQ(info.id(), 0u);
+  EXPECT_EQ(info.robot_id(), "@global");
   EXPECT_TRUE(info.merged());
+  EXPECT_EQ(about.version(), 1u);
+  ASSERT_EQ(about.members_size(), 2);
+  EXPECT_EQ(about.members(0).submap_id(), a);
+  EXPECT_EQ(about.members(1).submap_id(), b);
+  EXPECT_NEAR(about.members(1).t_map_submap().translation().x(),
+              r.alignments(1).t_reference_submap().translation().x(), 1e-12);
   EXPECT_NEAR(info.bounds_min().x(), 0.0, 0.15);  // spans the whole room
   EXPECT_NEAR(info.bounds_max().x(), 10.0, 0.15);
   EXPECT_EQ(List().size(), 3u);

@@ -185,19 +185,16 @@ TEST_F(SubmapStoreTest, DeleteRemovesAndReportsNotFound) {
 TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
-  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
-
   auto ids = Record(Accepted(a, b, "MERGED"));
   ASSERT_TRUE(ids.ok()) << ids.status().ToString();
   EXPECT_GT(ids->merge_id, 0);
   EXPECT_GT(ids->merged_submap_id, 0);
 
-  auto global = store_->LatestGlobalMap();
-  ASSERT_TRUE(global.ok()) << global.status().ToString();
-  EXPECT_EQ(global->id, ids->merged_submap_id);
-  EXPECT_EQ(global->robot, kMergedRobot);
-  EXPECT_EQ(global->name, "merge-" + std::to_string(ids->merge_id));
-  EXPECT_EQ(*store_->GetSubmapData(global->id), "MERGED");
+  auto merged = store_->GetSubmap(ids->merged_submap_id);
+  ASSERT_TRUE(merged.ok()) << merged.status().ToString();
+  EXPECT_EQ(merged->robot, kMergedRobot);
+  EXPECT_EQ(merged->name, "merge-" + std::to_string(ids->merge_id));
+  EXPECT_EQ(*store_->GetSubmapData(merged->id), "MERGED");
 
   Reopen();
   auto record = store_->GetMerge(ids->merge_id);
@@ -249,7 +246,6 @@ TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
   auto ids = Record(m);
   ASSERT_TRUE(ids.ok()) << ids.status().ToString();
   EXPECT_EQ(ids->merged_submap_id, 0);
-  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
   EXPECT_EQ(store_->ListSubmaps("")->size(), 2u);
   auto record = store_->GetMerge(ids->merge_id);
   ASSERT_TRUE(record.ok());
@@ -260,18 +256,61 @@ TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
   EXPECT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(a); }).ok());
 }
 
-TEST_F(SubmapStoreTest, LatestAcceptedMergeIsTheGlobalMap) {
+// A placement stays as first recorded (as a session tie), and the global
+// map's row comes back exactly: its members' poses bit for bit, so that the
+// builder can tell a moved member from a kept one.
+TEST_F(SubmapStoreTest, PlacementsKeepTheFirstAndTheGlobalMapComesBackExactly) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
-  ASSERT_TRUE(Record(Accepted(a, b, "FIRST")).ok());
-  auto second = Record(Accepted(b, a, "SECOND"));
-  ASSERT_TRUE(second.ok());
-  NewMerge refused;
-  refused.record.reason = "no overlap";
-  refused.record.inputs = {Input(a), Input(b)};
-  ASSERT_TRUE(Record(refused).ok());
-  EXPECT_EQ(store_->LatestGlobalMap()->id, second->merged_submap_id);
-  EXPECT_EQ(store_->ListMerges()->size(), 3u);
+  geometry::Rigid3 T;
+  T.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d(1, 2, 3).normalized()));
+  T.translation = {0.1, -1.0 / 3.0, 1e-17};
+  ASSERT_TRUE(Write([&](WriteTransaction* t) {
+                MAPD_RETURN_IF_ERROR(t->PlaceSubmap(b, 4, T));
+                return t->PlaceSubmap(b, 5, geometry::Rigid3::Identity());  // ignored
+              }).ok());
+  auto placements = store_->ListPlacements();
+  ASSERT_TRUE(placements.ok()) << placements.status().ToString();
+  ASSERT_EQ(placements->size(), 1u);
+  EXPECT_EQ((*placements)[0].submap_id, b);
+  EXPECT_EQ((*placements)[0].merge_id, 4);
+  EXPECT_EQ((*placements)[0].T_map_submap.translation, T.translation);
+
+  const Status none = store_->GetGlobalMap(true).status();
+  EXPECT_EQ(none.code(), StatusCode::kNotFound);
+  EXPECT_NE(none.message().find("no global map yet"), std::string::npos) << none.ToString();
+  GlobalMapRecord map;
+  map.version = 3;
+  map.built_ns = 77;
+  map.resolution_m = 0.05;
+  map.occupied_voxels = 12;
+  map.free_voxels = 34;
+  map.members = {{a, geometry::Rigid3::Identity()}, {b, T}};
+  map.data = std::string("BT\0bytes", 8);
+  ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->PutGlobalMap(map); }).ok());
+  Reopen();
+  auto read = store_->GetGlobalMap(/*with_data=*/true);
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  EXPECT_EQ(read->version, 3u);
+  EXPECT_EQ(read->built_ns, 77);
+  EXPECT_EQ(read->resolution_m, 0.05);
+  EXPECT_EQ(read->occupied_voxels, 12u);
+  EXPECT_EQ(read->free_voxels, 34u);
+  EXPECT_EQ(read->data, map.data);
+  ASSERT_EQ(read->members.size(), 2u);
+  EXPECT_EQ(read->members[0].submap_id, a);
+  EXPECT_EQ(read->members[1].submap_id, b);
+  EXPECT_EQ(read->members[1].T_map_submap.rotation.coeffs(), T.rotation.coeffs());
+  EXPECT_EQ(read->members[1].T_map_submap.translation, T.translation);
+  EXPECT_EQ(store_->GetGlobalMap(/*with_data=*/false)->data, "");
+
+  map.version = 4;
+  map.members.pop_back();
+  ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->PutGlobalMap(map); }).ok());
+  EXPECT_EQ(store_->GetGlobalMap(false)->version, 4u);
+  EXPECT_EQ(store_->GetGlobalMap(false)->members.size(), 1u);
+  ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteGlobalMap(); }).ok());
+  EXPECT_EQ(store_->GetGlobalMap(false).status().code(), StatusCode::kNotFound);
 }
 
 TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
@@ -285,7 +324,6 @@ TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
   ASSERT_TRUE(ids.ok()) << ids.status().ToString();
   EXPECT_GT(ids->merged_submap_id, 0);
   EXPECT_EQ(*store_->GetSubmapData(ids->merged_submap_id), "PROPOSED");
-  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
   auto record = store_->GetMerge(ids->merge_id);
   ASSERT_TRUE(record.ok());
   EXPECT_EQ(record->state, MergeState::kProposed);
@@ -303,7 +341,6 @@ TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
   EXPECT_EQ(record->state, MergeState::kAccepted);
   EXPECT_EQ(record->decided_by, "boss");
   EXPECT_EQ(record->decided_ns, 500);
-  EXPECT_EQ(store_->LatestGlobalMap()->id, ids->merged_submap_id);
   const Status again = decide(ids->merge_id, MergeState::kRejected);
   EXPECT_EQ(again.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(again.message().find("is accepted"), std::string::npos) << again.ToString();
@@ -326,13 +363,12 @@ TEST_F(SubmapStoreTest, RejectedProposalPinsNothingAndKeepsTheReason) {
   auto record = store_->GetMerge(ids->merge_id);
   EXPECT_EQ(record->state, MergeState::kRejected);
   EXPECT_EQ(record->reason, "askew");
-  EXPECT_EQ(store_->LatestGlobalMap().status().code(), StatusCode::kNotFound);
   for (int64_t id : {a, ids->merged_submap_id})
     EXPECT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(id); }).ok()) << id;
 }
 
 // A database of schema 5 (before review): its merges read as accepted /
-// refused, and the accepted one stays the global map.
+// refused.
 TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
@@ -357,7 +393,6 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
   EXPECT_EQ((*merges)[0].requested_by, "");
   EXPECT_EQ((*merges)[1].state, MergeState::kRefused);
   EXPECT_EQ((*merges)[1].reason, "no overlap");
-  EXPECT_EQ(store_->LatestGlobalMap()->id, accepted->merged_submap_id);
 }
 
 // Gate figures that are not numbers (NaN, infinite) are stored as not

@@ -123,9 +123,21 @@ class MapClient:
                                                       metadata=self._metadata))
 
     def global_map(self) -> Tuple[pb.SubmapInfo, bytes]:
-        """The merged global map (OctoMap binary); NOT_FOUND before the first merge."""
-        return self._read_chunks(self._stub.GetGlobalMap(pb.GetGlobalMapRequest(),
-                                                         metadata=self._metadata))
+        """The global map (OctoMap binary): the union of every submap placed in
+        the map frame; NOT_FOUND while none is."""
+        info, _, data = self.global_map_info()
+        return info, data
+
+    def global_map_info(self) -> Tuple[pb.SubmapInfo, pb.GlobalMapInfo, bytes]:
+        """The global map with its version and members (submap ids and poses)."""
+        info, about, parts = pb.SubmapInfo(), pb.GlobalMapInfo(), []
+        for chunk in self._stub.GetGlobalMap(pb.GetGlobalMapRequest(), metadata=self._metadata):
+            if chunk.HasField("info"):
+                info = chunk.info
+            if chunk.HasField("global"):
+                about = getattr(chunk, "global")
+            parts.append(chunk.data)
+        return info, about, b"".join(parts)
 
     def delete_submap(self, submap_id: int) -> None:
         self._stub.DeleteSubmap(pb.DeleteSubmapRequest(id=submap_id), timeout=self._timeout_s,

@@ -158,7 +158,7 @@ def test_submaps_upload_list_fetch_and_merge(mapd, tmp_path, with_voxel):
             client.merge([a.id, b.id])
         assert error.value.code() == grpc.StatusCode.UNIMPLEMENTED
         return
-    # Proposed first: no global map until approved.
+    # Proposed first: no global map until approved (a and b have no session).
     result = client.merge([a.id, b.id], progress=lambda stage, f: stages.append(stage),
                           review=True)
     assert "corners" in stages and "fusion" in stages
@@ -174,7 +174,9 @@ def test_submaps_upload_list_fetch_and_merge(mapd, tmp_path, with_voxel):
     assert aligned_b.T_reference_submap.translation.x == pytest.approx(2.0, abs=0.15)
     assert aligned_b.T_reference_submap.translation.y == pytest.approx(-0.5, abs=0.15)
     info, data = client.global_map()
-    assert info.id == result.merged_submap_id and data.startswith(b"# Octomap OcTree binary")
+    assert info.robot_id == "@global" and data.startswith(b"# Octomap OcTree binary")
+    _, about, _ = client.global_map_info()
+    assert about.version == 1 and [m.submap_id for m in about.members] == [a.id, b.id]
 
 
 def test_a_refused_token_gives_up_at_once_and_a_good_one_streams(mapd):

@@ -14,10 +14,12 @@
 
 namespace mapd::storage::testing {
 
-// SQL that turns schema 10's audit log back into schema 9's, then schema
-// 9's snapshot tables back into schema 8's (the downgrades below schema 9
-// start with it).
+// SQL that turns schema 11 back into 10 (no global map tables), schema 10's
+// audit log back into schema 9's, then schema 9's snapshot tables back into
+// schema 8's (the downgrades below schema 9 start with it).
 constexpr const char* kUndoSnapshotParts =
+    "DROP TABLE global_map; "
+    "DROP TABLE submap_placements; "
     "ALTER TABLE audit_log DROP COLUMN peer; "
     "ALTER TABLE audit_log DROP COLUMN credential; "
     "DROP TABLE fusion_snapshot_parts; "

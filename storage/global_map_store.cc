@@ -1,0 +1,136 @@
+// The global map's rows: submap placements and the built map
+// (WriteTransaction::PlaceSubmap / PutGlobalMap, Store::GetGlobalMap /
+// ListPlacements). The map itself is built by service/global_map_builder.h.
+#include <cinttypes>
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "storage/pose_columns.h"
+#include "storage/sqlite.h"
+#include "storage/store.h"
+
+namespace mapd::storage {
+namespace {
+
+// "id qw qx qy qz tx ty tz" per line, %.17g: doubles round-trip exactly, so a
+// member read back compares equal to the pose it was fused at.
+std::string EncodeMembers(const std::vector<GlobalMapMember>& members) {
+  std::string out;
+  char line[256];
+  for (const GlobalMapMember& m : members) {
+    const geometry::Rigid3& T = m.T_map_submap;
+    std::snprintf(line, sizeof line, "%" PRId64 " %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                  m.submap_id, T.rotation.w(), T.rotation.x(), T.rotation.y(), T.rotation.z(),
+                  T.translation.x(), T.translation.y(), T.translation.z());
+    out += line;
+  }
+  return out;
+}
+
+StatusOr<std::vector<GlobalMapMember>> DecodeMembers(const std::string& text) {
+  std::vector<GlobalMapMember> members;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    GlobalMapMember m;
+    double q[4], t[3];
+    if (std::sscanf(line.c_str(), "%" SCNd64 " %lf %lf %lf %lf %lf %lf %lf", &m.submap_id, &q[0],
+                    &q[1], &q[2], &q[3], &t[0], &t[1], &t[2]) != 8) {
+      return Status::Internal("global_map.members is corrupt: '" + line + "'");
+    }
+    m.T_map_submap.rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+    m.T_map_submap.translation = {t[0], t[1], t[2]};
+    members.push_back(m);
+  }
+  return members;
+}
+
+}  // namespace
+
+Status WriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
+                                     const geometry::Rigid3& T_map_submap) {
+  StatusOr<Statement> q = Statement::Prepare(
+      store_->writer_.get(),
+      "INSERT OR IGNORE INTO submap_placements (submap_id, merge_id, qw, qx, qy, qz, tx, ty, tz) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
+  if (!q.ok()) return q.status();
+  q->Bind(1, submap_id).Bind(2, merge_id);
+  BindPose(*q, 3, T_map_submap);
+  return q->Run();
+}
+
+Status WriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
+  StatusOr<Statement> q = Statement::Prepare(
+      store_->writer_.get(),
+      "INSERT OR REPLACE INTO global_map (id, version, built_ns, resolution, occupied, free, "
+      "members, data) VALUES (1, ?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  if (!q.ok()) return q.status();
+  const std::string members = EncodeMembers(map.members);
+  q->Bind(1, static_cast<int64_t>(map.version))
+      .Bind(2, map.built_ns)
+      .Bind(3, map.resolution_m)
+      .Bind(4, static_cast<int64_t>(map.occupied_voxels))
+      .Bind(5, static_cast<int64_t>(map.free_voxels))
+      .Bind(6, members)
+      .BindBlob(7, map.data.data(), map.data.size());
+  return q->Run();
+}
+
+Status WriteTransaction::DeleteGlobalMap() {
+  StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(), "DELETE FROM global_map");
+  if (!q.ok()) return q.status();
+  return q->Run();
+}
+
+StatusOr<GlobalMapRecord> Store::GetGlobalMap(bool with_data) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(), with_data
+                         ? "SELECT version, built_ns, resolution, occupied, free, members, data "
+                           "FROM global_map WHERE id = 1"
+                         : "SELECT version, built_ns, resolution, occupied, free, members, x'' "
+                           "FROM global_map WHERE id = 1");
+  if (!q.ok()) return q.status();
+  StatusOr<bool> row = q->Step();
+  if (!row.ok()) return row.status();
+  if (!*row) {
+    return Status::NotFound(
+        "no global map yet: no submap has a place in the map frame (accept a merge, or upload "
+        "a submap in a session whose frame is tied)");
+  }
+  GlobalMapRecord map;
+  map.version = static_cast<uint64_t>(q->ColumnInt(0));
+  map.built_ns = q->ColumnInt(1);
+  map.resolution_m = q->ColumnDouble(2);
+  map.occupied_voxels = static_cast<uint64_t>(q->ColumnInt(3));
+  map.free_voxels = static_cast<uint64_t>(q->ColumnInt(4));
+  StatusOr<std::vector<GlobalMapMember>> members = DecodeMembers(q->ColumnText(5));
+  if (!members.ok()) return members.status();
+  map.members = *std::move(members);
+  map.data = std::string(q->ColumnBlob(6));
+  return map;
+}
+
+StatusOr<std::vector<SubmapPlacement>> Store::ListPlacements() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  StatusOr<Statement> q = Statement::Prepare(
+      reader_.get(),
+      "SELECT submap_id, merge_id, qw, qx, qy, qz, tx, ty, tz FROM submap_placements "
+      "ORDER BY submap_id");
+  if (!q.ok()) return q.status();
+  std::vector<SubmapPlacement> out;
+  for (;;) {
+    StatusOr<bool> row = q->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) break;
+    SubmapPlacement p;
+    p.submap_id = q->ColumnInt(0);
+    p.merge_id = q->ColumnInt(1);
+    p.T_map_submap = ColumnPose(*q, 2);
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace mapd::storage
