@@ -4,12 +4,16 @@
 add_executable(voxel_merge_bench
   ${CMAKE_CURRENT_LIST_DIR}/voxel_merge_bench.cc
   ${CMAKE_CURRENT_LIST_DIR}/voxel_crops.cc
-  ${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc)
+  ${CMAKE_CURRENT_LIST_DIR}/fpfh_baseline.cc
+  ${CMAKE_CURRENT_LIST_DIR}/mapd_merge_client.cc)
 target_include_directories(voxel_merge_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 target_include_directories(voxel_merge_bench SYSTEM PRIVATE ${OCTOMAP_INCLUDE_DIRS}
                            ${PCL_INCLUDE_DIRS})
-target_link_libraries(voxel_merge_bench PRIVATE voxel ${OCTOMAP_LIBRARIES} ${PCL_LIBRARIES})
-target_compile_definitions(voxel_merge_bench PRIVATE ${PCL_DEFINITIONS})
+target_link_libraries(voxel_merge_bench PRIVATE voxel mapd_proto ${OCTOMAP_LIBRARIES}
+                      ${PCL_LIBRARIES})
+# --mapd (no value): the mapd built beside it.
+target_compile_definitions(voxel_merge_bench PRIVATE ${PCL_DEFINITIONS}
+                           MAPD_BINARY="$<TARGET_FILE:mapd>")
 mapd_set_warnings(voxel_merge_bench)
 # GCC 12 reports a false -Warray-bounds inside Eigen's umeyama<float> (instantiated
 # by PCL's registration headers), not in our code.

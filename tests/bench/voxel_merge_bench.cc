@@ -12,6 +12,7 @@
 //                     [--trials=20] [--trials-other=N] [--negatives=N] [--gap-m=2]
 //                     [--methods=ours,fpfh] [--seed=1] [--max-voxels=150000]
 //                     [--threads=1] [--out=FILE] [--keep-crops=DIR] [--baseline=BINARY]
+//                     [--mapd[=BINARY]]
 //
 // --trials applies to overlap 0.5, --trials-other (default = --trials) to the
 // others. --negatives (default = --trials-other) pairs per map of two DISJOINT
@@ -30,6 +31,15 @@
 // and the median of the paired CPU ratios. The machine's drift hits both
 // sides of a pair alike: on a VM whose speed wandered by a third between
 // runs, unpaired medians could not show a 10 % change.
+//
+// --mapd[=BINARY]: a real mapd (the one built beside this, or BINARY) is
+// started on a temporary database with its default settings, and every "ours"
+// pair is also uploaded to it and merged there (MergeSubmaps), as an operator
+// would (bench/mapd_merge_client.h). A second table gives per row what the
+// server decided (right / wrong / refused against the truth) and on how many
+// pairs it decided differently from the library (accepted vs refused, or
+// transforms more than 0.05 deg / 0.05 voxel apart). The exit code is 3 when
+// any pair disagrees: the two must decide alike (issue 42 item 1).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -43,12 +53,15 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "bench/fpfh_baseline.h"
+#include "bench/mapd_merge_client.h"
 #include "bench/voxel_crops.h"
+#include "common/process.h"
 #include "voxel/merge.h"
 #include "voxel/octree_reader.h"
 #include "voxel/voxel_grid.h"
@@ -354,6 +367,7 @@ struct Options {
   std::string out;
   std::string keep_crops;  // --keep-crops: where to copy every crop pair
   std::string baseline;    // --baseline: another build's binary, run on every "ours" pair
+  std::string mapd;        // --mapd: the mapd binary to merge every "ours" pair through
 };
 
 // Runs one worker process; FAILED status INTERNAL when it crashed or timed out.
@@ -453,6 +467,9 @@ struct Row {
   std::vector<std::vector<double>> stage_s;
   long peak_rss_kb = 0;
   std::map<std::string, int> error_messages;
+  // --mapd: the server's verdicts on the same pairs.
+  int mapd_runs = 0, mapd_right = 0, mapd_wrong = 0, mapd_refused = 0, mapd_errors = 0;
+  int mapd_disagree = 0;
   // --baseline: pairs run, outcomes that differ, its CPU, and this build's
   // over its per pair (crashed workers count as differing, with no CPU).
   int baseline_runs = 0, baseline_differs = 0;
@@ -555,6 +572,23 @@ void WriteTable(const std::vector<Row>& rows, const std::string& out_path, bool 
   }
 }
 
+// --mapd's table: what the server decided on the same pairs.
+void WriteMapdTable(const std::vector<Row>& rows, const std::string& out_path) {
+  std::ostringstream table;
+  table << "\nThrough mapd (upload, MergeSubmaps), the same pairs:\n\n"
+        << "| map | overlap | method | pairs | mapd right | mapd wrong | mapd refused | mapd "
+           "errors | decided unlike the library |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const Row& r : rows) {
+    if (r.mapd_runs == 0) continue;
+    table << "| " << r.map << " | "
+          << (r.negative ? std::string("disjoint") : Fmt("%.1f", r.overlap)) << " | " << r.method
+          << " | " << r.mapd_runs << " | " << r.mapd_right << " | " << r.mapd_wrong << " | "
+          << r.mapd_refused << " | " << r.mapd_errors << " | " << r.mapd_disagree << " |\n";
+  }
+  std::cout << table.str();
+  if (!out_path.empty()) std::ofstream(out_path, std::ios::app) << table.str();
+}
+
 bool ParseOptions(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -590,6 +624,8 @@ bool ParseOptions(int argc, char** argv, Options* o) {
       o->keep_crops = val;
     } else if (key == "--baseline") {
       o->baseline = val;
+    } else if (key == "--mapd") {
+      o->mapd = eq == std::string::npos ? MAPD_BINARY : val;
     } else {
       std::fprintf(stderr, "unknown flag %s (see the header of voxel_merge_bench.cc)\n",
                    arg.c_str());
@@ -644,6 +680,18 @@ int main(int argc, char** argv) {
   const std::string path_a = std::string(tmp) + "/a.bt", path_b = std::string(tmp) + "/b.bt";
 
   std::vector<Row> rows;
+  mapd::testing::MapdProcess mapd_process;
+  std::unique_ptr<mapd::bench::MapdMergeClient> mapd_client;
+  if (!opt.mapd.empty()) {
+    mapd_process =
+        mapd::testing::StartMapd(std::string(tmp) + "/mapd.db", {"--http.port", "0"}, opt.mapd);
+    if (mapd_process.port == 0) {
+      std::fprintf(stderr, "--mapd: %s did not start:\n%s\n", opt.mapd.c_str(),
+                   mapd_process.log().c_str());
+      return 1;
+    }
+    mapd_client = std::make_unique<mapd::bench::MapdMergeClient>(mapd_process.address);
+  }
   for (std::size_t mi = 0; mi < opt.maps.size(); ++mi) {
     const std::string path = opt.dir + "/" + opt.maps[mi];
     StatusOr<mapd::voxel::OcTreePtr> tree = mapd::voxel::ReadOctreeFile(path);
@@ -788,6 +836,45 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "  %-4s %-40s %.2f s (cpu %.2f s), peak %.0f MiB |%s\n",
                        opt.methods[k].c_str(), verdict.c_str(), w.total_s, MergeCpu(w),
                        rss_kb / 1024.0, w.message.c_str());
+          if (mapd_client && opt.methods[k] == "ours") {
+            const std::string name =
+                opt.maps[mi] + "-" + Fmt("%.2f", overlap) + "-" + std::to_string(trial);
+            const mapd::bench::MapdVerdict v = mapd_client->Merge(name, pair->a_bt, pair->b_bt);
+            ++row.mapd_runs;
+            std::string said;
+            if (!v.answered) {
+              ++row.mapd_errors;
+              said = "ERROR " + v.code;
+            } else if (!v.accepted) {
+              ++row.mapd_refused;
+              said = "REFUSED";
+            } else if (negative) {
+              ++row.mapd_wrong;
+              said = "WRONG (disjoint crops merged)";
+            } else {
+              const double rot = mapd::bench::RotationErrorDeg(v.T_a_b, pair->T_a_b);
+              const double vox =
+                  mapd::bench::TranslationErrorAt(v.T_a_b, pair->T_a_b, pair->centroid_b) /
+                  grid->resolution();
+              const bool ok = rot < 2.0 && vox < 2.0;
+              ++(ok ? row.mapd_right : row.mapd_wrong);
+              char buf[128];
+              std::snprintf(buf, sizeof(buf), "%s rot %.3f deg trans %.2f vox", ok ? "OK" : "WRONG",
+                            rot, vox);
+              said = buf;
+            }
+            const bool library_accepted = w.accepted && w.code == StatusCode::kOk;
+            bool agree = v.answered && v.accepted == library_accepted;
+            if (agree && v.accepted) {
+              agree = mapd::bench::RotationErrorDeg(v.T_a_b, w.T) < 0.05 &&
+                      mapd::bench::TranslationErrorAt(v.T_a_b, w.T, pair->centroid_b) /
+                              grid->resolution() <
+                          0.05;
+            }
+            row.mapd_disagree += agree ? 0 : 1;
+            std::fprintf(stderr, "  mapd %-40s %s |%s\n", said.c_str(),
+                         agree ? "as the library" : "UNLIKE THE LIBRARY", v.message.c_str());
+          }
           std::string stage_log;
           for (std::size_t i = 0; i < w.stage_s.size() && i < w.stage_names.size(); ++i) {
             stage_log += " " + w.stage_names[i] + "=" + Fmt("%.2f", w.stage_s[i]);
@@ -801,10 +888,20 @@ int main(int argc, char** argv) {
       for (Row& r : method_rows) rows.push_back(std::move(r));
     }
   }
+  if (mapd_client) {
+    mapd_client.reset();
+    mapd::testing::Stop(mapd_process.pid);
+    for (const char* file : {"/mapd.db", "/mapd.db-wal", "/mapd.db-shm", "/mapd.db.log"})
+      std::remove((std::string(tmp) + file).c_str());
+  }
   std::remove(path_a.c_str());
   std::remove(path_b.c_str());
   rmdir(tmp);
 
   WriteTable(rows, opt.out, /*final=*/true);
-  return 0;
+  if (opt.mapd.empty()) return 0;
+  WriteMapdTable(rows, opt.out);
+  int disagree = 0;
+  for (const Row& r : rows) disagree += r.mapd_disagree;
+  return disagree == 0 ? 0 : 3;
 }
