@@ -118,8 +118,11 @@ grpc::Status SubmapService::Get(grpc::ServerContext* context, const pb::GetSubma
 
 grpc::Status SubmapService::GetGlobalMap(grpc::ServerContext* context,
                                          grpc::ServerWriter<pb::DataChunk>* writer) {
-  // A change just committed (a merge accepted, an upload) is served once built.
-  global_->WaitUntilCurrent(std::chrono::milliseconds(kGlobalMapWaitMs));
+  // A change just committed (a merge accepted, an upload) is served once
+  // built. Not while the core recovers: nothing is built then, the stored
+  // map is served as it is.
+  if (core_->CheckReady().ok())
+    global_->WaitUntilCurrent(std::chrono::milliseconds(kGlobalMapWaitMs));
   StatusOr<storage::GlobalMapRecord> global = core_->store().GetGlobalMap(/*with_data=*/true);
   if (!global.ok()) {
     const std::string failed = global_->last_error();
