@@ -128,12 +128,14 @@ void GlobalMapBuilder::Loop() {
     if (stop_) return;
     if (requested_ <= built_) continue;
     lock.unlock();
-    // Writes are refused while the core recovers: the first build waits.
-    if (!core_->CheckReady().ok()) {
-      lock.lock();
+    const bool ready = core_->CheckReady().ok();
+    lock.lock();
+    if (!ready) {
+      // Writes are refused while the core recovers: the build waits, asking
+      // again every 100 ms (not in a spin: recovery needs the CPU).
+      cv_.wait_for(lock, std::chrono::milliseconds(100), [&] { return stop_; });
       continue;
     }
-    lock.lock();
     const uint64_t covering = requested_;
     const bool first = !backfilled_;
     lock.unlock();

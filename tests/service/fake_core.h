@@ -32,8 +32,14 @@ class FakeCore final : public service::Core {
     hub_.Start(map_version);
   }
 
+  // Readiness (CheckReady): settable while the service runs, since its
+  // threads (the global map builder) ask at any time.
+  void SetReady(Status ready) {
+    std::lock_guard<std::mutex> lock(mu_);
+    ready_ = std::move(ready);
+  }
+
   // What the test sets (before the handlers run).
-  Status ready = Status::Ok();
   std::vector<service::FusedView> features;
   uint64_t map_version = 1;
   uint64_t backlog = 0;
@@ -45,7 +51,15 @@ class FakeCore final : public service::Core {
     return submitted_;
   }
 
-  Status CheckReady() const override { return ready; }
+  Status CheckReady() const override {
+    std::lock_guard<std::mutex> lock(mu_);
+    ++check_ready_calls_;
+    return ready_;
+  }
+  size_t check_ready_calls() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return check_ready_calls_;
+  }
   void Submit(service::IngestBatch, service::DoneCallback done) override {
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -54,7 +68,7 @@ class FakeCore final : public service::Core {
     done(outcome);
   }
   Status ExecuteWrite(service::WriteFunction write) override {
-    if (!ready.ok()) return ready;
+    if (Status ready = CheckReady(); !ready.ok()) return ready;
     std::lock_guard<std::mutex> lock(write_mu_);  // one writer, as in MapCore
     StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
     if (!txn.ok()) return txn.status();
@@ -87,6 +101,8 @@ class FakeCore final : public service::Core {
   mutable std::mutex mu_;
   std::mutex write_mu_;
   size_t submitted_ = 0;
+  Status ready_ = Status::Ok();           // guarded by mu_
+  mutable size_t check_ready_calls_ = 0;  // guarded by mu_
   service::WatchHub hub_;
 };
 

@@ -7,9 +7,11 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <memory>
 #include <random>
 #include <string>
+#include <thread>
 
 #include "common/batches.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -52,8 +54,22 @@ class FakeCoreTest : public ::testing::Test {
   std::unique_ptr<ServedCore> served_;
 };
 
+// The global map builder waits for a recovering core without spinning: it
+// asks every 100 ms (a spin asked millions of times a second and took a core
+// from the recovery it waited for).
+TEST(FakeCoreAlone, TheGlobalMapBuilderWaitsForARecoveringCoreWithoutSpinning) {
+  FakeCore core;
+  core.SetReady(Status::Unavailable("recovering"));
+  {
+    ServedCore served(&core);
+    const size_t before = core.check_ready_calls();
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    EXPECT_LT(core.check_ready_calls() - before, 100u);
+  }
+}
+
 TEST_F(FakeCoreTest, RecoveringCoreRefusesReadsAndBatchesWithUnavailable) {
-  core_.ready = Status::Unavailable("recovering the fused map: 40% of 1000 observations");
+  core_.SetReady(Status::Unavailable("recovering the fused map: 40% of 1000 observations"));
   pb::FeatureMapPage page;
   const grpc::Status read = ReadMap(&page);
   EXPECT_EQ(read.error_code(), grpc::StatusCode::UNAVAILABLE);

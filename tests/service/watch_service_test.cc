@@ -516,7 +516,7 @@ TEST_F(WatchFakeCoreTest, AWatcherWhoseQueueOverflowsGetsAResyncAndPublishingNev
 
 TEST_F(WatchFakeCoreTest, ARecoveringCoreRefusesWatches) {
   Start();
-  core_->ready = Status::Unavailable("recovering");
+  core_->SetReady(Status::Unavailable("recovering"));
   WatchClient watch(stub(), {});
   EXPECT_EQ(watch.Finish().error_code(), grpc::StatusCode::UNAVAILABLE);
 }
