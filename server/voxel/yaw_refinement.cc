@@ -13,7 +13,7 @@
 namespace mapd::voxel {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kRadPerDeg = M_PI / 180.0;
 // The spectrum of `values` into `out`.
 void Transform(RealFft& fft, const LargeVector<float>& values, LargeVector<Complex>* out) {
   const Complex* s = fft.Forward([&](std::size_t i) { return values[i]; });
@@ -270,7 +270,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     Scored best = score(yaw);
     candidate_scores.push_back(best.score);
     const auto consider = [&](double offset) {
-      const Scored s = score(yaw + offset * kDeg);
+      const Scored s = score(yaw + offset * kRadPerDeg);
       if (s.score > best.score) best_offset = offset, best = s;
     };
     for (int k = -steps; k <= steps; ++k) {
@@ -283,10 +283,10 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
       }
     }
     window_scores.push_back(best.score);
-    window_yaws.push_back(yaw + best_offset * kDeg);
+    window_yaws.push_back(yaw + best_offset * kRadPerDeg);
     window_shifts.push_back(best.t_m);
     if (std::abs(best_offset) >= params.min_change_deg) {
-      refined.emplace_back(best.score, std::remainder(yaw + best_offset * kDeg, 2 * M_PI));
+      refined.emplace_back(best.score, std::remainder(yaw + best_offset * kRadPerDeg, 2 * M_PI));
     }
   }
   std::stable_sort(refined.begin(), refined.end(),

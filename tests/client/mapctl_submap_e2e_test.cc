@@ -495,6 +495,39 @@ TEST_F(MapctlSubmapE2eTest, SubmapGetRoundTripsAndDeleteRemoves) {
   EXPECT_EQ(Mapctl({"submap", "delete", "abc"}).exit_code, 2);
 }
 
+// Issue 42 item 6: what a map holds, from a local file (no server needed)
+// or a stored submap, with the same figures either way; junk exits 1 naming
+// why, a word that is neither a file nor an id is a usage error.
+TEST_F(MapctlSubmapE2eTest, SubmapInfoReadsFilesAndStoredSubmaps) {
+  const voxel::SubmapSummary want = voxel::InspectSubmap(maps_->a_bt).value();
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "resolution %.3f m, %llu occupied / %llu free voxels",
+                want.resolution, static_cast<unsigned long long>(want.occupied_voxels),
+                static_cast<unsigned long long>(want.free_voxels));
+  const std::string figures = buf;
+  CommandResult r = Mapctl({"submap", "info", a_bt_});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr(a_bt_ + ": OctoMap .bt, " + figures)) << r.out;
+
+  const std::string id_a = Upload(a_bt_, "r1");
+  ASSERT_FALSE(id_a.empty());
+  r = Mapctl({"submap", "info", id_a});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out,
+              HasSubstr("submap " + id_a + " (robot r1, name room_a): OctoMap .bt, " + figures))
+      << r.out;
+
+  const std::string junk = dir_.File("junk.bt");
+  std::ofstream(junk) << "# Octomap OcTree binary file\nres 0.1\nsize 5\ndata\nxx";
+  r = Mapctl({"submap", "info", junk});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("is not a usable OctoMap file")) << r.err;
+  EXPECT_EQ(Mapctl({"submap", "info", "no-such-file.bt"}).exit_code, 2);
+  r = Mapctl({"submap", "info", "999"});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
+}
+
 TEST_F(MapctlSubmapE2eTest, RenderUsageErrors) {
   // Checked before anything is sent or read.
   CommandResult r = Mapctl({"merge", "1", "2", "--render", dir_.File("out.jpg")});
