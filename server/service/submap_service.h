@@ -32,13 +32,12 @@
 //   session frame's pose in the map, T_map_R, is: R's own if R's session is
 //   tied; else T_map_k * T_R_k^-1 from the first input k whose pose in the
 //   map is known (its session is tied, or it was uploaded without a session
-//   and an accepted merge placed it); else the identity (the reference's frame becomes the map frame: the
-//   first tie of a fleet that has no map-frame session yet). Every input i
-//   whose session is not tied yet is then tied with T_map_i = T_map_R * T_R_i;
-//   ties are never moved later. Submaps uploaded without a session tie
-//   nothing. Every input is placed at T_map_R * T_R_i (kept if it was placed
-//   before): the global map's members. The fuser then re-projects every stored observation with the new
-//   frames, so the robots' walls fuse into one feature map.
+//   and an accepted merge placed it); else the identity (the reference's frame becomes the map
+//   frame: the first tie of a fleet that has no map-frame session yet). Every input i whose session
+//   is not tied yet is then tied with T_map_i = T_map_R * T_R_i; ties are never moved later.
+//   Submaps uploaded without a session tie nothing. Every input is placed at T_map_R * T_R_i (kept
+//   if it was placed before): the global map's members. The fuser then re-projects every stored
+//   observation with the new frames, so the robots' walls fuse into one feature map.
 // - GetGlobalMap: the union, in the map frame, of every upload with a place
 //   there (global_map_builder.h): its session is tied, or an accepted merge
 //   placed it (that merge's FramesOfMerge placements). Rebuilt after an

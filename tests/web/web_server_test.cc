@@ -378,7 +378,8 @@ TEST_F(WebFixture, BadMergeRequestsGetAClear4xx) {
   EXPECT_EQ(r->status, 400);
   const json bad = GetJson("/api/merges?state=maybe", 400);
   EXPECT_THAT(bad["error"].get<std::string>(), HasSubstr("'maybe' is not proposed"));
-  EXPECT_EQ(GetJson("/api/global-map.png", 404)["error"], "no global map yet (no submap placed in the map frame)");
+  EXPECT_EQ(GetJson("/api/global-map.png", 404)["error"],
+            "no global map yet (no submap placed in the map frame)");
 }
 
 TEST_F(WebFixture, WithTokensReadsNeedAReaderAndDecisionsAnOperator) {
