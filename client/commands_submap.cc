@@ -169,6 +169,10 @@ int RunInfo(const Context& ctx, const InfoOptions& flags) {
   std::string bytes, label;
   struct stat st {};
   if (stat(flags.what.c_str(), &st) == 0) {
+    if (!S_ISREG(st.st_mode)) {
+      PrintError("submap info: " + flags.what + " is not a regular file");
+      return kExitFailed;
+    }
     std::ifstream file(flags.what, std::ios::binary);
     if (!file) {
       PrintError("submap info: cannot open " + flags.what + ": " + std::strerror(errno));

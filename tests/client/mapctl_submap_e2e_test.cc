@@ -523,6 +523,9 @@ TEST_F(MapctlSubmapE2eTest, SubmapInfoReadsFilesAndStoredSubmaps) {
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_THAT(r.err, HasSubstr("is not a usable OctoMap file")) << r.err;
   EXPECT_EQ(Mapctl({"submap", "info", "no-such-file.bt"}).exit_code, 2);
+  r = Mapctl({"submap", "info", dir_.path()});  // a directory: an error, not a crash
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("is not a regular file"));
   r = Mapctl({"submap", "info", "999"});
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
