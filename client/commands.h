@@ -24,6 +24,9 @@ void AddWatchCommand(CLI::App* app, Action* action);
 void AddIngestCommands(CLI::App* app, Action* action);
 // commands_submap.cc: submaps, submap upload|get|delete, global-map (voxel submaps)
 void AddSubmapCommands(CLI::App* app, Action* action);
+// commands_submap_tools.cc: submap info|crop|transform (OctoMap files and
+// stored submaps), added to the `submap` command
+void AddSubmapToolCommands(CLI::App* submap, Action* action);
 // commands_merge.cc: merge, merge show|approve|reject, merges
 void AddMergeCommands(CLI::App* app, Action* action);
 // commands_export.cc: occupancy-grid (ROS map_server files), trails (GeoJSON)

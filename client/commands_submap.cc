@@ -1,19 +1,14 @@
-// mapctl submaps | submap upload|get|delete|info | global-map
-#include <sys/stat.h>
-
-#include <algorithm>
+// mapctl submaps | submap upload|get|delete | global-map (info, crop, transform:
+// commands_submap_tools.cc)
 #include <cerrno>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 
 #include "client/commands.h"
 #include "client/format.h"
 #include "client/rigid_transform.h"
 #include "client/text_util.h"
-#include "voxel/octree_reader.h"
 
 namespace mapd::client {
 namespace {
@@ -43,10 +38,6 @@ struct GetOptions {
 
 struct DeleteOptions {
   uint64_t id = 0;
-};
-
-struct InfoOptions {
-  std::string what;  // a file, or a stored submap's id
 };
 
 struct GlobalMapOptions {
@@ -162,58 +153,6 @@ int RunDelete(const Context& ctx, const DeleteOptions& flags) {
   return kExitOk;
 }
 
-// mapctl submap info FILE|ID: what an OctoMap file holds, read with the
-// server's own validating reader (no tree is built), from a local file or a
-// stored submap's bytes.
-int RunInfo(const Context& ctx, const InfoOptions& flags) {
-  std::string bytes, label;
-  struct stat st {};
-  if (stat(flags.what.c_str(), &st) == 0) {
-    if (!S_ISREG(st.st_mode)) {
-      PrintError("submap info: " + flags.what + " is not a regular file");
-      return kExitFailed;
-    }
-    std::ifstream file(flags.what, std::ios::binary);
-    if (!file) {
-      PrintError("submap info: cannot open " + flags.what + ": " + std::strerror(errno));
-      return kExitFailed;
-    }
-    bytes.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-    label = flags.what;
-  } else if (!flags.what.empty() && std::all_of(flags.what.begin(), flags.what.end(),
-                                                [](char c) { return c >= '0' && c <= '9'; })) {
-    pb::GetSubmapRequest request;
-    request.set_id(std::strtoull(flags.what.c_str(), nullptr, 10));
-    auto call = ctx.NewStreamContext();
-    pb::SubmapInfo info;
-    const grpc::Status status =
-        ReadChunks(ctx.stub->GetSubmap(call.get(), request).get(), &bytes, &info);
-    if (!status.ok()) return ReportRpcError(ctx, "submap info " + flags.what, status);
-    label = "submap " + flags.what + " (robot " + info.robot_id() + ", name " + info.name() + ")";
-  } else {
-    return UsageError(
-        "submap", "'" + flags.what + "' is neither a file nor a submap id (see 'mapctl submaps')");
-  }
-  const StatusOr<voxel::SubmapSummary> summary = voxel::InspectSubmap(bytes);
-  if (!summary.ok()) {
-    PrintError("submap info: " + label +
-               " is not a usable OctoMap file: " + summary.status().message());
-    return kExitFailed;
-  }
-  const bool full = bytes.rfind("# Octomap OcTree file", 0) == 0;
-  const Eigen::Vector3d extent = summary->bounds_max - summary->bounds_min;
-  std::printf(
-      "%s: OctoMap %s, resolution %.3f m, %llu occupied / %llu free voxels, occupied within "
-      "(%.2f, %.2f, %.2f)..(%.2f, %.2f, %.2f) m (%.2f x %.2f x %.2f m), %zu bytes\n",
-      label.c_str(), full ? ".ot" : ".bt", summary->resolution,
-      static_cast<unsigned long long>(summary->occupied_voxels),
-      static_cast<unsigned long long>(summary->free_voxels), summary->bounds_min.x(),
-      summary->bounds_min.y(), summary->bounds_min.z(), summary->bounds_max.x(),
-      summary->bounds_max.y(), summary->bounds_max.z(), extent.x(), extent.y(), extent.z(),
-      bytes.size());
-  return kExitOk;
-}
-
 // "global map v3: the union of submaps 1, 2, 5 in the map frame".
 std::string DescribeGlobalMap(const pb::GlobalMapInfo& global) {
   if (global.version() == 0)
@@ -282,7 +221,7 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
   submaps->add_flag("--json", list->json, "the ListSubmapsResponse in protobuf JSON");
 
   CLI::App* submap = app->add_subcommand(
-      "submap", "submap upload FILE --robot R | get ID -o FILE | delete ID: one submap");
+      "submap", "submap upload|get|delete|info|crop|transform: one submap or OctoMap file");
   submap->require_subcommand(1);
   CLI::App* upload = submap->add_subcommand("upload", "upload an OctoMap file (.bt or .ot)");
   upload->footer("Uploads the file in 1 MiB chunks and prints the stored submap.");
@@ -314,14 +253,7 @@ void AddSubmapCommands(CLI::App* app, Action* action) {
       ->required()
       ->check(PositiveId());
 
-  CLI::App* info = submap->add_subcommand("info", "what an OctoMap file or a stored submap holds");
-  info->footer(
-      "Reads a local .bt/.ot file (no server needed) or a stored submap's bytes with the "
-      "server's own validating reader: format, resolution, occupied and free voxels, the "
-      "occupied bounds. A file that is not a usable OctoMap exits 1 naming why.");
-  auto in = BindCommand(info, action, RunInfo);
-  info->add_option("FILE|ID", in->what, "a file, or a submap id (see 'mapctl submaps')")
-      ->required();
+  AddSubmapToolCommands(submap, action);
 
   CLI::App* global = app->add_subcommand(
       "global-map", "download the global map, the union of the placed submaps (-o FILE.bt)");

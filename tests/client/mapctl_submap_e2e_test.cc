@@ -531,6 +531,65 @@ TEST_F(MapctlSubmapE2eTest, SubmapInfoReadsFilesAndStoredSubmaps) {
   EXPECT_THAT(r.err, HasSubstr("NOT_FOUND"));
 }
 
+// Issue 42 item 6: an operator moves a map into place and cuts regions out,
+// without C++. Room b is the room's x in [2, 10) seen from T_a_b (a quarter
+// turn and whole voxels); moved by T_a_b and cut to x in [2, 8), it is the
+// same region of a, cut alike: the same voxels, so the same figures.
+TEST_F(MapctlSubmapE2eTest, SubmapCropAndTransformMoveAMapIntoPlaceAndCutItOut) {
+  const std::string id_b = Upload(b_bt_, "r2");
+  ASSERT_FALSE(id_b.empty());
+  const std::string b_in_a = dir_.File("b_in_a.bt");
+  // From the stored submap: yaw 90, pitch 0, roll 0; then (2, -1, 0) m.
+  CommandResult r = Mapctl(
+      {"submap", "transform", id_b, "--rotate", "90,0,0", "--translate", "2,-1,0", "-o", b_in_a});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("wrote " + b_in_a + ": OctoMap .bt"));
+
+  const auto cut = [&](const std::string& in, const std::string& out) {
+    CommandResult c =
+        Mapctl({"submap", "crop", in, "--min", "2,-1,-1", "--max", "7.99,9,3", "-o", out});
+    EXPECT_EQ(c.exit_code, 0) << c.out << c.err;
+    // The figures after "OctoMap .bt, ": resolution, voxels, bounds, bytes.
+    const size_t at = c.out.find("OctoMap .bt, ");
+    return at == std::string::npos ? c.out : c.out.substr(at);
+  };
+  const std::string a_cut = cut(a_bt_, dir_.File("a_cut.bt"));
+  EXPECT_THAT(a_cut, HasSubstr("occupied within (2.00, 0.00, 0.00)..(8.00, ")) << a_cut;
+  EXPECT_EQ(cut(b_in_a, dir_.File("b_cut.bt")), a_cut);
+  EXPECT_EQ(ReadAll(dir_.File("b_cut.bt")), ReadAll(dir_.File("a_cut.bt")));
+
+  // A .ot output keeps log-odds; the result reads back through info.
+  r = Mapctl(
+      {"submap", "crop", a_bt_, "--min", "0,0,0", "--max", "1,1,1", "-o", dir_.File("corner.ot")});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  r = Mapctl({"submap", "info", dir_.File("corner.ot")});
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("OctoMap .ot"));
+
+  // Bad input: named, and nothing written.
+  r = Mapctl({"submap", "crop", a_bt_, "--min", "50,50,0", "--max", "60,60,2", "-o",
+              dir_.File("none.bt")});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("no known voxel of the map lies in the box"));
+  EXPECT_THAT(r.err, HasSubstr("occupied voxels lie within"));
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("none.bt")));
+  r = Mapctl({"submap", "crop", a_bt_, "--min", "0,0", "--max", "1,1,1", "-o", dir_.File("x.bt")});
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("three numbers"));
+  r = Mapctl({"submap", "transform", a_bt_, "-o", dir_.File("x.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("must end in .bt or .ot"));
+  r = Mapctl({"submap", "transform", a_bt_, "--translate", "1e6,0,0", "-o", dir_.File("x.bt")});
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("outside OctoMap's key range"));
+  const std::string junk = dir_.File("junk.bt");
+  std::ofstream(junk) << "# Octomap OcTree binary file\nres 0.1\nsize 5\ndata\nxx";
+  r = Mapctl({"submap", "transform", junk, "-o", dir_.File("x.bt")});
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("is not a usable OctoMap file"));
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("x.bt")));
+}
+
 TEST_F(MapctlSubmapE2eTest, RenderUsageErrors) {
   // Checked before anything is sent or read.
   CommandResult r = Mapctl({"merge", "1", "2", "--render", dir_.File("out.jpg")});
