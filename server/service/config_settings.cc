@@ -433,6 +433,10 @@ const std::vector<Setting>& Settings() {
            [](C& c) -> auto& { return c.submaps.max_restart_spread_voxels; }, {0, 1000}),
       Real("merge.max_seconds", "time budget of one merge, seconds",
            [](C& c) -> auto& { return c.submaps.max_merge_seconds; }, {0, 86400, true}),
+      Count("merge.threads", "threads one merge uses (0: the machine's cores); "
+            "limits.max_concurrent_merges merges run at once and the rest queue, so the cores are "
+            "not oversubscribed",
+            [](C& c) -> auto& { return c.submaps.merge_threads; }, 0, 256),
       Choice("merge.resolution_policy", "submaps of different resolutions: refuse, or resample to the finest",
              [](C& c) -> auto& { return c.submaps.resample_resolutions; }, "refuse", "resample"),
       Choice("merge.fusion_rule", "occupancy fusion: overlap (the paper's rule) or log_odds",

@@ -108,7 +108,10 @@ struct SubmapOptions {
   // voxel::MergeParams; 0 = off): further, the overlap does not fix the
   // alignment.
   double max_restart_spread_voxels = 4.0;
-  double max_merge_seconds = 60.0;    // budget of one merge, seconds
+  double max_merge_seconds = 60.0;  // budget of one merge, seconds
+  // Threads one merge uses (voxel::MergeParams::threads); 0: the machine's
+  // cores. max_concurrent_merges merges run at once, the rest queue.
+  size_t merge_threads = 0;
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule
   // The correlation generator (voxel::CorrelationParams): run after the

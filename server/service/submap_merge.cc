@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <string>
+#include <thread>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -30,6 +31,8 @@ voxel::MergeParams ToMergeParams(const SubmapOptions& o) {
   p.min_shared_free_ratio = o.min_shared_free_ratio;
   p.max_restart_spread_voxels = o.max_restart_spread_voxels;
   p.max_seconds = o.max_merge_seconds;
+  p.threads = static_cast<int>(
+      o.merge_threads > 0 ? o.merge_threads : std::max(1U, std::thread::hardware_concurrency()));
   p.resolution_policy = o.resample_resolutions ? voxel::ResolutionPolicy::kResampleToFinest
                                                : voxel::ResolutionPolicy::kRefuse;
   p.fusion_rule = o.log_odds_fusion ? voxel::FusionRule::kLogOdds : voxel::FusionRule::kOverlapRule;

@@ -10,6 +10,7 @@
 
 #include "voxel/fft_support.h"
 #include "voxel/large_array.h"
+#include "voxel/parallel.h"
 
 namespace mapd::voxel {
 namespace {
@@ -367,7 +368,7 @@ Status CorrelationParams::Validate() const {
 StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b, const Eigen::Matrix3d& R_b,
     const std::vector<double>& yaws, double finest_resolution_m, const CorrelationParams& params,
-    CorrelationStats* stats) {
+    CorrelationStats* stats, int threads) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
   if (a.empty() || b.empty() || yaws.empty()) return std::vector<CorrelationHypothesis>{};
@@ -436,7 +437,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // The FFT, reshaped to each yaw's size on the common grid's buffers, a's
   // three spectra on the current size, and b's buffers. Reserved for the
   // common grid (untouched until used), so no size change maps fresh pages.
-  RealFft fft({n[0], n[1], n[2]});
+  RealFft fft({n[0], n[1], n[2]}, threads);
   std::array<int, 3> size{};  // of the spectra below; none yet
   LargeVector<Complex> occ_a, hit_a, cover_a, occ_b;
   for (auto* v : {&occ_a, &hit_a, &cover_a, &occ_b}) v->reserve(fft.complex_size());
@@ -503,7 +504,13 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
                                           static_cast<double>(fft.real_size()),
                                       1.0);
     Complex* product = fft.ForwardInBoxRows(extent, rows_of(cover));
-    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(occ_a[i], product[i]);
+    // Element-wise products on every thread (ParallelRanges).
+    const auto products = [&](auto&& at) {
+      ParallelRanges(spectrum_size, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) at(i);
+      });
+    };
+    products([&](std::size_t i) { product[i] = MulConj(occ_a[i], product[i]); });
     // Only shifts where the two grids' content can meet can score: a's
     // content rows [0, rows_a) against b's [0, extent) are shifts
     // [0, rows_a) and [n - extent + 1, n) along x and y; the inverses and
@@ -529,7 +536,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const float* a_in_b = fft.InverseRows(meet[0], meet[1]);
     for_each_cell([&](std::size_t i) { weight[i] = a_in_b[i]; });
     product = fft.spectrum();
-    for (std::size_t i = 0; i < spectrum_size; ++i) product[i] = MulConj(cover_a[i], occ_b[i]);
+    products([&](std::size_t i) { product[i] = MulConj(cover_a[i], occ_b[i]); });
     const float* b_in_a = fft.InverseRows(meet[0], meet[1]);
     for_each_cell([&](std::size_t i) {
       const double in_a = b_in_a[i], in_b = weight[i];
@@ -537,9 +544,9 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
           std::min(in_a, in_b) >= min_cells ? static_cast<float>(1.0 / std::sqrt(in_a * in_b)) : 0;
     });
     product = fft.ForwardInBoxRows(extent, rows_of(free));
-    for (std::size_t i = 0; i < spectrum_size; ++i) {
+    products([&](std::size_t i) {
       product[i] = MulConj(hit_a[i], occ_b[i]) - MulConj(w * occ_a[i], product[i]);
-    }
+    });
     float* score = fft.InverseRows(meet[0], meet[1]);
     positive.clear();
     for_each_cell([&](std::size_t i) {

@@ -26,6 +26,20 @@ int FftSize(int n) {
 }
 
 namespace {
+// The planner lock, with FFTW's threads set for the plans made under it
+// (plans execute on that many threads; the planner's thread count is
+// global state, hence set under the lock for every plan).
+class PlannerLock {
+ public:
+  explicit PlannerLock(int threads) : lock_(FftwPlannerMutex()) {
+    static const bool threads_ok = fftwf_init_threads() != 0;
+    if (threads_ok) fftwf_plan_with_nthreads(std::max(1, threads));
+  }
+
+ private:
+  const std::lock_guard<std::mutex> lock_;
+};
+
 // Cells of a real grid of `dims` and of its half spectrum.
 std::pair<std::size_t, std::size_t> Sizes(const std::vector<int>& dims) {
   std::size_t real = 1, complex = 1;
@@ -37,7 +51,8 @@ std::pair<std::size_t, std::size_t> Sizes(const std::vector<int>& dims) {
 }
 }  // namespace
 
-RealFft::RealFft(const std::vector<int>& dims) : dims_(dims), capacity_dims_(dims) {
+RealFft::RealFft(const std::vector<int>& dims, int threads)
+    : threads_(threads), dims_(dims), capacity_dims_(dims) {
   std::tie(real_size_, complex_size_) = Sizes(dims);
   real_capacity_ = real_size_;
   complex_capacity_ = complex_size_;
@@ -68,7 +83,7 @@ void RealFft::MakePlans() {
   // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
   auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
   const int rank = static_cast<int>(dims_.size());
-  const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  const PlannerLock lock(threads_);
   forward_ = fftwf_plan_dft_r2c(rank, dims_.data(), real_, spectrum, FFTW_ESTIMATE);
   inverse_ = fftwf_plan_dft_c2r(rank, dims_.data(), spectrum, real_, FFTW_ESTIMATE);
 }
@@ -113,7 +128,7 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
     const fftwf_iodim columns[2] = {{extent[0], n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
     const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
     const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    const PlannerLock lock(threads_);
     p.rows = fftwf_plan_guru_dft_r2c(1, &along_z, 2, rows, real_, spectrum, FFTW_ESTIMATE);
     p.columns = fftwf_plan_guru_dft(1, &along_y, 2, columns, spectrum, spectrum, FFTW_FORWARD,
                                     FFTW_ESTIMATE);
@@ -149,7 +164,7 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
   const auto planned = [&](auto* cache, const auto& key, auto&& make) {
     auto found = cache->find(key);
     if (found == cache->end()) {
-      const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+      const PlannerLock lock(threads_);
       found = cache->emplace(key, make()).first;
     }
     return found->second;
@@ -157,7 +172,7 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
   if (inverse_planes_ == nullptr) {
     const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
     const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
-    const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    const PlannerLock lock(threads_);
     inverse_planes_ = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_BACKWARD,
                                           FFTW_ESTIMATE);
   }

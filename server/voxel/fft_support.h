@@ -5,6 +5,7 @@
 #ifndef MAPD_VOXEL_FFT_SUPPORT_H_
 #define MAPD_VOXEL_FFT_SUPPORT_H_
 
+#include <algorithm>
 #include <array>
 #include <complex>
 #include <cstddef>
@@ -12,6 +13,8 @@
 #include <mutex>
 #include <utility>
 #include <vector>
+
+#include "voxel/parallel.h"
 
 struct fftwf_plan_s;  // fftw3.h's plan, kept out of this header
 
@@ -43,7 +46,8 @@ int FftSize(int n);
 // real_size()).
 class RealFft {
  public:
-  explicit RealFft(const std::vector<int>& dims);
+  // threads: FFTW's threads for every transform (1: the caller's alone).
+  explicit RealFft(const std::vector<int>& dims, int threads = 1);
   ~RealFft();
   RealFft(const RealFft&) = delete;
   RealFft& operator=(const RealFft&) = delete;
@@ -86,17 +90,20 @@ class RealFft {
   }
   // ForwardInBox with the rows filled by fill_row(x, y, row): the row's
   // dims[2] values, x < extent[0], y < extent[1] (a grid of another layout
-  // copied in).
+  // copied in). The rows are filled on the transform's threads (fill_row is
+  // called concurrently for different rows): the fill is also the first
+  // touch of fresh buffer pages, whose zeroing by the kernel is then shared.
   template <typename FillRow>
   Complex* ForwardInBoxRows(const std::array<int, 2>& extent, const FillRow& fill_row) {
     const std::size_t n1 = static_cast<std::size_t>(dims_[1]),
                       n2 = static_cast<std::size_t>(dims_[2]);
-    for (int x = 0; x < extent[0]; ++x) {
-      for (int y = 0; y < extent[1]; ++y) {
-        fill_row(x, y,
-                 real_ + (static_cast<std::size_t>(x) * n1 + static_cast<std::size_t>(y)) * n2);
-      }
-    }
+    ParallelFor(static_cast<std::size_t>(std::max(extent[0], 0)), threads_,
+                [&](std::size_t x, std::size_t) {
+                  for (int y = 0; y < extent[1]; ++y) {
+                    fill_row(static_cast<int>(x), y,
+                             real_ + (x * n1 + static_cast<std::size_t>(y)) * n2);
+                  }
+                });
     ExecuteForwardInBox(extent);
     return spectrum_;
   }
@@ -135,6 +142,7 @@ class RealFft {
   std::map<std::pair<int, int>, fftwf_plan_s*> inverse_columns_;
   std::map<std::array<int, 4>, fftwf_plan_s*> inverse_rows_;
 
+  const int threads_;
   std::vector<int> dims_;
   std::vector<int> capacity_dims_;  // the constructor's, which sized the buffers
   std::map<std::array<int, 2>, BoxPlans> box_plans_;

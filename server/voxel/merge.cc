@@ -14,6 +14,7 @@
 #include "voxel/merge_graph.h"
 #include "voxel/merge_pair.h"
 #include "voxel/octree_reader.h"
+#include "voxel/parallel.h"
 #include "voxel/submap_features.h"
 #include "voxel/voxel_grid.h"
 
@@ -89,18 +90,30 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   // Parse (the safe reader) and view every input.
   Clock::time_point stage_start = Clock::now();
   std::vector<Submap> submaps(inputs.size());
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
+  // With the correlation generator first (the default), every pair levels
+  // both maps: their gravity frames are computed here, with the views, one
+  // input per thread.
+  const bool level_now = params.correlation.enabled && params.correlation.after_corner_stages == 0;
+  std::vector<Status> read(inputs.size());
+  std::vector<StageTimes> view_times(inputs.size());
+  ParallelFor(inputs.size(), params.threads, [&](std::size_t i, std::size_t) {
     submaps[i].id = inputs[i].id;
     auto tree = ReadOctree(inputs[i].bytes);
-    if (!tree.ok())
-      return Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
+    if (!tree.ok()) {
+      read[i] = Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
+      return;
+    }
     auto grid = VoxelGrid::FromOcTree(**tree);
-    if (!grid.ok())
-      return Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
+    if (!grid.ok()) {
+      read[i] = Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
+      return;
+    }
     submaps[i].tree = std::move(tree).value();
     submaps[i].grid = std::move(grid).value();
     submaps[i].features.emplace(submaps[i].id, &submaps[i].grid, &params);
-  }
+    if (level_now) submaps[i].features->Gravity(&view_times[i]);  // errors: AlignPair's to report
+  });
+  for (const Status& status : read) MAPD_RETURN_IF_ERROR(status);
   outcome.times.reading_s = SecondsSince(stage_start);
   double finest = submaps[0].grid.resolution();
   for (const auto& submap : submaps) {

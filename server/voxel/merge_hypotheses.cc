@@ -64,8 +64,9 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   const auto start = std::chrono::steady_clock::now();
   const std::vector<double> candidates = YawCandidates(*frame_a, *frame_b, params.gravity);
   YawRefinementStats refinement;
-  auto yaws = RefineYaws(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, candidates,
-                         finest_resolution_m, params.correlation.yaw_refinement, &refinement);
+  auto yaws =
+      RefineYaws(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, candidates, finest_resolution_m,
+                 params.correlation.yaw_refinement, &refinement, params.threads);
   if (!yaws.ok()) {
     times->correlation_s += SecondsSince(start);
     return yaws.status();
@@ -139,7 +140,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
   CorrelationParams search = params.correlation;
   search.max_hypotheses = 1000;  // every peak (the most Validate allows); capped below
   auto all = SearchTranslations(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, search_yaws,
-                                finest_resolution_m, search, nullptr);
+                                finest_resolution_m, search, nullptr, params.threads);
   times->correlation_s += SecondsSince(plan_view_ran ? search_start : start);
   if (!all.ok()) return all.status();
   // The candidates' best max_hypotheses first, then the best peak of each

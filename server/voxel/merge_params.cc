@@ -36,6 +36,9 @@ Status MergeParams::Validate() const {
   if (!(max_seconds > 0) || !std::isfinite(max_seconds)) {
     return Status::InvalidArgument("max_seconds must be finite and > 0");
   }
+  if (threads < 1 || threads > 256) {
+    return Status::InvalidArgument("threads must be in [1, 256], got " + std::to_string(threads));
+  }
   if (!(consistency_distance_voxels > 0) || !std::isfinite(consistency_distance_voxels)) {
     return Status::InvalidArgument("consistency_distance_voxels must be finite and > 0");
   }

@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <memory>
 #include <utility>
 
 #include "voxel/fft_support.h"
 #include "voxel/large_array.h"
+#include "voxel/parallel.h"
 
 namespace mapd::voxel {
 namespace {
@@ -154,7 +157,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
                                          const std::vector<double>& yaws,
                                          double finest_resolution_m,
                                          const YawRefinementParams& params,
-                                         YawRefinementStats* stats) {
+                                         YawRefinementStats* stats, int threads) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   if (!(finest_resolution_m > 0)) return Status::InvalidArgument("resolution must be > 0");
   for (double yaw : yaws) {
@@ -199,7 +202,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
 
   const Eigen::Vector2d origin_a = box_a.min() - Eigen::Vector2d::Constant(pixel);
   RealFft fft({nx, ny});
-  LargeVector<Complex> structure_a, dilated_a, data_a, structure_b, data_b;
+  LargeVector<Complex> structure_a, dilated_a, data_a;
   double structures_a = 0;
   {
     ColumnImage image(nx, ny, pixel);
@@ -210,12 +213,20 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     structures_a = image.structures();
   }
   if (structures_a == 0) return yaws;
-  ColumnImage image_b(nx, ny, pixel);
   const Eigen::Vector2d origin_b = -Eigen::Vector2d::Constant(radius_b + pixel);
-  LargeVector<float> weight(fft.real_size());
-  int scored = 0;
+  std::atomic<int> scored{0};
   const int columns_a = static_cast<int>(std::ceil(box_a.sizes().x() / pixel)) + 2;
   const int rows_a = static_cast<int>(std::ceil(box_a.sizes().y() / pixel)) + 2;
+  // One per thread: b's image, its transforms and the scratch of a score.
+  struct Workspace {
+    Workspace(int nx_, int ny_, double pixel_m) : fft({nx_, ny_}), image_b(nx_, ny_, pixel_m) {
+      weight.resize(fft.real_size());
+    }
+    RealFft fft;
+    ColumnImage image_b;
+    LargeVector<Complex> structure_b, data_b;
+    LargeVector<float> weight;
+  };
   // The best normalised correlation over all shifts (as in
   // SearchTranslations: hits / sqrt(b's structure in a's data * a's in b's)),
   // and the shift that gives it as the translation t of
@@ -224,26 +235,28 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     double score = 0;
     Eigen::Vector2d t_m = Eigen::Vector2d::Constant(std::nan(""));
   };
-  const auto score = [&](double yaw) {
+  const auto score = [&](double yaw, Workspace& w) {
     ++scored;
     Scored out;
-    image_b.Rasterise(points_b, yaw, origin_b, params);
-    if (image_b.structures() == 0) return out;
-    Transform(fft, image_b.structure(), &structure_b);
-    Transform(fft, image_b.Dilated(image_b.data(), kDataRadius), &data_b);
-    const double min_pixels =
-        std::max(1.0, params.min_overlap_fraction * std::min(structures_a, image_b.structures())) *
-        static_cast<double>(fft.real_size());
-    const float* a_in_b = Correlate(fft, structure_a, data_b);
-    std::copy(a_in_b, a_in_b + fft.real_size(), weight.begin());
-    const float* b_in_a = Correlate(fft, data_a, structure_b);
+    RealFft& fft_b = w.fft;
+    LargeVector<float>& weight = w.weight;
+    w.image_b.Rasterise(points_b, yaw, origin_b, params);
+    if (w.image_b.structures() == 0) return out;
+    Transform(fft_b, w.image_b.structure(), &w.structure_b);
+    Transform(fft_b, w.image_b.Dilated(w.image_b.data(), kDataRadius), &w.data_b);
+    const double min_pixels = std::max(1.0, params.min_overlap_fraction *
+                                                std::min(structures_a, w.image_b.structures())) *
+                              static_cast<double>(fft_b.real_size());
+    const float* a_in_b = Correlate(fft_b, structure_a, w.data_b);
+    std::copy(a_in_b, a_in_b + fft_b.real_size(), weight.begin());
+    const float* b_in_a = Correlate(fft_b, data_a, w.structure_b);
     for (std::size_t i = 0; i < weight.size(); ++i) {
       const double in_a = b_in_a[i], in_b = weight[i];
       weight[i] = std::min(in_a, in_b) >= min_pixels
                       ? static_cast<float>(1.0 / std::sqrt(in_a * in_b))
                       : 0.0F;
     }
-    const float* hits = Correlate(fft, dilated_a, structure_b);
+    const float* hits = Correlate(fft_b, dilated_a, w.structure_b);
     std::size_t best_i = 0;
     for (std::size_t i = 0; i < weight.size(); ++i) {
       const auto value = static_cast<double>(hits[i] * weight[i]);
@@ -261,32 +274,80 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     return out;
   };
 
-  std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
+  // Every candidate's window: a coarse pass, then the degrees around its
+  // best. Each pass scores all its (candidate, offset) pairs in parallel;
+  // the best of a window is then taken in the order a single thread would
+  // try them (the candidate, then the coarse offsets ascending, then the
+  // degrees nearest first), the first of equal scores winning, so the result
+  // does not depend on the thread count.
   const int steps = static_cast<int>(std::floor(params.window_deg / params.coarse_step_deg));
-  std::vector<double> candidate_scores, window_scores, window_yaws;
-  std::vector<Eigen::Vector2d> window_shifts;
-  for (double yaw : yaws) {
-    double best_offset = 0;
-    Scored best = score(yaw);
-    candidate_scores.push_back(best.score);
-    const auto consider = [&](double offset) {
-      const Scored s = score(yaw + offset * kRadPerDeg);
-      if (s.score > best.score) best_offset = offset, best = s;
-    };
-    for (int k = -steps; k <= steps; ++k) {
-      if (k != 0) consider(k * params.coarse_step_deg);
-    }
-    const double coarse_best = best_offset;
-    for (double d = 1; d < params.coarse_step_deg; ++d) {
-      for (double offset : {coarse_best - d, coarse_best + d}) {
-        if (std::abs(offset) <= params.window_deg) consider(offset);
+  struct Trial {
+    std::size_t candidate;
+    double offset_deg;
+    Scored scored;
+  };
+  std::vector<std::unique_ptr<Workspace>> workspaces(
+      static_cast<std::size_t>(std::max(1, threads)));
+  const auto score_all = [&](std::vector<Trial>* trials) {
+    ParallelFor(trials->size(), threads, [&](std::size_t t, std::size_t worker) {
+      if (!workspaces[worker]) workspaces[worker] = std::make_unique<Workspace>(nx, ny, pixel);
+      Trial& trial = (*trials)[t];
+      trial.scored =
+          score(yaws[trial.candidate] + trial.offset_deg * kRadPerDeg, *workspaces[worker]);
+    });
+  };
+  struct Window {
+    double candidate_score = 0, best_offset = 0;
+    Scored best;
+  };
+  std::vector<Window> windows(yaws.size());
+  const auto take_best = [&](const std::vector<Trial>& trials) {
+    for (const Trial& trial : trials) {
+      Window& window = windows[trial.candidate];
+      if (trial.scored.score > window.best.score) {
+        window.best_offset = trial.offset_deg;
+        window.best = trial.scored;
       }
     }
-    window_scores.push_back(best.score);
-    window_yaws.push_back(yaw + best_offset * kRadPerDeg);
-    window_shifts.push_back(best.t_m);
-    if (std::abs(best_offset) >= params.min_change_deg) {
-      refined.emplace_back(best.score, std::remainder(yaw + best_offset * kRadPerDeg, 2 * M_PI));
+  };
+  std::vector<Trial> coarse;
+  for (std::size_t c = 0; c < yaws.size(); ++c) {
+    coarse.push_back({c, 0.0, {}});
+    for (int k = -steps; k <= steps; ++k) {
+      if (k != 0) coarse.push_back({c, k * params.coarse_step_deg, {}});
+    }
+  }
+  score_all(&coarse);
+  for (const Trial& trial : coarse) {
+    if (trial.offset_deg != 0.0) continue;
+    windows[trial.candidate].best = trial.scored;
+    windows[trial.candidate].candidate_score = trial.scored.score;
+  }
+  take_best(coarse);
+  std::vector<Trial> fine;
+  for (std::size_t c = 0; c < yaws.size(); ++c) {
+    const double coarse_best = windows[c].best_offset;
+    for (double d = 1; d < params.coarse_step_deg; ++d) {
+      for (double offset : {coarse_best - d, coarse_best + d}) {
+        if (std::abs(offset) <= params.window_deg) fine.push_back({c, offset, {}});
+      }
+    }
+  }
+  score_all(&fine);
+  take_best(fine);
+  std::vector<std::pair<double, double>> refined;  // (2D score, yaw)
+  std::vector<double> candidate_scores, window_scores, window_yaws;
+  std::vector<Eigen::Vector2d> window_shifts;
+  for (std::size_t c = 0; c < yaws.size(); ++c) {
+    const Window& window = windows[c];
+    const double yaw = yaws[c];
+    candidate_scores.push_back(window.candidate_score);
+    window_scores.push_back(window.best.score);
+    window_yaws.push_back(yaw + window.best_offset * kRadPerDeg);
+    window_shifts.push_back(window.best.t_m);
+    if (std::abs(window.best_offset) >= params.min_change_deg) {
+      refined.emplace_back(window.best.score,
+                           std::remainder(yaw + window.best_offset * kRadPerDeg, 2 * M_PI));
     }
   }
   std::stable_sort(refined.begin(), refined.end(),
@@ -295,7 +356,7 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
     refined.resize(static_cast<std::size_t>(params.max_added));
   }
   if (stats != nullptr) {
-    stats->yaws_scored = scored;
+    stats->yaws_scored = scored.load();
     stats->yaws_added = static_cast<int>(refined.size());
     stats->candidate_scores = candidate_scores;
     stats->window_scores = window_scores;

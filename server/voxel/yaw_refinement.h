@@ -87,13 +87,15 @@ struct YawRefinementStats {
 // in SearchTranslations. Returns the candidates followed by the best yaws of
 // the candidates' windows that lie min_change_deg or more from their
 // candidate, at most max_added of them, best first (none when a map has no
-// structure column). InvalidArgument for bad params.
+// structure column). InvalidArgument for bad params. The candidates' windows
+// are scored on up to `threads` threads (MergeParams::threads); the result
+// does not depend on the count.
 StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
                                          const VoxelGrid& b, const Eigen::Matrix3d& R_b,
                                          const std::vector<double>& yaws,
                                          double finest_resolution_m,
                                          const YawRefinementParams& params,
-                                         YawRefinementStats* stats);
+                                         YawRefinementStats* stats, int threads = 1);
 
 // The height that completes a plan-view placement: for b levelled by R_b,
 // turned by `yaw` about +z and moved by the horizontal translation t_m (as

@@ -1,8 +1,12 @@
 #include "bench/mapd_merge_client.h"
 
 #include <grpcpp/grpcpp.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <sstream>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 
@@ -32,13 +36,29 @@ const char* CodeName(grpc::StatusCode code) {
   }
 }
 
+// utime + stime of a process (all its threads), seconds; -1 if unreadable.
+double ProcessCpuSeconds(int pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (pid <= 0 || !std::getline(stat, line)) return -1;
+  // Fields after the command name (which may hold spaces) in parentheses.
+  std::istringstream rest(line.substr(line.rfind(')') + 2));
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i) {
+    if (i == 14 || i == 15) ticks += std::stod(field);  // utime, stime
+  }
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
 }  // namespace
 
 struct MapdMergeClient::Stub {
   std::unique_ptr<pb::MapService::Stub> stub;
 };
 
-MapdMergeClient::MapdMergeClient(const std::string& address) : stub_(new Stub) {
+MapdMergeClient::MapdMergeClient(const std::string& address, int mapd_pid)
+    : stub_(new Stub), mapd_pid_(mapd_pid) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   stub_->stub = pb::MapService::NewStub(
@@ -76,6 +96,8 @@ MapdVerdict MapdMergeClient::Merge(const std::string& name, const std::string& a
     }
     ids[i] = info.id();
   }
+  const double cpu_before = ProcessCpuSeconds(mapd_pid_);
+  const auto wall_start = std::chrono::steady_clock::now();
   grpc::ClientContext ctx;
   pb::MergeSubmapsRequest request;
   request.add_submap_ids(ids[0]);
@@ -91,6 +113,10 @@ MapdVerdict MapdMergeClient::Merge(const std::string& name, const std::string& a
     }
   }
   const grpc::Status s = reader->Finish();
+  v.merge_wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const double cpu_after = ProcessCpuSeconds(mapd_pid_);
+  if (cpu_before >= 0 && cpu_after >= 0) v.mapd_cpu_s = cpu_after - cpu_before;
   v.code = CodeName(s.error_code());
   v.message = s.error_message();
   v.answered = s.ok() || s.error_code() == grpc::StatusCode::FAILED_PRECONDITION;

@@ -17,11 +17,18 @@ struct MapdVerdict {
   std::string code;     // the gRPC status code's name ("OK", "FAILED_PRECONDITION", ...)
   std::string message;  // the server's reason when refused
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  // b in a's frame, when accepted
+  // The MergeSubmaps call alone (not the uploads): wall seconds from the
+  // request to the final status, and the CPU seconds mapd used meanwhile
+  // (its /proc stat, all threads; -1 without a pid).
+  double merge_wall_s = 0;
+  double mapd_cpu_s = -1;
 };
 
 class MapdMergeClient {
  public:
-  explicit MapdMergeClient(const std::string& address);  // "127.0.0.1:PORT"
+  // address: "127.0.0.1:PORT"; mapd_pid: the server's process, for its CPU
+  // (0: not measured).
+  explicit MapdMergeClient(const std::string& address, int mapd_pid = 0);
   ~MapdMergeClient();
   // Uploads a and b under robots "bench-a" / "bench-b" named `name` (unique
   // per call), merges them (a is the reference) and returns the verdict.
@@ -30,6 +37,7 @@ class MapdMergeClient {
  private:
   struct Stub;
   std::unique_ptr<Stub> stub_;
+  int mapd_pid_ = 0;
 };
 
 }  // namespace mapd::bench

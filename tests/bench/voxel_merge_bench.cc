@@ -207,7 +207,7 @@ void PrintWorkerOutput(const WorkerOutput& out) {
   std::fflush(stdout);
 }
 
-WorkerOutput RunOurs(const std::string& a, const std::string& b) {
+WorkerOutput RunOurs(const std::string& a, const std::string& b, int threads) {
   WorkerOutput out;
   out.stage_names = {"corners", "matching", "correlation", "alignment", "fusion", "other"};
   const auto start = std::chrono::steady_clock::now();
@@ -216,6 +216,7 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b) {
   // not on work (two such errors in the first run, at 6 s of CPU). The
   // benchmark reports time itself, so the budget only guards against hangs.
   params.max_seconds = 600.0;
+  params.threads = threads;  // --threads: MergeParams::threads
   // Threshold studies without a rebuild (the workers inherit the environment).
   if (const char* v = std::getenv("MAPD_BENCH_MAX_RESIDUAL_VOXELS"))
     params.max_residual_voxels = std::atof(v);
@@ -346,7 +347,7 @@ int WorkerMain(const std::string& method, const std::string& path_a, const std::
     std::fprintf(stderr, "worker: cannot read inputs\n");
     return 2;
   }
-  PrintWorkerOutput(method == "ours" ? RunOurs(*a, *b) : RunFpfh(*a, *b, threads, seed));
+  PrintWorkerOutput(method == "ours" ? RunOurs(*a, *b, threads) : RunFpfh(*a, *b, threads, seed));
   return 0;
 }
 
@@ -470,6 +471,9 @@ struct Row {
   // --mapd: the server's verdicts on the same pairs.
   int mapd_runs = 0, mapd_right = 0, mapd_wrong = 0, mapd_refused = 0, mapd_errors = 0;
   int mapd_disagree = 0;
+  // The MergeSubmaps call alone: wall, mapd's CPU meanwhile (all threads),
+  // and that CPU for the refused merges.
+  std::vector<double> mapd_wall_s, mapd_cpu_s, mapd_refused_cpu_s;
   // --baseline: pairs run, outcomes that differ, its CPU, and this build's
   // over its per pair (crashed workers count as differing, with no CPU).
   int baseline_runs = 0, baseline_differs = 0;
@@ -577,13 +581,16 @@ void WriteMapdTable(const std::vector<Row>& rows, const std::string& out_path) {
   std::ostringstream table;
   table << "\nThrough mapd (upload, MergeSubmaps), the same pairs:\n\n"
         << "| map | overlap | method | pairs | mapd right | mapd wrong | mapd refused | mapd "
-           "errors | decided unlike the library |\n|---|---|---|---|---|---|---|---|---|\n";
+           "errors | decided unlike the library | median wall (s) | median mapd CPU (s) | "
+           "median mapd CPU of refusals (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Row& r : rows) {
     if (r.mapd_runs == 0) continue;
     table << "| " << r.map << " | "
           << (r.negative ? std::string("disjoint") : Fmt("%.1f", r.overlap)) << " | " << r.method
           << " | " << r.mapd_runs << " | " << r.mapd_right << " | " << r.mapd_wrong << " | "
-          << r.mapd_refused << " | " << r.mapd_errors << " | " << r.mapd_disagree << " |\n";
+          << r.mapd_refused << " | " << r.mapd_errors << " | " << r.mapd_disagree << " | "
+          << Fmt("%.2f", Median(r.mapd_wall_s)) << " | " << Fmt("%.2f", Median(r.mapd_cpu_s))
+          << " | " << Fmt("%.2f", Median(r.mapd_refused_cpu_s)) << " |\n";
   }
   std::cout << table.str();
   if (!out_path.empty()) std::ofstream(out_path, std::ios::app) << table.str();
@@ -690,7 +697,8 @@ int main(int argc, char** argv) {
                    mapd_process.log().c_str());
       return 1;
     }
-    mapd_client = std::make_unique<mapd::bench::MapdMergeClient>(mapd_process.address);
+    mapd_client =
+        std::make_unique<mapd::bench::MapdMergeClient>(mapd_process.address, mapd_process.pid);
   }
   for (std::size_t mi = 0; mi < opt.maps.size(); ++mi) {
     const std::string path = opt.dir + "/" + opt.maps[mi];
@@ -841,6 +849,11 @@ int main(int argc, char** argv) {
                 opt.maps[mi] + "-" + Fmt("%.2f", overlap) + "-" + std::to_string(trial);
             const mapd::bench::MapdVerdict v = mapd_client->Merge(name, pair->a_bt, pair->b_bt);
             ++row.mapd_runs;
+            row.mapd_wall_s.push_back(v.merge_wall_s);
+            if (v.mapd_cpu_s >= 0) {
+              row.mapd_cpu_s.push_back(v.mapd_cpu_s);
+              if (v.answered && !v.accepted) row.mapd_refused_cpu_s.push_back(v.mapd_cpu_s);
+            }
             std::string said;
             if (!v.answered) {
               ++row.mapd_errors;
@@ -872,8 +885,9 @@ int main(int argc, char** argv) {
                           0.05;
             }
             row.mapd_disagree += agree ? 0 : 1;
-            std::fprintf(stderr, "  mapd %-40s %s |%s\n", said.c_str(),
-                         agree ? "as the library" : "UNLIKE THE LIBRARY", v.message.c_str());
+            std::fprintf(stderr, "  mapd %-40s %s, %.2f s (mapd cpu %.2f s) |%s\n", said.c_str(),
+                         agree ? "as the library" : "UNLIKE THE LIBRARY", v.merge_wall_s,
+                         v.mapd_cpu_s, v.message.c_str());
           }
           std::string stage_log;
           for (std::size_t i = 0; i < w.stage_s.size() && i < w.stage_names.size(); ++i) {
