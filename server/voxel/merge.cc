@@ -263,10 +263,20 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
         "fusion", 0.8 + 0.2 * static_cast<double>(k) / static_cast<double>(placement.order.size()));
     MAPD_RETURN_IF_ERROR(OverBudget(start, params, "fusion"));
   }
-  auto bytes = WriteBinaryOctree(**merged);
+  // The file and the count read the tree alone; the inputs are freed
+  // meanwhile (a campus pair's trees take ~0.2 s to free).
+  StatusOr<std::string> bytes = Status::Internal("not written");
+  ParallelFor(2 + submaps.size(), params.threads, [&](std::size_t task, std::size_t) {
+    if (task == 0) {
+      bytes = WriteBinaryOctree(**merged);
+    } else if (task == 1) {
+      outcome.occupied_voxels = CountOccupiedVoxels(**merged);
+    } else {
+      submaps[task - 2].tree.reset();
+    }
+  });
   if (!bytes.ok()) return bytes.status();
   outcome.merged_bt = std::move(bytes).value();
-  outcome.occupied_voxels = CountOccupiedVoxels(**merged);
   outcome.free_voxels_skipped = stats.free_voxels_skipped;
   outcome.times.fusion_s = SecondsSince(stage_start);
   outcome.times.total_s = SecondsSince(start);

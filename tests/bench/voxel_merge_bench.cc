@@ -33,7 +33,8 @@
 // runs, unpaired medians could not show a 10 % change.
 //
 // --mapd[=BINARY]: a real mapd (the one built beside this, or BINARY) is
-// started on a temporary database with its default settings, and every "ours"
+// started on a temporary database with its default settings (merge.threads:
+// --threads, as the library's merges here), and every "ours"
 // pair is also uploaded to it and merged there (MergeSubmaps), as an operator
 // would (bench/mapd_merge_client.h). A second table gives per row what the
 // server decided (right / wrong / refused against the truth) and on how many
@@ -690,8 +691,9 @@ int main(int argc, char** argv) {
   mapd::testing::MapdProcess mapd_process;
   std::unique_ptr<mapd::bench::MapdMergeClient> mapd_client;
   if (!opt.mapd.empty()) {
-    mapd_process =
-        mapd::testing::StartMapd(std::string(tmp) + "/mapd.db", {"--http.port", "0"}, opt.mapd);
+    mapd_process = mapd::testing::StartMapd(
+        std::string(tmp) + "/mapd.db",
+        {"--http.port", "0", "--merge.threads", std::to_string(opt.threads)}, opt.mapd);
     if (mapd_process.port == 0) {
       std::fprintf(stderr, "--mapd: %s did not start:\n%s\n", opt.mapd.c_str(),
                    mapd_process.log().c_str());
