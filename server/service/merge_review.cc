@@ -2,7 +2,6 @@
 // ApproveMerge, RejectMerge (rules in submap_service.h, "Review").
 #include "service/merge_review.h"
 
-#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -54,41 +53,24 @@ StatusOr<std::vector<storage::SubmapMeta>> StoredInputs(storage::Store& store,
 StatusOr<MergeFrames> FramesOfMerge(storage::Store& store,
                                     const std::vector<storage::SubmapMeta>& inputs,
                                     const std::vector<geometry::Rigid3>& T_ref_input) {
-  std::vector<std::optional<storage::SessionFrame>> frames(inputs.size());
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    if (inputs[i].session_id == 0) continue;
-    StatusOr<storage::SessionFrame> f = store.GetSession(inputs[i].session_id);
-    if (!f.ok()) return f.status();
-    frames[i] = *f;
-  }
-  // Where an input is known to sit in the map frame: its session's tie, or
-  // (a submap uploaded without a session) where an earlier merge placed it.
+  // What the map knows of each input's frame now; the rule is the library's.
   StatusOr<std::vector<storage::SubmapPlacement>> placements = store.ListPlacements();
   if (!placements.ok()) return placements.status();
-  const auto known_pose = [&](size_t k) -> std::optional<geometry::Rigid3> {
-    if (frames[k]) {
-      if (frames[k]->tied) return frames[k]->T_map_frame;
-      return std::nullopt;
-    }
-    for (const storage::SubmapPlacement& p : *placements)
-      if (p.submap_id == inputs[k].id) return p.T_map_submap;
-    return std::nullopt;
-  };
-  geometry::Rigid3 T_map_ref = geometry::Rigid3::Identity();
-  for (size_t k = 0; k < inputs.size(); ++k) {
-    if (const std::optional<geometry::Rigid3> T_map_k = known_pose(k)) {
-      T_map_ref = *T_map_k * T_ref_input[k].inverse();
-      break;
-    }
-  }
-  MergeFrames out;
-  std::unordered_set<int64_t> seen;
+  std::vector<geometry::MergeInputFrame> frames(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
-    out.placements.emplace_back(inputs[i].id, T_map_ref * T_ref_input[i]);
-    if (!frames[i] || frames[i]->tied || !seen.insert(frames[i]->session_id).second) continue;
-    out.ties.emplace_back(frames[i]->session_id, T_map_ref * T_ref_input[i]);
+    frames[i].submap_id = inputs[i].id;
+    frames[i].session_id = inputs[i].session_id;
+    if (inputs[i].session_id != 0) {
+      StatusOr<storage::SessionFrame> f = store.GetSession(inputs[i].session_id);
+      if (!f.ok()) return f.status();
+      if (f->tied) frames[i].T_map_session = f->T_map_frame;
+      continue;
+    }
+    for (const storage::SubmapPlacement& p : *placements) {
+      if (p.submap_id == inputs[i].id) frames[i].T_map_submap = p.T_map_submap;
+    }
   }
-  return out;
+  return geometry::FramesOfMerge(frames, T_ref_input);
 }
 
 Status ApplyMergeFrames(const MergeFrames& frames, int64_t merge_id,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/status.h"
+#include "geometry/merge_frames.h"
 #include "geometry/rigid3.h"
 #include "mapserver/v1/map_service.pb.h"
 #include "service/auth.h"
@@ -18,13 +19,10 @@
 
 namespace mapd::service {
 
-// What an accepted merge implies for the map frame (rules in
-// submap_service.h, "Frames"), with the frames as they are now: the session
-// ties, and where each input sits in the map frame (global_map_builder.h).
-struct MergeFrames {
-  std::vector<std::pair<int64_t, geometry::Rigid3>> ties;        // session id, T_map_frame
-  std::vector<std::pair<int64_t, geometry::Rigid3>> placements;  // submap id, T_map_submap
-};
+using geometry::MergeFrames;
+// What an accepted merge implies for the map frame (geometry::FramesOfMerge,
+// the rule) with the frames as they are in the store now: the session ties,
+// and where each input sits in the map frame (global_map_builder.h).
 // T_ref_input[i] maps input i into the reference's (first input's) frame.
 // Call on the writer thread.
 StatusOr<MergeFrames> FramesOfMerge(storage::Store& store,

@@ -58,15 +58,6 @@ geometry::Rigid3 ToRigid(const Eigen::Isometry3d& iso) {
   return T;
 }
 
-// The library checks its thresholds; its second look (voxel::CheckMergeEvidence,
-// the benchmark's too) keeps a bug there from writing a weak merge as a success.
-Status CheckEvidence(const voxel::MergeOutcome& outcome,
-                     const std::vector<storage::SubmapMeta>& inputs, const SubmapOptions& o) {
-  std::vector<double> resolutions;
-  for (const storage::SubmapMeta& m : inputs) resolutions.push_back(m.resolution_m);
-  return voxel::CheckMergeEvidence(outcome, resolutions, ToMergeParams(o));
-}
-
 grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
   if (request.submap_ids_size() < 2)
     return InvalidArgument("submap_ids: give two or more submap ids");
@@ -79,16 +70,17 @@ grpc::Status CheckMergeRequest(const pb::MergeSubmapsRequest& request) {
   return grpc::Status::OK;
 }
 
-// The merge record of an accepted outcome (alignments in input order) and the
-// pose of every input in the reference frame.
+// The merge record of an accepted or proposed outcome (alignments in input
+// order) and the pose of every input in the reference frame: the decision's,
+// converted.
 StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
-                                          const std::vector<uint64_t>& ids, bool review,
-                                          const Principal& caller,
+                                          const voxel::MergeDecision& decision,
+                                          const std::vector<uint64_t>& ids, const Principal& caller,
                                           std::vector<geometry::Rigid3>* T_ref_input) {
   storage::NewMerge merge;
   merge.record.created_ns = UnixNowNs();
   merge.record.requested_by = caller.name;
-  if (review) {
+  if (decision.verdict == voxel::MergeVerdict::kProposed) {
     merge.record.state = storage::MergeState::kProposed;
   } else {
     merge.record.state = storage::MergeState::kAccepted;
@@ -103,7 +95,7 @@ StatusOr<storage::NewMerge> AcceptedMerge(const voxel::MergeOutcome& outcome,
       return Status::Internal("the merge returned no alignment for submap " +
                               std::to_string(ids[i]) + "; nothing was stored");
     }
-    (*T_ref_input)[i] = ToRigid(it->T_reference_submap);
+    (*T_ref_input)[i] = ToRigid(decision.T_ref_input[i]);
     storage::MergeInputRecord in;
     in.submap_id = static_cast<int64_t>(ids[i]);
     in.aligned = true;
@@ -283,23 +275,24 @@ grpc::Status SubmapService::Merge(grpc::ServerContext* context,
   if (!job.ok()) return ToGrpcStatus(job.status());
   if (grpc::Status s = AwaitMerge(context, job->get(), inputs.ids.size(), writer); !s.ok())
     return s;
-  StatusOr<voxel::MergeOutcome> outcome = (*job)->TakeResult();
-  if (outcome.ok()) {
-    Status evidence = CheckEvidence(*outcome, inputs.metas, options_);
-    if (!evidence.ok()) outcome = evidence;
-  }
+  const StatusOr<voxel::MergeOutcome> outcome = (*job)->TakeResult();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!outcome.ok()) {
-    if (outcome.status().code() == StatusCode::kUnavailable)
-      return ToGrpcStatus(outcome.status());  // shutdown: nothing to record
-    return RecordRefusedMerge(inputs.ids, outcome.status(), seconds, caller);
-  }
+  if (!outcome.ok() && outcome.status().code() == StatusCode::kUnavailable)
+    return ToGrpcStatus(outcome.status());  // shutdown: nothing to record
+  // The library decides (voxel::DecideMerge, the benchmark's too); this
+  // handler converts and stores.
+  std::vector<double> resolutions;
+  for (const storage::SubmapMeta& m : inputs.metas) resolutions.push_back(m.resolution_m);
+  const bool review = request.review() || options_.merge_review;
+  const voxel::MergeDecision decision =
+      voxel::DecideMerge(outcome, inputs.ids, resolutions, ToMergeParams(options_), review);
+  if (decision.verdict == voxel::MergeVerdict::kRefused)
+    return RecordRefusedMerge(inputs.ids, decision.reason, seconds, caller);
 
   std::vector<geometry::Rigid3> T_ref_input;
-  const bool review = request.review() || options_.merge_review;
   StatusOr<storage::NewMerge> merge =
-      AcceptedMerge(*outcome, inputs.ids, review, caller, &T_ref_input);
+      AcceptedMerge(*outcome, decision, inputs.ids, caller, &T_ref_input);
   if (!merge.ok()) return ToGrpcStatus(merge.status());
   storage::MergeIds stored;
   size_t tied = 0;

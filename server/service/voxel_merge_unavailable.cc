@@ -23,9 +23,19 @@ StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(std::string_view,
 
 namespace mapd::voxel {
 
-// Never reached (no merge runs), but submap_merge.cc names it.
+// Never reached (no merge runs), but submap_merge.cc names them.
 Status CheckMergeEvidence(const MergeOutcome&, const std::vector<double>&, const MergeParams&) {
   return Status::Unimplemented("this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
+MergeDecision DecideMerge(const StatusOr<MergeOutcome>& outcome, const std::vector<uint64_t>&,
+                          const std::vector<double>&, const MergeParams&, bool) {
+  MergeDecision refused;
+  refused.reason = outcome.ok() ? Status::Unimplemented(
+                                      "this mapd was built without voxel merging "
+                                      "(MAPD_WITH_VOXEL=OFF)")
+                                : outcome.status();
+  return refused;
 }
 
 }  // namespace mapd::voxel

@@ -325,6 +325,24 @@ struct MergeOutcome {
 Status CheckMergeEvidence(const MergeOutcome& outcome, const std::vector<double>& resolutions_m,
                           const MergeParams& params);
 
+// What a merge's answer means, decided in one place for every caller (the
+// service's MergeSubmaps, which the web view and mapctl reach; the
+// benchmark): refused (the search's own refusal or CheckMergeEvidence's), or
+// accepted, or proposed when `review` (an operator approves it later).
+enum class MergeVerdict { kRefused, kAccepted, kProposed };
+struct MergeDecision {
+  MergeVerdict verdict = MergeVerdict::kRefused;
+  Status reason;  // why refused; Ok otherwise
+  // Accepted or proposed: where input i (in `ids` order) sits in the first
+  // input's frame. The frame ties they imply: geometry::FramesOfMerge.
+  std::vector<Eigen::Isometry3d> T_ref_input;
+};
+// outcome: MergeSubmaps's answer for the inputs `ids` (the first is the
+// reference) of resolutions `resolutions_m`, params as it ran with.
+MergeDecision DecideMerge(const StatusOr<MergeOutcome>& outcome, const std::vector<uint64_t>& ids,
+                          const std::vector<double>& resolutions_m, const MergeParams& params,
+                          bool review);
+
 // stage: "corners", "matching", "alignment", "fusion"; fraction in [0, 1] of the whole merge.
 using ProgressCallback = std::function<void(const std::string& stage, double fraction)>;
 

@@ -1,5 +1,5 @@
-// CheckMergeEvidence (merge.h): the one rule the service and the benchmark
-// apply to a merge's outcome before they count it as a merge.
+// CheckMergeEvidence and DecideMerge (merge.h): the one rule the service and
+// the benchmark apply to a merge's outcome before they count it as a merge.
 #include <algorithm>
 #include <string>
 #include <vector>
@@ -38,6 +38,31 @@ Status CheckMergeEvidence(const MergeOutcome& outcome, const std::vector<double>
   }
   if (outcome.merged_bt.empty()) return Status::Internal("the merge returned no merged map");
   return Status::Ok();
+}
+
+MergeDecision DecideMerge(const StatusOr<MergeOutcome>& outcome, const std::vector<uint64_t>& ids,
+                          const std::vector<double>& resolutions_m, const MergeParams& params,
+                          bool review) {
+  MergeDecision decision;
+  if (!outcome.ok()) {
+    decision.reason = outcome.status();
+    return decision;
+  }
+  decision.reason = CheckMergeEvidence(*outcome, resolutions_m, params);
+  if (!decision.reason.ok()) return decision;
+  for (const uint64_t id : ids) {
+    const auto it = std::find_if(outcome->alignments.begin(), outcome->alignments.end(),
+                                 [&](const Alignment& a) { return a.id == id; });
+    if (it == outcome->alignments.end()) {
+      decision.reason =
+          Status::Internal("the merge returned no alignment for submap " + std::to_string(id));
+      decision.T_ref_input.clear();
+      return decision;
+    }
+    decision.T_ref_input.push_back(it->T_reference_submap);
+  }
+  decision.verdict = review ? MergeVerdict::kProposed : MergeVerdict::kAccepted;
+  return decision;
 }
 
 }  // namespace mapd::voxel

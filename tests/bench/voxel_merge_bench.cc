@@ -259,19 +259,19 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b, int threads) {
         t.alignment_s,
         t.fusion_s,
         out.total_s - t.corners_s - t.matching_s - t.correlation_s - t.alignment_s - t.fusion_s};
-    // The service's second look, the same function (issue 42: the two once
+    // The service's decision, the same function (issue 42: the two once
     // decided differently): a merge it would refuse is refused here too.
-    const mapd::Status evidence =
-        mapd::voxel::CheckMergeEvidence(*r, {r->resolution, r->resolution}, params);
-    if (!evidence.ok()) {
-      out.code = evidence.code();
-      out.message = "the second look: " + evidence.message();
+    const mapd::voxel::MergeDecision decision = mapd::voxel::DecideMerge(
+        r, {1, 2}, {r->resolution, r->resolution}, params, /*review=*/false);
+    if (decision.verdict == mapd::voxel::MergeVerdict::kRefused) {
+      out.code = decision.reason.code();
+      out.message = "the decision: " + decision.reason.message();
       return out;
     }
+    out.accepted = true;
+    out.T = decision.T_ref_input[1];
     for (const auto& al : r->alignments) {
       if (al.id == 2) {
-        out.accepted = true;
-        out.T = al.T_reference_submap;
         out.message = "matched=" + std::to_string(al.matched_corners) +
                       " residual_m=" + std::to_string(al.residual_m) +
                       " overlap=" + std::to_string(al.overlap_score);
@@ -284,10 +284,6 @@ WorkerOutput RunOurs(const std::string& a, const std::string& b, int threads) {
       for (const PairColumn& column : kPairColumns) {
         out.pair_values.push_back(column.value(pair, r->resolution));
       }
-    }
-    if (!out.accepted) {
-      out.code = StatusCode::kInternal;
-      out.message = "no alignment for submap 2 in an OK outcome";
     }
   } else {
     out.stage_s = {0, 0, 0, 0, 0, out.total_s};

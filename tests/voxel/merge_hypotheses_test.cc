@@ -103,6 +103,50 @@ TEST(MergeEvidenceTest, RefusesWhatTheGatesRefuseNamingTheFigure) {
   EXPECT_EQ(CheckMergeEvidence(outcome, res, params).code(), StatusCode::kInternal);
 }
 
+// The one decision (DecideMerge) of the service and the benchmark: the
+// search's refusal, the evidence's, then accepted or proposed, with every
+// input's pose in the order the caller named them.
+TEST(MergeDecisionTest, RefusesAcceptsOrProposesAndOrdersThePosesByInput) {
+  MergeParams params;
+  const std::vector<double> res = {0.1, 0.1};
+  const MergeDecision searched =
+      DecideMerge(Status::FailedPrecondition("no overlap"), {3, 7}, res, params, false);
+  EXPECT_EQ(searched.verdict, MergeVerdict::kRefused);
+  EXPECT_EQ(searched.reason.message(), "no overlap");
+
+  MergeOutcome outcome;
+  outcome.merged_bt = "a map";
+  outcome.alignments.resize(2);
+  outcome.alignments[0].id = 3;
+  Alignment& b = outcome.alignments[1];
+  b.id = 7;
+  b.residual_m = 0.05;
+  b.overlap_score = 0.9;
+  b.T_reference_submap = Pose(90, 0, 0, Eigen::Vector3d(1, 2, 3));
+  const MergeDecision accepted = DecideMerge(outcome, {3, 7}, res, params, false);
+  EXPECT_EQ(accepted.verdict, MergeVerdict::kAccepted);
+  EXPECT_TRUE(accepted.reason.ok());
+  ASSERT_EQ(accepted.T_ref_input.size(), 2u);
+  EXPECT_TRUE(accepted.T_ref_input[1].isApprox(b.T_reference_submap));
+  const MergeDecision proposed = DecideMerge(outcome, {3, 7}, res, params, true);
+  EXPECT_EQ(proposed.verdict, MergeVerdict::kProposed);
+  EXPECT_TRUE(proposed.T_ref_input[1].isApprox(b.T_reference_submap));
+  // Asked in another order, the poses follow the ids.
+  const MergeDecision reordered = DecideMerge(outcome, {7, 3}, res, params, false);
+  ASSERT_EQ(reordered.T_ref_input.size(), 2u);
+  EXPECT_TRUE(reordered.T_ref_input[0].isApprox(b.T_reference_submap));
+
+  b.overlap_score = 0.01;  // the evidence check refuses it, whatever review says
+  const MergeDecision weak = DecideMerge(outcome, {3, 7}, res, params, true);
+  EXPECT_EQ(weak.verdict, MergeVerdict::kRefused);
+  EXPECT_NE(weak.reason.message().find("overlap score"), std::string::npos);
+  b.overlap_score = 0.9;
+  const MergeDecision unknown = DecideMerge(outcome, {3, 8}, res, params, false);
+  EXPECT_EQ(unknown.verdict, MergeVerdict::kRefused);
+  EXPECT_EQ(unknown.reason.code(), StatusCode::kInternal);
+  EXPECT_TRUE(unknown.T_ref_input.empty());
+}
+
 // Two crops of a hall's middle: floor and ceiling, no wall, so no yaw to
 // take. The pair is refused (FailedPrecondition) with that reason, not an
 // error.
