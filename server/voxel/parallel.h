@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -33,7 +34,15 @@ void ParallelFor(std::size_t n, int threads, const Fn& fn) {
   };
   std::vector<std::thread> helpers;
   helpers.reserve(workers - 1);
-  for (std::size_t w = 1; w < workers; ++w) helpers.emplace_back(work, w);
+  for (std::size_t w = 1; w < workers; ++w) {
+    // A process at its thread limit gets fewer helpers, not an exception
+    // (mapd would end): the indices are shared, so fewer workers do them all.
+    try {
+      helpers.emplace_back(work, w);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
   work(0);
   for (std::thread& t : helpers) t.join();
 }
