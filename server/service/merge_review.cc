@@ -178,8 +178,8 @@ grpc::Status SubmapService::GetMerge(const pb::GetMergeRequest& request,
   return grpc::Status::OK;
 }
 
-Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
-                   const Principal& caller) {
+Status DecideProposal(Core* core, int64_t id, const std::string& reject_reason,
+                      const Principal& caller) {
   const bool approve = reject_reason.empty();
   const std::string action = approve ? "ApproveMerge" : "RejectMerge";
   size_t tied = 0;
@@ -269,7 +269,7 @@ grpc::Status SubmapService::ApproveMerge(const pb::ApproveMergeRequest& request,
   if (request.id() == 0) return InvalidArgument("id: required (a merge id, see ListMerges)");
   if (draining_) return ShuttingDown();
   const auto id = static_cast<int64_t>(request.id());
-  const Status decided = DecideMerge(core_, id, "", caller);
+  const Status decided = DecideProposal(core_, id, "", caller);
   if (decided.ok()) global_->Invalidate();  // its inputs were placed
   return FinishDecision(id, decided, response);
 }
@@ -280,7 +280,7 @@ grpc::Status SubmapService::RejectMerge(const pb::RejectMergeRequest& request,
   if (Status s = CheckRejectReason(request.reason()); !s.ok()) return ToGrpcStatus(s);
   if (draining_) return ShuttingDown();
   const auto id = static_cast<int64_t>(request.id());
-  return FinishDecision(id, DecideMerge(core_, id, request.reason(), caller), response);
+  return FinishDecision(id, DecideProposal(core_, id, request.reason(), caller), response);
 }
 
 }  // namespace mapd::service

@@ -51,8 +51,8 @@ void ToProto(const storage::MergeInputRecord& in, bool with_matched,
 // the writer thread, audited and logged, a refusal too (NotFound,
 // FailedPrecondition naming the state or the conflict). For ApproveMerge,
 // RejectMerge and the web view's POSTs.
-Status DecideMerge(Core* core, int64_t id, const std::string& reject_reason,
-                   const Principal& caller);
+Status DecideProposal(Core* core, int64_t id, const std::string& reject_reason,
+                      const Principal& caller);
 // InvalidArgument unless `reason` is a valid rejection reason: 1-1000
 // characters, no control characters (see common/text_escape.h).
 Status CheckRejectReason(const std::string& reason);

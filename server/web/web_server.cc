@@ -236,7 +236,7 @@ void WebServer::Route() {
       }
     }
     const auto merge_id = static_cast<int64_t>(*id);
-    if (Status s = service::DecideMerge(core_, merge_id, reason, *who); !s.ok())
+    if (Status s = service::DecideProposal(core_, merge_id, reason, *who); !s.ok())
       return SendError(res, s);
     StatusOr<storage::MergeRecord> r = core_->store().GetMerge(merge_id);
     if (!r.ok()) return SendError(res, r.status());
