@@ -1,7 +1,8 @@
-// What an accepted merge does to the map frame (docs/operations.md, "Frames"):
-// the rule, on plain values. The service reads the frames from the store and
-// writes the result in the merge's transaction; the rule itself is here, so
-// the service, the review (ApproveMerge) and the benchmark apply one rule.
+// What an accepted merge does to the map frame (service/submap_service.h,
+// "Frames"; docs/algorithms.md A.10): the rule, on plain values. The service
+// reads the frames from the store and writes the result in the merge's
+// transaction; the rule itself is here, so the service and the review
+// (ApproveMerge) apply one rule.
 //
 //   1. The reference (the first input) sits in the map frame where the first
 //      input with a known pose puts it: an input whose session is tied
