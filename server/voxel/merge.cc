@@ -95,6 +95,8 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   // input per thread.
   const bool level_now = params.correlation.enabled && params.correlation.after_corner_stages == 0;
   std::vector<Status> read(inputs.size());
+  // Gravity() records its time; here that time is part of reading_s, so the
+  // per-input records (one each: the threads must not share one) are dropped.
   std::vector<StageTimes> view_times(inputs.size());
   ParallelFor(inputs.size(), params.threads, [&](std::size_t i, std::size_t) {
     submaps[i].id = inputs[i].id;
