@@ -254,6 +254,7 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   FusionParams fusion;
   fusion.rule = params.fusion_rule;
   fusion.max_free_voxels = params.max_fusion_free_voxels;
+  fusion.threads = params.threads;
   FusionStats stats;
   auto merged = StartMergedMap(*submaps[0].tree, finest, fusion, &stats);
   if (!merged.ok()) return merged.status();

@@ -14,6 +14,7 @@
 #include "voxel/lattice_pose.h"
 #include "voxel/merge_hypotheses.h"
 #include "voxel/merge_overlap.h"
+#include "voxel/parallel.h"
 #include "voxel/submap_features.h"
 
 namespace mapd::voxel {
@@ -90,15 +91,18 @@ StatusOr<double> RestartSpread(const PairSide& a, const PairSide& b, const Merge
     }
     return spread_m;
   };
-  // Runs ICP from each start; FailedPrecondition (the overlap lost) is no
-  // rival, any other error is returned.
+  // Runs ICP from each start, the starts on the merge's threads (each
+  // result in its own slot: the same whatever the thread count);
+  // FailedPrecondition (the overlap lost) is no rival, any other error is
+  // returned.
   const auto run = [&](const std::vector<Eigen::Isometry3d>& starts, const IcpParams& icp_params,
                        std::vector<StatusOr<IcpResult>>* out) -> Status {
-    out->clear();
-    for (const Eigen::Isometry3d& start : starts) {
-      out->push_back(RefineIcp(target, source, start, icp_params));
-      const Status& status = out->back().status();
-      if (!status.ok() && status.code() != StatusCode::kFailedPrecondition) return status;
+    out->assign(starts.size(), Status::Internal("not run"));
+    ParallelFor(starts.size(), params.threads, [&](std::size_t i, std::size_t) {
+      (*out)[i] = RefineIcp(target, source, starts[i], icp_params);
+    });
+    for (const StatusOr<IcpResult>& r : *out) {
+      if (!r.ok() && r.status().code() != StatusCode::kFailedPrecondition) return r.status();
     }
     return Status::Ok();
   };
@@ -146,13 +150,19 @@ void SnapToLattice(const PairSide& a, const PairSide& b, const MergeParams& para
   // The ICP answer scored on the same terms (the overlap judged from it).
   const auto answer = EvaluateIcp(target, b.grid->occupied_centres(), report->T_a_b, params.icp);
   if (!answer.ok()) return;
+  // Every pose scored on the merge's threads, then taken in order (the
+  // last of equal fits wins, as in one loop).
+  std::vector<StatusOr<IcpResult>> fits(poses.size(), Status::Internal("not run"));
+  ParallelFor(poses.size(), params.threads, [&](std::size_t i, std::size_t) {
+    fits[i] = EvaluateIcp(target, b.grid->occupied_centres(), poses[i], params.icp);
+  });
   double best_m = answer->rms_residual_m;
   std::optional<Eigen::Isometry3d> best;
-  for (const Eigen::Isometry3d& pose : poses) {
-    const auto fit = EvaluateIcp(target, b.grid->occupied_centres(), pose, params.icp);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const StatusOr<IcpResult>& fit = fits[i];
     if (fit.ok() && fit->inliers >= answer->inliers && fit->rms_residual_m <= best_m) {
       best_m = fit->rms_residual_m;
-      best = pose;
+      best = poses[i];
     }
   }
   if (!best) return;

@@ -63,6 +63,10 @@ struct FusionParams {
   FusionRule rule = FusionRule::kOverlapRule;
   // Voxel-level operations on free space per fused submap (see above).
   std::uint64_t max_free_voxels = 8'000'000;
+  // Threads for the voxel-level reading of the two maps (the writes into the
+  // merged tree stay on the caller's): 1 to 256. The result does not depend
+  // on it.
+  int threads = 1;
 
   // InvalidArgument naming the first bad field.
   Status Validate() const;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <iterator>
 #include <system_error>
 #include <thread>
 #include <vector>
@@ -56,6 +57,32 @@ void ParallelRanges(std::size_t n, int threads, const Fn& fn) {
       std::max<std::size_t>(1, std::min<std::size_t>(threads > 1 ? threads : 1, n / kMinPart));
   ParallelFor(parts, static_cast<int>(parts),
               [&](std::size_t part, std::size_t) { fn(n * part / parts, n * (part + 1) / parts); });
+}
+
+// std::sort of [first, last) on up to `threads` threads: contiguous parts
+// sorted at once, then merged pairwise. The same order as std::sort for
+// values that compare equal only when identical (keys, codes).
+template <typename It>
+void ParallelSort(It first, It last, int threads) {
+  const auto n = static_cast<std::size_t>(last - first);
+  constexpr std::size_t kMinPart = 1 << 16;
+  std::size_t parts = 1;
+  while (parts * 2 <= static_cast<std::size_t>(threads > 1 ? threads : 1) &&
+         n / (parts * 2) >= kMinPart) {
+    parts *= 2;
+  }
+  const auto at = [&](std::size_t part) {
+    return first + static_cast<std::ptrdiff_t>(n * part / parts);
+  };
+  ParallelFor(parts, static_cast<int>(parts),
+              [&](std::size_t part, std::size_t) { std::sort(at(part), at(part + 1)); });
+  for (std::size_t width = 1; width < parts; width *= 2) {
+    ParallelFor(parts / (2 * width), static_cast<int>(parts / (2 * width)),
+                [&](std::size_t k, std::size_t) {
+                  const std::size_t lo = 2 * width * k;
+                  std::inplace_merge(at(lo), at(lo + width), at(lo + 2 * width));
+                });
+  }
 }
 
 }  // namespace mapd::voxel

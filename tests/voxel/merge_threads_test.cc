@@ -6,7 +6,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <mutex>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -45,6 +47,21 @@ TEST(ParallelForTest, CallsEveryIndexOnceOnAtMostThatManyWorkers) {
     for (std::size_t i = begin; i < end; ++i) ++covered[i];
   });
   for (int n : covered) ASSERT_EQ(n, 1);
+}
+
+TEST(ParallelSortTest, SortsAsStdSortOnAnyThreadCount) {
+  std::mt19937_64 random(7);
+  for (const std::size_t n : {std::size_t{0}, std::size_t{1000}, std::size_t{300'001}}) {
+    std::vector<std::uint64_t> codes(n);
+    for (auto& c : codes) c = random() % 50'000;  // duplicates, as voxel codes have
+    std::vector<std::uint64_t> expected = codes;
+    std::sort(expected.begin(), expected.end());
+    for (int threads : {0, 1, 2, 3, 4, 8}) {
+      std::vector<std::uint64_t> sorted = codes;
+      ParallelSort(sorted.begin(), sorted.end(), threads);
+      ASSERT_EQ(sorted, expected) << n << " values on " << threads << " threads";
+    }
+  }
 }
 
 void ExpectSameOutcome(const MergeOutcome& one, const MergeOutcome& many) {

@@ -255,6 +255,32 @@ TEST(OccupancyFusionTest, FreeSpaceBeyondTheCapIsLeftUnknownAndCounted) {
   EXPECT_EQ(StateOf(**merged, 17, 1, 1), S::kFree);
 }
 
+// The cap drops the big open cubes, not the small leaves near surfaces: free
+// leaves are spent smallest first, whatever the tree's order.
+TEST(OccupancyFusionTest, TheCapLeavesOutTheLargestFreeLeavesFirst) {
+  octomap::OcTree a(kTreeRes), b(kTreeRes);
+  Set(&a, 0, S::kOccupied);
+  for (int x = 16; x < 24; ++x)  // an aligned 8^3 block: one leaf of 512 voxels
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 8; ++z) Set(&b, x, S::kFree, y, z);
+  for (int x = 40; x < 46; x += 2) Set(&b, x, S::kFree);  // three single voxels beyond it
+  b.prune();
+  for (const int threads : {1, 3}) {
+    FusionParams params;
+    // Room for the big leaf alone; spent smallest first, the three singles
+    // come first and the big leaf no longer fits.
+    params.max_free_voxels = 513;
+    params.threads = threads;
+    FusionStats stats;
+    auto merged = FuseTrees(a, b, Eigen::Isometry3d::Identity(), params, &stats);
+    ASSERT_TRUE(merged.ok());
+    EXPECT_EQ(stats.free_voxels_skipped, 512u) << threads;
+    EXPECT_EQ(stats.free_written, 3u) << threads;
+    EXPECT_EQ(StateOf(**merged, 17, 1, 1), S::kUnknown) << threads;
+    EXPECT_EQ(StateOf(**merged, 42), S::kFree) << threads;
+  }
+}
+
 // Morton codes of the voxels of [x0, x0 + n)^3 (keys as Key()).
 std::vector<std::uint64_t> CubeCodes(int x0, int n) {
   std::vector<std::uint64_t> codes;
@@ -441,6 +467,47 @@ TEST(OccupancyFusionTest, EveryVoxelFollowsTheRuleOnRandomSubmaps) {
     EXPECT_LE(stats.free_written, static_cast<std::uint64_t>(free_from_b + near_a_face));
     EXPECT_FALSE(HasCollapsibleNode(**merged, (*merged)->getRoot(), true)) << "seed " << seed;
   }
+}
+
+// The reading on threads changes nothing: the same tree (its .bt bytes) and
+// the same counts on 1 and 3 threads, also where the free-voxel cap leaves
+// some of each map's free leaves out (which ones hangs on the order the cap
+// is spent in).
+TEST(OccupancyFusionTest, FusesTheSameTreeOnOneAndThreeThreads) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    std::mt19937 random(seed);
+    const octomap::OcTree a = RandomSubmap(&random), b = RandomSubmap(&random);
+    const Eigen::Isometry3d T_a_b = Eigen::Translation3d(0.23, -0.61, 0.07) *
+                                    Eigen::AngleAxisd(0.3 * seed, Eigen::Vector3d::UnitZ());
+    for (const std::uint64_t cap : {std::uint64_t{8'000'000}, std::uint64_t{1500}}) {
+      FusionParams one;
+      one.max_free_voxels = cap;
+      FusionParams three = one;
+      three.threads = 3;
+      FusionStats stats_one, stats_three;
+      auto merged_one = FuseTrees(a, b, T_a_b, one, &stats_one);
+      auto merged_three = FuseTrees(a, b, T_a_b, three, &stats_three);
+      ASSERT_TRUE(merged_one.ok() && merged_three.ok());
+      const std::string at = "seed " + std::to_string(seed) + " cap " + std::to_string(cap);
+      EXPECT_EQ(*WriteBinaryOctree(**merged_one), *WriteBinaryOctree(**merged_three)) << at;
+      EXPECT_EQ(stats_one.occupied_written, stats_three.occupied_written) << at;
+      EXPECT_EQ(stats_one.free_written, stats_three.free_written) << at;
+      EXPECT_EQ(stats_one.free_cleared, stats_three.free_cleared) << at;
+      EXPECT_EQ(stats_one.free_voxels_skipped, stats_three.free_voxels_skipped) << at;
+      if (cap < 8'000'000) EXPECT_GT(stats_one.free_voxels_skipped, 0u) << at;  // the cap bit
+      EXPECT_GT(stats_one.free_cleared, 0u) << at;
+    }
+  }
+}
+
+TEST(OccupancyFusionTest, ValidateRefusesAThreadCountOutOfRange) {
+  FusionParams params;
+  params.threads = 0;
+  EXPECT_EQ(params.Validate().code(), StatusCode::kInvalidArgument);
+  params.threads = 257;
+  EXPECT_EQ(params.Validate().code(), StatusCode::kInvalidArgument);
+  params.threads = 256;
+  EXPECT_TRUE(params.Validate().ok());
 }
 
 }  // namespace
