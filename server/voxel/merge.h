@@ -259,6 +259,20 @@ struct StageTimes {
 };
 
 // One pairwise merge attempt (every pair of inputs is tried).
+// One hypothesis of a pair as its refinement ended (PairReport::hypotheses).
+struct HypothesisReport {
+  std::string label;  // the generator's, e.g. "plan view yaw 58.6 deg"
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
+  // Refused by the ICP screen: residual_m is the screen's, on
+  // MergeParams::icp_screen_points of B's voxels, and no later gate ran.
+  bool screened = false;
+  double residual_m = 0.0;  // 0 when ICP failed (reason says why)
+  double overlap_score = 0.0;
+  double support_fraction = 0.0;
+  bool accepted = false;  // passed every gate of its own (not the uniqueness gate)
+  std::string reason;     // why refused; empty when accepted
+};
+
 struct PairReport {
   uint64_t id_a = 0, id_b = 0;
   bool accepted = false;
@@ -298,6 +312,13 @@ struct PairReport {
   // The matched corners (positions in A's and in B's frame, metres), set
   // whenever matched_corners is.
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> matched_a_b;
+  // residual_m is an ICP screen's (see HypothesisReport::screened).
+  bool screened = false;
+  // Every hypothesis that reached ICP, in the order refined (corner
+  // solutions, then the correlation generator's; the 180 deg twin last):
+  // how close right and wrong ones come to the gates (tests/bench's
+  // voxel_residuals_diag).
+  std::vector<HypothesisReport> hypotheses;
 };
 
 struct MergeOutcome {

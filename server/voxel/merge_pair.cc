@@ -207,6 +207,7 @@ Status RefineAndGate(const PairSide& a, const PairSide& b, const MergeParams& pa
         report->reason =
             ResidualReason(screen->rms_residual_m, screen_voxels, params.max_residual_voxels) +
             gate_unit + " (on " + std::to_string(screen->source_points) + " points)";
+        report->screened = true;
         return Status::Ok();
       }
       T_start = screen->T_target_source;
@@ -451,6 +452,21 @@ std::string DescribeCorners(const CornerRun& run, bool ran) {
 
 }  // namespace
 
+namespace {
+
+std::vector<HypothesisReport> Summaries(const std::vector<TriedHypothesis>& tried) {
+  std::vector<HypothesisReport> out;
+  out.reserve(tried.size());
+  for (const TriedHypothesis& h : tried) {
+    const PairReport& r = h.report;
+    out.push_back({h.label, r.T_a_b, r.screened, r.residual_m, r.overlap_score, r.support_fraction,
+                   r.accepted, r.reason});
+  }
+  return out;
+}
+
+}  // namespace
+
 StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const MergeParams& params,
                                double finest_resolution_m, double seconds_left, StageTimes* times) {
   const auto start = std::chrono::steady_clock::now();
@@ -547,6 +563,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
     const TriedHypothesis& best = tried[static_cast<std::size_t>(accepted_index)];
     PairReport report = best.report;
     report.source = best.label;
+    report.hypotheses = Summaries(tried);
     report.hypotheses_tried = static_cast<int>(tried.size());
     report.corner_solutions_tried = corners.solutions;
     report.correlation_hypotheses = correlation.generated;
@@ -575,6 +592,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
 
   // Refused: what every stage found, in the order they ran.
   PairReport report = corners.first;
+  report.hypotheses = Summaries(tried);
   report.hypotheses_tried = static_cast<int>(tried.size());
   report.corner_solutions_tried = corners.solutions;
   report.correlation_hypotheses = correlation.generated;
@@ -605,6 +623,7 @@ StatusOr<PairReport> AlignPair(const PairSide& a, const PairSide& b, const Merge
       if (corners.first.matched_corners == 0) {
         report.T_a_b = best->report.T_a_b;
         report.residual_m = best->report.residual_m;
+        report.screened = best->report.screened;
         report.overlap_score = best->report.overlap_score;
         report.icp_iterations = best->report.icp_iterations;
       }

@@ -35,3 +35,5 @@ endfunction()
 mapd_add_voxel_diag(voxel_hypotheses_diag)
 # The correlation generator's levelling, yaws and translation peaks.
 mapd_add_voxel_diag(voxel_correlation_diag)
+# Every hypothesis's ICP residual, right apart from wrong (issue 42 item 2).
+mapd_add_voxel_diag(voxel_residuals_diag)

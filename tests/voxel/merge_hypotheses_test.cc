@@ -68,6 +68,48 @@ TEST(MergeHypothesesTest, CorrelationMergesACorridorCornerMatchingRefuses) {
   EXPECT_TRUE(CheckMergeEvidence(*outcome, {kRoomResolutionM, kRoomResolutionM}, params).ok());
 }
 
+// PairReport::hypotheses: every hypothesis refined, accepted or refused, with
+// its own figures and reason (the residual study of issue 42 item 2 reads
+// them).
+TEST(MergeHypothesesTest, EveryRefinedHypothesisIsListedWithItsFigures) {
+  const Corridors c = MakeCorridors();
+  const VoxelGrid a = testing::GridOf(c.a), b = testing::GridOf(c.b);
+  for (const double max_residual_voxels : {0.75, 0.01}) {  // merges; nothing can pass
+    MergeParams params;
+    params.max_residual_voxels = max_residual_voxels;
+    SubmapFeatures features_a(1, &a, &params), features_b(2, &b, &params);
+    StageTimes times;
+    auto pair = AlignPair({1, &a, &features_a}, {2, &b, &features_b}, params, kRoomResolutionM,
+                          60.0, &times);
+    ASSERT_TRUE(pair.ok()) << pair.status().ToString();
+    const bool merges = max_residual_voxels > 0.5;
+    ASSERT_EQ(pair->accepted, merges) << pair->reason;
+    ASSERT_EQ(static_cast<int>(pair->hypotheses.size()), pair->hypotheses_tried);
+    ASSERT_GE(pair->hypotheses.size(), 2u);
+    int answers = 0, screened = 0;
+    for (const HypothesisReport& h : pair->hypotheses) {
+      EXPECT_FALSE(h.label.empty());
+      EXPECT_EQ(h.accepted, h.reason.empty()) << h.label << ": " << h.reason;
+      EXPECT_GT(h.residual_m, 0) << h.label << ": " << h.reason;
+      if (h.accepted) {
+        EXPECT_LE(h.residual_m, max_residual_voxels * kRoomResolutionM) << h.label;
+      }
+      if (h.screened) {
+        ++screened;
+        EXPECT_NE(h.reason.find(" points)"), std::string::npos) << h.reason;
+      }
+      if (h.label == pair->source && h.T_a_b.matrix() == pair->T_a_b.matrix()) {
+        ++answers;
+        EXPECT_TRUE(h.accepted);
+        EXPECT_EQ(h.residual_m, pair->residual_m);
+        EXPECT_EQ(h.support_fraction, pair->support_fraction);
+      }
+    }
+    EXPECT_EQ(answers, merges ? 1 : 0);
+    if (!merges) EXPECT_GT(screened, 0);  // a 0.01 voxel gate refuses at the screen
+  }
+}
+
 // The second look (CheckMergeEvidence) on outcomes a buggy search could give.
 TEST(MergeEvidenceTest, RefusesWhatTheGatesRefuseNamingTheFigure) {
   MergeParams params;
