@@ -138,7 +138,7 @@ std::size_t CorrelationGridCells(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
 // Hypotheses best first, at most max_hypotheses. InvalidArgument for bad
 // params; ResourceExhausted if even the coarsest allowed cell exceeds
 // max_cells (never for maps within VoxelGrid's key range and max_cells >= 1000).
-// The FFTs run on `threads` of FFTW's threads (MergeParams::threads).
+// The FFTs' passes run on `threads` threads (MergeParams::threads; RealFft).
 StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const VoxelGrid& a, const Eigen::Matrix3d& R_a, const VoxelGrid& b, const Eigen::Matrix3d& R_b,
     const std::vector<double>& yaws, double finest_resolution_m, const CorrelationParams& params,

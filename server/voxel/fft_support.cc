@@ -26,19 +26,22 @@ int FftSize(int n) {
 }
 
 namespace {
-// The planner lock, with FFTW's threads set for the plans made under it
-// (plans execute on that many threads; the planner's thread count is
-// global state, hence set under the lock for every plan).
-class PlannerLock {
- public:
-  explicit PlannerLock(int threads) : lock_(FftwPlannerMutex()) {
-    static const bool threads_ok = fftwf_init_threads() != 0;
-    if (threads_ok) fftwf_plan_with_nthreads(std::max(1, threads));
-  }
+using PlannerLock = std::lock_guard<std::mutex>;
 
- private:
-  const std::lock_guard<std::mutex> lock_;
-};
+// A pass of `count` 1D transforms as up to `parts` plans over consecutive
+// parts of the batch: make(first, n) plans transforms [first, first + n).
+template <typename Make>
+std::vector<fftwf_plan_s*> SplitPass(int count, int parts, const Make& make) {
+  std::vector<fftwf_plan_s*> pass;
+  parts = std::max(1, std::min(parts, count));
+  const PlannerLock lock(FftwPlannerMutex());
+  for (int k = 0; k < parts; ++k) {
+    const int first = static_cast<int>(static_cast<long>(count) * k / parts);
+    const int end = static_cast<int>(static_cast<long>(count) * (k + 1) / parts);
+    if (end > first) pass.push_back(make(first, end - first));
+  }
+  return pass;
+}
 
 // Cells of a real grid of `dims` and of its half spectrum.
 std::pair<std::size_t, std::size_t> Sizes(const std::vector<int>& dims) {
@@ -83,24 +86,33 @@ void RealFft::MakePlans() {
   // fftwf_complex is float[2], laid out as std::complex<float> (FFTW manual 4.1.1).
   auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
   const int rank = static_cast<int>(dims_.size());
-  const PlannerLock lock(threads_);
+  const PlannerLock lock(FftwPlannerMutex());
   forward_ = fftwf_plan_dft_r2c(rank, dims_.data(), real_, spectrum, FFTW_ESTIMATE);
   inverse_ = fftwf_plan_dft_c2r(rank, dims_.data(), spectrum, real_, FFTW_ESTIMATE);
+}
+
+void RealFft::Destroy(Pass* pass) {
+  for (fftwf_plan_s* plan : *pass) fftwf_destroy_plan(plan);
+  pass->clear();
+}
+
+void RealFft::Execute(const Pass& pass) const {
+  ParallelFor(pass.size(), threads_, [&](std::size_t i, std::size_t) { fftwf_execute(pass[i]); });
 }
 
 void RealFft::DestroyPlans() {
   const std::lock_guard<std::mutex> lock(FftwPlannerMutex());
   fftwf_destroy_plan(forward_);
   fftwf_destroy_plan(inverse_);
-  if (inverse_planes_ != nullptr) fftwf_destroy_plan(inverse_planes_);
-  for (const auto& [range, plan] : inverse_columns_) fftwf_destroy_plan(plan);
-  for (const auto& [ranges, plan] : inverse_rows_) fftwf_destroy_plan(plan);
-  for (const auto& [extent, p] : box_plans_) {
-    fftwf_destroy_plan(p.rows);
-    fftwf_destroy_plan(p.columns);
-    fftwf_destroy_plan(p.planes);
+  Destroy(&inverse_planes_);
+  for (auto& [range, pass] : inverse_columns_) Destroy(&pass);
+  for (auto& [ranges, pass] : inverse_rows_) Destroy(&pass);
+  for (auto& [extent, p] : box_plans_) {
+    Destroy(&p.rows);
+    Destroy(&p.columns);
+    Destroy(&p.planes);
   }
-  forward_ = inverse_ = inverse_planes_ = nullptr;
+  forward_ = inverse_ = nullptr;
   inverse_columns_.clear();
   inverse_rows_.clear();
   box_plans_.clear();
@@ -116,37 +128,45 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
     return;
   }
   auto* spectrum = reinterpret_cast<fftwf_complex*>(spectrum_);
+  const std::size_t plane = static_cast<std::size_t>(n1) * n2c;
   auto found = box_plans_.find(extent);
   if (found == box_plans_.end()) {
     BoxPlans p;
     // Guru interface: a 1D transform of `length` (stride) repeated over
     // `loops` (count, input stride, output stride), in spectrum elements for
-    // the complex passes; FFTW_ESTIMATE plans do not touch the buffers.
-    const fftwf_iodim along_z = {dims_[2], 1, 1};
-    const fftwf_iodim rows[2] = {{extent[0], n1 * dims_[2], n1 * n2c}, {extent[1], dims_[2], n2c}};
-    const fftwf_iodim along_y = {n1, n2c, n2c};
-    const fftwf_iodim columns[2] = {{extent[0], n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
-    const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
-    const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
-    const PlannerLock lock(threads_);
-    p.rows = fftwf_plan_guru_dft_r2c(1, &along_z, 2, rows, real_, spectrum, FFTW_ESTIMATE);
-    p.columns = fftwf_plan_guru_dft(1, &along_y, 2, columns, spectrum, spectrum, FFTW_FORWARD,
-                                    FFTW_ESTIMATE);
-    p.planes = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_FORWARD,
-                                   FFTW_ESTIMATE);
-    found = box_plans_.emplace(extent, p).first;
+    // the complex passes; FFTW_ESTIMATE plans do not touch the buffers. Each
+    // pass split along its outermost loop.
+    p.rows = SplitPass(extent[0], kParts, [&](int x0, int nx) {
+      const fftwf_iodim along_z = {dims_[2], 1, 1};
+      const fftwf_iodim rows[2] = {{nx, n1 * dims_[2], n1 * n2c}, {extent[1], dims_[2], n2c}};
+      return fftwf_plan_guru_dft_r2c(1, &along_z, 2, rows,
+                                     real_ + static_cast<std::size_t>(x0) * n1 * dims_[2],
+                                     spectrum + x0 * plane, FFTW_ESTIMATE);
+    });
+    p.columns = SplitPass(extent[0], kParts, [&](int x0, int nx) {
+      const fftwf_iodim along_y = {n1, n2c, n2c};
+      const fftwf_iodim columns[2] = {{nx, n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
+      fftwf_complex* part = spectrum + x0 * plane;
+      return fftwf_plan_guru_dft(1, &along_y, 2, columns, part, part, FFTW_FORWARD, FFTW_ESTIMATE);
+    });
+    p.planes = SplitPass(n1 * n2c, kParts, [&](int k0, int nk) {
+      const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
+      const fftwf_iodim planes[1] = {{nk, 1, 1}};
+      return fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum + k0, spectrum + k0, FFTW_FORWARD,
+                                 FFTW_ESTIMATE);
+    });
+    found = box_plans_.emplace(extent, std::move(p)).first;
   }
   // The passes read zeros where the rows were not transformed.
-  const std::size_t plane = static_cast<std::size_t>(n1) * n2c;
   for (std::size_t x = 0; x < static_cast<std::size_t>(extent[0]); ++x) {
     std::fill_n(spectrum_ + x * plane + static_cast<std::size_t>(extent[1]) * n2c,
                 static_cast<std::size_t>(n1 - extent[1]) * n2c, Complex(0, 0));
   }
   std::fill(spectrum_ + static_cast<std::size_t>(extent[0]) * plane, spectrum_ + complex_size_,
             Complex(0, 0));
-  fftwf_execute(found->second.rows);
-  fftwf_execute(found->second.columns);
-  fftwf_execute(found->second.planes);
+  Execute(found->second.rows);
+  Execute(found->second.columns);
+  Execute(found->second.planes);
 }
 
 float* RealFft::Inverse() {
@@ -161,31 +181,32 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
   // Planned on first use, each on the part of the buffers it transforms
   // (guru interface, as ExecuteForwardInBox; FFTW_ESTIMATE plans do not touch
   // the buffers).
-  const auto planned = [&](auto* cache, const auto& key, auto&& make) {
+  const auto planned = [&](auto* cache, const auto& key, auto&& make) -> const Pass& {
     auto found = cache->find(key);
-    if (found == cache->end()) {
-      const PlannerLock lock(threads_);
-      found = cache->emplace(key, make()).first;
-    }
+    if (found == cache->end()) found = cache->emplace(key, make()).first;
     return found->second;
   };
-  if (inverse_planes_ == nullptr) {
-    const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
-    const fftwf_iodim planes[1] = {{n1 * n2c, 1, 1}};
-    const PlannerLock lock(threads_);
-    inverse_planes_ = fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum, spectrum, FFTW_BACKWARD,
-                                          FFTW_ESTIMATE);
+  if (inverse_planes_.empty()) {
+    inverse_planes_ = SplitPass(n1 * n2c, kParts, [&](int k0, int nk) {
+      const fftwf_iodim along_x = {n0, n1 * n2c, n1 * n2c};
+      const fftwf_iodim planes[1] = {{nk, 1, 1}};
+      return fftwf_plan_guru_dft(1, &along_x, 1, planes, spectrum + k0, spectrum + k0,
+                                 FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
   }
-  fftwf_execute(inverse_planes_);
+  Execute(inverse_planes_);
   // Plain ints, not structured bindings: C++17 lambdas cannot capture those.
   for (const std::pair<int, int>& x_range : xs) {
     const int x0 = x_range.first, x1 = x_range.second;
     if (x0 >= x1) continue;
-    fftwf_complex* part = spectrum + static_cast<std::size_t>(x0) * plane;
-    fftwf_execute(planned(&inverse_columns_, std::make_pair(x0, x1), [&] {
-      const fftwf_iodim along_y = {n1, n2c, n2c};
-      const fftwf_iodim columns[2] = {{x1 - x0, n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
-      return fftwf_plan_guru_dft(1, &along_y, 2, columns, part, part, FFTW_BACKWARD, FFTW_ESTIMATE);
+    Execute(planned(&inverse_columns_, std::make_pair(x0, x1), [&] {
+      return SplitPass(x1 - x0, kParts, [&](int first, int nx) {
+        fftwf_complex* part = spectrum + static_cast<std::size_t>(x0 + first) * plane;
+        const fftwf_iodim along_y = {n1, n2c, n2c};
+        const fftwf_iodim columns[2] = {{nx, n1 * n2c, n1 * n2c}, {n2c, 1, 1}};
+        return fftwf_plan_guru_dft(1, &along_y, 2, columns, part, part, FFTW_BACKWARD,
+                                   FFTW_ESTIMATE);
+      });
     }));
   }
   for (const std::pair<int, int>& x_range : xs) {
@@ -193,13 +214,15 @@ float* RealFft::InverseRows(const Ranges& xs, const Ranges& ys) {
       const int x0 = x_range.first, x1 = x_range.second;
       const int y0 = y_range.first, y1 = y_range.second;
       if (x0 >= x1 || y0 >= y1) continue;
-      const std::size_t first = static_cast<std::size_t>(x0) * n1 + static_cast<std::size_t>(y0);
-      fftwf_complex* in = spectrum + first * n2c;
-      float* out = real_ + first * static_cast<std::size_t>(n2);
-      fftwf_execute(planned(&inverse_rows_, std::array<int, 4>{x0, x1, y0, y1}, [&] {
-        const fftwf_iodim along_z = {n2, 1, 1};
-        const fftwf_iodim rows[2] = {{x1 - x0, n1 * n2c, n1 * n2}, {y1 - y0, n2c, n2}};
-        return fftwf_plan_guru_dft_c2r(1, &along_z, 2, rows, in, out, FFTW_ESTIMATE);
+      Execute(planned(&inverse_rows_, std::array<int, 4>{x0, x1, y0, y1}, [&] {
+        return SplitPass(x1 - x0, kParts, [&](int first, int nx) {
+          const std::size_t row =
+              static_cast<std::size_t>(x0 + first) * n1 + static_cast<std::size_t>(y0);
+          const fftwf_iodim along_z = {n2, 1, 1};
+          const fftwf_iodim rows[2] = {{nx, n1 * n2c, n1 * n2}, {y1 - y0, n2c, n2}};
+          return fftwf_plan_guru_dft_c2r(1, &along_z, 2, rows, spectrum + row * n2c,
+                                         real_ + row * static_cast<std::size_t>(n2), FFTW_ESTIMATE);
+        });
       }));
     }
   }

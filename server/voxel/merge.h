@@ -84,9 +84,10 @@ struct MergeParams {
   // naming the stage); also caps the corner search of each pair.
   double max_seconds = 60.0;
   // Threads one merge may use (the caller's included): the inputs are read
-  // and viewed, and the plan view's yaw candidates scored, in parallel, and
-  // the correlation's FFTs use FFTW's threads. The result does not depend on
-  // it (tests compare 1 and 2). 1: single-threaded. mapd sets it from
+  // and viewed, the plan view's yaw candidates scored, the correlation's FFT
+  // passes run, ICP's restarts scored and the maps read for fusion in
+  // parallel. The result does not depend on it (tests compare 1 to 4).
+  // 1: single-threaded. mapd sets it from
   // merge.threads and runs limits.max_concurrent_merges merges at once, so a
   // merge queues rather than oversubscribes the cores.
   int threads = 1;

@@ -8,7 +8,7 @@
 // ICP's, and per pair the lowest residual of a right and of a wrong one: a
 // gate belongs in the gap between them, if there is one.
 //
-//   voxel_residuals_diag MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2]
+//   voxel_residuals_diag MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2] [FIRST_TRIAL=0]
 //
 // OVERLAPS: comma-separated, e.g. 0.1,0.2,0.3,0.5. NEGATIVES: pairs of
 // disjoint crops (every hypothesis of theirs is wrong).
@@ -72,7 +72,7 @@ std::vector<double> ParseList(const std::string& s) {
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: %s MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2] [FIRST_TRIAL=0]\n", argv[0]);
     return 2;
   }
   const std::vector<double> overlaps = ParseList(argv[2]);
@@ -80,6 +80,7 @@ int main(int argc, char** argv) {
   const int negatives = argc > 4 ? std::atoi(argv[4]) : 0;
   mapd::voxel::MergeParams params;
   params.threads = argc > 5 ? std::atoi(argv[5]) : 2;
+  const int first = argc > 6 ? std::atoi(argv[6]) : 0;
   params.max_seconds = 600;  // a hang guard only: the machine may be loaded
   Counts counts;
   std::printf(
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
   if (negatives > 0) runs.emplace_back(0.0, negatives);
   for (const auto& [overlap, count] : runs) {
     const int rc = mapd::bench::ForEachBenchTrial(
-        argv[1], overlap, 0, count, [&](int t, const mapd::bench::BenchTrial& trial) {
+        argv[1], overlap, first, count, [&](int t, const mapd::bench::BenchTrial& trial) {
           const double voxel_m = trial.a.resolution();
           mapd::voxel::SubmapFeatures fa(1, &trial.a, &params), fb(2, &trial.b, &params);
           mapd::voxel::StageTimes times;
