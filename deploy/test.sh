@@ -14,3 +14,7 @@ bash deploy/check-skips.sh ${MAPD_STRICT_SKIPS:+--strict} build/ctest-junit.xml
 # here, alone after the suite, not as a ctest: a measurement beside other
 # tests on the same cores would be a flaky unit test.
 build/tests/bench/fusion_cpu_guard
+# The merges' CPU guard (tests/bench/merge_cpu_guard.cc): two real campus
+# pairs merged on 2 threads, against docs/voxel-merge.md; it says so and
+# passes without the shared maps.
+build/tests/bench/merge_cpu_guard

@@ -37,3 +37,5 @@ mapd_add_voxel_diag(voxel_hypotheses_diag)
 mapd_add_voxel_diag(voxel_correlation_diag)
 # Every hypothesis's ICP residual, right apart from wrong (issue 42 item 2).
 mapd_add_voxel_diag(voxel_residuals_diag)
+# Not a diagnostic: the merges' CPU guard that deploy/test.sh runs after ctest.
+mapd_add_voxel_diag(merge_cpu_guard)
