@@ -72,7 +72,9 @@ std::vector<double> ParseList(const std::string& s) {
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: %s MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2] [FIRST_TRIAL=0]\n", argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s MAP.bt OVERLAPS TRIALS [NEGATIVES=0] [THREADS=2] [FIRST_TRIAL=0]\n",
+                 argv[0]);
     return 2;
   }
   const std::vector<double> overlaps = ParseList(argv[2]);
