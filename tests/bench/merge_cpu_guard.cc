@@ -15,11 +15,12 @@
 // that kind fails it on any machine within 2x of the doc's, one run slowed by
 // a busy host does not. Without the shared map it says so and exits 0.
 //
-//   merge_cpu_guard [--max-ratio R]
+//   merge_cpu_guard [--max-ratio=R]   (R >= 1; default 2)
 //
 // deploy/test.sh runs it after ctest, beside fusion_cpu_guard.
 #include <sys/resource.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -63,7 +64,14 @@ int main(int argc, char** argv) {
   double max_ratio = 2.0;
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--max-ratio=", 12) == 0) {
-      max_ratio = std::atof(argv[i] + 12);
+      char* end = nullptr;
+      max_ratio = std::strtod(argv[i] + 12, &end);
+      if (end == argv[i] + 12 || *end != '\0' || !(max_ratio >= 1) || !std::isfinite(max_ratio)) {
+        std::fprintf(stderr,
+                     "merge_cpu_guard: --max-ratio must be a finite number >= 1, got '%s'\n",
+                     argv[i] + 12);
+        return 2;
+      }
     } else {
       std::fprintf(stderr, "usage: %s [--max-ratio=R]\n", argv[0]);
       return 2;

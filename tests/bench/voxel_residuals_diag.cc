@@ -60,11 +60,17 @@ struct Counts {
   int right_refused_at_residual = 0;  // right, full ICP, refused by the residual gate
 };
 
-std::vector<double> ParseList(const std::string& s) {
+// The overlaps, each in (0, 1); empty when one is not.
+std::vector<double> ParseOverlaps(const std::string& s) {
   std::vector<double> out;
   std::stringstream in(s);
   std::string item;
-  while (std::getline(in, item, ',')) out.push_back(std::atof(item.c_str()));
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (end == item.c_str() || *end != '\0' || !(v > 0 && v < 1)) return {};
+    out.push_back(v);
+  }
   return out;
 }
 
@@ -77,12 +83,23 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  const std::vector<double> overlaps = ParseList(argv[2]);
+  const std::vector<double> overlaps = ParseOverlaps(argv[2]);
   const int trials = std::atoi(argv[3]);
   const int negatives = argc > 4 ? std::atoi(argv[4]) : 0;
+  if (overlaps.empty() || trials < 0 || negatives < 0) {
+    std::fprintf(stderr,
+                 "OVERLAPS must be numbers in (0, 1) separated by commas, TRIALS and "
+                 "NEGATIVES counts >= 0\n");
+    return 2;
+  }
   mapd::voxel::MergeParams params;
   params.threads = argc > 5 ? std::atoi(argv[5]) : 2;
   const int first = argc > 6 ? std::atoi(argv[6]) : 0;
+  if (const mapd::Status valid = params.Validate(); !valid.ok() || first < 0) {
+    std::fprintf(stderr, "%s\n",
+                 valid.ok() ? "FIRST_TRIAL must be >= 0" : valid.ToString().c_str());
+    return 2;
+  }
   params.max_seconds = 600;  // a hang guard only: the machine may be loaded
   Counts counts;
   std::printf(
