@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "client/commands.h"
-#include "client/robot_client.h"
+#include "client/robot/robot_client.h"
 #include "client/sim_robot.h"
 #include "client/text_util.h"
 #include "common/clock.h"
@@ -86,12 +86,12 @@ std::string WallList() {
 }
 
 struct Tally {
-  IngestCounts counts;
-  std::vector<Rejection> rejections;
+  robot::IngestCounts counts;
+  std::vector<robot::Rejection> rejections;
   grpc::Status status;
 };
 
-void Add(const IngestCounts& c, IngestCounts* total) {
+void Add(const robot::IngestCounts& c, robot::IngestCounts* total) {
   total->sent += c.sent;
   total->stored += c.stored;
   total->duplicate += c.duplicate;
@@ -99,7 +99,7 @@ void Add(const IngestCounts& c, IngestCounts* total) {
   total->reconnects += c.reconnects;
 }
 
-std::string Summary(const IngestCounts& c) {
+std::string Summary(const robot::IngestCounts& c) {
   return Printf("%llu batches sent: %llu stored, %llu duplicate, %llu rejected",
                 static_cast<unsigned long long>(c.sent), static_cast<unsigned long long>(c.stored),
                 static_cast<unsigned long long>(c.duplicate),
@@ -131,10 +131,10 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
   std::istream& in = path == "-" ? std::cin : file;
   if (int rc = CheckReachable(ctx, "ingest"); rc != kExitOk) return rc;
 
-  RobotClientOptions options;
+  robot::RobotClientOptions options;
   options.give_up_after = ctx.timeout();
   options.token = ctx.token;
-  RobotClient client(ctx.channel, options);
+  robot::RobotClient client(ctx.channel, options);
   std::map<std::pair<std::string, uint64_t>, size_t> line_of;  // (session, seq) -> line number
   std::string line, parse_error;
   size_t line_number = 0;
@@ -155,9 +155,9 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
     client.Send(std::move(batch));
   }
   const grpc::Status status = client.Finish(ctx.timeout());
-  const IngestCounts counts = client.counts();
+  const robot::IngestCounts counts = client.counts();
   std::printf("ingest: %s\n", Summary(counts).c_str());
-  for (const Rejection& r : client.rejections()) {
+  for (const robot::Rejection& r : client.rejections()) {
     const auto it = line_of.find({r.session_id, r.seq});
     const std::string where = it == line_of.end() ? "a batch" : Printf("line %zu", it->second);
     std::fprintf(stderr, "mapctl: ingest: %s (session %s, seq %llu) rejected: %s (%s)\n",
@@ -233,10 +233,10 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   for (size_t i = 0; i < robots; ++i) {
     threads.emplace_back([&ctx, &params, &tallies, scans, i] {
       SimRobot sim(DefaultWorld(), params[i]);
-      RobotClientOptions options;
+      robot::RobotClientOptions options;
       options.give_up_after = ctx.timeout();
       options.token = ctx.token;
-      RobotClient client(ctx.channel, options);
+      robot::RobotClient client(ctx.channel, options);
       for (uint64_t s = 0; s < scans; ++s) client.Send(sim.NextBatch());
       tallies[i].status = client.Finish(ctx.timeout());
       tallies[i].counts = client.counts();
@@ -247,11 +247,11 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  IngestCounts total;
+  robot::IngestCounts total;
   int rc = kExitOk;
   for (size_t i = 0; i < robots; ++i) {
     Add(tallies[i].counts, &total);
-    for (const Rejection& r : tallies[i].rejections) {
+    for (const robot::Rejection& r : tallies[i].rejections) {
       std::fprintf(stderr, "mapctl: simulate: %s seq %llu rejected: %s (%s)\n",
                    params[i].robot_id.c_str(), static_cast<unsigned long long>(r.seq),
                    Visible(r.message).c_str(), StatusCodeName(r.code));

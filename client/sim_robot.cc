@@ -6,7 +6,7 @@
 #include <limits>
 #include <utility>
 
-#include "geometry/split_and_merge.h"
+#include "client/robot/laser_lines.h"
 
 namespace mapd::client {
 namespace {
@@ -63,24 +63,24 @@ std::vector<double> CastScan(const std::vector<Segment2>& walls, const Pose2& T_
 
 std::vector<Segment2> ExtractSegments(const std::vector<double>& ranges, const LaserParams& laser,
                                       const ExtractionParams& params) {
+  // The robot library's extractor, as a real robot would call it.
   const sim::LaserFan fan = Fan(laser);
-  std::vector<Vec2> points(ranges.size(), Vec2::Constant(std::numeric_limits<double>::quiet_NaN()));
-  for (size_t i = 0; i < ranges.size(); ++i) {
-    const double r = ranges[i];
-    if (!std::isfinite(r) || r <= 0) continue;  // no return: ends a run
-    const double angle = fan.BeamAngle(static_cast<int>(i));
-    points[i] = Vec2(r * std::cos(angle), r * std::sin(angle));
-  }
-  geometry::SplitAndMergeParams sm;
-  sm.split_m = params.split_threshold_m;
-  sm.min_points = static_cast<size_t>(std::max(2, params.min_points));
-  sm.min_length_m = params.min_length_m;
-  sm.max_gap_m = params.min_gap_m;
-  sm.gap_per_range = params.gap_factor * fan.step_rad;
+  robot::LaserScan scan;
+  scan.angle_min_rad = fan.start_rad;
+  scan.angle_increment_rad = fan.step_rad;
+  scan.range_max_m = 100'000.0;  // noise may carry a return past max_range_m: kept
+  scan.ranges_m = ranges;
+  robot::LineExtractionParams lines;
+  lines.split_m = params.split_threshold_m;
+  lines.min_points = std::max(2, params.min_points);
+  lines.min_length_m = params.min_length_m;
+  lines.max_gap_m = params.min_gap_m;
+  lines.gap_per_range = params.gap_factor * fan.step_rad;
+  // The settings are the simulator's own; a scan of no beams has no lines.
+  const auto extracted = robot::ExtractLines(scan, lines);
   std::vector<Segment2> segments;
-  for (const geometry::ExtractedLine& line : geometry::SplitAndMerge(points, sm)) {
-    segments.push_back(line.segment);
-  }
+  if (!extracted.ok()) return segments;
+  for (const robot::ExtractedLine& line : *extracted) segments.push_back(line.segment);
   return segments;
 }
 

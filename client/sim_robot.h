@@ -1,7 +1,7 @@
 // A deterministic simulated robot for demos and tests: a floor of walls, a
 // robot driving a closed loop, a 2D laser ray-cast against the walls, and
 // split-and-merge line extraction per scan (client/sim/laser_sim.h and
-// geometry/split_and_merge.h, shared with the tests' synthetic city).
+// client/robot/split_and_merge.h, shared with the tests' synthetic city).
 // Everything random comes from one seeded std::mt19937_64, so a seed gives the
 // same batches on every run.
 //
@@ -81,8 +81,8 @@ struct SimRobotParams {
 std::vector<double> CastScan(const std::vector<Segment2>& walls, const Pose2& T_map_sensor,
                              const LaserParams& laser, std::mt19937_64* rng);
 
-// Split-and-merge (geometry/split_and_merge.h) over the scan's points, in beam
-// order; sensor frame.
+// The scan's lines in beam order, sensor frame: the robot library's
+// extractor (client/robot/laser_lines.h) with these settings.
 std::vector<Segment2> ExtractSegments(const std::vector<double>& ranges, const LaserParams& laser,
                                       const ExtractionParams& params);
 

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <memory>
 
-#include "geometry/split_and_merge.h"
+#include "client/robot/split_and_merge.h"
 
 namespace mapd::bench {
 namespace {
@@ -92,7 +92,7 @@ geometry::Vec2 BeamPoint(const LaserScan& scan, size_t i) {
 }
 
 ScanLines ExtractLaserLines(const LaserScan& scan, double max_range_m) {
-  geometry::SplitAndMergeParams params;
+  robot::SplitAndMergeParams params;
   params.split_m = 0.05;
   params.min_points = 6;
   params.min_length_m = 0.3;
@@ -101,7 +101,7 @@ ScanLines ExtractLaserLines(const LaserScan& scan, double max_range_m) {
   out.sensor_xy_m = geometry::Vec2(scan.x_m, scan.y_m);
   std::vector<geometry::Vec2> run;
   const auto flush = [&]() {
-    for (const geometry::ExtractedLine& line : geometry::SplitAndMerge(run, params)) {
+    for (const robot::ExtractedLine& line : robot::SplitAndMerge(run, params)) {
       out.lines.push_back(line.segment);
     }
     run.clear();

@@ -41,7 +41,7 @@ geometry::Vec2 BeamPoint(const LaserScan& scan, size_t i);
 // One scan's valid returns and the lines extracted from them, map frame.
 struct ScanLines {
   std::vector<geometry::Vec2> points;     // valid returns (0 < range < max range)
-  std::vector<geometry::Segment2> lines;  // split-and-merge (geometry/split_and_merge.h)
+  std::vector<geometry::Segment2> lines;  // split-and-merge (client/robot/split_and_merge.h)
   geometry::Vec2 sensor_xy_m = geometry::Vec2::Zero();  // the laser's position
 };
 

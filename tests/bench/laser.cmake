@@ -3,7 +3,7 @@
 find_package(ZLIB REQUIRED)
 add_executable(laser_bench laser_bench.cc carmen.cc seen_through.cc)
 target_include_directories(laser_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(laser_bench PRIVATE fusion ZLIB::ZLIB)
+target_link_libraries(laser_bench PRIVATE fusion robot_extraction ZLIB::ZLIB)
 target_compile_definitions(laser_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 mapd_set_warnings(laser_bench)
 
@@ -12,7 +12,15 @@ mapd_set_warnings(laser_bench)
 if(MAPD_WITH_SERVICE)  # it links the service and the client library
   add_executable(fusion_modes_bench fusion_modes_bench.cc carmen.cc)
   target_include_directories(fusion_modes_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
-  target_link_libraries(fusion_modes_bench PRIVATE fusion mapd_eval service mapclient ZLIB::ZLIB)
+  target_link_libraries(fusion_modes_bench PRIVATE fusion robot_extraction mapd_eval service mapclient ZLIB::ZLIB)
   target_compile_definitions(fusion_modes_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   mapd_set_warnings(fusion_modes_bench)
 endif()
+
+# The robot library's laser extractor on the same logs: CPU per scan and per
+# beam, lines per scan (docs/robot-library.md). On demand.
+add_executable(robot_extraction_bench robot_extraction_bench.cc carmen.cc)
+target_include_directories(robot_extraction_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+target_link_libraries(robot_extraction_bench PRIVATE robot_extraction ZLIB::ZLIB)
+target_compile_definitions(robot_extraction_bench PRIVATE MAPD_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+mapd_set_warnings(robot_extraction_bench)

@@ -1,6 +1,6 @@
 // Real data through the fusion engine (issue item 9): the CARMEN laser logs of
 // shared/data/laser, lines extracted per scan by split-and-merge
-// (geometry/split_and_merge.h), moved into the map frame by the corrected laser
+// (client/robot/split_and_merge.h), moved into the map frame by the corrected laser
 // pose, fed to FusionEngine one observation per scan, as the paper (no chain
 // guard, no wall consolidation) and with the defaults (both on). Reports raw and fused feature
 // counts and the share of valid scan points (range < max range) within 5 cm and 10 cm of a fused

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "client/robot_client.h"
+#include "client/robot/robot_client.h"
 #include "client/sim_robot.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
@@ -78,7 +78,7 @@ class RetirementTest : public ::testing::Test {
   // Every robot drives one lap (one after the other), then the fuser catches up.
   void Lap() {
     for (SimRobot& robot : robots_) {
-      RobotClient client(channel_);
+      robot::RobotClient client(channel_);
       for (int s = 0; s < kScansPerLap; ++s) client.Send(robot.NextBatch());
       ASSERT_TRUE(client.Finish(seconds(30)).ok());
       ASSERT_EQ(client.counts().rejected, 0u);

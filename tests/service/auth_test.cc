@@ -4,7 +4,7 @@
 
 #include <fstream>
 
-#include "client/robot_client.h"
+#include "client/robot/robot_client.h"
 #include "common/health.h"
 #include "common/temp_dir.h"
 #include "service/support/auth_fixture.h"
@@ -290,16 +290,16 @@ TEST_F(AuthTest, SecretsNeverReachTheDatabaseFile) {
 
 TEST_F(AuthTest, RobotClientStreamsWithItsTokenAndGivesUpAtOnceWithoutOne) {
   MakeTokens();
-  client::RobotClientOptions options;
+  robot::RobotClientOptions options;
   options.token = robot_;
-  client::RobotClient ok(channel_, options);
+  robot::RobotClient ok(channel_, options);
   for (const pb::ObservationBatch& b : Walk("r1", 4)) ok.Send(b);
   EXPECT_TRUE(ok.Finish(std::chrono::seconds(30)).ok());
   EXPECT_EQ(ok.counts().stored, 4u);
 
   options.token = "mapd_1_wrong";
   options.give_up_after = std::chrono::hours(1);  // a refusal must not be retried until then
-  client::RobotClient refused(channel_, options);
+  robot::RobotClient refused(channel_, options);
   refused.Send(Walk("r1", 1, 10)[0]);
   EXPECT_EQ(refused.Finish(std::chrono::hours(1)).error_code(), grpc::StatusCode::UNAUTHENTICATED);
 }

@@ -5,7 +5,7 @@
 #include <limits>
 #include <utility>
 
-#include "geometry/split_and_merge.h"
+#include "client/robot/split_and_merge.h"
 
 namespace mapd::fusion::scenario {
 
@@ -242,7 +242,7 @@ Scan ScanSimulator::Simulate(size_t index) const {
     const double ang = fan_.BeamAngle(static_cast<int>(b));
     points[b] = ranges[b] * Vec2(std::cos(ang), std::sin(ang));
   }
-  geometry::SplitAndMergeParams sm;
+  robot::SplitAndMergeParams sm;
   sm.split_m = params_.split_m;
   sm.min_points = static_cast<size_t>(params_.min_points);
   sm.min_length_m = params_.min_length_m;
@@ -253,7 +253,7 @@ Scan ScanSimulator::Simulate(size_t index) const {
   sm.merge_neighbours = false;
   sm.gap_from_farther_point = false;
   sm.clip_to_extremes = false;
-  const std::vector<geometry::ExtractedLine> lines = geometry::SplitAndMerge(points, sm);
+  const std::vector<robot::ExtractedLine> lines = robot::SplitAndMerge(points, sm);
   for (size_t k = 0; k < lines.size() && k < 1024; ++k) {
     GroundFeature f;
     f.id = (static_cast<FeatureId>(index) << 10) | k;

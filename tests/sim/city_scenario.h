@@ -44,7 +44,7 @@ struct ScenarioParams {
   double range_sigma_m = 0.02;   // Gaussian range noise
   double pose_sigma_xy_m = 0.0;  // per-scan pose error (GNSS/INS-like, independent)
   double pose_sigma_yaw_rad = 0.0;
-  // Line extraction (geometry/split_and_merge.h; the variant set in city_scenario.cc).
+  // Line extraction (client/robot/split_and_merge.h; the variant set in city_scenario.cc).
   double split_m = 0.08;      // split-and-merge: max point-to-chord distance
   double break_base_m = 0.3;  // consecutive points farther apart than
   double break_factor = 4.0;  //   base + factor * r * beam_angle start a new run

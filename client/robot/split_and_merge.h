@@ -18,15 +18,18 @@
 // The variant options of SplitAndMergeParams change steps 1-4 in small ways; the
 // defaults are the steps as written here.
 // Pure function of its input; no state.
-#ifndef MAPD_GEOMETRY_SPLIT_AND_MERGE_H_
-#define MAPD_GEOMETRY_SPLIT_AND_MERGE_H_
+#ifndef MAPD_CLIENT_ROBOT_SPLIT_AND_MERGE_H_
+#define MAPD_CLIENT_ROBOT_SPLIT_AND_MERGE_H_
 
 #include <cstddef>
 #include <vector>
 
 #include "geometry/segment2.h"
 
-namespace mapd::geometry {
+namespace mapd::robot {
+
+using geometry::Segment2;
+using geometry::Vec2;
 
 struct SplitAndMergeParams {
   double split_m = 0.05;       // max point-to-chord distance inside one segment, metres
@@ -78,6 +81,6 @@ struct ExtractedLine {
 std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
                                          const SplitAndMergeParams& params);
 
-}  // namespace mapd::geometry
+}  // namespace mapd::robot
 
-#endif  // MAPD_GEOMETRY_SPLIT_AND_MERGE_H_
+#endif  // MAPD_CLIENT_ROBOT_SPLIT_AND_MERGE_H_

@@ -14,8 +14,8 @@
 // from any thread. One internal reader thread collects the acks and owns
 // reconnection. A stream refused UNAUTHENTICATED or PERMISSION_DENIED is
 // final: the client gives up at once (retrying cannot help).
-#ifndef MAPD_CLIENT_ROBOT_CLIENT_H_
-#define MAPD_CLIENT_ROBOT_CLIENT_H_
+#ifndef MAPD_CLIENT_ROBOT_ROBOT_CLIENT_H_
+#define MAPD_CLIENT_ROBOT_ROBOT_CLIENT_H_
 
 #include <grpcpp/grpcpp.h>
 
@@ -32,7 +32,7 @@
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 
-namespace mapd::client {
+namespace mapd::robot {
 
 // How quickly a restarted server is found again also depends on the channel's
 // own reconnect backoff (GRPC_ARG_INITIAL/MAX_RECONNECT_BACKOFF_MS; gRPC's
@@ -138,6 +138,6 @@ class RobotClient {
   std::thread reader_;
 };
 
-}  // namespace mapd::client
+}  // namespace mapd::robot
 
-#endif  // MAPD_CLIENT_ROBOT_CLIENT_H_
+#endif  // MAPD_CLIENT_ROBOT_ROBOT_CLIENT_H_

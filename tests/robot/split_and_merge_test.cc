@@ -1,6 +1,6 @@
 // Split-and-merge line extraction from a laser scan: splits at corners, never
 // bridges gaps, drops short pieces, rejoins needless cuts.
-#include "geometry/split_and_merge.h"
+#include "client/robot/split_and_merge.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-namespace mapd::geometry {
+namespace mapd::robot {
 namespace {
 
 // n points evenly spaced from a to b, both included.
@@ -234,4 +234,4 @@ TEST(SplitAndMergeTest, EmptyAndTinyInputs) {
 }
 
 }  // namespace
-}  // namespace mapd::geometry
+}  // namespace mapd::robot

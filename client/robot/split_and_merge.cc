@@ -1,4 +1,4 @@
-#include "geometry/split_and_merge.h"
+#include "client/robot/split_and_merge.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,12 @@
 
 #include "geometry/line_fit.h"
 
-namespace mapd::geometry {
+namespace mapd::robot {
 namespace {
+
+using geometry::FitLine;
+using geometry::Line2;
+using geometry::PointMoments2;
 
 struct Piece {
   size_t first;
@@ -128,4 +132,4 @@ std::vector<ExtractedLine> SplitAndMerge(const std::vector<Vec2>& points,
   return lines;
 }
 
-}  // namespace mapd::geometry
+}  // namespace mapd::robot

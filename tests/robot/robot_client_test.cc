@@ -1,6 +1,6 @@
 // RobotClient against the real mapd: pipelined acks, rejections, reconnecting
 // after the server died, giving up on a server that is not there.
-#include "client/robot_client.h"
+#include "client/robot/robot_client.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -9,8 +9,12 @@
 #include "common/process.h"
 #include "common/temp_dir.h"
 
-namespace mapd::client {
+namespace mapd::robot {
 namespace {
+
+using client::DefaultWorld;
+using client::SimRobot;
+using client::SimRobotParams;
 
 using mapd::testing::MapdProcess;
 using std::chrono::seconds;
@@ -118,4 +122,4 @@ TEST(RobotClientUnreachableTest, GivesUpWithTheReason) {
 }
 
 }  // namespace
-}  // namespace mapd::client
+}  // namespace mapd::robot

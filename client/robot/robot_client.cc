@@ -1,10 +1,10 @@
-#include "client/robot_client.h"
+#include "client/robot/robot_client.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <optional>
 
-namespace mapd::client {
+namespace mapd::robot {
 
 namespace pb = mapserver::v1;
 
@@ -241,4 +241,4 @@ void RobotClient::HandleAck(const pb::IngestAck& ack) {
   cv_.notify_all();
 }
 
-}  // namespace mapd::client
+}  // namespace mapd::robot
