@@ -8,7 +8,8 @@
 # voxel merging, so no PCL (with VTK, Qt, Boost, MPI: 290 MB), no FFTW, no
 # GoogleTest, no Python, no Chromium.
 # --build-only (the container's build stage) leaves out what only the tests
-# use: Chromium, which runs the web view's page in tests/web, and the openssl
+# use: PCL (the LiDAR simulator's plane extraction and the merge benchmark's
+# FPFH baseline; mapd and mapctl do not link it), Chromium, which runs the web view's page in tests/web, and the openssl
 # tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
 # prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc),
 # python3-venv, in which the Python client's test pip-installs it, and
@@ -24,11 +25,11 @@ PACKAGES=(
   libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
 )
 if [ "${1:-}" != "--demo" ]; then
-  PACKAGES+=(libpcl-dev libfftw3-dev libgtest-dev libgmock-dev
+  PACKAGES+=(libfftw3-dev libgtest-dev libgmock-dev
              python3-grpcio python3-protobuf python3-pytest)
 fi
 if [ "${1:-}" != "--build-only" ] && [ "${1:-}" != "--demo" ]; then
-  PACKAGES+=(chromium openssl prometheus python3-venv haproxy)
+  PACKAGES+=(libpcl-dev chromium openssl prometheus python3-venv haproxy)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

@@ -1,9 +1,5 @@
 #include "voxel/icp.h"
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -43,47 +39,25 @@ Eigen::Isometry3d FitPairs(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& 
   return T;
 }
 
-// The nearest target of a query point under either index.
+// The nearest target of a query point: an index of its own, or a shared
+// one asked only for its points inside `within`.
 class NearestTarget {
  public:
-  NearestTarget(const std::vector<Eigen::Vector3d>& target, double voxel_m, NeighbourSearch search)
-      : search_(search) {
-    if (search == NeighbourSearch::kVoxelHash) {
-      owned_ = std::make_unique<NearestVoxelIndex>(target, voxel_m);
-      hash_ = owned_.get();
-      return;
-    }
-    pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-    for (const auto& p : target) {
-      cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                     static_cast<float>(p.z())));
-    }
-    tree_.setInputCloud(cloud);
-  }
-  // A shared index of a larger set, asked only for its points inside `within`.
+  NearestTarget(const std::vector<Eigen::Vector3d>& target, double voxel_m)
+      : owned_(std::make_unique<NearestVoxelIndex>(target, voxel_m)), index_(owned_.get()) {}
   NearestTarget(const NearestVoxelIndex* shared, const Box* within)
-      : search_(NeighbourSearch::kVoxelHash), hash_(shared), within_(within) {}
+      : index_(shared), within_(within) {}
 
-  // others_m2 (kVoxelHash only, else null): see NearestVoxelIndex::Nearest.
+  // others_m2: see NearestVoxelIndex::Nearest.
   int Nearest(const Eigen::Vector3d& q, double max_m, float* squared_m2,
               double* others_m2 = nullptr) const {
-    if (search_ == NeighbourSearch::kVoxelHash)
-      return hash_->Nearest(q, max_m, squared_m2, within_, others_m2);
-    const pcl::PointXYZ p(static_cast<float>(q.x()), static_cast<float>(q.y()),
-                          static_cast<float>(q.z()));
-    if (tree_.nearestKSearch(p, 1, index_, sq_) < 1 || sq_[0] > max_m * max_m) return -1;
-    *squared_m2 = sq_[0];
-    return index_[0];
+    return index_->Nearest(q, max_m, squared_m2, within_, others_m2);
   }
 
  private:
-  NeighbourSearch search_;
   std::unique_ptr<NearestVoxelIndex> owned_;
-  const NearestVoxelIndex* hash_ = nullptr;
+  const NearestVoxelIndex* index_ = nullptr;
   const Box* within_ = nullptr;
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
-  mutable std::vector<int> index_ = std::vector<int>(1);
-  mutable std::vector<float> sq_ = std::vector<float>(1);
 };
 
 // A source point's last searched pairing: the query it was searched for,
@@ -122,8 +96,8 @@ struct Pairs {
 
 // Nearest target of every source point under T, within max_distance_m, then
 // the closest trim_fraction of them. With `pairings` (one per source point,
-// kept between calls; null for kKdTree), a pairing that provably still holds
-// is kept without a search (StillNearest): the same pairs either way.
+// kept between calls; null: search every point), a pairing that provably holds
+// still is kept without a search (StillNearest): the same pairs either way.
 Pairs Correspond(const NearestTarget& nearest, const std::vector<Eigen::Vector3d>& target,
                  const std::vector<Eigen::Vector3d>& source, const Eigen::Isometry3d& T,
                  double max_distance_m, double trim_fraction, std::vector<Pairing>* pairings,
@@ -182,9 +156,6 @@ Status IcpParams::Validate() const {
   }
   if (!(convergence_rms_relative >= 0) || !std::isfinite(convergence_rms_relative)) {
     return Status::InvalidArgument("icp.convergence_rms_relative must be finite and >= 0");
-  }
-  if (search != NeighbourSearch::kVoxelHash && search != NeighbourSearch::kKdTree) {
-    return Status::InvalidArgument("icp.search is not a known neighbour search");
   }
   if (min_inliers < 3) return Status::InvalidArgument("icp.min_inliers must be >= 3");
   return Status::Ok();
@@ -251,11 +222,11 @@ StatusOr<IcpResult> Refine(const std::vector<Eigen::Vector3d>& target,
         std::to_string(in_overlap) + " target points in the overlap)");
   }
   const std::vector<Eigen::Vector3d>& tgt = shared == nullptr ? subset : target;
-  const NearestTarget tree = shared == nullptr ? NearestTarget(tgt, voxel_size_m, params.search)
-                                               : NearestTarget(shared, &source_box);
+  const NearestTarget tree =
+      shared == nullptr ? NearestTarget(tgt, voxel_size_m) : NearestTarget(shared, &source_box);
   double previous_rms = -1.0;
   std::vector<Pairing> pairings;
-  if (params.search == NeighbourSearch::kVoxelHash && params.reuse_pairings) {
+  if (params.reuse_pairings) {
     pairings.resize(src.size());
   }
   std::vector<Pairing>* reuse = pairings.empty() ? nullptr : &pairings;
@@ -337,18 +308,16 @@ StatusOr<IcpResult> RefineIcp(const IcpTarget& target, const std::vector<Eigen::
                               const Eigen::Isometry3d& T_init, const IcpParams& params) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   MAPD_RETURN_IF_ERROR(target.status());
-  const bool shared = params.search == NeighbourSearch::kVoxelHash;
-  return Refine(target.points(), shared ? &target.index() : nullptr, source, T_init,
-                target.voxel_size_m(), params, /*iterate=*/true);
+  return Refine(target.points(), &target.index(), source, T_init, target.voxel_size_m(), params,
+                /*iterate=*/true);
 }
 
 StatusOr<IcpResult> EvaluateIcp(const IcpTarget& target, const std::vector<Eigen::Vector3d>& source,
                                 const Eigen::Isometry3d& T, const IcpParams& params) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   MAPD_RETURN_IF_ERROR(target.status());
-  const bool shared = params.search == NeighbourSearch::kVoxelHash;
-  return Refine(target.points(), shared ? &target.index() : nullptr, source, T,
-                target.voxel_size_m(), params, /*iterate=*/false);
+  return Refine(target.points(), &target.index(), source, T, target.voxel_size_m(), params,
+                /*iterate=*/false);
 }
 
 }  // namespace mapd::voxel

@@ -12,16 +12,14 @@
 // and 7 cm off it reaches 0.02 deg / 3 mm and stops by the RMS criterion
 // after 18 iterations (point-to-plane would need fewer; not done).
 //
-// Nearest neighbours, exact within max_correspondence_voxels, two choices:
-// kVoxelHash (default): the target points binned into cells of one voxel
-// (NearestVoxelIndex, nearest_voxel.h: bit sets and rank, a hash only for
-// huge boxes); a query scans rings of cells outwards and stops as soon as the
-// best distance is below the next ring's bound (usually after the 27 cells
-// around it).
-// kKdTree: PCL's KdTreeFLANN. Measured on geb079.bt (186k voxels, 8 cm),
-// whole RefineIcp, 18 iterations, CPU s on a loaded 2-core machine: 10k
-// source points 0.42 (hash) vs 0.67 (k-d tree), 20k 0.59 vs 1.23; on
-// fr_078_tidyup.bt (288k, 5 cm), 10k points 0.79 vs 0.92. Same results.
+// Nearest neighbours, exact within max_correspondence_voxels: the target
+// points binned into cells of one voxel (NearestVoxelIndex, nearest_voxel.h:
+// bit sets and rank, a hash only for huge boxes); a query scans rings of
+// cells outwards and stops as soon as the best distance is below the next
+// ring's bound (usually after the 27 cells around it). It replaced PCL's
+// KdTreeFLANN, with the same results and faster (geb079.bt, 186k voxels,
+// 10k source points: 0.42 vs 0.67 CPU s a RefineIcp; fr_078_tidyup.bt 0.79
+// vs 0.92), and with it the server's last use of PCL.
 // Between iterations a source point keeps its target without a search while
 // it provably stays the nearest (reuse_pairings; exact): on the benchmark's
 // crops 35-63 % of the searches of a merge's ICP runs, and 7-13 % of an
@@ -41,11 +39,8 @@
 
 namespace mapd::voxel {
 
-enum class NeighbourSearch { kVoxelHash, kKdTree };
-
 // Distances in voxels (multiples of `voxel_size_m` given to RefineIcp).
 struct IcpParams {
-  NeighbourSearch search = NeighbourSearch::kVoxelHash;
   int max_iterations = 50;
   // Pairs farther apart than this are not correspondences.
   double max_correspondence_voxels = 3.0;
@@ -64,7 +59,7 @@ struct IcpParams {
   // Source points used (an even, deterministic subsample of the overlap);
   // 0 = all. A few ten thousand fix a rigid transform far below a voxel.
   std::size_t max_source_points = 10'000;
-  // kVoxelHash: keep a source point's pairing without a search while its
+  // Keep a source point's pairing without a search while its
   // image has provably not moved closer to another target (icp.cc,
   // StillNearest). Exact: the same pairs, so the same result bit for bit
   // (tested); off only to measure it.
@@ -89,13 +84,12 @@ struct IcpResult {
   std::size_t searches = 0;
 };
 
-// A target point set with its kVoxelHash index, built once for many RefineIcp
+// A target point set with its NearestVoxelIndex, built once for many RefineIcp
 // calls against one map: a merge refines a dozen or more hypotheses against
 // the same submap, and building the index in every call was 2-5 % of a merge
 // (docs/voxel-merge.md). Each call still pairs only with the target points
 // of its own overlap (the index is asked within a box), so its result is the
-// vector overload's, bit for bit. kKdTree calls build their tree per call, as
-// the vector overload does.
+// vector overload's, bit for bit.
 class IcpTarget {
  public:
   // `points` must outlive this. A voxel size that is not finite and > 0, or

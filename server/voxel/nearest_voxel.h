@@ -1,5 +1,5 @@
 // Exact nearest neighbour within a few voxels: ICP's correspondence search
-// (icp.cc, NeighbourSearch::kVoxelHash).
+// (icp.cc).
 //
 // The points are binned in cubic cells of one voxel. A query scans rings of
 // cells outwards from its own and stops as soon as the best distance is

@@ -1,5 +1,6 @@
-// Point-to-point ICP: exact transforms, the voxel-hash neighbour search against
-// PCL's k-d tree, indexed targets and kept pairings bit for bit, bad input.
+// Point-to-point ICP: exact transforms, indexed targets and kept pairings bit
+// for bit, bad input. Its neighbour search (NearestVoxelIndex) is checked
+// against brute force in nearest_voxel_test.cc.
 #include "voxel/icp.h"
 
 #include <gtest/gtest.h>
@@ -15,11 +16,6 @@
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
-
-// gtest prints parameters with this (not as bytes).
-void PrintTo(NeighbourSearch search, std::ostream* out) {
-  *out << (search == NeighbourSearch::kVoxelHash ? "voxel hash" : "k-d tree");
-}
 
 namespace {
 
@@ -47,22 +43,14 @@ RoomPair RasterisedRoomPair(const Eigen::Isometry3d& T_a_b, double b_min_x) {
                                        T_a_b, kRoomResolutionM))};
 }
 
-class IcpSearchTest : public ::testing::TestWithParam<NeighbourSearch> {};
-
-std::string SearchName(const ::testing::TestParamInfo<NeighbourSearch>& param) {
-  return param.param == NeighbourSearch::kVoxelHash ? "voxel_hash" : "kd_tree";
-}
-
 // Two rasterisations of one room (different crops, B's grid rotated): ICP
 // from a start 1 deg and ~1 voxel off lands within a fraction of a voxel.
-TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
+TEST(IcpTest, RefinesAPerturbedStartOnRasterisedMaps) {
   const Eigen::Isometry3d T_a_b = Pose(23, 6, -4, Eigen::Vector3d(0.7, -1.2, 0.3));
   const auto [a, b] = RasterisedRoomPair(T_a_b, 2.2);
   const Eigen::Isometry3d start =
       Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b;  // 1 deg, ~1 voxel at the origin
-  IcpParams params;
-  params.search = GetParam();
-  auto result = RefineIcp(a, b, start, kRoomResolutionM, params);
+  auto result = RefineIcp(a, b, start, kRoomResolutionM, IcpParams());
   ASSERT_TRUE(result.ok()) << result.status().ToString();
   EXPECT_LT(testing::RotationErrorDeg(result->T_target_source, T_a_b), 0.3);
   EXPECT_LT(testing::TranslationError(result->T_target_source, T_a_b), 0.5 * kRoomResolutionM);
@@ -72,10 +60,6 @@ TEST_P(IcpSearchTest, RefinesAPerturbedStartOnRasterisedMaps) {
   EXPECT_GT(result->iterations, 1);
   EXPECT_TRUE(result->converged);
 }
-
-INSTANTIATE_TEST_SUITE_P(Searches, IcpSearchTest,
-                         ::testing::Values(NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree),
-                         SearchName);
 
 // Exact correspondences (the same points moved): recovered to numerical
 // precision, both ways.
@@ -109,79 +93,36 @@ TEST(IcpTest, RecoversAnExactTransformAndItsInverse) {
   EXPECT_LT(testing::TranslationError(backward->T_target_source, T_t_s.inverse()), 1e-4);
 }
 
-// The voxel hash answers as the k-d tree does: the same ICP, step for step,
-// on noisy patches. Once with the target's cells in a small box (empty cells
-// answered by the hash's bit set), once with one more point 2 km away in both
-// maps, which makes the box too large for the bit set (every cell goes to the
-// hash table).
-TEST(IcpTest, VoxelHashAndKdTreeFindTheSameNeighbours) {
-  for (const bool far_point : {false, true}) {
-    SCOPED_TRACE(far_point ? "box too large for the bit set" : "bit set");
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> u(0.0, 3.0);
-    std::normal_distribution<double> noise(0.0, 0.2 * kRoomResolutionM);
-    const Eigen::Isometry3d T_t_s = Pose(2, -1, 1, Eigen::Vector3d(0.06, -0.04, 0.05));
-    std::vector<Eigen::Vector3d> target, source;
-    for (int i = 0; i < 3000; ++i) {
-      Eigen::Vector3d p(u(rng), u(rng), u(rng));
-      p[i % 3] = 0.0;
-      target.push_back(p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
-      source.push_back(T_t_s.inverse() * p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
-    }
-    if (far_point) {
-      target.emplace_back(2000.0, 2000.0, 1.0);
-      source.push_back(T_t_s.inverse() * target.back());
-    }
-    IcpParams params;
-    params.search = NeighbourSearch::kVoxelHash;
-    auto hash = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
-    params.search = NeighbourSearch::kKdTree;
-    auto tree = RefineIcp(target, source, Eigen::Isometry3d::Identity(), kRoomResolutionM, params);
-    ASSERT_TRUE(hash.ok()) << hash.status().ToString();
-    ASSERT_TRUE(tree.ok()) << tree.status().ToString();
-    EXPECT_EQ(hash->target_points, tree->target_points);
-    EXPECT_EQ(hash->inliers, tree->inliers);
-    EXPECT_EQ(hash->iterations, tree->iterations);
-    EXPECT_NEAR(hash->rms_residual_m, tree->rms_residual_m, 1e-6);
-    EXPECT_LT((hash->T_target_source.matrix() - tree->T_target_source.matrix()).norm(), 1e-6);
-    EXPECT_GT(hash->inliers, 2500);
-  }
-}
-
 // A target indexed once (IcpTarget) gives every run the result of the vector
 // overload, bit for bit: from several starts, so that each run's overlap box
 // leaves out a different part of the target (B is a crop of another part of
-// the room, turned a little), with either neighbour search.
+// the room, turned a little).
 TEST(IcpTest, AnIndexedTargetGivesTheVectorOverloadsResultsBitForBit) {
   const Eigen::Isometry3d T_a_b = Pose(3, 1, -1, Eigen::Vector3d(0.4, -0.3, 0.1));
   const auto [a, b] = RasterisedRoomPair(T_a_b, 3.5);
   const IcpTarget target(&a, kRoomResolutionM);
   ASSERT_TRUE(target.status().ok());
-  for (const NeighbourSearch search : {NeighbourSearch::kVoxelHash, NeighbourSearch::kKdTree}) {
-    IcpParams params;
-    params.search = search;
-    params.max_source_points = 3000;
-    for (const Eigen::Isometry3d& start :
-         {Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b,
-          Pose(-4, 1, 0, Eigen::Vector3d(-0.3, 0.2, 0.1)) * T_a_b,
-          Pose(8, 0, 0, Eigen::Vector3d(0.5, 0.0, 0.0)) * T_a_b,
-          Pose(0, 0, 0, Eigen::Vector3d(0.25, 0.0, 0.0)) * T_a_b,
-          Pose(0, 0, 0, Eigen::Vector3d(0.2, 0.1, 0.0)) * T_a_b}) {
-      const auto want = RefineIcp(a, b, start, kRoomResolutionM, params);
-      const auto got = RefineIcp(target, b, start, params);
-      ASSERT_EQ(got.ok(), want.ok());
-      if (!want.ok()) {
-        EXPECT_EQ(got.status().ToString(), want.status().ToString());
-        continue;
-      }
-      EXPECT_LT(want->target_points, a.size());  // the box left some of a out
-      EXPECT_EQ(got->target_points, want->target_points);
-      EXPECT_EQ(got->source_points, want->source_points);
-      EXPECT_EQ(got->iterations, want->iterations);
-      EXPECT_EQ(got->inliers, want->inliers);
-      EXPECT_EQ(got->rms_residual_m, want->rms_residual_m);
-      EXPECT_EQ(got->T_target_source.matrix(), want->T_target_source.matrix());
+  IcpParams params;
+  params.max_source_points = 3000;
+  for (const Eigen::Isometry3d& start : {Pose(1, 0, 0, Eigen::Vector3d(0.07, 0.05, -0.05)) * T_a_b,
+                                         Pose(-4, 1, 0, Eigen::Vector3d(-0.3, 0.2, 0.1)) * T_a_b,
+                                         Pose(8, 0, 0, Eigen::Vector3d(0.5, 0.0, 0.0)) * T_a_b,
+                                         Pose(0, 0, 0, Eigen::Vector3d(0.25, 0.0, 0.0)) * T_a_b,
+                                         Pose(0, 0, 0, Eigen::Vector3d(0.2, 0.1, 0.0)) * T_a_b}) {
+    const auto want = RefineIcp(a, b, start, kRoomResolutionM, params);
+    const auto got = RefineIcp(target, b, start, params);
+    ASSERT_EQ(got.ok(), want.ok());
+    if (!want.ok()) {
+      EXPECT_EQ(got.status().ToString(), want.status().ToString());
+      continue;
     }
+    EXPECT_LT(want->target_points, a.size());  // the box left some of a out
+    EXPECT_EQ(got->target_points, want->target_points);
+    EXPECT_EQ(got->source_points, want->source_points);
+    EXPECT_EQ(got->iterations, want->iterations);
+    EXPECT_EQ(got->inliers, want->inliers);
+    EXPECT_EQ(got->rms_residual_m, want->rms_residual_m);
+    EXPECT_EQ(got->T_target_source.matrix(), want->T_target_source.matrix());
   }
 }
 

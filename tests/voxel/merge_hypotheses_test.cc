@@ -106,7 +106,9 @@ TEST(MergeHypothesesTest, EveryRefinedHypothesisIsListedWithItsFigures) {
       }
     }
     EXPECT_EQ(answers, merges ? 1 : 0);
-    if (!merges) EXPECT_GT(screened, 0);  // a 0.01 voxel gate refuses at the screen
+    if (!merges) {
+      EXPECT_GT(screened, 0);  // a 0.01 voxel gate refuses at the screen
+    }
   }
 }
 
