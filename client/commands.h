@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "client/cli.h"
-#include "client/rigid_transform.h"
 #include "client/voxel_render.h"
+#include "geometry/rigid3.h"
 
 namespace mapd::client {
 
@@ -55,7 +55,7 @@ int CheckRenderOutput(const std::string& command, const std::string& path, Image
 // Parses OctoMap `bytes` (untrusted) and appends them as a layer named `what`
 // in the next colour. A malformed file is kExitUsage, like any bad input file.
 int AddRenderLayer(const std::string& command, const std::string& what, std::string_view bytes,
-                   const RigidTransform& T_view_layer, std::vector<VoxelLayer>* layers);
+                   const geometry::Rigid3& T_view_layer, std::vector<VoxelLayer>* layers);
 // Renders and writes `path`; prints one line saying what was written. Returns
 // kExitOk or kExitFailed.
 int WriteRendering(const std::string& command, const std::vector<VoxelLayer>& layers,

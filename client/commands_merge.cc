@@ -68,9 +68,9 @@ int RenderAlignedInputs(const Context& ctx, const std::string& command,
   for (int i = 0; i < alignments.size(); ++i) {
     const pb::SubmapAlignment& a = alignments.Get(i);
     const uint64_t id = a.submap_id();
-    RigidTransform T_reference_submap;
+    geometry::Rigid3 T_reference_submap;
     if (a.has_t_reference_submap()) {
-      T_reference_submap = ToRigidTransform(a.t_reference_submap());
+      T_reference_submap = ToRigid3(a.t_reference_submap());
     } else if (i > 0) {
       PrintError(Printf("%s: no transform for submap %llu; not drawn", command.c_str(),
                         static_cast<unsigned long long>(id)));

@@ -37,7 +37,7 @@ int CheckRenderOutput(const std::string& command, const std::string& path, Image
 }
 
 int AddRenderLayer(const std::string& command, const std::string& what, std::string_view bytes,
-                   const RigidTransform& T_view_layer, std::vector<VoxelLayer>* layers) {
+                   const geometry::Rigid3& T_view_layer, std::vector<VoxelLayer>* layers) {
   StatusOr<LoadedVoxels> voxels = LoadOccupiedVoxels(bytes);
   if (!voxels.ok()) {
     PrintError(command + ": " + what + ": " + voxels.status().message() + " (" +
@@ -100,7 +100,7 @@ int RunRender(const Context& /*ctx*/, const RenderCommandOptions& flags) {
     std::stringstream bytes;
     bytes << file.rdbuf();
     const std::string name = std::filesystem::path(path).filename().string();
-    if (int rc = AddRenderLayer("render", name, bytes.str(), RigidTransform(), &layers);
+    if (int rc = AddRenderLayer("render", name, bytes.str(), geometry::Rigid3(), &layers);
         rc != kContinue)
       return rc;
   }

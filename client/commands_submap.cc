@@ -7,8 +7,8 @@
 
 #include "client/commands.h"
 #include "client/format.h"
-#include "client/rigid_transform.h"
 #include "client/text_util.h"
+#include "geometry/rigid3.h"
 
 namespace mapd::client {
 namespace {
@@ -194,7 +194,8 @@ int RunGlobalMap(const Context& ctx, const GlobalMapOptions& flags) {
   std::vector<VoxelLayer> layers;
   const std::string what =
       Printf("global map v%llu", static_cast<unsigned long long>(global.version()));
-  if (int rc = AddRenderLayer("global-map", what, data, RigidTransform(), &layers); rc != kContinue)
+  if (int rc = AddRenderLayer("global-map", what, data, geometry::Rigid3(), &layers);
+      rc != kContinue)
     return rc;
   return WriteRendering("global-map", layers, render_path, render_format);
 }

@@ -180,7 +180,7 @@ int RunTransform(const Context& ctx, const TransformOptions& flags) {
   }
   constexpr double kRad = M_PI / 180.0;
   // p_out = R p_in + t, R = Rz(yaw) Ry(pitch) Rx(roll): the convention the
-  // merge tables print (RigidTransform::YawPitchRollDeg).
+  // merge tables print (geometry::Rigid3::YawPitchRollDeg).
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = (Eigen::AngleAxisd(flags.rotate_deg[0] * kRad, Eigen::Vector3d::UnitZ()) *
                 Eigen::AngleAxisd(flags.rotate_deg[1] * kRad, Eigen::Vector3d::UnitY()) *

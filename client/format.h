@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "client/rigid_transform.h"
+#include "geometry/rigid3.h"
 #include "mapserver/v1/map_service.pb.h"
 
 namespace mapd::client {
@@ -87,7 +87,7 @@ std::string FormatMergeRecord(const mapserver::v1::MergeRecord& merge);
 // and overlap; "not aligned" for an input of a refused merge.
 std::string FormatAlignment(const mapserver::v1::SubmapAlignment& alignment);
 // The API's transform as the client's (for renderings and yaw/pitch/roll).
-RigidTransform ToRigidTransform(const mapserver::v1::Rigid3& T);
+geometry::Rigid3 ToRigid3(const mapserver::v1::Rigid3& T);
 
 // `mapctl watch`: one line per change of a FeatureMapDelta (a resync first
 // gets its own line, "resync"). Text: `v=<map_version> <added|updated|removed>

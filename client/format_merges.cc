@@ -4,8 +4,8 @@
 #include <nlohmann/json.hpp>
 
 #include "client/format.h"
-#include "client/rigid_transform.h"
 #include "client/text_util.h"
+#include "geometry/rigid3.h"
 
 namespace mapd::client {
 namespace {
@@ -71,7 +71,7 @@ nlohmann::ordered_json AlignmentJson(const pb::SubmapAlignment& a) {
       {"translation", {T.translation().x(), T.translation().y(), T.translation().z()}},
       {"rotation_wxyz", {T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z()}}};
   double yaw = 0, pitch = 0, roll = 0;
-  ToRigidTransform(T).YawPitchRollDeg(&yaw, &pitch, &roll);
+  ToRigid3(T).YawPitchRollDeg(&yaw, &pitch, &roll);
   j["yaw_pitch_roll_deg"] = {yaw, pitch, roll};
   j["matched_corners"] = a.matched_corners();
   j["residual_m"] = a.residual_m();
@@ -111,14 +111,14 @@ std::string FormatAlignment(const pb::SubmapAlignment& a) {
   if (!a.has_t_reference_submap()) {
     return Printf("  submap %llu: not aligned\n", static_cast<unsigned long long>(a.submap_id()));
   }
-  const RigidTransform T = ToRigidTransform(a.t_reference_submap());
+  const geometry::Rigid3 T = ToRigid3(a.t_reference_submap());
   double yaw = 0, pitch = 0, roll = 0;
   T.YawPitchRollDeg(&yaw, &pitch, &roll);
   std::string out = Printf(
       "  submap %llu: xyz (%.3f, %.3f, %.3f) m, yaw/pitch/roll (%.2f, %.2f, %.2f) deg, "
       "%u matched corners, residual %.3f m, overlap %.2f\n",
-      static_cast<unsigned long long>(a.submap_id()), T.t.x, T.t.y, T.t.z, yaw, pitch, roll,
-      a.matched_corners(), a.residual_m(), a.overlap_score());
+      static_cast<unsigned long long>(a.submap_id()), T.translation.x(), T.translation.y(),
+      T.translation.z(), yaw, pitch, roll, a.matched_corners(), a.residual_m(), a.overlap_score());
   // The rest of the placing edge's evidence, when the server recorded it (the
   // reference input and merges from before it have none).
   if (a.source().empty()) return out;
@@ -131,8 +131,8 @@ std::string FormatAlignment(const pb::SubmapAlignment& a) {
          figure(a.second_residual_m(), 3, " m") + "\n";
 }
 
-RigidTransform ToRigidTransform(const pb::Rigid3& T) {
-  return RigidTransform::FromQuaternion(
+geometry::Rigid3 ToRigid3(const pb::Rigid3& T) {
+  return geometry::Rigid3::FromQuaternion(
       T.rotation().w(), T.rotation().x(), T.rotation().y(), T.rotation().z(),
       {T.translation().x(), T.translation().y(), T.translation().z()});
 }

@@ -44,8 +44,7 @@ StatusOr<LoadedVoxels> LoadOccupiedVoxels(std::string_view bytes) {
   LoadedVoxels out;
   out.resolution_m = grid->resolution();
   out.centres_m.reserve(grid->occupied_centres().size());
-  for (const Eigen::Vector3d& c : grid->occupied_centres())
-    out.centres_m.push_back({c.x(), c.y(), c.z()});
+  for (const Eigen::Vector3d& c : grid->occupied_centres()) out.centres_m.push_back(c);
   return out;
 }
 

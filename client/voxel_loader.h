@@ -8,15 +8,15 @@
 #include <string_view>
 #include <vector>
 
-#include "client/rigid_transform.h"
 #include "common/status.h"
+#include "geometry/rigid3.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::client {
 
 struct LoadedVoxels {
-  double resolution_m = 0;        // voxel edge
-  std::vector<Point3> centres_m;  // occupied voxels at the finest resolution, file frame
+  double resolution_m = 0;                 // voxel edge
+  std::vector<Eigen::Vector3d> centres_m;  // occupied voxels at the finest resolution, file frame
 };
 
 // InvalidArgument for a malformed file, ResourceExhausted beyond the reader's

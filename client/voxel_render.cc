@@ -16,8 +16,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // exactly on a pixel edge covers one pixel, not two.
 constexpr double kEdgeEps = 1e-6;
 
-bool IsFinite(const Point3& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+bool IsFinite(const Eigen::Vector3d& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
 
 // Darkest shade at the lowest voxel: floors stay visible but walls stand out.
@@ -64,7 +64,7 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
   if (layers.empty()) return Status::InvalidArgument("layers is empty: nothing to render");
 
   // Transform every layer once; bounds are those of the voxels' squares.
-  std::vector<std::vector<Point3>> points(layers.size());
+  std::vector<std::vector<Eigen::Vector3d>> points(layers.size());
   double x_min = kInf, x_max = -kInf, y_min = kInf, y_max = -kInf, z_min = kInf, z_max = -kInf;
   double finest = kInf;
   for (size_t i = 0; i < layers.size(); ++i) {
@@ -75,16 +75,16 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
     }
     const double half = layer.resolution_m / 2;
     points[i].reserve(layer.centres_m.size());
-    for (const Point3& c : layer.centres_m) {
-      const Point3 p = layer.T_view_layer.Apply(c);
+    for (const Eigen::Vector3d& c : layer.centres_m) {
+      const Eigen::Vector3d p = layer.T_view_layer * c;
       if (!IsFinite(p)) {
         return Status::InvalidArgument("layers[" + std::to_string(i) + "] (" + layer.label +
                                        ") has a point that is not finite after its transform");
       }
       points[i].push_back(p);
-      x_min = std::min(x_min, p.x - half), x_max = std::max(x_max, p.x + half);
-      y_min = std::min(y_min, p.y - half), y_max = std::max(y_max, p.y + half);
-      z_min = std::min(z_min, p.z), z_max = std::max(z_max, p.z);
+      x_min = std::min(x_min, p.x() - half), x_max = std::max(x_max, p.x() + half);
+      y_min = std::min(y_min, p.y() - half), y_max = std::max(y_max, p.y() + half);
+      z_min = std::min(z_min, p.z()), z_max = std::max(z_max, p.z());
     }
     if (!layer.centres_m.empty()) finest = std::min(finest, layer.resolution_m);
   }
@@ -109,8 +109,8 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
   // squeeze every wall into the darkest shades.
   {
     std::vector<double> zs;
-    for (const std::vector<Point3>& layer : points) {
-      for (const Point3& p : layer) zs.push_back(p.z);
+    for (const std::vector<Eigen::Vector3d>& layer : points) {
+      for (const Eigen::Vector3d& p : layer) zs.push_back(p.z());
     }
     const size_t lo = static_cast<size_t>(std::floor(0.01 * static_cast<double>(zs.size() - 1)));
     const size_t hi = static_cast<size_t>(std::ceil(0.99 * static_cast<double>(zs.size() - 1)));
@@ -130,10 +130,10 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
     if (points[i].empty()) continue;
     top[i].assign(num_pixels, -std::numeric_limits<float>::infinity());
     const double half_px = layers[i].resolution_m / 2 / view.pixel_m;
-    for (const Point3& p : points[i]) {
+    for (const Eigen::Vector3d& p : points[i]) {
       // The voxel's square [x - r/2, x + r/2] in pixel units; a rotated voxel
       // is drawn as its axis-aligned square, which keeps rotated walls closed.
-      const double cx = (p.x - x_min) / view.pixel_m, cy = (y_max - p.y) / view.pixel_m;
+      const double cx = (p.x() - x_min) / view.pixel_m, cy = (y_max - p.y()) / view.pixel_m;
       const int c0 = std::max(0, static_cast<int>(std::floor(cx - half_px + kEdgeEps)));
       const int c1 = std::min(
           width - 1, std::max(c0, static_cast<int>(std::ceil(cx + half_px - kEdgeEps)) - 1));
@@ -144,7 +144,7 @@ StatusOr<TopView> RenderTopView(const std::vector<VoxelLayer>& layers,
         for (int c = c0; c <= c1; ++c) {
           float& z =
               top[i][static_cast<size_t>(r) * static_cast<size_t>(width) + static_cast<size_t>(c)];
-          z = std::max(z, static_cast<float>(p.z));
+          z = std::max(z, static_cast<float>(p.z()));
         }
       }
       ++view.voxels;

@@ -15,17 +15,17 @@
 #include <vector>
 
 #include "client/rgb_image.h"
-#include "client/rigid_transform.h"
 #include "common/status.h"
+#include "geometry/rigid3.h"
 
 namespace mapd::client {
 
 struct VoxelLayer {
-  std::string label;              // legend text: "submap 3 (robot r1)", a file name
-  Rgb colour;                     // e.g. LayerColour(index)
-  double resolution_m = 0.1;      // voxel edge; each voxel covers this square
-  std::vector<Point3> centres_m;  // occupied voxel centres, layer frame
-  RigidTransform T_view_layer;    // maps the layer's points into the picture's frame
+  std::string label;                       // legend text: "submap 3 (robot r1)", a file name
+  Rgb colour;                              // e.g. LayerColour(index)
+  double resolution_m = 0.1;               // voxel edge; each voxel covers this square
+  std::vector<Eigen::Vector3d> centres_m;  // occupied voxel centres, layer frame
+  geometry::Rigid3 T_view_layer;           // maps the layer's points into the picture's frame
 };
 
 // Well-separated colours for layer `index` (they repeat after 8).

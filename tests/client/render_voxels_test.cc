@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "client/rgb_image.h"
-#include "client/rigid_transform.h"
 #include "client/support/png_decode.h"
 #include "client/support/svg_facts.h"
 #include "client/voxel_render.h"
+#include "geometry/rigid3.h"
 
 namespace mapd::client {
 namespace {
@@ -25,35 +25,6 @@ const Rgb kWhite{255, 255, 255};
 Rgb Scaled(Rgb c, double f) {
   return {static_cast<uint8_t>(std::lround(c.r * f)), static_cast<uint8_t>(std::lround(c.g * f)),
           static_cast<uint8_t>(std::lround(c.b * f))};
-}
-
-// ---------------------------------------------------------------------------
-// Transforms
-
-TEST(RigidTransformTest, YawPitchRollRoundTrip) {
-  // q = qz(yaw) * qy(pitch) * qx(roll), the Z-Y-X convention printed by mapctl.
-  const double yaw = 30 * M_PI / 180, pitch = -10 * M_PI / 180, roll = 5 * M_PI / 180;
-  const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2), cp = std::cos(pitch / 2),
-               sp = std::sin(pitch / 2), cr = std::cos(roll / 2), sr = std::sin(roll / 2);
-  const double w = cy * cp * cr + sy * sp * sr, x = cy * cp * sr - sy * sp * cr,
-               y = cy * sp * cr + sy * cp * sr, z = sy * cp * cr - cy * sp * sr;
-  const RigidTransform T =
-      RigidTransform::FromQuaternion(2 * w, 2 * x, 2 * y, 2 * z, {1, 2, 3});  // not unit
-  double out_yaw, out_pitch, out_roll;
-  T.YawPitchRollDeg(&out_yaw, &out_pitch, &out_roll);
-  EXPECT_NEAR(out_yaw, 30, 1e-9);
-  EXPECT_NEAR(out_pitch, -10, 1e-9);
-  EXPECT_NEAR(out_roll, 5, 1e-9);
-}
-
-TEST(RigidTransformTest, AppliesRotationThenTranslation) {
-  // 90 degrees about z: x -> y.
-  const RigidTransform T =
-      RigidTransform::FromQuaternion(std::cos(M_PI / 4), 0, 0, std::sin(M_PI / 4), {10, 0, -1});
-  const Point3 p = T.Apply({1, 0, 2});
-  EXPECT_NEAR(p.x, 10, 1e-12);
-  EXPECT_NEAR(p.y, 1, 1e-12);
-  EXPECT_NEAR(p.z, 1, 1e-12);
 }
 
 // ---------------------------------------------------------------------------
@@ -122,7 +93,7 @@ TEST(RenderTopViewTest, TransformedLayersThatCoincideMixTheirColours) {
   b.resolution_m = 1.0;
   b.centres_m = {{0.5, 0.5, 2.5}};
   // Moved by (2, 1, 0) it lands on the red layer's high voxel at (2.5, 1.5, 2.5).
-  b.T_view_layer = RigidTransform::FromQuaternion(1, 0, 0, 0, {2, 1, 0});
+  b.T_view_layer = geometry::Rigid3::FromQuaternion(1, 0, 0, 0, Eigen::Vector3d(2, 1, 0));
   StatusOr<TopView> view = RenderTopView({TinyLayer(red), b}, Unmagnified());
   ASSERT_TRUE(view.ok());
   ASSERT_EQ(view->map.width(), 3);
@@ -139,15 +110,15 @@ TEST(RenderTopViewTest, RotatedLayerKeepsAWallClosed) {
   wall.colour = {0, 150, 0};
   wall.resolution_m = 0.1;
   for (int i = 0; i < 20; ++i) wall.centres_m.push_back({0.05 + 0.1 * i, 0.05, 0.05});
-  wall.T_view_layer =
-      RigidTransform::FromQuaternion(std::cos(M_PI / 8), 0, 0, std::sin(M_PI / 8), {});
+  wall.T_view_layer = geometry::Rigid3::FromQuaternion(std::cos(M_PI / 8), 0, 0, std::sin(M_PI / 8),
+                                                       Eigen::Vector3d::Zero());
   StatusOr<TopView> view = RenderTopView({wall}, RenderOptions());
   ASSERT_TRUE(view.ok());
   int holes = 0;
   for (double s = 0.1; s < 1.9; s += 0.05) {  // along the rotated wall's axis
-    const Point3 p = wall.T_view_layer.Apply({s, 0.05, 0});
+    const Eigen::Vector3d p = wall.T_view_layer * Eigen::Vector3d(s, 0.05, 0);
     int col, row;
-    view->MetresToPixel(p.x, p.y, &col, &row);
+    view->MetresToPixel(p.x(), p.y(), &col, &row);
     if (view->map.At(col, row) == kWhite) ++holes;
   }
   EXPECT_EQ(holes, 0);
@@ -253,7 +224,7 @@ TEST(RenderTopViewTest, RefusesBadInputNamingIt) {
   EXPECT_THAT(view.status().message(), HasSubstr("layers[1].resolution_m"));
 
   VoxelLayer nan = TinyLayer({1, 1, 1});
-  nan.T_view_layer.t.x = std::nan("");
+  nan.T_view_layer.translation.x() = std::nan("");
   view = RenderTopView({nan}, RenderOptions());
   ASSERT_FALSE(view.ok());
   EXPECT_THAT(view.status().message(), HasSubstr("not finite"));
