@@ -22,6 +22,8 @@ void AddMapCommands(CLI::App* app, Action* action);
 void AddWatchCommand(CLI::App* app, Action* action);
 // commands_ingest.cc: ingest, simulate (writing observations)
 void AddIngestCommands(CLI::App* app, Action* action);
+// commands_replay.cc: replay (recorded robots through the robot library)
+void AddReplayCommand(CLI::App* app, Action* action);
 // commands_submap.cc: submaps, submap upload|get|delete, global-map (voxel submaps)
 void AddSubmapCommands(CLI::App* app, Action* action);
 // commands_submap_tools.cc: submap info|crop|transform (OctoMap files and

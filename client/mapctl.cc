@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   mapd::client::AddMapCommands(&app, &action);
   mapd::client::AddWatchCommand(&app, &action);
   mapd::client::AddIngestCommands(&app, &action);
+  mapd::client::AddReplayCommand(&app, &action);
   mapd::client::AddSubmapCommands(&app, &action);
   mapd::client::AddMergeCommands(&app, &action);
   mapd::client::AddExportCommands(&app, &action);

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -166,6 +167,50 @@ TEST_F(MapctlE2eTest, IngestReportsTheRejectedLine) {
   r = Mapctl({"ingest", "-"}, lines[0] + "\n{\"robotId\": 12, \"nope\": true}\n");
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_THAT(r.err, HasSubstr("line 2"));
+}
+
+// A recorded robot through the robot library: a CARMEN log of a corridor
+// (walls at y = +-1.5 m, 180 beams, 40 scans 0.2 m apart) streamed as that
+// robot, its walls fused; again is all duplicates; a malformed log sends nothing.
+TEST_F(MapctlE2eTest, ReplayStreamsARecordedRobot) {
+  std::string log = "# a CARMEN log\nODOM 0 0 0 0 0 0 0 host 0\n";
+  for (int k = 0; k < 40; ++k) {
+    log += "FLASER 180";
+    for (int i = 0; i < 180; ++i) {
+      const double s = std::sin(-M_PI / 2 + i * M_PI / 180);
+      log += " " + std::to_string(std::abs(s) < 1.5 / 80 ? 80.0 : 1.5 / std::abs(s));
+    }
+    const double x = 0.2 * k, t = 1700000000.0 + 0.1 * k;
+    log += " " + std::to_string(x) + " 0 0 " + std::to_string(x) + " 0 0 " + std::to_string(t) +
+           " host " + std::to_string(t) + "\n";
+  }
+  const std::string path = dir_.File("corridor.log");
+  std::ofstream(path) << log;
+
+  CommandResult r = Mapctl({"replay", "--session", "rec", path});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("1 robot, 40 scans"));
+  EXPECT_THAT(r.out, HasSubstr("40 batches sent: 40 stored"));
+  r = Mapctl({"robots"});
+  EXPECT_THAT(r.out, HasSubstr("corridor"));  // named by its file
+  r = Mapctl({"features", "--format", "json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Count(r.out, "\"id\""), 2U) << r.out;  // one fused feature per wall
+
+  r = Mapctl({"replay", "--session", "rec", path});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("40 duplicate"));
+
+  const std::string bad = dir_.File("bad.log");
+  std::size_t cut = 0;  // after the 12th line: 10 scans
+  for (int line = 0; line < 12; ++line) cut = log.find('\n', cut) + 1;
+  std::ofstream(bad) << log.substr(0, cut) << "FLASER 180 1.0 2.0\n" << log.substr(cut);
+  r = Mapctl({"replay", "--session", "bad", "--robot-id", "other", bad});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("bad.log:13"));
+  EXPECT_THAT(r.err, HasSubstr("missing range"));
+  r = Mapctl({"robots"});
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("other")));  // nothing was sent
 }
 
 TEST_F(MapctlE2eTest, ExitCodesForScripts) {
