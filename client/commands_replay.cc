@@ -1,6 +1,7 @@
 // mapctl replay: recorded robots streamed into mapd through the robot library,
 // as the robots would have streamed them (client/robot: ExtractLines,
 // ScanBatch, RobotClient).
+#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,7 +32,8 @@ struct ReplayOptions {
   std::string session;   // empty: replay-<UTC time>
   double rate = 0;       // 0: as fast as possible; 1: as recorded; N: N times as fast
   double max_range_m = 80;
-  uint64_t every = 1;  // every Nth scan
+  uint64_t every = 1;       // every Nth scan
+  std::string export_path;  // write JSON lines instead of streaming; - for stdout
 };
 
 // One log's robot: its batches, made before anything is sent.
@@ -156,6 +158,29 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
       }
     }
   }
+  if (!flags.export_path.empty()) {
+    // The .proto field names (snake_case), as `simulate --export` writes them.
+    google::protobuf::util::JsonPrintOptions options;
+    options.preserve_proto_field_names = true;
+    std::string text, json;
+    for (const Recording& r : recordings) {
+      for (const pb::ObservationBatch& batch : r.batches) {
+        json.clear();
+        (void)google::protobuf::util::MessageToJsonString(batch, &json, options);
+        text += json + "\n";
+      }
+    }
+    std::string error;
+    if (!WriteOutput(flags.export_path, text, &error)) {
+      PrintError("replay: " + error);
+      return kExitFailed;
+    }
+    if (flags.export_path != "-") {
+      std::printf("replay: wrote %zu batches (%zu lines, session %s) to %s\n", total, lines,
+                  session.c_str(), flags.export_path.c_str());
+    }
+    return kExitOk;
+  }
   if (int rc = CheckReachable(ctx, "replay"); rc != kExitOk) return rc;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -240,6 +265,10 @@ void AddReplayCommand(CLI::App* app, Action* action) {
                    "say the laser's maximum)")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
+  replay->add_option(
+      "--export", r->export_path,
+      "write the batches as JSON lines (for 'mapctl ingest') instead of streaming them; - for "
+      "stdout");
   replay->add_option("--every", r->every, "send every Nth scan")
       ->capture_default_str()
       ->check(CLI::Range(uint64_t{1}, uint64_t{1000000}));

@@ -9,6 +9,9 @@
     with MapClient(channel).watch() as feed:   # the change feed; LiveFeatureMap applies it
         for delta in feed: ...
 
+A robot's laser scans become line observations with mapd_client.laser
+(extract_lines, line_batch: the C++ robot library's extractor, the same lines).
+
 The stubs (mapserver.v1.map_service_pb2, _pb2_grpc) are generated at build
 time into <build>/client/python; see the "Python" section of the project README.
 """
