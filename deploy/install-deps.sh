@@ -7,9 +7,10 @@
 # --demo installs only what deploy/demo.sh builds: mapd and mapctl without
 # voxel merging, so no PCL (with VTK, Qt, Boost, MPI: 290 MB), no FFTW, no
 # GoogleTest, no Python, no Chromium.
-# --build-only (the container's build stage) leaves out what only the tests
-# use: PCL (the LiDAR simulator's plane extraction and the merge benchmark's
-# FPFH baseline; mapd and mapctl do not link it), Chromium, which runs the web view's page in tests/web, and the openssl
+# --build-only (the container's build stage, which builds mapd and mapctl
+# with MAPD_WITH_ROBOT_PLANES=OFF) leaves out PCL (the robot library's plane
+# extractor, the LiDAR simulator, the merge benchmark's FPFH baseline; mapd
+# and mapctl do not link it) and what only the tests use: Chromium, which runs the web view's page in tests/web, and the openssl
 # tool, which makes the TLS tests' certificates (tests/service/tls_auth_test.cc),
 # prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc),
 # python3-venv, in which the Python client's test pip-installs it, and

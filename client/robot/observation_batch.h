@@ -14,6 +14,7 @@
 
 #include "client/robot/laser_lines.h"
 #include "common/status.h"
+#include "geometry/observation.h"
 #include "mapserver/v1/map_service.pb.h"
 
 namespace mapd::robot {
@@ -36,6 +37,14 @@ struct BatchHeader {
 StatusOr<mapserver::v1::ObservationBatch> LineBatch(const BatchHeader& header,
                                                     const Eigen::Isometry3d& T_frame_sensor,
                                                     const std::vector<ExtractedLine>& lines);
+
+// A batch of lines and planes (sensor frame: a 3D scan's planes from
+// cloud_planes.h). As LineBatch, and InvalidArgument naming the plane whose
+// normal is not unit (within 1e-3), offset not finite, or boundary not 3 or
+// more finite points.
+StatusOr<mapserver::v1::ObservationBatch> FeatureBatch(
+    const BatchHeader& header, const Eigen::Isometry3d& T_frame_sensor,
+    const std::vector<ExtractedLine>& lines, const std::vector<geometry::PlaneFeature>& planes);
 
 // ExtractLines and LineBatch in one: the batch for one scan.
 StatusOr<mapserver::v1::ObservationBatch> ScanBatch(const BatchHeader& header,

@@ -2,7 +2,7 @@
 # the real OctoMap maps, through ProjectToGround and fusion (issue 10):
 # ./plane_bench [--data DIR] (figures in docs/planes-3d.md). On demand, not by ctest.
 # Its SVG pictures are drawn by cairo (eval_svg), so it is built with client/.
-if(TARGET eval_svg)
+if(TARGET eval_svg AND TARGET lidar_sim)
   add_executable(plane_bench ${CMAKE_CURRENT_LIST_DIR}/plane_bench.cc)
   target_include_directories(plane_bench PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_link_libraries(plane_bench PRIVATE lidar_sim mapd_eval eval_svg)

@@ -117,5 +117,35 @@ TEST(ObservationBatchTest, RefusesWhatTheServerWouldNamingTheField) {
   EXPECT_NE(batch.status().message().find("scan.ranges_m[2]"), std::string::npos);
 }
 
+TEST(ObservationBatchTest, CarriesPlanesAndNamesABadOne) {
+  geometry::PlaneFeature floor;  // 1 m below the sensor
+  floor.normal = Eigen::Vector3d::UnitZ();
+  floor.offset = 1.0;
+  floor.boundary = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}};
+  const auto batch = FeatureBatch(Header(), Pose(), {}, {floor});
+  ASSERT_TRUE(batch.ok()) << batch.status().message();
+  ASSERT_EQ(batch->planes_size(), 1);
+  EXPECT_EQ(batch->planes(0).normal().z(), 1.0);
+  EXPECT_EQ(batch->planes(0).offset(), 1.0);
+  EXPECT_EQ(batch->planes(0).boundary_size(), 4);
+  EXPECT_EQ(batch->planes(0).boundary(2).x(), 1.0);
+
+  geometry::PlaneFeature bad = floor;
+  bad.normal *= 2;
+  auto refused = FeatureBatch(Header(), Pose(), {}, {floor, bad});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("planes[1].normal"), std::string::npos);
+  bad = floor;
+  bad.boundary.resize(2);
+  refused = FeatureBatch(Header(), Pose(), {}, {bad});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("planes[0].boundary has 2 points"), std::string::npos);
+  bad = floor;
+  bad.boundary[1].y() = std::nan("");
+  refused = FeatureBatch(Header(), Pose(), {}, {bad});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("planes[0].boundary[1]"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace mapd::robot
