@@ -6,11 +6,8 @@
 // Thread safety: the functions are reentrant. A merge may take seconds; the
 // progress callback is called on the caller's thread.
 //
-// Measured (2-core machine shared with other builds, load ~7): geb079.bt
-// (186k occupied voxels, 8 cm) against a copy moved by 28.6 deg yaw, 2.9 deg
-// roll and 1.1 m: 3.9 s wall, 2.7 s CPU (reading 0.74 s, corners 1.37 s,
-// matching 0.66 s, alignment 0.24 s, fusion 0.86 s wall); 257 / 293 corners,
-// 16 matched, RMS 0.040 m, error 0.001 deg / 2 mm.
+// The measurements behind the defaults below, and the merge's current
+// figures on real maps: docs/voxel-merge.md.
 #ifndef MAPD_VOXEL_MERGE_H_
 #define MAPD_VOXEL_MERGE_H_
 
@@ -45,15 +42,12 @@ struct MergeParams {
   // with FailedPrecondition and a reason, and nothing is written.
   int min_matched_corners = 4;
   // RMS after ICP, in voxels of the COARSER map of the pair (the same unit
-  // when both have one resolution): a right 10 cm / 5 cm merge ended at 0.43
-  // coarse voxels, 0.87 fine ones (merge_pair.cc). Two rasterisations of one
-  // surface in rotated grids leave ~0.5 voxel (geb079.bt: 0.04 m at 8 cm); a
-  // 180 deg flip of a furnished room that still put walls on walls left 1.5.
-  // On the real-map benchmark (docs/voxel-merge.md) 151 right merges ended at
-  // 0.50-0.63 voxel; two converged ICPs 2.3 deg / 3.3 voxels and 0.6 deg /
-  // 3.0 voxels off ended at 0.99 and 0.98 (accepted under the former 1.0),
-  // two 0.7-0.9 deg / 1.5 voxels off at 0.81-0.82. Maps noisier than
-  // rasterisations (different sensors) may need more: it is configurable.
+  // when both have one resolution: a right 10 cm / 5 cm merge ends at 0.43
+  // coarse voxels, 0.87 fine ones). Two rasterisations of one surface in
+  // rotated grids leave ~0.5 voxel; right merges of the real-map benchmark
+  // end at 0.50-0.63, the closest wrong ones at 0.81 and above
+  // (docs/voxel-merge.md, "Residuals of right and wrong hypotheses"). Maps
+  // noisier than rasterisations (different sensors) may need more.
   double max_residual_voxels = 0.75;
   // Overlap score (voxel/merge_overlap.h): of B's occupied voxels that land on
   // space A has observed (free or occupied), the share that lands on (or
@@ -141,11 +135,8 @@ struct MergeParams {
   double icp_screen_residual_factor = 1.5;
   // The screen's iterations (at most icp.max_iterations). The full ICP goes
   // on from where the screen ended, so the cap only decides how far a start
-  // may drift before it is judged. Measured on the issue-14 table
-  // (docs/voxel-merge.md): 60 gave the same outcomes in all 90 merges as no
-  // cap (150), and refusals' median CPU 22 % lower to 5 % higher per cell (7
-  // of 8 cells lower); 30 refused a right new_college merge whose corner
-  // solution needed more iterations.
+  // may drift before it is judged: 60 decided every benchmark merge as no cap
+  // did, at less CPU; 30 refused a right one (docs/voxel-merge.md).
   int icp_screen_iterations = 60;
   // Local uniqueness, the last gate: ICP is restarted from the answer turned
   // by +-restart_turn_deg about each axis (about the centre of B's voxels in
@@ -154,11 +145,9 @@ struct MergeParams {
   // max_residual_voxels lies more than max_restart_spread_voxels (voxels of
   // the coarser map) from the answer at a corner of B's bounding box, the
   // overlap does not fix the alignment and the pair is refused (0 = off).
-  // The uniqueness gate only sees rivals 3 deg or 4 voxels apart: at 10 %
-  // overlap on geb079 ICP had three minima within 1.6 deg (0.46-0.51 voxels
-  // of residual, the truth among them) and the merge was accepted 1.56 deg
-  // off, its restarts 7.3 voxels apart; right merges' screened restarts
-  // ended up to 4.4 voxels apart at 10 % overlap, below 4 on all points
+  // Why: the uniqueness gate only sees rivals 3 deg or 4 voxels apart, and a
+  // low-overlap pair can have several ICP minima closer than that, one of
+  // them wrong; right merges' restarts end within 4 voxels
   // (docs/voxel-merge.md, "Larger samples").
   double restart_turn_deg = 1.5;
   double max_restart_spread_voxels = 4.0;
@@ -198,12 +187,9 @@ struct MergeParams {
   // ... or when its overlap score is at least this much higher than the
   // best one's, whatever its support: it puts fewer of B's surfaces on space
   // A saw as free. A corridor's 180 deg flip can end with more support than
-  // the truth (its walls and a shared box coincide with A's) while putting
-  // B's boxes in A's free space: on the generated corridor, started at the
-  // flip, ICP ended there with support 0.958 and overlap 0.958 and passed
-  // every gate, and the truth (support 0.450, overlap 1.000) was no rival by
-  // support alone (docs/voxel-merge.md). No accepted merge of the benchmark
-  // can be refused by this: their overlap scores were all >= 0.991.
+  // the truth (its walls coincide with A's) while putting B's boxes in A's
+  // free space; the truth is then no rival by support alone (the generated
+  // corridor of merge_test.cc; docs/voxel-merge.md).
   double ambiguous_overlap_margin = 0.02;
   // Corner solutions tried after an accepted one (its pairs excluded) to look
   // for a distinct second one. Each costs a clique search and an ICP screen.
