@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/octomap_scenes.h"
 #include "common/process.h"
 #include "web/sse_client.h"
 #include "web/web_fixture.h"
@@ -380,6 +381,37 @@ TEST_F(WebFixture, BadMergeRequestsGetAClear4xx) {
   EXPECT_THAT(bad["error"].get<std::string>(), HasSubstr("'maybe' is not proposed"));
   EXPECT_EQ(GetJson("/api/global-map.png", 404)["error"],
             "no global map yet (no submap placed in the map frame)");
+}
+
+// The global map's picture is mapctl's top view (client/voxel_render.h): a
+// PNG of the stored global map, its version in a header.
+TEST_F(WebFixture, TheGlobalMapIsDrawnByTheSharedRenderer) {
+  Start();
+  storage::GlobalMapRecord global;
+  global.version = 3;
+  global.resolution_m = 0.1;
+  global.data = RoomSubmap(RoomScene(), 0.0, 6.0, Eigen::Isometry3d::Identity());
+  global.members.push_back({1, geometry::Rigid3()});
+  ASSERT_TRUE(
+      server_->core()
+          ->ExecuteWrite([&](storage::WriteTransaction* txn) { return txn->PutGlobalMap(global); })
+          .ok());
+  const httplib::Result r = Client().Get("/api/global-map.png");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(r->get_header_value("X-Global-Map-Version"), "3");
+  ASSERT_GT(r->body.size(), 24U);
+  EXPECT_EQ(r->body.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  // Width and height (PNG IHDR, big-endian): a map of 6 m at 0.1 m is
+  // magnified to at least 512 px (RenderOptions::min_map_px), plus the legend.
+  const auto be32 = [&](std::size_t at) {
+    return static_cast<uint32_t>(static_cast<unsigned char>(r->body[at])) << 24 |
+           static_cast<uint32_t>(static_cast<unsigned char>(r->body[at + 1])) << 16 |
+           static_cast<uint32_t>(static_cast<unsigned char>(r->body[at + 2])) << 8 |
+           static_cast<uint32_t>(static_cast<unsigned char>(r->body[at + 3]));
+  };
+  EXPECT_GE(std::max(be32(16), be32(20)), 512U);
 }
 
 TEST_F(WebFixture, WithTokensReadsNeedAReaderAndDecisionsAnOperator) {
