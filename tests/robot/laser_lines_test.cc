@@ -84,6 +84,23 @@ TEST(LaserLinesTest, BeamsWithoutAReturnCutTheWall) {
     EXPECT_EQ((*lines)[1].last, 84U);
     EXPECT_EQ((*lines)[2].first, 89U);
   }
+  // Readings at or beyond range_max are no return, however many there are: 30
+  // of them in a row would otherwise make lines on their 30 m arc (with a 1 m
+  // gap limit and a 0.5 m straightness tolerance, two lines of 7.5 m).
+  for (const double at_max : {30.0, 45.0}) {
+    LaserScan scan = RoomScan();
+    for (int i = 80; i <= 109; ++i) scan.ranges_m[static_cast<std::size_t>(i)] = at_max;
+    LineExtractionParams params;
+    params.max_gap_m = 1.0;
+    params.split_m = 0.5;
+    const auto lines = ExtractLines(scan, params);
+    ASSERT_TRUE(lines.ok());
+    EXPECT_EQ(lines->size(), 4U) << at_max;
+    for (const ExtractedLine& line : *lines) {
+      EXPECT_LT(line.segment.a.norm(), 10.0) << at_max;
+      EXPECT_LT(line.segment.b.norm(), 10.0) << at_max;
+    }
+  }
   // At or below range_min: no return either. The beams within 14 deg of
   // straight ahead read 3.0-3.1 m: the wall ahead keeps its two ends.
   LaserScan scan = RoomScan();
