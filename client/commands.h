@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "client/cli.h"
+#include "client/robot/robot_client.h"
 #include "client/voxel_render.h"
 #include "geometry/rigid3.h"
 
@@ -22,6 +23,12 @@ void AddMapCommands(CLI::App* app, Action* action);
 void AddWatchCommand(CLI::App* app, Action* action);
 // commands_ingest.cc: ingest, simulate (writing observations)
 void AddIngestCommands(CLI::App* app, Action* action);
+// Shared by ingest, simulate and replay (commands_ingest.cc): totals of
+// several streams, their one-line summary, and a UTC time for default
+// session names (20261205T183707Z).
+void Add(const robot::IngestCounts& c, robot::IngestCounts* total);
+std::string Summary(const robot::IngestCounts& c);
+std::string UtcStampForName();
 // commands_replay.cc: replay (recorded robots through the robot library)
 void AddReplayCommand(CLI::App* app, Action* action);
 // commands_submap.cc: submaps, submap upload|get|delete, global-map (voxel submaps)

@@ -91,33 +91,6 @@ struct Tally {
   grpc::Status status;
 };
 
-void Add(const robot::IngestCounts& c, robot::IngestCounts* total) {
-  total->sent += c.sent;
-  total->stored += c.stored;
-  total->duplicate += c.duplicate;
-  total->rejected += c.rejected;
-  total->reconnects += c.reconnects;
-}
-
-std::string Summary(const robot::IngestCounts& c) {
-  return Printf("%llu batches sent: %llu stored, %llu duplicate, %llu rejected",
-                static_cast<unsigned long long>(c.sent), static_cast<unsigned long long>(c.stored),
-                static_cast<unsigned long long>(c.duplicate),
-                static_cast<unsigned long long>(c.rejected)) +
-         (c.reconnects > 0
-              ? Printf(" (%llu reconnects)", static_cast<unsigned long long>(c.reconnects))
-              : "");
-}
-
-std::string UtcStampForName() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char out[32];
-  std::strftime(out, sizeof(out), "%Y%m%dT%H%M%SZ", &tm);
-  return out;
-}
-
 int RunIngest(const Context& ctx, const IngestOptions& flags) {
   const std::string& path = flags.path;
   std::ifstream file;
@@ -275,6 +248,33 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
 }
 
 }  // namespace
+
+void Add(const robot::IngestCounts& c, robot::IngestCounts* total) {
+  total->sent += c.sent;
+  total->stored += c.stored;
+  total->duplicate += c.duplicate;
+  total->rejected += c.rejected;
+  total->reconnects += c.reconnects;
+}
+
+std::string Summary(const robot::IngestCounts& c) {
+  return Printf("%llu batches sent: %llu stored, %llu duplicate, %llu rejected",
+                static_cast<unsigned long long>(c.sent), static_cast<unsigned long long>(c.stored),
+                static_cast<unsigned long long>(c.duplicate),
+                static_cast<unsigned long long>(c.rejected)) +
+         (c.reconnects > 0
+              ? Printf(" (%llu reconnects)", static_cast<unsigned long long>(c.reconnects))
+              : "");
+}
+
+std::string UtcStampForName() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char out[32];
+  std::strftime(out, sizeof(out), "%Y%m%dT%H%M%SZ", &tm);
+  return out;
+}
 
 void AddIngestCommands(CLI::App* app, Action* action) {
   CLI::App* ingest =

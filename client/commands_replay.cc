@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <string>
 #include <thread>
 #include <vector>
@@ -63,15 +62,6 @@ std::string RobotIdOf(const std::string& path) {
   }
   if (name.size() > 128) name.resize(128);
   return name.empty() ? "replay-robot" : name;
-}
-
-std::string UtcStamp() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char out[32];
-  std::strftime(out, sizeof(out), "%Y%m%dT%H%M%SZ", &tm);
-  return out;
 }
 
 // Reads `path` and makes every batch: a bad file or scan is reported here,
@@ -135,7 +125,7 @@ void Stream(const Context& ctx, const ReplayOptions& flags,
 }
 
 int RunReplay(const Context& ctx, const ReplayOptions& flags) {
-  const std::string session = flags.session.empty() ? "replay-" + UtcStamp() : flags.session;
+  const std::string session = flags.session.empty() ? "replay-" + UtcStampForName() : flags.session;
   std::vector<Recording> recordings(flags.logs.size());
   std::size_t total = 0, lines = 0;
   for (std::size_t i = 0; i < flags.logs.size(); ++i) {
@@ -212,10 +202,7 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
   robot::IngestCounts counts;
   int rc = kExitOk;
   for (const Recording& r : recordings) {
-    counts.sent += r.counts.sent;
-    counts.stored += r.counts.stored;
-    counts.duplicate += r.counts.duplicate;
-    counts.rejected += r.counts.rejected;
+    Add(r.counts, &counts);
     for (const robot::Rejection& x : r.rejections) {
       std::fprintf(stderr, "mapctl: replay: %s seq %llu rejected: %s (%s)\n", r.robot_id.c_str(),
                    static_cast<unsigned long long>(x.seq), Visible(x.message).c_str(),
@@ -223,13 +210,9 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
     }
     if (!r.status.ok() && rc == kExitOk) rc = ReportRpcError(ctx, "replay " + r.robot_id, r.status);
   }
-  std::printf(
-      "replay: %zu robot%s, %zu scans, %zu lines, session %s, %.1f s: %llu batches sent: %llu "
-      "stored, %llu duplicate, %llu rejected\n",
-      recordings.size(), recordings.size() == 1 ? "" : "s", total, lines, session.c_str(), seconds,
-      static_cast<unsigned long long>(counts.sent), static_cast<unsigned long long>(counts.stored),
-      static_cast<unsigned long long>(counts.duplicate),
-      static_cast<unsigned long long>(counts.rejected));
+  std::printf("replay: %zu robot%s, %zu scans, %zu lines, session %s, %.1f s: %s\n",
+              recordings.size(), recordings.size() == 1 ? "" : "s", total, lines, session.c_str(),
+              seconds, Summary(counts).c_str());
   if (rc != kExitOk) return rc;
   return counts.rejected > 0 ? kExitFailed : kExitOk;
 }
