@@ -223,7 +223,7 @@ void AddReplayCommand(CLI::App* app, Action* action) {
   CLI::App* replay =
       app->add_subcommand("replay", "stream recorded robots (CARMEN laser logs) into mapd");
   replay->footer(
-      "Each LOG is one robot: a CARMEN laser log (plain or .gz; its FLASER lines, with the\n"
+      "Each LOG is one robot: a CARMEN laser log (plain or .gz; its ROBOTLASER1 lines, or FLASER\n"
       "corrected laser poses of the map frame). Every scan goes through the robot library\n"
       "as a robot would send it: split-and-merge lines in the laser frame\n"
       "(docs/robot-library.md), the pose, the scan's time; one Ingest stream per robot, all\n"

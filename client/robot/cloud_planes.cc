@@ -5,6 +5,7 @@
 #include <pcl/point_types.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
+#include <pcl/search/kdtree.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <Eigen/Eigenvalues>
@@ -21,11 +22,24 @@ Status Bad(const std::string& what) {
   return Status::InvalidArgument("plane extraction params: " + what);
 }
 
+// The points of one scan and how they neighbour: an organised cloud's image,
+// or (columns == 0) none, and space decides.
+struct CloudView {
+  const std::vector<Eigen::Vector3f>& points;
+  int rows = 0;
+  int columns = 0;  // 0: unorganised
+  bool wrap_columns = false;
+};
+
+float JumpLimit(const PlaneExtractionParams& params, const Eigen::Vector3f& p) {
+  return static_cast<float>(params.jump_base_m + params.jump_factor * p.norm());
+}
+
 // Components of `mask` connected through image neighbours (same row, next
 // column within the jump limit, around the end when the columns wrap; same
 // column, next row).
-std::vector<std::vector<int>> Components(const OrganisedCloud& cloud, const std::vector<char>& mask,
-                                         const PlaneExtractionParams& params) {
+std::vector<std::vector<int>> ImageComponents(const CloudView& cloud, const std::vector<char>& mask,
+                                              const PlaneExtractionParams& params) {
   std::vector<int> seen(mask.size(), 0);
   std::vector<std::vector<int>> out;
   std::vector<int> stack;
@@ -41,7 +55,7 @@ std::vector<std::vector<int>> Components(const OrganisedCloud& cloud, const std:
       comp.push_back(i);
       const int r = i / W, c = i % W;
       const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(i)];
-      const float jump = static_cast<float>(params.jump_base_m + params.jump_factor * p.norm());
+      const float jump = JumpLimit(params, p);
       const int neighbours[4][2] = {{r, c + 1}, {r, c - 1}, {r + 1, c}, {r - 1, c}};
       for (int k = 0; k < 4; ++k) {
         const int nr = neighbours[k][0];
@@ -63,20 +77,70 @@ std::vector<std::vector<int>> Components(const OrganisedCloud& cloud, const std:
   return out;
 }
 
+// Components of the points `members` (indices into cloud.points) joined when
+// closer than the jump limit of either: a k-d tree over the members, grown
+// from each unvisited one.
+std::vector<std::vector<int>> SpaceComponents(const CloudView& cloud,
+                                              const std::vector<int>& members,
+                                              const PlaneExtractionParams& params) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr xyz(new pcl::PointCloud<pcl::PointXYZ>);
+  xyz->reserve(members.size());
+  float max_jump = 0.0f;
+  for (int i : members) {
+    const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(i)];
+    xyz->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    max_jump = std::max(max_jump, JumpLimit(params, p));
+  }
+  pcl::search::KdTree<pcl::PointXYZ> tree;
+  tree.setInputCloud(xyz);
+  std::vector<char> seen(members.size(), 0);
+  std::vector<std::vector<int>> out;
+  std::vector<int> stack, found;
+  std::vector<float> squared;
+  for (size_t start = 0; start < members.size(); ++start) {
+    if (seen[start]) continue;
+    std::vector<int> comp;
+    stack.assign(1, static_cast<int>(start));
+    seen[start] = 1;
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      comp.push_back(members[static_cast<size_t>(k)]);
+      const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(members[static_cast<size_t>(k)])];
+      // Either end's limit joins the pair: search with the largest, keep the
+      // pairs within the larger of the two.
+      const float own = JumpLimit(params, p);
+      tree.radiusSearch(static_cast<int>(k), max_jump, found, squared);
+      for (size_t f = 0; f < found.size(); ++f) {
+        const int j = found[f];
+        if (seen[static_cast<size_t>(j)]) continue;
+        const float limit = std::max(
+            own,
+            JumpLimit(params, cloud.points[static_cast<size_t>(members[static_cast<size_t>(j)])]));
+        if (squared[f] > limit * limit) continue;
+        seen[static_cast<size_t>(j)] = 1;
+        stack.push_back(j);
+      }
+    }
+    out.push_back(std::move(comp));
+  }
+  return out;
+}
+
 // Least-squares plane and hull of one component; false if it fails a gate.
-bool MakePlane(const OrganisedCloud& cloud, const std::vector<int>& comp,
+bool MakePlane(const CloudView& cloud, const std::vector<int>& comp,
                const PlaneExtractionParams& params, ExtractedPlane* out,
                PlaneExtractionStats* stats) {
   if (comp.size() < params.min_inliers) return false;
-  std::vector<char> rows(static_cast<size_t>(cloud.rows), 0);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (int i : comp) {
-    mean += cloud.points[static_cast<size_t>(i)].cast<double>();
-    rows[static_cast<size_t>(i / cloud.columns)] = 1;
-  }
-  if (std::count(rows.begin(), rows.end(), 1) < params.min_rows) {
-    ++stats->rejected_rows;
-    return false;
+  for (int i : comp) mean += cloud.points[static_cast<size_t>(i)].cast<double>();
+  if (cloud.columns > 0) {
+    std::vector<char> rows(static_cast<size_t>(cloud.rows), 0);
+    for (int i : comp) rows[static_cast<size_t>(i / cloud.columns)] = 1;
+    if (std::count(rows.begin(), rows.end(), 1) < params.min_rows) {
+      ++stats->rejected_rows;
+      return false;
+    }
   }
   mean /= static_cast<double>(comp.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
@@ -123,6 +187,56 @@ bool MakePlane(const OrganisedCloud& cloud, const std::vector<int>& comp,
   return true;
 }
 
+// RANSAC rounds over what is left of `cloud`, each round's inliers split into
+// components (image or space) and the good ones kept.
+std::vector<ExtractedPlane> Extract(const CloudView& cloud, const PlaneExtractionParams& params,
+                                    PlaneExtractionStats* stats) {
+  const size_t n = cloud.points.size();
+  std::vector<int> pool;  // indices not yet taken by a plane
+  for (size_t i = 0; i < n; ++i) {
+    if (cloud.points[i].allFinite()) pool.push_back(static_cast<int>(i));
+  }
+  pcl::SACSegmentation<pcl::PointXYZ> seg;
+  seg.setModelType(pcl::SACMODEL_PLANE);
+  seg.setMethodType(pcl::SAC_RANSAC);
+  seg.setDistanceThreshold(params.distance_m);
+  seg.setMaxIterations(params.max_iterations);
+  seg.setOptimizeCoefficients(true);
+  std::vector<ExtractedPlane> planes;
+  std::vector<char> mask(n, 0);
+  for (int round = 0; round < params.max_planes && pool.size() >= params.min_inliers; ++round) {
+    pcl::PointCloud<pcl::PointXYZ>::Ptr points(new pcl::PointCloud<pcl::PointXYZ>);
+    points->reserve(pool.size());
+    for (int i : pool) {
+      const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(i)];
+      points->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    }
+    pcl::PointIndices inliers;
+    pcl::ModelCoefficients coefficients;
+    seg.setInputCloud(points);
+    seg.segment(inliers, coefficients);
+    ++stats->ransac_rounds;
+    if (inliers.indices.size() < params.min_inliers) break;
+    std::fill(mask.begin(), mask.end(), 0);
+    std::vector<int> members;
+    members.reserve(inliers.indices.size());
+    for (int k : inliers.indices) {
+      members.push_back(pool[static_cast<size_t>(k)]);
+      mask[static_cast<size_t>(members.back())] = 1;
+    }
+    const auto components = cloud.columns > 0 ? ImageComponents(cloud, mask, params)
+                                              : SpaceComponents(cloud, members, params);
+    for (const auto& comp : components) {
+      ExtractedPlane plane;
+      if (MakePlane(cloud, comp, params, &plane, stats)) planes.push_back(std::move(plane));
+    }
+    pool.erase(std::remove_if(pool.begin(), pool.end(),
+                              [&](int i) { return mask[static_cast<size_t>(i)] != 0; }),
+               pool.end());
+  }
+  return planes;
+}
+
 }  // namespace
 
 Status PlaneExtractionParams::Validate() const {
@@ -152,45 +266,17 @@ StatusOr<std::vector<ExtractedPlane>> ExtractPlanes(const OrganisedCloud& cloud,
                                    std::to_string(cloud.columns) + ", " +
                                    std::to_string(cloud.points.size()) + " points)");
   }
-  const size_t n = cloud.points.size();
   PlaneExtractionStats local;
-  if (stats == nullptr) stats = &local;
-  std::vector<int> pool;  // indices not yet taken by a plane
-  for (size_t i = 0; i < n; ++i) {
-    if (cloud.points[i].allFinite()) pool.push_back(static_cast<int>(i));
-  }
-  pcl::SACSegmentation<pcl::PointXYZ> seg;
-  seg.setModelType(pcl::SACMODEL_PLANE);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setDistanceThreshold(params.distance_m);
-  seg.setMaxIterations(params.max_iterations);
-  seg.setOptimizeCoefficients(true);
-  std::vector<ExtractedPlane> planes;
-  std::vector<char> mask(n, 0);
-  for (int round = 0; round < params.max_planes && pool.size() >= params.min_inliers; ++round) {
-    pcl::PointCloud<pcl::PointXYZ>::Ptr points(new pcl::PointCloud<pcl::PointXYZ>);
-    points->reserve(pool.size());
-    for (int i : pool) {
-      const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(i)];
-      points->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-    }
-    pcl::PointIndices inliers;
-    pcl::ModelCoefficients coefficients;
-    seg.setInputCloud(points);
-    seg.segment(inliers, coefficients);
-    ++stats->ransac_rounds;
-    if (inliers.indices.size() < params.min_inliers) break;
-    std::fill(mask.begin(), mask.end(), 0);
-    for (int k : inliers.indices) mask[static_cast<size_t>(pool[static_cast<size_t>(k)])] = 1;
-    for (const auto& comp : Components(cloud, mask, params)) {
-      ExtractedPlane plane;
-      if (MakePlane(cloud, comp, params, &plane, stats)) planes.push_back(std::move(plane));
-    }
-    pool.erase(std::remove_if(pool.begin(), pool.end(),
-                              [&](int i) { return mask[static_cast<size_t>(i)] != 0; }),
-               pool.end());
-  }
-  return planes;
+  return Extract(CloudView{cloud.points, cloud.rows, cloud.columns, cloud.wrap_columns}, params,
+                 stats == nullptr ? &local : stats);
+}
+
+StatusOr<std::vector<ExtractedPlane>> ExtractPlanes(const std::vector<Eigen::Vector3f>& points,
+                                                    const PlaneExtractionParams& params,
+                                                    PlaneExtractionStats* stats) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  PlaneExtractionStats local;
+  return Extract(CloudView{points, 1, 0, false}, params, stats == nullptr ? &local : stats);
 }
 
 }  // namespace mapd::robot

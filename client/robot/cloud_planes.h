@@ -1,9 +1,11 @@
-// Plane observations from one organised 3D scan (a spinning LiDAR's range
-// image, or a depth camera's), as a robot makes them before it sends a batch:
-// iterative RANSAC (pcl::SACSegmentation, SACMODEL_PLANE) takes the largest
-// plane of the points left; its inliers are split into components connected
-// in the scan's image (row and column neighbours, a jump limit along a row),
-// so two coplanar facades with a street between them stay apart; each
+// Plane observations from one 3D scan, as a robot makes them before it sends
+// a batch: iterative RANSAC (pcl::SACSegmentation, SACMODEL_PLANE) takes the
+// largest plane of the points left; its inliers are split into connected
+// components, so two coplanar facades with a street between them stay apart.
+// An organised scan (a spinning LiDAR's range image, a depth camera's) joins
+// image neighbours (row and column, a jump limit along a row); an unorganised
+// one (a filtered or merged cloud, a PLY's vertices) joins points closer than
+// the jump limit in space (a k-d tree). Each
 // component large enough in points, extent and rows is refitted by least
 // squares (PCA) and becomes a plane in the sensor frame, its boundary the
 // convex hull of its inliers projected into the plane, its normal towards the
@@ -38,10 +40,11 @@ struct PlaneExtractionParams {
   size_t min_inliers = 120;   // per kept component (and to keep looking): >= 3
   double min_extent_m = 1.0;  // longest in-plane side of the component: >= 0
   double min_width_m = 0.3;   // shortest in-plane side (a single scan line has none): >= 0
-  int min_rows = 3;           // distinct rows (beams) in a component: >= 1
+  int min_rows = 3;           // distinct rows (beams) in a component (organised only): >= 1
   double max_rms_m = 0.05;    // least-squares residual of the refit: > 0
   int max_planes = 24;        // RANSAC rounds per scan: >= 1
-  // Row neighbours are connected if closer than base + factor * range.
+  // Row neighbours (organised) or any two inliers (unorganised) are connected
+  // if closer than base + factor * range.
   double jump_base_m = 0.3;
   double jump_factor = 0.03;
   Status Validate() const;  // InvalidArgument naming the field
@@ -49,7 +52,7 @@ struct PlaneExtractionParams {
 
 struct ExtractedPlane {
   geometry::PlaneFeature feature;  // sensor frame; normal towards the sensor
-  std::vector<int> indices;        // the component's points (into OrganisedCloud::points)
+  std::vector<int> indices;        // the component's points (into the cloud's points)
   double rms_m = 0.0;              // of the refit
 };
 
@@ -65,6 +68,13 @@ struct PlaneExtractionStats {
 // that is not rows x columns points (rows and columns >= 1). A cloud without
 // planes (or without returns) gives an empty list.
 StatusOr<std::vector<ExtractedPlane>> ExtractPlanes(const OrganisedCloud& cloud,
+                                                    const PlaneExtractionParams& params,
+                                                    PlaneExtractionStats* stats = nullptr);
+
+// The planes of an unorganised cloud (sensor frame, metres; non-finite
+// points ignored). InvalidArgument for bad settings. The same gates, but
+// min_rows: an unorganised cloud has no rows.
+StatusOr<std::vector<ExtractedPlane>> ExtractPlanes(const std::vector<Eigen::Vector3f>& points,
                                                     const PlaneExtractionParams& params,
                                                     PlaneExtractionStats* stats = nullptr);
 

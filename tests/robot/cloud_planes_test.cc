@@ -1,58 +1,24 @@
-// Organised 3D scans to planes: a floor and a wall in the sensor frame with
-// their normals towards the sensor, a wall across the columns' seam whole only
-// when the columns wrap, no returns, and bad input named.
+// 3D scans to planes: a floor and a wall in the sensor frame with their
+// normals towards the sensor, a wall across the columns' seam whole only when
+// the columns wrap, the same scan unorganised and shuffled, two coplanar walls
+// kept apart by the gap between them, no returns, and bad input named.
 #include "client/robot/cloud_planes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
+
+#include "robot/room_scan.h"
 
 namespace mapd::robot {
 namespace {
 
-// A 16-beam spinning LiDAR 1 m above a floor (z = -1) facing a wall x = 4
-// (|y| <= 3, up to z = 2); azimuth of column c: first_azimuth + c deg.
-OrganisedCloud Room(double first_azimuth_deg, bool wrap) {
-  OrganisedCloud cloud;
-  cloud.rows = 16;
-  cloud.columns = 360;
-  cloud.wrap_columns = wrap;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (int r = 0; r < cloud.rows; ++r) {
-    const double elevation = (-15.0 + 2.0 * r) * M_PI / 180;
-    for (int c = 0; c < cloud.columns; ++c) {
-      const double azimuth = (first_azimuth_deg + c) * M_PI / 180;
-      const Eigen::Vector3d d(std::cos(elevation) * std::cos(azimuth),
-                              std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
-      double t = 30;
-      if (d.z() < 0) t = std::min(t, -1.0 / d.z());
-      if (d.x() > 0) {
-        const double hit = 4.0 / d.x();
-        const Eigen::Vector3d p = hit * d;
-        if (std::abs(p.y()) <= 3 && p.z() <= 2 && hit < t) t = hit;
-      }
-      const Eigen::Vector3f hit = (t * d).cast<float>();
-      cloud.points.push_back(t < 30 ? hit : Eigen::Vector3f::Constant(nan));
-    }
-  }
-  return cloud;
-}
-
-int CountNear(const std::vector<ExtractedPlane>& planes, const Eigen::Vector3d& normal,
-              double offset) {
-  int n = 0;
-  for (const ExtractedPlane& p : planes) {
-    if (p.feature.normal.dot(normal) > std::cos(M_PI / 180) &&
-        std::abs(p.feature.offset - offset) < 0.02) {
-      ++n;
-      EXPECT_GE(p.feature.boundary.size(), 3U);
-      EXPECT_LT(p.rms_m, 0.01);  // the floor takes the wall's foot within 6 cm
-    }
-  }
-  return n;
-}
+using scenes::CountNear;
+using scenes::Room;
 
 TEST(CloudPlanesTest, TheFloorAndTheWallFacingTheSensor) {
   PlaneExtractionStats stats;
@@ -82,6 +48,43 @@ TEST(CloudPlanesTest, ColumnsWrapOnlyWhenTheScanGoesAllRound) {
   EXPECT_EQ(CountNear(*cut, -Eigen::Vector3d::UnitX(), 4.0), 2);
 }
 
+// The room densely sampled as an unorganised cloud, in a shuffled order: the
+// same two planes, joined in space instead of in the image.
+TEST(CloudPlanesTest, AnUnorganisedCloudHasTheSamePlanes) {
+  std::vector<Eigen::Vector3f> points = scenes::DenseRoom();
+  std::mt19937 random(7);
+  std::shuffle(points.begin(), points.end(), random);
+  PlaneExtractionStats stats;
+  const auto planes = ExtractPlanes(points, PlaneExtractionParams(), &stats);
+  ASSERT_TRUE(planes.ok()) << planes.status().message();
+  EXPECT_EQ(CountNear(*planes, Eigen::Vector3d::UnitZ(), 1.0), 1);
+  EXPECT_EQ(CountNear(*planes, -Eigen::Vector3d::UnitX(), 4.0), 1);
+  EXPECT_EQ(planes->size(), 2U);
+  EXPECT_EQ(stats.rejected_rows, 0U);  // no rows to count
+}
+
+// Two 2 x 2 m patches of the plane x = 5, 3 m apart along y, densely sampled:
+// one RANSAC plane, two components, two observations; a gap under the jump
+// limit (0.3 m + 3 % of the range) joins them.
+TEST(CloudPlanesTest, CoplanarWallsApartInSpaceStayApart) {
+  const auto patches = [](double gap_m) {
+    std::vector<Eigen::Vector3f> points;
+    for (double y = 0; y <= 2.0; y += 0.05) {
+      for (double z = 0; z <= 2.0; z += 0.05) {
+        points.emplace_back(5.0f, static_cast<float>(y), static_cast<float>(z));
+        points.emplace_back(5.0f, static_cast<float>(2.0 + gap_m + y), static_cast<float>(z));
+      }
+    }
+    return points;
+  };
+  const auto apart = ExtractPlanes(patches(3.0), PlaneExtractionParams());
+  ASSERT_TRUE(apart.ok());
+  EXPECT_EQ(CountNear(*apart, -Eigen::Vector3d::UnitX(), 5.0), 2);
+  const auto joined = ExtractPlanes(patches(0.2), PlaneExtractionParams());
+  ASSERT_TRUE(joined.ok());
+  EXPECT_EQ(CountNear(*joined, -Eigen::Vector3d::UnitX(), 5.0), 1);
+}
+
 TEST(CloudPlanesTest, NoReturnsIsNoPlanesAndBadInputIsNamed) {
   OrganisedCloud empty = Room(-180, true);
   for (auto& p : empty.points) p = Eigen::Vector3f::Constant(std::nanf(""));
@@ -102,6 +105,11 @@ TEST(CloudPlanesTest, NoReturnsIsNoPlanesAndBadInputIsNamed) {
   const auto bad = ExtractPlanes(Room(-180, true), params);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.status().message().find("min_inliers"), std::string::npos);
+  const auto bad_unorganised = ExtractPlanes(std::vector<Eigen::Vector3f>(), params);
+  EXPECT_EQ(bad_unorganised.status().code(), StatusCode::kInvalidArgument);
+  const auto nothing = ExtractPlanes(std::vector<Eigen::Vector3f>(), PlaneExtractionParams());
+  ASSERT_TRUE(nothing.ok());
+  EXPECT_TRUE(nothing->empty());
   params = PlaneExtractionParams();
   params.distance_m = std::nan("");
   EXPECT_NE(params.Validate().message().find("distance_m"), std::string::npos);
