@@ -10,11 +10,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "client/commands.h"
+#include "client/replay.h"
 #include "client/robot/carmen_log.h"
 #include "client/robot/observation_batch.h"
 #include "client/robot/robot_client.h"
@@ -25,31 +27,10 @@ namespace {
 
 namespace pb = mapserver::v1;
 
-struct ReplayOptions {
-  std::vector<std::string> logs;
-  std::string robot_id;  // empty: each log's file name
-  std::string session;   // empty: replay-<UTC time>
-  double rate = 0;       // 0: as fast as possible; 1: as recorded; N: N times as fast
-  double max_range_m = 80;
-  uint64_t every = 1;       // every Nth scan
-  std::string export_path;  // write JSON lines instead of streaming; - for stdout
-};
-
-// One log's robot: its batches, made before anything is sent.
-struct Recording {
-  std::string path;
-  std::string robot_id;
-  std::vector<pb::ObservationBatch> batches;
-  std::vector<double> stamps_s;
-  std::size_t lines = 0;
-  robot::IngestCounts counts;
-  std::vector<robot::Rejection> rejections;
-  grpc::Status status;
-};
-
-// The robot id a log's file name gives: its name without directories and
+// The robot id a source's name gives: its name without directories and
 // .gz / .log, characters outside the id alphabet as '-'.
-std::string RobotIdOf(const std::string& path) {
+std::string RobotIdOf(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();  // a folder
   std::string name = path.substr(path.find_last_of('/') + 1);
   for (const char* suffix : {".gz", ".log"}) {
     const std::string s = suffix;
@@ -64,16 +45,17 @@ std::string RobotIdOf(const std::string& path) {
   return name.empty() ? "replay-robot" : name;
 }
 
-// Reads `path` and makes every batch: a bad file or scan is reported here,
-// before anything is sent. kContinue, or the exit code.
-int Record(const ReplayOptions& flags, const std::string& session, Recording* r) {
+// Reads the CARMEN log r->path and makes every batch: a bad file or scan is
+// reported here, before anything is sent. kContinue, or the exit code.
+int RecordLog(const ReplayOptions& flags, const std::string& session, Recording* r) {
   auto scans = robot::ReadCarmenLaserLog(r->path);
   if (!scans.ok()) {
     PrintError("replay: " + scans.status().message());
     return scans.status().code() == StatusCode::kNotFound ? kExitFailed : kExitUsage;
   }
   if (scans->empty()) {
-    PrintError("replay: " + r->path + " has no FLASER line (not a CARMEN laser log?)");
+    PrintError("replay: " + r->path +
+               " has no FLASER or ROBOTLASER1 line (not a CARMEN laser log?)");
     return kExitUsage;
   }
   const robot::LineExtractionParams params;
@@ -124,19 +106,63 @@ void Stream(const Context& ctx, const ReplayOptions& flags,
   r->rejections = client.rejections();
 }
 
+// Makes every recording: a log, or a folder of scans with the next --poses
+// file (or its own poses.txt).
+int RecordAll(const ReplayOptions& flags, const std::string& session,
+              std::vector<Recording>* recordings) {
+  std::size_t folders = 0;
+  for (std::size_t i = 0; i < flags.sources.size(); ++i) {
+    Recording& r = (*recordings)[i];
+    r.path = flags.sources[i];
+    r.robot_id = flags.robot_id.empty()      ? RobotIdOf(r.path)
+                 : flags.sources.size() == 1 ? flags.robot_id
+                                             : flags.robot_id + "-" + std::to_string(i + 1);
+    std::error_code ec;
+    if (!std::filesystem::is_directory(r.path, ec)) {
+      if (int rc = RecordLog(flags, session, &r); rc != kContinue) return rc;
+      continue;
+    }
+    std::string poses = folders < flags.poses.size() ? flags.poses[folders] : "";
+    ++folders;
+    if (poses.empty()) {
+      poses = r.path + "/poses.txt";
+      if (!std::filesystem::is_regular_file(poses, ec)) {
+        PrintError("replay: the scan folder " + r.path +
+                   " needs its poses: --poses FILE (TUM or KITTI), or a poses.txt in it");
+        return kExitUsage;
+      }
+    }
+    if (int rc = RecordCloudFolder(flags, session, poses, &r); rc != kContinue) return rc;
+  }
+  if (folders < flags.poses.size()) {
+    PrintError(
+        Printf("replay: %zu --poses files for %zu scan folders", flags.poses.size(), folders));
+    return kExitUsage;
+  }
+  return kContinue;
+}
+
+// "N lines", "M planes" or both.
+std::string FeatureCounts(std::size_t lines, std::size_t planes) {
+  std::string out;
+  if (lines > 0 || planes == 0) out = Printf("%zu lines", lines);
+  if (planes > 0) out += (out.empty() ? "" : ", ") + Printf("%zu planes", planes);
+  return out;
+}
+
 int RunReplay(const Context& ctx, const ReplayOptions& flags) {
   const std::string session = flags.session.empty() ? "replay-" + UtcStampForName() : flags.session;
-  std::vector<Recording> recordings(flags.logs.size());
-  std::size_t total = 0, lines = 0;
-  for (std::size_t i = 0; i < flags.logs.size(); ++i) {
-    Recording& r = recordings[i];
-    r.path = flags.logs[i];
-    r.robot_id = flags.robot_id.empty()   ? RobotIdOf(r.path)
-                 : flags.logs.size() == 1 ? flags.robot_id
-                                          : flags.robot_id + "-" + std::to_string(i + 1);
-    if (int rc = Record(flags, session, &r); rc != kContinue) return rc;
+  std::vector<Recording> recordings(flags.sources.size());
+  if (int rc = RecordAll(flags, session, &recordings); rc != kContinue) return rc;
+  std::size_t total = 0, lines = 0, planes = 0;
+  for (const Recording& r : recordings) {
     total += r.batches.size();
     lines += r.lines;
+    planes += r.planes;
+    if (r.skipped > 0) {
+      std::fprintf(stderr, "mapctl: replay: %s: %zu scans without a pose within %.3f s, skipped\n",
+                   r.path.c_str(), r.skipped, flags.max_dt_s);
+    }
   }
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
@@ -166,8 +192,8 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
       return kExitFailed;
     }
     if (flags.export_path != "-") {
-      std::printf("replay: wrote %zu batches (%zu lines, session %s) to %s\n", total, lines,
-                  session.c_str(), flags.export_path.c_str());
+      std::printf("replay: wrote %zu batches (%s, session %s) to %s\n", total,
+                  FeatureCounts(lines, planes).c_str(), session.c_str(), flags.export_path.c_str());
     }
     return kExitOk;
   }
@@ -210,9 +236,9 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
     }
     if (!r.status.ok() && rc == kExitOk) rc = ReportRpcError(ctx, "replay " + r.robot_id, r.status);
   }
-  std::printf("replay: %zu robot%s, %zu scans, %zu lines, session %s, %.1f s: %s\n",
-              recordings.size(), recordings.size() == 1 ? "" : "s", total, lines, session.c_str(),
-              seconds, Summary(counts).c_str());
+  std::printf("replay: %zu robot%s, %zu scans, %s, session %s, %.1f s: %s\n", recordings.size(),
+              recordings.size() == 1 ? "" : "s", total, FeatureCounts(lines, planes).c_str(),
+              session.c_str(), seconds, Summary(counts).c_str());
   if (rc != kExitOk) return rc;
   return counts.rejected > 0 ? kExitFailed : kExitOk;
 }
@@ -220,21 +246,43 @@ int RunReplay(const Context& ctx, const ReplayOptions& flags) {
 }  // namespace
 
 void AddReplayCommand(CLI::App* app, Action* action) {
-  CLI::App* replay =
-      app->add_subcommand("replay", "stream recorded robots (CARMEN laser logs) into mapd");
+  CLI::App* replay = app->add_subcommand(
+      "replay", "stream recorded robots (CARMEN laser logs, folders of 3D scans) into mapd");
   replay->footer(
-      "Each LOG is one robot: a CARMEN laser log (plain or .gz; its ROBOTLASER1 lines, or FLASER\n"
-      "corrected laser poses of the map frame). Every scan goes through the robot library\n"
-      "as a robot would send it: split-and-merge lines in the laser frame\n"
-      "(docs/robot-library.md), the pose, the scan's time; one Ingest stream per robot, all\n"
-      "at once. Every log is read and every scan extracted before anything is sent: a bad\n"
-      "file sends nothing. Robots are named by their file names (intel-corrected.log.gz:\n"
-      "intel-corrected), or --robot-id. Re-running with the same --session is safe: stored\n"
-      "batches are answered 'duplicate'. Exit 2 for a malformed log, 1 for one that cannot\n"
-      "be read or for rejected batches.");
+      "Each SOURCE is one robot, streamed through the robot library as the robot would\n"
+      "have sent it (docs/robot-library.md):\n"
+      "  a CARMEN laser log (plain or .gz): its ROBOTLASER1 lines, or FLASER, with the\n"
+      "    corrected laser poses of the map frame; split-and-merge lines per scan;\n"
+      "  a folder of 3D scans (.pcd, .ply, KITTI .bin, .xyz; not built in without PCL):\n"
+      "    RANSAC planes per scan, posed by a trajectory: --poses FILE (one per folder, in\n"
+      "    order; default FOLDER/poses.txt), TUM (t x y z qx qy qz qw, z up) or KITTI (3 x 4\n"
+      "    matrices by order, with times.txt and calib.txt's Tr when beside the folder,\n"
+      "    turned to z up). TUM poses go with scans named by their times (nearest within\n"
+      "    --max-dt) or else by order.\n"
+      "One Ingest stream per robot, all at once. Every source is read and every scan\n"
+      "extracted before anything is sent: a bad file sends nothing. Robots are named by\n"
+      "their file or folder names (intel-corrected.log.gz: intel-corrected), or --robot-id.\n"
+      "Re-running with the same --session is safe: stored batches are answered 'duplicate'.\n"
+      "Exit 2 for a malformed file, 1 for one that cannot be read or for rejected batches.");
   auto r = BindCommand(replay, action, RunReplay);
-  replay->add_option("LOG", r->logs, "CARMEN laser logs, one robot each")->required();
-  replay->add_option("--robot-id", r->robot_id, "name the robots ID (one log) or ID-1..N");
+  replay->add_option("SOURCE", r->sources, "CARMEN laser logs and 3D scan folders, one robot each")
+      ->required();
+  replay
+      ->add_option("--poses", r->poses,
+                   "a scan folder's trajectory (TUM or KITTI); repeat for each folder")
+      ->allow_extra_args(false);
+  replay->add_option("--poses-format", r->poses_format, "auto (by count of numbers), tum or kitti")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "tum", "kitti"}));
+  replay
+      ->add_option("--max-dt", r->max_dt_s,
+                   "TUM: the largest time between a scan and its pose, seconds")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
+  replay->add_flag("--wrap-columns", r->wrap_columns,
+                   "organised scans come from a 360 degree LiDAR: their last column touches "
+                   "the first");
+  replay->add_option("--robot-id", r->robot_id, "name the robots ID (one source) or ID-1..N");
   replay->add_option("--session", r->session,
                      "session id (default replay-<UTC time>, so re-runs add data)");
   replay
@@ -244,8 +292,8 @@ void AddReplayCommand(CLI::App* app, Action* action) {
       ->check(CLI::Range(0.0, 1e6));
   replay
       ->add_option("--max-range", r->max_range_m,
-                   "readings at or beyond this many metres are no return (FLASER does not "
-                   "say the laser's maximum)")
+                   "laser readings at or beyond this many metres are no return (FLASER does "
+                   "not say the laser's maximum)")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
   replay->add_option(

@@ -1,8 +1,9 @@
 // Point cloud files, for replaying recorded 3D scans (mapctl replay) and for
 // robots that log them: PCD (ascii, binary, binary_compressed) and PLY (its
-// vertices) through PCL's readers, and plain text with one "x y z" a line
-// (.xyz, .txt, .dat: OctoMap's scan.dat, many scanners' exports). Only x y z
-// are read; metres, in the sensor frame.
+// vertices) through PCL's readers, KITTI's Velodyne .bin (float32 x y z
+// reflectance), and plain text with one "x y z" a line (.xyz, .txt, .dat:
+// OctoMap's scan.dat, many scanners' exports). Only x y z are read; metres,
+// in the sensor frame.
 #ifndef MAPD_CLIENT_ROBOT_CLOUD_FILES_H_
 #define MAPD_CLIENT_ROBOT_CLOUD_FILES_H_
 
@@ -24,7 +25,7 @@ struct CloudFile {
   OrganisedCloud AsOrganised(bool wrap_columns) const;
 };
 
-// The cloud in `path`, its format from the extension (.pcd, .ply; .xyz,
+// The cloud in `path`, its format from the extension (.pcd, .ply, .bin; .xyz,
 // .txt, .dat for text). NotFound if it cannot be opened; InvalidArgument
 // naming the file (and the line, for text) if it is not a cloud of that
 // format or has no x y z; an empty cloud is a cloud.

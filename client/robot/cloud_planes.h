@@ -34,7 +34,14 @@ struct OrganisedCloud {
   bool wrap_columns = false;  // the last column is next to the first (a 360 deg scan)
 };
 
+// How points are grouped into candidate planes. RANSAC measured better on
+// simulated and real scans (docs/robot-library.md, "RANSAC or region
+// growing"); region growing (pcl::RegionGrowing on k-nearest-neighbour
+// normals, each region through the same gates) stays for comparison.
+enum class PlaneSegmentation { kRansac, kRegionGrowing };
+
 struct PlaneExtractionParams {
+  PlaneSegmentation segmentation = PlaneSegmentation::kRansac;
   double distance_m = 0.06;   // RANSAC inlier threshold: (0, 1]
   int max_iterations = 300;   // RANSAC iterations per plane: >= 1
   size_t min_inliers = 120;   // per kept component (and to keep looking): >= 3
@@ -47,7 +54,13 @@ struct PlaneExtractionParams {
   // if closer than base + factor * range.
   double jump_base_m = 0.3;
   double jump_factor = 0.03;
-  Status Validate() const;  // InvalidArgument naming the field
+  // Region growing only: neighbours per normal and per step, the largest
+  // angle between neighbouring normals (degrees) and the largest curvature
+  // (PCL's surface variation, 0..1/3) a region grows through.
+  int normal_neighbours = 20;   // [3, 200]
+  double smoothness_deg = 5.0;  // (0, 90]
+  double max_curvature = 0.05;  // (0, 1]
+  Status Validate() const;      // InvalidArgument naming the field
 };
 
 struct ExtractedPlane {

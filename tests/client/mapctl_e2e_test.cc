@@ -7,6 +7,7 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -212,6 +213,98 @@ TEST_F(MapctlE2eTest, ReplayStreamsARecordedRobot) {
   r = Mapctl({"robots"});
   EXPECT_THAT(r.out, ::testing::Not(HasSubstr("other")));  // nothing was sent
 }
+
+#ifdef MAPD_HAVE_ROBOT_PLANES
+// A 3D corridor scanned from a sensor driving along it: walls y = +-2 m
+// (0..3 m high) and the floor z = 0, sampled every 10 cm within 6 m, in the
+// sensor frame (no rotation), one .xyz file a scan.
+std::string CorridorScan(const Eigen::Vector3d& sensor) {
+  std::string text;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    if ((p - sensor).norm() > 6.0) return;
+    const Eigen::Vector3d q = p - sensor;
+    text +=
+        std::to_string(q.x()) + " " + std::to_string(q.y()) + " " + std::to_string(q.z()) + "\n";
+  };
+  for (int i = -60; i <= 160; ++i) {
+    const double x = 0.1 * i;
+    for (int k = 0; k <= 30; ++k) {
+      add({x, -2.0, 0.1 * k});
+      add({x, 2.0, 0.1 * k});
+    }
+    for (int j = -19; j <= 19; ++j) add({x, 0.1 * j, 0.0});
+  }
+  return text;
+}
+
+// Folders of 3D scans through the robot library: scans named by their times
+// with a TUM trajectory (nearest pose in time, a scan without one skipped), and
+// the same corridor with KITTI poses (by order, the camera's y-down world
+// turned z up); planes fused into two walls and a floor; a folder without poses, poses
+// that do not match and a malformed scan send nothing.
+TEST_F(MapctlE2eTest, ReplayStreamsFoldersOf3dScans) {
+  namespace fs = std::filesystem;
+  const std::string tum = dir_.File("tum"), kitti = dir_.File("kitti");
+  fs::create_directories(tum);
+  fs::create_directories(kitti);
+  std::string tum_poses = "# timestamp tx ty tz qx qy qz qw\n", kitti_poses;
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector3d sensor(1.0 * k, 0.3, 1.2);
+    const std::string stamp = std::to_string(1700000000 + k) + ".5";
+    std::ofstream(tum + "/" + stamp + ".xyz") << CorridorScan(sensor);
+    tum_poses +=
+        std::to_string(1700000000 + k) + ".52 " + std::to_string(sensor.x()) + " 0.3 1.2 0 0 0 1\n";
+    char name[16];
+    std::snprintf(name, sizeof name, "%06d.xyz", k);
+    std::ofstream(kitti + "/" + name) << CorridorScan(sensor);
+    // The camera world: x right (map -y), y down (map -z), z forward (map x).
+    char line[256];
+    std::snprintf(line, sizeof line, "1 0 0 %f 0 1 0 %f 0 0 1 %f\n", -sensor.y(), -sensor.z(),
+                  sensor.x());
+    kitti_poses += line;
+  }
+  std::ofstream(tum + "/1700000100.0.xyz") << CorridorScan({0, 0, 1});  // no pose near it
+  std::ofstream(tum + "/poses.txt") << tum_poses;                       // found without --poses
+  const std::string kitti_file = dir_.File("00.txt");
+  std::ofstream(kitti_file) << kitti_poses;
+
+  CommandResult r =
+      Mapctl({"replay", "--session", "s3", "--poses", kitti_file, kitti, "--export", "-"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Count(r.out, "\n"), 5U);
+  // KITTI scans 0.1 s apart; the third one's sensor is at x = 2 m in the map frame.
+  EXPECT_THAT(r.out, HasSubstr("\"translation\":{\"x\":2,\"y\":0.3"));
+  EXPECT_THAT(r.out, HasSubstr("\"planes\""));
+  r = Mapctl({"replay", "--session", "s3", tum});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("1 robot, 5 scans"));
+  EXPECT_THAT(r.out, HasSubstr("planes"));
+  EXPECT_THAT(r.out, HasSubstr("5 stored"));
+  EXPECT_THAT(r.err, HasSubstr("1 scans without a pose within 0.050 s, skipped"));
+  r = Mapctl({"features", "--format", "json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"total\": 2"));          // one fused wall a side
+  EXPECT_EQ(Count(r.out, "\"normal\""), 1U) << r.out;  // and the floor
+  r = Mapctl({"robots"});
+  EXPECT_THAT(r.out, HasSubstr("tum"));
+
+  const std::string bare = dir_.File("bare");
+  fs::create_directories(bare);
+  std::ofstream(bare + "/a.xyz") << "1 2 3\n";
+  r = Mapctl({"replay", bare});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr("needs its poses: --poses FILE"));
+  r = Mapctl({"replay", "--poses", kitti_file, bare});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("has 5 poses for 1 scans"));
+  std::ofstream(kitti + "/000002.xyz") << "1 2 3\n4 5\n";
+  r = Mapctl({"replay", "--session", "bad", "--robot-id", "other", "--poses", kitti_file, kitti});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("000002.xyz:2: not an 'x y z' line"));
+  r = Mapctl({"robots"});
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("other")));  // nothing was sent
+}
+#endif  // MAPD_HAVE_ROBOT_PLANES
 
 TEST_F(MapctlE2eTest, ExitCodesForScripts) {
   CommandResult r = Mapctl({"features", "--bbox", "1,2"});

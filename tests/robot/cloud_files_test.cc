@@ -1,5 +1,5 @@
 // Point cloud files: an organised PCD stays organised and gives the room's
-// planes, a PLY's and a text file's vertices are unorganised (a dense room)
+// planes, a PLY's, a KITTI .bin's and a text file's points are unorganised (a dense room)
 // and give them too, and a bad file is named (with its line, for text) without a crash.
 #include "client/robot/cloud_files.h"
 
@@ -88,6 +88,19 @@ TEST(CloudFilesTest, PlyAndTextAreUnorganised) {
     ExpectTheRoom(*file);
   }
   EXPECT_EQ(ToPoints(returns).size(), returns.size());
+
+  // KITTI's Velodyne .bin: x y z reflectance, float32.
+  std::vector<float> bin;
+  for (const pcl::PointXYZ& p : returns) bin.insert(bin.end(), {p.x, p.y, p.z, 0.5f});
+  const std::string velodyne = dir.File("000000.bin");
+  std::ofstream(velodyne, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bin.data()),
+             static_cast<std::streamsize>(bin.size() * sizeof(float)));
+  const auto file = ReadCloudFile(velodyne);
+  ASSERT_TRUE(file.ok()) << file.status().message();
+  ASSERT_EQ(file->points.size(), returns.size());
+  EXPECT_EQ(file->points[7], Eigen::Vector3f(returns[7].x, returns[7].y, returns[7].z));
+  ExpectTheRoom(*file);
 }
 
 TEST(CloudFilesTest, ABadFileIsNamed) {
@@ -103,8 +116,23 @@ TEST(CloudFilesTest, ABadFileIsNamed) {
   expect(dir.File("scan.las"), StatusCode::kInvalidArgument, "unknown point cloud format 'las'");
   std::ofstream(dir.File("junk.pcd")) << "not a pcd\n";
   expect(dir.File("junk.pcd"), StatusCode::kInvalidArgument, "junk.pcd is not a readable PCD");
+  // Files PCL's reader crashes on are refused before it reads them.
+  const std::string header =
+      "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1000\nHEIGHT 1\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000\n";
+  std::ofstream(dir.File("short.pcd")) << header << "DATA binary\n" << std::string(100, 'x');
+  expect(dir.File("short.pcd"), StatusCode::kInvalidArgument,
+         "100 bytes of data for 1000 points of 12 bytes");
+  std::ofstream(dir.File("packed.pcd")) << header << "DATA binary_compressed\n"
+                                        << std::string(100, '\xff');
+  expect(dir.File("packed.pcd"), StatusCode::kInvalidArgument, "compressed data's sizes");
+  std::ofstream(dir.File("wide.pcd")) << "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 10\n"
+                                         "HEIGHT 2\nPOINTS 10\nDATA ascii\n";
+  expect(dir.File("wide.pcd"), StatusCode::kInvalidArgument, "WIDTH x HEIGHT is not POINTS");
   std::ofstream(dir.File("junk.ply")) << "ply\nformat nonsense\n";
   expect(dir.File("junk.ply"), StatusCode::kInvalidArgument, "junk.ply is not a readable PLY");
+  std::ofstream(dir.File("short.bin")) << "0123456789";
+  expect(dir.File("short.bin"), StatusCode::kInvalidArgument, "10 bytes, not a whole number");
   std::ofstream(dir.File("bad.xyz")) << "1 2 3\n4 5\n";
   expect(dir.File("bad.xyz"), StatusCode::kInvalidArgument, "bad.xyz:2: not an 'x y z' line");
   pcl::PointCloud<pcl::Normal> normals;  // a PCD without x y z
@@ -115,6 +143,34 @@ TEST(CloudFilesTest, ABadFileIsNamed) {
   const auto empty = ReadCloudFile(dir.File("empty.xyz"));
   ASSERT_TRUE(empty.ok());
   EXPECT_TRUE(empty->points.empty());
+}
+
+// Every truncation of good PCD (ascii, binary, compressed) and PLY files is
+// read or refused, never a crash: a robot's disk fills up mid-write.
+TEST(CloudFilesTest, TruncatedFilesAreReadOrRefusedNeverACrash) {
+  testing::TempDir dir;
+  const pcl::PointCloud<pcl::PointXYZI> room = RoomAsPcl();
+  pcl::PCDWriter writer;
+  ASSERT_EQ(writer.writeASCII(dir.File("a.pcd"), room), 0);
+  ASSERT_EQ(writer.writeBinary(dir.File("b.pcd"), room), 0);
+  ASSERT_EQ(writer.writeBinaryCompressed(dir.File("c.pcd"), room), 0);
+  pcl::PointCloud<pcl::PointXYZ> returns;
+  for (const Eigen::Vector3f& p : scenes::DenseRoom())
+    returns.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  ASSERT_EQ(pcl::io::savePLYFileBinary(dir.File("d.ply"), returns), 0);
+  ASSERT_EQ(pcl::io::savePLYFileASCII(dir.File("e.ply"), returns), 0);
+  size_t refused = 0, read = 0;
+  for (const std::string name : {"a.pcd", "b.pcd", "c.pcd", "d.ply", "e.ply"}) {
+    const std::string bytes = testing::ReadFileBytes(dir.File(name));
+    ASSERT_FALSE(bytes.empty());
+    const std::string cut = dir.File("cut" + name.substr(name.size() - 4));
+    for (size_t length = 0; length < bytes.size(); length += 1 + bytes.size() / 23) {
+      std::ofstream(cut, std::ios::binary | std::ios::trunc) << bytes.substr(0, length);
+      const auto file = ReadCloudFile(cut);
+      (file.ok() ? read : refused) += 1;
+    }
+  }
+  EXPECT_GT(refused, 0U);
 }
 
 }  // namespace

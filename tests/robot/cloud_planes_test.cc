@@ -1,7 +1,8 @@
 // 3D scans to planes: a floor and a wall in the sensor frame with their
 // normals towards the sensor, a wall across the columns' seam whole only when
 // the columns wrap, the same scan unorganised and shuffled, two coplanar walls
-// kept apart by the gap between them, no returns, and bad input named.
+// kept apart by the gap between them, region growing on a dense room, no
+// returns, and bad input named.
 #include "client/robot/cloud_planes.h"
 
 #include <gtest/gtest.h>
@@ -63,14 +64,14 @@ TEST(CloudPlanesTest, AnUnorganisedCloudHasTheSamePlanes) {
   EXPECT_EQ(stats.rejected_rows, 0U);  // no rows to count
 }
 
-// Two 2 x 2 m patches of the plane x = 5, 3 m apart along y, densely sampled:
-// one RANSAC plane, two components, two observations; a gap under the jump
-// limit (0.3 m + 3 % of the range) joins them.
+// Two 2 x 2 m patches of the plane x = 5, 3 m apart along y, sampled every
+// 10 cm: one RANSAC plane, two components, two observations; a gap under the
+// jump limit (0.3 m + 3 % of the range) joins them.
 TEST(CloudPlanesTest, CoplanarWallsApartInSpaceStayApart) {
   const auto patches = [](double gap_m) {
     std::vector<Eigen::Vector3f> points;
-    for (double y = 0; y <= 2.0; y += 0.05) {
-      for (double z = 0; z <= 2.0; z += 0.05) {
+    for (double y = 0; y <= 2.0; y += 0.1) {
+      for (double z = 0; z <= 2.0; z += 0.1) {
         points.emplace_back(5.0f, static_cast<float>(y), static_cast<float>(z));
         points.emplace_back(5.0f, static_cast<float>(2.0 + gap_m + y), static_cast<float>(z));
       }
@@ -83,6 +84,25 @@ TEST(CloudPlanesTest, CoplanarWallsApartInSpaceStayApart) {
   const auto joined = ExtractPlanes(patches(0.2), PlaneExtractionParams());
   ASSERT_TRUE(joined.ok());
   EXPECT_EQ(CountNear(*joined, -Eigen::Vector3d::UnitX(), 5.0), 1);
+}
+
+// Region growing (the measured alternative) finds the dense room's two
+// planes too, through the same gates.
+TEST(CloudPlanesTest, RegionGrowingFindsTheDenseRoom) {
+  PlaneExtractionParams params;
+  params.segmentation = PlaneSegmentation::kRegionGrowing;
+  const auto planes = ExtractPlanes(scenes::DenseRoom(), params);
+  ASSERT_TRUE(planes.ok()) << planes.status().message();
+  EXPECT_EQ(CountNear(*planes, Eigen::Vector3d::UnitZ(), 1.0), 1);
+  EXPECT_EQ(CountNear(*planes, -Eigen::Vector3d::UnitX(), 4.0), 1);
+  params.smoothness_deg = 0;
+  EXPECT_NE(params.Validate().message().find("smoothness_deg"), std::string::npos);
+  params = PlaneExtractionParams();
+  params.normal_neighbours = 2;
+  EXPECT_NE(params.Validate().message().find("normal_neighbours"), std::string::npos);
+  params = PlaneExtractionParams();
+  params.max_curvature = 2;
+  EXPECT_NE(params.Validate().message().find("max_curvature"), std::string::npos);
 }
 
 TEST(CloudPlanesTest, NoReturnsIsNoPlanesAndBadInputIsNamed) {
