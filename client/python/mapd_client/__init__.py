@@ -10,7 +10,9 @@
         for delta in feed: ...
 
 A robot's laser scans become line observations with mapd_client.laser
-(extract_lines, line_batch: the C++ robot library's extractor, the same lines).
+(extract_lines, line_batch: the C++ robot library's extractor, the same lines),
+its 3D scans plane observations with mapd_client.planes (extract_planes,
+read_cloud, plane_batch: the C++ library through libmapd_robot_c).
 
 The stubs (mapserver.v1.map_service_pb2, _pb2_grpc) are generated at build
 time into <build>/client/python; see the "Python" section of the project README.
