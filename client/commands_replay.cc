@@ -110,6 +110,15 @@ void Stream(const Context& ctx, const ReplayOptions& flags,
 // file (or its own poses.txt).
 int RecordAll(const ReplayOptions& flags, const std::string& session,
               std::vector<Recording>* recordings) {
+  std::error_code ec;
+  const std::size_t folder_count = static_cast<std::size_t>(
+      std::count_if(flags.sources.begin(), flags.sources.end(),
+                    [&ec](const std::string& s) { return std::filesystem::is_directory(s, ec); }));
+  if (folder_count < flags.poses.size()) {  // before reading anything
+    PrintError(
+        Printf("replay: %zu --poses files for %zu scan folders", flags.poses.size(), folder_count));
+    return kExitUsage;
+  }
   std::size_t folders = 0;
   for (std::size_t i = 0; i < flags.sources.size(); ++i) {
     Recording& r = (*recordings)[i];
@@ -117,7 +126,6 @@ int RecordAll(const ReplayOptions& flags, const std::string& session,
     r.robot_id = flags.robot_id.empty()      ? RobotIdOf(r.path)
                  : flags.sources.size() == 1 ? flags.robot_id
                                              : flags.robot_id + "-" + std::to_string(i + 1);
-    std::error_code ec;
     if (!std::filesystem::is_directory(r.path, ec)) {
       if (int rc = RecordLog(flags, session, &r); rc != kContinue) return rc;
       continue;
@@ -133,11 +141,6 @@ int RecordAll(const ReplayOptions& flags, const std::string& session,
       }
     }
     if (int rc = RecordCloudFolder(flags, session, poses, &r); rc != kContinue) return rc;
-  }
-  if (folders < flags.poses.size()) {
-    PrintError(
-        Printf("replay: %zu --poses files for %zu scan folders", flags.poses.size(), folders));
-    return kExitUsage;
   }
   return kContinue;
 }

@@ -29,7 +29,7 @@ struct Sample {
 // the right cells. Rounded, not floored: at 3 voxels a cell, floor made every
 // free voxel a sample (1.2M per yaw on fr_078_tidyup crops); pieces of 2
 // voxels changed no outcome of the benchmark's 108 pairs and took 8 % off
-// fr_078_tidyup merges (docs/voxel-merge.md, "Exact speed-ups and free
+// fr_078_tidyup merges (docs/archive/voxel-merge-history.md, "Exact speed-ups and free
 // pieces of two voxels").
 LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
   const double res = grid.resolution();

@@ -40,7 +40,7 @@ struct CorrelationParams {
   // accepts nothing. On the benchmark's 90 merges and 18 negative pairs every
   // outcome was the same as with corner matching first, at 30-45 % less CPU
   // indoors: corner extraction and matching were a third to a half of an indoor merge
-  // (docs/voxel-merge.md, "Correlation first"). It was 1 until the shared
+  // (docs/archive/voxel-merge-history.md, "Correlation first"). It was 1 until the shared
   // free space gate (MergeParams::min_shared_free_ratio): the generator's
   // peaks that put a room's floor on the other room's ceiling passed every
   // other gate in the test scenes. 1: the strict corner stage first, then

@@ -23,7 +23,7 @@
 // Between iterations a source point keeps its target without a search while
 // it provably stays the nearest (reuse_pairings; exact): on the benchmark's
 // crops 35-63 % of the searches of a merge's ICP runs, and 7-13 % of an
-// fr_078_tidyup merge's CPU (docs/voxel-merge.md, "Kept ICP pairings").
+// fr_078_tidyup merge's CPU (docs/archive/voxel-merge-history.md, "Kept ICP pairings").
 // Pure function; thread compatible.
 #ifndef MAPD_VOXEL_ICP_H_
 #define MAPD_VOXEL_ICP_H_

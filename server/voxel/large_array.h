@@ -60,7 +60,7 @@ using LargeVector = std::vector<T, LargeArrayAllocator<T>>;
 // more is a fresh mapping, which the kernel zeroes page by page on first
 // touch, so the pages never touched cost nothing; LargeVector's assign(n, 0)
 // writes, and so faults in, every page. (A campus crop's 11.5M-cell
-// correlation grid holds its content in a fifth of it: docs/voxel-merge.md,
+// correlation grid holds its content in a fifth of it: docs/archive/voxel-merge-history.md,
 // "Leaf walks by recursion; untouched zeros".) Smaller blocks are zeroed
 // here. Move-only.
 template <typename T>

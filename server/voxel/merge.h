@@ -148,7 +148,7 @@ struct MergeParams {
   // Why: the uniqueness gate only sees rivals 3 deg or 4 voxels apart, and a
   // low-overlap pair can have several ICP minima closer than that, one of
   // them wrong; right merges' restarts end within 4 voxels
-  // (docs/voxel-merge.md, "Larger samples").
+  // (docs/archive/voxel-merge-history.md, "Larger samples").
   double restart_turn_deg = 1.5;
   double max_restart_spread_voxels = 4.0;
   // A converged ICP answer within this many degrees of a lattice pose (right

@@ -34,7 +34,7 @@ struct Leaf {
 // Counted per level first and then written in place: collecting them and
 // then sorting (a 56-byte struct, over 600k of them on a campus crop) took
 // two more arrays in fresh memory; with malloc on small pages the first
-// collection of a merge went from 0.44 to 0.14 s (docs/voxel-merge.md,
+// collection of a merge went from 0.44 to 0.14 s (docs/archive/voxel-merge-history.md,
 // "Leaf walks by recursion").
 std::vector<Leaf> CollectLeaves(const octomap::OcTree& tree) {
   const int depth = static_cast<int>(tree.getTreeDepth());

@@ -5,7 +5,7 @@
 // elements and pushes every inner node's children through it. The fusion
 // walks both maps and VoxelGrid::FromOcTree walks each map twice; collecting
 // a campus crop's ~520k leaves for the fusion took 0.13 s through the
-// iterator, 0.10 s with this (docs/voxel-merge.md, "Leaf walks by recursion").
+// iterator, 0.10 s with this (docs/archive/voxel-merge-history.md, "Leaf walks by recursion").
 //
 // Thread safety: reentrant; reads the tree only.
 #ifndef MAPD_VOXEL_OCTREE_LEAVES_H_

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 
@@ -36,19 +37,24 @@ const char* CodeName(grpc::StatusCode code) {
   }
 }
 
-// utime + stime of a process (all its threads), seconds; -1 if unreadable.
-double ProcessCpuSeconds(int pid) {
+// utime + stime of a process (all its threads), seconds, and stime alone in
+// *system_s; -1 if unreadable.
+double ProcessCpuSeconds(int pid, double* system_s) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
   std::string line;
+  *system_s = -1;
   if (pid <= 0 || !std::getline(stat, line)) return -1;
   // Fields after the command name (which may hold spaces) in parentheses.
   std::istringstream rest(line.substr(line.rfind(')') + 2));
   std::string field;
-  double ticks = 0;
+  double ticks = 0, system_ticks = 0;
   for (int i = 3; i <= 15 && rest >> field; ++i) {
     if (i == 14 || i == 15) ticks += std::stod(field);  // utime, stime
+    if (i == 15) system_ticks = std::stod(field);
   }
-  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+  const double tick_s = 1.0 / static_cast<double>(sysconf(_SC_CLK_TCK));
+  *system_s = system_ticks * tick_s;
+  return ticks * tick_s;
 }
 
 }  // namespace
@@ -96,7 +102,23 @@ MapdVerdict MapdMergeClient::Merge(const std::string& name, const std::string& a
     }
     ids[i] = info.id();
   }
-  const double cpu_before = ProcessCpuSeconds(mapd_pid_);
+  // The merge alone, as the library's worker measures it: wait (up to 60 s)
+  // until mapd is quiet, its background work done (the global map built
+  // after the previous accepted merge and these uploads), and say how long.
+  double system_before = 0, system_after = 0;
+  const auto quiet_start = std::chrono::steady_clock::now();
+  for (double last = ProcessCpuSeconds(mapd_pid_, &system_before);;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const double now = ProcessCpuSeconds(mapd_pid_, &system_before);
+    if (now < 0 || now - last < 0.01 ||
+        std::chrono::steady_clock::now() - quiet_start > std::chrono::seconds(60)) {
+      break;
+    }
+    last = now;
+  }
+  v.background_wait_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - quiet_start).count();
+  const double cpu_before = ProcessCpuSeconds(mapd_pid_, &system_before);
   const auto wall_start = std::chrono::steady_clock::now();
   grpc::ClientContext ctx;
   pb::MergeSubmapsRequest request;
@@ -115,8 +137,11 @@ MapdVerdict MapdMergeClient::Merge(const std::string& name, const std::string& a
   const grpc::Status s = reader->Finish();
   v.merge_wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const double cpu_after = ProcessCpuSeconds(mapd_pid_);
-  if (cpu_before >= 0 && cpu_after >= 0) v.mapd_cpu_s = cpu_after - cpu_before;
+  const double cpu_after = ProcessCpuSeconds(mapd_pid_, &system_after);
+  if (cpu_before >= 0 && cpu_after >= 0) {
+    v.mapd_cpu_s = cpu_after - cpu_before;
+    v.mapd_system_cpu_s = system_after - system_before;
+  }
   v.code = CodeName(s.error_code());
   v.message = s.error_message();
   v.answered = s.ok() || s.error_code() == grpc::StatusCode::FAILED_PRECONDITION;

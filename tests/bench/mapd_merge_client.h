@@ -22,6 +22,10 @@ struct MapdVerdict {
   // (its /proc stat, all threads; -1 without a pid).
   double merge_wall_s = 0;
   double mapd_cpu_s = -1;
+  double mapd_system_cpu_s = -1;  // its system part (mostly the kernel zeroing fresh pages)
+  // How long mapd took to fall quiet before the merge was sent (its global
+  // map build after the previous accepted merge and the uploads).
+  double background_wait_s = 0;
 };
 
 class MapdMergeClient {

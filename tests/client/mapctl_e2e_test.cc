@@ -297,6 +297,9 @@ TEST_F(MapctlE2eTest, ReplayStreamsFoldersOf3dScans) {
   r = Mapctl({"replay", "--poses", kitti_file, bare});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("has 5 poses for 1 scans"));
+  r = Mapctl({"replay", "--poses", kitti_file, "--poses", kitti_file, bare});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("2 --poses files for 1 scan folders"));
   std::ofstream(kitti + "/000002.xyz") << "1 2 3\n4 5\n";
   r = Mapctl({"replay", "--session", "bad", "--robot-id", "other", "--poses", kitti_file, kitti});
   EXPECT_EQ(r.exit_code, 2);

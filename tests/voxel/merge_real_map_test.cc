@@ -60,7 +60,7 @@ bool BenchmarkPair(const std::string& map_file_name, double overlap, int seed, i
 // strip, and ICP has three minima within 1.6 deg there (0.46-0.51 voxels of
 // residual, the truth among them). Before the restart-spread gate the merge
 // was accepted 1.56 deg / 2.9 voxels off; the uniqueness gate only sees
-// rivals more than 3 deg or 4 voxels apart (docs/voxel-merge.md, "Larger
+// rivals more than 3 deg or 4 voxels apart (docs/archive/voxel-merge-history.md, "Larger
 // samples").
 TEST(MergeRealMapTest, RefusesAStripThatDoesNotFixTheRotation) {
   bench::CropPair pair;
