@@ -494,7 +494,9 @@ TEST(OccupancyFusionTest, FusesTheSameTreeOnOneAndThreeThreads) {
       EXPECT_EQ(stats_one.free_written, stats_three.free_written) << at;
       EXPECT_EQ(stats_one.free_cleared, stats_three.free_cleared) << at;
       EXPECT_EQ(stats_one.free_voxels_skipped, stats_three.free_voxels_skipped) << at;
-      if (cap < 8'000'000) EXPECT_GT(stats_one.free_voxels_skipped, 0u) << at;  // the cap bit
+      if (cap < 8'000'000) {
+        EXPECT_GT(stats_one.free_voxels_skipped, 0u) << at;  // the cap bit
+      }
       EXPECT_GT(stats_one.free_cleared, 0u) << at;
     }
   }
