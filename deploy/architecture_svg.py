@@ -23,7 +23,8 @@ LAYERS = [
     ("binaries", ["mapd", "mapd_health", "mapctl"]),
     ("front ends", ["mapd_cli", "web", "mapclient"]),
     ("service, pictures", ["service", "maprender", "occupancy_grid"]),
-    ("robot", ["maprobot", "robot_planes", "robot_datasets", "robot_extraction", "laser_sim"]),
+    ("robot", ["maprobot", "robot_planes", "mapd_robot_c", "robot_datasets", "robot_extraction",
+               "laser_sim"]),
     ("infrastructure", ["storage", "config", "mapd_proto"]),
     ("algorithms", ["fusion", "voxel"]),
     ("geometry, io", ["geometry", "voxel_io"]),
@@ -34,6 +35,8 @@ TEST_SIDE = re.compile(
 # CMake's shapes for what this project defines: executables, static and
 # interface libraries (external libraries are "Unknown Library" septagons).
 OURS = {"egg", "octagon", "pentagon"}
+# Shared libraries are double octagons, like the imported ones (PCL's): ours by name.
+OUR_SHARED = {"mapd_robot_c"}
 
 ROW_H, BOX_H, MARGIN, CHAR_W = 92, 34, 20, 7.6
 
@@ -45,7 +48,8 @@ def graph(build: str):
                        stdout=subprocess.DEVNULL)
         text = open(dot, encoding="utf-8").read()
     names = {node: label for node, label, shape in
-             re.findall(r'"(node\d+)" \[ label = "([^"]+)", shape = (\w+)', text) if shape in OURS}
+             re.findall(r'"(node\d+)" \[ label = "([^"]+)", shape = (\w+)', text)
+             if shape in OURS or label in OUR_SHARED}
     edges = {(names[a], names[b]) for a, b in re.findall(r'"(node\d+)" -> "(node\d+)"', text)
              if a in names and b in names}
     return set(names.values()), edges
