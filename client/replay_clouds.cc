@@ -1,7 +1,7 @@
 // mapctl replay of a folder of 3D scans: every scan's planes through the
-// robot library (ReadCloudFile, ExtractPlanes, FeatureBatch), from the pose a
-// TUM or KITTI trajectory gives it. Built with the plane extractor
-// (MAPD_WITH_ROBOT_PLANES); without it, RecordCloudFolder says so.
+// robot library (ReadCloudFile and ExtractPlanes, loaded at run time from
+// libmapd_robot_c.so: plane_library.h; FeatureBatch), from the pose a TUM or
+// KITTI trajectory gives it.
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,28 +13,13 @@
 #include <vector>
 
 #include "client/cli.h"
+#include "client/plane_library.h"
 #include "client/replay.h"
-#include "client/text_util.h"
-
-#ifdef MAPD_HAVE_ROBOT_PLANES
-#include "client/robot/cloud_files.h"
 #include "client/robot/observation_batch.h"
 #include "client/robot/pose_files.h"
-#endif
+#include "client/text_util.h"
 
 namespace mapd::client {
-
-#ifndef MAPD_HAVE_ROBOT_PLANES
-
-int RecordCloudFolder(const ReplayOptions&, const std::string&, const std::string&, Recording* r) {
-  PrintError("replay: " + r->path +
-             " is a folder of 3D scans, and this mapctl was built without the plane "
-             "extractor (MAPD_WITH_ROBOT_PLANES=OFF; it needs PCL)");
-  return kExitUsage;
-}
-
-#else
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -205,7 +190,11 @@ int RecordCloudFolder(const ReplayOptions& flags, const std::string& session,
   if (int rc = PoseScans(flags, r->path, poses_path, scans, &poses, &stamps_s); rc != kContinue) {
     return rc;
   }
-  const robot::PlaneExtractionParams params;
+  auto library = PlaneLibrary::Load();
+  if (!library.ok()) {
+    PrintError("replay: " + r->path + " is a folder of 3D scans: " + library.status().message());
+    return kExitFailed;
+  }
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::size_t posed = 0;
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -219,30 +208,24 @@ int RecordCloudFolder(const ReplayOptions& flags, const std::string& session,
                    scans.size());
       std::fflush(stderr);
     }
-    auto cloud = robot::ReadCloudFile(scans[i].path);
-    if (!cloud.ok()) {
+    auto features = (*library)->PlanesOfFile(scans[i].path, flags.wrap_columns);
+    if (!features.ok()) {
       if (tty) std::fprintf(stderr, "\n");
-      PrintError("replay: " + cloud.status().message());
-      return kExitUsage;
-    }
-    auto planes = robot::ExtractPlanes(*cloud, flags.wrap_columns, params);
-    std::vector<geometry::PlaneFeature> features;
-    if (planes.ok()) {
-      for (const robot::ExtractedPlane& p : *planes) features.push_back(p.feature);
+      PrintError("replay: " + features.status().message());
+      return features.status().code() == StatusCode::kNotFound ? kExitFailed : kExitUsage;
     }
     robot::BatchHeader header;
     header.robot_id = r->robot_id;
     header.session_id = session;
     header.seq = r->batches.size() + 1;
     header.stamp_ns = static_cast<int64_t>(std::llround(stamps_s[i] * 1e9));
-    auto batch = planes.ok() ? robot::FeatureBatch(header, poses[i], {}, features)
-                             : StatusOr<mapserver::v1::ObservationBatch>(planes.status());
+    auto batch = robot::FeatureBatch(header, poses[i], {}, *features);
     if (!batch.ok()) {
       if (tty) std::fprintf(stderr, "\n");
       PrintError("replay: " + scans[i].path + ": " + batch.status().message());
       return kExitUsage;
     }
-    r->planes += features.size();
+    r->planes += features->size();
     r->stamps_s.push_back(stamps_s[i]);
     r->batches.push_back(std::move(batch).value());
   }
@@ -254,7 +237,5 @@ int RecordCloudFolder(const ReplayOptions& flags, const std::string& session,
   }
   return kContinue;
 }
-
-#endif  // MAPD_HAVE_ROBOT_PLANES
 
 }  // namespace mapd::client
