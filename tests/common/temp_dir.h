@@ -26,6 +26,12 @@ class TempDir {
 
   std::string path() const { return path_; }
   std::string File(const std::string& name) const { return path_ + "/" + name; }
+  // Writes `text` to the file `name` here (replacing it) and returns its path.
+  std::string Write(const std::string& name, const std::string& text) const {
+    const std::string path = File(name);
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+    return path;
+  }
 
  private:
   std::string path_;

@@ -21,16 +21,10 @@ constexpr char kRobotLaser[] =
     "ROBOTLASER1 4 -2.356 4.712 0.01 30.0 0.01 0 3 1.5 30.0 2.5 2 0.1 0.2 "
     "1.0 2.0 0.5 0.9 1.9 0.5 0.1 0.0 0.55 0.35 0.0 1300.25 host 1300.3\n";
 
-std::string Write(const testing::TempDir& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir.File(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
 TEST(CarmenLogTest, FlaserIsTheHalfCircleFan) {
   testing::TempDir dir;
   const auto scans =
-      ReadCarmenLaserLog(Write(dir, "a.log", "# comment\nODOM 1 2 3\n" + std::string(kFlaser)));
+      ReadCarmenLaserLog(dir.Write("a.log", "# comment\nODOM 1 2 3\n" + std::string(kFlaser)));
   ASSERT_TRUE(scans.ok()) << scans.status().message();
   ASSERT_EQ(scans->size(), 1u);
   const CarmenScan& s = scans->front();
@@ -48,7 +42,7 @@ TEST(CarmenLogTest, FlaserIsTheHalfCircleFan) {
 TEST(CarmenLogTest, RobotLaserCarriesItsOwnLaserAndWinsOverFlaser) {
   testing::TempDir dir;
   const auto scans = ReadCarmenLaserLog(
-      Write(dir, "b.log", std::string(kFlaser) + kRobotLaser + kFlaser + kRobotLaser));
+      dir.Write("b.log", std::string(kFlaser) + kRobotLaser + kFlaser + kRobotLaser));
   ASSERT_TRUE(scans.ok()) << scans.status().message();
   ASSERT_EQ(scans->size(), 2u);  // the ROBOTLASER1 lines only
   const CarmenScan& s = scans->front();
@@ -79,7 +73,7 @@ TEST(CarmenLogTest, GzipIsReadLikePlainText) {
 TEST(CarmenLogTest, AMalformedLineIsNamedAndAMissingFileIsNotFound) {
   testing::TempDir dir;
   const auto expect_bad = [&](const std::string& text, const std::string& what) {
-    const std::string path = Write(dir, "bad.log", "PARAM x 1\n" + text);
+    const std::string path = dir.Write("bad.log", "PARAM x 1\n" + text);
     const auto scans = ReadCarmenLaserLog(path);
     ASSERT_FALSE(scans.ok()) << text;
     EXPECT_EQ(scans.status().code(), StatusCode::kInvalidArgument);

@@ -13,19 +13,13 @@
 namespace mapd::robot {
 namespace {
 
-std::string Write(const testing::TempDir& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir.File(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
 TEST(PoseFilesTest, TumAndKittiAreToldApart) {
   testing::TempDir dir;
   PoseFormat detected = PoseFormat::kAuto;
   // A quarter turn about z (qz = qw = sqrt(1/2)), written to 6 digits.
   const auto tum = ReadPoseFile(
-      Write(dir, "tum.txt",
-            "# timestamp tx ty tz qx qy qz qw\n\n1305031102.5 1 2 3 0 0 0.707107 0.707107\n"),
+      dir.Write("tum.txt",
+                "# timestamp tx ty tz qx qy qz qw\n\n1305031102.5 1 2 3 0 0 0.707107 0.707107\n"),
       PoseFormat::kAuto, &detected);
   ASSERT_TRUE(tum.ok()) << tum.status().message();
   EXPECT_EQ(detected, PoseFormat::kTum);
@@ -35,9 +29,9 @@ TEST(PoseFilesTest, TumAndKittiAreToldApart) {
   EXPECT_TRUE((tum->front().T_world_sensor.linear() * Eigen::Vector3d::UnitX())
                   .isApprox(Eigen::Vector3d::UnitY(), 1e-6));
 
-  const auto kitti = ReadPoseFile(
-      Write(dir, "00.txt", "1 0 0 0.5 0 1 0 -0.25 0 0 1 7\n0 -1 0 1 1 0 0 2 0 0 1 3\n"),
-      PoseFormat::kAuto, &detected);
+  const auto kitti =
+      ReadPoseFile(dir.Write("00.txt", "1 0 0 0.5 0 1 0 -0.25 0 0 1 7\n0 -1 0 1 1 0 0 2 0 0 1 3\n"),
+                   PoseFormat::kAuto, &detected);
   ASSERT_TRUE(kitti.ok()) << kitti.status().message();
   EXPECT_EQ(detected, PoseFormat::kKitti);
   ASSERT_EQ(kitti->size(), 2u);
@@ -45,11 +39,11 @@ TEST(PoseFilesTest, TumAndKittiAreToldApart) {
   EXPECT_TRUE((kitti->back().T_world_sensor.linear() * Eigen::Vector3d::UnitX())
                   .isApprox(Eigen::Vector3d::UnitY()));
 
-  const auto times = ReadKittiTimes(Write(dir, "times.txt", "0.000000e+00\n1.036e-01\n"));
+  const auto times = ReadKittiTimes(dir.Write("times.txt", "0.000000e+00\n1.036e-01\n"));
   ASSERT_TRUE(times.ok());
   EXPECT_EQ(*times, (std::vector<double>{0.0, 0.1036}));
-  const auto tr = ReadKittiVelodyneToCamera(Write(
-      dir, "calib.txt", "P0: 1 2 3 4 5 6 7 8 9 10 11 12\nTr: 0 -1 0 0 0 0 -1 -0.08 1 0 0 -0.27\n"));
+  const auto tr = ReadKittiVelodyneToCamera(dir.Write(
+      "calib.txt", "P0: 1 2 3 4 5 6 7 8 9 10 11 12\nTr: 0 -1 0 0 0 0 -1 -0.08 1 0 0 -0.27\n"));
   ASSERT_TRUE(tr.ok()) << tr.status().message();
   EXPECT_TRUE(tr->translation().isApprox(Eigen::Vector3d(0, -0.08, -0.27)));
   EXPECT_TRUE((tr->linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitZ()));
@@ -58,7 +52,7 @@ TEST(PoseFilesTest, TumAndKittiAreToldApart) {
 TEST(PoseFilesTest, AMalformedLineIsNamed) {
   testing::TempDir dir;
   const auto expect_bad = [&](const std::string& text, PoseFormat format, const std::string& what) {
-    const std::string path = Write(dir, "bad.txt", "# header\n" + text);
+    const std::string path = dir.Write("bad.txt", "# header\n" + text);
     const auto poses = ReadPoseFile(path, format);
     ASSERT_FALSE(poses.ok()) << text;
     EXPECT_EQ(poses.status().code(), StatusCode::kInvalidArgument);
@@ -76,8 +70,8 @@ TEST(PoseFilesTest, AMalformedLineIsNamed) {
   expect_bad("-1 0 0 0 0 1 0 0 0 0 1 0\n", PoseFormat::kKitti, "the 3 x 3 part is not a rotation");
   EXPECT_EQ(ReadPoseFile(dir.File("none.txt"), PoseFormat::kAuto).status().code(),
             StatusCode::kNotFound);
-  EXPECT_FALSE(ReadKittiVelodyneToCamera(Write(dir, "c.txt", "P0: 1 2\n")).ok());
-  EXPECT_FALSE(ReadKittiTimes(Write(dir, "t.txt", "0.1 0.2\n")).ok());
+  EXPECT_FALSE(ReadKittiVelodyneToCamera(dir.Write("c.txt", "P0: 1 2\n")).ok());
+  EXPECT_FALSE(ReadKittiTimes(dir.Write("t.txt", "0.1 0.2\n")).ok());
 }
 
 }  // namespace
