@@ -13,9 +13,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
-#include <iterator>
 #include <string>
 
 namespace mapd::robot {
@@ -79,8 +79,7 @@ Status CheckPcdHeader(const std::string& path) {
   uint64_t width = 0, height = 0, points = 0;
   if (keys["WIDTH"].size() != 1 || keys["HEIGHT"].size() != 1 || keys["POINTS"].size() != 1 ||
       !number(keys["WIDTH"][0], &width) || !number(keys["HEIGHT"][0], &height) ||
-      !number(keys["POINTS"][0], &points) || points > (1ull << 31) ||
-      width * height != points) {
+      !number(keys["POINTS"][0], &points) || points > (1ull << 31) || width * height != points) {
     return bad("WIDTH x HEIGHT is not POINTS (or not numbers)");
   }
   const std::string data = keys["DATA"].empty() ? "" : keys["DATA"][0];

@@ -754,7 +754,7 @@ int main(int argc, char** argv) {
       continue;
     }
     tree->reset();  // release the octree: the grid is all we need
-    stop_mapd();  // the previous map's, with its name
+    stop_mapd();    // the previous map's, with its name
     mapd_map = opt.maps[mi];
     if (!start_mapd()) return 1;
     // The overlaps, then the negative pairs (overlap 0: disjoint crops).

@@ -283,7 +283,7 @@ TEST_F(MapctlE2eTest, ReplayStreamsFoldersOf3dScans) {
   EXPECT_THAT(r.err, HasSubstr("1 scans without a pose within 0.050 s, skipped"));
   r = Mapctl({"features", "--format", "json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.out, HasSubstr("\"total\": 2"));          // one fused wall a side
+  EXPECT_THAT(r.out, HasSubstr("\"total\": 2"));       // one fused wall a side
   EXPECT_EQ(Count(r.out, "\"normal\""), 1U) << r.out;  // and the floor
   r = Mapctl({"robots"});
   EXPECT_THAT(r.out, HasSubstr("tum"));
