@@ -262,7 +262,7 @@ void AddReplayCommand(CLI::App* app, Action* action) {
       "    order; default FOLDER/poses.txt), TUM (t x y z qx qy qz qw, z up) or KITTI (3 x 4\n"
       "    matrices by order, with times.txt and calib.txt's Tr when beside the folder,\n"
       "    turned to z up). TUM poses go with scans named by their times (nearest within\n"
-      "    --max-dt) or else by order.\n"
+      "    --max-dt), or else (other names, numbers that are no pose's time) by order.\n"
       "One Ingest stream per robot, all at once. Every source is read and every scan\n"
       "extracted before anything is sent: a bad file sends nothing. Robots are named by\n"
       "their file or folder names (intel-corrected.log.gz: intel-corrected), or --robot-id.\n"

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -34,8 +35,10 @@ struct ScanFile {
 // name is a number (1305031102.175304.pcd, 000042.bin), else as text.
 std::vector<ScanFile> ListScans(const std::string& folder) {
   std::vector<ScanFile> scans;
-  for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
-    if (!e.is_regular_file()) continue;
+  std::error_code ec;  // an unreadable folder lists no scan (and says so)
+  for (fs::directory_iterator it(folder, ec), last; !ec && it != last; it.increment(ec)) {
+    const fs::directory_entry& e = *it;
+    if (!e.is_regular_file(ec)) continue;
     std::string ext = e.path().extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext != ".pcd" && ext != ".ply" && ext != ".bin" && ext != ".xyz") continue;
@@ -140,8 +143,7 @@ int PoseScans(const ReplayOptions& flags, const std::string& folder, const std::
     }
     return kContinue;
   }
-  const bool by_time = std::isfinite(scans.front().stamp_s);
-  if (!by_time) {
+  const auto by_order = [&]() -> int {
     if (trajectory->size() != scans.size()) {
       PrintError(
           Printf("replay: %s has %zu poses for %zu scans in %s (scans not named by "
@@ -154,7 +156,8 @@ int PoseScans(const ReplayOptions& flags, const std::string& folder, const std::
       (*stamps_s)[i] = (*trajectory)[i].stamp_s;
     }
     return kContinue;
-  }
+  };
+  if (!std::isfinite(scans.front().stamp_s)) return by_order();
   // Scans named by their times: the nearest pose in time, within max_dt_s.
   std::vector<robot::StampedPose> sorted = *trajectory;
   std::sort(sorted.begin(), sorted.end(),
@@ -172,6 +175,10 @@ int PoseScans(const ReplayOptions& flags, const std::string& folder, const std::
     if (best == nullptr || std::abs(best->stamp_s - t) > flags.max_dt_s) continue;
     (*poses)[i] = best->T_world_sensor;
     (*stamps_s)[i] = t;
+  }
+  // Numbered, not timed (000000.pcd ...): no name is near a pose's time.
+  if (std::none_of(stamps_s->begin(), stamps_s->end(), [](double t) { return std::isfinite(t); })) {
+    return by_order();
   }
   return kContinue;
 }

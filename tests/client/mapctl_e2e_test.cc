@@ -288,6 +288,19 @@ TEST_F(MapctlE2eTest, ReplayStreamsFoldersOf3dScans) {
   r = Mapctl({"robots"});
   EXPECT_THAT(r.out, HasSubstr("tum"));
 
+  // Numbered scans with a TUM file: no name is a pose's time, so by order.
+  const std::string numbered = dir_.File("numbered");
+  fs::create_directories(numbered);
+  for (int k = 0; k < 5; ++k) {
+    std::filesystem::copy_file(kitti + "/00000" + std::to_string(k) + ".xyz",
+                               numbered + "/00000" + std::to_string(k) + ".xyz");
+  }
+  std::ofstream(numbered + "/poses.txt") << tum_poses;
+  r = Mapctl({"replay", numbered, "--export", "-"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Count(r.out, "\n"), 5U);
+  EXPECT_THAT(r.out, HasSubstr("\"translation\":{\"x\":2,\"y\":0.3"));
+
   const std::string bare = dir_.File("bare");
   fs::create_directories(bare);
   std::ofstream(bare + "/a.xyz") << "1 2 3\n";
