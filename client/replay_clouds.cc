@@ -27,7 +27,6 @@ namespace fs = std::filesystem;
 
 struct ScanFile {
   std::string path;
-  std::string stem;
   double stamp_s = NAN;  // the name as a number (a timestamp, or KITTI's index)
 };
 
@@ -44,10 +43,10 @@ std::vector<ScanFile> ListScans(const std::string& folder) {
     if (ext != ".pcd" && ext != ".ply" && ext != ".bin" && ext != ".xyz") continue;
     ScanFile s;
     s.path = e.path().string();
-    s.stem = e.path().stem().string();
+    const std::string stem = e.path().stem().string();
     char* end = nullptr;
-    const double v = std::strtod(s.stem.c_str(), &end);
-    if (!s.stem.empty() && end == s.stem.c_str() + s.stem.size() && std::isfinite(v)) {
+    const double v = std::strtod(stem.c_str(), &end);
+    if (!stem.empty() && end == stem.c_str() + stem.size() && std::isfinite(v)) {
       s.stamp_s = v;
     }
     scans.push_back(std::move(s));
