@@ -116,7 +116,8 @@ size_t mapd_planes_count(const mapd_planes* planes) {
 
 void mapd_planes_get(const mapd_planes* planes, size_t i, double normal[3], double* offset_m,
                      double* rms_m, size_t* boundary_size, size_t* inlier_count) {
-  const mapd::robot::ExtractedPlane& p = planes->planes.at(i);
+  if (planes == nullptr || i >= planes->planes.size()) return;  // no exception crosses C
+  const mapd::robot::ExtractedPlane& p = planes->planes[i];
   for (int k = 0; k < 3; ++k) normal[k] = p.feature.normal[k];
   *offset_m = p.feature.offset;
   *rms_m = p.rms_m;
@@ -125,14 +126,16 @@ void mapd_planes_get(const mapd_planes* planes, size_t i, double normal[3], doub
 }
 
 void mapd_planes_boundary(const mapd_planes* planes, size_t i, double* xyz) {
-  const auto& boundary = planes->planes.at(i).feature.boundary;
+  if (planes == nullptr || i >= planes->planes.size()) return;
+  const auto& boundary = planes->planes[i].feature.boundary;
   for (size_t k = 0; k < boundary.size(); ++k) {
     for (int d = 0; d < 3; ++d) xyz[3 * k + static_cast<size_t>(d)] = boundary[k][d];
   }
 }
 
 void mapd_planes_inliers(const mapd_planes* planes, size_t i, int32_t* indices) {
-  const auto& inliers = planes->planes.at(i).indices;
+  if (planes == nullptr || i >= planes->planes.size()) return;
+  const auto& inliers = planes->planes[i].indices;
   std::copy(inliers.begin(), inliers.end(), indices);
 }
 
@@ -160,7 +163,7 @@ size_t mapd_cloud_size(const mapd_cloud* cloud) {
 }
 
 void mapd_cloud_shape(const mapd_cloud* cloud, int* rows, int* columns) {
-  const bool organised = cloud->file.organised();
+  const bool organised = cloud != nullptr && cloud->file.organised();
   *rows = organised ? cloud->file.rows : 0;
   *columns = organised ? cloud->file.columns : 0;
 }
@@ -168,7 +171,8 @@ void mapd_cloud_shape(const mapd_cloud* cloud, int* rows, int* columns) {
 const float* mapd_cloud_points(const mapd_cloud* cloud) {
   // Eigen::Vector3f is three packed floats (no alignment padding).
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  return cloud->file.points.empty() ? nullptr : cloud->file.points.front().data();
+  return cloud == nullptr || cloud->file.points.empty() ? nullptr
+                                                        : cloud->file.points.front().data();
 }
 
 void mapd_cloud_free(mapd_cloud* cloud) { delete cloud; }

@@ -48,7 +48,8 @@ int mapd_extract_planes(const float* xyz, size_t count, int rows, int columns, i
                         const mapd_plane_params* params, mapd_planes** out, char* error,
                         size_t error_size);
 size_t mapd_planes_count(const mapd_planes* planes);
-/* Plane i: unit normal towards the sensor, offset (n.x + offset = 0), refit
+/* Plane i (an i out of range leaves the outputs as they are): unit normal
+ * towards the sensor, offset (n.x + offset = 0), refit
  * RMS, and the sizes of its boundary and of its inliers. */
 void mapd_planes_get(const mapd_planes* planes, size_t i, double normal[3], double* offset_m,
                      double* rms_m, size_t* boundary_size, size_t* inlier_count);
