@@ -185,30 +185,60 @@ class UniformGrid {
         lo, hi, [](const CellKey&) { return true; }, fn, max_items);
   }
 
+  // The cells within radius_m of a segment (a superset of the cells holding
+  // points within radius_m of it): those of the box around the segment
+  // grown by radius_m whose centre lies within radius_m plus half a cell
+  // diagonal of it. Meets() is the test ForEachNearSegment applies to every
+  // cell it probes, so a caller holding a list of items' points can tell
+  // which of them a search would find without searching.
+  struct SegmentBand {
+    CellKey lo, hi;  // the box, inclusive
+    geometry::Vec2 a, d;
+    double len2 = 0.0, reach2 = 0.0, cell_m = 1.0;
+    bool Meets(const CellKey& key) const {
+      if (key.x < lo.x || key.x > hi.x || key.y < lo.y || key.y > hi.y) return false;
+      return Near(key);
+    }
+    // Meets() inside the box.
+    bool Near(const CellKey& key) const {
+      // geometry::PointSegmentDistance's arithmetic, with the segment's terms
+      // computed once: no call and no root per cell.
+      const geometry::Vec2 c((static_cast<double>(key.x) + 0.5) * cell_m,
+                             (static_cast<double>(key.y) + 0.5) * cell_m);
+      if (len2 == 0.0) return (c - a).squaredNorm() <= reach2;
+      const double t = std::clamp((c - a).dot(d) / len2, 0.0, 1.0);
+      return (c - (a + t * d)).squaredNorm() <= reach2;
+    }
+  };
+  SegmentBand BandOf(const geometry::Segment2& s, double radius_m) const {
+    const geometry::Vec2 r(radius_m, radius_m);
+    SegmentBand band;
+    band.lo = KeyOf(s.a.cwiseMin(s.b) - r);
+    band.hi = KeyOf(s.a.cwiseMax(s.b) + r);
+    band.a = s.a;
+    band.d = s.direction();
+    band.len2 = band.d.squaredNorm();
+    // A cell meets the band if its centre is within radius + half its diagonal.
+    const double reach_m = radius_m + 0.7072 * cell_m_;
+    band.reach2 = reach_m * reach_m;
+    band.cell_m = cell_m_;
+    return band;
+  }
+
   // Calls fn(item) for every item in the cells that come within radius_m of
-  // segment s (a superset of the items within radius_m of s: callers filter),
-  // at most max_items as ForEachNear. For a long segment this probes a thin
-  // band of cells, not the square around its whole length that ForEachNear would.
+  // segment s (BandOf; a superset of the items within radius_m of s: callers
+  // filter), at most max_items as ForEachNear. For a long segment this probes
+  // a thin band of cells, not the square around its whole length that
+  // ForEachNear would.
   template <typename Fn>
   bool ForEachNearSegment(const geometry::Segment2& s, double radius_m, Fn&& fn,
                           size_t max_items = SIZE_MAX) const {
-    const geometry::Vec2 r(radius_m, radius_m);
-    const CellKey lo = KeyOf(s.a.cwiseMin(s.b) - r);
-    const CellKey hi = KeyOf(s.a.cwiseMax(s.b) + r);
-    // A cell meets the band if its centre is within radius + half its diagonal.
-    const double reach_m = radius_m + 0.7072 * cell_m_;
-    // geometry::PointSegmentDistance's arithmetic, with the segment's terms
-    // computed once: the same cells, without a call per cell.
-    const geometry::Vec2 d = s.direction();
-    const double len2 = d.squaredNorm();
-    const double reach2 = reach_m * reach_m;  // squared: no root per cell
-    const auto near = [&](const CellKey& key) {
-      const geometry::Vec2 c = CentreOf(key);
-      if (len2 == 0.0) return (c - s.a).squaredNorm() <= reach2;
-      const double t = std::clamp((c - s.a).dot(d) / len2, 0.0, 1.0);
-      return (c - (s.a + t * d)).squaredNorm() <= reach2;
-    };
-    return VisitCells(lo, hi, near, fn, max_items);
+    return ForEachInBand(BandOf(s, radius_m), fn, max_items);
+  }
+  template <typename Fn>
+  bool ForEachInBand(const SegmentBand& band, Fn&& fn, size_t max_items = SIZE_MAX) const {
+    return VisitCells(
+        band.lo, band.hi, [&band](const CellKey& key) { return band.Near(key); }, fn, max_items);
   }
 
  private:
@@ -258,10 +288,6 @@ class UniformGrid {
       }
     }
     return true;
-  }
-
-  geometry::Vec2 CentreOf(const CellKey& k) const {
-    return {(static_cast<double>(k.x) + 0.5) * cell_m_, (static_cast<double>(k.y) + 0.5) * cell_m_};
   }
 
   double cell_m_;

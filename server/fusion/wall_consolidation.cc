@@ -17,10 +17,6 @@ using geometry::Vec2;
 
 namespace {
 
-// Pieces are filed in the index at points at most this far apart along their
-// fitted segment (and the grid's cells are this wide): every point of a piece
-// is then within half of it from a filed point.
-constexpr double kPieceStepM = 2.0;
 constexpr double kSlackM = 1e-6;
 // Piercing ignores this much of each end of a piece: its fitted end may
 // overshoot the wall's corner, past which the space is free.
@@ -57,14 +53,6 @@ bool AnySample(const Vec2& p, const Vec2& u, double t0, double t1, Fn&& fn) {
     if (fn(p + (t0 + (t1 - t0) * static_cast<double>(i) / steps) * u)) return true;
   }
   return false;
-}
-
-int FilingSteps(const Segment2& s) {
-  return std::max(1, static_cast<int>(std::ceil(s.length() / kPieceStepM)));
-}
-
-Vec2 FiledPoint(const Segment2& s, int i, int steps) {
-  return s.a + (static_cast<double>(i) / steps) * (s.b - s.a);
 }
 
 std::vector<Vec2> FiledPoints(const Segment2& s) {
@@ -169,7 +157,11 @@ WallConsolidator::WallConsolidator(const FusionParams& params, uint32_t support_
       support_cap_(support_cap),
       max_wall_pieces_(params.mode == FusionMode::kBounded ? params.max_wall_pieces
                                                            : std::numeric_limits<size_t>::max()),
-      index_(kPieceStepM) {}
+      index_(kPieceStepM),
+      candidates_(&index_, [this](ClusterId id) -> const Segment2* {
+        auto it = pieces_.find(id);
+        return it == pieces_.end() || it->second.retired ? nullptr : &it->second.fit.segment;
+      }) {}
 
 void WallConsolidator::TouchNeighboursIfOversized(ClusterId id) {
   if (!pieces_.at(id).oversized) return;
@@ -184,6 +176,7 @@ FreeSpaceGrid* WallConsolidator::EnableFreeSpace() {
         std::make_unique<FreeSpaceGrid>(params_.wall_free_min_count, params_.evidence_range_m);
     // Neighbours() searches further with evidence (occluded gaps).
     all_neighbours_stale_ = true;
+    candidates_.Clear();
     if (params_.wall_proof_gap_m > 0.0) {
       proof_ = std::make_unique<FreeSpaceGrid>(1, params_.evidence_range_m);
     }
@@ -210,6 +203,7 @@ void WallConsolidator::AddObservation(const Vec2& origin, const std::vector<Segm
 }
 
 void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
+  if (insert) candidates_.Filed(id);
   for (const Vec2& p : FiledPoints(s)) {
     if (insert) {
       index_.Insert(p, id);
@@ -299,6 +293,7 @@ void WallConsolidator::Retire(ClusterId id) {
   ++retired_count_;
   if (ledger_) ledger_->Unwatch(id);
   DropNeighbours(id);
+  candidates_.Forget(id);
 }
 
 std::vector<ClusterId> WallConsolidator::RetiredPieces() const {
@@ -326,6 +321,7 @@ void WallConsolidator::Erase(ClusterId piece) {
   if (it->second.has_wall) touched_walls_.push_back(it->second.wall);
   pieces_.erase(it);
   piece_stats_.erase(piece);
+  candidates_.Forget(piece);
 }
 
 void WallConsolidator::SetVerifyNeighbourCache(bool on) { verify_neighbour_cache = on; }
@@ -363,24 +359,21 @@ const std::vector<ClusterId>& WallConsolidator::CachedNeighbours(ClusterId id) {
     ++neighbour_cache_mismatch_count;
     RefreshNeighbours(id);
     it = neighbours_.find(id);
-  } else if (verify_neighbour_cache && Neighbours(id, false) != it->second) {
+  } else if (verify_neighbour_cache && Neighbours(id, false, false) != it->second) {
     ++neighbour_cache_mismatch_count;
   }
   return it->second;
 }
 
-std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_gaps) {
+std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_gaps,
+                                                    bool cached_search) {
   std::vector<ClusterId> out;
   if (!params_.consolidate) return out;
-  out.reserve(32);  // a piece is filed every 2 m: long walls find each other many times
   const Piece& piece = pieces_.at(id);
   if (piece.pierced) return out;
   const Segment2& s = piece.fit.segment;
-  const double radius = params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM;
-  const auto add = [&](ClusterId other) {
-    if (other != id) out.push_back(other);
-  };
-  index_.ForEachNearSegment(s, radius, add);
+  std::vector<SearchBand> bands;
+  bands.push_back({s, params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM});
   const double length = s.length();
   if (free_space_ && params_.wall_occluded_gap_m > params_.wall_gap_m && length > 0.0) {
     // Occluded-gap candidates lie along the line: the nearer end of the other
@@ -393,11 +386,30 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_ga
     const double lateral_m =
         2.0 * params_.wall_offset_m + (gap_m + kPieceStepM) * tan_delta + kSlackM;
     // Beyond the two ends only: along the extent the band above finds them.
-    index_.ForEachNearSegment(Segment2{s.a - along_m * u, s.a}, lateral_m, add);
-    index_.ForEachNearSegment(Segment2{s.b, s.b + along_m * u}, lateral_m, add);
+    bands.push_back({Segment2{s.a - along_m * u, s.a}, lateral_m});
+    bands.push_back({Segment2{s.b, s.b + along_m * u}, lateral_m});
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  if (cached_search) {
+    // The cache's candidates, kept if a search of the bands finds them.
+    std::vector<PieceIndex::SegmentBand> exact;
+    for (const SearchBand& band : bands)
+      exact.push_back(index_.BandOf(band.segment, band.radius_m));
+    for (ClusterId other : candidates_.Candidates(id, bands)) {
+      if (other == id) continue;
+      auto it = pieces_.find(other);
+      if (it == pieces_.end() || it->second.retired) continue;  // not filed
+      if (FiledInBands(index_, it->second.fit.segment, exact)) out.push_back(other);
+    }
+  } else {
+    out.reserve(32);  // a piece is filed every 2 m: long walls find each other many times
+    for (const SearchBand& band : bands) {
+      index_.ForEachNearSegment(band.segment, band.radius_m, [&](ClusterId other) {
+        if (other != id) out.push_back(other);
+      });
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
   std::vector<Vec2> gap_samples;
   out.erase(std::remove_if(out.begin(), out.end(),
                            [&](ClusterId other) {

@@ -66,6 +66,7 @@
 #include "fusion/free_space.h"
 #include "fusion/grid_index.h"
 #include "fusion/params.h"
+#include "fusion/wall_candidates.h"
 #include "fusion/wall_retirement.h"
 
 namespace mapd::fusion {
@@ -166,10 +167,12 @@ class WallConsolidator {
   // current neighbours are resolved again.
   void TouchNeighboursIfOversized(ClusterId id);
   void Index(ClusterId id, const geometry::Segment2& s, bool insert);
-  // Pieces on one wall with `id`, ascending, computed from the index.
-  // Records the cells of the occluded gaps it bridges (gap_watch_) if
-  // record_gaps.
-  std::vector<ClusterId> Neighbours(ClusterId id, bool record_gaps = true);
+  // Pieces on one wall with `id`, ascending, computed from the index (through
+  // the candidate cache if cached_search; the test hook checks it against a
+  // search of the index). Records the cells of the occluded gaps it bridges
+  // (gap_watch_) if record_gaps.
+  std::vector<ClusterId> Neighbours(ClusterId id, bool record_gaps = true,
+                                    bool cached_search = true);
   // The neighbour cache (neighbours_): recomputes `id`'s list and mirrors the
   // change into its old and new neighbours' lists; drops a piece that left.
   void RefreshNeighbours(ClusterId id);
@@ -194,7 +197,8 @@ class WallConsolidator {
   std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending
   std::vector<ClusterId> touched_pieces_;
   std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
-  UniformGrid<ClusterId> index_;               // pieces filed at points along their fitted segment
+  PieceIndex index_;                           // pieces filed at points along their fitted segment
+  WallCandidates candidates_;                  // of Neighbours(), from index_
   std::unique_ptr<FreeSpaceGrid> free_space_;  // see AddView
   std::unique_ptr<FreeSpaceGrid> proof_;       // see AddObservation
   std::unique_ptr<RetirementLedger> ledger_;   // with free_space_, if retire_views > 0
