@@ -16,7 +16,7 @@ constexpr double kMinDoubleAreaM2 = 1e-9;
 
 int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-int64_t CellIndex(double x) { return static_cast<int64_t>(std::floor(x / FreeSpaceGrid::kCellM)); }
+int64_t CellIndex(double x) { return FloorInt(x / FreeSpaceGrid::kCellM); }
 
 // One eroded half-plane of the triangle: inside iff n . p >= c.
 struct HalfPlane {
@@ -73,8 +73,8 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   int64_t row_ty = 0;
   // Rows whose centre lies in [y_lo, y_hi] (the others are outside the
   // triangle or the range).
-  const int64_t cy_first = static_cast<int64_t>(std::ceil(y_lo / kCellM - 0.5));
-  const int64_t cy_last = static_cast<int64_t>(std::floor(y_hi / kCellM - 0.5));
+  const int64_t cy_first = CeilInt(y_lo / kCellM - 0.5);
+  const int64_t cy_last = FloorInt(y_hi / kCellM - 0.5);
   for (int64_t cy = cy_first; cy <= cy_last; ++cy) {
     const double y = (static_cast<double>(cy) + 0.5) * kCellM;
     double lo = x_lo, hi = x_hi;
@@ -90,8 +90,8 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
     }
     if (hi < lo) continue;
     // Cells whose centre (cx + 0.5) * kCellM lies in [lo, hi].
-    const int64_t cx_first = static_cast<int64_t>(std::ceil(lo / kCellM - 0.5));
-    const int64_t cx_last = static_cast<int64_t>(std::floor(hi / kCellM - 0.5));
+    const int64_t cx_first = CeilInt(lo / kCellM - 0.5);
+    const int64_t cx_last = FloorInt(hi / kCellM - 0.5);
     if (cx_first > cx_last) continue;
     const int64_t ty = FloorDiv(cy, kTileCells);
     if (!has_row || ty != row_ty) {

@@ -39,6 +39,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "fusion/floor_int.h"
 #include "geometry/segment2.h"
 
 namespace mapd::fusion {
@@ -74,8 +75,8 @@ class FreeSpaceGrid {
     explicit Probe(const FreeSpaceGrid& grid) : grid_(grid) {}
     // Inline: callers probe every half cell along lines (piercing, gaps).
     bool IsFree(const geometry::Vec2& p) {
-      const auto cx = static_cast<int64_t>(std::floor(p.x() / kCellM));
-      const auto cy = static_cast<int64_t>(std::floor(p.y() / kCellM));
+      const int64_t cx = FloorInt(p.x() / kCellM);
+      const int64_t cy = FloorInt(p.y() / kCellM);
       const int64_t tx = cx >> kTileShift, ty = cy >> kTileShift;  // floor division
       const uint64_t key = TileKey(tx, ty);
       if (!has_tile_ || key != tile_key_) {

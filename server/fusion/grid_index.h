@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "fusion/floor_int.h"
 #include "geometry/segment2.h"
 
 namespace mapd::fusion {
@@ -138,8 +139,7 @@ class UniformGrid {
   explicit UniformGrid(double cell_m) : cell_m_(cell_m) {}
 
   CellKey KeyOf(const geometry::Vec2& p) const {
-    return {static_cast<int64_t>(std::floor(p.x() / cell_m_)),
-            static_cast<int64_t>(std::floor(p.y() / cell_m_))};
+    return {FloorInt(p.x() / cell_m_), FloorInt(p.y() / cell_m_)};
   }
 
   void Insert(const geometry::Vec2& p, T item) {

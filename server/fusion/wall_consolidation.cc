@@ -40,9 +40,9 @@ void EraseSorted(std::vector<ClusterId>* ids, ClusterId x) {
 // The index cell (kPieceStepM square) that contains p, packed as a
 // free-space cell key of its indices.
 uint64_t IndexCellKey(const Vec2& p) {
-  return FreeSpaceGrid::CellKeyOf(
-      Vec2(std::floor(p.x() / kPieceStepM), std::floor(p.y() / kPieceStepM)) *
-      FreeSpaceGrid::kCellM);
+  return FreeSpaceGrid::CellKeyOf(Vec2(static_cast<double>(FloorInt(p.x() / kPieceStepM)),
+                                       static_cast<double>(FloorInt(p.y() / kPieceStepM))) *
+                                  FreeSpaceGrid::kCellM);
 }
 
 // Points every kSampleStepM from p + t0 u to p + t1 u (both included).
