@@ -49,19 +49,42 @@ void ClusterStats::AddFeature(const GroundFeature& f, ObservationId observation,
 }
 
 void ClusterStats::Merge(ClusterStats&& other, uint32_t support_cap) {
-  id = std::min(id, other.id);
-  member_count += other.member_count;
-  plane_members += other.plane_members;
-  moments.Merge(other.moments);
-  z_min_m = std::min(z_min_m, other.z_min_m);
-  z_max_m = std::max(z_max_m, other.z_max_m);
-
   // hull(A u B) = hull(hull(A) u hull(B)).
   std::vector<geometry::Vec2> points;
   points.reserve(hull.size() + other.hull.size());
   points.insert(points.end(), hull.begin(), hull.end());
   points.insert(points.end(), other.hull.begin(), other.hull.end());
   hull = geometry::ConvexHull(std::move(points));
+  MergeAllButHull(std::move(other), support_cap);
+}
+
+ClusterStats ClusterStats::MergeAll(const std::vector<const ClusterStats*>& parts,
+                                    uint32_t support_cap) {
+  ClusterStats all = *parts.front();
+  if (parts.size() == 1) return all;
+  size_t vertices = 0;
+  for (const ClusterStats* part : parts) vertices += part->hull.size();
+  std::vector<geometry::Vec2> points;
+  points.reserve(vertices);
+  for (const ClusterStats* part : parts) {
+    points.insert(points.end(), part->hull.begin(), part->hull.end());
+  }
+  for (size_t i = 1; i < parts.size(); ++i) {
+    ClusterStats copy = *parts[i];
+    all.MergeAllButHull(std::move(copy), support_cap);
+  }
+  // hull(A u B u ...) = hull(hull(A) u hull(B) u ...).
+  all.hull = geometry::ConvexHull(std::move(points));
+  return all;
+}
+
+void ClusterStats::MergeAllButHull(ClusterStats&& other, uint32_t support_cap) {
+  id = std::min(id, other.id);
+  member_count += other.member_count;
+  plane_members += other.plane_members;
+  moments.Merge(other.moments);
+  z_min_m = std::min(z_min_m, other.z_min_m);
+  z_max_m = std::max(z_max_m, other.z_max_m);
 
   observations.Merge(std::move(other.observations), support_cap);
 

@@ -29,6 +29,10 @@ struct ClusterStats {
   // O(support) for the observation ids while exact (support_counter.h; `cap`
   // bounds them) and O(h log h) for the hulls, h = number of hull vertices.
   void Merge(ClusterStats&& other, uint32_t support_cap);
+  // The stats of the union of parts (at least one), merged in their order,
+  // as Merge would, with one hull of all their hulls' vertices at the end
+  // rather than one per part (a wall of k pieces: one sort, not k - 1).
+  static ClusterStats MergeAll(const std::vector<const ClusterStats*>& parts, uint32_t support_cap);
   // Absorbs one more member: Merge(OfFeature(f, observation, robot)), cheaper.
   // `inside_hull`: the caller knows both endpoints lie strictly inside the
   // hull (the hull is then left as it is without a test).
@@ -47,6 +51,10 @@ struct ClusterStats {
 
   // The fused feature before corner optimisation (segment == fitted).
   FusedFeature ToFused(const Fit& fit) const;
+
+ private:
+  // Merge without the hull.
+  void MergeAllButHull(ClusterStats&& other, uint32_t support_cap);
 };
 
 }  // namespace mapd::fusion

@@ -389,16 +389,18 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_ga
     bands.push_back({Segment2{s.a - along_m * u, s.a}, lateral_m});
     bands.push_back({Segment2{s.b, s.b + along_m * u}, lateral_m});
   }
+  // The cache's candidates are kept below if a search of the bands would
+  // find them: if they are filed in a cell of `exact`.
+  std::vector<PieceIndex::SegmentBand> exact;
   if (cached_search) {
-    // The cache's candidates, kept if a search of the bands finds them.
-    std::vector<PieceIndex::SegmentBand> exact;
-    for (const SearchBand& band : bands)
+    for (const SearchBand& band : bands) {
       exact.push_back(index_.BandOf(band.segment, band.radius_m));
+    }
     for (ClusterId other : candidates_.Candidates(id, bands)) {
       if (other == id) continue;
       auto it = pieces_.find(other);
       if (it == pieces_.end() || it->second.retired) continue;  // not filed
-      if (FiledInBands(index_, it->second.fit.segment, exact)) out.push_back(other);
+      out.push_back(other);
     }
   } else {
     out.reserve(32);  // a piece is filed every 2 m: long walls find each other many times
@@ -418,6 +420,10 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_ga
                              gap_samples.clear();
                              if (!OnOneWall(s, id, q.fit.segment, other, params_, free_space_.get(),
                                             record_gaps ? &gap_samples : nullptr, proof_.get())) {
+                               return true;
+                             }
+                             // Last, as the dearer test: OnOneWall rejects most candidates.
+                             if (cached_search && !FiledInBands(index_, q.fit.segment, exact)) {
                                return true;
                              }
                              // Bridged an occluded gap: watch its cells.
@@ -546,11 +552,10 @@ void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
   for (const std::vector<uint32_t>& group : groups) {  // each ascending, as `component`
     Wall wall;
     for (uint32_t i : group) wall.pieces.push_back(component[i]);
-    wall.stats = piece_stats_.at(component[group.front()]);
-    for (size_t i = 1; i < group.size(); ++i) {
-      ClusterStats copy = piece_stats_.at(component[group[i]]);
-      wall.stats.Merge(std::move(copy), support_cap_);
-    }
+    std::vector<const ClusterStats*> parts;
+    parts.reserve(group.size());
+    for (uint32_t i : group) parts.push_back(&piece_stats_.at(component[i]));
+    wall.stats = ClusterStats::MergeAll(parts, support_cap_);
     wall.fit = group.size() == 1 ? pieces_.at(component[group.front()]).fit : wall.stats.Refit();
     walls->push_back(std::move(wall));
   }
@@ -666,6 +671,10 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   }
 
   for (ClusterId wall : affected) walls_.erase(wall);
+  // At most a wall per piece: no reallocation moves the walls' statistics.
+  size_t most_walls = singles.size();
+  for (const std::vector<ClusterId>& component : components) most_walls += component.size();
+  walls->reserve(most_walls);
   std::unordered_set<ClusterId> now;
   for (const std::vector<ClusterId>& component : components) {
     const size_t first = walls->size();
