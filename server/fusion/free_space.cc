@@ -43,7 +43,78 @@ HalfPlane InwardRay(const Vec2& p, const Vec2& q, const Vec2& o, double k) {
   return {m, m.dot(o)};
 }
 
+// The x-range of triangle (o, a, b) within the horizontal band y0 <= y <= y1;
+// false if they do not meet.
+bool BandRange(const Vec2& o, const Vec2& a, const Vec2& b, double y0, double y1, double* x_min,
+               double* x_max) {
+  bool any = false;
+  const auto take = [&](double x) {
+    *x_min = any ? std::min(*x_min, x) : x;
+    *x_max = any ? std::max(*x_max, x) : x;
+    any = true;
+  };
+  const Vec2* corners[3] = {&o, &a, &b};
+  for (int i = 0; i < 3; ++i) {
+    const Vec2& p = *corners[i];
+    const Vec2& q = *corners[(i + 1) % 3];
+    if (p.y() >= y0 && p.y() <= y1) take(p.x());
+    if (p.y() == q.y()) continue;
+    for (const double y : {y0, y1}) {
+      if ((y - p.y()) * (y - q.y()) < 0.0)
+        take(p.x() + (y - p.y()) * (q.x() - p.x()) / (q.y() - p.y()));
+    }
+  }
+  return any;
+}
+
+// AddView tests rows this many at a time for cells it would change (a
+// divisor of kTileCells): on the CPU guard's city, 8 took the fewest
+// instructions (valgrind), 4, 16 and 32 up to 6 % more.
+constexpr int64_t kStripRows = 8;
+
+// Where the boundary lines of two half-planes cross; false if parallel.
+bool Crossing(const HalfPlane& g, const HalfPlane& h, Vec2* x) {
+  const double det = g.n.x() * h.n.y() - g.n.y() * h.n.x();
+  if (std::abs(det) < 1e-12) return false;
+  *x = Vec2((g.c * h.n.y() - g.n.y() * h.c) / det, (g.n.x() * h.c - g.c * h.n.x()) / det);
+  return true;
+}
+
+// The corners of the region inside all three half-planes of a view (side,
+// segment, side), if it is the triangle they bound: false when erosion
+// emptied it or turned it over (a view of a short segment far away).
+bool ErodedCorners(const HalfPlane (&planes)[3], Vec2 (&corners)[3]) {
+  constexpr double kToleranceM = 1e-9;
+  for (int i = 0; i < 3; ++i) {
+    if (!Crossing(planes[i], planes[(i + 1) % 3], &corners[i])) return false;
+  }
+  // Each corner inside the third plane, and the corners counter-clockwise.
+  for (int i = 0; i < 3; ++i) {
+    const HalfPlane& third = planes[(i + 2) % 3];
+    if (third.n.dot(corners[i]) < third.c - kToleranceM) return false;
+  }
+  return geometry::Cross(corners[1] - corners[0], corners[2] - corners[0]) > 0.0;
+}
+
 }  // namespace
+
+bool FreeSpaceGrid::Quiet(int64_t ty, size_t row_first, size_t row_last, int64_t cx_first,
+                          int64_t cx_last) const {
+  for (int64_t tx = FloorDiv(cx_first, kTileCells); tx * kTileCells <= cx_last; ++tx) {
+    auto it = tiles_.find(TileKey(tx, ty));
+    if (it == tiles_.end()) return false;  // counts of zero
+    const TileData& tile = *it->second;
+    const int first = static_cast<int>(std::max(cx_first, tx * kTileCells) - tx * kTileCells);
+    const int last =
+        static_cast<int>(std::min(cx_last, (tx + 1) * kTileCells - 1) - tx * kTileCells);
+    const uint32_t run =
+        (last == kTileCells - 1 ? ~0u : (1u << (last + 1)) - 1u) & ~((1u << first) - 1u);
+    for (size_t row = row_first; row <= row_last; ++row) {
+      if (((run & ~tile.saturated[row]) | (run & tile.watched[row])) != 0) return false;
+    }
+  }
+  return true;
+}
 
 FreeSpaceGrid::TileData& FreeSpaceGrid::TileAt(int64_t tx, int64_t ty) {
   std::unique_ptr<TileData>& tile = tiles_[TileKey(tx, ty)];
@@ -75,7 +146,42 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   // triangle or the range).
   const int64_t cy_first = CeilInt(y_lo / kCellM - 0.5);
   const int64_t cy_last = FloorInt(y_hi / kCellM - 0.5);
+  Vec2 corners[3];
+  const bool eroded = ErodedCorners(planes, corners);
   for (int64_t cy = cy_first; cy <= cy_last; ++cy) {
+    const int64_t strip_first = FloorDiv(cy, kStripRows) * kStripRows;
+    if (cy == cy_first || cy == strip_first) {
+      // A new strip of rows (within one tile row): its rows are skipped
+      // together if every cell the triangle could cover in them (its x-range
+      // over the rows' centres) is saturated and unwatched, so that the rows
+      // would change nothing. Revisited areas are mostly that.
+      const int64_t strip_ty = FloorDiv(cy, kTileCells);
+      const int64_t strip_last = std::min(cy_last, strip_first + kStripRows - 1);
+      const double y0 = (static_cast<double>(cy) + 0.5) * kCellM;
+      const double y1 = (static_cast<double>(strip_last) + 0.5) * kCellM;
+      double x_min = 0.0, x_max = 0.0;
+      int64_t qx_first = 0, qx_last = -1;
+      if (eroded) {
+        // The cells whose centre lies in the eroded triangle, a micrometre
+        // grown (rounding).
+        if (!BandRange(corners[0], corners[1], corners[2], y0 - 1e-6, y1 + 1e-6, &x_min, &x_max)) {
+          cy = strip_last;  // the triangle misses these rows
+          continue;
+        }
+        qx_first = CeilInt((std::max(x_min, x_lo) - 1e-6) / kCellM - 0.5);
+        qx_last = FloorInt((std::min(x_max, x_hi) + 1e-6) / kCellM - 0.5);
+      } else if (BandRange(origin, a, b, y0, y1, &x_min, &x_max)) {
+        // The view's whole triangle holds the region, a cell wider.
+        qx_first = CellIndex(std::max(x_min, x_lo)) - 1;
+        qx_last = CellIndex(std::min(x_max, x_hi)) + 1;
+      }
+      if (skip_quiet_rows_ && qx_first <= qx_last &&
+          Quiet(strip_ty, static_cast<size_t>(cy - strip_ty * kTileCells),
+                static_cast<size_t>(strip_last - strip_ty * kTileCells), qx_first, qx_last)) {
+        cy = strip_last;
+        continue;
+      }
+    }
     const double y = (static_cast<double>(cy) + 0.5) * kCellM;
     double lo = x_lo, hi = x_hi;
     for (const HalfPlane& h : planes) {

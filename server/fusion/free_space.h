@@ -113,6 +113,10 @@ class FreeSpaceGrid {
   // (a cell once per triangle that covered it); clears the list.
   std::vector<uint64_t> TakeWatchedPasses();
 
+  // Test hook: AddView without skipping rows it would not change (the
+  // reference its skipping must equal).
+  void set_skip_quiet_rows(bool on) { skip_quiet_rows_ = on; }
+
   size_t tile_count() const { return tiles_.size(); }
   size_t memory_bytes() const { return tiles_.size() * (sizeof(TileData) + 48); }
 
@@ -138,9 +142,14 @@ class FreeSpaceGrid {
            static_cast<uint64_t>(static_cast<uint32_t>(ty));
   }
   TileData& TileAt(int64_t tx, int64_t ty);
+  // Whether cells [cx_first, cx_last] of rows [row_first, row_last] of tile
+  // row ty are all saturated and unwatched (AddView would change nothing).
+  bool Quiet(int64_t ty, size_t row_first, size_t row_last, int64_t cx_first,
+             int64_t cx_last) const;
 
   const uint32_t min_count_;
   const double range_m_;
+  bool skip_quiet_rows_ = true;
   std::unordered_map<uint64_t, std::unique_ptr<TileData>> tiles_;
   // AddView's scratch: the tiles of the tile row it is in, by column.
   std::vector<TileData*> row_tiles_;

@@ -121,6 +121,43 @@ FusionParams WithEvidence(double occluded_gap_m, FusionMode mode = FusionMode::k
   return p;
 }
 
+// AddView skips strips of rows in which every cell it could cover is
+// saturated and unwatched: the grid, its newly free cells and its watched
+// passes must be those of a grid that visits every row. A robot revisiting
+// a small block from many poses, far and short segments among the views
+// (erosion turns their triangles over), watches switched on and off.
+TEST(FreeSpaceGridTest, SkippingQuietRowsChangesNothing) {
+  for (const uint32_t min_count : {1u, 3u}) {
+    FreeSpaceGrid skipping(min_count, 30.0), reference(min_count, 30.0);
+    reference.set_skip_quiet_rows(false);
+    std::mt19937 rng(min_count);
+    std::uniform_real_distribution<double> pos(-12.0, 12.0), far(-60.0, 60.0), len(0.05, 8.0),
+        angle(-3.2, 3.2);
+    for (int view = 0; view < 4000; ++view) {
+      const Vec2 origin(pos(rng), pos(rng));
+      const Vec2 a = view % 7 == 0 ? Vec2(far(rng), far(rng)) : Vec2(pos(rng), pos(rng));
+      const double t = angle(rng);
+      const Segment2 segment{a, a + len(rng) * Vec2(std::cos(t), std::sin(t))};
+      if (view % 5 == 0) {
+        const uint64_t cell = FreeSpaceGrid::CellKeyOf(Vec2(pos(rng), pos(rng)));
+        const bool on = rng() % 2 == 0;
+        skipping.Watch(cell, on);
+        reference.Watch(cell, on);
+      }
+      skipping.AddView(origin, segment);
+      reference.AddView(origin, segment);
+      ASSERT_EQ(skipping.TakeNewlyFree(), reference.TakeNewlyFree()) << "view " << view;
+      ASSERT_EQ(skipping.TakeWatchedPasses(), reference.TakeWatchedPasses()) << "view " << view;
+    }
+    const auto tiles = skipping.SortedTiles(), reference_tiles = reference.SortedTiles();
+    ASSERT_EQ(tiles.size(), reference_tiles.size());
+    for (size_t i = 0; i < tiles.size(); ++i) {
+      EXPECT_EQ(tiles[i].first, reference_tiles[i].first);
+      EXPECT_EQ(*tiles[i].second, *reference_tiles[i].second);
+    }
+  }
+}
+
 TEST(OccludedGapTest, AGapBehindAnOccluderJoins) {
   FusionEngine off(WithEvidence(0.0));
   Feed(&off, Street(/*fence=*/true, /*open_gap=*/false));
