@@ -44,10 +44,12 @@ using mapd::fusion::GroundFeature;
 using mapd::geometry::Vec2;
 
 // docs/long-running.md, "The CPU guard": this workload's fused features per
-// CPU-second on the doc's machine (2026-12-05, after issue 40's cost work;
-// the soak's fuser thread, sharing its cores with robots and gRPC, reads
-// 67,000-82,000 on the same city). Update it with the doc.
-constexpr double kStatedFeaturesPerCpuS = 84500.0;
+// CPU-second on the doc's machine (2026-12-06, median of five, after issue
+// 40's cost work, on a day that host ran the code before it at 48,450 rather
+// than the 84,500 of 2026-12-05; the soak's fuser thread, sharing its cores
+// with robots and gRPC, read 52,700-78,600 on the same city that day).
+// Update it with the doc.
+constexpr double kStatedFeaturesPerCpuS = 60300.0;
 
 double CpuSeconds() {
   rusage u{};
