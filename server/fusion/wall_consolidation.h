@@ -93,6 +93,10 @@ class WallConsolidator {
  public:
   // support_cap: as ClusterStats::Merge (the engine's).
   WallConsolidator(const FusionParams& params, uint32_t support_cap);
+  // Neither copied nor moved: the candidate cache reads pieces_ through a
+  // pointer to this object.
+  WallConsolidator(const WallConsolidator&) = delete;
+  WallConsolidator& operator=(const WallConsolidator&) = delete;
 
   // Piece stats.id appeared or changed. Returns false (and records nothing)
   // if it is unchanged: same member count, support and fitted segment.
