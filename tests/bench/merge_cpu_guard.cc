@@ -10,12 +10,14 @@
 // measures the CPU of the MergeSubmaps call (getrusage: every thread of this
 // process; the machine's other load does not count, unlike wall time). It
 // fails (exit 1) when a pair is decided otherwise than the benchmark decides
-// it (merged right; refused), or when its CPU is above twice the figure
+// it (merged right; refused), or when its CPU is above three times the figure
 // docs/voxel-merge.md states for it in three runs in a row: a regression of
-// that kind fails it on any machine within 2x of the doc's, one run slowed by
-// a busy host does not. Without the shared map it says so and exits 0.
+// that kind (4.6x and 14x) fails it on any machine within 1.5x of the doc's,
+// one run slowed by a busy host does not. Twice was too tight: the doc's host
+// itself ran the disjoint pair in 8.8 s on 2026-12-06 (1.8x; its speed moves
+// from day to day). Without the shared map it says so and exits 0.
 //
-//   merge_cpu_guard [--max-ratio=R]   (R >= 1; default 2)
+//   merge_cpu_guard [--max-ratio=R]   (R >= 1; default 3)
 //
 // deploy/test.sh runs it after ctest, beside fusion_cpu_guard.
 #include <sys/resource.h>
@@ -61,7 +63,7 @@ std::string MapPath() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  double max_ratio = 2.0;
+  double max_ratio = 3.0;
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--max-ratio=", 12) == 0) {
       char* end = nullptr;
