@@ -150,7 +150,7 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
   const bool eroded = ErodedCorners(planes, corners);
   for (int64_t cy = cy_first; cy <= cy_last; ++cy) {
     const int64_t strip_first = FloorDiv(cy, kStripRows) * kStripRows;
-    if (cy == cy_first || cy == strip_first) {
+    if (skip_quiet_rows_ && (cy == cy_first || cy == strip_first)) {
       // A new strip of rows (within one tile row): its rows are skipped
       // together if every cell the triangle could cover in them (its x-range
       // over the rows' centres) is saturated and unwatched, so that the rows
@@ -175,7 +175,7 @@ void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
         qx_first = CellIndex(std::max(x_min, x_lo)) - 1;
         qx_last = CellIndex(std::min(x_max, x_hi)) + 1;
       }
-      if (skip_quiet_rows_ && qx_first <= qx_last &&
+      if (qx_first <= qx_last &&
           Quiet(strip_ty, static_cast<size_t>(cy - strip_ty * kTileCells),
                 static_cast<size_t>(strip_last - strip_ty * kTileCells), qx_first, qx_last)) {
         cy = strip_last;

@@ -113,8 +113,9 @@ class FreeSpaceGrid {
   // (a cell once per triangle that covered it); clears the list.
   std::vector<uint64_t> TakeWatchedPasses();
 
-  // Test hook: AddView without skipping rows it would not change (the
-  // reference its skipping must equal).
+  // Test hook: AddView visiting every row, without skipping strips it would
+  // not change or that the triangle misses (the reference its skipping must
+  // equal).
   void set_skip_quiet_rows(bool on) { skip_quiet_rows_ = on; }
 
   size_t tile_count() const { return tiles_.size(); }
