@@ -20,8 +20,10 @@ void AddFlags(CLI::App* app, CommandLine* line) {
   app->add_flag("--version", line->version, "print the version and exit");
   const service::ServerConfig defaults;
   for (const Setting& s : service::Settings()) {
+    // --data-dir as the issue and docs spell it, beside the setting's name.
+    const std::string names = "--" + s.key + (s.key == "data_dir" ? ",--data-dir" : "");
     app->add_option_function<std::string>(
-           "--" + s.key,
+           names,
            [line, key = s.key](const std::string& v) { line->settings.emplace_back(key, v); },
            s.help)
         ->type_name("<" + s.kind + ">")

@@ -1,4 +1,5 @@
-// grpc.health.v1.Health/Check (the server's overall status, service "")
+// grpc.health.v1.Health/Check (the server's overall status, service "", or
+// one map's, "map/<id>")
 // through gRPC's generic stub: Debian ships gRPC's health service but no
 // client stubs for it, so the two-byte messages are encoded here. Used by
 // mapd-health and by the tests. Header-only, gRPC only.
@@ -31,15 +32,22 @@ inline const char* ServingStatusName(ServingStatus s) {
   return "UNKNOWN";
 }
 
-// Asks `channel` within `deadline`; the call's status, and on success the
-// server's answer in *status (UNKNOWN for an answer it cannot read).
+// Asks `channel` within `deadline` about `service` (under 128 bytes); the
+// call's status (NOT_FOUND for a service the server does not know), and on
+// success the server's answer in *status (UNKNOWN for an answer it cannot read).
 inline grpc::Status CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
-                                std::chrono::milliseconds deadline, ServingStatus* status) {
+                                std::chrono::milliseconds deadline, ServingStatus* status,
+                                const std::string& service = "") {
   grpc::GenericStub stub(channel);
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + deadline);
-  grpc::Slice empty(std::string{});  // HealthCheckRequest{service: ""} encodes to no bytes
-  const grpc::ByteBuffer request(&empty, 1);
+  // HealthCheckRequest{service}: field 1, length-delimited; "" encodes to no bytes.
+  std::string encoded;
+  if (!service.empty() && service.size() < 128) {
+    encoded = std::string{'\x0a', static_cast<char>(service.size())} + service;
+  }
+  grpc::Slice slice(encoded);
+  const grpc::ByteBuffer request(&slice, 1);
   grpc::ByteBuffer response;
   std::promise<grpc::Status> done;
   stub.UnaryCall(&ctx, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,

@@ -116,7 +116,10 @@ void AddTokenCommand(CLI::App* app, std::function<int()>* action) {
   auto flags = std::make_shared<TokenOptions>();
   const auto add = [&](const char* name, const char* summary, int (*run)(const TokenOptions&)) {
     CLI::App* verb = token->add_subcommand(name, summary);
-    verb->add_option("--db", flags->db, "the database file mapd serves")->required();
+    verb->add_option("--db", flags->db,
+                     "the database file mapd serves (with --data-dir DIR: DIR/default.db, which "
+                     "holds the tokens of every map)")
+        ->required();
     verb->callback([flags, action, run] { *action = [flags, run] { return run(*flags); }; });
     return verb;
   };

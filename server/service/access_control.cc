@@ -11,7 +11,7 @@ constexpr char kBearer[] = "Bearer ";
 
 bool IsWrite(Permission p) {
   return p == Permission::kWrite || p == Permission::kDelete || p == Permission::kMerge ||
-         p == Permission::kManageTokens;
+         p == Permission::kManageTokens || p == Permission::kManageMaps;
 }
 
 std::string_view View(const grpc::string_ref& s) { return std::string_view(s.data(), s.size()); }

@@ -16,6 +16,7 @@ bool Grants(Role role, Permission p) {
     case Permission::kReadAudit:
       return role == Role::kOperator || role == Role::kAdmin;
     case Permission::kManageTokens:
+    case Permission::kManageMaps:
       return role == Role::kAdmin;
   }
   return false;
@@ -71,6 +72,8 @@ const char* PermissionName(Permission p) {
       return "read_audit";
     case Permission::kManageTokens:
       return "manage_tokens";
+    case Permission::kManageMaps:
+      return "manage_maps";
   }
   return "unknown";
 }

@@ -25,6 +25,7 @@ enum class Permission {
   kMerge,         // MergeSubmaps, ApproveMerge, RejectMerge
   kReadAudit,     // ListAudit
   kManageTokens,  // CreateToken, ListTokens, RevokeToken
+  kManageMaps,    // CreateMap
 };
 
 struct Principal {

@@ -83,6 +83,11 @@ Status ServerConfig::Validate() const {
     return Status::InvalidArgument(
         "limits.max_feature_length_m must be at most fusion.max_wall_length_m");
   }
+  if (!db_path.empty() && !data_dir.empty()) {
+    return Status::InvalidArgument(
+        "db and data_dir are both set: db serves one map from one file, data_dir several maps "
+        "from one directory; set one");
+  }
   MAPD_RETURN_IF_ERROR(CheckHostPort("listen", listen));
   if (!health_listen.empty()) MAPD_RETURN_IF_ERROR(CheckHostPort("health_listen", health_listen));
   if (tls_cert.empty() != tls_key.empty()) {

@@ -22,8 +22,11 @@ namespace mapd::service {
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   std::string db_path;                     // empty: DefaultDbPath()
-  bool sync_full = false;                  // synchronous=FULL (survives power loss)
-  int busy_timeout_ms = 5000;              // wait for a database lock held by another process
+  // Several maps, one SQLite file <map id>.db each (map_directory.h); not
+  // with db_path. Empty: one map in db_path.
+  std::string data_dir;
+  bool sync_full = false;      // synchronous=FULL (survives power loss)
+  int busy_timeout_ms = 5000;  // wait for a database lock held by another process
   fusion::FusionParams fusion;
   fusion::PlaneFusionParams planes;  // non-vertical planes (floors, ramps)
   IngestOptions ingest;

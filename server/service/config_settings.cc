@@ -164,6 +164,9 @@ const std::vector<Setting>& Settings() {
       Text("db", "SQLite database file; empty = $MAPD_DATA_DIR/map.db, else $XDG_DATA_HOME/mapd/map.db, "
                  "else ~/.local/share/mapd/map.db",
            [](C& c) -> auto& { return c.db_path; }),
+      Text("data_dir", "serve several maps from this directory, one SQLite file <map id>.db each (default.db = "
+                       "the default map; CreateMap adds more); not with db",
+           [](C& c) -> auto& { return c.data_dir; }),
       Choice("sync", "normal: an acknowledged batch survives a crash of mapd; full: it survives power loss too "
                      "(slower commits)",
              [](C& c) -> auto& { return c.sync_full; }, "normal", "full"),

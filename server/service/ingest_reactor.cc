@@ -77,6 +77,14 @@ void IngestReactor::OnReadDone(bool ok) {
     ack.set_code(grpc::StatusCode::UNAVAILABLE);
     ack.set_message("mapd is shutting down; reconnect and resend unacknowledged batches");
     Complete(std::move(ack));
+  } else if (!request_.map_id().empty() && request_.map_id() != options_->map_id) {
+    // One stream, one map: the stream goes on (a client bug, not an attack).
+    ack.set_result(pb::IngestAck::REJECTED);
+    ack.set_code(grpc::StatusCode::INVALID_ARGUMENT);
+    ack.set_message("map_id is '" + request_.map_id().substr(0, 128) +
+                    "' but this stream writes map '" + options_->map_id +
+                    "'; open one Ingest stream per map, naming it in the mapd-map-id metadata");
+    Complete(std::move(ack));
   } else if (StatusOr<IngestBatch> batch = ValidateBatch(request_, options_->limits); !batch.ok()) {
     // Validated before the authorization, so that a refusal's log line and
     // audit row only ever name well-formed ids (issue 43: a robot id with a

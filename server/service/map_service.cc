@@ -33,22 +33,34 @@ Status ParseFeatureMapRequest(const pb::FeatureMapRequest& in, FeatureQuery* out
   return Status::Ok();
 }
 
+template <class Options>
+Options WithMap(Options options, const std::string& map_id) {
+  options.map_id = map_id;
+  return options;
+}
+
 }  // namespace
 
 MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options,
                                const SubmapOptions& submap_options,
-                               const StreamLimits& stream_limits, AuthOptions auth_options)
+                               const StreamLimits& stream_limits, AuthOptions auth_options,
+                               MapPlacement placement)
     : core_(core),
-      ingest_options_(ingest_options),
+      ingest_options_(WithMap(std::move(ingest_options), placement.map_id)),
       stream_limits_(stream_limits),
-      limiter_(stream_limits),
-      access_(core, auth_options),
-      submaps_(core, submap_options, &access_),
-      auth_(core, &access_) {}
+      own_limiter_(placement.shared_with ? nullptr
+                                         : std::make_unique<StreamLimiter>(stream_limits)),
+      limiter_(placement.shared_with ? placement.shared_with->limiter_ : own_limiter_.get()),
+      own_access_(placement.shared_with ? nullptr
+                                        : std::make_unique<AccessControl>(core, auth_options)),
+      access_(placement.shared_with ? placement.shared_with->access_ : own_access_.get()),
+      submaps_(core, WithMap(submap_options, placement.map_id), access_),
+      auth_(core, access_) {}
 
 void MapServiceImpl::Tick() {
   submaps_.ExpireIdleUploads();
-  access_.FlushDenials();
+  if (own_access_ == nullptr) return;  // the audit log is the sharing service's
+  access_->FlushDenials();
   if (++ticks_ % 60 != 0) return;
   int64_t deleted = 0;
   const Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
@@ -75,27 +87,27 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
   if (Status ready = core_->CheckReady(); !ready.ok())
     return new RefusedIngest(ToGrpcStatus(ready));
   StreamSlot slot;
-  if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
+  if (Status admitted = limiter_->TryOpen(context->peer(), &slot); !admitted.ok()) {
     Log(LogLevel::kWarn, "stream_refused",
         {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new RefusedIngest(ToGrpcStatus(admitted));
   }
-  StatusOr<Principal> who = access_.Authenticate(*context);
+  StatusOr<Principal> who = access_->Authenticate(*context);
   if (!who.ok()) return new RefusedIngest(ToGrpcStatus(who.status()));
   // The role first (a reader never writes); each batch's robot id is then
   // checked by the reactor.
-  if (Status may = access_.Check(*who, Permission::kWrite, "Ingest", who->robot_id, "stream");
+  if (Status may = access_->Check(*who, Permission::kWrite, "Ingest", who->robot_id, "stream");
       !may.ok()) {
     return new RefusedIngest(ToGrpcStatus(may));
   }
-  return new IngestReactor(context, core_, &ingest_options_, &ingest_streams_, &access_,
+  return new IngestReactor(context, core_, &ingest_options_, &ingest_streams_, access_,
                            *std::move(who), std::move(slot));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
                                            const pb::FeatureMapRequest* request,
                                            grpc::ServerWriter<pb::FeatureMapPage>* writer) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
     return ToGrpcStatus(p.status());
   FeatureQuery query;
   Status s = ParseFeatureMapRequest(*request, &query);
@@ -137,7 +149,7 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
                                              const pb::WatchFeatureMapRequest* request,
                                              grpc::ServerWriter<pb::FeatureMapDelta>* writer) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "WatchFeatureMap"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "WatchFeatureMap"); !p.ok())
     return ToGrpcStatus(p.status());
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   FeatureFilter filter;
@@ -156,7 +168,7 @@ grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
 
 grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,
                                         pb::ListRobotsResponse* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok())
     return ToGrpcStatus(p.status());
   StatusOr<std::vector<storage::RobotSummary>> robots = core_->store().ListRobots();
   if (!robots.ok()) return ToGrpcStatus(robots.status());
@@ -175,7 +187,7 @@ grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::
 
 grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::GetStatsRequest*,
                                       pb::Stats* response) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kReadMap, "GetStats");
+  StatusOr<Principal> p = access_->Admit(*context, Permission::kReadMap, "GetStats");
   if (!p.ok()) return ToGrpcStatus(p.status());
   StatusOr<storage::StoreCounts> counts = core_->store().Counts();
   if (!counts.ok()) return ToGrpcStatus(counts.status());
@@ -227,15 +239,15 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
     grpc::CallbackServerContext* context, pb::SubmapInfo* response) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StreamSlot slot;
-  if (Status admitted = limiter_.TryOpen(context->peer(), &slot); !admitted.ok()) {
+  if (Status admitted = limiter_->TryOpen(context->peer(), &slot); !admitted.ok()) {
     Log(LogLevel::kWarn, "stream_refused",
         {{"rpc", "UploadSubmap"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new Refused(ToGrpcStatus(admitted));
   }
-  StatusOr<Principal> p = access_.Authenticate(*context);
+  StatusOr<Principal> p = access_->Authenticate(*context);
   if (!p.ok()) return new Refused(ToGrpcStatus(p.status()));
   // The role here; the header's robot id once it is read (UploadReactor).
-  if (Status may = access_.Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload");
+  if (Status may = access_->Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload");
       !may.ok()) {
     return new Refused(ToGrpcStatus(may));
   }
@@ -246,7 +258,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
 grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
                                          const pb::ListSubmapsRequest* request,
                                          pb::ListSubmapsResponse* response) {
-  StatusOr<Principal> p = access_.Authenticate(*context);
+  StatusOr<Principal> p = access_->Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   pb::ListSubmapsRequest scoped = *request;
   // A robot lists its own submaps unless it names another robot (refused).
@@ -261,7 +273,7 @@ grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context,
                                        const pb::GetSubmapRequest* request,
                                        grpc::ServerWriter<pb::DataChunk>* writer) {
-  StatusOr<Principal> p = access_.Authenticate(*context);
+  StatusOr<Principal> p = access_->Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   if (p->role == Role::kRobot && !p->anonymous) {
     StatusOr<storage::SubmapMeta> meta =
@@ -276,7 +288,7 @@ grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context,
                                           const pb::DeleteSubmapRequest* request,
                                           pb::DeleteSubmapResponse*) {
-  StatusOr<Principal> p = access_.Authenticate(*context);
+  StatusOr<Principal> p = access_->Authenticate(*context);
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Delete(*request, *p);
 }
@@ -286,14 +298,14 @@ grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context,
   std::string inputs;
   for (const uint64_t id : request->submap_ids())
     inputs += (inputs.empty() ? "submaps " : ",") + std::to_string(id);
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "MergeSubmaps", "", inputs);
+  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "MergeSubmaps", "", inputs);
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Merge(context, *request, writer, *p);
 }
 grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
                                           const pb::GetGlobalMapRequest*,
                                           grpc::ServerWriter<pb::DataChunk>* writer) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.GetGlobalMap(context, writer);
 }
@@ -301,30 +313,30 @@ grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::ListMerges(grpc::ServerContext* context,
                                         const pb::ListMergesRequest* request,
                                         pb::ListMergesResponse* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "ListMerges"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "ListMerges"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.ListMerges(*request, response);
 }
 grpc::Status MapServiceImpl::GetMerge(grpc::ServerContext* context,
                                       const pb::GetMergeRequest* request,
                                       pb::MergeRecord* response) {
-  if (auto p = access_.Admit(*context, Permission::kReadMap, "GetMerge"); !p.ok())
+  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetMerge"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.GetMerge(*request, response);
 }
 grpc::Status MapServiceImpl::ApproveMerge(grpc::ServerContext* context,
                                           const pb::ApproveMergeRequest* request,
                                           pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "ApproveMerge", "",
-                                        "merge " + std::to_string(request->id()));
+  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "ApproveMerge", "",
+                                         "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.ApproveMerge(*request, *p, response);
 }
 grpc::Status MapServiceImpl::RejectMerge(grpc::ServerContext* context,
                                          const pb::RejectMergeRequest* request,
                                          pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_.Admit(*context, Permission::kMerge, "RejectMerge", "",
-                                        "merge " + std::to_string(request->id()));
+  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "RejectMerge", "",
+                                         "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.RejectMerge(*request, *p, response);
 }

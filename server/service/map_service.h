@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <memory>
+#include <string>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/access_control.h"
@@ -22,20 +23,34 @@
 
 namespace mapd::service {
 
+// Where a MapServiceImpl sits among the maps of one server (map_directory.h).
+struct MapPlacement {
+  std::string map_id = "default";
+  // The service whose stream limiter and access control (tokens, audit log,
+  // denial counts) this one shares, so that limits and identities are the
+  // server's, not per map; null: its own (the default map's).
+  class MapServiceImpl* shared_with = nullptr;
+};
+
 class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
                                  mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
                                      mapserver::v1::MapService::Service>> {
  public:
   MapServiceImpl(Core* core, IngestOptions ingest_options, const SubmapOptions& submap_options = {},
-                 const StreamLimits& stream_limits = {}, AuthOptions auth_options = {});
+                 const StreamLimits& stream_limits = {}, AuthOptions auth_options = {},
+                 MapPlacement placement = {});
+
+  const std::string& map_id() const { return ingest_options_.map_id; }
+  Core* core() const { return core_; }
+  AccessControl& access() { return *access_; }
 
   // Housekeeping, every second: ends idle uploads.
   // Every second (MapServer's housekeeping): idle uploads expire, counted
   // denials are written as summary rows, and once a minute the denial rows
   // beyond limits.audit_max_denied_rows are deleted, oldest first.
   void Tick();
-  void FlushDenials(bool all) { access_.FlushDenials(all); }
-  const StreamLimiter& limiter() const { return limiter_; }
+  void FlushDenials(bool all) { access_->FlushDenials(all); }
+  const StreamLimiter& limiter() const { return *limiter_; }
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
   // and merges in flight are abandoned (shutdown).
@@ -119,8 +134,10 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   const StreamLimits stream_limits_;
   std::atomic<bool> draining_{false};
   IngestStreams ingest_streams_;
-  StreamLimiter limiter_;
-  AccessControl access_;
+  std::unique_ptr<StreamLimiter> own_limiter_;  // null when shared
+  StreamLimiter* const limiter_;
+  std::unique_ptr<AccessControl> own_access_;  // null when shared
+  AccessControl* const access_;
   int ticks_ = 0;  // Tick() calls, from one thread
   SubmapService submaps_;
   AuthService auth_;

@@ -36,6 +36,9 @@ constexpr uint32_t kMaxFeaturesPerBatchHard = 1u << kFeatureIdBits;
 struct IngestOptions {
   IngestLimits limits;
   uint32_t max_in_flight = 1024;  // per stream
+  // The map the streams write (MapServiceImpl sets it from its placement;
+  // not a setting): a batch naming another map is refused.
+  std::string map_id = "default";
 };
 
 // Limits on connections and streams (floods, slow or idle clients).
@@ -90,7 +93,10 @@ struct WebOptions {
 // builds without the voxel library (MAPD_WITH_VOXEL=OFF).
 struct SubmapOptions {
   size_t max_submap_bytes = size_t{64} << 20;  // one uploaded file at most, bytes
-  size_t max_concurrent_merges = 1;            // merges computed at once
+  // The map the uploads go to (MapServiceImpl sets it; not a setting): a
+  // header naming another map is refused.
+  std::string map_id = "default";
+  size_t max_concurrent_merges = 1;  // merges computed at once
   // Merges waiting for a slot at most; one more is refused with
   // RESOURCE_EXHAUSTED (the caller retries later) rather than queued unbounded.
   size_t max_queued_merges = 4;

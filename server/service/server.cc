@@ -47,11 +47,14 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   MAPD_RETURN_IF_ERROR(config.Validate());
   std::unique_ptr<MapServer> server(new MapServer());
   server->config_ = config;
-  if (server->config_.db_path.empty()) server->config_.db_path = DefaultDbPath();
+  if (server->config_.db_path.empty() && config.data_dir.empty())
+    server->config_.db_path = DefaultDbPath();
   const std::string& db = server->config_.db_path;
   std::error_code ec;
   const auto parent = std::filesystem::path(db).parent_path();
-  if (config.db_path.empty()) {
+  if (!config.data_dir.empty()) {
+    // The maps' directory is the operator's: MapDirectory checks it exists.
+  } else if (config.db_path.empty()) {
     // The default path's directory is mapd's own: made on first use.
     // Only the last directory is mapd's own, made owner-only (the rest,
     // e.g. ~/.local/share, belongs to the user's session).
@@ -68,34 +71,23 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     return Status::FailedPrecondition("--db '" + db + "': the directory '" + parent.string() +
                                       "' does not exist; create it first (mkdir -p)");
   }
-  MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db));
-
-  MapCoreOptions core_options;
-  core_options.db_path = db;
-  core_options.store.synchronous_full = config.sync_full;
-  core_options.store.busy_timeout_ms = config.busy_timeout_ms;
-  core_options.store.max_db_bytes = config.max_db_bytes;
-  core_options.stop_flush_s = config.shutdown_flush_s;
-  core_options.fusion = config.fusion;
-  core_options.planes = config.planes;
-  core_options.max_group_batches = config.max_group_batches;
-  core_options.fusion_share.after_s = config.fusion_share_after_s;
-  core_options.fusion_share.factor = config.fusion_share_factor;
-  core_options.snapshot_every_observations = config.snapshot_every_observations;
-  core_options.snapshot_max_age_s = config.snapshot_max_age_s;
-  core_options.raw_retention_days = config.raw_retention_days;
-  core_options.watch = config.watch;
-  core_options.hold_fuser_for_test = config.hold_fuser_for_test;
-  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
-  if (!core.ok()) return core.status();
-  server->core_ = std::move(core).value();
   AuthOptions& auth = server->auth_;  // docs/security.md
   auth.required = config.auth_required;
   auth.client_certs = !config.tls_client_ca.empty();
   auth.denials_per_minute = config.streams.audit_denials_per_minute;
   auth.denials = std::make_shared<DenialAuditLimiter>(auth.denials_per_minute);
-  server->service_ = std::make_unique<MapServiceImpl>(server->core_.get(), config.ingest,
-                                                      config.submaps, config.streams, auth);
+  MapServer* s = server.get();
+  MapDirectory::Opener opener = [s](const std::string& id, const std::string& path,
+                                    MapServiceImpl* shared_with) {
+    return s->OpenMap(id, path, shared_with);
+  };
+  StatusOr<std::unique_ptr<MapDirectory>> maps =
+      config.data_dir.empty() ? MapDirectory::OpenSingle(db, opener)
+                              : MapDirectory::OpenDataDir(config.data_dir, opener);
+  if (!maps.ok()) return maps.status();
+  server->maps_ = std::move(maps).value();
+  server->router_ =
+      std::make_unique<MapRouter>(server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); });
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -124,7 +116,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     builder.AddListeningPort(config.health_listen, grpc::InsecureServerCredentials(),
                              &server->health_port_);
   }
-  builder.RegisterService(server->service_.get());
+  builder.RegisterService(server->router_.get());
   // Every call counted by method and code, and timed (rpc_metrics.h, /metrics).
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
   interceptors.push_back(RpcMetrics::InterceptorFactory());
@@ -170,43 +162,95 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   server->server_->GetHealthCheckService()->SetServingStatus(false);
   Log(LogLevel::kInfo, "listening",
       {{"address", server->address()},
-       {"db", db},
+       {config.data_dir.empty() ? "db" : "data_dir",
+        config.data_dir.empty() ? db : config.data_dir},
+       {"maps", std::to_string(server->maps_->List().size())},
        {"health", "NOT_SERVING"},
        {"reason", "recovering the fused map"},
        {"malloc_huge_pages", MallocHugePages()}});
-  MapServer* s = server.get();
-  server->core_->write_health().SetListener([s](const Status& failure) {
-    std::lock_guard<std::mutex> lock(s->health_mu_);
+  for (ServedMap* map : server->maps_->List()) server->WatchMap(map);
+  server->housekeeping_ = std::thread([s] { s->Housekeeping(); });
+  return server;
+}
+
+StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
+                                                        const std::string& db_path,
+                                                        MapServiceImpl* shared_with) {
+  const ServerConfig& config = config_;
+  auto map = std::make_unique<ServedMap>();
+  map->id = id;
+  map->db_path = db_path;
+  StatusOr<DatabaseLock> lock = DatabaseLock::Acquire(db_path);
+  if (!lock.ok()) return lock.status();
+  map->lock = std::move(lock).value();
+  MapCoreOptions core_options;
+  core_options.db_path = db_path;
+  core_options.store.synchronous_full = config.sync_full;
+  core_options.store.busy_timeout_ms = config.busy_timeout_ms;
+  core_options.store.max_db_bytes = config.max_db_bytes;
+  core_options.stop_flush_s = config.shutdown_flush_s;
+  core_options.fusion = config.fusion;
+  core_options.planes = config.planes;
+  core_options.max_group_batches = config.max_group_batches;
+  core_options.fusion_share.after_s = config.fusion_share_after_s;
+  core_options.fusion_share.factor = config.fusion_share_factor;
+  core_options.snapshot_every_observations = config.snapshot_every_observations;
+  core_options.snapshot_max_age_s = config.snapshot_max_age_s;
+  core_options.raw_retention_days = config.raw_retention_days;
+  core_options.watch = config.watch;
+  core_options.hold_fuser_for_test = config.hold_fuser_for_test;
+  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
+  if (!core.ok()) {
+    if (id == kDefaultMapId) return core.status();
+    return Status(core.status().code(), "map '" + id + "': " + core.status().message());
+  }
+  map->core = std::move(core).value();
+  map->service =
+      std::make_unique<MapServiceImpl>(map->core.get(), config.ingest, config.submaps,
+                                       config.streams, auth_, MapPlacement{id, shared_with});
+  return map;
+}
+
+void MapServer::WatchMap(ServedMap* map) {
+  const std::string id = map->id, db = map->db_path;
+  map->core->write_health().SetListener([this, id](const Status& failure) {
+    std::lock_guard<std::mutex> lock(health_mu_);
     if (failure.ok()) {
-      Log(LogLevel::kInfo, "writable_again", {{"health", "SERVING"}});
+      Log(LogLevel::kInfo, "writable_again", {{"map", id}, {"health", "SERVING"}});
     } else {
       Log(LogLevel::kError, "not_writable",
-          {{"health", "NOT_SERVING"},
+          {{"map", id},
+           {"health", "NOT_SERVING"},
            {"reason", failure.message()},
            {"action",
             "batches and uploads are refused (robots resend); free disk space or fix the database "
             "file; mapd probes every second and serves again by itself"}});
     }
-    s->UpdateHealthLocked();
+    UpdateHealthLocked();
   });
-  server->core_->OnReady([s, db, sync = config.sync_full, fusion = config.fusion] {
-    std::lock_guard<std::mutex> lock(s->health_mu_);
-    if (s->shut_down_) return;
-    s->UpdateHealthLocked();
+  map->core->OnReady([this, id, db, sync = config_.sync_full, fusion = config_.fusion] {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    if (shut_down_) return;
+    UpdateHealthLocked();
     Log(LogLevel::kInfo, "serving",
-        {{"address", s->address()},
+        {{"address", address()},
+         {"map", id},
          {"db", db},
          {"sync", sync ? "full" : "normal"},
          {"fusion_mode", fusion::FusionModeName(fusion.mode)},
          {"corner_mode", fusion::CornerModeName(fusion.corner_mode)}});
   });
-  server->housekeeping_ = std::thread([s] { s->Housekeeping(); });
-  return server;
 }
 
 void MapServer::UpdateHealthLocked() {
-  server_->GetHealthCheckService()->SetServingStatus(!shut_down_ && core_->ready() &&
-                                                     core_->write_health().ok());
+  grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService();
+  bool all = !shut_down_;
+  for (ServedMap* map : maps_->List()) {
+    const bool serving = !shut_down_ && map->core->ready() && map->core->write_health().ok();
+    health->SetServingStatus("map/" + map->id, serving);
+    all = all && serving;
+  }
+  health->SetServingStatus(all);
 }
 
 void MapServer::Housekeeping() {
@@ -216,13 +260,14 @@ void MapServer::Housekeeping() {
   while (!housekeeping_cv_.wait_for(lock, std::chrono::seconds(1),
                                     [this] { return housekeeping_stop_; })) {
     lock.unlock();
-    service_->Tick();
+    for (ServedMap* map : maps_->List()) map->service->Tick();
     FlushSuppressedLogs();
     // Give memory back after a burst: a flood of streams leaves gRPC's and
     // malloc's freed memory in the heap (1.5 GiB, never returned, before).
     // Trim once the burst is over (under 100 stream opens in the last
     // second), and every 30 s anyway.
-    const uint64_t events = service_->limiter().admitted() + service_->limiter().refused();
+    const StreamLimiter& limiter = maps_->default_map().service->limiter();  // shared by all
+    const uint64_t events = limiter.admitted() + limiter.refused();
     const uint64_t last_second = events - last_events;
     last_events = events;
     since_trim += last_second;
@@ -236,7 +281,8 @@ void MapServer::Housekeeping() {
 }
 
 bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {
-  return core_->WaitUntilReady(timeout) && core_->CheckReady().ok();
+  const MapCore& core = *maps_->default_map().core;
+  return core.WaitUntilReady(timeout) && core.CheckReady().ok();
 }
 
 std::string MapServer::address() const {
@@ -251,8 +297,11 @@ void MapServer::Shutdown() {
     shut_down_ = true;
   }
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
-  server_->GetHealthCheckService()->SetServingStatus(false);
-  service_->StartDraining();
+  {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    UpdateHealthLocked();  // NOT_SERVING, every map
+  }
+  for (ServedMap* map : maps_->List()) map->service->StartDraining();
   // The calls in progress get the grace period; then gRPC gets 100 ms more
   // (for a call that came in just now) before it cancels what is left and
   // closes the idle connections, which it would otherwise wait for
@@ -272,8 +321,10 @@ void MapServer::Shutdown() {
   }
   server_->Shutdown(std::chrono::system_clock::now() + linger);  // returns once every RPC has ended
   StopHousekeeping();
-  service_->FlushDenials(/*all=*/true);  // the counts of the last denials (denial_audit.h)
-  core_->Stop();                         // commits what is queued, checkpoints
+  // The counts of the last denials (denial_audit.h), into the default map's
+  // database, before it stops.
+  maps_->default_map().service->FlushDenials(/*all=*/true);
+  for (ServedMap* map : maps_->List()) map->core->Stop();  // commits what is queued, checkpoints
   Log(LogLevel::kInfo, "stopped");
 }
 

@@ -1,4 +1,5 @@
-// MapServer: MapCore + the gRPC server around it (health, reflection, TLS).
+// MapServer: the maps (map_directory.h: each a MapCore and its handlers) and
+// the gRPC server around them (routing, health, reflection, TLS).
 #ifndef MAPD_SERVICE_SERVER_H_
 #define MAPD_SERVICE_SERVER_H_
 
@@ -16,18 +17,21 @@
 #include "service/calls_in_progress.h"
 #include "service/config.h"
 #include "service/map_core.h"
+#include "service/map_directory.h"
+#include "service/map_router.h"
 #include "service/map_service.h"
 
 namespace mapd::service {
 
 class MapServer {
  public:
-  // Opens the database and starts listening at once. The fused map is
-  // recovered in the background (MapCore::Open): until then the health
-  // service says NOT_SERVING and map RPCs answer UNAVAILABLE; then SERVING
-  // and an `event=serving` log line.
+  // Opens the database (or the maps of data_dir) and starts listening at
+  // once. Each fused map is recovered in the background (MapCore::Open):
+  // until then its health (service name "map/<id>") says NOT_SERVING and its
+  // map RPCs answer UNAVAILABLE; then SERVING and an `event=serving` log
+  // line. The server's health ("") is SERVING while every map is.
   static StatusOr<std::unique_ptr<MapServer>> Start(const ServerConfig& config);
-  // Waits until the map is recovered; false on timeout or failed recovery.
+  // Waits until the default map is recovered; false on timeout or failed recovery.
   bool WaitUntilServing(std::chrono::duration<double> timeout) const;
   ~MapServer();
 
@@ -36,8 +40,9 @@ class MapServer {
   // The port of health_listen (0 when it is not set).
   int health_port() const { return health_port_; }
   std::string address() const;
-  // The core, for what runs beside the gRPC server (the web view).
-  Core* core() const { return core_.get(); }
+  // The default map's core, for what runs beside the gRPC server (the web view).
+  Core* core() const { return maps_->default_map().core.get(); }
+  MapDirectory& maps() const { return *maps_; }
   // Who may call, for what runs beside it (the web view): the same rules
   // and the same per-identity limit on denial rows in the audit log.
   const AuthOptions& auth() const { return auth_; }
@@ -52,16 +57,21 @@ class MapServer {
 
  private:
   MapServer() = default;
-  // SERVING once the map is recovered, while the database takes writes and
-  // until Shutdown(). REQUIRES: health_mu_ held.
+  // Opens map `id` (MapDirectory::Opener).
+  StatusOr<std::unique_ptr<ServedMap>> OpenMap(const std::string& id, const std::string& db_path,
+                                               MapServiceImpl* shared_with);
+  // Logs and health for a map once it is in the directory.
+  void WatchMap(ServedMap* map);
+  // Each map SERVING once it is recovered, while its database takes writes
+  // and until Shutdown(); "" while every map is. REQUIRES: health_mu_ held.
   void UpdateHealthLocked();
   void Housekeeping();  // every second: idle uploads, log summaries, memory trim
   void StopHousekeeping();
 
   ServerConfig config_;
   AuthOptions auth_;
-  std::unique_ptr<MapCore> core_;
-  std::unique_ptr<MapServiceImpl> service_;
+  std::unique_ptr<MapDirectory> maps_;
+  std::unique_ptr<MapRouter> router_;
   CallsInProgress calls_;  // before server_: its interceptors point here
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;

@@ -263,6 +263,11 @@ grpc::Status SubmapService::CheckUploadHeader(const pb::UploadSubmapRequest& fir
   if (!first.has_header())
     return InvalidArgument("the first message must be the header (SubmapHeader), not a chunk");
   *header = first.header();
+  if (!header->map_id().empty() && header->map_id() != options_.map_id) {
+    return InvalidArgument("header.map_id is '" + header->map_id().substr(0, 128) +
+                           "' but this upload stream is for map '" + options_.map_id +
+                           "'; name the map in the call's mapd-map-id metadata");
+  }
   return CheckHeader(*header);
 }
 

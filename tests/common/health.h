@@ -18,9 +18,10 @@ enum class Health { kError = -1, kUnknown = 0, kServing = 1, kNotServing = 2 };
 // The server's overall status (service "") over `channel`, or kError if the
 // call failed (within `deadline`).
 inline Health CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
-                          std::chrono::milliseconds deadline = std::chrono::seconds(5)) {
+                          std::chrono::milliseconds deadline = std::chrono::seconds(5),
+                          const std::string& service = "") {
   ServingStatus serving = ServingStatus::kUnknown;
-  if (!mapd::CheckHealth(channel, deadline, &serving).ok()) return Health::kError;
+  if (!mapd::CheckHealth(channel, deadline, &serving, service).ok()) return Health::kError;
   return static_cast<Health>(serving);
 }
 

@@ -27,6 +27,7 @@ TEST(AuthorizeTest, RoleTableMatchesTheDocs) {
       {Permission::kMerge, false, false, true, true},
       {Permission::kReadAudit, false, false, true, true},
       {Permission::kManageTokens, false, false, false, true},
+      {Permission::kManageMaps, false, false, false, true},
   };
   for (const Row& r : rows) {
     SCOPED_TRACE(PermissionName(r.p));
@@ -61,6 +62,8 @@ TEST(AuthorizeTest, AnonymousMayDoAllButManageTokens) {
   EXPECT_TRUE(Authorize(anon, Permission::kWrite, "Ingest", "anything").ok());
   EXPECT_EQ(Authorize(anon, Permission::kManageTokens, "CreateToken").code(),
             StatusCode::kPermissionDenied);
+  // The open mode is loopback without tokens: making a map is no escalation.
+  EXPECT_TRUE(Authorize(anon, Permission::kManageMaps, "CreateMap").ok());
 }
 
 TEST(TokenTest, ParsesTheWireFormatAndRefusesOthers) {

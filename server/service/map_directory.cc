@@ -1,0 +1,162 @@
+#include "service/map_directory.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "service/file_modes.h"
+#include "service/ingest_batch.h"
+
+namespace mapd::service {
+namespace {
+
+constexpr char kDbSuffix[] = ".db";
+
+std::string PathOf(const std::string& dir, const std::string& id) {
+  return (std::filesystem::path(dir) / (id + kDbSuffix)).string();
+}
+
+}  // namespace
+
+StatusOr<DatabaseLock> DatabaseLock::Acquire(const std::string& path) {
+  // Read-only is enough for flock, and leaves a read-only database to the
+  // store's clearer refusal. Created owner-only if missing: SQLite takes an
+  // empty file as a new database.
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0 && errno == ENOENT) fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    return Status::FailedPrecondition("cannot open the database '" + path +
+                                      "': " + std::strerror(errno));
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd);
+    if (err == EWOULDBLOCK) {
+      return Status::FailedPrecondition(
+          "the database '" + path +
+          "' is in use by another mapd (it holds the file's lock); one mapd serves a database "
+          "at a time: stop the other, or give this one another --db or --data-dir");
+    }
+    return Status::FailedPrecondition("cannot lock the database '" + path +
+                                      "': " + std::strerror(err));
+  }
+  DatabaseLock lock;
+  lock.fd_ = fd;
+  return lock;
+}
+
+DatabaseLock::DatabaseLock(DatabaseLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+DatabaseLock& DatabaseLock::operator=(DatabaseLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+DatabaseLock::~DatabaseLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the flock
+}
+
+Status CheckMapId(const std::string& id, const std::string& what) {
+  if (!ValidId(id) || id.front() == '.') {
+    return Status::InvalidArgument(what + " '" + id.substr(0, 128) +
+                                   "' is not a map id: 1-128 characters of [A-Za-z0-9_.-], "
+                                   "not starting with '.'");
+  }
+  return Status::Ok();
+}
+
+StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenSingle(const std::string& db_path,
+                                                                 Opener opener) {
+  std::unique_ptr<MapDirectory> d(new MapDirectory("", std::move(opener)));
+  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, db_path);
+  if (!map.ok()) return map.status();
+  return d;
+}
+
+StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenDataDir(const std::string& data_dir,
+                                                                  Opener opener) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(data_dir, ec)) {
+    return Status::FailedPrecondition("--data-dir '" + data_dir +
+                                      "' is not a directory; create it first (mkdir -p)");
+  }
+  std::vector<std::string> ids;
+  for (const auto& entry : std::filesystem::directory_iterator(data_dir, ec)) {
+    const std::filesystem::path& p = entry.path();
+    if (!entry.is_regular_file() || p.extension() != kDbSuffix) continue;
+    const std::string id = p.stem().string();
+    if (id == kDefaultMapId) continue;
+    // Another .db beside the maps is not one: say so rather than serve it.
+    if (Status s = CheckMapId(id, "the file " + p.string() + ": its name"); !s.ok()) return s;
+    ids.push_back(id);
+  }
+  if (ec)
+    return Status::FailedPrecondition("cannot list --data-dir '" + data_dir + "': " + ec.message());
+  std::sort(ids.begin(), ids.end());
+  std::unique_ptr<MapDirectory> d(new MapDirectory(data_dir, std::move(opener)));
+  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, PathOf(data_dir, kDefaultMapId));
+  if (!map.ok()) return map.status();
+  for (const std::string& id : ids) {
+    map = d->Open(id, PathOf(data_dir, id));
+    if (!map.ok()) return map.status();
+  }
+  return d;
+}
+
+StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path) {
+  MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
+  StatusOr<std::unique_ptr<ServedMap>> map =
+      opener_(id, db_path, default_ == nullptr ? nullptr : default_->service.get());
+  if (!map.ok()) return map.status();
+  ServedMap* raw = map->get();
+  std::lock_guard<std::mutex> lock(mu_);
+  maps_.emplace(id, std::move(map).value());
+  if (default_ == nullptr) default_ = raw;
+  return raw;
+}
+
+StatusOr<ServedMap*> MapDirectory::Find(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = maps_.find(id.empty() ? std::string(kDefaultMapId) : id);
+  if (it == maps_.end()) {
+    return Status::NotFound("map '" + id.substr(0, 128) +
+                            "' is not served here; ListMaps (mapctl maps) names the maps");
+  }
+  return it->second.get();
+}
+
+std::vector<ServedMap*> MapDirectory::List() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  std::vector<ServedMap*> out;
+  for (const auto& [id, map] : maps_) out.push_back(map.get());
+  return out;
+}
+
+StatusOr<ServedMap*> MapDirectory::Create(const std::string& id) {
+  MAPD_RETURN_IF_ERROR(CheckMapId(id, "map_id"));
+  if (!can_create()) {
+    return Status::FailedPrecondition(
+        "this mapd serves one database (--db); start it with --data-dir DIR to serve several "
+        "maps and create more");
+  }
+  std::lock_guard<std::mutex> creating(create_mu_);
+  if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' exists already");
+  const std::string path = PathOf(data_dir_, id);
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) {
+    // Not served, yet there: another mapd made it, or a file was copied in.
+    return Status::AlreadyExists("the file '" + path +
+                                 "' exists but is not served here; restart mapd to serve it");
+  }
+  return Open(id, path);
+}
+
+}  // namespace mapd::service

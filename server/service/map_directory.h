@@ -1,0 +1,106 @@
+// The maps one mapd serves (docs/scale-out.md). A map is one map frame: its
+// own database file, MapCore (fusion engines, writer and fuser threads) and
+// MapServiceImpl (handlers, uploads, merges). With --db there is one map,
+// "default"; with --data-dir every <id>.db file of the directory is a map,
+// "default" is made when missing, and Create() adds maps while serving.
+//
+// Each database file is locked (flock, exclusive) while it is served, so a
+// second mapd on the same file refuses to start instead of writing beside
+// the first.
+//
+// Maps are added while serving and never removed before the directory is
+// destroyed, so a ServedMap* stays valid for the server's life.
+//
+// Thread safety: every method may be called from any thread.
+#ifndef MAPD_SERVICE_MAP_DIRECTORY_H_
+#define MAPD_SERVICE_MAP_DIRECTORY_H_
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "service/map_core.h"
+#include "service/map_service.h"
+
+namespace mapd::service {
+
+inline constexpr char kDefaultMapId[] = "default";
+
+// An exclusive flock on a database file, held until destroyed. flock locks
+// are apart from the fcntl locks SQLite takes, so they do not interfere; the
+// descriptor must outlive the database's connections (closing any descriptor
+// of a file drops the process's fcntl locks on it), hence ServedMap's order.
+class DatabaseLock {
+ public:
+  // FailedPrecondition naming the file when another process holds it.
+  static StatusOr<DatabaseLock> Acquire(const std::string& path);
+  DatabaseLock() = default;
+  DatabaseLock(DatabaseLock&& other) noexcept;
+  DatabaseLock& operator=(DatabaseLock&& other) noexcept;
+  ~DatabaseLock();
+
+ private:
+  int fd_ = -1;
+};
+
+struct ServedMap {
+  std::string id;
+  std::string db_path;
+  // Members are destroyed bottom up: the service, then the core (which
+  // closes the database), then the lock.
+  DatabaseLock lock;
+  std::unique_ptr<MapCore> core;
+  std::unique_ptr<MapServiceImpl> service;
+};
+
+// A map id is a robot id (1-128 of [A-Za-z0-9_.-]) that does not start with
+// '.' (it names a file). InvalidArgument naming `what` otherwise.
+Status CheckMapId(const std::string& id, const std::string& what);
+
+class MapDirectory {
+ public:
+  // Opens map `id` at `db_path` (locked by the caller's ServedMap) and its
+  // service; `shared_with` is the default map's service (null for the
+  // default map itself).
+  using Opener = std::function<StatusOr<std::unique_ptr<ServedMap>>(
+      const std::string& id, const std::string& db_path, MapServiceImpl* shared_with)>;
+
+  // One map, "default", in the file `db_path`.
+  static StatusOr<std::unique_ptr<MapDirectory>> OpenSingle(const std::string& db_path,
+                                                            Opener opener);
+  // Every <id>.db of `data_dir`, which must exist: "default" first (made
+  // when missing), then the others by id.
+  static StatusOr<std::unique_ptr<MapDirectory>> OpenDataDir(const std::string& data_dir,
+                                                             Opener opener);
+
+  // NotFound naming the id (never the other maps: the caller may not be
+  // authenticated yet).
+  StatusOr<ServedMap*> Find(const std::string& id) const;
+  ServedMap& default_map() const { return *default_; }
+  std::vector<ServedMap*> List() const;  // by id
+  // A new, empty map. FailedPrecondition with one database (--db),
+  // AlreadyExists, InvalidArgument for a bad id, or the opener's error.
+  StatusOr<ServedMap*> Create(const std::string& id);
+  bool can_create() const { return !data_dir_.empty(); }
+  const std::string& data_dir() const { return data_dir_; }
+
+ private:
+  MapDirectory(std::string data_dir, Opener opener)
+      : data_dir_(std::move(data_dir)), opener_(std::move(opener)) {}
+  StatusOr<ServedMap*> Open(const std::string& id, const std::string& db_path);
+
+  const std::string data_dir_;  // empty: one database
+  const Opener opener_;
+  std::mutex create_mu_;  // one Create at a time (it opens files)
+  mutable std::mutex mu_;
+  std::map<std::string, std::unique_ptr<ServedMap>> maps_;  // GUARDED_BY(mu_)
+  ServedMap* default_ = nullptr;                            // set once, first
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MAP_DIRECTORY_H_

@@ -1,0 +1,115 @@
+// The mapserver.v1.MapService that gRPC sees: it finds the map a call names
+// (map_directory.h) and hands the call to that map's MapServiceImpl, which
+// does the work. How a call names its map ("Maps" in map_service.proto):
+// the request's map_id, else the call's mapd-map-id metadata, else
+// "default"; a stream (Ingest, UploadSubmap) by its metadata. Tokens, the
+// audit log and WhoAmI are the server's and go to the default map's
+// service, whose database holds them. ListMaps and CreateMap are answered
+// here.
+#ifndef MAPD_SERVICE_MAP_ROUTER_H_
+#define MAPD_SERVICE_MAP_ROUTER_H_
+
+#include <functional>
+#include <string>
+
+#include "mapserver/v1/map_service.grpc.pb.h"
+#include "service/map_directory.h"
+
+namespace mapd::service {
+
+inline constexpr char kMapIdMetadata[] = "mapd-map-id";
+
+class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
+                            mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
+                                mapserver::v1::MapService::Service>> {
+ public:
+  // `on_create` runs for each map CreateMap made (health, logs).
+  MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create)
+      : maps_(maps), on_create_(std::move(on_create)) {}
+
+  // The map a call names: `field` (a request's map_id), else the metadata,
+  // else "default". InvalidArgument when both are set and differ, or when
+  // the metadata is not a map id.
+  static StatusOr<std::string> MapIdOf(const grpc::ServerContextBase& context,
+                                       const std::string& field);
+
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Ingest(
+      grpc::CallbackServerContext* context) override;
+  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(
+      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response) override;
+
+  grpc::Status GetFeatureMap(grpc::ServerContext* context,
+                             const mapserver::v1::FeatureMapRequest* request,
+                             grpc::ServerWriter<mapserver::v1::FeatureMapPage>* writer) override;
+  grpc::Status WatchFeatureMap(grpc::ServerContext* context,
+                               const mapserver::v1::WatchFeatureMapRequest* request,
+                               grpc::ServerWriter<mapserver::v1::FeatureMapDelta>* writer) override;
+  grpc::Status ListRobots(grpc::ServerContext* context,
+                          const mapserver::v1::ListRobotsRequest* request,
+                          mapserver::v1::ListRobotsResponse* response) override;
+  grpc::Status GetStats(grpc::ServerContext* context, const mapserver::v1::GetStatsRequest* request,
+                        mapserver::v1::Stats* response) override;
+  grpc::Status GetTrails(grpc::ServerContext* context,
+                         const mapserver::v1::GetTrailsRequest* request,
+                         grpc::ServerWriter<mapserver::v1::SessionTrail>* writer) override;
+  grpc::Status ListSubmaps(grpc::ServerContext* context,
+                           const mapserver::v1::ListSubmapsRequest* request,
+                           mapserver::v1::ListSubmapsResponse* response) override;
+  grpc::Status GetSubmap(grpc::ServerContext* context,
+                         const mapserver::v1::GetSubmapRequest* request,
+                         grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
+  grpc::Status DeleteSubmap(grpc::ServerContext* context,
+                            const mapserver::v1::DeleteSubmapRequest* request,
+                            mapserver::v1::DeleteSubmapResponse* response) override;
+  grpc::Status MergeSubmaps(grpc::ServerContext* context,
+                            const mapserver::v1::MergeSubmapsRequest* request,
+                            grpc::ServerWriter<mapserver::v1::MergeProgress>* writer) override;
+  grpc::Status GetGlobalMap(grpc::ServerContext* context,
+                            const mapserver::v1::GetGlobalMapRequest* request,
+                            grpc::ServerWriter<mapserver::v1::DataChunk>* writer) override;
+  grpc::Status ListMerges(grpc::ServerContext* context,
+                          const mapserver::v1::ListMergesRequest* request,
+                          mapserver::v1::ListMergesResponse* response) override;
+  grpc::Status GetMerge(grpc::ServerContext* context, const mapserver::v1::GetMergeRequest* request,
+                        mapserver::v1::MergeRecord* response) override;
+  grpc::Status ApproveMerge(grpc::ServerContext* context,
+                            const mapserver::v1::ApproveMergeRequest* request,
+                            mapserver::v1::MergeRecord* response) override;
+  grpc::Status RejectMerge(grpc::ServerContext* context,
+                           const mapserver::v1::RejectMergeRequest* request,
+                           mapserver::v1::MergeRecord* response) override;
+
+  grpc::Status CreateToken(grpc::ServerContext* context,
+                           const mapserver::v1::CreateTokenRequest* request,
+                           mapserver::v1::CreateTokenResponse* response) override;
+  grpc::Status ListTokens(grpc::ServerContext* context,
+                          const mapserver::v1::ListTokensRequest* request,
+                          mapserver::v1::ListTokensResponse* response) override;
+  grpc::Status RevokeToken(grpc::ServerContext* context,
+                           const mapserver::v1::RevokeTokenRequest* request,
+                           mapserver::v1::RevokeTokenResponse* response) override;
+  grpc::Status ListAudit(grpc::ServerContext* context,
+                         const mapserver::v1::ListAuditRequest* request,
+                         mapserver::v1::ListAuditResponse* response) override;
+  grpc::Status WhoAmI(grpc::ServerContext* context, const mapserver::v1::WhoAmIRequest* request,
+                      mapserver::v1::WhoAmIResponse* response) override;
+
+  grpc::Status ListMaps(grpc::ServerContext* context, const mapserver::v1::ListMapsRequest* request,
+                        mapserver::v1::ListMapsResponse* response) override;
+  grpc::Status CreateMap(grpc::ServerContext* context,
+                         const mapserver::v1::CreateMapRequest* request,
+                         mapserver::v1::MapInfo* response) override;
+
+ private:
+  // Runs `call` on the service of the map the call names, or answers why not.
+  grpc::Status Forward(const grpc::ServerContextBase& context, const std::string& field,
+                       const std::function<grpc::Status(MapServiceImpl*)>& call);
+  MapServiceImpl* server_wide() const { return maps_->default_map().service.get(); }
+
+  MapDirectory* const maps_;
+  const std::function<void(ServedMap*)> on_create_;
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MAP_ROUTER_H_

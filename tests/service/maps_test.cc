@@ -1,0 +1,244 @@
+// Several maps in one mapd (--data-dir; map_directory.h, map_router.h):
+// each its own frame, fused map and database file, named per call by map_id
+// or the mapd-map-id metadata; old clients land in "default".
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "common/health.h"
+#include "server_fixture.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+class MapsTest : public ServerFixture {
+ protected:
+  void SetUp() override {
+    config_.listen = "127.0.0.1:0";
+    config_.data_dir = dir_.path();
+    config_.shutdown_grace_s = 1.0;
+    config_.busy_timeout_ms = 300;
+    StartServer();
+  }
+
+  grpc::Status CreateMap(const std::string& id, pb::MapInfo* info = nullptr) {
+    grpc::ClientContext ctx;
+    pb::CreateMapRequest request;
+    request.set_map_id(id);
+    pb::MapInfo ignored;
+    return stub_->CreateMap(&ctx, request, info ? info : &ignored);
+  }
+
+  pb::ListMapsResponse ListMaps() {
+    grpc::ClientContext ctx;
+    pb::ListMapsResponse maps;
+    const grpc::Status s = stub_->ListMaps(&ctx, {}, &maps);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    return maps;
+  }
+
+  // One Ingest stream opened for `map` (metadata); every ack.
+  std::vector<pb::IngestAck> StreamTo(const std::string& map,
+                                      const std::vector<pb::ObservationBatch>& batches,
+                                      grpc::Status* end = nullptr) {
+    grpc::ClientContext ctx;
+    ctx.AddMetadata("mapd-map-id", map);
+    auto stream = stub_->Ingest(&ctx);
+    for (const auto& b : batches) stream->Write(b);
+    stream->WritesDone();
+    std::vector<pb::IngestAck> acks;
+    pb::IngestAck ack;
+    while (stream->Read(&ack)) acks.push_back(ack);
+    const grpc::Status s = stream->Finish();
+    if (end != nullptr) *end = s;
+    return acks;
+  }
+
+  std::vector<pb::FusedFeature> FeaturesOf(const std::string& map) {
+    pb::FeatureMapRequest request;
+    request.set_map_id(map);
+    request.set_max_wait_ms(5000);
+    return Features(request);
+  }
+
+  uint64_t StoredBatches(const std::string& map) {
+    grpc::ClientContext ctx;
+    pb::GetStatsRequest request;
+    request.set_map_id(map);
+    pb::Stats stats;
+    EXPECT_TRUE(stub_->GetStats(&ctx, request, &stats).ok());
+    return stats.batches();
+  }
+};
+
+TEST_F(MapsTest, TheDefaultMapIsMadeAndListed) {
+  EXPECT_TRUE(std::filesystem::exists(dir_.File("default.db")));
+  const pb::ListMapsResponse maps = ListMaps();
+  ASSERT_EQ(maps.maps_size(), 1);
+  EXPECT_EQ(maps.maps(0).map_id(), "default");
+  EXPECT_TRUE(maps.can_create());
+}
+
+TEST_F(MapsTest, MapsAreApartAndOldClientsLandInDefault) {
+  pb::MapInfo info;
+  ASSERT_TRUE(CreateMap("site-7", &info).ok());
+  EXPECT_EQ(info.map_id(), "site-7");
+  EXPECT_TRUE(std::filesystem::exists(dir_.File("site-7.db")));
+
+  for (const pb::IngestAck& ack : StreamTo("site-7", Walk("r1", 6)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  EXPECT_EQ(StoredBatches("site-7"), 6u);
+  EXPECT_EQ(StoredBatches("default"), 0u);
+  EXPECT_FALSE(FeaturesOf("site-7").empty());
+  EXPECT_TRUE(FeaturesOf("default").empty());
+
+  // A client from before maps names none: the default map, as before.
+  for (const pb::IngestAck& ack : Stream(Walk("r2", 3)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  EXPECT_EQ(StoredBatches(""), 3u);
+  EXPECT_EQ(Stats().batches(), 3u);
+  EXPECT_EQ(StoredBatches("site-7"), 6u);
+
+  const pb::ListMapsResponse maps = ListMaps();
+  ASSERT_EQ(maps.maps_size(), 2);
+  EXPECT_EQ(maps.maps(0).map_id(), "default");
+  EXPECT_EQ(maps.maps(1).map_id(), "site-7");
+  EXPECT_EQ(maps.maps(1).batches(), 6u);
+}
+
+TEST_F(MapsTest, ABatchNamingAnotherMapIsRefusedAndTheStreamGoesOn) {
+  ASSERT_TRUE(CreateMap("site-7").ok());
+  std::vector<pb::ObservationBatch> batches = Walk("r1", 3);
+  batches[1].set_map_id("default");  // a stream of site-7 carrying a default batch
+  batches[2].set_map_id("site-7");   // naming its own map is fine
+  grpc::Status end;
+  std::vector<pb::IngestAck> acks = StreamTo("site-7", batches, &end);
+  EXPECT_TRUE(end.ok()) << end.error_message();
+  ASSERT_EQ(acks.size(), 3u);
+  // A refusal is answered at once, before earlier batches commit: by seq.
+  std::sort(acks.begin(), acks.end(),
+            [](const pb::IngestAck& a, const pb::IngestAck& b) { return a.seq() < b.seq(); });
+  EXPECT_EQ(acks[0].result(), pb::IngestAck::STORED);
+  EXPECT_EQ(acks[1].result(), pb::IngestAck::REJECTED);
+  EXPECT_EQ(acks[1].code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(acks[1].message(), HasSubstr("this stream writes map 'site-7'"));
+  EXPECT_EQ(acks[2].result(), pb::IngestAck::STORED);
+  EXPECT_EQ(StoredBatches("site-7"), 2u);
+  EXPECT_EQ(StoredBatches("default"), 0u);
+}
+
+TEST_F(MapsTest, UnknownOrContradictoryMapsAreRefusedWithTheReason) {
+  ASSERT_TRUE(CreateMap("site-7").ok());
+  // Unknown: NOT_FOUND, for a call and for a stream.
+  pb::FeatureMapRequest request;
+  request.set_map_id("site-8");
+  Features(request);
+  EXPECT_EQ(last_status_.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_THAT(last_status_.error_message(), HasSubstr("map 'site-8' is not served here"));
+  grpc::Status end;
+  EXPECT_TRUE(StreamTo("site-8", Walk("r1", 1), &end).empty());
+  EXPECT_EQ(end.error_code(), grpc::StatusCode::NOT_FOUND);
+  // The field and the metadata disagree.
+  grpc::ClientContext ctx;
+  ctx.AddMetadata("mapd-map-id", "default");
+  pb::GetStatsRequest stats;
+  stats.set_map_id("site-7");
+  pb::Stats out;
+  const grpc::Status both = stub_->GetStats(&ctx, stats, &out);
+  EXPECT_EQ(both.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(both.error_message(), HasSubstr("name different maps"));
+  // Ids: taken, and not an id.
+  EXPECT_EQ(CreateMap("site-7").error_code(), grpc::StatusCode::ALREADY_EXISTS);
+  EXPECT_EQ(CreateMap("../etc").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(CreateMap(".hidden").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(CreateMap("").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(ListMaps().maps_size(), 2);
+}
+
+TEST_F(MapsTest, AnUploadHeaderNamingAnotherMapIsRefused) {
+  ASSERT_TRUE(CreateMap("site-7").ok());
+  grpc::ClientContext ctx;
+  ctx.AddMetadata("mapd-map-id", "site-7");
+  pb::SubmapInfo info;
+  auto writer = stub_->UploadSubmap(&ctx, &info);
+  pb::UploadSubmapRequest header;
+  header.mutable_header()->set_robot_id("r1");
+  header.mutable_header()->set_name("room");
+  header.mutable_header()->set_format(pb::SUBMAP_FORMAT_OCTOMAP_BT);
+  header.mutable_header()->set_map_id("default");
+  writer->Write(header);
+  writer->WritesDone();
+  const grpc::Status s = writer->Finish();
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("this upload stream is for map 'site-7'"));
+}
+
+TEST_F(MapsTest, MapsComeBackAfterARestartAndEachHasItsHealth) {
+  ASSERT_TRUE(CreateMap("site-7").ok());
+  for (const pb::IngestAck& ack : StreamTo("site-7", Walk("r1", 6)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  const size_t features = FeaturesOf("site-7").size();
+  ASSERT_GT(features, 0u);
+  Restart();
+  EXPECT_EQ(ListMaps().maps_size(), 2);
+  EXPECT_EQ(FeaturesOf("site-7").size(), features);
+  EXPECT_TRUE(FeaturesOf("default").empty());
+
+  Health health = Health::kUnknown;
+  for (int i = 0; i < 200 && health != Health::kServing; ++i) {
+    health = CheckHealth(channel_, std::chrono::seconds(5), "map/site-7");
+    if (health != Health::kServing) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(health, Health::kServing);
+  EXPECT_EQ(CheckHealth(channel_, std::chrono::seconds(5), "map/default"), Health::kServing);
+  EXPECT_EQ(CheckHealth(channel_, std::chrono::seconds(5), "map/site-8"), Health::kError);
+}
+
+TEST_F(MapsTest, ASecondMapdOnTheSameDirectoryRefusesToStart) {
+  service::ServerConfig second = config_;
+  auto other = service::MapServer::Start(second);
+  ASSERT_FALSE(other.ok());
+  EXPECT_EQ(other.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_THAT(other.status().message(), HasSubstr("in use by another mapd"));
+  // The first goes on.
+  for (const pb::IngestAck& ack : Stream(Walk("r1", 2)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+}
+
+TEST_F(MapsTest, AFileThatIsNotAMapIdStopsTheStartWithItsName) {
+  server_.reset();
+  dir_.Write(".backup.db", "");
+  auto server = service::MapServer::Start(config_);
+  ASSERT_FALSE(server.ok());
+  EXPECT_THAT(server.status().message(), HasSubstr(".backup.db"));
+}
+
+// One database (--db): the default map only; CreateMap says how to get more.
+TEST_F(ServerFixture, ASingleDatabaseServesTheDefaultMapOnly) {
+  grpc::ClientContext list_ctx;
+  pb::ListMapsResponse maps;
+  ASSERT_TRUE(stub_->ListMaps(&list_ctx, {}, &maps).ok());
+  ASSERT_EQ(maps.maps_size(), 1);
+  EXPECT_EQ(maps.maps(0).map_id(), "default");
+  EXPECT_FALSE(maps.can_create());
+  grpc::ClientContext ctx;
+  pb::CreateMapRequest request;
+  request.set_map_id("site-7");
+  pb::MapInfo info;
+  const grpc::Status s = stub_->CreateMap(&ctx, request, &info);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), HasSubstr("--data-dir"));
+  // A second server on the same file refuses to start.
+  auto other = service::MapServer::Start(config_);
+  ASSERT_FALSE(other.ok());
+  EXPECT_THAT(other.status().message(), HasSubstr("in use by another mapd"));
+}
+
+}  // namespace
+}  // namespace mapd::testing
