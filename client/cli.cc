@@ -20,9 +20,49 @@ std::unique_ptr<grpc::ClientContext> Context::NewCallContext() const {
 }
 
 std::unique_ptr<grpc::ClientContext> Context::NewStreamContext() const {
+  CheckMapOnce();
   auto context = std::make_unique<grpc::ClientContext>();
   if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
+  if (!map.empty()) context->AddMetadata("mapd-map-id", map);
   return context;
+}
+
+void Context::CheckMapOnce() const {
+  if (map.empty() || map == "default") return;  // every server serves that one
+  std::call_once(*map_checked_, [this] {
+    const grpc::Status s = CheckMapServed(*this, map);
+    if (s.ok()) return;
+    if (s.error_code() == grpc::StatusCode::UNAVAILABLE) {
+      std::exit(ReportRpcError(*this, "--map " + map, s));
+    }
+    PrintError("--map " + map + ": " + s.error_message() + " (" + StatusCodeName(s.error_code()) +
+               ")");
+    std::exit(kExitFailed);
+  });
+}
+
+grpc::Status CheckMapServed(const Context& ctx, const std::string& map) {
+  grpc::ClientContext call;
+  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
+  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
+  pb::ListMapsResponse maps;
+  const grpc::Status s = ctx.stub->ListMaps(&call, pb::ListMapsRequest(), &maps);
+  if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                        "the server at " + ctx.server +
+                            " serves one map and knows no others (a mapd from before maps: "
+                            "ListMaps is unimplemented); upgrade it, or leave --map and $MAPD_MAP "
+                            "unset to use its map");
+  }
+  if (!s.ok()) return s;
+  std::string names;
+  for (const pb::MapInfo& m : maps.maps()) {
+    if (m.map_id() == map) return grpc::Status::OK;
+    names += (names.empty() ? "" : ", ") + m.map_id();
+  }
+  return grpc::Status(grpc::StatusCode::NOT_FOUND,
+                      "the server at " + ctx.server + " does not serve map '" + map +
+                          "'; it serves: " + names + " (mapctl maps create ID makes one)");
 }
 
 std::chrono::milliseconds Context::timeout() const {

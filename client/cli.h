@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -31,15 +32,31 @@ struct Context {
   std::string server;     // host:port
   double timeout_s = 10;  // RPC deadline; for ingest/simulate the wait for the last acks
   std::string token;      // bearer token (--token / $MAPD_TOKEN); empty: none
+  // The map every call is about (--map / $MAPD_MAP), sent as the mapd-map-id
+  // metadata; empty: the server's default map.
+  std::string map;
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<mapserver::v1::MapService::Stub> stub;
 
-  // A context whose deadline is now + timeout_s, carrying the token.
+  // A context whose deadline is now + timeout_s, carrying the token and the map.
+  // With a map other than "default", the first one first asks the server
+  // (ListMaps) whether it serves that map: a server from before maps would
+  // ignore the metadata and answer for its only map, so then mapctl prints
+  // why and exits (1; 3 when the server cannot be reached).
   std::unique_ptr<grpc::ClientContext> NewCallContext() const;
   // The same without a deadline (uploads, merges, downloads take their time).
   std::unique_ptr<grpc::ClientContext> NewStreamContext() const;
   std::chrono::milliseconds timeout() const;
+
+ private:
+  void CheckMapOnce() const;
+  std::shared_ptr<std::once_flag> map_checked_ = std::make_shared<std::once_flag>();
 };
+
+// Whether the server behind `ctx` serves `map`: OK, FAILED_PRECONDITION when
+// it does not know maps (ListMaps UNIMPLEMENTED), NOT_FOUND naming the maps it
+// serves, or the call's error.
+grpc::Status CheckMapServed(const Context& ctx, const std::string& map);
 
 // Prints `mapctl: <what>: <message> (<CODE>)` and returns the exit code for
 // `status`: kExitUnreachable when the server could not be reached, else kExitFailed.

@@ -107,6 +107,7 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
   robot::RobotClientOptions options;
   options.give_up_after = ctx.timeout();
   options.token = ctx.token;
+  options.map_id = ctx.map;
   robot::RobotClient client(ctx.channel, options);
   std::map<std::pair<std::string, uint64_t>, size_t> line_of;  // (session, seq) -> line number
   std::string line, parse_error;
@@ -209,6 +210,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
       robot::RobotClientOptions options;
       options.give_up_after = ctx.timeout();
       options.token = ctx.token;
+      options.map_id = ctx.map;
       robot::RobotClient client(ctx.channel, options);
       for (uint64_t s = 0; s < scans; ++s) client.Send(sim.NextBatch());
       tallies[i].status = client.Finish(ctx.timeout());

@@ -1,4 +1,4 @@
-// mapctl status | robots | features
+// mapctl status | robots | features | maps [create ID]
 #include <cstdio>
 
 #include "client/commands.h"
@@ -32,6 +32,59 @@ int RunStatus(const Context& ctx, const JsonOptions& flags) {
   if (!status.ok()) return ReportRpcError(ctx, "status", status);
   std::fputs(flags.json ? MessageToJson(stats).c_str() : FormatStats(stats, ctx.server).c_str(),
              stdout);
+  return kExitOk;
+}
+
+int RunMaps(const Context& ctx, const JsonOptions& flags) {
+  pb::ListMapsResponse maps;
+  grpc::ClientContext call;  // not NewCallContext: listing needs no map
+  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
+  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
+  const grpc::Status status = ctx.stub->ListMaps(&call, pb::ListMapsRequest(), &maps);
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    // A mapd from before maps serves exactly one, the default.
+    std::printf("%-20s  %s\n", "default", "(a mapd from before maps: its only map)");
+    return kExitOk;
+  }
+  if (!status.ok()) return ReportRpcError(ctx, "maps", status);
+  if (flags.json) {
+    std::fputs(MessageToJson(maps).c_str(), stdout);
+    return kExitOk;
+  }
+  std::printf("%-20s  %-11s  %12s  %10s  %12s\n", "MAP", "STATE", "MAP VERSION", "FEATURES",
+              "BATCHES");
+  for (const pb::MapInfo& m : maps.maps()) {
+    std::printf("%-20s  %-11s  %12llu  %10llu  %12llu\n", m.map_id().c_str(),
+                m.serving() ? "serving" : "not serving",
+                static_cast<unsigned long long>(m.map_version()),
+                static_cast<unsigned long long>(m.fused_features()),
+                static_cast<unsigned long long>(m.batches()));
+  }
+  if (!maps.can_create()) {
+    std::printf("(one database: start mapd with --data-dir DIR to serve and create more)\n");
+  }
+  return kExitOk;
+}
+
+struct CreateMapOptions {
+  std::string id;
+};
+
+int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
+  grpc::ClientContext call;
+  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
+  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
+  pb::CreateMapRequest request;
+  request.set_map_id(flags.id);
+  pb::MapInfo info;
+  const grpc::Status status = ctx.stub->CreateMap(&call, request, &info);
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    PrintError("maps create: the server at " + ctx.server +
+               " serves one map (a mapd from before maps); upgrade it to serve several");
+    return kExitFailed;
+  }
+  if (!status.ok()) return ReportRpcError(ctx, "maps create", status);
+  std::printf("created map %s\n", info.map_id().c_str());
   return kExitOk;
 }
 
@@ -144,6 +197,23 @@ void AddMapCommands(CLI::App* app, Action* action) {
   status->add_flag(
       "--json", BindCommand(status, action, RunStatus)->json,
       "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
+
+  CLI::App* maps = app->add_subcommand("maps", "the maps the server serves; maps create ID");
+  maps->footer(
+      "Each map is its own map frame, fused map, submaps and merges; name one with\n"
+      "'mapctl --map ID <command>' or $MAPD_MAP. mapd --data-dir serves several.");
+  // Not BindCommand: CLI11 runs this callback after `create`'s, whose action stays.
+  auto list = std::make_shared<JsonOptions>();
+  maps->callback([maps, list, action] {
+    if (!maps->get_subcommands().empty()) return;
+    *action = [list](const Context& ctx) { return RunMaps(ctx, *list); };
+  });
+  maps->add_flag("--json", list->json, "the ListMapsResponse in protobuf JSON");
+  CLI::App* create = maps->add_subcommand("create", "make a new, empty map (role admin)");
+  create
+      ->add_option("id", BindCommand(create, action, RunCreateMap)->id,
+                   "the map id: 1-128 characters of [A-Za-z0-9_.-], not starting with '.'")
+      ->required();
 
   CLI::App* robots =
       app->add_subcommand("robots", "the robots seen, with their sessions and counts");

@@ -91,6 +91,7 @@ void Stream(const Context& ctx, const ReplayOptions& flags,
   robot::RobotClientOptions options;
   options.give_up_after = ctx.timeout();
   options.token = ctx.token;
+  options.map_id = ctx.map;
   robot::RobotClient client(ctx.channel, options);
   for (std::size_t i = 0; i < r->batches.size(); ++i) {
     if (flags.rate > 0) {  // as recorded, or N times as fast

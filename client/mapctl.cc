@@ -1,6 +1,6 @@
 // mapctl: the command-line client of mapd.
 //
-//   mapctl [--server HOST:PORT] [--timeout S] [--token T] [--tls-ca PEM
+//   mapctl [--server HOST:PORT] [--map ID] [--timeout S] [--token T] [--tls-ca PEM
 //          [--tls-cert PEM --tls-key PEM]] <command> [options]
 //
 // Exit codes: 0 ok; 1 the server answered an error (or batches were rejected);
@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   const char* env_server = std::getenv("MAPD_SERVER");
   ctx.server = env_server != nullptr && *env_server != '\0' ? env_server : "127.0.0.1:50051";
   if (const char* t = std::getenv("MAPD_TOKEN"); t != nullptr) ctx.token = t;
+  if (const char* m = std::getenv("MAPD_MAP"); m != nullptr) ctx.map = m;
   std::string tls_ca, tls_cert, tls_key;  // PEM file names
 
   // Global flags come before the command; each command's flags after it.
@@ -56,6 +57,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(mapd::client::PositiveReal());
   app.add_option("--token", ctx.token, "bearer token (default $MAPD_TOKEN; docs/security.md)");
+  app.add_option("--map", ctx.map,
+                 "the map to work on, when mapd serves several (default $MAPD_MAP, else the "
+                 "server's default map; 'mapctl maps' lists them)");
   CLI::Option* ca = app.add_option("--tls-ca", tls_ca,
                                    "use TLS, trusting this CA (PEM) for the server's certificate");
   CLI::Option* cert =

@@ -109,6 +109,7 @@ void RobotClient::CancelLocked() {
 void RobotClient::OpenStreamLocked() {
   context_ = std::make_unique<grpc::ClientContext>();
   if (!options_.token.empty()) context_->AddMetadata("authorization", "Bearer " + options_.token);
+  if (!options_.map_id.empty()) context_->AddMetadata("mapd-map-id", options_.map_id);
   stream_ = stub_->Ingest(context_.get());
   half_closed_ = false;
   std::vector<pb::ObservationBatch> resend;
@@ -135,36 +136,43 @@ void RobotClient::ReaderLoop() {
   std::optional<Clock::time_point> failing_since;  // start of the current run of failures
   auto backoff = options_.initial_backoff;
   bool first_stream = true;
+  // Every server serves "default"; another map is asked about once.
+  bool map_checked = options_.map_id.empty() || options_.map_id == "default";
   for (;;) {
     {
       std::lock_guard<std::mutex> lock(mu_);
       if (stopping_ || (closing_ && pending_.empty())) break;
       if (!first_stream) ++counts_.reconnects;
     }
-    Stream* stream = nullptr;
-    {
-      std::lock_guard<std::mutex> write_lock(write_mu_);
-      OpenStreamLocked();
-      stream = stream_.get();
-    }
     first_stream = false;
-
     bool got_ack = false;
-    pb::IngestAck ack;
-    while (stream->Read(&ack)) {
-      HandleAck(ack);
-      got_ack = true;
-    }
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      cancel_target_ = nullptr;
-    }
     grpc::Status status;
-    {
-      std::lock_guard<std::mutex> write_lock(write_mu_);
-      status = stream_->Finish();
-      stream_.reset();
-      context_.reset();
+    if (!map_checked) {
+      status = CheckMapServed();
+      map_checked = status.ok();
+    }
+    if (map_checked) {
+      Stream* stream = nullptr;
+      {
+        std::lock_guard<std::mutex> write_lock(write_mu_);
+        OpenStreamLocked();
+        stream = stream_.get();
+      }
+      pb::IngestAck ack;
+      while (stream->Read(&ack)) {
+        HandleAck(ack);
+        got_ack = true;
+      }
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        cancel_target_ = nullptr;
+      }
+      {
+        std::lock_guard<std::mutex> write_lock(write_mu_);
+        status = stream_->Finish();
+        stream_.reset();
+        context_.reset();
+      }
     }
 
     std::unique_lock<std::mutex> lock(mu_);
@@ -180,8 +188,11 @@ void RobotClient::ReaderLoop() {
                                        std::to_string(pending_.size()) + " batches unacknowledged")
                     : status;
     const Clock::time_point give_up_at = *failing_since + options_.give_up_after;
+    // Final: retrying cannot help (credentials, or a map the server lacks).
     const bool refused = status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
-                         status.error_code() == grpc::StatusCode::PERMISSION_DENIED;
+                         status.error_code() == grpc::StatusCode::PERMISSION_DENIED ||
+                         status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ||
+                         status.error_code() == grpc::StatusCode::NOT_FOUND;
     if (now >= give_up_at || refused) {
       gave_up_ = true;
       break;
@@ -194,6 +205,36 @@ void RobotClient::ReaderLoop() {
   std::lock_guard<std::mutex> lock(mu_);
   reader_done_ = true;
   cv_.notify_all();
+}
+
+grpc::Status RobotClient::CheckMapServed() {
+  grpc::ClientContext call;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_) return grpc::Status(grpc::StatusCode::CANCELLED, "stopping");
+    cancel_target_ = &call;
+  }
+  call.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  if (!options_.token.empty()) call.AddMetadata("authorization", "Bearer " + options_.token);
+  pb::ListMapsResponse maps;
+  grpc::Status s = stub_->ListMaps(&call, pb::ListMapsRequest(), &maps);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    cancel_target_ = nullptr;
+  }
+  if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                        "map '" + options_.map_id +
+                            "': the server serves one map and knows no others (a mapd from "
+                            "before maps); nothing was sent: upgrade it, or send without a map");
+  }
+  if (!s.ok()) return s;
+  for (const pb::MapInfo& m : maps.maps()) {
+    if (m.map_id() == options_.map_id) return grpc::Status::OK;
+  }
+  return grpc::Status(grpc::StatusCode::NOT_FOUND,
+                      "the server does not serve map '" + options_.map_id +
+                          "' (ListMaps; an admin makes one with mapctl maps create)");
 }
 
 void RobotClient::WaitForChannel(std::chrono::steady_clock::time_point deadline) {

@@ -47,6 +47,12 @@ struct RobotClientOptions {
   // Sent as `authorization: Bearer <token>` on every stream (docs/security.md);
   // empty: none (the open mode, or a client certificate on the channel).
   std::string token;
+  // The map the batches are for, when mapd serves several (the stream's
+  // mapd-map-id metadata); empty: the server's default map. With a map
+  // other than "default" the client first asks the server (ListMaps) and
+  // gives up when it does not know maps (FAILED_PRECONDITION: a mapd from
+  // before maps would store them in its only map) or that map (NOT_FOUND).
+  std::string map_id;
 };
 
 // What the server answered, over the client's lifetime.
@@ -101,6 +107,8 @@ class RobotClient {
       grpc::ClientReaderWriter<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>;
 
   void ReaderLoop();
+  // OK when the server serves options_.map_id (see there), else why not.
+  grpc::Status CheckMapServed();
   // Opens a stream and writes every pending batch to it. REQUIRES: write_mu_ held.
   void OpenStreamLocked();
   void HandleAck(const mapserver::v1::IngestAck& ack);

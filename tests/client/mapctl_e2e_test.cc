@@ -26,6 +26,7 @@ namespace mapd::testing {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 class MapctlE2eTest : public ::testing::Test {
  protected:
@@ -105,6 +106,50 @@ TEST_F(MapctlE2eTest, ScriptedSession) {
   // SIGTERM: the server drains, checkpoints and exits 0.
   EXPECT_EQ(Stop(mapd_.pid, SIGTERM), 0) << mapd_.log();
   mapd_.pid = -1;
+}
+
+// mapd --data-dir: maps made and listed from mapctl, each its own map.
+TEST(MapctlMapsE2eTest, SeveralMapsFromTheCommandLine) {
+  TempDir dir;
+  std::filesystem::create_directory(dir.File("maps"));
+  MapdProcess mapd = StartMapd("", {"--data-dir", dir.File("maps")}, MAPD_BINARY,
+                               std::chrono::seconds(30), "serving", dir.File("mapd.log"));
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  auto mapctl = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd.address});
+    return RunCommand(args);
+  };
+  CommandResult r = mapctl({"maps", "create", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("created map site-1"));
+  r = mapctl({"--map", "site-1", "simulate", "--robots", "2", "--scans", "40"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("80 stored"));
+
+  r = mapctl({"maps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("default"));
+  EXPECT_THAT(r.out, HasSubstr("site-1"));
+  setenv("MAPD_MAP", "site-1", 1);  // mapctl inherits it
+  r = mapctl({"status", "--json"});
+  unsetenv("MAPD_MAP");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  r = mapctl({"status", "--json"});  // no map: the default one, empty
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, Not(HasSubstr("\"batches\": 80")));
+  r = mapctl({"--map", "site-1", "features", "--format", "json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("sim-robot-1"));
+
+  // A map the server does not serve: exit 1, naming the maps it has.
+  r = mapctl({"--map", "site-2", "features"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("does not serve map 'site-2'; it serves: default, site-1"));
+  r = mapctl({"maps", "create", "site-1"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("ALREADY_EXISTS"));
+  Stop(mapd.pid, SIGTERM);
 }
 
 TEST_F(MapctlE2eTest, TrailsAsGeoJson) {

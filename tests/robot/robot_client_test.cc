@@ -2,8 +2,11 @@
 // after the server died, giving up on a server that is not there.
 #include "client/robot/robot_client.h"
 
+#include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+
+#include <atomic>
 
 #include "client/sim_robot.h"
 #include "common/process.h"
@@ -119,6 +122,75 @@ TEST(RobotClientUnreachableTest, GivesUpWithTheReason) {
   const grpc::Status status = client.Finish(seconds(10));
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
   EXPECT_EQ(client.unacknowledged(), 1u);
+}
+
+TEST_F(RobotClientTest, AMapTheServerDoesNotServeIsFinalAndNothingIsStored) {
+  RobotClientOptions options;
+  options.map_id = "site-9";  // this mapd serves one database: "default" only
+  RobotClient client(Channel(mapd_.address), options);
+  client.Send(Robot("s1").NextBatch());
+  const grpc::Status status = client.Finish(seconds(10));
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
+  EXPECT_NE(status.error_message().find("'site-9'"), std::string::npos) << status.error_message();
+  EXPECT_EQ(client.counts().stored, 0u);
+  EXPECT_EQ(client.unacknowledged(), 1u);
+}
+
+TEST_F(RobotClientTest, TheDefaultMapByNameIsTheDefaultMap) {
+  RobotClientOptions options;
+  options.map_id = "default";
+  RobotClient client(Channel(mapd_.address), options);
+  client.Send(Robot("s1").NextBatch());
+  ASSERT_TRUE(client.Finish(seconds(10)).ok());
+  EXPECT_EQ(client.counts().stored, 1u);
+}
+
+// A mapd from before maps: Ingest stores everything, ListMaps is unimplemented
+// (proto3 would skip the map it does not know).
+class ServerBeforeMaps final : public mapserver::v1::MapService::Service {
+ public:
+  grpc::Status Ingest(grpc::ServerContext*,
+                      grpc::ServerReaderWriter<mapserver::v1::IngestAck,
+                                               mapserver::v1::ObservationBatch>* stream) override {
+    mapserver::v1::ObservationBatch batch;
+    while (stream->Read(&batch)) {
+      ++stored;
+      mapserver::v1::IngestAck ack;
+      ack.set_session_id(batch.session_id());
+      ack.set_seq(batch.seq());
+      ack.set_result(mapserver::v1::IngestAck::STORED);
+      stream->Write(ack);
+    }
+    return grpc::Status::OK;
+  }
+  std::atomic<int> stored{0};
+};
+
+TEST(RobotClientOldServerTest, AMapIsNeverSentToAServerThatKnowsNoMaps) {
+  ServerBeforeMaps old;
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&old);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  ASSERT_GT(port, 0);
+  const std::string address = "127.0.0.1:" + std::to_string(port);
+
+  RobotClientOptions options;
+  options.map_id = "site-7";
+  RobotClient client(Channel(address), options);
+  client.Send(Robot("s1").NextBatch());
+  const grpc::Status status = client.Finish(seconds(10));
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+  EXPECT_NE(status.error_message().find("before maps"), std::string::npos);
+  EXPECT_EQ(old.stored.load(), 0);
+
+  // Without a map the old server is used as before.
+  RobotClient plain(Channel(address));
+  plain.Send(Robot("s1").NextBatch());
+  EXPECT_TRUE(plain.Finish(seconds(10)).ok());
+  EXPECT_EQ(old.stored.load(), 1);
+  server->Shutdown();
 }
 
 }  // namespace
