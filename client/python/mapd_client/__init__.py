@@ -19,9 +19,10 @@ time into <build>/client/python; see the "Python" section of the project README.
 """
 
 from mapd_client._proto import pb, pb_grpc
-from mapd_client.map_client import FeatureMap, MapClient, connect
+from mapd_client.map_client import FeatureMap, MapClient, MapNotServed, connect
 from mapd_client.robot_client import IngestCounts, IngestError, Rejection, RobotClient
 from mapd_client.watch import FeatureWatch, LiveFeatureMap
 
-__all__ = ["pb", "pb_grpc", "connect", "MapClient", "FeatureMap", "RobotClient", "IngestCounts",
+__all__ = ["pb", "pb_grpc", "connect", "MapClient", "MapNotServed", "FeatureMap", "RobotClient",
+           "IngestCounts",
            "IngestError", "Rejection", "FeatureWatch", "LiveFeatureMap"]

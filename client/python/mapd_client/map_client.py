@@ -36,11 +36,54 @@ def connect(address: str = "127.0.0.1:50051", root_certificates: Optional[bytes]
     return grpc.secure_channel(address, credentials, options=options)
 
 
+class MapNotServed(Exception):
+    """The server does not serve the MapClient's map_id: it knows no maps (a
+    mapd from before them would answer for its only map) or not this one."""
+
+
 class MapClient:
-    def __init__(self, channel: grpc.Channel, token: str = "", timeout_s: float = 30.0):
+    def __init__(self, channel: grpc.Channel, token: str = "", timeout_s: float = 30.0,
+                 map_id: str = ""):
+        """map_id: the map every call is about, when mapd serves several; "" =
+        the server's default map. Another map than "default" is looked up
+        with ListMaps before the first call, which raises MapNotServed if the
+        server knows no maps or not this one."""
         self._stub = pb_grpc.MapServiceStub(channel)
         self._metadata = [("authorization", "Bearer " + token)] if token else []
         self._timeout_s = timeout_s
+        self._map_id = map_id
+        self._map_checked = map_id in ("", "default")
+
+    def _md(self) -> List[Tuple[str, str]]:
+        """The metadata of a call about the map, once the map is known served."""
+        if not self._map_checked:
+            try:
+                served = [m.map_id for m in self.maps().maps]
+            except grpc.RpcError as error:
+                if error.code() != grpc.StatusCode.UNIMPLEMENTED:
+                    raise
+                raise MapNotServed(f"map '{self._map_id}': the server serves one map and knows "
+                                   "no others (a mapd from before maps); upgrade it, or leave "
+                                   "map_id empty") from None
+            if self._map_id not in served:
+                raise MapNotServed(f"the server does not serve map '{self._map_id}'; it serves: "
+                                   + ", ".join(served))
+            self._map_checked = True
+        if not self._map_id:
+            return self._metadata
+        return self._metadata + [("mapd-map-id", self._map_id)]
+
+    # -- maps
+
+    def maps(self) -> pb.ListMapsResponse:
+        """The maps the server serves (ListMaps)."""
+        return self._stub.ListMaps(pb.ListMapsRequest(), timeout=self._timeout_s,
+                                   metadata=self._metadata)
+
+    def create_map(self, map_id: str) -> pb.MapInfo:
+        """A new, empty map (role admin; mapd --data-dir)."""
+        return self._stub.CreateMap(pb.CreateMapRequest(map_id=map_id), timeout=self._timeout_s,
+                                    metadata=self._metadata)
 
     # -- the fused map
 
@@ -57,7 +100,7 @@ class MapClient:
         planes: List[pb.FusedPlane] = []
         version = pending = 0
         for page in self._stub.GetFeatureMap(request, timeout=self._timeout_s,
-                                             metadata=self._metadata):
+                                             metadata=self._md()):
             features.extend(page.features)
             planes.extend(page.planes)
             version, pending = page.map_version, page.fusion_pending
@@ -70,23 +113,23 @@ class MapClient:
         messages (LiveFeatureMap applies them); it reconnects from the last
         complete map_version when mapd restarts. close() or `with` ends it.
         A bad filter raises grpc.RpcError INVALID_ARGUMENT naming the field."""
-        return FeatureWatch(self._stub, self._metadata, watch_request(bbox, kind, robot_id),
+        return FeatureWatch(self._stub, self._md(), watch_request(bbox, kind, robot_id),
                             since_map_version=since_map_version, reconnect=reconnect)
 
     def stats(self) -> pb.Stats:
         return self._stub.GetStats(pb.GetStatsRequest(), timeout=self._timeout_s,
-                                   metadata=self._metadata)
+                                   metadata=self._md())
 
     def robots(self) -> List[pb.RobotInfo]:
         return list(self._stub.ListRobots(pb.ListRobotsRequest(), timeout=self._timeout_s,
-                                          metadata=self._metadata).robots)
+                                          metadata=self._md()).robots)
 
     def trails(self, robot_id: str = "", max_poses_per_session: int = 0) -> List[pb.SessionTrail]:
         """Each robot session's sensor positions (map frame where frame_tied)."""
         request = pb.GetTrailsRequest(robot_id=robot_id,
                                       max_poses_per_session=max_poses_per_session)
         return list(self._stub.GetTrails(request, timeout=self._timeout_s,
-                                         metadata=self._metadata))
+                                         metadata=self._md()))
 
     # -- voxel submaps
 
@@ -110,17 +153,17 @@ class MapClient:
             yield pb.UploadSubmapRequest(header=header)
             for at in range(0, len(data), CHUNK_BYTES):
                 yield pb.UploadSubmapRequest(chunk=data[at:at + CHUNK_BYTES])
-        return self._stub.UploadSubmap(requests(), metadata=self._metadata)
+        return self._stub.UploadSubmap(requests(), metadata=self._md())
 
     def list_submaps(self, robot_id: str = "") -> List[pb.SubmapInfo]:
         return list(self._stub.ListSubmaps(pb.ListSubmapsRequest(robot_id=robot_id),
                                            timeout=self._timeout_s,
-                                           metadata=self._metadata).submaps)
+                                           metadata=self._md()).submaps)
 
     def get_submap(self, submap_id: int) -> Tuple[pb.SubmapInfo, bytes]:
         """The stored file and its info."""
         return self._read_chunks(self._stub.GetSubmap(pb.GetSubmapRequest(id=submap_id),
-                                                      metadata=self._metadata))
+                                                      metadata=self._md()))
 
     def global_map(self) -> Tuple[pb.SubmapInfo, bytes]:
         """The global map (OctoMap binary): the union of every submap placed in
@@ -131,7 +174,7 @@ class MapClient:
     def global_map_info(self) -> Tuple[pb.SubmapInfo, pb.GlobalMapInfo, bytes]:
         """The global map with its version and members (submap ids and poses)."""
         info, about, parts = pb.SubmapInfo(), pb.GlobalMapInfo(), []
-        for chunk in self._stub.GetGlobalMap(pb.GetGlobalMapRequest(), metadata=self._metadata):
+        for chunk in self._stub.GetGlobalMap(pb.GetGlobalMapRequest(), metadata=self._md()):
             if chunk.HasField("info"):
                 info = chunk.info
             if chunk.HasField("global"):
@@ -141,7 +184,7 @@ class MapClient:
 
     def delete_submap(self, submap_id: int) -> None:
         self._stub.DeleteSubmap(pb.DeleteSubmapRequest(id=submap_id), timeout=self._timeout_s,
-                                metadata=self._metadata)
+                                metadata=self._md())
 
     def merge(self, submap_ids: Sequence[int],
               progress: Optional[Callable[[str, float], None]] = None,
@@ -153,7 +196,7 @@ class MapClient:
         MERGE_STATE_PROPOSED) until approve_merge()."""
         request = pb.MergeSubmapsRequest(submap_ids=submap_ids, review=review)
         result = None
-        for message in self._stub.MergeSubmaps(request, metadata=self._metadata):
+        for message in self._stub.MergeSubmaps(request, metadata=self._md()):
             if progress is not None and message.stage:
                 progress(message.stage, message.fraction)
             if message.HasField("result"):
@@ -165,19 +208,19 @@ class MapClient:
     def list_merges(self, state: int = pb.MERGE_STATE_UNSPECIFIED) -> List[pb.MergeRecord]:
         return list(self._stub.ListMerges(pb.ListMergesRequest(state=state),
                                           timeout=self._timeout_s,
-                                          metadata=self._metadata).merges)
+                                          metadata=self._md()).merges)
 
     def get_merge(self, merge_id: int) -> pb.MergeRecord:
         return self._stub.GetMerge(pb.GetMergeRequest(id=merge_id), timeout=self._timeout_s,
-                                   metadata=self._metadata)
+                                   metadata=self._md())
 
     def approve_merge(self, merge_id: int) -> pb.MergeRecord:
         return self._stub.ApproveMerge(pb.ApproveMergeRequest(id=merge_id),
-                                       timeout=self._timeout_s, metadata=self._metadata)
+                                       timeout=self._timeout_s, metadata=self._md())
 
     def reject_merge(self, merge_id: int, reason: str) -> pb.MergeRecord:
         return self._stub.RejectMerge(pb.RejectMergeRequest(id=merge_id, reason=reason),
-                                      timeout=self._timeout_s, metadata=self._metadata)
+                                      timeout=self._timeout_s, metadata=self._md())
 
     @staticmethod
     def _read_chunks(stream) -> Tuple[pb.SubmapInfo, bytes]:

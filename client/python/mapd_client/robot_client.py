@@ -70,10 +70,20 @@ class RobotClient:
 
     def __init__(self, channel: grpc.Channel, token: str = "",
                  give_up_after_s: float = 30.0, initial_backoff_s: float = 0.1,
-                 max_backoff_s: float = 2.0, max_unacknowledged: int = 1000):
+                 max_backoff_s: float = 2.0, max_unacknowledged: int = 1000,
+                 map_id: str = ""):
+        """map_id: the map the batches are for when mapd serves several;
+        "" = the server's default map. Another map than "default" is first
+        looked up with ListMaps: a server that knows no maps (a mapd from
+        before them would store the batches in its only map) or not this one
+        makes finish() raise IngestError FAILED_PRECONDITION / NOT_FOUND, with
+        nothing sent."""
         self._channel = channel
         self._stub = pb_grpc.MapServiceStub(channel)
         self._metadata = [("authorization", "Bearer " + token)] if token else []
+        self._map_id = map_id
+        if map_id:
+            self._metadata.append(("mapd-map-id", map_id))
         self._give_up_after_s = give_up_after_s
         self._initial_backoff_s = initial_backoff_s
         self._max_backoff_s = max_backoff_s
@@ -233,10 +243,29 @@ class RobotClient:
         with self._mu:
             self._call = None
 
+    def _check_map(self) -> Tuple[grpc.StatusCode, str]:
+        """OK when the server serves self._map_id, else why not."""
+        try:
+            maps = self._stub.ListMaps(pb.ListMapsRequest(), timeout=10.0,
+                                       metadata=self._metadata)
+        except grpc.RpcError as error:
+            if error.code() == grpc.StatusCode.UNIMPLEMENTED:
+                return (grpc.StatusCode.FAILED_PRECONDITION,
+                        f"map '{self._map_id}': the server serves one map and knows no others "
+                        "(a mapd from before maps); nothing was sent: upgrade it, or send "
+                        "without a map")
+            return error.code(), error.details() or ""
+        if any(m.map_id == self._map_id for m in maps.maps):
+            return grpc.StatusCode.OK, ""
+        return (grpc.StatusCode.NOT_FOUND,
+                f"the server does not serve map '{self._map_id}' (ListMaps; an admin makes "
+                "one with mapctl maps create)")
+
     def _reader_loop(self) -> None:
         failing_since: Optional[float] = None
         backoff = self._initial_backoff_s
         first = True
+        map_checked = self._map_id in ("", "default")  # every server serves that one
         while True:
             with self._mu:
                 if self._stopping or (self._closing and not self._pending):
@@ -244,16 +273,20 @@ class RobotClient:
                 if not first:
                     self._counts.reconnects += 1
             first = False
-            call, requests = self._open_stream()
             got_ack = False
             code, message = grpc.StatusCode.OK, ""
-            try:
-                for ack in call:
-                    self._handle_ack(ack)
-                    got_ack = True
-            except grpc.RpcError as error:
-                code, message = error.code(), error.details() or ""
-            self._close_stream(requests)
+            if not map_checked:
+                code, message = self._check_map()
+                map_checked = code == grpc.StatusCode.OK
+            if map_checked:
+                call, requests = self._open_stream()
+                try:
+                    for ack in call:
+                        self._handle_ack(ack)
+                        got_ack = True
+                except grpc.RpcError as error:
+                    code, message = error.code(), error.details() or ""
+                self._close_stream(requests)
 
             with self._cv:
                 if self._stopping or (self._closing and not self._pending):
@@ -269,8 +302,11 @@ class RobotClient:
                                      f"{len(self._pending)} batches unacknowledged")
                 self._last_error = (code, message)
                 give_up_at = failing_since + self._give_up_after_s
+                # Final: retrying cannot help (credentials, or a map the server lacks).
                 refused = code in (grpc.StatusCode.UNAUTHENTICATED,
-                                   grpc.StatusCode.PERMISSION_DENIED)
+                                   grpc.StatusCode.PERMISSION_DENIED,
+                                   grpc.StatusCode.FAILED_PRECONDITION,
+                                   grpc.StatusCode.NOT_FOUND)
                 if now >= give_up_at or refused:
                     self._gave_up = True
                     break

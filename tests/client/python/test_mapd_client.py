@@ -203,3 +203,38 @@ def test_a_refused_token_gives_up_at_once_and_a_good_one_streams(mapd):
     with pytest.raises(grpc.RpcError) as denied:
         MapClient(channel, token=token).merge([1, 2])
     assert denied.value.code() == grpc.StatusCode.PERMISSION_DENIED
+
+
+def test_several_maps_each_its_own(tmp_path):
+    """mapd --data-dir: a map made from Python, written by a robot and read
+    back apart from the default map; a map the server lacks is refused."""
+    import os
+    from conftest import Mapd
+    from mapd_client import MapNotServed
+    (tmp_path / "maps").mkdir()
+    server = Mapd(os.environ["MAPD_BINARY"], str(tmp_path))
+    server.start(extra=("--db", "", "--data-dir", str(tmp_path / "maps")))
+    try:
+        channel = connect(server.address)
+        admin = MapClient(channel)
+        assert admin.create_map("site-1").map_id == "site-1"
+        with RobotClient(channel, map_id="site-1") as robot:
+            for batch in walk("r1", 20):
+                robot.send(batch)
+        assert robot.counts().stored == 20
+        site = MapClient(channel, map_id="site-1")
+        assert site.stats().batches == 20
+        assert len(site.feature_map(max_wait_ms=5000).features) == 4
+        assert admin.stats().batches == 0  # the default map
+        assert [m.map_id for m in admin.maps().maps] == ["default", "site-1"]
+
+        with pytest.raises(MapNotServed, match="does not serve map 'site-2'"):
+            MapClient(channel, map_id="site-2").stats()
+        lost = RobotClient(channel, map_id="site-2", give_up_after_s=5)
+        lost.send(walk("r1", 1)[0])
+        with pytest.raises(IngestError) as error:
+            lost.finish(timeout_s=10)
+        assert error.value.code == grpc.StatusCode.NOT_FOUND
+        lost.close()
+    finally:
+        server.kill()
