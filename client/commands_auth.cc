@@ -17,6 +17,7 @@ struct CreateOptions {
   std::string name;
   std::string role;
   std::string robot;
+  std::vector<std::string> maps;
 };
 
 struct RevokeOptions {
@@ -63,14 +64,16 @@ std::string Utc(int64_t ns) {
 }
 
 void PrintTokens(const pb::ListTokensResponse& r) {
-  std::printf("%-5s %-24s %-9s %-16s %-20s %-20s %s\n", "ID", "NAME", "ROLE", "ROBOT", "CREATED",
-              "BY", "REVOKED");
+  std::printf("%-5s %-24s %-9s %-16s %-20s %-20s %-20s %s\n", "ID", "NAME", "ROLE", "ROBOT",
+              "CREATED", "BY", "REVOKED", "MAPS");
   for (const pb::TokenInfo& t : r.tokens()) {
-    std::printf("%-5llu %-24s %-9s %-16s %-20s %-20s %s\n", static_cast<unsigned long long>(t.id()),
-                Visible(t.name()).c_str(), RoleName(t.role()),
-                t.robot_id().empty() ? "-" : Visible(t.robot_id()).c_str(),
+    std::string maps;
+    for (const std::string& m : t.maps()) maps += (maps.empty() ? "" : ",") + Visible(m);
+    std::printf("%-5llu %-24s %-9s %-16s %-20s %-20s %-20s %s\n",
+                static_cast<unsigned long long>(t.id()), Visible(t.name()).c_str(),
+                RoleName(t.role()), t.robot_id().empty() ? "-" : Visible(t.robot_id()).c_str(),
                 Utc(t.created_ns()).c_str(), Visible(t.created_by()).c_str(),
-                Utc(t.revoked_ns()).c_str());
+                Utc(t.revoked_ns()).c_str(), maps.empty() ? "(every map)" : maps.c_str());
   }
 }
 
@@ -78,6 +81,7 @@ int RunTokenCreate(const Context& ctx, const CreateOptions& flags) {
   pb::CreateTokenRequest request;
   request.set_name(flags.name);
   request.set_robot_id(flags.robot);
+  for (const std::string& map : flags.maps) request.add_maps(map);
   pb::Role role = pb::ROLE_UNSPECIFIED;
   ParseRole(flags.role, &role);  // checked by the parser
   request.set_role(role);
@@ -181,6 +185,8 @@ void AddAuthCommands(CLI::App* app, Action* action) {
       ->required()
       ->check(CLI::IsMember({"reader", "robot", "operator", "admin"}));
   create->add_option("--robot", c->robot, "the robot id a robot token may write");
+  create->add_option("--maps", c->maps, "ID,...: the maps it may act on (default: every map)")
+      ->delimiter(',');
   CLI::App* list = token->add_subcommand("list", "list the tokens");
   BindCommand(list, action, RunTokenList);
   CLI::App* revoke = token->add_subcommand("revoke", "revoke a token");

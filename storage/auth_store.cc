@@ -9,7 +9,7 @@ namespace {
 
 constexpr char kTokenColumns[] =
     "SELECT id, name, role, robot_id, secret_sha256, created_ns, created_by, "
-    "coalesce(revoked_ns, 0) FROM tokens ";
+    "coalesce(revoked_ns, 0), maps FROM tokens ";
 
 TokenRecord ColumnToken(const Statement& q) {
   TokenRecord t;
@@ -21,6 +21,7 @@ TokenRecord ColumnToken(const Statement& q) {
   t.created_ns = q.ColumnInt(5);
   t.created_by = q.ColumnText(6);
   t.revoked_ns = q.ColumnInt(7);
+  t.maps = q.ColumnText(8);
   return t;
 }
 
@@ -38,12 +39,12 @@ StatusOr<int64_t> WriteTransaction::InsertToken(const TokenRecord& t) {
                                  "' exists already (names are never reused)");
   StatusOr<Statement> q = Statement::Prepare(
       w,
-      "INSERT INTO tokens (name, role, robot_id, secret_sha256, created_ns, created_by) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+      "INSERT INTO tokens (name, role, robot_id, secret_sha256, created_ns, created_by, maps) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   if (!q.ok()) return q.status();
   q->Bind(1, t.name).Bind(2, t.role).Bind(3, t.robot_id);
   q->BindBlob(4, t.secret_sha256.data(), t.secret_sha256.size());
-  q->Bind(5, t.created_ns).Bind(6, t.created_by);
+  q->Bind(5, t.created_ns).Bind(6, t.created_by).Bind(7, t.maps);
   MAPD_RETURN_IF_ERROR(q->Run());
   return static_cast<int64_t>(sqlite3_last_insert_rowid(w));
 }

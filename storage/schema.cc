@@ -243,6 +243,11 @@ const std::vector<const char*>& Migrations() {
         data        BLOB NOT NULL
       );
       )sql",
+      // 11 -> 12: a token may be scoped to maps (issue 41): comma-separated
+      // map ids, '' = every map (as every token before this version).
+      R"sql(
+      ALTER TABLE tokens ADD COLUMN maps TEXT NOT NULL DEFAULT '';
+      )sql",
   };
   return kMigrations;
 }

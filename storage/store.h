@@ -299,6 +299,7 @@ struct TokenRecord {
   int64_t created_ns = 0;
   std::string created_by;  // the creator's name ("mapd token create" offline)
   int64_t revoked_ns = 0;  // 0 while valid
+  std::string maps;        // the maps it may act on, comma-separated; empty = every map
 };
 
 struct AuditEntry {

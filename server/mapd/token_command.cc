@@ -18,6 +18,7 @@ struct TokenOptions {
   std::string role;
   std::string name;
   std::string robot;
+  std::vector<std::string> maps;
   int64_t id = 0;
 };
 
@@ -59,6 +60,7 @@ int RunCreate(const TokenOptions& flags) {
   service::ParseRole(flags.role, &t.role);  // checked by the parser
   t.name = flags.name;
   t.robot_id = flags.robot;
+  t.maps = flags.maps;
   t.created_by = "mapd token (offline)";
   service::IssuedToken issued;
   Status s = Write(**store, [&](storage::WriteTransaction* txn) {
@@ -82,11 +84,12 @@ int RunList(const TokenOptions& flags) {
   if (!store.ok()) return Fail(store.status());
   StatusOr<std::vector<storage::TokenRecord>> tokens = (*store)->ListTokens();
   if (!tokens.ok()) return Fail(tokens.status());
-  std::printf("%-6s %-24s %-9s %-16s %s\n", "ID", "NAME", "ROLE", "ROBOT", "STATE");
+  std::printf("%-6s %-24s %-9s %-16s %-8s %s\n", "ID", "NAME", "ROLE", "ROBOT", "STATE", "MAPS");
   for (const auto& t : *tokens) {
-    std::printf("%-6lld %-24s %-9s %-16s %s\n", static_cast<long long>(t.id), t.name.c_str(),
+    std::printf("%-6lld %-24s %-9s %-16s %-8s %s\n", static_cast<long long>(t.id), t.name.c_str(),
                 t.role.c_str(), t.robot_id.empty() ? "-" : t.robot_id.c_str(),
-                t.revoked_ns ? "revoked" : "active");
+                t.revoked_ns ? "revoked" : "active",
+                t.maps.empty() ? "(every map)" : t.maps.c_str());
   }
   return 0;
 }
@@ -136,6 +139,8 @@ void AddTokenCommand(CLI::App* app, std::function<int()>* action) {
           "ROLE"));
   create->add_option("--name", flags->name, "what the token is for")->required();
   create->add_option("--robot", flags->robot, "the robot id a robot token may write");
+  create->add_option("--maps", flags->maps, "ID,...: the maps it may act on (default: every map)")
+      ->delimiter(',');
   add("list", "list the tokens", RunList);
   add("revoke", "revoke a token", RunRevoke)
       ->add_option("--id", flags->id, "the token's id (see 'mapd token list')")

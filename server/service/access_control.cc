@@ -2,6 +2,7 @@
 
 #include "common/clock.h"
 #include "service/log.h"
+#include "service/map_id.h"
 #include "service/token.h"
 
 namespace mapd::service {
@@ -58,6 +59,7 @@ StatusOr<Principal> AccessControl::FromToken(std::string_view bearer) {
   p.name = record->name;
   p.robot_id = record->robot_id;
   p.credential = "token";
+  p.maps = SplitMapIds(record->maps);  // stored sorted
   if (!ParseRole(record->role, &p.role))
     return Status::Internal("token '" + record->name + "' has unknown role");
   tokens_exist_ = true;
@@ -150,6 +152,13 @@ Status AccessControl::Check(const Principal& principal, Permission permission,
                             const std::string& target) {
   Status s = Authorize(principal, permission, action, robot);
   if (!s.ok() && IsWrite(permission)) AuditDenied(principal, action, target, s);
+  return s;
+}
+
+Status AccessControl::CheckMap(const Principal& principal, const std::string& map,
+                               const std::string& action) {
+  Status s = AuthorizeMap(principal, map, action);
+  if (!s.ok()) AuditDenied(principal, action, "map " + map, s);
   return s;
 }
 

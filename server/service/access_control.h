@@ -68,6 +68,8 @@ class AccessControl {
   // id); a refusal is audited with `target`.
   Status Check(const Principal& principal, Permission permission, const std::string& action,
                const std::string& robot, const std::string& target);
+  // AuthorizeMap: a token scoped to other maps is refused `map`, audited.
+  Status CheckMap(const Principal& principal, const std::string& map, const std::string& action);
   // Check for the callback reactors, which must not block a gRPC thread on a
   // commit: `done` gets the verdict at once when it is OK (or not a write),
   // otherwise on the writer thread once the refusal's audit row is committed

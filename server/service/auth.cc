@@ -1,5 +1,7 @@
 #include "service/auth.h"
 
+#include <algorithm>
+
 namespace mapd::service {
 namespace {
 
@@ -97,6 +99,14 @@ Status Authorize(const Principal& principal, Permission permission, const std::s
         ": token management needs an admin token, and the open mode has none; create the "
         "first with `mapd token create --db FILE --role admin --name NAME`");
   }
+  const bool server_wide = permission == Permission::kManageTokens ||
+                           permission == Permission::kManageMaps ||
+                           permission == Permission::kReadAudit;
+  if (server_wide && !principal.maps.empty()) {
+    return Status::PermissionDenied(action + ": " + Describe(principal) +
+                                    " is scoped to maps; permission " + PermissionName(permission) +
+                                    " is the server's and needs a token for every map");
+  }
   if (!Grants(principal.role, permission)) {
     return Status::PermissionDenied(action + ": " + Describe(principal) + " lacks permission " +
                                     PermissionName(permission) + " (granted to " +
@@ -109,6 +119,17 @@ Status Authorize(const Principal& principal, Permission permission, const std::s
         " on any robot is granted to " + RolesGranting(permission));
   }
   return Status::Ok();
+}
+
+Status AuthorizeMap(const Principal& principal, const std::string& map, const std::string& action) {
+  if (principal.maps.empty() ||
+      std::binary_search(principal.maps.begin(), principal.maps.end(), map)) {
+    return Status::Ok();
+  }
+  std::string maps;
+  for (const std::string& m : principal.maps) maps += (maps.empty() ? "" : ", ") + m;
+  return Status::PermissionDenied(action + ": " + Describe(principal) + " may act on maps " + maps +
+                                  " only, not on map '" + map + "'");
 }
 
 }  // namespace mapd::service

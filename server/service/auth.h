@@ -9,6 +9,7 @@
 #define MAPD_SERVICE_AUTH_H_
 
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 
@@ -39,6 +40,8 @@ struct Principal {
   // "certificate", "none") and its address (gRPC's peer, "ipv4:1.2.3.4:5").
   std::string credential;
   std::string peer;
+  // A token's scope: the maps it may act on (sorted); empty = every map.
+  std::vector<std::string> maps;
 };
 
 const char* RoleName(Role role);  // "reader", "robot", "operator", "admin"
@@ -50,8 +53,14 @@ std::string RolesGranting(Permission p);
 // OK, or PermissionDenied naming the principal, its role, the action and the
 // permission needed. `robot` is the robot whose data is touched (empty: none
 // in particular); it matters only for robot-scoped permissions.
+// A token scoped to maps is refused what is the server's, not a map's
+// (managing tokens and maps, reading the audit log).
 Status Authorize(const Principal& principal, Permission permission, const std::string& action,
                  const std::string& robot = "");
+
+// OK when the principal may act on `map` (its token is not scoped, or
+// scoped to it), else PermissionDenied naming its maps.
+Status AuthorizeMap(const Principal& principal, const std::string& map, const std::string& action);
 
 }  // namespace mapd::service
 

@@ -2,6 +2,7 @@
 
 #include "common/clock.h"
 #include "service/log.h"
+#include "service/map_id.h"
 #include "service/status_mapping.h"
 #include "service/token.h"
 
@@ -55,6 +56,7 @@ void TokenToProto(const storage::TokenRecord& t, pb::TokenInfo* out) {
   out->set_created_ns(t.created_ns);
   out->set_created_by(t.created_by);
   out->set_revoked_ns(t.revoked_ns);
+  for (const std::string& map : SplitMapIds(t.maps)) out->add_maps(map);
 }
 
 std::string TokenTarget(int64_t id, const std::string& name) {
@@ -78,6 +80,7 @@ grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
   t.name = request.name();
   t.robot_id = request.robot_id();
   t.created_by = admin->name;
+  t.maps.assign(request.maps().begin(), request.maps().end());
   IssuedToken issued;
   Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
     StatusOr<IssuedToken> r = IssueToken(t, UnixNowNs(), txn);
@@ -86,7 +89,8 @@ grpc::Status AuthService::CreateToken(const grpc::ServerContextBase& context,
     return txn->AppendAudit(
         AccessControl::Entry(*admin, "CreateToken",
                              TokenTarget(issued.record.id, t.name) + " role " + RoleName(t.role) +
-                                 (t.robot_id.empty() ? "" : " robot " + t.robot_id),
+                                 (t.robot_id.empty() ? "" : " robot " + t.robot_id) +
+                                 (issued.record.maps.empty() ? "" : " maps " + issued.record.maps),
                              "ok"));
   });
   if (!s.ok()) return ToGrpcStatus(s);

@@ -9,7 +9,6 @@
 #include <filesystem>
 
 #include "service/file_modes.h"
-#include "service/ingest_batch.h"
 
 namespace mapd::service {
 namespace {
@@ -62,15 +61,6 @@ DatabaseLock& DatabaseLock::operator=(DatabaseLock&& other) noexcept {
 
 DatabaseLock::~DatabaseLock() {
   if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the flock
-}
-
-Status CheckMapId(const std::string& id, const std::string& what) {
-  if (!ValidId(id) || id.front() == '.') {
-    return Status::InvalidArgument(what + " '" + id.substr(0, 128) +
-                                   "' is not a map id: 1-128 characters of [A-Za-z0-9_.-], "
-                                   "not starting with '.'");
-  }
-  return Status::Ok();
 }
 
 StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenSingle(const std::string& db_path,

@@ -24,11 +24,10 @@
 
 #include "common/status.h"
 #include "service/map_core.h"
+#include "service/map_id.h"
 #include "service/map_service.h"
 
 namespace mapd::service {
-
-inline constexpr char kDefaultMapId[] = "default";
 
 // An exclusive flock on a database file, held until destroyed. flock locks
 // are apart from the fcntl locks SQLite takes, so they do not interfere; the
@@ -56,10 +55,6 @@ struct ServedMap {
   std::unique_ptr<MapCore> core;
   std::unique_ptr<MapServiceImpl> service;
 };
-
-// A map id is a robot id (1-128 of [A-Za-z0-9_.-]) that does not start with
-// '.' (it names a file). InvalidArgument naming `what` otherwise.
-Status CheckMapId(const std::string& id, const std::string& what);
 
 class MapDirectory {
  public:

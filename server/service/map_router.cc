@@ -145,9 +145,12 @@ grpc::Status MapRouter::WhoAmI(grpc::ServerContext* c, const pb::WhoAmIRequest* 
 
 grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMapsRequest*,
                                  pb::ListMapsResponse* response) {
-  if (auto p = server_wide()->access().Admit(*context, Permission::kReadMap, "ListMaps"); !p.ok())
-    return ToGrpcStatus(p.status());
-  for (ServedMap* map : maps_->List()) ToProto(*map, response->add_maps());
+  StatusOr<Principal> p = server_wide()->access().Admit(*context, Permission::kReadMap, "ListMaps");
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  for (ServedMap* map : maps_->List()) {
+    // A token scoped to maps sees those only.
+    if (AuthorizeMap(*p, map->id, "ListMaps").ok()) ToProto(*map, response->add_maps());
+  }
   response->set_can_create(maps_->can_create());
   return grpc::Status::OK;
 }

@@ -57,6 +57,24 @@ MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options,
       submaps_(core, WithMap(submap_options, placement.map_id), access_),
       auth_(core, access_) {}
 
+StatusOr<Principal> MapServiceImpl::AuthenticateToMap(const grpc::ServerContextBase& context,
+                                                      const std::string& action) {
+  StatusOr<Principal> p = access_->Authenticate(context);
+  if (!p.ok()) return p;
+  MAPD_RETURN_IF_ERROR(access_->CheckMap(*p, map_id(), action));
+  return p;
+}
+
+StatusOr<Principal> MapServiceImpl::AdmitToMap(const grpc::ServerContextBase& context,
+                                               Permission permission, const std::string& action,
+                                               const std::string& robot,
+                                               const std::string& target) {
+  StatusOr<Principal> p = access_->Admit(context, permission, action, robot, target);
+  if (!p.ok()) return p;
+  MAPD_RETURN_IF_ERROR(access_->CheckMap(*p, map_id(), action));
+  return p;
+}
+
 void MapServiceImpl::Tick() {
   submaps_.ExpireIdleUploads();
   if (own_access_ == nullptr) return;  // the audit log is the sharing service's
@@ -92,7 +110,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
         {{"rpc", "Ingest"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new RefusedIngest(ToGrpcStatus(admitted));
   }
-  StatusOr<Principal> who = access_->Authenticate(*context);
+  StatusOr<Principal> who = AuthenticateToMap(*context, "Ingest");
   if (!who.ok()) return new RefusedIngest(ToGrpcStatus(who.status()));
   // The role first (a reader never writes); each batch's robot id is then
   // checked by the reactor.
@@ -107,7 +125,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
                                            const pb::FeatureMapRequest* request,
                                            grpc::ServerWriter<pb::FeatureMapPage>* writer) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "GetFeatureMap"); !p.ok())
     return ToGrpcStatus(p.status());
   FeatureQuery query;
   Status s = ParseFeatureMapRequest(*request, &query);
@@ -149,7 +167,7 @@ grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
                                              const pb::WatchFeatureMapRequest* request,
                                              grpc::ServerWriter<pb::FeatureMapDelta>* writer) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "WatchFeatureMap"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "WatchFeatureMap"); !p.ok())
     return ToGrpcStatus(p.status());
   if (Status ready = core_->CheckReady(); !ready.ok()) return ToGrpcStatus(ready);
   FeatureFilter filter;
@@ -168,7 +186,7 @@ grpc::Status MapServiceImpl::WatchFeatureMap(grpc::ServerContext* context,
 
 grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::ListRobotsRequest*,
                                         pb::ListRobotsResponse* response) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "ListRobots"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "ListRobots"); !p.ok())
     return ToGrpcStatus(p.status());
   StatusOr<std::vector<storage::RobotSummary>> robots = core_->store().ListRobots();
   if (!robots.ok()) return ToGrpcStatus(robots.status());
@@ -187,7 +205,7 @@ grpc::Status MapServiceImpl::ListRobots(grpc::ServerContext* context, const pb::
 
 grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::GetStatsRequest*,
                                       pb::Stats* response) {
-  StatusOr<Principal> p = access_->Admit(*context, Permission::kReadMap, "GetStats");
+  StatusOr<Principal> p = AdmitToMap(*context, Permission::kReadMap, "GetStats");
   if (!p.ok()) return ToGrpcStatus(p.status());
   StatusOr<storage::StoreCounts> counts = core_->store().Counts();
   if (!counts.ok()) return ToGrpcStatus(counts.status());
@@ -244,7 +262,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
         {{"rpc", "UploadSubmap"}, {"peer", context->peer()}, {"why", admitted.message()}});
     return new Refused(ToGrpcStatus(admitted));
   }
-  StatusOr<Principal> p = access_->Authenticate(*context);
+  StatusOr<Principal> p = AuthenticateToMap(*context, "UploadSubmap");
   if (!p.ok()) return new Refused(ToGrpcStatus(p.status()));
   // The role here; the header's robot id once it is read (UploadReactor).
   if (Status may = access_->Check(*p, Permission::kWrite, "UploadSubmap", p->robot_id, "upload");
@@ -258,7 +276,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
 grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
                                          const pb::ListSubmapsRequest* request,
                                          pb::ListSubmapsResponse* response) {
-  StatusOr<Principal> p = access_->Authenticate(*context);
+  StatusOr<Principal> p = AuthenticateToMap(*context, "ListSubmaps");
   if (!p.ok()) return ToGrpcStatus(p.status());
   pb::ListSubmapsRequest scoped = *request;
   // A robot lists its own submaps unless it names another robot (refused).
@@ -273,7 +291,7 @@ grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context,
                                        const pb::GetSubmapRequest* request,
                                        grpc::ServerWriter<pb::DataChunk>* writer) {
-  StatusOr<Principal> p = access_->Authenticate(*context);
+  StatusOr<Principal> p = AuthenticateToMap(*context, "GetSubmap");
   if (!p.ok()) return ToGrpcStatus(p.status());
   if (p->role == Role::kRobot && !p->anonymous) {
     StatusOr<storage::SubmapMeta> meta =
@@ -288,7 +306,7 @@ grpc::Status MapServiceImpl::GetSubmap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::DeleteSubmap(grpc::ServerContext* context,
                                           const pb::DeleteSubmapRequest* request,
                                           pb::DeleteSubmapResponse*) {
-  StatusOr<Principal> p = access_->Authenticate(*context);
+  StatusOr<Principal> p = AuthenticateToMap(*context, "DeleteSubmap");
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Delete(*request, *p);
 }
@@ -298,14 +316,14 @@ grpc::Status MapServiceImpl::MergeSubmaps(grpc::ServerContext* context,
   std::string inputs;
   for (const uint64_t id : request->submap_ids())
     inputs += (inputs.empty() ? "submaps " : ",") + std::to_string(id);
-  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "MergeSubmaps", "", inputs);
+  StatusOr<Principal> p = AdmitToMap(*context, Permission::kMerge, "MergeSubmaps", "", inputs);
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.Merge(context, *request, writer, *p);
 }
 grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
                                           const pb::GetGlobalMapRequest*,
                                           grpc::ServerWriter<pb::DataChunk>* writer) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "GetGlobalMap"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.GetGlobalMap(context, writer);
 }
@@ -313,30 +331,30 @@ grpc::Status MapServiceImpl::GetGlobalMap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::ListMerges(grpc::ServerContext* context,
                                         const pb::ListMergesRequest* request,
                                         pb::ListMergesResponse* response) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "ListMerges"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "ListMerges"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.ListMerges(*request, response);
 }
 grpc::Status MapServiceImpl::GetMerge(grpc::ServerContext* context,
                                       const pb::GetMergeRequest* request,
                                       pb::MergeRecord* response) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetMerge"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "GetMerge"); !p.ok())
     return ToGrpcStatus(p.status());
   return submaps_.GetMerge(*request, response);
 }
 grpc::Status MapServiceImpl::ApproveMerge(grpc::ServerContext* context,
                                           const pb::ApproveMergeRequest* request,
                                           pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "ApproveMerge", "",
-                                         "merge " + std::to_string(request->id()));
+  StatusOr<Principal> p = AdmitToMap(*context, Permission::kMerge, "ApproveMerge", "",
+                                     "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.ApproveMerge(*request, *p, response);
 }
 grpc::Status MapServiceImpl::RejectMerge(grpc::ServerContext* context,
                                          const pb::RejectMergeRequest* request,
                                          pb::MergeRecord* response) {
-  StatusOr<Principal> p = access_->Admit(*context, Permission::kMerge, "RejectMerge", "",
-                                         "merge " + std::to_string(request->id()));
+  StatusOr<Principal> p = AdmitToMap(*context, Permission::kMerge, "RejectMerge", "",
+                                     "merge " + std::to_string(request->id()));
   if (!p.ok()) return ToGrpcStatus(p.status());
   return submaps_.RejectMerge(*request, *p, response);
 }

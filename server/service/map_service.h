@@ -129,6 +129,14 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
                       mapserver::v1::WhoAmIResponse* response) override;
 
  private:
+  // access_'s Authenticate and Admit, and then whether the caller may act
+  // on this map (a token scoped to maps; AccessControl::CheckMap).
+  StatusOr<Principal> AuthenticateToMap(const grpc::ServerContextBase& context,
+                                        const std::string& action);
+  StatusOr<Principal> AdmitToMap(const grpc::ServerContextBase& context, Permission permission,
+                                 const std::string& action, const std::string& robot = "",
+                                 const std::string& target = "");
+
   Core* const core_;
   const IngestOptions ingest_options_;
   const StreamLimits stream_limits_;

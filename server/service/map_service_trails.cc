@@ -21,7 +21,7 @@ constexpr uint32_t kMaxPoses = 50000;
 grpc::Status MapServiceImpl::GetTrails(grpc::ServerContext* context,
                                        const pb::GetTrailsRequest* request,
                                        grpc::ServerWriter<pb::SessionTrail>* writer) {
-  if (auto p = access_->Admit(*context, Permission::kReadMap, "GetTrails"); !p.ok())
+  if (auto p = AdmitToMap(*context, Permission::kReadMap, "GetTrails"); !p.ok())
     return ToGrpcStatus(p.status());
   if (!request->robot_id().empty() && !ValidId(request->robot_id())) {
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,

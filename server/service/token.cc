@@ -6,6 +6,8 @@
 
 #include <algorithm>
 
+#include "service/map_id.h"
+
 namespace mapd::service {
 namespace {
 
@@ -79,6 +81,7 @@ StatusOr<IssuedToken> IssueToken(const NewToken& t, int64_t now_ns,
     return Status::InvalidArgument(std::string("robot_id is only for role robot, not ") +
                                    RoleName(t.role));
   }
+  for (const std::string& map : t.maps) MAPD_RETURN_IF_ERROR(CheckMapId(map, "maps entry"));
   unsigned char raw[kSecretBytes];
   if (RAND_bytes(raw, sizeof(raw)) != 1)
     return Status::Internal("the CSPRNG (OpenSSL RAND_bytes) failed");
@@ -92,6 +95,10 @@ StatusOr<IssuedToken> IssueToken(const NewToken& t, int64_t now_ns,
   r.secret_sha256 = Sha256(secret);
   r.created_ns = now_ns;
   r.created_by = t.created_by;
+  std::vector<std::string> maps = t.maps;  // sorted, once each
+  std::sort(maps.begin(), maps.end());
+  maps.erase(std::unique(maps.begin(), maps.end()), maps.end());
+  r.maps = JoinMapIds(maps);
   StatusOr<int64_t> id = txn->InsertToken(r);
   if (!id.ok()) return id.status();
   r.id = *id;

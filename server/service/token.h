@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/status.h"
 #include "service/auth.h"
@@ -32,6 +33,7 @@ struct NewToken {
   Role role = Role::kReader;
   std::string robot_id;  // required for Role::kRobot, refused otherwise
   std::string created_by;
+  std::vector<std::string> maps;  // map ids it may act on; empty = every map
 };
 
 struct IssuedToken {

@@ -11,6 +11,7 @@
 
 #include "common/health.h"
 #include "server_fixture.h"
+#include "service/support/auth_fixture.h"
 
 namespace mapd::testing {
 namespace {
@@ -217,6 +218,94 @@ TEST_F(MapsTest, AFileThatIsNotAMapIdStopsTheStartWithItsName) {
   auto server = service::MapServer::Start(config_);
   ASSERT_FALSE(server.ok());
   EXPECT_THAT(server.status().message(), HasSubstr(".backup.db"));
+}
+
+// Tokens scoped to maps (docs/security.md): a site's robot writes its site only.
+class ScopedTokenTest : public AuthFixture {
+ protected:
+  void SetUp() override {
+    config_.listen = "127.0.0.1:0";
+    config_.data_dir = dir_.path();
+    config_.shutdown_grace_s = 1.0;
+    config_.busy_timeout_ms = 300;
+    StartServer();
+    MakeTokens();
+    for (const char* id : {"site-7", "site-8"}) {
+      pb::CreateMapRequest request;
+      request.set_map_id(id);
+      pb::MapInfo info;
+      auto ctx = As(admin_);
+      const grpc::Status s = stub_->CreateMap(ctx.get(), request, &info);
+      ASSERT_TRUE(s.ok()) << s.error_message();
+    }
+  }
+  std::vector<pb::IngestAck> StreamTo(const std::string& token, const std::string& map,
+                                      const std::vector<pb::ObservationBatch>& batches,
+                                      grpc::Status* status) {
+    auto ctx = As(token);
+    ctx->AddMetadata("mapd-map-id", map);
+    auto stream = stub_->Ingest(ctx.get());
+    for (const auto& b : batches) stream->Write(b);
+    stream->WritesDone();
+    std::vector<pb::IngestAck> acks;
+    pb::IngestAck ack;
+    while (stream->Read(&ack)) acks.push_back(ack);
+    *status = stream->Finish();
+    return acks;
+  }
+};
+
+TEST_F(ScopedTokenTest, ARobotOfOneSiteCannotTouchAnother) {
+  std::string site7;
+  ASSERT_TRUE(CreateTokenAs(admin_, pb::ROLE_ROBOT, "r1-site-7", "r1", &site7, {"site-7"}).ok());
+  grpc::Status end;
+  const auto stored = StreamTo(site7, "site-7", Walk("r1", 3), &end);
+  EXPECT_TRUE(end.ok()) << end.error_message();
+  ASSERT_EQ(stored.size(), 3u);
+  for (const pb::IngestAck& ack : stored) EXPECT_EQ(ack.result(), pb::IngestAck::STORED);
+  for (const char* other : {"site-8", "default"}) {
+    EXPECT_TRUE(StreamTo(site7, other, Walk("r1", 2), &end).empty());
+    EXPECT_EQ(end.error_code(), grpc::StatusCode::PERMISSION_DENIED) << other;
+    EXPECT_THAT(end.error_message(), HasSubstr("may act on maps site-7 only"));
+  }
+  // Reads too: its map only, and ListMaps names only that one.
+  EXPECT_EQ(StatsAs(site7).error_code(), grpc::StatusCode::PERMISSION_DENIED);  // default
+  auto ctx = As(site7);
+  pb::ListMapsResponse maps;
+  ASSERT_TRUE(stub_->ListMaps(ctx.get(), {}, &maps).ok());
+  ASSERT_EQ(maps.maps_size(), 1);
+  EXPECT_EQ(maps.maps(0).map_id(), "site-7");
+  // The refusal is in the audit log, naming the map.
+  bool audited = false;
+  for (const pb::AuditEntry& e : Audit(admin_))
+    audited = audited || (e.who() == "r1-site-7" && e.target() == "map site-8");
+  EXPECT_TRUE(audited);
+  // The admin's list shows the scope.
+  auto list = As(admin_);
+  pb::ListTokensResponse tokens;
+  ASSERT_TRUE(stub_->ListTokens(list.get(), {}, &tokens).ok());
+  bool listed = false;
+  for (const pb::TokenInfo& t : tokens.tokens())
+    listed = listed || (t.name() == "r1-site-7" && t.maps_size() == 1 && t.maps(0) == "site-7");
+  EXPECT_TRUE(listed);
+}
+
+TEST_F(ScopedTokenTest, AScopedAdminManagesNeitherTokensNorMaps) {
+  std::string scoped;
+  ASSERT_TRUE(CreateTokenAs(admin_, pb::ROLE_ADMIN, "site-7-admin", "", &scoped, {"site-7"}).ok());
+  const grpc::Status create = CreateTokenAs(scoped, pb::ROLE_ADMIN, "escalated");
+  EXPECT_EQ(create.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_THAT(create.error_message(), HasSubstr("scoped to maps"));
+  pb::CreateMapRequest request;
+  request.set_map_id("site-9");
+  pb::MapInfo info;
+  auto ctx = As(scoped);
+  EXPECT_EQ(stub_->CreateMap(ctx.get(), request, &info).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  // A map id that is not one is refused when the token is made.
+  const grpc::Status bad = CreateTokenAs(admin_, pb::ROLE_READER, "bad", "", nullptr, {"../x"});
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(bad.error_message(), HasSubstr("not a map id"));
 }
 
 // One database (--db): the default map only; CreateMap says how to get more.

@@ -29,7 +29,10 @@ class AuthFixture : public ServerFixture {
   // A token written straight into the database (the server may run).
   std::string OfflineToken(service::Role role, const std::string& name,
                            const std::string& robot = "") {
-    auto store = storage::Store::Open(config_.db_path, storage::StoreOptions{});
+    // With data_dir the tokens are in the default map's database.
+    const std::string db =
+        config_.data_dir.empty() ? config_.db_path : config_.data_dir + "/default.db";
+    auto store = storage::Store::Open(db, storage::StoreOptions{});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (!store.ok()) return "";
     auto txn = (*store)->BeginWrite();
@@ -43,11 +46,13 @@ class AuthFixture : public ServerFixture {
 
   // CreateToken called with `caller`'s token; the new secret in *secret.
   grpc::Status CreateTokenAs(const std::string& caller, pb::Role role, const std::string& name,
-                             const std::string& robot = "", std::string* secret = nullptr) {
+                             const std::string& robot = "", std::string* secret = nullptr,
+                             const std::vector<std::string>& maps = {}) {
     pb::CreateTokenRequest request;
     request.set_name(name);
     request.set_role(role);
     request.set_robot_id(robot);
+    for (const std::string& map : maps) request.add_maps(map);
     pb::CreateTokenResponse response;
     auto ctx = As(caller);
     const grpc::Status s = stub_->CreateToken(ctx.get(), request, &response);
