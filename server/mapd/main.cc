@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
     options.address = config.web.address;
     options.port = config.web.port;
     options.auth = (*server)->auth();
+    const mapd::service::MapDirectory* maps = &(*server)->maps();
+    options.list_maps = [maps] { return maps->Ids(); };
+    options.find_map = [maps](const std::string& id) { return maps->FindCore(id); };
     mapd::StatusOr<std::unique_ptr<mapd::web::WebServer>> started =
         mapd::web::WebServer::Start((*server)->core(), options);
     if (!started.ok()) {

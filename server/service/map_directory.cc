@@ -130,6 +130,18 @@ std::vector<ServedMap*> MapDirectory::List() const {
   return out;
 }
 
+std::vector<std::string> MapDirectory::Ids() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  std::vector<std::string> out;
+  for (const auto& [id, map] : maps_) out.push_back(id);
+  return out;
+}
+
+Core* MapDirectory::FindCore(const std::string& id) const {
+  StatusOr<ServedMap*> map = Find(id);
+  return map.ok() ? (*map)->core.get() : nullptr;
+}
+
 StatusOr<ServedMap*> MapDirectory::Create(const std::string& id) {
   MAPD_RETURN_IF_ERROR(CheckMapId(id, "map_id"));
   if (!can_create()) {

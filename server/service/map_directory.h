@@ -76,7 +76,9 @@ class MapDirectory {
   // authenticated yet).
   StatusOr<ServedMap*> Find(const std::string& id) const;
   ServedMap& default_map() const { return *default_; }
-  std::vector<ServedMap*> List() const;  // by id
+  std::vector<ServedMap*> List() const;         // by id
+  std::vector<std::string> Ids() const;         // sorted
+  Core* FindCore(const std::string& id) const;  // null when not served
   // A new, empty map. FailedPrecondition with one database (--db),
   // AlreadyExists, InvalidArgument for a bad id, or the opener's error.
   StatusOr<ServedMap*> Create(const std::string& id);

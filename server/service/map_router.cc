@@ -136,7 +136,7 @@ grpc::Status MapRouter::RevokeToken(grpc::ServerContext* c, const pb::RevokeToke
 }
 grpc::Status MapRouter::ListAudit(grpc::ServerContext* c, const pb::ListAuditRequest* r,
                                   pb::ListAuditResponse* out) {
-  return server_wide()->ListAudit(c, r, out);
+  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ListAudit(c, r, out); });
 }
 grpc::Status MapRouter::WhoAmI(grpc::ServerContext* c, const pb::WhoAmIRequest* r,
                                pb::WhoAmIResponse* out) {

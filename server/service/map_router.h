@@ -2,9 +2,9 @@
 // (map_directory.h) and hands the call to that map's MapServiceImpl, which
 // does the work. How a call names its map ("Maps" in map_service.proto):
 // the request's map_id, else the call's mapd-map-id metadata, else
-// "default"; a stream (Ingest, UploadSubmap) by its metadata. Tokens, the
-// audit log and WhoAmI are the server's and go to the default map's
-// service, whose database holds them. ListMaps and CreateMap are answered
+// "default"; a stream (Ingest, UploadSubmap) by its metadata. Tokens and
+// WhoAmI are the server's and go to the default map's service, whose
+// database holds them; ListAudit reads the named map's log. ListMaps and CreateMap are answered
 // here.
 #ifndef MAPD_SERVICE_MAP_ROUTER_H_
 #define MAPD_SERVICE_MAP_ROUTER_H_

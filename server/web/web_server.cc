@@ -71,6 +71,7 @@ StatusOr<uint64_t> ParseId(const std::string& text, const std::string& what) {
 
 WebServer::WebServer(service::Core* core, const WebServerOptions& options)
     : core_(core),
+      options_(options),
       loopback_(service::IsLoopbackAddress(options.address)),
       access_(core, options.auth),
       http_(std::make_unique<httplib::Server>()) {}
@@ -156,52 +157,87 @@ void WebServer::Route() {
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
-  // Every route but the page checks the caller first (the page holds no data).
-  auto admit = [this](const Request& req, Response& res, service::Permission permission,
-                      const std::string& action) -> StatusOr<service::Principal> {
+  // Every route but the page checks the caller first (the page holds no data),
+  // then finds the map it is about (?map=ID; absent: the default map).
+  struct Admitted {
+    service::Principal who;
+    service::Core* core = nullptr;
+  };
+  auto authenticate = [this](const Request& req) {
     const std::string* header =
         req.has_header("Authorization") ? &req.headers.find("Authorization")->second : nullptr;
-    StatusOr<service::Principal> who =
-        access_.AuthenticateHeader(header, req.remote_addr + ":" + std::to_string(req.remote_port));
+    return access_.AuthenticateHeader(header,
+                                      req.remote_addr + ":" + std::to_string(req.remote_port));
+  };
+  auto admit = [this, authenticate](const Request& req, Response& res,
+                                    service::Permission permission,
+                                    const std::string& action) -> StatusOr<Admitted> {
+    StatusOr<service::Principal> who = authenticate(req);
     Status s = who.ok() ? access_.Check(*who, permission, action, "", "web") : who.status();
-    if (s.ok()) s = core_->CheckReady();
+    const std::string map = req.has_param("map") ? req.get_param_value("map") : "default";
+    service::Core* core = nullptr;
+    if (s.ok()) s = access_.CheckMap(*who, map, action);
+    if (s.ok()) {
+      core = !options_.find_map ? (map == "default" ? core_ : nullptr) : options_.find_map(map);
+      if (core == nullptr) {
+        s = Status::NotFound("map '" + EscapeControlChars(map.substr(0, 128)) +
+                             "' is not served here; /api/maps lists the maps");
+      }
+    }
+    if (s.ok()) s = core->CheckReady();
     if (!s.ok()) {
       SendError(res, s);
       return s;
     }
-    return who;
+    return Admitted{*who, core};
   };
-  auto read = [admit](const Request& req, Response& res, const char* action) {
-    return admit(req, res, service::Permission::kReadMap, action).ok();
+  auto read = [admit](const Request& req, Response& res, const char* action) -> service::Core* {
+    StatusOr<Admitted> a = admit(req, res, service::Permission::kReadMap, action);
+    return a.ok() ? a->core : nullptr;
   };
 
   http_->Get("/", [](const Request&, Response& res) {
     res.set_content(kIndexHtml, "text/html; charset=utf-8");
   });
-  http_->Get("/api/features", [this, read](const Request& req, Response& res) {
-    if (!read(req, res, "GetFeatureMap")) return;
+  http_->Get("/api/maps", [this, authenticate](const Request& req, Response& res) {
+    StatusOr<service::Principal> who = authenticate(req);
+    Status s = who.ok() ? access_.Check(*who, service::Permission::kReadMap, "ListMaps", "", "web")
+                        : who.status();
+    if (!s.ok()) return SendError(res, s);
+    const std::vector<std::string> all =
+        options_.list_maps ? options_.list_maps() : std::vector<std::string>{"default"};
+    Json maps = Json::array();
+    for (const std::string& id : all) {
+      if (service::AuthorizeMap(*who, id, "ListMaps").ok()) maps.push_back(id);
+    }
+    SendJson(res, {{"maps", std::move(maps)}});
+  });
+  http_->Get("/api/features", [read](const Request& req, Response& res) {
+    service::Core* core = read(req, res, "GetFeatureMap");
+    if (core == nullptr) return;
     uint64_t version = 0;
     std::vector<service::PlaneView> planes;
     const std::vector<service::FusedView> lines =
-        core_->QueryFeatures(service::FeatureQuery(), &version, &planes);
+        core->QueryFeatures(service::FeatureQuery(), &version, &planes);
     SendJson(res, MapJson(version, lines, planes));
   });
   http_->Get("/api/events", [this, read](const Request& req, Response& res) {
-    if (!read(req, res, "WatchFeatureMap")) return;
-    ServeEvents(core_, req, res, &stopping_, &event_streams_);
+    service::Core* core = read(req, res, "WatchFeatureMap");
+    if (core != nullptr) ServeEvents(core, req, res, &stopping_, &event_streams_);
   });
-  http_->Get("/api/robots", [this, read](const Request& req, Response& res) {
-    if (read(req, res, "ListRobots")) ServeRobots(core_, res);
+  http_->Get("/api/robots", [read](const Request& req, Response& res) {
+    if (service::Core* core = read(req, res, "ListRobots")) ServeRobots(core, res);
   });
-  http_->Get("/api/global-map.png", [this, read](const Request& req, Response& res) {
-    if (read(req, res, "GetGlobalMap")) ServeGlobalMap(core_, res);
+  http_->Get("/api/global-map.png", [read](const Request& req, Response& res) {
+    if (service::Core* core = read(req, res, "GetGlobalMap")) ServeGlobalMap(core, res);
   });
-  http_->Get("/metrics", [this, read](const Request& req, Response& res) {
-    if (read(req, res, "GetStats"))
-      res.set_content(MetricsText(*core_), "text/plain; version=0.0.4; charset=utf-8");
+  http_->Get("/metrics", [read](const Request& req, Response& res) {
+    if (service::Core* core = read(req, res, "GetStats"))
+      res.set_content(MetricsText(*core), "text/plain; version=0.0.4; charset=utf-8");
   });
-  http_->Get("/api/merges", [this, read](const Request& req, Response& res) {
-    if (!read(req, res, "ListMerges")) return;
+  http_->Get("/api/merges", [read](const Request& req, Response& res) {
+    service::Core* core = read(req, res, "ListMerges");
+    if (core == nullptr) return;
     const std::string state = req.get_param_value("state");
     if (!state.empty() && state != "proposed" && state != "accepted" && state != "rejected" &&
         state != "refused") {
@@ -209,7 +245,7 @@ void WebServer::Route() {
                                              "' is not proposed, accepted, rejected or refused"));
       return;
     }
-    StatusOr<std::vector<storage::MergeRecord>> all = core_->store().ListMerges();
+    StatusOr<std::vector<storage::MergeRecord>> all = core->store().ListMerges();
     if (!all.ok()) return SendError(res, all.status());
     Json merges = Json::array();
     for (const storage::MergeRecord& r : *all) {
@@ -217,12 +253,13 @@ void WebServer::Route() {
     }
     SendJson(res, {{"merges", std::move(merges)}});
   });
-  http_->Post(R"(/api/merges/([^/]*)/(approve|reject))", [this, admit](const Request& req,
-                                                                       Response& res) {
+  http_->Post(R"(/api/merges/([^/]*)/(approve|reject))", [admit](const Request& req,
+                                                                 Response& res) {
     const bool approve = req.matches[2] == "approve";
     const char* action = approve ? "ApproveMerge" : "RejectMerge";
-    StatusOr<service::Principal> who = admit(req, res, service::Permission::kMerge, action);
-    if (!who.ok()) return;
+    StatusOr<Admitted> admitted = admit(req, res, service::Permission::kMerge, action);
+    if (!admitted.ok()) return;
+    service::Core* const core = admitted->core;
     StatusOr<uint64_t> id = ParseId(req.matches[1], "merge id");
     if (!id.ok()) return SendError(res, id.status());
     std::string reason;
@@ -236,9 +273,9 @@ void WebServer::Route() {
       }
     }
     const auto merge_id = static_cast<int64_t>(*id);
-    if (Status s = service::DecideProposal(core_, merge_id, reason, *who); !s.ok())
+    if (Status s = service::DecideProposal(core, merge_id, reason, admitted->who); !s.ok())
       return SendError(res, s);
-    StatusOr<storage::MergeRecord> r = core_->store().GetMerge(merge_id);
+    StatusOr<storage::MergeRecord> r = core->store().GetMerge(merge_id);
     if (!r.ok()) return SendError(res, r.status());
     SendJson(res, ToJson(*r));
   });

@@ -12,6 +12,11 @@
 //   POST /api/merges/ID/reject      ... ends without effect (JSON body {"reason": "..."})
 //   GET  /api/global-map.png        top view of the merged global map (404 before one)
 //   GET  /metrics                   Prometheus text
+//   GET  /api/maps                  the maps the caller may see (the page's picker)
+//
+// Every route but / and /api/maps is about one map: `?map=ID` (absent: the
+// default map); a map the server does not serve is 404, one the caller's
+// token is not scoped to 403.
 //
 // Who: the gRPC side's rules (service/access_control.h) over an
 // `Authorization: Bearer <token>` header: GETs need read_map and decisions
@@ -25,9 +30,11 @@
 #define MAPD_WEB_WEB_SERVER_H_
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "common/status.h"
 #include "service/access_control.h"
@@ -43,6 +50,10 @@ struct WebServerOptions {
   std::string address = "127.0.0.1";
   int port = 0;  // 0: any free port (tests); mapd starts no web server for http.port 0
   service::AuthOptions auth;
+  // The server's maps (service/map_directory.h): their ids, and a map's core
+  // (null when not served). Unset: the one core Start() is given, as "default".
+  std::function<std::vector<std::string>()> list_maps;
+  std::function<service::Core*(const std::string&)> find_map;
 };
 
 class WebServer {
@@ -60,7 +71,8 @@ class WebServer {
   WebServer(service::Core* core, const WebServerOptions& options);
   void Route();
 
-  service::Core* const core_;
+  service::Core* const core_;  // the default map's
+  const WebServerOptions options_;
   const bool loopback_;  // bound to a loopback address: only loopback Host headers
   service::AccessControl access_;
   std::unique_ptr<httplib::Server> http_;

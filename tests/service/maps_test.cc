@@ -111,6 +111,20 @@ TEST_F(MapsTest, MapsAreApartAndOldClientsLandInDefault) {
   EXPECT_EQ(maps.maps(0).map_id(), "default");
   EXPECT_EQ(maps.maps(1).map_id(), "site-7");
   EXPECT_EQ(maps.maps(1).batches(), 6u);
+
+  // CreateMap is the server's: audited in the default map's log.
+  grpc::ClientContext ctx;
+  pb::ListAuditResponse audit;
+  ASSERT_TRUE(stub_->ListAudit(&ctx, {}, &audit).ok());
+  ASSERT_GE(audit.entries_size(), 1);
+  EXPECT_EQ(audit.entries(0).action(), "CreateMap");
+  EXPECT_EQ(audit.entries(0).target(), "map site-7");
+  EXPECT_EQ(audit.entries(0).result(), "ok");
+  grpc::ClientContext site_ctx;
+  pb::ListAuditRequest site;
+  site.set_map_id("site-7");
+  ASSERT_TRUE(stub_->ListAudit(&site_ctx, site, &audit).ok());
+  EXPECT_EQ(audit.entries_size(), 0);  // no change to site-7's submaps or merges
 }
 
 TEST_F(MapsTest, ABatchNamingAnotherMapIsRefusedAndTheStreamGoesOn) {

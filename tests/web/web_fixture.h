@@ -104,6 +104,9 @@ class WebFixture : public ::testing::Test {
     web::WebServerOptions options;
     options.auth.required = config_.auth_required;
     options.address = web_address_;
+    const service::MapDirectory* maps = &server_->maps();
+    options.list_maps = [maps] { return maps->Ids(); };
+    options.find_map = [maps](const std::string& id) { return maps->FindCore(id); };
     auto web = web::WebServer::Start(server_->core(), options);
     ASSERT_TRUE(web.ok()) << web.status().ToString();
     web_ = std::move(web).value();
@@ -131,13 +134,15 @@ class WebFixture : public ::testing::Test {
     ASSERT_EQ(stored, static_cast<int>(batches.size()));
   }
 
-  std::string MakeToken(service::Role role, const std::string& name) {
+  std::string MakeToken(service::Role role, const std::string& name,
+                        const std::vector<std::string>& maps = {}) {
     std::string token;
     const Status s = server_->core()->ExecuteWrite([&](storage::WriteTransaction* txn) {
       service::NewToken t;
       t.name = name;
       t.role = role;
       t.created_by = "test";
+      t.maps = maps;
       StatusOr<service::IssuedToken> issued = service::IssueToken(t, 1, txn);
       if (issued.ok()) token = issued->token;
       return issued.status();

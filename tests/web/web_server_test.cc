@@ -37,6 +37,37 @@ TEST_F(WebFixture, FeaturesAreTheFusedMapWithTheProtosNames) {
   }
 }
 
+TEST_F(WebFixture, EachMapIsShownApartAndThePickerListsThem) {
+  config_.db_path.clear();
+  config_.data_dir = dir_.path();
+  Start();
+  grpc::ClientContext create;
+  pb::CreateMapRequest request;
+  request.set_map_id("site-7");
+  pb::MapInfo info;
+  ASSERT_TRUE(stub_->CreateMap(&create, request, &info).ok());
+  grpc::ClientContext ctx;
+  ctx.AddMetadata("mapd-map-id", "site-7");
+  auto stream = stub_->Ingest(&ctx);
+  for (const auto& b : RoomBatches("r1", 8)) ASSERT_TRUE(stream->Write(b));
+  stream->WritesDone();
+  pb::IngestAck ack;
+  while (stream->Read(&ack)) EXPECT_EQ(ack.result(), pb::IngestAck::STORED);
+  ASSERT_TRUE(stream->Finish().ok());
+
+  EXPECT_EQ(GetJson("/api/maps")["maps"], json::array({"default", "site-7"}));
+  EXPECT_EQ(GetJson("/api/features?map=site-7")["features"].size(), 4u);
+  EXPECT_EQ(GetJson("/api/features")["features"].size(), 0u);  // the default map
+  EXPECT_EQ(GetJson("/api/robots?map=site-7")["robots"].size(), 1u);
+  const json missing = GetJson("/api/features?map=site-9", 404);
+  EXPECT_NE(missing["error"].get<std::string>().find("site-9"), std::string::npos);
+  // A token scoped to site-7 sees that map only.
+  const std::string scoped = MakeToken(service::Role::kReader, "site-7-view", {"site-7"});
+  EXPECT_EQ(GetJson("/api/maps", 200, scoped)["maps"], json::array({"site-7"}));
+  EXPECT_EQ(GetJson("/api/features?map=site-7", 200, scoped)["features"].size(), 4u);
+  GetJson("/api/features", 403, scoped);
+}
+
 TEST_F(WebFixture, ThePageIsServedWithItsScript) {
   Start();
   httplib::Result r = Client().Get("/");
