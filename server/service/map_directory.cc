@@ -113,6 +113,13 @@ StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string
   return raw;
 }
 
+MapDirectory::~MapDirectory() {
+  std::unique_ptr<ServedMap> default_map;
+  if (auto it = maps_.find(kDefaultMapId); it != maps_.end()) default_map = std::move(it->second);
+  maps_.clear();
+  default_map.reset();
+}
+
 StatusOr<ServedMap*> MapDirectory::Find(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = maps_.find(id.empty() ? std::string(kDefaultMapId) : id);

@@ -72,6 +72,10 @@ class MapDirectory {
   static StatusOr<std::unique_ptr<MapDirectory>> OpenDataDir(const std::string& data_dir,
                                                              Opener opener);
 
+  // The other maps first: their services share the default map's access
+  // control and stream limiter.
+  ~MapDirectory();
+
   // NotFound naming the id (never the other maps: the caller may not be
   // authenticated yet).
   StatusOr<ServedMap*> Find(const std::string& id) const;

@@ -170,6 +170,9 @@ grpc::Status MapRouter::CreateMap(grpc::ServerContext* context, const pb::Create
       });
   if (!map.ok()) return ToGrpcStatus(map.status());
   if (on_create_) on_create_(*map);
+  // An empty map recovers at once: answer once it takes batches, so that the
+  // caller's next call is not UNAVAILABLE.
+  (*map)->core->WaitUntilReady(std::chrono::seconds(10));
   ToProto(**map, response);
   if (!audited.ok()) {
     return grpc::Status(grpc::StatusCode::INTERNAL,

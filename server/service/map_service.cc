@@ -54,7 +54,8 @@ MapServiceImpl::MapServiceImpl(Core* core, IngestOptions ingest_options,
       own_access_(placement.shared_with ? nullptr
                                         : std::make_unique<AccessControl>(core, auth_options)),
       access_(placement.shared_with ? placement.shared_with->access_ : own_access_.get()),
-      submaps_(core, WithMap(submap_options, placement.map_id), access_),
+      submaps_(core, WithMap(submap_options, placement.map_id), access_,
+               placement.shared_with ? placement.shared_with->submaps_.merge_runner() : nullptr),
       auth_(core, access_) {}
 
 StatusOr<Principal> MapServiceImpl::AuthenticateToMap(const grpc::ServerContextBase& context,

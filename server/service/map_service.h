@@ -26,9 +26,10 @@ namespace mapd::service {
 // Where a MapServiceImpl sits among the maps of one server (map_directory.h).
 struct MapPlacement {
   std::string map_id = "default";
-  // The service whose stream limiter and access control (tokens, audit log,
-  // denial counts) this one shares, so that limits and identities are the
-  // server's, not per map; null: its own (the default map's).
+  // The service whose stream limiter, access control (tokens, audit log,
+  // denial counts) and merge runner this one shares, so that limits and
+  // identities are the server's, not per map; null: its own (the default
+  // map's). Uploads in progress are limited per map.
   class MapServiceImpl* shared_with = nullptr;
 };
 

@@ -281,8 +281,15 @@ void MapServer::Housekeeping() {
 }
 
 bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {
-  const MapCore& core = *maps_->default_map().core;
-  return core.WaitUntilReady(timeout) && core.CheckReady().ok();
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (ServedMap* map : maps_->List()) {
+    const MapCore& core = *map->core;
+    if (!core.WaitUntilReady(deadline - std::chrono::steady_clock::now()) ||
+        !core.CheckReady().ok()) {
+      return false;
+    }
+  }
+  return true;
 }
 
 std::string MapServer::address() const {

@@ -31,7 +31,7 @@ class MapServer {
   // map RPCs answer UNAVAILABLE; then SERVING and an `event=serving` log
   // line. The server's health ("") is SERVING while every map is.
   static StatusOr<std::unique_ptr<MapServer>> Start(const ServerConfig& config);
-  // Waits until the default map is recovered; false on timeout or failed recovery.
+  // Waits until every map is recovered; false on timeout or failed recovery.
   bool WaitUntilServing(std::chrono::duration<double> timeout) const;
   ~MapServer();
 

@@ -80,12 +80,15 @@ grpc::Status CheckHeader(const pb::SubmapHeader& h) {
 
 }  // namespace
 
-SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessControl* access)
+SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessControl* access,
+                             std::shared_ptr<MergeRunner> shared_merges)
     : core_(core),
       options_(options),
       access_(access),
-      merges_(
-          std::make_unique<MergeRunner>(options.max_concurrent_merges, options.max_queued_merges)),
+      merges_(shared_merges != nullptr
+                  ? std::move(shared_merges)
+                  : std::make_shared<MergeRunner>(options.max_concurrent_merges,
+                                                  options.max_queued_merges)),
       global_(std::make_unique<GlobalMapBuilder>(core, GlobalFusionParams(options))) {}
 
 SubmapService::~SubmapService() {

@@ -91,7 +91,11 @@ class UploadReactor;
 
 class SubmapService {
  public:
-  SubmapService(Core* core, const SubmapOptions& options, AccessControl* access);
+  // `shared_merges`: the merge runner of the server's other maps, so that
+  // limits.max_concurrent_merges holds for the whole server (null: its own).
+  SubmapService(Core* core, const SubmapOptions& options, AccessControl* access,
+                std::shared_ptr<MergeRunner> shared_merges = nullptr);
+  const std::shared_ptr<MergeRunner>& merge_runner() const { return merges_; }
   ~SubmapService();
 
   // Shutdown: new uploads and merges are refused with UNAVAILABLE, merges in
@@ -182,7 +186,7 @@ class SubmapService {
   const SubmapOptions options_;
   AccessControl* const access_;
   std::atomic<bool> draining_{false};
-  std::unique_ptr<MergeRunner> merges_;
+  std::shared_ptr<MergeRunner> merges_;
   // Keeps the stored global map the union of the placed submaps.
   std::unique_ptr<GlobalMapBuilder> global_;
 

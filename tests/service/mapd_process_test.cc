@@ -77,6 +77,13 @@ TEST(MapdProcessTest, HealthProbeSaysServingThenUnreachable) {
   CommandResult r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("SERVING"));
+  // One map's health: the default map is served, another is not known.
+  r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address, "--map", "default"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("map default SERVING"));
+  r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address, "--map", "site-9"});
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_THAT(r.err, HasSubstr("code 5"));  // NOT_FOUND
   ASSERT_EQ(Stop(mapd.pid, SIGTERM), 0);
   r = RunCommand({MAPD_HEALTH_BINARY, "--server", mapd.address, "--timeout", "2"});
   EXPECT_EQ(r.exit_code, 3);

@@ -34,6 +34,37 @@ TEST_F(AuthStoreTest, AuditFieldsAreStoredAsOneLineOfVisibleText) {
   EXPECT_EQ((*rows)[0].credential, "token");
 }
 
+// A token's map scope is stored; tokens of a database from before scopes
+// (schema 11) read as unscoped after the migration.
+TEST_F(AuthStoreTest, TokenScopesAreStoredAndOlderTokensActOnEveryMap) {
+  TokenRecord scoped, old;
+  scoped.name = "site-7-robot";
+  scoped.role = "robot";
+  scoped.robot_id = "r7";
+  scoped.secret_sha256 = std::string(32, 'a');
+  scoped.maps = "site-7,site-8";
+  old.name = "old";
+  old.role = "reader";
+  old.secret_sha256 = std::string(32, 'b');
+  ASSERT_TRUE(Write([&](WriteTransaction* txn) {
+                MAPD_RETURN_IF_ERROR(txn->InsertToken(scoped).status());
+                return txn->InsertToken(old).status();
+              }).ok());
+  auto tokens = store_->ListTokens();
+  ASSERT_TRUE(tokens.ok());
+  ASSERT_EQ(tokens->size(), 2u);
+  EXPECT_EQ((*tokens)[0].maps, "site-7,site-8");
+  EXPECT_EQ((*tokens)[1].maps, "");
+
+  DowngradeAndReopen(
+      "ALTER TABLE tokens DROP COLUMN maps; DELETE FROM schema_version WHERE version >= 12");
+  tokens = store_->ListTokens();
+  ASSERT_TRUE(tokens.ok()) << tokens.status().ToString();
+  ASSERT_EQ(tokens->size(), 2u);
+  EXPECT_EQ((*tokens)[0].maps, "");  // the scope went with the downgrade: every map
+  EXPECT_EQ((*tokens)[0].robot_id, "r7");
+}
+
 TEST_F(AuthStoreTest, TrimmingKeepsTheNewestDenialsAndEveryOtherRow) {
   auto txn = store_->BeginWrite();
   ASSERT_TRUE(txn.ok());

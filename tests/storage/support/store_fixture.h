@@ -14,10 +14,12 @@
 
 namespace mapd::storage::testing {
 
-// SQL that turns schema 11 back into 10 (no global map tables), schema 10's
-// audit log back into schema 9's, then schema 9's snapshot tables back into
-// schema 8's (the downgrades below schema 9 start with it).
+// SQL that turns schema 12 back into 11 (tokens not scoped to maps), 11 into
+// 10 (no global map tables), schema 10's audit log back into schema 9's, then
+// schema 9's snapshot tables back into schema 8's (the downgrades below schema
+// 9 start with it).
 constexpr const char* kUndoSnapshotParts =
+    "ALTER TABLE tokens DROP COLUMN maps; "
     "DROP TABLE global_map; "
     "DROP TABLE submap_placements; "
     "ALTER TABLE audit_log DROP COLUMN peer; "
