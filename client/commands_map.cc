@@ -1,5 +1,8 @@
-// mapctl status | robots | features | maps [create ID]
+// mapctl status | robots | features | maps [create ID [--set KEY=VALUE ...]]
 #include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "client/commands.h"
 #include "client/format.h"
@@ -51,14 +54,19 @@ int RunMaps(const Context& ctx, const JsonOptions& flags) {
     std::fputs(MessageToJson(maps).c_str(), stdout);
     return kExitOk;
   }
-  std::printf("%-20s  %-11s  %12s  %10s  %12s\n", "MAP", "STATE", "MAP VERSION", "FEATURES",
-              "BATCHES");
+  std::printf("%-20s  %-11s  %12s  %10s  %12s  %s\n", "MAP", "STATE", "MAP VERSION", "FEATURES",
+              "BATCHES", "OWN SETTINGS");
   for (const pb::MapInfo& m : maps.maps()) {
-    std::printf("%-20s  %-11s  %12llu  %10llu  %12llu\n", m.map_id().c_str(),
-                m.serving() ? "serving" : "not serving",
-                static_cast<unsigned long long>(m.map_version()),
-                static_cast<unsigned long long>(m.fused_features()),
-                static_cast<unsigned long long>(m.batches()));
+    // protobuf maps iterate in no fixed order: sorted for a stable line.
+    const std::map<std::string, std::string> sorted(m.settings().begin(), m.settings().end());
+    std::string settings;
+    for (const auto& [key, value] : sorted)
+      settings += (settings.empty() ? "" : " ") + key + "=" + value;
+    std::printf(
+        "%-20s  %-11s  %12llu  %10llu  %12llu  %s\n", m.map_id().c_str(),
+        m.serving() ? "serving" : "not serving", static_cast<unsigned long long>(m.map_version()),
+        static_cast<unsigned long long>(m.fused_features()),
+        static_cast<unsigned long long>(m.batches()), settings.empty() ? "-" : settings.c_str());
   }
   if (!maps.can_create()) {
     std::printf("(one database: start mapd with --data-dir DIR to serve and create more)\n");
@@ -68,6 +76,7 @@ int RunMaps(const Context& ctx, const JsonOptions& flags) {
 
 struct CreateMapOptions {
   std::string id;
+  std::vector<std::string> settings;  // KEY=VALUE
 };
 
 int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
@@ -76,6 +85,13 @@ int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
   if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
   pb::CreateMapRequest request;
   request.set_map_id(flags.id);
+  for (const std::string& kv : flags.settings) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      return UsageError("maps create", "--set '" + kv + "' is not KEY=VALUE");
+    }
+    (*request.mutable_settings())[kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
   pb::MapInfo info;
   const grpc::Status status = ctx.stub->CreateMap(&call, request, &info);
   if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
@@ -210,10 +226,16 @@ void AddMapCommands(CLI::App* app, Action* action) {
   });
   maps->add_flag("--json", list->json, "the ListMapsResponse in protobuf JSON");
   CLI::App* create = maps->add_subcommand("create", "make a new, empty map (role admin)");
+  auto created = BindCommand(create, action, RunCreateMap);
   create
-      ->add_option("id", BindCommand(create, action, RunCreateMap)->id,
+      ->add_option("id", created->id,
                    "the map id: 1-128 characters of [A-Za-z0-9_.-], not starting with '.'")
       ->required();
+  create
+      ->add_option("--set", created->settings,
+                   "KEY=VALUE: the map's own setting over mapd's, for fusion.*, planes.* and "
+                   "merge.* keys (mapd --help); repeat for more")
+      ->take_all();
 
   CLI::App* robots =
       app->add_subcommand("robots", "the robots seen, with their sessions and counts");

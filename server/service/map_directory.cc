@@ -101,10 +101,11 @@ StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenDataDir(const std::str
   return d;
 }
 
-StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path) {
+StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path,
+                                        const MapSettings* create_with) {
   MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
   StatusOr<std::unique_ptr<ServedMap>> map =
-      opener_(id, db_path, default_ == nullptr ? nullptr : default_->service.get());
+      opener_(id, db_path, default_ == nullptr ? nullptr : default_->service.get(), create_with);
   if (!map.ok()) return map.status();
   ServedMap* raw = map->get();
   std::lock_guard<std::mutex> lock(mu_);
@@ -149,7 +150,7 @@ Core* MapDirectory::FindCore(const std::string& id) const {
   return map.ok() ? (*map)->core.get() : nullptr;
 }
 
-StatusOr<ServedMap*> MapDirectory::Create(const std::string& id) {
+StatusOr<ServedMap*> MapDirectory::Create(const std::string& id, const MapSettings& settings) {
   MAPD_RETURN_IF_ERROR(CheckMapId(id, "map_id"));
   if (!can_create()) {
     return Status::FailedPrecondition(
@@ -165,7 +166,7 @@ StatusOr<ServedMap*> MapDirectory::Create(const std::string& id) {
     return Status::AlreadyExists("the file '" + path +
                                  "' exists but is not served here; restart mapd to serve it");
   }
-  return Open(id, path);
+  return Open(id, path, &settings);
 }
 
 }  // namespace mapd::service

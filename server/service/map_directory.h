@@ -26,6 +26,7 @@
 #include "service/map_core.h"
 #include "service/map_id.h"
 #include "service/map_service.h"
+#include "service/map_settings.h"
 
 namespace mapd::service {
 
@@ -52,6 +53,7 @@ struct ServedMap {
   // Members are destroyed bottom up: the service, then the core (which
   // closes the database), then the lock.
   DatabaseLock lock;
+  MapSettings settings;  // its own, over the server's (map_settings.h)
   std::unique_ptr<MapCore> core;
   std::unique_ptr<MapServiceImpl> service;
 };
@@ -60,9 +62,11 @@ class MapDirectory {
  public:
   // Opens map `id` at `db_path` (locked by the caller's ServedMap) and its
   // service; `shared_with` is the default map's service (null for the
-  // default map itself).
+  // default map itself). `create_with`: a new map's own settings, to check
+  // and store first; null when opening a map that exists.
   using Opener = std::function<StatusOr<std::unique_ptr<ServedMap>>(
-      const std::string& id, const std::string& db_path, MapServiceImpl* shared_with)>;
+      const std::string& id, const std::string& db_path, MapServiceImpl* shared_with,
+      const MapSettings* create_with)>;
 
   // One map, "default", in the file `db_path`.
   static StatusOr<std::unique_ptr<MapDirectory>> OpenSingle(const std::string& db_path,
@@ -83,16 +87,18 @@ class MapDirectory {
   std::vector<ServedMap*> List() const;         // by id
   std::vector<std::string> Ids() const;         // sorted
   Core* FindCore(const std::string& id) const;  // null when not served
-  // A new, empty map. FailedPrecondition with one database (--db),
-  // AlreadyExists, InvalidArgument for a bad id, or the opener's error.
-  StatusOr<ServedMap*> Create(const std::string& id);
+  // A new, empty map with its own `settings`. FailedPrecondition with one
+  // database (--db), AlreadyExists, InvalidArgument for a bad id or setting,
+  // or the opener's error.
+  StatusOr<ServedMap*> Create(const std::string& id, const MapSettings& settings = {});
   bool can_create() const { return !data_dir_.empty(); }
   const std::string& data_dir() const { return data_dir_; }
 
  private:
   MapDirectory(std::string data_dir, Opener opener)
       : data_dir_(std::move(data_dir)), opener_(std::move(opener)) {}
-  StatusOr<ServedMap*> Open(const std::string& id, const std::string& db_path);
+  StatusOr<ServedMap*> Open(const std::string& id, const std::string& db_path,
+                            const MapSettings* create_with = nullptr);
 
   const std::string data_dir_;  // empty: one database
   const Opener opener_;

@@ -15,6 +15,7 @@ void ToProto(ServedMap& map, pb::MapInfo* out) {
   out->set_map_version(s.map_version);
   out->set_fused_features(s.fused_features);
   out->set_batches(s.batches_stored);
+  for (const auto& [key, value] : map.settings) (*out->mutable_settings())[key] = value;
 }
 
 }  // namespace
@@ -161,7 +162,8 @@ grpc::Status MapRouter::CreateMap(grpc::ServerContext* context, const pb::Create
   AccessControl& access = server_wide()->access();
   StatusOr<Principal> p = access.Admit(*context, Permission::kManageMaps, "CreateMap", "", target);
   if (!p.ok()) return ToGrpcStatus(p.status());
-  StatusOr<ServedMap*> map = maps_->Create(request->map_id());
+  const MapSettings settings(request->settings().begin(), request->settings().end());
+  StatusOr<ServedMap*> map = maps_->Create(request->map_id(), settings);
   // The audit row says what happened, made or not (the server's log).
   const std::string result = map.ok() ? "ok" : map.status().ToString();
   const Status audited =

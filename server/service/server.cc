@@ -78,8 +78,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   auth.denials = std::make_shared<DenialAuditLimiter>(auth.denials_per_minute);
   MapServer* s = server.get();
   MapDirectory::Opener opener = [s](const std::string& id, const std::string& path,
-                                    MapServiceImpl* shared_with) {
-    return s->OpenMap(id, path, shared_with);
+                                    MapServiceImpl* shared_with, const MapSettings* create_with) {
+    return s->OpenMap(id, path, shared_with, create_with);
   };
   StatusOr<std::unique_ptr<MapDirectory>> maps =
       config.data_dir.empty() ? MapDirectory::OpenSingle(db, opener)
@@ -175,13 +175,41 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
 
 StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
                                                         const std::string& db_path,
-                                                        MapServiceImpl* shared_with) {
-  const ServerConfig& config = config_;
+                                                        MapServiceImpl* shared_with,
+                                                        const MapSettings* create_with) {
   auto map = std::make_unique<ServedMap>();
   map->id = id;
   map->db_path = db_path;
+  // A map's own settings (map_settings.h): only maps of a data directory
+  // have them, in <id>.conf; a new one's are checked and stored first.
+  ServerConfig config = config_;
+  const std::string settings_path = MapSettingsPath(db_path);
+  bool wrote_settings = false;
+  if (create_with != nullptr && !create_with->empty()) {
+    MAPD_RETURN_IF_ERROR(ApplyMapSettings(*create_with, config_, &config));
+    MAPD_RETURN_IF_ERROR(WriteMapSettings(settings_path, *create_with));
+    wrote_settings = true;
+  }
+  auto fail = [&](const Status& s) {
+    // A map that could not be made leaves no file behind (the lock creates
+    // the database file), so that the same id can be tried again.
+    if (wrote_settings) std::remove(settings_path.c_str());
+    if (create_with != nullptr) {
+      map->lock = DatabaseLock();
+      for (const char* suffix : {"", "-wal", "-shm"}) std::remove((db_path + suffix).c_str());
+    }
+    return id == kDefaultMapId ? s : Status(s.code(), "map '" + id + "': " + s.message());
+  };
+  if (!config_.data_dir.empty()) {
+    StatusOr<MapSettings> settings = ReadMapSettings(settings_path);
+    if (!settings.ok()) return fail(settings.status());
+    if (Status s = ApplyMapSettings(*settings, config_, &config); !s.ok()) {
+      return fail(Status(s.code(), settings_path + ": " + s.message()));
+    }
+    map->settings = *std::move(settings);
+  }
   StatusOr<DatabaseLock> lock = DatabaseLock::Acquire(db_path);
-  if (!lock.ok()) return lock.status();
+  if (!lock.ok()) return fail(lock.status());
   map->lock = std::move(lock).value();
   MapCoreOptions core_options;
   core_options.db_path = db_path;
@@ -200,10 +228,7 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
   core_options.watch = config.watch;
   core_options.hold_fuser_for_test = config.hold_fuser_for_test;
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
-  if (!core.ok()) {
-    if (id == kDefaultMapId) return core.status();
-    return Status(core.status().code(), "map '" + id + "': " + core.status().message());
-  }
+  if (!core.ok()) return fail(core.status());
   map->core = std::move(core).value();
   map->service =
       std::make_unique<MapServiceImpl>(map->core.get(), config.ingest, config.submaps,

@@ -59,7 +59,8 @@ class MapServer {
   MapServer() = default;
   // Opens map `id` (MapDirectory::Opener).
   StatusOr<std::unique_ptr<ServedMap>> OpenMap(const std::string& id, const std::string& db_path,
-                                               MapServiceImpl* shared_with);
+                                               MapServiceImpl* shared_with,
+                                               const MapSettings* create_with);
   // Logs and health for a map once it is in the directory.
   void WatchMap(ServedMap* map);
   // Each map SERVING once it is recovered, while its database takes writes

@@ -119,9 +119,12 @@ TEST(MapctlMapsE2eTest, SeveralMapsFromTheCommandLine) {
     args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd.address});
     return RunCommand(args);
   };
-  CommandResult r = mapctl({"maps", "create", "site-1"});
+  CommandResult r = mapctl({"maps", "create", "site-1", "--set", "fusion.eta_m=0.25"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("created map site-1"));
+  r = mapctl({"maps", "create", "site-2", "--set", "limits.max_streams=5"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("is not a map's setting"));
   r = mapctl({"--map", "site-1", "simulate", "--robots", "2", "--scans", "40"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("80 stored"));
@@ -130,6 +133,8 @@ TEST(MapctlMapsE2eTest, SeveralMapsFromTheCommandLine) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("default"));
   EXPECT_THAT(r.out, HasSubstr("site-1"));
+  EXPECT_THAT(r.out, HasSubstr("fusion.eta_m=0.25"));
+  EXPECT_THAT(r.out, Not(HasSubstr("site-2")));
   setenv("MAPD_MAP", "site-1", 1);  // mapctl inherits it
   r = mapctl({"status", "--json"});
   unsetenv("MAPD_MAP");

@@ -176,6 +176,53 @@ TEST_F(MapsTest, UnknownOrContradictoryMapsAreRefusedWithTheReason) {
   EXPECT_EQ(ListMaps().maps_size(), 2);
 }
 
+TEST_F(MapsTest, AMapKeepsItsOwnSettings) {
+  grpc::ClientContext ctx;
+  pb::CreateMapRequest request;
+  request.set_map_id("site-7");
+  (*request.mutable_settings())["fusion.min_support"] = "1";  // publish what one scan saw
+  pb::MapInfo info;
+  ASSERT_TRUE(stub_->CreateMap(&ctx, request, &info).ok());
+  EXPECT_EQ(info.settings().at("fusion.min_support"), "1");
+  EXPECT_TRUE(std::filesystem::exists(dir_.File("site-7.conf")));
+  // One batch in each map: site-7 publishes its walls, default (min_support 3) none.
+  for (const pb::IngestAck& ack : StreamTo("site-7", Walk("r1", 1)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  for (const pb::IngestAck& ack : Stream(Walk("r1", 1)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  EXPECT_FALSE(FeaturesOf("site-7").empty());
+  EXPECT_TRUE(FeaturesOf("default").empty());
+  // Kept across a restart.
+  Restart();
+  const pb::ListMapsResponse maps = ListMaps();
+  ASSERT_EQ(maps.maps_size(), 2);
+  EXPECT_EQ(maps.maps(1).settings().at("fusion.min_support"), "1");
+  EXPECT_TRUE(maps.maps(0).settings().empty());
+  EXPECT_FALSE(FeaturesOf("site-7").empty());
+}
+
+TEST_F(MapsTest, SettingsAMapMayNotHaveAreRefusedAndNothingIsMade) {
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"limits.max_streams", "5"},                      // the server's, not a map's
+      {"fusion.eta_m", "-1"},                           // out of range
+      {"fusion.no_such_key", "1"},                      // unknown
+      {"fusion.eta_m", "0.2\nlimits.max_streams = 5"},  // a second line in the file
+  };
+  for (const auto& [key, value] : bad) {
+    grpc::ClientContext ctx;
+    pb::CreateMapRequest request;
+    request.set_map_id("site-7");
+    (*request.mutable_settings())[key] = value;
+    pb::MapInfo info;
+    const grpc::Status s = stub_->CreateMap(&ctx, request, &info);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << key;
+    EXPECT_THAT(s.error_message(), HasSubstr("settings")) << key;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("site-7.db")));
+  EXPECT_FALSE(std::filesystem::exists(dir_.File("site-7.conf")));
+  EXPECT_EQ(ListMaps().maps_size(), 1);
+}
+
 TEST_F(MapsTest, AnUploadHeaderNamingAnotherMapIsRefused) {
   ASSERT_TRUE(CreateMap("site-7").ok());
   grpc::ClientContext ctx;

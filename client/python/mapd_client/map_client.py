@@ -80,10 +80,12 @@ class MapClient:
         return self._stub.ListMaps(pb.ListMapsRequest(), timeout=self._timeout_s,
                                    metadata=self._metadata)
 
-    def create_map(self, map_id: str) -> pb.MapInfo:
-        """A new, empty map (role admin; mapd --data-dir)."""
-        return self._stub.CreateMap(pb.CreateMapRequest(map_id=map_id), timeout=self._timeout_s,
-                                    metadata=self._metadata)
+    def create_map(self, map_id: str, settings: Optional[dict] = None) -> pb.MapInfo:
+        """A new, empty map (role admin; mapd --data-dir). settings: its own
+        fusion.*, planes.* and merge.* settings over mapd's, e.g.
+        {"fusion.eta_m": "0.2"}."""
+        request = pb.CreateMapRequest(map_id=map_id, settings=settings or {})
+        return self._stub.CreateMap(request, timeout=self._timeout_s, metadata=self._metadata)
 
     # -- the fused map
 
