@@ -60,8 +60,10 @@ int RunMaps(const Context& ctx, const JsonOptions& flags) {
     // protobuf maps iterate in no fixed order: sorted for a stable line.
     const std::map<std::string, std::string> sorted(m.settings().begin(), m.settings().end());
     std::string settings;
-    for (const auto& [key, value] : sorted)
-      settings += (settings.empty() ? "" : " ") + key + "=" + value;
+    for (const auto& [key, value] : sorted) {
+      if (!settings.empty()) settings += ' ';
+      settings.append(key).append("=").append(value);
+    }
     std::printf(
         "%-20s  %-11s  %12llu  %10llu  %12llu  %s\n", m.map_id().c_str(),
         m.serving() ? "serving" : "not serving", static_cast<unsigned long long>(m.map_version()),

@@ -81,7 +81,7 @@ StatusOr<MapSettings> ReadMapSettings(const std::string& path) {
 
 Status WriteMapSettings(const std::string& path, const MapSettings& settings) {
   std::string text = "# This map's own settings (mapctl maps create --set), over mapd's.\n";
-  for (const auto& [key, value] : settings) text += key + " = " + value + "\n";
+  for (const auto& [key, value] : settings) text.append(key).append(" = ").append(value) += '\n';
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0)
