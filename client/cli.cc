@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "client/robot/robot_client.h"
 #include "client/text_util.h"
 
 namespace mapd::client {
@@ -30,7 +31,7 @@ std::unique_ptr<grpc::ClientContext> Context::NewStreamContext() const {
 void Context::CheckMapOnce() const {
   if (map.empty() || map == "default") return;  // every server serves that one
   std::call_once(*map_checked_, [this] {
-    const grpc::Status s = CheckMapServed(*this, map);
+    const grpc::Status s = robot::CheckMapServed(stub.get(), NewServerCallContext().get(), map);
     if (s.ok()) return;
     if (s.error_code() == grpc::StatusCode::UNAVAILABLE) {
       std::exit(ReportRpcError(*this, "--map " + map, s));
@@ -41,28 +42,11 @@ void Context::CheckMapOnce() const {
   });
 }
 
-grpc::Status CheckMapServed(const Context& ctx, const std::string& map) {
-  grpc::ClientContext call;
-  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
-  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
-  pb::ListMapsResponse maps;
-  const grpc::Status s = ctx.stub->ListMaps(&call, pb::ListMapsRequest(), &maps);
-  if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
-    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                        "the server at " + ctx.server +
-                            " serves one map and knows no others (a mapd from before maps: "
-                            "ListMaps is unimplemented); upgrade it, or leave --map and $MAPD_MAP "
-                            "unset to use its map");
-  }
-  if (!s.ok()) return s;
-  std::string names;
-  for (const pb::MapInfo& m : maps.maps()) {
-    if (m.map_id() == map) return grpc::Status::OK;
-    names += (names.empty() ? "" : ", ") + m.map_id();
-  }
-  return grpc::Status(grpc::StatusCode::NOT_FOUND,
-                      "the server at " + ctx.server + " does not serve map '" + map +
-                          "'; it serves: " + names + " (mapctl maps create ID makes one)");
+std::unique_ptr<grpc::ClientContext> Context::NewServerCallContext() const {
+  auto context = std::make_unique<grpc::ClientContext>();
+  context->set_deadline(std::chrono::system_clock::now() + timeout());
+  if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
+  return context;
 }
 
 std::chrono::milliseconds Context::timeout() const {

@@ -46,17 +46,15 @@ struct Context {
   std::unique_ptr<grpc::ClientContext> NewCallContext() const;
   // The same without a deadline (uploads, merges, downloads take their time).
   std::unique_ptr<grpc::ClientContext> NewStreamContext() const;
+  // A call about the server rather than a map (ListMaps, CreateMap): the
+  // deadline and the token, no map and no map check.
+  std::unique_ptr<grpc::ClientContext> NewServerCallContext() const;
   std::chrono::milliseconds timeout() const;
 
  private:
   void CheckMapOnce() const;
   std::shared_ptr<std::once_flag> map_checked_ = std::make_shared<std::once_flag>();
 };
-
-// Whether the server behind `ctx` serves `map`: OK, FAILED_PRECONDITION when
-// it does not know maps (ListMaps UNIMPLEMENTED), NOT_FOUND naming the maps it
-// serves, or the call's error.
-grpc::Status CheckMapServed(const Context& ctx, const std::string& map);
 
 // Prints `mapctl: <what>: <message> (<CODE>)` and returns the exit code for
 // `status`: kExitUnreachable when the server could not be reached, else kExitFailed.

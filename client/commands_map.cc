@@ -40,10 +40,8 @@ int RunStatus(const Context& ctx, const JsonOptions& flags) {
 
 int RunMaps(const Context& ctx, const JsonOptions& flags) {
   pb::ListMapsResponse maps;
-  grpc::ClientContext call;  // not NewCallContext: listing needs no map
-  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
-  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
-  const grpc::Status status = ctx.stub->ListMaps(&call, pb::ListMapsRequest(), &maps);
+  const grpc::Status status =
+      ctx.stub->ListMaps(ctx.NewServerCallContext().get(), pb::ListMapsRequest(), &maps);
   if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
     // A mapd from before maps serves exactly one, the default.
     std::printf("%-20s  %s\n", "default", "(a mapd from before maps: its only map)");
@@ -82,9 +80,6 @@ struct CreateMapOptions {
 };
 
 int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
-  grpc::ClientContext call;
-  call.set_deadline(std::chrono::system_clock::now() + ctx.timeout());
-  if (!ctx.token.empty()) call.AddMetadata("authorization", "Bearer " + ctx.token);
   pb::CreateMapRequest request;
   request.set_map_id(flags.id);
   for (const std::string& kv : flags.settings) {
@@ -95,7 +90,7 @@ int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
     (*request.mutable_settings())[kv.substr(0, eq)] = kv.substr(eq + 1);
   }
   pb::MapInfo info;
-  const grpc::Status status = ctx.stub->CreateMap(&call, request, &info);
+  const grpc::Status status = ctx.stub->CreateMap(ctx.NewServerCallContext().get(), request, &info);
   if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
     PrintError("maps create: the server at " + ctx.server +
                " serves one map (a mapd from before maps); upgrade it to serve several");

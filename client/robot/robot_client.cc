@@ -148,7 +148,7 @@ void RobotClient::ReaderLoop() {
     bool got_ack = false;
     grpc::Status status;
     if (!map_checked) {
-      status = CheckMapServed();
+      status = CheckMap();
       map_checked = status.ok();
     }
     if (map_checked) {
@@ -207,7 +207,29 @@ void RobotClient::ReaderLoop() {
   cv_.notify_all();
 }
 
-grpc::Status RobotClient::CheckMapServed() {
+grpc::Status CheckMapServed(pb::MapService::Stub* stub, grpc::ClientContext* context,
+                            const std::string& map) {
+  pb::ListMapsResponse maps;
+  const grpc::Status s = stub->ListMaps(context, pb::ListMapsRequest(), &maps);
+  if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                        "map '" + map +
+                            "': the server serves one map and knows no others (a mapd from "
+                            "before maps: ListMaps is unimplemented); nothing was sent to it: "
+                            "upgrade it, or name no map to use its only one");
+  }
+  if (!s.ok()) return s;
+  std::string names;
+  for (const pb::MapInfo& m : maps.maps()) {
+    if (m.map_id() == map) return grpc::Status::OK;
+    names += (names.empty() ? "" : ", ") + m.map_id();
+  }
+  return grpc::Status(grpc::StatusCode::NOT_FOUND,
+                      "the server does not serve map '" + map + "'; it serves: " + names +
+                          " (an admin makes one with mapctl maps create)");
+}
+
+grpc::Status RobotClient::CheckMap() {
   grpc::ClientContext call;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -216,25 +238,10 @@ grpc::Status RobotClient::CheckMapServed() {
   }
   call.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
   if (!options_.token.empty()) call.AddMetadata("authorization", "Bearer " + options_.token);
-  pb::ListMapsResponse maps;
-  grpc::Status s = stub_->ListMaps(&call, pb::ListMapsRequest(), &maps);
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    cancel_target_ = nullptr;
-  }
-  if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
-    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                        "map '" + options_.map_id +
-                            "': the server serves one map and knows no others (a mapd from "
-                            "before maps); nothing was sent: upgrade it, or send without a map");
-  }
-  if (!s.ok()) return s;
-  for (const pb::MapInfo& m : maps.maps()) {
-    if (m.map_id() == options_.map_id) return grpc::Status::OK;
-  }
-  return grpc::Status(grpc::StatusCode::NOT_FOUND,
-                      "the server does not serve map '" + options_.map_id +
-                          "' (ListMaps; an admin makes one with mapctl maps create)");
+  const grpc::Status s = CheckMapServed(stub_.get(), &call, options_.map_id);
+  std::lock_guard<std::mutex> lock(mu_);
+  cancel_target_ = nullptr;
+  return s;
 }
 
 void RobotClient::WaitForChannel(std::chrono::steady_clock::time_point deadline) {

@@ -72,6 +72,13 @@ struct Rejection {
   std::string message;  // names the offending field, e.g. "lines[3].a.x is NaN"
 };
 
+// Whether the server behind `stub` serves `map`, asked with ListMaps on
+// `context`: OK; FAILED_PRECONDITION when it knows no maps (a mapd from before
+// maps ignores a map's name and would store the batches in its only map);
+// NOT_FOUND naming the maps it serves; or the call's error.
+grpc::Status CheckMapServed(mapserver::v1::MapService::Stub* stub, grpc::ClientContext* context,
+                            const std::string& map);
+
 class RobotClient {
  public:
   explicit RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options = {});
@@ -107,8 +114,8 @@ class RobotClient {
       grpc::ClientReaderWriter<mapserver::v1::ObservationBatch, mapserver::v1::IngestAck>;
 
   void ReaderLoop();
-  // OK when the server serves options_.map_id (see there), else why not.
-  grpc::Status CheckMapServed();
+  // CheckMapServed(options_.map_id), cancellable like a stream.
+  grpc::Status CheckMap();
   // Opens a stream and writes every pending batch to it. REQUIRES: write_mu_ held.
   void OpenStreamLocked();
   void HandleAck(const mapserver::v1::IngestAck& ack);

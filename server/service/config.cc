@@ -132,7 +132,9 @@ Status ApplySetting(const std::string& key, const std::string& value, ServerConf
   return s->set(value, config);
 }
 
-Status LoadConfigFile(const std::string& path, ServerConfig* config) {
+Status ForEachConfigLine(
+    const std::string& path,
+    const std::function<Status(const std::string& key, const std::string& value)>& fn) {
   std::ifstream in(path);
   if (!in) return Status::NotFound("cannot read config file '" + path + "'");
   std::string line;
@@ -143,11 +145,17 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config) {
     if (eq == std::string::npos) {
       return Status::InvalidArgument(path + ":" + std::to_string(n) + ": expected key = value");
     }
-    Status s = ApplySetting(Trim(line.substr(0, eq)), Trim(line.substr(eq + 1)), config);
+    Status s = fn(Trim(line.substr(0, eq)), Trim(line.substr(eq + 1)));
     if (!s.ok())
       return Status::InvalidArgument(path + ":" + std::to_string(n) + ": " + s.message());
   }
   return Status::Ok();
+}
+
+Status LoadConfigFile(const std::string& path, ServerConfig* config) {
+  return ForEachConfigLine(path, [config](const std::string& key, const std::string& value) {
+    return ApplySetting(key, value, config);
+  });
 }
 
 std::string ConfigFileText(const ServerConfig& config) {

@@ -74,6 +74,12 @@ std::string DefaultDbPath();
 // Sets one key (see the table in config.cc); InvalidArgument names the key.
 Status ApplySetting(const std::string& key, const std::string& value, ServerConfig* config);
 Status LoadConfigFile(const std::string& path, ServerConfig* config);
+// Calls `fn` with each `key = value` line of the config file `path` (blank
+// lines and # comments skipped, both sides trimmed). NotFound when it cannot be
+// read; InvalidArgument "path:line: ..." for a line without '=' or fn's error.
+Status ForEachConfigLine(
+    const std::string& path,
+    const std::function<Status(const std::string& key, const std::string& value)>& fn);
 
 // `config` as a config file: every setting with its help line, in table order.
 // ConfigFileText(ServerConfig()) is deploy/mapd.conf.example.

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 
 namespace mapd::service {
 namespace {
@@ -17,12 +16,6 @@ bool IsMapSettingKey(const std::string& key) {
     if (key.rfind(prefix, 0) == 0) return true;
   }
   return false;
-}
-
-std::string Trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
 }
 
 }  // namespace
@@ -64,18 +57,13 @@ StatusOr<MapSettings> ReadMapSettings(const std::string& path) {
   MapSettings settings;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return settings;
-  std::ifstream in(path);
-  if (!in) return Status::FailedPrecondition("cannot read the map's settings '" + path + "'");
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n) {
-    line = Trim(line.substr(0, line.find('#')));
-    if (line.empty()) continue;
-    const size_t eq = line.find('=');
-    if (eq == std::string::npos) {
-      return Status::InvalidArgument(path + ":" + std::to_string(n) + ": expected key = value");
-    }
-    settings[Trim(line.substr(0, eq))] = Trim(line.substr(eq + 1));
-  }
+  Status read = ForEachConfigLine(path, [&](const std::string& key, const std::string& value) {
+    settings[key] = value;
+    return Status::Ok();
+  });
+  if (read.code() == StatusCode::kNotFound)
+    return Status::FailedPrecondition("cannot read the map's settings '" + path + "'");
+  if (!read.ok()) return read;
   return settings;
 }
 

@@ -21,10 +21,8 @@ using ::testing::HasSubstr;
 class MapsTest : public ServerFixture {
  protected:
   void SetUp() override {
-    config_.listen = "127.0.0.1:0";
-    config_.data_dir = dir_.path();
-    config_.shutdown_grace_s = 1.0;
-    config_.busy_timeout_ms = 300;
+    Configure();
+    UseDataDir();
     StartServer();
   }
 
@@ -285,10 +283,8 @@ TEST_F(MapsTest, AFileThatIsNotAMapIdStopsTheStartWithItsName) {
 class ScopedTokenTest : public AuthFixture {
  protected:
   void SetUp() override {
-    config_.listen = "127.0.0.1:0";
-    config_.data_dir = dir_.path();
-    config_.shutdown_grace_s = 1.0;
-    config_.busy_timeout_ms = 300;
+    Configure();
+    UseDataDir();
     StartServer();
     MakeTokens();
     for (const char* id : {"site-7", "site-8"}) {

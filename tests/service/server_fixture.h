@@ -22,11 +22,21 @@ namespace pb = mapserver::v1;
 class ServerFixture : public ::testing::Test {
  protected:
   void SetUp() override {
+    Configure();
+    StartServer();
+  }
+
+  // The test server's settings: a free port, one database in dir_.
+  void Configure() {
     config_.listen = "127.0.0.1:0";
     config_.db_path = dir_.File("map.db");
     config_.shutdown_grace_s = 1.0;
     config_.busy_timeout_ms = 300;
-    StartServer();
+  }
+  // Several maps instead (--data-dir): dir_ holds one database per map.
+  void UseDataDir() {
+    config_.db_path.clear();
+    config_.data_dir = dir_.path();
   }
 
   void StartServer() {
