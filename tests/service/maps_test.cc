@@ -221,6 +221,44 @@ TEST_F(MapsTest, SettingsAMapMayNotHaveAreRefusedAndNothingIsMade) {
   EXPECT_EQ(ListMaps().maps_size(), 1);
 }
 
+TEST_F(MapsTest, HugeAndMalformedMapIdsAreRefusedWithoutHarm) {
+  const std::string huge(300, 'a');
+  EXPECT_EQ(CreateMap(huge).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(CreateMap("site\n7").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  pb::FeatureMapRequest request;
+  request.set_map_id(huge);
+  Features(request);
+  EXPECT_EQ(last_status_.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_LT(last_status_.error_message().size(), 300u);  // the id is cut in the message
+  grpc::ClientContext ctx;
+  ctx.AddMetadata("mapd-map-id", huge);
+  pb::Stats stats;
+  EXPECT_EQ(stub_->GetStats(&ctx, {}, &stats).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(ListMaps().maps_size(), 1);
+}
+
+TEST_F(MapsTest, AMalformedSettingsFileStopsTheStartNamingItAndKeepsTheMap) {
+  grpc::ClientContext ctx;
+  pb::CreateMapRequest request;
+  request.set_map_id("site-7");
+  (*request.mutable_settings())["fusion.eta_m"] = "0.2";
+  pb::MapInfo info;
+  ASSERT_TRUE(stub_->CreateMap(&ctx, request, &info).ok());
+  for (const pb::IngestAck& ack : StreamTo("site-7", Walk("r1", 4)))
+    EXPECT_EQ(ack.result(), pb::IngestAck::STORED) << ack.message();
+  server_.reset();
+  for (const char* text : {"fusion.eta_m\n", "fusion.eta_m = abc\n", "limits.max_streams = 5\n"}) {
+    dir_.Write("site-7.conf", text);
+    auto refused = service::MapServer::Start(config_);
+    ASSERT_FALSE(refused.ok()) << text;
+    EXPECT_THAT(refused.status().message(), HasSubstr("site-7.conf")) << text;
+  }
+  // Mended, the map comes back with everything it stored.
+  dir_.Write("site-7.conf", "fusion.eta_m = 0.2\n");
+  StartServer();
+  EXPECT_EQ(StoredBatches("site-7"), 4u);
+}
+
 TEST_F(MapsTest, AnUploadHeaderNamingAnotherMapIsRefused) {
   ASSERT_TRUE(CreateMap("site-7").ok());
   grpc::ClientContext ctx;
