@@ -8,6 +8,7 @@
 #include "service/auth.h"
 #include "service/file_modes.h"
 #include "service/token.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd {
@@ -50,7 +51,10 @@ storage::AuditEntry OfflineAudit(const std::string& action, const std::string& t
 
 StatusOr<std::unique_ptr<storage::Store>> Open(const TokenOptions& flags) {
   MAPD_RETURN_IF_ERROR(service::CheckDatabaseFileModes(flags.db));
-  return storage::Store::Open(flags.db, storage::StoreOptions{});
+  StatusOr<std::unique_ptr<storage::SqliteStore>> store =
+      storage::SqliteStore::Open(flags.db, storage::StoreOptions{});
+  if (!store.ok()) return store.status();
+  return std::unique_ptr<storage::Store>(std::move(store).value());
 }
 
 int RunCreate(const TokenOptions& flags) {

@@ -11,6 +11,7 @@
 #include "fusion/projection.h"
 #include "service/feature_filter.h"
 #include "service/log.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::service {
 namespace {
@@ -46,8 +47,8 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (options.snapshot_part_bytes == 0)
     return Status::InvalidArgument("snapshot_part_bytes must be > 0");
   std::unique_ptr<MapCore> core(new MapCore(options));
-  StatusOr<std::unique_ptr<storage::Store>> store =
-      storage::Store::Open(options.db_path, options.store);
+  StatusOr<std::unique_ptr<storage::SqliteStore>> store =
+      storage::SqliteStore::Open(options.db_path, options.store);
   if (!store.ok()) {
     return Status(store.status().code(), "cannot open the database '" + options.db_path +
                                              "': " + store.status().message());

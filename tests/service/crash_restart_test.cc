@@ -23,6 +23,7 @@
 #include "fusion/projection.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/ingest_batch.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd::testing {
@@ -158,7 +159,7 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
   //    commit (= id) order, the order mapd fused them in (the default bounded
   //    engine is deterministic but not order independent), and compare.
   //    Fed as mapd's fuser feeds it (MapCore::Fuse): with the sensor origin.
-  auto store = storage::Store::Open(db, {});
+  auto store = storage::SqliteStore::Open(db, {});
   ASSERT_TRUE(store.ok()) << store.status().ToString();
   std::vector<storage::StoredObservation> observations;
   ASSERT_TRUE((*store)

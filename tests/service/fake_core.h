@@ -20,13 +20,14 @@
 #include "service/core.h"
 #include "service/map_service.h"
 #include "service/watch_hub.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::testing {
 
 class FakeCore final : public service::Core {
  public:
   explicit FakeCore(service::WatchOptions watch = {}) : hub_(watch) {
-    auto store = storage::Store::Open(dir_.File("map.db"), {});
+    auto store = storage::SqliteStore::Open(dir_.File("map.db"), {});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (store.ok()) store_ = std::move(store).value();
     hub_.Start(map_version);

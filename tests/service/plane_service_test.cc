@@ -5,6 +5,7 @@
 #include <sqlite3.h>
 
 #include "server_fixture.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd::testing {
@@ -115,7 +116,7 @@ TEST_F(PlaneServiceTest, FusedPlanesArePersistedAndASnapshotWithoutPlanesIsRepla
   stub_.reset();
   server_.reset();
   {
-    auto store = storage::Store::Open(config_.db_path, {});
+    auto store = storage::SqliteStore::Open(config_.db_path, {});
     ASSERT_TRUE(store.ok()) << store.status().ToString();
     auto rows = (*store)->LoadFusedPlanes();
     ASSERT_TRUE(rows.ok());

@@ -14,7 +14,7 @@
 
 #include "common/octomap_scenes.h"
 #include "server_fixture.h"
-#include "storage/sqlite.h"
+#include "storage/sqlite/sqlite.h"
 #include "voxel/merge.h"
 
 namespace mapd::testing {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "server_fixture.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd::testing {
@@ -106,8 +107,8 @@ TEST_F(TrailsTest, TiedSessionComesInTheMapFrame) {
   channel_.reset();
   server_.reset();
   {
-    StatusOr<std::unique_ptr<storage::Store>> store =
-        storage::Store::Open(config_.db_path, storage::StoreOptions());
+    StatusOr<std::unique_ptr<storage::SqliteStore>> store =
+        storage::SqliteStore::Open(config_.db_path, storage::StoreOptions());
     ASSERT_TRUE(store.ok()) << store.status().ToString();
     StatusOr<storage::SessionFrame> local = (*store)->FindSession("r2", "local");
     ASSERT_TRUE(local.ok());

@@ -1,10 +1,11 @@
 // The SQLite store: idempotent batches, frame kinds, transactions, reopening,
 // the database stamp (newer mapd, foreign files) and the size cap.
-#include "storage/store.h"
+#include "storage/sqlite/store.h"
 
 #include <gtest/gtest.h>
 
-#include "storage/schema.h"
+#include "storage/sqlite/schema.h"
+#include "storage/store.h"
 #include "storage/support/store_fixture.h"
 
 namespace mapd::storage {
@@ -153,7 +154,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerMapd) {
     ASSERT_TRUE(db.ok());
     ASSERT_TRUE(Exec(db->get(), "INSERT INTO schema_version VALUES (999)").ok());
   }
-  auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
+  auto opened = SqliteStore::Open(dir_.File("map.db"), StoreOptions{});
   EXPECT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(opened.status().message().find("database schema version 999 is newer than this mapd"),
             std::string::npos)
@@ -165,7 +166,7 @@ TEST_F(StoreTest, RefusesAFileThatIsNotADatabase) {
   FILE* f = fopen(dir_.File("junk.db").c_str(), "w");
   fputs("this is not an SQLite database, just some text long enough to be read as a header...", f);
   fclose(f);
-  auto opened = Store::Open(dir_.File("junk.db"), StoreOptions{});
+  auto opened = SqliteStore::Open(dir_.File("junk.db"), StoreOptions{});
   ASSERT_FALSE(opened.ok());
   // SQLite's own words, so that the operator knows it is the file, not mapd.
   EXPECT_NE(opened.status().message().find("file is not a database"), std::string::npos)
@@ -194,7 +195,7 @@ class StoreIdentityTest : public ::testing::Test {
 TEST_F(StoreIdentityTest, RefusesAnotherApplicationsDatabaseAndLeavesItAlone) {
   const std::string path = ForeignDatabase(
       "crm.db", "CREATE TABLE customers (id INTEGER); INSERT INTO customers VALUES (7)");
-  auto opened = Store::Open(path, StoreOptions{});
+  auto opened = SqliteStore::Open(path, StoreOptions{});
   ASSERT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(opened.status().message().find("tables of another application (customers)"),
             std::string::npos)
@@ -210,7 +211,7 @@ TEST_F(StoreIdentityTest, RefusesAnotherApplicationsDatabaseAndLeavesItAlone) {
 
 TEST_F(StoreIdentityTest, RefusesAForeignApplicationIdEvenWithoutTables) {
   const std::string path = ForeignDatabase("other.db", "PRAGMA application_id = 1234");
-  auto opened = Store::Open(path, StoreOptions{});
+  auto opened = SqliteStore::Open(path, StoreOptions{});
   ASSERT_EQ(opened.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(opened.status().message().find("application_id is 0x000004d2"), std::string::npos)
       << opened.status().message();
@@ -218,7 +219,7 @@ TEST_F(StoreIdentityTest, RefusesAForeignApplicationIdEvenWithoutTables) {
 
 TEST_F(StoreIdentityTest, StampsNewDatabasesAndAdoptsOnesFromBeforeTheStamp) {
   {
-    auto store = Store::Open(dir_.File("map.db"), StoreOptions{});
+    auto store = SqliteStore::Open(dir_.File("map.db"), StoreOptions{});
     ASSERT_TRUE(store.ok()) << store.status().message();
   }
   auto db = OpenDatabase(dir_.File("map.db"), false);
@@ -232,14 +233,14 @@ TEST_F(StoreIdentityTest, StampsNewDatabasesAndAdoptsOnesFromBeforeTheStamp) {
   // A database of an earlier mapd carries no stamp: adopted and stamped.
   ASSERT_TRUE(Exec(db->get(), "PRAGMA application_id = 0").ok());
   EXPECT_EQ(id(), 0);
-  ASSERT_TRUE(Store::Open(dir_.File("map.db"), StoreOptions{}).ok());
+  ASSERT_TRUE(SqliteStore::Open(dir_.File("map.db"), StoreOptions{}).ok());
   EXPECT_EQ(id(), kApplicationId);
 }
 
 TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted) {
   StoreOptions options;
   options.max_db_bytes = 4 << 20;  // room for the 1 MiB probe at first
-  auto store = Store::Open(dir_.File("map.db"), options);
+  auto store = SqliteStore::Open(dir_.File("map.db"), options);
   ASSERT_TRUE(store.ok()) << store.status().message();
   EXPECT_TRUE((*store)->ProbeWrite().ok());
   geometry::SensorObservation features;
@@ -263,7 +264,7 @@ TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted
   EXPECT_GT(committed, 0u);
   EXPECT_EQ((*store)->ProbeWrite().code(), StatusCode::kResourceExhausted);
   store->reset();
-  auto reopened = Store::Open(dir_.File("map.db"), StoreOptions{});
+  auto reopened = SqliteStore::Open(dir_.File("map.db"), StoreOptions{});
   ASSERT_TRUE(reopened.ok());
   uint64_t kept = 0;
   ASSERT_TRUE((*reopened)

@@ -16,6 +16,7 @@
 #include <set>
 
 #include "common/process.h"
+#include "storage/sqlite/store.h"
 #include "web/web_fixture.h"
 
 namespace mapd::testing {
@@ -136,7 +137,7 @@ TEST_F(WebBrowserTest, ThePageDrawsTheFusedMapAndItsUpdates) {
 // buttons to decide it (recorded in the database before mapd opens it).
 TEST_F(WebBrowserTest, TheMergeTableShowsEachPlacementsEvidence) {
   {
-    auto store = storage::Store::Open(dir_.File("map.db"), storage::StoreOptions{});
+    auto store = storage::SqliteStore::Open(dir_.File("map.db"), storage::StoreOptions{});
     ASSERT_TRUE(store.ok()) << store.status().ToString();
     auto txn = (*store)->BeginWrite();
     ASSERT_TRUE(txn.ok()) << txn.status().ToString();

@@ -11,6 +11,7 @@
 #include "common/clock.h"
 #include "service/server_fixture.h"
 #include "service/token.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd::testing {
@@ -32,7 +33,7 @@ class AuthFixture : public ServerFixture {
     // With data_dir the tokens are in the default map's database.
     const std::string db =
         config_.data_dir.empty() ? config_.db_path : config_.data_dir + "/default.db";
-    auto store = storage::Store::Open(db, storage::StoreOptions{});
+    auto store = storage::SqliteStore::Open(db, storage::StoreOptions{});
     EXPECT_TRUE(store.ok()) << store.status().ToString();
     if (!store.ok()) return "";
     auto txn = (*store)->BeginWrite();

@@ -9,7 +9,8 @@
 #include <utility>
 
 #include "common/temp_dir.h"
-#include "storage/sqlite.h"
+#include "storage/sqlite/sqlite.h"
+#include "storage/sqlite/store.h"
 #include "storage/store.h"
 
 namespace mapd::storage::testing {
@@ -36,7 +37,7 @@ class StoreFixture : public ::testing::Test {
   // Closes the store (if open) and opens the same file again.
   void Reopen() {
     store_.reset();
-    auto opened = Store::Open(dir_.File("map.db"), StoreOptions{});
+    auto opened = SqliteStore::Open(dir_.File("map.db"), StoreOptions{});
     ASSERT_TRUE(opened.ok()) << opened.status().ToString();
     store_ = std::move(opened).value();
   }

@@ -1,6 +1,6 @@
 // The database schema and its migrations.
-#ifndef MAPD_STORAGE_SCHEMA_H_
-#define MAPD_STORAGE_SCHEMA_H_
+#ifndef MAPD_STORAGE_SQLITE_SCHEMA_H_
+#define MAPD_STORAGE_SQLITE_SCHEMA_H_
 
 #include <sqlite3.h>
 
@@ -36,4 +36,4 @@ Status Migrate(sqlite3* db);
 
 }  // namespace mapd::storage
 
-#endif  // MAPD_STORAGE_SCHEMA_H_
+#endif  // MAPD_STORAGE_SQLITE_SCHEMA_H_

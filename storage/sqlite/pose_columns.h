@@ -1,13 +1,13 @@
 // A rigid transform in seven REAL columns (qw, qx, qy, qz, tx, ty, tz), the
 // layout of every pose the schema stores (sessions, observations, merge
 // inputs, submap placements). Internal to the storage library.
-#ifndef MAPD_STORAGE_POSE_COLUMNS_H_
-#define MAPD_STORAGE_POSE_COLUMNS_H_
+#ifndef MAPD_STORAGE_SQLITE_POSE_COLUMNS_H_
+#define MAPD_STORAGE_SQLITE_POSE_COLUMNS_H_
 
 #include <Eigen/Geometry>
 
 #include "geometry/rigid3.h"
-#include "storage/sqlite.h"
+#include "storage/sqlite/sqlite.h"
 
 namespace mapd::storage {
 
@@ -31,4 +31,4 @@ inline geometry::Rigid3 ColumnPose(const Statement& s, int first) {
 
 }  // namespace mapd::storage
 
-#endif  // MAPD_STORAGE_POSE_COLUMNS_H_
+#endif  // MAPD_STORAGE_SQLITE_POSE_COLUMNS_H_

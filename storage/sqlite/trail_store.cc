@@ -2,12 +2,12 @@
 // in SQL so that a long session does not travel whole to the reader.
 #include <algorithm>
 
-#include "storage/store.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::storage {
 
-StatusOr<std::vector<SessionTrailRows>> Store::ListTrails(const std::string& robot,
-                                                          uint32_t max_points) {
+StatusOr<std::vector<SessionTrailRows>> SqliteStore::ListTrails(const std::string& robot,
+                                                                uint32_t max_points) {
   const int64_t max_n = std::max<int64_t>(2, max_points);
   std::lock_guard<std::mutex> lock(reader_mu_);
   // rn: 1-based position in the session by seq; n: the session's count. A

@@ -1,14 +1,14 @@
 // The global map's rows: submap placements and the built map
-// (WriteTransaction::PlaceSubmap / PutGlobalMap, Store::GetGlobalMap /
+// (SqliteWriteTransaction::PlaceSubmap / PutGlobalMap, SqliteStore::GetGlobalMap /
 // ListPlacements). The map itself is built by service/global_map_builder.h.
 #include <cinttypes>
 #include <cstdio>
 #include <sstream>
 #include <string>
 
-#include "storage/pose_columns.h"
-#include "storage/sqlite.h"
-#include "storage/store.h"
+#include "storage/sqlite/pose_columns.h"
+#include "storage/sqlite/sqlite.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::storage {
 namespace {
@@ -48,8 +48,8 @@ StatusOr<std::vector<GlobalMapMember>> DecodeMembers(const std::string& text) {
 
 }  // namespace
 
-Status WriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
-                                     const geometry::Rigid3& T_map_submap) {
+Status SqliteWriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
+                                           const geometry::Rigid3& T_map_submap) {
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),
       "INSERT OR IGNORE INTO submap_placements (submap_id, merge_id, qw, qx, qy, qz, tx, ty, tz) "
@@ -60,7 +60,7 @@ Status WriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
   return q->Run();
 }
 
-Status WriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
+Status SqliteWriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),
       "INSERT OR REPLACE INTO global_map (id, version, built_ns, resolution, occupied, free, "
@@ -77,13 +77,13 @@ Status WriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
   return q->Run();
 }
 
-Status WriteTransaction::DeleteGlobalMap() {
+Status SqliteWriteTransaction::DeleteGlobalMap() {
   StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(), "DELETE FROM global_map");
   if (!q.ok()) return q.status();
   return q->Run();
 }
 
-StatusOr<GlobalMapRecord> Store::GetGlobalMap(bool with_data) {
+StatusOr<GlobalMapRecord> SqliteStore::GetGlobalMap(bool with_data) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(), with_data
@@ -112,7 +112,7 @@ StatusOr<GlobalMapRecord> Store::GetGlobalMap(bool with_data) {
   return map;
 }
 
-StatusOr<std::vector<SubmapPlacement>> Store::ListPlacements() {
+StatusOr<std::vector<SubmapPlacement>> SqliteStore::ListPlacements() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),

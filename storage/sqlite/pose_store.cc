@@ -1,12 +1,12 @@
-// Store::RecentPoses: where a robot was last (the web view's robots).
+// SqliteStore::RecentPoses: where a robot was last (the web view's robots).
 #include <Eigen/Geometry>
 
-#include "storage/sqlite.h"
-#include "storage/store.h"
+#include "storage/sqlite/sqlite.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::storage {
 
-StatusOr<std::vector<StampedPose>> Store::RecentPoses(int64_t session_id, int limit) {
+StatusOr<std::vector<StampedPose>> SqliteStore::RecentPoses(int64_t session_id, int limit) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   // UNIQUE (session_id, seq) is an index: this reads `limit` rows, whatever
   // the length of the session.

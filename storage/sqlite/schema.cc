@@ -1,11 +1,11 @@
-#include "storage/schema.h"
+#include "storage/sqlite/schema.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include "storage/sqlite.h"
+#include "storage/sqlite/sqlite.h"
 
 namespace mapd::storage {
 namespace {
@@ -139,7 +139,7 @@ const std::vector<const char*>& Migrations() {
         result  TEXT NOT NULL    -- ok, denied: ..., or the error
       );
       )sql",
-      // 3 -> 4: a scratch table for Store::ProbeWrite (empty between probes).
+      // 3 -> 4: a scratch table for SqliteStore::ProbeWrite (empty between probes).
       R"sql(
       CREATE TABLE write_probe (data BLOB NOT NULL);
       )sql",
@@ -317,7 +317,7 @@ Status ClaimDatabase(sqlite3* db, const std::string& path) {
     }
   }
   // A new database gives freed pages back to the file system (raw retention,
-  // WriteTransaction::DropRawObservations); on an existing one this is a
+  // SqliteWriteTransaction::DropRawObservations); on an existing one this is a
   // no-op. Before the first write below, or it is too late.
   MAPD_RETURN_IF_ERROR(Exec(db, "PRAGMA auto_vacuum=INCREMENTAL"));
   // Written every start: the first write, so a database mapd cannot write is

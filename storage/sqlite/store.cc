@@ -1,4 +1,4 @@
-#include "storage/store.h"
+#include "storage/sqlite/store.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,8 +10,8 @@
 #include <cstring>
 
 #include "storage/observation_codec.h"
-#include "storage/pose_columns.h"
-#include "storage/schema.h"
+#include "storage/sqlite/pose_columns.h"
+#include "storage/sqlite/schema.h"
 
 namespace mapd::storage {
 namespace {
@@ -29,32 +29,11 @@ Status PrepareInto(sqlite3* db, const char* sql, Statement* out) {
   return Status::Ok();
 }
 
-// Unknown text (a newer mapd's state) reads as refused: never in effect.
-MergeState ParseMergeState(const std::string& text) {
-  for (MergeState s : {MergeState::kProposed, MergeState::kAccepted, MergeState::kRejected}) {
-    if (text == MergeStateName(s)) return s;
-  }
-  return MergeState::kRefused;
-}
-
 }  // namespace
 
-const char* MergeStateName(MergeState state) {
-  switch (state) {
-    case MergeState::kProposed:
-      return "proposed";
-    case MergeState::kAccepted:
-      return "accepted";
-    case MergeState::kRejected:
-      return "rejected";
-    case MergeState::kRefused:
-      return "refused";
-  }
-  return "refused";
-}
-
-StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const StoreOptions& options) {
-  std::unique_ptr<Store> store(new Store());
+StatusOr<std::unique_ptr<SqliteStore>> SqliteStore::Open(const std::string& path,
+                                                         const StoreOptions& options) {
+  std::unique_ptr<SqliteStore> store(new SqliteStore());
   store->path_ = path;
   // A new database is the owner's only (0600) whatever the umask: it holds
   // the token hashes. SQLite gives its -wal and -shm files the same mode. (An
@@ -103,11 +82,11 @@ StatusOr<std::unique_ptr<Store>> Store::Open(const std::string& path, const Stor
   return store;
 }
 
-Store::~Store() {
+SqliteStore::~SqliteStore() {
   if (writer_) (void)Checkpoint();
 }
 
-Status Store::Prepare() {
+Status SqliteStore::Prepare() {
   sqlite3* w = writer_.get();
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "BEGIN IMMEDIATE", &begin_));
   MAPD_RETURN_IF_ERROR(PrepareInto(w, "COMMIT", &commit_));
@@ -174,18 +153,18 @@ Status Store::Prepare() {
   return Status::Ok();
 }
 
-StatusOr<std::unique_ptr<WriteTransaction>> Store::BeginWrite() {
+StatusOr<std::unique_ptr<WriteTransaction>> SqliteStore::BeginWrite() {
   MAPD_RETURN_IF_ERROR(begin_.Run());
-  return std::unique_ptr<WriteTransaction>(new WriteTransaction(this));
+  return std::unique_ptr<WriteTransaction>(new SqliteWriteTransaction(this));
 }
 
-Status Store::Checkpoint() {
+Status SqliteStore::Checkpoint() {
   // Freed pages (old snapshots, retention) leave the file first.
   MAPD_RETURN_IF_ERROR(Exec(writer_.get(), "PRAGMA incremental_vacuum"));
   return Exec(writer_.get(), "PRAGMA wal_checkpoint(TRUNCATE)");
 }
 
-Status Store::ProbeWrite() {
+Status SqliteStore::ProbeWrite() {
   // A nearly full file system can take a probe (in WAL space a checkpoint
   // freed, or on its last blocks) and fail the next batch again: writes are
   // declared possible only with real room left.
@@ -215,11 +194,11 @@ Status Store::ProbeWrite() {
 // ---------------------------------------------------------------------------
 // WriteTransaction
 
-WriteTransaction::~WriteTransaction() {
+SqliteWriteTransaction::~SqliteWriteTransaction() {
   if (open_) (void)store_->rollback_.Run();
 }
 
-StatusOr<int64_t> WriteTransaction::RobotId(const std::string& name, int64_t now_ns) {
+StatusOr<int64_t> SqliteWriteTransaction::RobotId(const std::string& name, int64_t now_ns) {
   if (auto it = new_robots_.find(name); it != new_robots_.end()) return it->second;
   {
     std::lock_guard<std::mutex> lock(store_->cache_mu_);
@@ -232,9 +211,9 @@ StatusOr<int64_t> WriteTransaction::RobotId(const std::string& name, int64_t now
   return id;
 }
 
-StatusOr<SessionFrame> WriteTransaction::Session(int64_t robot_id, const std::string& name,
-                                                 FrameKind kind, int64_t now_ns) {
-  const std::string key = Store::SessionKey(robot_id, name);
+StatusOr<SessionFrame> SqliteWriteTransaction::Session(int64_t robot_id, const std::string& name,
+                                                       FrameKind kind, int64_t now_ns) {
+  const std::string key = SqliteStore::SessionKey(robot_id, name);
   if (auto it = new_sessions_.find(key); it != new_sessions_.end()) return it->second;
   {
     std::lock_guard<std::mutex> lock(store_->cache_mu_);
@@ -254,7 +233,7 @@ StatusOr<SessionFrame> WriteTransaction::Session(int64_t robot_id, const std::st
   return f;
 }
 
-StatusOr<InsertResult> WriteTransaction::InsertObservation(const NewObservation& obs) {
+StatusOr<InsertResult> SqliteWriteTransaction::InsertObservation(const NewObservation& obs) {
   StatusOr<int64_t> robot_id = RobotId(obs.robot, obs.received_ns);
   if (!robot_id.ok()) return robot_id.status();
   StatusOr<SessionFrame> frame = Session(*robot_id, obs.session, obs.frame_kind, obs.received_ns);
@@ -299,7 +278,7 @@ StatusOr<InsertResult> WriteTransaction::InsertObservation(const NewObservation&
   return result;
 }
 
-Status WriteTransaction::UpsertFused(const FusedRow& r) {
+Status SqliteWriteTransaction::UpsertFused(const FusedRow& r) {
   Statement& s = store_->upsert_fused_;
   s.Bind(1, static_cast<int64_t>(r.id)).Bind(2, static_cast<int64_t>(r.kind));
   s.Bind(3, r.segment.a.x())
@@ -312,19 +291,19 @@ Status WriteTransaction::UpsertFused(const FusedRow& r) {
   return s.Run();
 }
 
-Status WriteTransaction::DeleteFused(uint64_t id) {
+Status SqliteWriteTransaction::DeleteFused(uint64_t id) {
   store_->delete_fused_.Bind(1, static_cast<int64_t>(id));
   return store_->delete_fused_.Run();
 }
 
-std::vector<int64_t> WriteTransaction::tied_session_ids() const {
+std::vector<int64_t> SqliteWriteTransaction::tied_session_ids() const {
   std::vector<int64_t> ids;
   for (const auto& [session_id, T] : new_ties_) ids.push_back(session_id);
   std::sort(ids.begin(), ids.end());
   return ids;
 }
 
-Status WriteTransaction::Commit() {
+Status SqliteWriteTransaction::Commit() {
   for (const auto& [robot_id, d] : robot_deltas_) {
     Statement& s = store_->update_robot_;
     s.Bind(1, robot_id).Bind(2, static_cast<int64_t>(d.batches));
@@ -352,7 +331,8 @@ Status WriteTransaction::Commit() {
   return Status::Ok();
 }
 
-StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before_ns, int limit) {
+StatusOr<uint64_t> SqliteWriteTransaction::DropRawObservations(int64_t received_before_ns,
+                                                               int limit) {
   sqlite3* w = store_->writer_.get();
   // Only what every kept snapshot already reflects (so either can be
   // replayed from), only of sessions whose tie those snapshots reflect, and
@@ -374,8 +354,8 @@ StatusOr<uint64_t> WriteTransaction::DropRawObservations(int64_t received_before
   return dropped;
 }
 
-Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep,
-                                        SnapshotParts parts) {
+Status SqliteWriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep,
+                                              SnapshotParts parts) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
       w,
@@ -408,7 +388,7 @@ Status WriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep
   return prune->Run();
 }
 
-Status WriteTransaction::InsertSnapshotPart(int64_t key, int index, std::string_view bytes) {
+Status SqliteWriteTransaction::InsertSnapshotPart(int64_t key, int index, std::string_view bytes) {
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),
       "INSERT INTO fusion_snapshot_parts (parts_key, part, bytes) VALUES (?1, ?2, ?3)");
@@ -417,7 +397,7 @@ Status WriteTransaction::InsertSnapshotPart(int64_t key, int index, std::string_
   return q->Run();
 }
 
-StatusOr<int> WriteTransaction::DeleteUnusedSnapshotParts(int limit) {
+StatusOr<int> SqliteWriteTransaction::DeleteUnusedSnapshotParts(int limit) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
       w,
@@ -430,26 +410,16 @@ StatusOr<int> WriteTransaction::DeleteUnusedSnapshotParts(int limit) {
   return sqlite3_changes(w);
 }
 
-std::vector<std::string_view> SnapshotPartsOf(const FusionSnapshot& snapshot, size_t part_bytes) {
-  std::vector<std::string_view> out;
-  for (const std::string* bytes : {&snapshot.state, &snapshot.plane_state}) {
-    const std::string_view all(*bytes);
-    for (size_t at = 0; at < all.size(); at += part_bytes)
-      out.push_back(all.substr(at, part_bytes));
-  }
-  return out;
-}
-
 // ---------------------------------------------------------------------------
 // Submaps and merges (rare, large writes: statements are prepared per call).
 
-StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
+StatusOr<int64_t> SqliteWriteTransaction::InsertSubmap(const NewSubmap& submap) {
   const SubmapMeta& m = submap.meta;
   StatusOr<int64_t> robot_id = RobotId(m.robot, m.created_ns);
   if (!robot_id.ok()) return robot_id.status();
   int64_t session_id = 0;
   if (!submap.session.empty()) {
-    const std::string key = Store::SessionKey(*robot_id, submap.session);
+    const std::string key = SqliteStore::SessionKey(*robot_id, submap.session);
     if (auto it = new_sessions_.find(key); it != new_sessions_.end()) {
       session_id = it->second.session_id;
     } else {
@@ -496,7 +466,7 @@ StatusOr<int64_t> WriteTransaction::InsertSubmap(const NewSubmap& submap) {
   return sqlite3_last_insert_rowid(w);
 }
 
-Status WriteTransaction::DeleteSubmap(int64_t id) {
+Status SqliteWriteTransaction::DeleteSubmap(int64_t id) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> pinned = Statement::Prepare(
       w,
@@ -553,7 +523,7 @@ Status DecodeMatched(std::string_view blob, int64_t merge_id,
 
 }  // namespace
 
-StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
+StatusOr<MergeIds> SqliteWriteTransaction::RecordMerge(const NewMerge& merge) {
   const MergeRecord& r = merge.record;
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
@@ -614,8 +584,8 @@ StatusOr<MergeIds> WriteTransaction::RecordMerge(const NewMerge& merge) {
   return ids;
 }
 
-Status WriteTransaction::DecideMerge(int64_t id, MergeState state, const std::string& who,
-                                     int64_t now_ns, const std::string& reason) {
+Status SqliteWriteTransaction::DecideMerge(int64_t id, MergeState state, const std::string& who,
+                                           int64_t now_ns, const std::string& reason) {
   if (state != MergeState::kAccepted && state != MergeState::kRejected) {
     return Status::InvalidArgument("a merge is decided as accepted or rejected only");
   }
@@ -643,7 +613,7 @@ Status WriteTransaction::DecideMerge(int64_t id, MergeState state, const std::st
   return q->Run();
 }
 
-Status WriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
+Status SqliteWriteTransaction::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
   if (new_ties_.count(session_id) != 0) {
     return Status::FailedPrecondition("session " + std::to_string(session_id) + " is tied already");
   }
@@ -702,7 +672,7 @@ Status ForEachObservationRow(Statement& q,
 
 }  // namespace
 
-Status Store::ForEachObservation(const std::function<Status(const StoredObservation&)>& fn) {
+Status SqliteStore::ForEachObservation(const std::function<Status(const StoredObservation&)>& fn) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), std::string(kObservationColumns) + "ORDER BY o.id");
@@ -710,14 +680,15 @@ Status Store::ForEachObservation(const std::function<Status(const StoredObservat
   return ForEachObservationRow(*q, fn);
 }
 
-Status Store::ForEachObservationBetween(int64_t after_id, int64_t through_id,
-                                        const std::function<Status(const StoredObservation&)>& fn) {
+Status SqliteStore::ForEachObservationBetween(
+    int64_t after_id, int64_t through_id,
+    const std::function<Status(const StoredObservation&)>& fn) {
   return ForEachObservationWhere("", after_id, through_id, fn);
 }
 
-Status Store::ForEachObservationWhere(const std::string& condition, int64_t after_id,
-                                      int64_t through_id,
-                                      const std::function<Status(const StoredObservation&)>& fn) {
+Status SqliteStore::ForEachObservationWhere(
+    const std::string& condition, int64_t after_id, int64_t through_id,
+    const std::function<Status(const StoredObservation&)>& fn) {
   // Pages of rows (keyset: the next page starts after the last id seen), each
   // read under the reader lock and handed to `fn` after it is released: a long
   // replay (recovery, a tie of a large session) fuses for seconds, and other
@@ -749,7 +720,7 @@ Status Store::ForEachObservationWhere(const std::string& condition, int64_t afte
   }
 }
 
-StatusOr<int64_t> Store::NewestObservationId() {
+StatusOr<int64_t> SqliteStore::NewestObservationId() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), "SELECT coalesce(max(id), 0) FROM observations");
@@ -759,7 +730,7 @@ StatusOr<int64_t> Store::NewestObservationId() {
   return q->ColumnInt(0);
 }
 
-StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
+StatusOr<FusionSnapshot> SqliteStore::LatestSnapshot(int skip) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
@@ -811,7 +782,7 @@ StatusOr<FusionSnapshot> Store::LatestSnapshot(int skip) {
   return snap;
 }
 
-Status Store::ForEachObservationOfSessions(
+Status SqliteStore::ForEachObservationOfSessions(
     const std::vector<int64_t>& session_ids, int64_t max_id,
     const std::function<Status(const StoredObservation&)>& fn) {
   if (session_ids.empty()) return Status::Ok();
@@ -820,7 +791,7 @@ Status Store::ForEachObservationOfSessions(
   return ForEachObservationWhere("o.session_id IN (" + in + ")", 0, max_id, fn);
 }
 
-StatusOr<std::vector<SessionFrame>> Store::ListSessions() {
+StatusOr<std::vector<SessionFrame>> SqliteStore::ListSessions() {
   std::lock_guard<std::mutex> lock(cache_mu_);
   std::vector<SessionFrame> out;
   out.reserve(sessions_.size());
@@ -828,7 +799,7 @@ StatusOr<std::vector<SessionFrame>> Store::ListSessions() {
   return out;
 }
 
-StatusOr<SessionFrame> Store::GetSession(int64_t session_id) const {
+StatusOr<SessionFrame> SqliteStore::GetSession(int64_t session_id) const {
   std::lock_guard<std::mutex> lock(cache_mu_);
   for (const auto& [key, f] : sessions_) {
     if (f.session_id == session_id) return f;
@@ -836,8 +807,8 @@ StatusOr<SessionFrame> Store::GetSession(int64_t session_id) const {
   return Status::NotFound("no session with id " + std::to_string(session_id));
 }
 
-StatusOr<SessionFrame> Store::FindSession(const std::string& robot,
-                                          const std::string& session) const {
+StatusOr<SessionFrame> SqliteStore::FindSession(const std::string& robot,
+                                                const std::string& session) const {
   std::lock_guard<std::mutex> lock(cache_mu_);
   auto r = robot_ids_.find(robot);
   if (r != robot_ids_.end()) {
@@ -873,7 +844,7 @@ SubmapMeta ColumnSubmap(const Statement& q) {
 
 }  // namespace
 
-StatusOr<std::vector<SubmapMeta>> Store::ListSubmaps(const std::string& robot) {
+StatusOr<std::vector<SubmapMeta>> SqliteStore::ListSubmaps(const std::string& robot) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(), std::string(kSubmapColumns) + "WHERE ?1 = '' OR r.name = ?1 ORDER BY s.id");
@@ -888,7 +859,7 @@ StatusOr<std::vector<SubmapMeta>> Store::ListSubmaps(const std::string& robot) {
   }
 }
 
-StatusOr<SubmapMeta> Store::GetSubmap(int64_t id) {
+StatusOr<SubmapMeta> SqliteStore::GetSubmap(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), std::string(kSubmapColumns) + "WHERE s.id = ?1");
@@ -900,7 +871,7 @@ StatusOr<SubmapMeta> Store::GetSubmap(int64_t id) {
   return ColumnSubmap(*q);
 }
 
-StatusOr<std::string> Store::GetSubmapData(int64_t id) {
+StatusOr<std::string> SqliteStore::GetSubmapData(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), "SELECT data FROM submaps WHERE id = ?1");
@@ -912,7 +883,7 @@ StatusOr<std::string> Store::GetSubmapData(int64_t id) {
   return std::string(q->ColumnBlob(0));
 }
 
-StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
+StatusOr<std::vector<MergeRecord>> SqliteStore::ListMerges() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(),
@@ -969,7 +940,7 @@ StatusOr<std::vector<MergeRecord>> Store::ListMerges() {
   }
 }
 
-StatusOr<MergeRecord> Store::GetMerge(int64_t id) {
+StatusOr<MergeRecord> SqliteStore::GetMerge(int64_t id) {
   StatusOr<std::vector<MergeRecord>> all = ListMerges();
   if (!all.ok()) return all.status();
   for (MergeRecord& r : *all) {
@@ -978,7 +949,7 @@ StatusOr<MergeRecord> Store::GetMerge(int64_t id) {
   return Status::NotFound("no merge with id " + std::to_string(id));
 }
 
-StatusOr<std::vector<FusedRow>> Store::LoadFused() {
+StatusOr<std::vector<FusedRow>> SqliteStore::LoadFused() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
@@ -1004,7 +975,7 @@ StatusOr<std::vector<FusedRow>> Store::LoadFused() {
   }
 }
 
-StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
+StatusOr<std::vector<RobotSummary>> SqliteStore::ListRobots() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),
@@ -1031,7 +1002,7 @@ StatusOr<std::vector<RobotSummary>> Store::ListRobots() {
   }
 }
 
-StatusOr<StoreCounts> Store::Counts() {
+StatusOr<StoreCounts> SqliteStore::Counts() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(),
@@ -1053,12 +1024,12 @@ StatusOr<StoreCounts> Store::Counts() {
   return c;
 }
 
-std::string Store::RobotName(int64_t robot_id) const {
+std::string SqliteStore::RobotName(int64_t robot_id) const {
   std::lock_guard<std::mutex> lock(cache_mu_);
   auto it = robot_names_.find(robot_id);
   return it == robot_names_.end() ? std::string() : it->second;
 }
 
-uint64_t Store::SizeBytes() const { return FileSize(path_) + FileSize(path_ + "-wal"); }
+uint64_t SqliteStore::SizeBytes() const { return FileSize(path_) + FileSize(path_ + "-wal"); }
 
 }  // namespace mapd::storage

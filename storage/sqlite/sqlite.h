@@ -1,7 +1,7 @@
 // Thin RAII wrappers over the SQLite C API (SQLiteCpp style, without exceptions).
 // Every handle is owned by a unique_ptr with a deleter; failures come back as Status.
-#ifndef MAPD_STORAGE_SQLITE_H_
-#define MAPD_STORAGE_SQLITE_H_
+#ifndef MAPD_STORAGE_SQLITE_SQLITE_H_
+#define MAPD_STORAGE_SQLITE_SQLITE_H_
 
 #include <sqlite3.h>
 
@@ -74,4 +74,4 @@ Status SqliteError(sqlite3* db, std::string_view what);
 
 }  // namespace mapd::storage
 
-#endif  // MAPD_STORAGE_SQLITE_H_
+#endif  // MAPD_STORAGE_SQLITE_SQLITE_H_

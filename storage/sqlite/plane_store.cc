@@ -4,7 +4,7 @@
 // prepared per call.
 #include <cstring>
 
-#include "storage/store.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::storage {
 namespace {
@@ -34,7 +34,7 @@ Status DecodeBoundary(std::string_view blob, uint64_t id, std::vector<Eigen::Vec
 
 }  // namespace
 
-Status WriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
+Status SqliteWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),
       "INSERT OR REPLACE INTO fused_planes (id, nx, ny, nz, offset, boundary, area, z_min, z_max, "
@@ -51,7 +51,7 @@ Status WriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
   return q->Run();
 }
 
-Status WriteTransaction::DeleteFusedPlane(uint64_t id) {
+Status SqliteWriteTransaction::DeleteFusedPlane(uint64_t id) {
   StatusOr<Statement> q =
       Statement::Prepare(store_->writer_.get(), "DELETE FROM fused_planes WHERE id = ?1");
   if (!q.ok()) return q.status();
@@ -59,7 +59,7 @@ Status WriteTransaction::DeleteFusedPlane(uint64_t id) {
   return q->Run();
 }
 
-StatusOr<std::vector<FusedPlaneRow>> Store::LoadFusedPlanes() {
+StatusOr<std::vector<FusedPlaneRow>> SqliteStore::LoadFusedPlanes() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(
       reader_.get(),

@@ -2,7 +2,7 @@
 // Writes run in the writer's transactions (one writer, as for everything
 // else); reads on the reader connection.
 #include "common/text_escape.h"
-#include "storage/store.h"
+#include "storage/sqlite/store.h"
 
 namespace mapd::storage {
 namespace {
@@ -27,7 +27,7 @@ TokenRecord ColumnToken(const Statement& q) {
 
 }  // namespace
 
-StatusOr<int64_t> WriteTransaction::InsertToken(const TokenRecord& t) {
+StatusOr<int64_t> SqliteWriteTransaction::InsertToken(const TokenRecord& t) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> exists = Statement::Prepare(w, "SELECT id FROM tokens WHERE name = ?1");
   if (!exists.ok()) return exists.status();
@@ -49,7 +49,7 @@ StatusOr<int64_t> WriteTransaction::InsertToken(const TokenRecord& t) {
   return static_cast<int64_t>(sqlite3_last_insert_rowid(w));
 }
 
-Status WriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
+Status SqliteWriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q =
       Statement::Prepare(w, "SELECT coalesce(revoked_ns, 0) FROM tokens WHERE id = ?1");
@@ -66,7 +66,7 @@ Status WriteTransaction::RevokeToken(int64_t id, int64_t now_ns) {
   return u->Run();
 }
 
-Status WriteTransaction::AppendAudit(const AuditEntry& e) {
+Status SqliteWriteTransaction::AppendAudit(const AuditEntry& e) {
   StatusOr<Statement> q = Statement::Prepare(store_->writer_.get(),
                                              "INSERT INTO audit_log (time_ns, who, role, action, "
                                              "target, result, peer, credential) "
@@ -85,7 +85,7 @@ Status WriteTransaction::AppendAudit(const AuditEntry& e) {
   return q->Run();
 }
 
-StatusOr<int64_t> WriteTransaction::TrimDeniedAudit(int64_t keep) {
+StatusOr<int64_t> SqliteWriteTransaction::TrimDeniedAudit(int64_t keep) {
   sqlite3* w = store_->writer_.get();
   StatusOr<Statement> q = Statement::Prepare(
       w,
@@ -97,7 +97,7 @@ StatusOr<int64_t> WriteTransaction::TrimDeniedAudit(int64_t keep) {
   return static_cast<int64_t>(sqlite3_changes(w));
 }
 
-StatusOr<TokenRecord> Store::GetToken(int64_t id) {
+StatusOr<TokenRecord> SqliteStore::GetToken(int64_t id) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "WHERE id = ?1");
@@ -109,7 +109,7 @@ StatusOr<TokenRecord> Store::GetToken(int64_t id) {
   return ColumnToken(*q);
 }
 
-StatusOr<std::vector<TokenRecord>> Store::ListTokens() {
+StatusOr<std::vector<TokenRecord>> SqliteStore::ListTokens() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q =
       Statement::Prepare(reader_.get(), std::string(kTokenColumns) + "ORDER BY id");
@@ -123,7 +123,7 @@ StatusOr<std::vector<TokenRecord>> Store::ListTokens() {
   }
 }
 
-StatusOr<bool> Store::AnyTokenEver() {
+StatusOr<bool> SqliteStore::AnyTokenEver() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(reader_.get(), "SELECT EXISTS (SELECT 1 FROM tokens)");
   if (!q.ok()) return q.status();
@@ -132,7 +132,7 @@ StatusOr<bool> Store::AnyTokenEver() {
   return *row && q->ColumnInt(0) != 0;
 }
 
-StatusOr<std::vector<AuditEntry>> Store::ListAudit(int limit) {
+StatusOr<std::vector<AuditEntry>> SqliteStore::ListAudit(int limit) {
   std::lock_guard<std::mutex> lock(reader_mu_);
   StatusOr<Statement> q = Statement::Prepare(reader_.get(),
                                              "SELECT id, time_ns, who, role, action, target, "

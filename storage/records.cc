@@ -1,0 +1,38 @@
+// The backend-neutral helpers of the storage contract (storage/*_store.h).
+#include "storage/snapshot_store.h"
+#include "storage/submap_store.h"
+
+namespace mapd::storage {
+
+const char* MergeStateName(MergeState state) {
+  switch (state) {
+    case MergeState::kProposed:
+      return "proposed";
+    case MergeState::kAccepted:
+      return "accepted";
+    case MergeState::kRejected:
+      return "rejected";
+    case MergeState::kRefused:
+      return "refused";
+  }
+  return "refused";
+}
+
+MergeState ParseMergeState(std::string_view text) {
+  for (MergeState s : {MergeState::kProposed, MergeState::kAccepted, MergeState::kRejected}) {
+    if (text == MergeStateName(s)) return s;
+  }
+  return MergeState::kRefused;
+}
+
+std::vector<std::string_view> SnapshotPartsOf(const FusionSnapshot& snapshot, size_t part_bytes) {
+  std::vector<std::string_view> out;
+  for (const std::string* bytes : {&snapshot.state, &snapshot.plane_state}) {
+    const std::string_view all(*bytes);
+    for (size_t at = 0; at < all.size(); at += part_bytes)
+      out.push_back(all.substr(at, part_bytes));
+  }
+  return out;
+}
+
+}  // namespace mapd::storage
