@@ -15,14 +15,16 @@
 # prometheus, whose promtool checks /metrics (tests/web/web_server_test.cc),
 # python3-venv, in which the Python client's test pip-installs it, and
 # haproxy, which the rapid-reset test puts in front of mapd with
-# deploy/haproxy.cfg (tests/service/rapid_reset_test.cc).
+# deploy/haproxy.cfg (tests/service/rapid_reset_test.cc), and postgresql-15,
+# whose server the PostgreSQL storage tests start in a temporary directory
+# (tests/common/postgres.h; libpq-dev, the client library, is a build need).
 set -euo pipefail
 
 # What mapd and mapctl need without voxel merging (--demo stops here).
 PACKAGES=(
   build-essential cmake pkg-config
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libeigen3-dev libsqlite3-dev liboctomap-dev
+  libeigen3-dev libsqlite3-dev libpq-dev liboctomap-dev
   libcairo2-dev nlohmann-json3-dev libcli11-dev libcpp-httplib-dev
 )
 if [ "${1:-}" != "--demo" ]; then
@@ -30,7 +32,7 @@ if [ "${1:-}" != "--demo" ]; then
              python3-grpcio python3-protobuf python3-pytest)
 fi
 if [ "${1:-}" != "--build-only" ] && [ "${1:-}" != "--demo" ]; then
-  PACKAGES+=(libpcl-dev chromium openssl prometheus python3-venv haproxy)
+  PACKAGES+=(libpcl-dev chromium openssl prometheus python3-venv haproxy postgresql-15)
 fi
 if [ "${1:-}" = "--ci" ]; then
   PACKAGES+=(clang-14 libclang-rt-14-dev lld ninja-build clang-format-14 clang-tidy-14 systemd)

@@ -152,12 +152,6 @@ class ObservationWriter {
   virtual int64_t tie_seq() const = 0;
   // The sessions TieSession() tied in this transaction, ascending.
   virtual std::vector<int64_t> tied_session_ids() const = 0;
-  // Raw retention: deletes up to `limit` of the oldest observations received
-  // before `received_before_ns` that every stored snapshot reflects (never
-  // one of a session not tied, or tied after a snapshot, and never the newest
-  // observation), then returns the freed space where the backend can.
-  // Returns how many were deleted.
-  virtual StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit) = 0;
 };
 
 }  // namespace mapd::storage

@@ -69,6 +69,12 @@ class SnapshotWriter {
   // snapshot's, or those of one a stop or crash interrupted); returns how many.
   // Not while a snapshot's parts are being written: they are not named yet.
   virtual StatusOr<int> DeleteUnusedSnapshotParts(int limit) = 0;
+  // Raw retention, which snapshots make possible: deletes up to `limit` of
+  // the oldest observations received before `received_before_ns` that every
+  // stored snapshot reflects (never one of a session not tied, or tied after
+  // a snapshot, and never the newest observation, so ids keep growing), then
+  // returns the freed space where the backend can. Returns how many.
+  virtual StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit) = 0;
 };
 
 }  // namespace mapd::storage

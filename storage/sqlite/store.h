@@ -41,9 +41,6 @@ class SqliteWriteTransaction final : public WriteTransaction {
   bool ties_sessions() const override { return !new_ties_.empty(); }
   int64_t tie_seq() const override { return tie_seq_; }
   std::vector<int64_t> tied_session_ids() const override;
-  // Also returns the freed pages to the file system (databases made with
-  // auto_vacuum=INCREMENTAL; see ClaimDatabase).
-  StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit) override;
   // FusedMapWriter
   Status UpsertFused(const FusedRow& row) override;
   Status DeleteFused(uint64_t id) override;
@@ -69,6 +66,9 @@ class SqliteWriteTransaction final : public WriteTransaction {
                         SnapshotParts parts = {}) override;
   Status InsertSnapshotPart(int64_t key, int index, std::string_view bytes) override;
   StatusOr<int> DeleteUnusedSnapshotParts(int limit) override;
+  // Also returns the freed pages to the file system (databases made with
+  // auto_vacuum=INCREMENTAL; see ClaimDatabase).
+  StatusOr<uint64_t> DropRawObservations(int64_t received_before_ns, int limit) override;
 
   Status Commit() override;
 

@@ -1,0 +1,455 @@
+#include "storage/postgres/observation_log.h"
+
+#include <algorithm>
+
+#include "storage/observation_codec.h"
+#include "storage/postgres/schema.h"
+
+namespace mapd::storage {
+namespace {
+
+// The seven pose columns as parameters, and back.
+void AddPose(PgParams& p, const geometry::Rigid3& T) {
+  p.Double(T.rotation.w()).Double(T.rotation.x()).Double(T.rotation.y()).Double(T.rotation.z());
+  p.Double(T.translation.x()).Double(T.translation.y()).Double(T.translation.z());
+}
+geometry::Rigid3 PoseAt(const PgResult& r, int row, int first) {
+  geometry::Rigid3 T;
+  T.rotation = Eigen::Quaterniond(r.Double(row, first), r.Double(row, first + 1),
+                                  r.Double(row, first + 2), r.Double(row, first + 3));
+  T.translation = {r.Double(row, first + 4), r.Double(row, first + 5), r.Double(row, first + 6)};
+  return T;
+}
+
+constexpr const char* kObservationColumns =
+    "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
+    "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.map = o.map AND s.id = "
+    "o.session_id WHERE o.map = $1 AND o.id > $2 AND o.id <= $3 ";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// PgWriteScope
+
+PgWriteScope::PgWriteScope(PgConnection* conn) : conn_(conn), begun_(conn->Exec("BEGIN")) {
+  open_ = begun_.ok();
+}
+
+PgWriteScope::~PgWriteScope() {
+  if (open_) (void)conn_->Exec("ROLLBACK");
+}
+
+Status PgWriteScope::Commit() {
+  if (!open_) return Status::FailedPrecondition("the transaction is not open");
+  Status s = conn_->Exec("COMMIT");
+  // A failed COMMIT ends the transaction too (PostgreSQL rolls it back).
+  open_ = false;
+  return s;
+}
+
+// ---------------------------------------------------------------------------
+// PgObservationLog
+
+StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::string& conninfo,
+                                                                   const std::string& map_id) {
+  std::unique_ptr<PgObservationLog> log(new PgObservationLog());
+  log->map_id_ = map_id;
+  StatusOr<PgConnection> writer = PgConnection::Connect(conninfo);
+  if (!writer.ok()) return writer.status();
+  log->writer_ = std::move(writer).value();
+  MAPD_RETURN_IF_ERROR(MigratePostgres(log->writer_));
+  MAPD_RETURN_IF_ERROR(EnsureMapPartitions(log->writer_, map_id));
+  StatusOr<PgConnection> reader = PgConnection::Connect(conninfo);
+  if (!reader.ok()) return reader.status();
+  log->reader_ = std::move(reader).value();
+  MAPD_RETURN_IF_ERROR(log->LoadCaches());
+  return log;
+}
+
+Status PgObservationLog::LoadCaches() {
+  PgParams map;
+  map.Text(map_id_);
+  StatusOr<PgResult> robots = writer_.Query("SELECT id, name FROM robots WHERE map = $1", map);
+  if (!robots.ok()) return robots.status();
+  StatusOr<PgResult> sessions = writer_.Query(
+      "SELECT id, robot_id, name, frame_kind, tied, qw, qx, qy, qz, tx, ty, tz, "
+      "tied_through_observation, tie_seq FROM sessions WHERE map = $1",
+      map);
+  if (!sessions.ok()) return sessions.status();
+  StatusOr<PgResult> newest =
+      writer_.Query("SELECT coalesce(max(id), 0) FROM observations WHERE map = $1", map);
+  if (!newest.ok()) return newest.status();
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  for (int i = 0; i < robots->rows(); ++i) {
+    robot_ids_[robots->Text(i, 1)] = robots->Int(i, 0);
+    robot_names_[robots->Int(i, 0)] = robots->Text(i, 1);
+  }
+  for (int i = 0; i < sessions->rows(); ++i) {
+    SessionFrame f;
+    f.session_id = sessions->Int(i, 0);
+    f.robot_id = sessions->Int(i, 1);
+    f.kind = static_cast<FrameKind>(sessions->Int(i, 3));
+    f.tied = sessions->Int(i, 4) != 0;
+    if (f.tied) f.T_map_frame = PoseAt(*sessions, i, 5);
+    f.tied_through_observation = sessions->Int(i, 12);
+    f.tie_seq = sessions->Int(i, 13);
+    max_tie_seq_ = std::max(max_tie_seq_, f.tie_seq);
+    sessions_[SessionKey(f.robot_id, sessions->Text(i, 2))] = f;
+  }
+  newest_observation_ = newest->Int(0, 0);
+  return Status::Ok();
+}
+
+std::unique_ptr<PgObservationWriter> PgObservationLog::NewWriter() {
+  return std::unique_ptr<PgObservationWriter>(new PgObservationWriter(this));
+}
+
+Status PgObservationLog::ForEachWhere(const std::string& condition,
+                                      const std::vector<int64_t>& session_ids, int64_t after_id,
+                                      int64_t through_id, const ObservationFn& fn) {
+  // Keyset pages, each read under the reader lock and handed to `fn` after it
+  // is released (as in the SQLite backend: a replay fuses for seconds, and
+  // other readers must not wait for it).
+  constexpr int64_t kPageRows = 1024;
+  const std::string sql = std::string(kObservationColumns) + condition + " ORDER BY o.id LIMIT $4";
+  std::vector<StoredObservation> page;
+  for (int64_t last = after_id;;) {
+    page.clear();
+    {
+      std::lock_guard<std::mutex> lock(reader_mu_);
+      PgParams p;
+      p.Text(map_id_).Int(last).Int(through_id).Int(kPageRows);
+      if (!condition.empty()) p.IntArray(session_ids);
+      StatusOr<PgResult> r = reader_.Query(sql, p);
+      if (!r.ok()) return r.status();
+      for (int i = 0; i < r->rows(); ++i) {
+        StoredObservation obs;
+        obs.id = r->Int(i, 0);
+        obs.robot_id = r->Int(i, 1);
+        obs.session_id = r->Int(i, 2);
+        obs.seq = static_cast<uint64_t>(r->Int(i, 3));
+        obs.stamp_ns = r->Int(i, 4);
+        obs.features.T_frame_sensor = PoseAt(*r, i, 5);
+        Status s = DecodeFeatures(r->Bytes(i, 12), &obs.features);
+        if (!s.ok())
+          return Status(s.code(), "observation " + std::to_string(obs.id) + ": " + s.message());
+        page.push_back(std::move(obs));
+      }
+    }
+    for (const StoredObservation& obs : page) {
+      last = obs.id;
+      MAPD_RETURN_IF_ERROR(fn(obs));
+    }
+    if (static_cast<int64_t>(page.size()) < kPageRows) return Status::Ok();
+  }
+}
+
+Status PgObservationLog::ForEachObservation(const ObservationFn& fn) {
+  return ForEachWhere("", {}, 0, INT64_MAX, fn);
+}
+
+Status PgObservationLog::ForEachObservationBetween(int64_t after_id, int64_t through_id,
+                                                   const ObservationFn& fn) {
+  return ForEachWhere("", {}, after_id, through_id, fn);
+}
+
+Status PgObservationLog::ForEachObservationOfSessions(const std::vector<int64_t>& session_ids,
+                                                      int64_t max_id, const ObservationFn& fn) {
+  return ForEachWhere("AND o.session_id = ANY($5)", session_ids, 0, max_id, fn);
+}
+
+StatusOr<int64_t> PgObservationLog::NewestObservationId() {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  return newest_observation_;
+}
+
+StatusOr<std::vector<SessionFrame>> PgObservationLog::ListSessions() {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  std::vector<SessionFrame> out;
+  out.reserve(sessions_.size());
+  for (const auto& [key, f] : sessions_) out.push_back(f);
+  return out;
+}
+
+StatusOr<SessionFrame> PgObservationLog::GetSession(int64_t session_id) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  for (const auto& [key, f] : sessions_) {
+    if (f.session_id == session_id) return f;
+  }
+  return Status::NotFound("no session " + std::to_string(session_id));
+}
+
+StatusOr<SessionFrame> PgObservationLog::FindSession(const std::string& robot,
+                                                     const std::string& session) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  auto r = robot_ids_.find(robot);
+  if (r != robot_ids_.end()) {
+    auto it = sessions_.find(SessionKey(r->second, session));
+    if (it != sessions_.end()) return it->second;
+  }
+  return Status::NotFound("robot '" + robot + "' has no session '" + session + "'");
+}
+
+StatusOr<std::vector<RobotSummary>> PgObservationLog::ListRobots() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  PgParams p;
+  p.Text(map_id_);
+  StatusOr<PgResult> r = reader_.Query(
+      "SELECT r.id, r.name, r.first_seen_ns, r.last_seen_ns, r.batches, r.features, "
+      "count(s.id), coalesce(bool_and(s.tied), false) FROM robots r LEFT JOIN sessions s ON "
+      "s.map = r.map AND s.robot_id = r.id WHERE r.map = $1 AND r.name NOT LIKE '@%' "
+      "GROUP BY r.map, r.id ORDER BY r.name COLLATE \"C\"",
+      p);
+  if (!r.ok()) return r.status();
+  std::vector<RobotSummary> out;
+  for (int i = 0; i < r->rows(); ++i) {
+    RobotSummary s;
+    s.id = r->Int(i, 0);
+    s.name = r->Text(i, 1);
+    s.first_seen_ns = r->Int(i, 2);
+    s.last_seen_ns = r->Int(i, 3);
+    s.batches = static_cast<uint64_t>(r->Int(i, 4));
+    s.features = static_cast<uint64_t>(r->Int(i, 5));
+    s.sessions = static_cast<uint32_t>(r->Int(i, 6));
+    s.all_sessions_tied = r->Int(i, 7) != 0;
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+std::string PgObservationLog::RobotName(int64_t robot_id) const {
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  auto it = robot_names_.find(robot_id);
+  return it == robot_names_.end() ? "" : it->second;
+}
+
+StatusOr<std::vector<StampedPose>> PgObservationLog::RecentPoses(int64_t session_id, int limit) {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  PgParams p;
+  p.Text(map_id_).Int(session_id).Int(limit);
+  // UNIQUE (map, session_id, seq) is an index: `limit` rows whatever the session's length.
+  StatusOr<PgResult> r = reader_.Query(
+      "SELECT seq, stamp_ns, qw, qx, qy, qz, tx, ty, tz FROM observations WHERE map = $1 AND "
+      "session_id = $2 ORDER BY seq DESC LIMIT $3",
+      p);
+  if (!r.ok()) return r.status();
+  std::vector<StampedPose> out;
+  for (int i = 0; i < r->rows(); ++i) {
+    StampedPose s;
+    s.seq = static_cast<uint64_t>(r->Int(i, 0));
+    s.stamp_ns = r->Int(i, 1);
+    s.T_frame_sensor = PoseAt(*r, i, 2);
+    out.push_back(s);
+  }
+  return out;
+}
+
+StatusOr<std::vector<SessionTrailRows>> PgObservationLog::ListTrails(const std::string& robot,
+                                                                     uint32_t max_points) {
+  const int64_t max_n = std::max<int64_t>(2, max_points);
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  PgParams p;
+  p.Text(map_id_).Text(robot).Int(max_n);
+  // As the SQLite backend: a session longer than $3 keeps every k-th pose,
+  // k = ceil(n / ($3 - 1)), and its last one: at most $3 poses.
+  StatusOr<PgResult> r = reader_.Query(
+      "SELECT r.name, s.name, s.id, o.seq, o.stamp_ns, o.tx, o.ty, o.tz, o.n FROM "
+      "(SELECT session_id, seq, stamp_ns, tx, ty, tz, "
+      "row_number() OVER (PARTITION BY session_id ORDER BY seq) AS rn, "
+      "count(*) OVER (PARTITION BY session_id) AS n FROM observations WHERE map = $1) o "
+      "JOIN sessions s ON s.map = $1 AND s.id = o.session_id "
+      "JOIN robots r ON r.map = $1 AND r.id = s.robot_id "
+      "WHERE r.name NOT LIKE '@%' AND ($2 = '' OR r.name = $2) AND "
+      "(o.n <= $3 OR o.rn = o.n OR (o.rn - 1) % ((o.n + $3 - 2) / ($3 - 1)) = 0) "
+      "ORDER BY r.name COLLATE \"C\", s.name COLLATE \"C\", o.seq",
+      p);
+  if (!r.ok()) return r.status();
+  std::vector<SessionTrailRows> out;
+  for (int i = 0; i < r->rows(); ++i) {
+    const int64_t session_id = r->Int(i, 2);
+    if (out.empty() || out.back().session_id != session_id) {
+      SessionTrailRows t;
+      t.robot = r->Text(i, 0);
+      t.session = r->Text(i, 1);
+      t.session_id = session_id;
+      t.stored = static_cast<uint64_t>(r->Int(i, 8));
+      out.push_back(std::move(t));
+    }
+    TrailPoint pt;
+    pt.seq = static_cast<uint64_t>(r->Int(i, 3));
+    pt.stamp_ns = r->Int(i, 4);
+    pt.position = Eigen::Vector3d(r->Double(i, 5), r->Double(i, 6), r->Double(i, 7));
+    out.back().points.push_back(pt);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// PgObservationWriter
+
+PgObservationWriter::PgObservationWriter(PgObservationLog* log) : log_(log) {
+  std::lock_guard<std::mutex> lock(log->cache_mu_);
+  next_id_ = log->newest_observation_ + 1;
+}
+
+StatusOr<int64_t> PgObservationWriter::RobotId(const std::string& name, int64_t now_ns) {
+  if (auto it = new_robots_.find(name); it != new_robots_.end()) return it->second;
+  {
+    std::lock_guard<std::mutex> lock(log_->cache_mu_);
+    if (auto it = log_->robot_ids_.find(name); it != log_->robot_ids_.end()) return it->second;
+  }
+  PgParams p;
+  p.Text(log_->map_id_).Text(name).Int(now_ns);
+  StatusOr<PgResult> r = log_->writer_.Query(
+      "INSERT INTO robots (map, name, first_seen_ns, last_seen_ns) VALUES ($1, $2, $3, $3) "
+      "RETURNING id",
+      p);
+  if (!r.ok()) return r.status();
+  const int64_t id = r->Int(0, 0);
+  new_robots_[name] = id;
+  return id;
+}
+
+StatusOr<SessionFrame> PgObservationWriter::Session(int64_t robot_id, const std::string& name,
+                                                    FrameKind kind, int64_t now_ns) {
+  const std::string key = PgObservationLog::SessionKey(robot_id, name);
+  if (auto it = new_sessions_.find(key); it != new_sessions_.end()) return it->second;
+  {
+    std::lock_guard<std::mutex> lock(log_->cache_mu_);
+    if (auto it = log_->sessions_.find(key); it != log_->sessions_.end()) return it->second;
+  }
+  SessionFrame f;
+  f.robot_id = robot_id;
+  f.kind = kind;
+  f.tied = kind == FrameKind::kMap;  // a map-frame session is tied by identity
+  PgParams p;
+  p.Text(log_->map_id_).Int(robot_id).Text(name).Int(now_ns).Int(static_cast<int64_t>(kind));
+  p.Bool(f.tied);
+  AddPose(p, f.T_map_frame);
+  StatusOr<PgResult> r = log_->writer_.Query(
+      "INSERT INTO sessions (map, robot_id, name, created_ns, frame_kind, tied, qw, qx, qy, qz, "
+      "tx, ty, tz) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id",
+      p);
+  if (!r.ok()) return r.status();
+  f.session_id = r->Int(0, 0);
+  new_sessions_[key] = f;
+  return f;
+}
+
+StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservation& obs) {
+  StatusOr<int64_t> robot_id = RobotId(obs.robot, obs.received_ns);
+  if (!robot_id.ok()) return robot_id.status();
+  StatusOr<SessionFrame> frame = Session(*robot_id, obs.session, obs.frame_kind, obs.received_ns);
+  if (!frame.ok()) return frame.status();
+  if (frame->kind != obs.frame_kind) {
+    return Status::InvalidArgument(
+        "session_frame disagrees with session '" + obs.session + "' of robot '" + obs.robot +
+        "', which was opened with " +
+        (frame->kind == FrameKind::kMap ? "SESSION_FRAME_MAP" : "SESSION_FRAME_LOCAL") +
+        "; start a new session_id to change it");
+  }
+  InsertResult result;
+  result.frame = *frame;
+  const geometry::SensorObservation& f = *obs.features;
+  payload_.clear();
+  EncodeFeatures(f, &payload_);
+  PgParams p;
+  p.Text(log_->map_id_).Int(next_id_).Int(frame->session_id).Int(static_cast<int64_t>(obs.seq));
+  p.Int(obs.stamp_ns).Int(obs.received_ns);
+  AddPose(p, f.T_frame_sensor);
+  p.Int(static_cast<int64_t>(f.lines.size())).Int(static_cast<int64_t>(f.planes.size()));
+  p.Bytes(payload_);
+  // The duplicate's id in the same round trip: the CTE's insert returns no
+  // row on a conflict, and then the existing row answers.
+  StatusOr<PgResult> r = log_->writer_.Query(
+      "WITH ins AS (INSERT INTO observations (map, id, session_id, seq, stamp_ns, received_ns, "
+      "qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload) VALUES ($1, $2, $3, $4, $5, "
+      "$6, $7, $8, $9, $10, $11, $12, $13, $14::int8, $15::int8, $16) "
+      "ON CONFLICT (map, session_id, seq) DO NOTHING RETURNING id) "
+      "SELECT id, true FROM ins UNION ALL SELECT id, false FROM observations WHERE map = $1 AND "
+      "session_id = $3 AND seq = $4 AND NOT EXISTS (SELECT 1 FROM ins)",
+      p);
+  if (!r.ok()) return r.status();
+  if (r->rows() == 0) return Status::Internal("observation insert returned no row");
+  result.observation_id = r->Int(0, 0);
+  result.stored = r->Int(0, 1) != 0;
+  if (result.stored) {
+    ++next_id_;
+    RobotDelta& d = robot_deltas_[*robot_id];
+    d.batches += 1;
+    d.features += f.lines.size() + f.planes.size();
+    d.last_seen_ns = std::max(d.last_seen_ns, obs.received_ns);
+  }
+  return result;
+}
+
+Status PgObservationWriter::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
+  const std::string tied = "session " + std::to_string(session_id) + " is tied already";
+  if (new_ties_.count(session_id) != 0) return Status::FailedPrecondition(tied);
+  StatusOr<SessionFrame> current = log_->GetSession(session_id);
+  if (!current.ok()) {
+    bool fresh = false;  // made in this transaction
+    for (const auto& [key, f] : new_sessions_) fresh |= f.session_id == session_id;
+    if (!fresh) return current.status();
+  } else if (current->tied) {
+    return Status::FailedPrecondition(tied);
+  }
+  if (tie_seq_ == 0) {
+    std::lock_guard<std::mutex> lock(log_->cache_mu_);
+    tie_seq_ = log_->max_tie_seq_ + 1;  // one sequence number per tying transaction
+  }
+  PgParams p;
+  p.Text(log_->map_id_).Int(session_id);
+  AddPose(p, T_map_frame);
+  p.Int(tie_point_).Int(tie_seq_);
+  StatusOr<PgResult> r = log_->writer_.Query(
+      "UPDATE sessions SET tied = true, qw = $3, qx = $4, qy = $5, qz = $6, tx = $7, ty = $8, "
+      "tz = $9, tied_through_observation = $10, tie_seq = $11 WHERE map = $1 AND id = $2",
+      p);
+  if (!r.ok()) return r.status();
+  new_ties_[session_id] = T_map_frame;
+  return Status::Ok();
+}
+
+std::vector<int64_t> PgObservationWriter::tied_session_ids() const {
+  std::vector<int64_t> ids;
+  for (const auto& [session_id, T] : new_ties_) ids.push_back(session_id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+Status PgObservationWriter::BeforeCommit() {
+  for (const auto& [robot_id, d] : robot_deltas_) {
+    PgParams p;
+    p.Text(log_->map_id_).Int(robot_id).Int(static_cast<int64_t>(d.batches));
+    p.Int(static_cast<int64_t>(d.features)).Int(d.last_seen_ns);
+    StatusOr<PgResult> r = log_->writer_.Query(
+        "UPDATE robots SET batches = batches + $3, features = features + $4, "
+        "last_seen_ns = greatest(last_seen_ns, $5) WHERE map = $1 AND id = $2",
+        p);
+    if (!r.ok()) return r.status();
+  }
+  return Status::Ok();
+}
+
+void PgObservationWriter::AfterCommit() {
+  std::lock_guard<std::mutex> lock(log_->cache_mu_);
+  for (const auto& [name, id] : new_robots_) {
+    log_->robot_ids_[name] = id;
+    log_->robot_names_[id] = name;
+  }
+  for (const auto& [key, frame] : new_sessions_) log_->sessions_[key] = frame;
+  for (const auto& [session_id, T] : new_ties_) {
+    for (auto& [key, frame] : log_->sessions_) {
+      if (frame.session_id != session_id) continue;
+      frame.tied = true;
+      frame.T_map_frame = T;
+      frame.tied_through_observation = tie_point_;
+      frame.tie_seq = tie_seq_;
+    }
+  }
+  log_->max_tie_seq_ = std::max(log_->max_tie_seq_, tie_seq_);
+  log_->newest_observation_ = std::max(log_->newest_observation_, next_id_ - 1);
+}
+
+}  // namespace mapd::storage

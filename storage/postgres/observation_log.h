@@ -1,0 +1,143 @@
+// The observation intent (storage/observation_store.h) on PostgreSQL, for
+// one map of a shared database.
+//
+// Like the SQLite backend it has two connections: the writer's, used by one
+// thread in group transactions, and a reader's, serialised on a mutex.
+// Observation ids are given by the writer (the newest committed + 1): one
+// mapd writes a map at a time (its owner), so ids follow the commit order,
+// which snapshots and replay rely on, and no sequence gaps or cross-map
+// contention come with them.
+//
+// A transaction is shared with the other intents: PgWriteScope runs BEGIN,
+// COMMIT or ROLLBACK on the writer connection; PgObservationWriter writes in
+// it and must be told BeforeCommit() (it flushes the robots' counters) and
+// AfterCommit() (it publishes the new robots, sessions and ties to the caches).
+#ifndef MAPD_STORAGE_POSTGRES_OBSERVATION_LOG_H_
+#define MAPD_STORAGE_POSTGRES_OBSERVATION_LOG_H_
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "storage/observation_store.h"
+#include "storage/postgres/pq.h"
+
+namespace mapd::storage {
+
+class PgObservationWriter;
+
+// BEGIN on construction (check status()), ROLLBACK when destroyed unless committed.
+class PgWriteScope {
+ public:
+  explicit PgWriteScope(PgConnection* conn);
+  ~PgWriteScope();
+  PgWriteScope(const PgWriteScope&) = delete;
+  PgWriteScope& operator=(const PgWriteScope&) = delete;
+  const Status& status() const { return begun_; }
+  Status Commit();
+
+ private:
+  PgConnection* conn_;
+  Status begun_;
+  bool open_ = false;
+};
+
+class PgObservationLog final : public ObservationReader {
+ public:
+  // Connects twice to `conninfo`, migrates the schema, makes `map_id`'s
+  // partition and loads the map's robots and sessions.
+  static StatusOr<std::unique_ptr<PgObservationLog>> Open(const std::string& conninfo,
+                                                          const std::string& map_id);
+
+  // The writer connection (writer thread only), for PgWriteScope and the
+  // other intents' writers.
+  PgConnection& writer() { return writer_; }
+  // A writer for the transaction open on writer() (writer thread only).
+  std::unique_ptr<PgObservationWriter> NewWriter();
+
+  Status ForEachObservation(const ObservationFn& fn) override;
+  Status ForEachObservationBetween(int64_t after_id, int64_t through_id,
+                                   const ObservationFn& fn) override;
+  Status ForEachObservationOfSessions(const std::vector<int64_t>& session_ids, int64_t max_id,
+                                      const ObservationFn& fn) override;
+  StatusOr<int64_t> NewestObservationId() override;
+  StatusOr<std::vector<SessionFrame>> ListSessions() override;
+  StatusOr<SessionFrame> GetSession(int64_t session_id) const override;
+  StatusOr<SessionFrame> FindSession(const std::string& robot,
+                                     const std::string& session) const override;
+  StatusOr<std::vector<RobotSummary>> ListRobots() override;
+  std::string RobotName(int64_t robot_id) const override;
+  StatusOr<std::vector<StampedPose>> RecentPoses(int64_t session_id, int limit) override;
+  StatusOr<std::vector<SessionTrailRows>> ListTrails(const std::string& robot,
+                                                     uint32_t max_points) override;
+
+  const std::string& map_id() const { return map_id_; }
+
+ private:
+  friend class PgObservationWriter;
+  PgObservationLog() = default;
+  Status LoadCaches();
+  // Rows with after_id < id <= through_id and `condition` (SQL on o, with
+  // parameters from $4 on), in id order, in pages; fn runs unlocked.
+  Status ForEachWhere(const std::string& condition, const std::vector<int64_t>& session_ids,
+                      int64_t after_id, int64_t through_id, const ObservationFn& fn);
+  static std::string SessionKey(int64_t robot_id, const std::string& name) {
+    return std::to_string(robot_id) + "/" + name;
+  }
+
+  std::string map_id_;
+  PgConnection writer_;
+  PgConnection reader_;
+  std::mutex reader_mu_;  // guards reader_
+
+  // Committed robots and sessions, and the newest committed observation id.
+  mutable std::mutex cache_mu_;
+  std::unordered_map<std::string, int64_t> robot_ids_;
+  std::unordered_map<int64_t, std::string> robot_names_;
+  std::unordered_map<std::string, SessionFrame> sessions_;
+  int64_t max_tie_seq_ = 0;         // GUARDED_BY(cache_mu_)
+  int64_t newest_observation_ = 0;  // GUARDED_BY(cache_mu_)
+};
+
+class PgObservationWriter final : public ObservationWriter {
+ public:
+  StatusOr<InsertResult> InsertObservation(const NewObservation& obs) override;
+  Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) override;
+  void set_tie_point(int64_t newest_observation_id) override { tie_point_ = newest_observation_id; }
+  bool ties_sessions() const override { return !new_ties_.empty(); }
+  int64_t tie_seq() const override { return tie_seq_; }
+  std::vector<int64_t> tied_session_ids() const override;
+
+  // Before COMMIT, in the transaction: the robots' batch and feature counts.
+  Status BeforeCommit();
+  // After COMMIT succeeded: the caches learn what this transaction made.
+  void AfterCommit();
+
+ private:
+  friend class PgObservationLog;
+  explicit PgObservationWriter(PgObservationLog* log);
+  struct RobotDelta {
+    uint64_t batches = 0, features = 0;
+    int64_t last_seen_ns = 0;
+  };
+  StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
+  StatusOr<SessionFrame> Session(int64_t robot_id, const std::string& name, FrameKind kind,
+                                 int64_t now_ns);
+
+  PgObservationLog* log_;
+  int64_t next_id_;  // the id the next stored observation gets
+  std::unordered_map<std::string, int64_t> new_robots_;
+  std::unordered_map<std::string, SessionFrame> new_sessions_;
+  std::unordered_map<int64_t, RobotDelta> robot_deltas_;
+  std::unordered_map<int64_t, geometry::Rigid3> new_ties_;
+  int64_t tie_point_ = 0;
+  int64_t tie_seq_ = 0;
+  std::string payload_;
+};
+
+}  // namespace mapd::storage
+
+#endif  // MAPD_STORAGE_POSTGRES_OBSERVATION_LOG_H_
