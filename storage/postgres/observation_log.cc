@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "common/clock.h"
 #include "storage/observation_codec.h"
 #include "storage/postgres/schema.h"
 
@@ -59,11 +60,36 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   log->writer_ = std::move(writer).value();
   MAPD_RETURN_IF_ERROR(MigratePostgres(log->writer_));
   MAPD_RETURN_IF_ERROR(EnsureMapPartitions(log->writer_, map_id));
+  MAPD_RETURN_IF_ERROR(log->Own());
   StatusOr<PgConnection> reader = PgConnection::Connect(conninfo);
   if (!reader.ok()) return reader.status();
   log->reader_ = std::move(reader).value();
   MAPD_RETURN_IF_ERROR(log->LoadCaches());
   return log;
+}
+
+Status PgObservationLog::Own() {
+  // The lock is the writer connection's: it goes when the connection does
+  // (mapd stops or dies and its socket closes). A paused mapd keeps it, so
+  // nothing takes over from it either (leases with fencing: step 3).
+  PgParams p;
+  p.Text(map_id_).Int(UnixNowNs());
+  StatusOr<PgResult> r = writer_.Query(
+      "INSERT INTO maps (id, created_ns) VALUES ($1, $2) ON CONFLICT (id) DO NOTHING", p);
+  if (!r.ok()) return r.status();
+  PgParams q;
+  q.Text(map_id_);
+  r = writer_.Query("SELECT pg_try_advisory_lock(" + std::to_string(kMapLockClass) +
+                        ", num) FROM maps WHERE id = $1",
+                    q);
+  if (!r.ok()) return r.status();
+  if (r->rows() != 1 || r->Int(0, 0) == 0) {
+    return Status::FailedPrecondition(
+        "map '" + map_id_ +
+        "' is served by another mapd on this PostgreSQL database (it holds the map's lock); "
+        "stop that one first");
+  }
+  return Status::Ok();
 }
 
 Status PgObservationLog::LoadCaches() {
@@ -409,6 +435,14 @@ Status PgObservationWriter::TieSession(int64_t session_id, const geometry::Rigid
   if (!r.ok()) return r.status();
   new_ties_[session_id] = T_map_frame;
   return Status::Ok();
+}
+
+int64_t PgObservationWriter::SessionId(int64_t robot_id, const std::string& name) const {
+  const std::string key = PgObservationLog::SessionKey(robot_id, name);
+  if (auto it = new_sessions_.find(key); it != new_sessions_.end()) return it->second.session_id;
+  std::lock_guard<std::mutex> lock(log_->cache_mu_);
+  auto it = log_->sessions_.find(key);
+  return it == log_->sessions_.end() ? 0 : it->second.session_id;
 }
 
 std::vector<int64_t> PgObservationWriter::tied_session_ids() const {

@@ -1,8 +1,9 @@
 // The observation intent (storage/observation_store.h) on PostgreSQL, for
 // one map of a shared database.
 //
-// Like the SQLite backend it has two connections: the writer's, used by one
-// thread in group transactions, and a reader's, serialised on a mutex.
+// Opening a map takes its ownership lock, so that one mapd writes it at a
+// time (a second gets FailedPrecondition). Like the SQLite backend it has two connections: the
+// writer's, used by one thread in group transactions, and a reader's, serialised on a mutex.
 // Observation ids are given by the writer (the newest committed + 1): one
 // mapd writes a map at a time (its owner), so ids follow the commit order,
 // which snapshots and replay rely on, and no sequence gaps or cross-map
@@ -78,8 +79,14 @@ class PgObservationLog final : public ObservationReader {
 
  private:
   friend class PgObservationWriter;
+  friend class PgStore;  // shares the connections with the other intents
   PgObservationLog() = default;
+  // Adds the map's row if missing and takes its ownership lock (a session
+  // advisory lock on the writer connection): one mapd writes a map at a time.
+  // FailedPrecondition when another holds it.
+  Status Own();
   Status LoadCaches();
+  static constexpr int32_t kMapLockClass = 0x6d617064;  // "mapd"
   // Rows with after_id < id <= through_id and `condition` (SQL on o, with
   // parameters from $4 on), in id order, in pages; fn runs unlocked.
   Status ForEachWhere(const std::string& condition, const std::vector<int64_t>& session_ids,
@@ -116,6 +123,11 @@ class PgObservationWriter final : public ObservationWriter {
   // After COMMIT succeeded: the caches learn what this transaction made.
   void AfterCommit();
 
+  // For the other intents in the same transaction (submaps): the robot's
+  // id, made on first sight, and a session's id (0 if it has none).
+  StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
+  int64_t SessionId(int64_t robot_id, const std::string& name) const;
+
  private:
   friend class PgObservationLog;
   explicit PgObservationWriter(PgObservationLog* log);
@@ -123,7 +135,6 @@ class PgObservationWriter final : public ObservationWriter {
     uint64_t batches = 0, features = 0;
     int64_t last_seen_ns = 0;
   };
-  StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
   StatusOr<SessionFrame> Session(int64_t robot_id, const std::string& name, FrameKind kind,
                                  int64_t now_ns);
 

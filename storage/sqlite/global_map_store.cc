@@ -6,48 +6,12 @@
 #include <sstream>
 #include <string>
 
+#include "storage/blob_codec.h"
 #include "storage/sqlite/pose_columns.h"
 #include "storage/sqlite/sqlite.h"
 #include "storage/sqlite/store.h"
 
 namespace mapd::storage {
-namespace {
-
-// "id qw qx qy qz tx ty tz" per line, %.17g: doubles round-trip exactly, so a
-// member read back compares equal to the pose it was fused at.
-std::string EncodeMembers(const std::vector<GlobalMapMember>& members) {
-  std::string out;
-  char line[256];
-  for (const GlobalMapMember& m : members) {
-    const geometry::Rigid3& T = m.T_map_submap;
-    std::snprintf(line, sizeof line, "%" PRId64 " %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
-                  m.submap_id, T.rotation.w(), T.rotation.x(), T.rotation.y(), T.rotation.z(),
-                  T.translation.x(), T.translation.y(), T.translation.z());
-    out += line;
-  }
-  return out;
-}
-
-StatusOr<std::vector<GlobalMapMember>> DecodeMembers(const std::string& text) {
-  std::vector<GlobalMapMember> members;
-  std::istringstream lines(text);
-  std::string line;
-  while (std::getline(lines, line)) {
-    GlobalMapMember m;
-    double q[4], t[3];
-    if (std::sscanf(line.c_str(), "%" SCNd64 " %lf %lf %lf %lf %lf %lf %lf", &m.submap_id, &q[0],
-                    &q[1], &q[2], &q[3], &t[0], &t[1], &t[2]) != 8) {
-      return Status::Internal("global_map.members is corrupt: '" + line + "'");
-    }
-    m.T_map_submap.rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
-    m.T_map_submap.translation = {t[0], t[1], t[2]};
-    members.push_back(m);
-  }
-  return members;
-}
-
-}  // namespace
-
 Status SqliteWriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
                                            const geometry::Rigid3& T_map_submap) {
   StatusOr<Statement> q = Statement::Prepare(

@@ -4,36 +4,10 @@
 // prepared per call.
 #include <cstring>
 
+#include "storage/blob_codec.h"
 #include "storage/sqlite/store.h"
 
 namespace mapd::storage {
-namespace {
-
-// The boundary as x, y, z doubles in the machine's (little-endian) byte order.
-std::string EncodeBoundary(const std::vector<Eigen::Vector3d>& boundary) {
-  std::string out(boundary.size() * 3 * sizeof(double), '\0');
-  char* p = out.data();
-  for (const Eigen::Vector3d& v : boundary) {
-    std::memcpy(p, v.data(), 3 * sizeof(double));
-    p += 3 * sizeof(double);
-  }
-  return out;
-}
-
-Status DecodeBoundary(std::string_view blob, uint64_t id, std::vector<Eigen::Vector3d>* out) {
-  if (blob.size() % (3 * sizeof(double)) != 0) {
-    return Status::Internal("fused_planes row " + std::to_string(id) + ": boundary blob of " +
-                            std::to_string(blob.size()) + " bytes is not a list of 3D points");
-  }
-  out->resize(blob.size() / (3 * sizeof(double)));
-  for (size_t i = 0; i < out->size(); ++i) {
-    std::memcpy((*out)[i].data(), blob.data() + i * 3 * sizeof(double), 3 * sizeof(double));
-  }
-  return Status::Ok();
-}
-
-}  // namespace
-
 Status SqliteWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
   StatusOr<Statement> q = Statement::Prepare(
       store_->writer_.get(),

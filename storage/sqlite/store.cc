@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "storage/blob_codec.h"
 #include "storage/observation_codec.h"
 #include "storage/sqlite/pose_columns.h"
 #include "storage/sqlite/schema.h"
@@ -489,39 +490,6 @@ Status SqliteWriteTransaction::DeleteSubmap(int64_t id) {
   if (sqlite3_changes(w) == 0) return Status::NotFound("no submap with id " + std::to_string(id));
   return Status::Ok();
 }
-
-namespace {
-
-// merge_inputs.matched_points (schema.cc, 6 -> 7).
-constexpr size_t kMatchedPointBytes = 6 * sizeof(double);
-
-std::string EncodeMatched(const std::vector<MatchedCornerRecord>& matched) {
-  std::string out(matched.size() * kMatchedPointBytes, '\0');
-  char* p = out.data();
-  for (const MatchedCornerRecord& m : matched) {
-    std::memcpy(p, m.in_submap.data(), 3 * sizeof(double));
-    std::memcpy(p + 3 * sizeof(double), m.in_reference.data(), 3 * sizeof(double));
-    p += kMatchedPointBytes;
-  }
-  return out;
-}
-
-Status DecodeMatched(std::string_view blob, int64_t merge_id,
-                     std::vector<MatchedCornerRecord>* out) {
-  if (blob.size() % kMatchedPointBytes != 0) {
-    return Status::Internal("merge " + std::to_string(merge_id) + ": matched_points blob of " +
-                            std::to_string(blob.size()) + " bytes is not whole corner pairs");
-  }
-  out->resize(blob.size() / kMatchedPointBytes);
-  for (size_t i = 0; i < out->size(); ++i) {
-    const char* p = blob.data() + i * kMatchedPointBytes;
-    std::memcpy((*out)[i].in_submap.data(), p, 3 * sizeof(double));
-    std::memcpy((*out)[i].in_reference.data(), p + 3 * sizeof(double), 3 * sizeof(double));
-  }
-  return Status::Ok();
-}
-
-}  // namespace
 
 StatusOr<MergeIds> SqliteWriteTransaction::RecordMerge(const NewMerge& merge) {
   const MergeRecord& r = merge.record;

@@ -9,7 +9,9 @@ namespace {
 
 using AuthStoreTest = testing::StoreFixture;
 
-TEST_F(AuthStoreTest, AuditFieldsAreStoredAsOneLineOfVisibleText) {
+using AuthStoreConformanceTest = testing::OnEveryBackend<AuthStoreTest>;
+
+TEST_P(AuthStoreConformanceTest, AuditFieldsAreStoredAsOneLineOfVisibleText) {
   AuditEntry e;
   e.time_ns = 1;
   e.who = "r1-key";
@@ -65,7 +67,7 @@ TEST_F(AuthStoreTest, TokenScopesAreStoredAndOlderTokensActOnEveryMap) {
   EXPECT_EQ((*tokens)[0].robot_id, "r7");
 }
 
-TEST_F(AuthStoreTest, TrimmingKeepsTheNewestDenialsAndEveryOtherRow) {
+TEST_P(AuthStoreConformanceTest, TrimmingKeepsTheNewestDenialsAndEveryOtherRow) {
   auto txn = store_->BeginWrite();
   ASSERT_TRUE(txn.ok());
   for (int i = 0; i < 30; ++i) {
@@ -95,6 +97,8 @@ TEST_F(AuthStoreTest, TrimmingKeepsTheNewestDenialsAndEveryOtherRow) {
   EXPECT_EQ(ok, 10);
   EXPECT_EQ(denied, 5);
 }
+
+MAPD_ON_EVERY_BACKEND(AuthStoreConformanceTest);
 
 }  // namespace
 }  // namespace mapd::storage

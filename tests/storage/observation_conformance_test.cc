@@ -7,6 +7,7 @@
 #include <thread>
 #include <vector>
 
+#include "storage/postgres/map_catalog.h"
 #include "storage/support/observation_backends.h"
 
 namespace mapd::storage {
@@ -355,9 +356,8 @@ TEST_F(PostgresMapsTest, SeveralOpeningAnEmptyDatabaseTogetherMigrateItOnce) {
   std::vector<Status> results(6);
   for (size_t i = 0; i < results.size(); ++i) {
     threads.emplace_back([&, i] {
-      // Half open the same map, half each its own.
       StatusOr<std::unique_ptr<PgObservationLog>> log =
-          PgObservationLog::Open(conninfo_, i % 2 == 0 ? "shared" : "own-" + std::to_string(i));
+          PgObservationLog::Open(conninfo_, "site-" + std::to_string(i));
       results[i] = log.status();
     });
   }
@@ -368,6 +368,35 @@ TEST_F(PostgresMapsTest, SeveralOpeningAnEmptyDatabaseTogetherMigrateItOnce) {
   auto rows = conn->Query("SELECT count(*) FROM mapd_schema");
   ASSERT_TRUE(rows.ok());
   EXPECT_EQ(rows->Int(0, 0), 1);
+  StatusOr<PgMapCatalog> catalog = PgMapCatalog::Open(conninfo_);
+  ASSERT_TRUE(catalog.ok());
+  EXPECT_EQ(catalog->ListMaps()->size(), 6u);
+}
+
+TEST_F(PostgresMapsTest, OneMapdWritesAMapAtATime) {
+  auto first = PgObservationLog::Open(conninfo_, "site-1");
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  auto second = PgObservationLog::Open(conninfo_, "site-1");
+  EXPECT_EQ(second.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(second.status().message().find("served by another mapd"), std::string::npos)
+      << second.status().message();
+  EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-2").ok()) << "other maps are free";
+  first->reset();  // its connection closes, and the lock with it
+  EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-1").ok());
+}
+
+TEST_F(PostgresMapsTest, TheCatalogListsMapsAndKeepsTheirSettings) {
+  StatusOr<PgMapCatalog> catalog = PgMapCatalog::Open(conninfo_);
+  ASSERT_TRUE(catalog.ok()) << catalog.status().ToString();
+  EXPECT_TRUE(catalog->ListMaps()->empty());
+  ASSERT_TRUE(catalog->CreateMap("site-7", "fusion.eta_m = 0.2\n", 1).ok());
+  EXPECT_EQ(catalog->CreateMap("site-7", "", 2).code(), StatusCode::kAlreadyExists);
+  EXPECT_EQ(catalog->CreateMap("a b", "", 2).code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(PgObservationLog::Open(conninfo_, "default").ok());  // opening adds its row
+  EXPECT_EQ(*catalog->ListMaps(), (std::vector<std::string>{"default", "site-7"}));
+  EXPECT_EQ(*catalog->Settings("site-7"), "fusion.eta_m = 0.2\n");
+  EXPECT_EQ(*catalog->Settings("default"), "");
+  EXPECT_EQ(catalog->Settings("site-8").status().code(), StatusCode::kNotFound);
 }
 
 TEST_F(PostgresMapsTest, ABadMapIdOrServerIsAClearError) {

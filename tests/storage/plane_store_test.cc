@@ -9,7 +9,9 @@ namespace {
 
 class PlaneStoreTest : public testing::StoreFixture {};
 
-TEST_F(PlaneStoreTest, FusedPlaneRowsSurviveAReopenAndCanBeDeleted) {
+using PlaneStoreConformanceTest = testing::OnEveryBackend<PlaneStoreTest>;
+
+TEST_P(PlaneStoreConformanceTest, FusedPlaneRowsSurviveAReopenAndCanBeDeleted) {
   FusedPlaneRow row;
   row.id = 4097;
   row.normal = {0, 0, 1};
@@ -45,7 +47,7 @@ TEST_F(PlaneStoreTest, FusedPlaneRowsSurviveAReopenAndCanBeDeleted) {
   EXPECT_EQ(r.robots, "r1,r2");
 }
 
-TEST_F(PlaneStoreTest, SnapshotsCarryThePlaneStateOrSayTheyHaveNone) {
+TEST_P(PlaneStoreConformanceTest, SnapshotsCarryThePlaneStateOrSayTheyHaveNone) {
   FusionSnapshot with;
   with.state = "lines";
   with.plane_state = "planes";
@@ -67,6 +69,8 @@ TEST_F(PlaneStoreTest, SnapshotsCarryThePlaneStateOrSayTheyHaveNone) {
   EXPECT_EQ(older->plane_state, "planes");
   EXPECT_EQ(older->state, "lines");
 }
+
+MAPD_ON_EVERY_BACKEND(PlaneStoreConformanceTest);
 
 }  // namespace
 }  // namespace mapd::storage

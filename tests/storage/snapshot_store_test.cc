@@ -41,25 +41,19 @@ class SnapshotStoreTest : public testing::StoreFixture {
                 }).ok());
   }
 
-  int CountParts() {
-    int n = 0;
-    auto db = OpenDatabase(dir_.File("map.db"), true);
-    EXPECT_TRUE(db.ok());
-    auto q = Statement::Prepare(db->get(), "SELECT count(*) FROM fusion_snapshot_parts");
-    EXPECT_TRUE(q.ok());
-    if (q.ok() && *q->Step()) n = static_cast<int>(q->ColumnInt(0));
-    return n;
-  }
+  int CountParts() { return static_cast<int>(CountRows("fusion_snapshot_parts")); }
 };
 
-TEST_F(SnapshotStoreTest, PartsNeverSpanStateAndPlaneState) {
+using SnapshotStoreConformanceTest = testing::OnEveryBackend<SnapshotStoreTest>;
+
+TEST_P(SnapshotStoreConformanceTest, PartsNeverSpanStateAndPlaneState) {
   const FusionSnapshot snap = Snapshot("abcdefg", "xyz", true);
   const std::vector<std::string_view> parts = SnapshotPartsOf(snap, 3);
   EXPECT_EQ(parts, (std::vector<std::string_view>{"abc", "def", "g", "xyz"}));
   EXPECT_TRUE(SnapshotPartsOf(Snapshot("", "", false), 3).empty());
 }
 
-TEST_F(SnapshotStoreTest, ASnapshotInPartsReadsBackWhole) {
+TEST_P(SnapshotStoreConformanceTest, ASnapshotInPartsReadsBackWhole) {
   const FusionSnapshot snap = Snapshot("the line engine's state", "planes", true);
   WriteInParts(snap, 42, 4);
   Reopen();
@@ -74,7 +68,7 @@ TEST_F(SnapshotStoreTest, ASnapshotInPartsReadsBackWhole) {
   EXPECT_EQ(read->params, "params");
 }
 
-TEST_F(SnapshotStoreTest, ASnapshotInPartsWithoutPlaneStateSaysSo) {
+TEST_P(SnapshotStoreConformanceTest, ASnapshotInPartsWithoutPlaneStateSaysSo) {
   WriteInParts(Snapshot("lines only", "", false), 5, 3);
   auto read = store_->LatestSnapshot();
   ASSERT_TRUE(read.ok()) << read.status().ToString();
@@ -96,7 +90,7 @@ TEST_F(SnapshotStoreTest, AMissingPartIsAnErrorNamingIt) {
       << read.status().message();
 }
 
-TEST_F(SnapshotStoreTest, PartsOfPrunedOrUnfinishedSnapshotsAreDeletedInRounds) {
+TEST_P(SnapshotStoreConformanceTest, PartsOfPrunedOrUnfinishedSnapshotsAreDeletedInRounds) {
   WriteInParts(Snapshot("aaaaaa", "", false), 1, 1, /*keep=*/1);  // 6 parts, pruned below
   // An interrupted snapshot: parts, no row.
   ASSERT_TRUE(
@@ -143,6 +137,8 @@ TEST_F(SnapshotStoreTest, ASnapshotOfAnOlderDatabaseReadsUnchanged) {
   ASSERT_TRUE(before.ok());
   EXPECT_EQ(before->state, "whole");
 }
+
+MAPD_ON_EVERY_BACKEND(SnapshotStoreConformanceTest);
 
 }  // namespace
 }  // namespace mapd::storage

@@ -45,7 +45,9 @@ class StoreTest : public testing::StoreFixture {
   }();
 };
 
-TEST_F(StoreTest, StoresABatchOnceAndReportsTheDuplicate) {
+using StoreConformanceTest = testing::OnEveryBackend<StoreTest>;
+
+TEST_P(StoreConformanceTest, StoresABatchOnceAndReportsTheDuplicate) {
   auto first = InsertOne(Batch("r1", "s1", 1));
   ASSERT_TRUE(first.ok()) << first.status().ToString();
   EXPECT_TRUE(first->stored);
@@ -60,7 +62,7 @@ TEST_F(StoreTest, StoresABatchOnceAndReportsTheDuplicate) {
   EXPECT_EQ(counts->raw_features, 2u);
 }
 
-TEST_F(StoreTest, SameSeqInAnotherSessionOrRobotIsNew) {
+TEST_P(StoreConformanceTest, SameSeqInAnotherSessionOrRobotIsNew) {
   auto first = InsertOne(Batch("r1", "s1", 1));
   ASSERT_TRUE(first.ok()) << first.status().ToString();
   EXPECT_TRUE(first->stored);
@@ -85,14 +87,14 @@ TEST_F(StoreTest, SameSeqInAnotherSessionOrRobotIsNew) {
   EXPECT_EQ((*robots)[1].sessions, 1u);
 }
 
-TEST_F(StoreTest, RefusesAFrameKindThatDisagreesWithTheSession) {
+TEST_P(StoreConformanceTest, RefusesAFrameKindThatDisagreesWithTheSession) {
   ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1, FrameKind::kMap)).ok());
   auto bad = InsertOne(Batch("r1", "s1", 2, FrameKind::kLocal));
   EXPECT_EQ(bad.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(bad.status().message().find("session_frame"), std::string::npos);
 }
 
-TEST_F(StoreTest, UncommittedTransactionLeavesNothing) {
+TEST_P(StoreConformanceTest, UncommittedTransactionLeavesNothing) {
   {
     auto txn = store_->BeginWrite();
     ASSERT_TRUE(txn.ok());
@@ -107,7 +109,7 @@ TEST_F(StoreTest, UncommittedTransactionLeavesNothing) {
   EXPECT_EQ(store_->Counts()->robots, 1u);
 }
 
-TEST_F(StoreTest, EverythingSurvivesAReopen) {
+TEST_P(StoreConformanceTest, EverythingSurvivesAReopen) {
   ASSERT_TRUE(InsertOne(Batch("r1", "s1", 1)).ok());
   ASSERT_TRUE(InsertOne(Batch("r1", "s1", 2)).ok());
   {
@@ -276,6 +278,8 @@ TEST_F(StoreIdentityTest, ASizeCapFailsWritesAsAFullDiskAndKeepsWhatWasCommitted
   EXPECT_EQ(kept, committed);
   EXPECT_TRUE((*reopened)->ProbeWrite().ok());
 }
+
+MAPD_ON_EVERY_BACKEND(StoreConformanceTest);
 
 }  // namespace
 }  // namespace mapd::storage

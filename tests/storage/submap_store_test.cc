@@ -112,7 +112,9 @@ class SubmapStoreTest : public testing::StoreFixture {
   }();
 };
 
-TEST_F(SubmapStoreTest, StoresListsAndReadsBackBytesAndMetadata) {
+using SubmapStoreConformanceTest = testing::OnEveryBackend<SubmapStoreTest>;
+
+TEST_P(SubmapStoreConformanceTest, StoresListsAndReadsBackBytesAndMetadata) {
   std::string bytes = "# Octomap OcTree binary file\n";
   bytes += std::string("\0\x01\xff\x80", 4);  // binary, with a NUL
   auto id = Insert(Submap("r1", "hall", bytes));
@@ -149,7 +151,7 @@ TEST_F(SubmapStoreTest, StoresListsAndReadsBackBytesAndMetadata) {
   EXPECT_EQ(*store_->GetSubmapData(*id), bytes);
 }
 
-TEST_F(SubmapStoreTest, NameIsUniquePerRobot) {
+TEST_P(SubmapStoreConformanceTest, NameIsUniquePerRobot) {
   ASSERT_TRUE(Insert(Submap("r1", "hall", "a")).ok());
   auto again = Insert(Submap("r1", "hall", "b"));
   EXPECT_EQ(again.status().code(), StatusCode::kAlreadyExists);
@@ -157,7 +159,7 @@ TEST_F(SubmapStoreTest, NameIsUniquePerRobot) {
   EXPECT_EQ(*store_->GetSubmapData(store_->ListSubmaps("r1")->at(0).id), "a");
 }
 
-TEST_F(SubmapStoreTest, UnknownSessionIsRefusedKnownOneIsLinked) {
+TEST_P(SubmapStoreConformanceTest, UnknownSessionIsRefusedKnownOneIsLinked) {
   auto unknown = Insert(Submap("r1", "hall", "a", "s1"));
   EXPECT_EQ(unknown.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_TRUE(store_->ListSubmaps("")->empty());
@@ -170,7 +172,7 @@ TEST_F(SubmapStoreTest, UnknownSessionIsRefusedKnownOneIsLinked) {
   EXPECT_EQ(store_->GetSubmap(*id)->session_id, session->session_id);
 }
 
-TEST_F(SubmapStoreTest, DeleteRemovesAndReportsNotFound) {
+TEST_P(SubmapStoreConformanceTest, DeleteRemovesAndReportsNotFound) {
   auto id = Insert(Submap("r1", "hall", "a"));
   ASSERT_TRUE(id.ok());
   ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->DeleteSubmap(*id); }).ok());
@@ -182,7 +184,7 @@ TEST_F(SubmapStoreTest, DeleteRemovesAndReportsNotFound) {
   EXPECT_TRUE(Insert(Submap("r1", "hall", "b")).ok());
 }
 
-TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) {
+TEST_P(SubmapStoreConformanceTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   auto ids = Record(Accepted(a, b, "MERGED"));
@@ -236,7 +238,7 @@ TEST_F(SubmapStoreTest, AcceptedMergeStoresRecordAndMergedMapAndPinsItsSubmaps) 
   }
 }
 
-TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
+TEST_P(SubmapStoreConformanceTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   NewMerge m;
@@ -259,7 +261,7 @@ TEST_F(SubmapStoreTest, RefusedMergeIsRecordedWithoutMergedMapAndPinsNothing) {
 // A placement stays as first recorded (as a session tie), and the global
 // map's row comes back exactly: its members' poses bit for bit, so that the
 // builder can tell a moved member from a kept one.
-TEST_F(SubmapStoreTest, PlacementsKeepTheFirstAndTheGlobalMapComesBackExactly) {
+TEST_P(SubmapStoreConformanceTest, PlacementsKeepTheFirstAndTheGlobalMapComesBackExactly) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   geometry::Rigid3 T;
@@ -313,7 +315,7 @@ TEST_F(SubmapStoreTest, PlacementsKeepTheFirstAndTheGlobalMapComesBackExactly) {
   EXPECT_EQ(store_->GetGlobalMap(false).status().code(), StatusCode::kNotFound);
 }
 
-TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
+TEST_P(SubmapStoreConformanceTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   const std::string merged_bytes = "PROPOSED";  // NewSubmap::data views it
@@ -349,7 +351,7 @@ TEST_F(SubmapStoreTest, ProposedMergeKeepsItsMapButIsNotInEffectUntilApproved) {
             StatusCode::kFailedPrecondition);
 }
 
-TEST_F(SubmapStoreTest, RejectedProposalPinsNothingAndKeepsTheReason) {
+TEST_P(SubmapStoreConformanceTest, RejectedProposalPinsNothingAndKeepsTheReason) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   const std::string merged_bytes = "P";  // NewSubmap::data views it
@@ -397,7 +399,7 @@ TEST_F(SubmapStoreTest, MergesOfAnOlderDatabaseShowAsAcceptedOrRefused) {
 
 // Gate figures that are not numbers (NaN, infinite) are stored as not
 // measured (-1), not as garbage, and the merge is recorded whole.
-TEST_F(SubmapStoreTest, GateFiguresThatAreNotNumbersReadAsNotMeasured) {
+TEST_P(SubmapStoreConformanceTest, GateFiguresThatAreNotNumbersReadAsNotMeasured) {
   const int64_t a = *Insert(Submap("r1", "a", "A"));
   const int64_t b = *Insert(Submap("r2", "b", "B"));
   const std::string merged_bytes = "M";  // NewSubmap::data views it
@@ -490,7 +492,7 @@ TEST_F(SubmapStoreTest, TruncatedMatchedCornersAreAnError) {
   EXPECT_NE(record.status().message().find("matched_points"), std::string::npos);
 }
 
-TEST_F(SubmapStoreTest, TiedSessionFramePersistsAndIsNeverMoved) {
+TEST_P(SubmapStoreConformanceTest, TiedSessionFramePersistsAndIsNeverMoved) {
   OpenLocalSession("r2", "s1");
   auto before = store_->FindSession("r2", "s1");
   ASSERT_TRUE(before.ok());
@@ -520,7 +522,7 @@ TEST_F(SubmapStoreTest, TiedSessionFramePersistsAndIsNeverMoved) {
   EXPECT_TRUE((*robots)[0].all_sessions_tied);
 }
 
-TEST_F(SubmapStoreTest, RolledBackTieLeavesTheCacheAlone) {
+TEST_P(SubmapStoreConformanceTest, RolledBackTieLeavesTheCacheAlone) {
   OpenLocalSession("r2", "s1");
   const int64_t session = store_->FindSession("r2", "s1")->session_id;
   {
@@ -533,6 +535,8 @@ TEST_F(SubmapStoreTest, RolledBackTieLeavesTheCacheAlone) {
   Reopen();
   EXPECT_FALSE(store_->GetSession(session)->tied);
 }
+
+MAPD_ON_EVERY_BACKEND(SubmapStoreConformanceTest);
 
 }  // namespace
 }  // namespace mapd::storage

@@ -8,7 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "common/postgres.h"
 #include "common/temp_dir.h"
+#include "storage/postgres/store.h"
 #include "storage/sqlite/sqlite.h"
 #include "storage/sqlite/store.h"
 #include "storage/store.h"
@@ -30,13 +32,28 @@ constexpr const char* kUndoSnapshotParts =
     "ALTER TABLE fusion_snapshots DROP COLUMN parts_key; "
     "ALTER TABLE fusion_snapshots DROP COLUMN state_bytes; ";
 
+// A Store on a fresh SQLite file, or (backend_ "postgresql") on a fresh
+// database of the test's throw-away PostgreSQL cluster (skipped without one).
 class StoreFixture : public ::testing::Test {
  protected:
-  void SetUp() override { Reopen(); }
+  void SetUp() override {
+    if (backend_ == "postgresql") {
+      mapd::testing::PostgresCluster* cluster = mapd::testing::PostgresCluster::Shared();
+      if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15)";
+      conninfo_ = cluster->NewDatabase();
+    }
+    Reopen();
+  }
 
-  // Closes the store (if open) and opens the same file again.
+  // Closes the store (if open) and opens the same file (database) again.
   void Reopen() {
     store_.reset();
+    if (backend_ == "postgresql") {
+      auto opened = PgStore::Open(conninfo_, "default", StoreOptions{});
+      ASSERT_TRUE(opened.ok()) << opened.status().ToString();
+      store_ = std::move(opened).value();
+      return;
+    }
     auto opened = SqliteStore::Open(dir_.File("map.db"), StoreOptions{});
     ASSERT_TRUE(opened.ok()) << opened.status().ToString();
     store_ = std::move(opened).value();
@@ -54,6 +71,25 @@ class StoreFixture : public ::testing::Test {
     Reopen();
   }
 
+  // The rows of `table` (the whole database's, under either backend).
+  int64_t CountRows(const std::string& table) {
+    const std::string sql = "SELECT count(*) FROM " + table;
+    if (backend_ == "postgresql") {
+      StatusOr<PgConnection> conn = PgConnection::Connect(conninfo_);
+      EXPECT_TRUE(conn.ok()) << conn.status().ToString();
+      if (!conn.ok()) return -1;
+      StatusOr<PgResult> r = conn->Query(sql);
+      EXPECT_TRUE(r.ok()) << r.status().ToString();
+      return r.ok() ? r->Int(0, 0) : -1;
+    }
+    auto db = OpenDatabase(dir_.File("map.db"), true);
+    EXPECT_TRUE(db.ok());
+    if (!db.ok()) return -1;
+    auto q = Statement::Prepare(db->get(), sql);
+    EXPECT_TRUE(q.ok());
+    return q.ok() && *q->Step() ? q->ColumnInt(0) : -1;
+  }
+
   // Runs `fn` in one write transaction and commits it when fn succeeds.
   template <typename Fn>
   Status Write(Fn fn) {
@@ -64,9 +100,28 @@ class StoreFixture : public ::testing::Test {
     return (*txn)->Commit();
   }
 
+  std::string backend_ = "sqlite";
+  std::string conninfo_;  // postgresql
   mapd::testing::TempDir dir_;
   std::unique_ptr<Store> store_;
 };
+
+// `Fixture`'s tests on every backend: the storage conformance suite.
+//   using SubmapConformanceTest = OnEveryBackend<SubmapStoreTest>;
+//   TEST_P(SubmapConformanceTest, ...) { ... }
+//   MAPD_ON_EVERY_BACKEND(SubmapConformanceTest);
+template <typename Fixture>
+class OnEveryBackend : public Fixture, public ::testing::WithParamInterface<std::string> {
+ protected:
+  void SetUp() override {
+    this->backend_ = this->GetParam();
+    Fixture::SetUp();
+  }
+};
+
+#define MAPD_ON_EVERY_BACKEND(Suite)                                                   \
+  INSTANTIATE_TEST_SUITE_P(Backends, Suite, ::testing::Values("sqlite", "postgresql"), \
+                           [](const ::testing::TestParamInfo<std::string>& p) { return p.param; })
 
 }  // namespace mapd::storage::testing
 

@@ -1,0 +1,41 @@
+// The maps a PostgreSQL database holds (table `maps`), for mapd's map
+// directory: which maps exist, and each one's own settings. Opening a map's
+// store (PgStore::Open) adds its row if missing; CreateMap adds one with
+// settings first.
+#ifndef MAPD_STORAGE_POSTGRES_MAP_CATALOG_H_
+#define MAPD_STORAGE_POSTGRES_MAP_CATALOG_H_
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "storage/postgres/pq.h"
+
+namespace mapd::storage {
+
+class PgMapCatalog {
+ public:
+  // Connects and migrates the schema (schema.h).
+  static StatusOr<PgMapCatalog> Open(const std::string& conninfo);
+
+  // Every map's id, sorted.
+  StatusOr<std::vector<std::string>> ListMaps();
+  // Adds map `id` with `settings` (opaque text); AlreadyExists if it exists,
+  // InvalidArgument for a malformed id.
+  Status CreateMap(const std::string& id, const std::string& settings, int64_t now_ns);
+  // A map's settings ('' when it has none); NotFound when there is no such map.
+  StatusOr<std::string> Settings(const std::string& id);
+
+ private:
+  PgConnection conn_;
+};
+
+// Map ids on PostgreSQL are mapd's map ids: 1-64 of A-Z a-z 0-9 _ . -
+// (InvalidArgument otherwise; they are also part of a partition's name).
+Status CheckPgMapId(const std::string& id);
+
+}  // namespace mapd::storage
+
+#endif  // MAPD_STORAGE_POSTGRES_MAP_CATALOG_H_
