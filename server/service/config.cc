@@ -88,6 +88,14 @@ Status ServerConfig::Validate() const {
         "db and data_dir are both set: db serves one map from one file, data_dir several maps "
         "from one directory; set one");
   }
+  if (!store.empty()) {
+    if (!db_path.empty() || !data_dir.empty()) {
+      return Status::InvalidArgument(
+          "store is set with " + std::string(db_path.empty() ? "data_dir" : "db") +
+          ": store serves the maps of a PostgreSQL database, db and data_dir SQLite files; set "
+          "one");
+    }
+  }
   MAPD_RETURN_IF_ERROR(CheckHostPort("listen", listen));
   if (!health_listen.empty()) MAPD_RETURN_IF_ERROR(CheckHostPort("health_listen", health_listen));
   if (tls_cert.empty() != tls_key.empty()) {
@@ -137,6 +145,15 @@ Status ForEachConfigLine(
     const std::function<Status(const std::string& key, const std::string& value)>& fn) {
   std::ifstream in(path);
   if (!in) return Status::NotFound("cannot read config file '" + path + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return ForEachConfigTextLine(text.str(), path, fn);
+}
+
+Status ForEachConfigTextLine(
+    const std::string& text, const std::string& path,
+    const std::function<Status(const std::string& key, const std::string& value)>& fn) {
+  std::istringstream in(text);
   std::string line;
   for (int n = 1; std::getline(in, line); ++n) {
     line = Trim(line.substr(0, line.find('#')));

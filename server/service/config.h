@@ -25,6 +25,9 @@ struct ServerConfig {
   // Several maps, one SQLite file <map id>.db each (map_directory.h); not
   // with db_path. Empty: one map in db_path.
   std::string data_dir;
+  // Every map in one PostgreSQL database (libpq key=value string or
+  // postgresql:// URI, no password); not with db_path or data_dir.
+  std::string store;
   bool sync_full = false;      // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;  // wait for a database lock held by another process
   fusion::FusionParams fusion;
@@ -79,6 +82,11 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config);
 // read; InvalidArgument "path:line: ..." for a line without '=' or fn's error.
 Status ForEachConfigLine(
     const std::string& path,
+    const std::function<Status(const std::string& key, const std::string& value)>& fn);
+// The same for `text` held elsewhere (a map's settings in PostgreSQL);
+// messages say "name:line".
+Status ForEachConfigTextLine(
+    const std::string& text, const std::string& name,
     const std::function<Status(const std::string& key, const std::string& value)>& fn);
 
 // `config` as a config file: every setting with its help line, in table order.

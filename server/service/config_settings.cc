@@ -167,6 +167,10 @@ const std::vector<Setting>& Settings() {
       Text("data_dir", "serve several maps from this directory, one SQLite file <map id>.db each (default.db = "
                        "the default map; CreateMap adds more); not with db",
            [](C& c) -> auto& { return c.data_dir; }),
+      Text("store", "serve the maps of a PostgreSQL database: a libpq connection string or postgresql:// URI "
+                    "(docs/scale-out.md); the password comes from PGPASSWORD, ~/.pgpass or passfile=, never "
+                    "from here; not with db or data_dir",
+           [](C& c) -> auto& { return c.store; }),
       Choice("sync", "normal: an acknowledged batch survives a crash of mapd; full: it survives power loss too "
                      "(slower commits)",
              [](C& c) -> auto& { return c.sync_full; }, "normal", "full"),

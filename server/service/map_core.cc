@@ -11,6 +11,7 @@
 #include "fusion/projection.h"
 #include "service/feature_filter.h"
 #include "service/log.h"
+#include "storage/postgres/store.h"
 #include "storage/sqlite/store.h"
 
 namespace mapd::service {
@@ -47,13 +48,23 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   if (options.snapshot_part_bytes == 0)
     return Status::InvalidArgument("snapshot_part_bytes must be > 0");
   std::unique_ptr<MapCore> core(new MapCore(options));
-  StatusOr<std::unique_ptr<storage::SqliteStore>> store =
-      storage::SqliteStore::Open(options.db_path, options.store);
-  if (!store.ok()) {
-    return Status(store.status().code(), "cannot open the database '" + options.db_path +
-                                             "': " + store.status().message());
+  if (!options.postgres.empty()) {
+    StatusOr<std::unique_ptr<storage::PgStore>> store =
+        storage::PgStore::Open(options.postgres, options.map_id, options.store);
+    if (!store.ok()) {
+      return Status(store.status().code(), "cannot open map '" + options.map_id +
+                                               "' on PostgreSQL: " + store.status().message());
+    }
+    core->store_ = std::move(store).value();
+  } else {
+    StatusOr<std::unique_ptr<storage::SqliteStore>> store =
+        storage::SqliteStore::Open(options.db_path, options.store);
+    if (!store.ok()) {
+      return Status(store.status().code(), "cannot open the database '" + options.db_path +
+                                               "': " + store.status().message());
+    }
+    core->store_ = std::move(store).value();
   }
-  core->store_ = std::move(store).value();
   StatusOr<std::vector<storage::RobotSummary>> robots = core->store_->ListRobots();
   if (!robots.ok()) return robots.status();
   for (const auto& r : *robots) core->robot_names_[r.id] = r.name;

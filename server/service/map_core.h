@@ -59,7 +59,11 @@
 namespace mapd::service {
 
 struct MapCoreOptions {
-  std::string db_path;
+  std::string db_path;  // the SQLite file, unless `postgres` is set
+  // A PostgreSQL connection string: the map `map_id` of that database
+  // (storage/postgres/store.h) instead of a file.
+  std::string postgres;
+  std::string map_id;
   storage::StoreOptions store;
   fusion::FusionParams fusion;
   fusion::PlaneFusionParams planes;   // non-vertical planes (fusion/plane_engine.h)

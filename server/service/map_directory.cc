@@ -101,9 +101,28 @@ StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenDataDir(const std::str
   return d;
 }
 
+StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenPostgres(std::vector<std::string> ids,
+                                                                   const std::string& where,
+                                                                   Opener opener) {
+  for (const std::string& id : ids) {
+    if (id == kDefaultMapId) continue;
+    if (Status s = CheckMapId(id, where + ": the map"); !s.ok()) return s;
+  }
+  std::unique_ptr<MapDirectory> d(new MapDirectory("", std::move(opener)));
+  d->postgres_ = true;
+  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, "");
+  if (!map.ok()) return map.status();
+  for (const std::string& id : ids) {
+    if (id == kDefaultMapId) continue;
+    map = d->Open(id, "");
+    if (!map.ok()) return map.status();
+  }
+  return d;
+}
+
 StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path,
                                         const MapSettings* create_with) {
-  MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
+  if (!postgres_) MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
   StatusOr<std::unique_ptr<ServedMap>> map =
       opener_(id, db_path, default_ == nullptr ? nullptr : default_->service.get(), create_with);
   if (!map.ok()) return map.status();
@@ -159,6 +178,7 @@ StatusOr<ServedMap*> MapDirectory::Create(const std::string& id, const MapSettin
   }
   std::lock_guard<std::mutex> creating(create_mu_);
   if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' exists already");
+  if (postgres_) return Open(id, "", &settings);  // the opener adds the map's row
   const std::string path = PathOf(data_dir_, id);
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) {

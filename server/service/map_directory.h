@@ -75,6 +75,12 @@ class MapDirectory {
   // when missing), then the others by id.
   static StatusOr<std::unique_ptr<MapDirectory>> OpenDataDir(const std::string& data_dir,
                                                              Opener opener);
+  // The maps `ids` of a PostgreSQL database (`where` names it in messages):
+  // "default" first (made when missing), then the others. The opener gets
+  // an empty db_path, and a new map's settings to store with it.
+  static StatusOr<std::unique_ptr<MapDirectory>> OpenPostgres(std::vector<std::string> ids,
+                                                              const std::string& where,
+                                                              Opener opener);
 
   // The other maps first: their services share the default map's access
   // control and stream limiter.
@@ -91,7 +97,7 @@ class MapDirectory {
   // database (--db), AlreadyExists, InvalidArgument for a bad id or setting,
   // or the opener's error.
   StatusOr<ServedMap*> Create(const std::string& id, const MapSettings& settings = {});
-  bool can_create() const { return !data_dir_.empty(); }
+  bool can_create() const { return !data_dir_.empty() || postgres_; }
   const std::string& data_dir() const { return data_dir_; }
 
  private:
@@ -100,7 +106,8 @@ class MapDirectory {
   StatusOr<ServedMap*> Open(const std::string& id, const std::string& db_path,
                             const MapSettings* create_with = nullptr);
 
-  const std::string data_dir_;  // empty: one database
+  const std::string data_dir_;  // empty: one database, or PostgreSQL
+  bool postgres_ = false;       // maps of a PostgreSQL database
   const Opener opener_;
   std::mutex create_mu_;  // one Create at a time (it opens files)
   mutable std::mutex mu_;

@@ -67,9 +67,24 @@ StatusOr<MapSettings> ReadMapSettings(const std::string& path) {
   return settings;
 }
 
-Status WriteMapSettings(const std::string& path, const MapSettings& settings) {
+std::string MapSettingsText(const MapSettings& settings) {
   std::string text = "# This map's own settings (mapctl maps create --set), over mapd's.\n";
   for (const auto& [key, value] : settings) text.append(key).append(" = ").append(value) += '\n';
+  return text;
+}
+
+StatusOr<MapSettings> ParseMapSettings(const std::string& text, const std::string& name) {
+  MapSettings settings;
+  MAPD_RETURN_IF_ERROR(
+      ForEachConfigTextLine(text, name, [&](const std::string& key, const std::string& value) {
+        settings[key] = value;
+        return Status::Ok();
+      }));
+  return settings;
+}
+
+Status WriteMapSettings(const std::string& path, const MapSettings& settings) {
+  const std::string text = MapSettingsText(settings);
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0)

@@ -29,6 +29,10 @@ std::string MapSettingsPath(const std::string& db_path);
 StatusOr<MapSettings> ReadMapSettings(const std::string& path);
 // Writes `settings` to `path` owner-only, atomically (a temporary file renamed).
 Status WriteMapSettings(const std::string& path, const MapSettings& settings);
+// The same `key = value` lines as text (PostgreSQL keeps them in the map's
+// row), and back; `name` says where the text is from in messages.
+std::string MapSettingsText(const MapSettings& settings);
+StatusOr<MapSettings> ParseMapSettings(const std::string& text, const std::string& name);
 
 }  // namespace mapd::service
 

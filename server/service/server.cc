@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/clock.h"
 #include "service/file_modes.h"
 #include "service/log.h"
 #include "service/rpc_metrics.h"
@@ -47,12 +48,12 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   MAPD_RETURN_IF_ERROR(config.Validate());
   std::unique_ptr<MapServer> server(new MapServer());
   server->config_ = config;
-  if (server->config_.db_path.empty() && config.data_dir.empty())
+  if (server->config_.db_path.empty() && config.data_dir.empty() && config.store.empty())
     server->config_.db_path = DefaultDbPath();
   const std::string& db = server->config_.db_path;
   std::error_code ec;
   const auto parent = std::filesystem::path(db).parent_path();
-  if (!config.data_dir.empty()) {
+  if (!config.data_dir.empty() || !config.store.empty()) {
     // The maps' directory is the operator's: MapDirectory checks it exists.
   } else if (config.db_path.empty()) {
     // The default path's directory is mapd's own: made on first use.
@@ -81,9 +82,22 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
                                     MapServiceImpl* shared_with, const MapSettings* create_with) {
     return s->OpenMap(id, path, shared_with, create_with);
   };
-  StatusOr<std::unique_ptr<MapDirectory>> maps =
-      config.data_dir.empty() ? MapDirectory::OpenSingle(db, opener)
-                              : MapDirectory::OpenDataDir(config.data_dir, opener);
+  StatusOr<std::unique_ptr<MapDirectory>> maps = Status::Internal("no maps");
+  if (!config.store.empty()) {
+    MAPD_RETURN_IF_ERROR(storage::CheckConninfo(config.store));
+    StatusOr<storage::PgMapCatalog> catalog = storage::PgMapCatalog::Open(config.store);
+    if (!catalog.ok()) {
+      return Status(catalog.status().code(), "store: " + catalog.status().message());
+    }
+    server->catalog_ = std::make_unique<storage::PgMapCatalog>(std::move(catalog).value());
+    StatusOr<std::vector<std::string>> ids = server->catalog_->ListMaps();
+    if (!ids.ok()) return ids.status();
+    maps = MapDirectory::OpenPostgres(*ids, "the PostgreSQL database", opener);
+  } else if (!config.data_dir.empty()) {
+    maps = MapDirectory::OpenDataDir(config.data_dir, opener);
+  } else {
+    maps = MapDirectory::OpenSingle(db, opener);
+  }
   if (!maps.ok()) return maps.status();
   server->maps_ = std::move(maps).value();
   server->router_ =
@@ -131,7 +145,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   // cap per connection, keepalive (dead peers are dropped), ping-flood
   // protection, idle and maximal connection age.
   const StreamLimits& limits = config.streams;
-  auto ms = [](double s) { return static_cast<int>(std::min(s * 1000.0, 2.0e9)); };
+  auto ms = [](double seconds) { return static_cast<int>(std::min(seconds * 1000.0, 2.0e9)); };
   builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS,
                              static_cast<int>(limits.max_streams_per_connection));
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ms(limits.keepalive_time_s));
@@ -162,8 +176,10 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   server->server_->GetHealthCheckService()->SetServingStatus(false);
   Log(LogLevel::kInfo, "listening",
       {{"address", server->address()},
-       {config.data_dir.empty() ? "db" : "data_dir",
-        config.data_dir.empty() ? db : config.data_dir},
+       {!config.store.empty() ? "store" : config.data_dir.empty() ? "db" : "data_dir",
+        !config.store.empty()     ? "postgresql"
+        : config.data_dir.empty() ? db
+                                  : config.data_dir},
        {"maps", std::to_string(server->maps_->List().size())},
        {"health", "NOT_SERVING"},
        {"reason", "recovering the fused map"},
@@ -180,6 +196,7 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
   auto map = std::make_unique<ServedMap>();
   map->id = id;
   map->db_path = db_path;
+  if (catalog_ != nullptr) return OpenPostgresMap(std::move(map), shared_with, create_with);
   // A map's own settings (map_settings.h): only maps of a data directory
   // have them, in <id>.conf; a new one's are checked and stored first.
   ServerConfig config = config_;
@@ -211,8 +228,65 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
   StatusOr<DatabaseLock> lock = DatabaseLock::Acquire(db_path);
   if (!lock.ok()) return fail(lock.status());
   map->lock = std::move(lock).value();
-  MapCoreOptions core_options;
+  MapCoreOptions core_options = CoreOptions(config);
   core_options.db_path = db_path;
+  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
+  if (!core.ok()) return fail(core.status());
+  map->core = std::move(core).value();
+  map->service =
+      std::make_unique<MapServiceImpl>(map->core.get(), config.ingest, config.submaps,
+                                       config.streams, auth_, MapPlacement{id, shared_with});
+  return map;
+}
+
+StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenPostgresMap(std::unique_ptr<ServedMap> map,
+                                                                MapServiceImpl* shared_with,
+                                                                const MapSettings* create_with) {
+  const std::string& id = map->id;
+  auto fail = [&](const Status& s) {
+    return id == kDefaultMapId ? s : Status(s.code(), "map '" + id + "': " + s.message());
+  };
+  ServerConfig config = config_;
+  if (create_with != nullptr) {
+    // Checked first, then stored with the map's row: a refused setting leaves no map.
+    if (Status s = ApplyMapSettings(*create_with, config_, &config); !s.ok()) return fail(s);
+    Status made = catalog_->CreateMap(id, MapSettingsText(*create_with), UnixNowNs());
+    if (made.code() == StatusCode::kAlreadyExists) {
+      return Status::AlreadyExists("map '" + id +
+                                   "' is in the PostgreSQL database but not served here; restart "
+                                   "mapd to serve it");
+    }
+    if (!made.ok()) return fail(made);
+    map->settings = *create_with;
+  } else {
+    StatusOr<std::string> text = catalog_->Settings(id);
+    if (text.ok()) {
+      const std::string where = "the settings of map '" + id + "' in PostgreSQL";
+      StatusOr<MapSettings> settings = ParseMapSettings(*text, where);
+      if (!settings.ok()) return fail(settings.status());
+      if (Status s = ApplyMapSettings(*settings, config_, &config); !s.ok()) {
+        return fail(Status(s.code(), where + ": " + s.message()));
+      }
+      map->settings = *std::move(settings);
+    } else if (text.status().code() != StatusCode::kNotFound) {  // NotFound: a new default map
+      return fail(text.status());
+    }
+  }
+  MapCoreOptions core_options = CoreOptions(config);
+  core_options.postgres = config_.store;
+  core_options.map_id = id;
+  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
+  if (!core.ok()) return fail(core.status());
+  map->core = std::move(core).value();
+  map->db_path = map->core->store().path();  // for the logs: "postgresql map <id>"
+  map->service =
+      std::make_unique<MapServiceImpl>(map->core.get(), config.ingest, config.submaps,
+                                       config.streams, auth_, MapPlacement{id, shared_with});
+  return map;
+}
+
+MapCoreOptions MapServer::CoreOptions(const ServerConfig& config) {
+  MapCoreOptions core_options;
   core_options.store.synchronous_full = config.sync_full;
   core_options.store.busy_timeout_ms = config.busy_timeout_ms;
   core_options.store.max_db_bytes = config.max_db_bytes;
@@ -227,13 +301,7 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
   core_options.raw_retention_days = config.raw_retention_days;
   core_options.watch = config.watch;
   core_options.hold_fuser_for_test = config.hold_fuser_for_test;
-  StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
-  if (!core.ok()) return fail(core.status());
-  map->core = std::move(core).value();
-  map->service =
-      std::make_unique<MapServiceImpl>(map->core.get(), config.ingest, config.submaps,
-                                       config.streams, auth_, MapPlacement{id, shared_with});
-  return map;
+  return core_options;
 }
 
 void MapServer::WatchMap(ServedMap* map) {

@@ -18,6 +18,7 @@
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_directory.h"
+#include "storage/postgres/map_catalog.h"
 #include "service/map_router.h"
 #include "service/map_service.h"
 
@@ -61,6 +62,12 @@ class MapServer {
   StatusOr<std::unique_ptr<ServedMap>> OpenMap(const std::string& id, const std::string& db_path,
                                                MapServiceImpl* shared_with,
                                                const MapSettings* create_with);
+  // OpenMap for a map of the PostgreSQL database (config_.store).
+  StatusOr<std::unique_ptr<ServedMap>> OpenPostgresMap(std::unique_ptr<ServedMap> map,
+                                                       MapServiceImpl* shared_with,
+                                                       const MapSettings* create_with);
+  // What a map's MapCore takes from the (map's) configuration.
+  static MapCoreOptions CoreOptions(const ServerConfig& config);
   // Logs and health for a map once it is in the directory.
   void WatchMap(ServedMap* map);
   // Each map SERVING once it is recovered, while its database takes writes
@@ -71,6 +78,9 @@ class MapServer {
 
   ServerConfig config_;
   AuthOptions auth_;
+  // With config_.store: the database's maps and their settings. Opening
+  // maps is serialised by MapDirectory (at start, then one Create at a time).
+  std::unique_ptr<storage::PgMapCatalog> catalog_;
   std::unique_ptr<MapDirectory> maps_;
   std::unique_ptr<MapRouter> router_;
   CallsInProgress calls_;  // before server_: its interceptors point here

@@ -173,6 +173,30 @@ StatusOr<PgResult> PgConnection::Query(const std::string& sql, const PgParams& p
   return PgError(conn_.get(), r, sql.substr(0, 60));
 }
 
+Status CheckConninfo(const std::string& conninfo) {
+  char* error = nullptr;
+  PQconninfoOption* options = PQconninfoParse(conninfo.c_str(), &error);
+  if (options == nullptr) {
+    std::string why = error != nullptr ? error : "out of memory";
+    PQfreemem(error);
+    while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
+    return Status::InvalidArgument("store: not a PostgreSQL connection string: " + why);
+  }
+  bool has_password = false;
+  for (PQconninfoOption* o = options; o->keyword != nullptr; ++o) {
+    if (std::strcmp(o->keyword, "password") == 0 && o->val != nullptr && o->val[0] != '\0')
+      has_password = true;
+  }
+  PQconninfoFree(options);
+  if (has_password) {
+    return Status::InvalidArgument(
+        "store: the connection string holds a password, which others can read on the command "
+        "line or in the config file; put it in PGPASSWORD, ~/.pgpass or a file named by "
+        "passfile= (mode 0600)");
+  }
+  return Status::Ok();
+}
+
 Status PgError(PGconn* conn, const PGresult* result, std::string_view what) {
   std::string message = result != nullptr ? PQresultErrorMessage(result) : "";
   if (message.empty() && conn != nullptr) message = PQerrorMessage(conn);

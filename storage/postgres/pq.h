@@ -91,6 +91,12 @@ class PgConnection {
   std::unique_ptr<PGconn, PgConnDeleter> conn_;
 };
 
+// Checks a connection string (libpq key=value or postgresql:// URI) before
+// use: InvalidArgument with libpq's reason when it does not parse, or when it
+// holds a password (command lines and config files are read by others; the
+// password belongs in PGPASSWORD, ~/.pgpass or a passfile=).
+Status CheckConninfo(const std::string& conninfo);
+
 // A failed result (or connection) as a Status naming `what` we were doing:
 // unique violations are AlreadyExists, a full disk or exhausted resources
 // ResourceExhausted, a lost connection, shutdown, serialization failure or

@@ -1,0 +1,107 @@
+// mapd on PostgreSQL (--store), driven through mapctl as an operator would:
+// maps kept in a database the test starts itself (tests/common/postgres.h),
+// across a restart, one mapd per map at a time, and no password on the
+// command line.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <string>
+#include <vector>
+
+#include "common/postgres.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+class MapdOnPostgresTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    PostgresCluster* cluster = PostgresCluster::Shared();
+    if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15)";
+    store_ = cluster->NewDatabase();
+  }
+  MapdProcess Start(const std::string& log_name) {
+    return StartMapd("", {"--store", store_, "--limits.read_wait_s", "120"}, MAPD_BINARY,
+                     std::chrono::seconds(60), "serving", dir_.File(log_name));
+  }
+  CommandResult Mapctl(const MapdProcess& mapd, std::vector<std::string> args) {
+    args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd.address});
+    return RunCommand(args, "", std::chrono::seconds(120));
+  }
+
+  TempDir dir_;
+  std::string store_;
+};
+
+TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
+  MapdProcess mapd = Start("first.log");
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  EXPECT_THAT(mapd.log(), HasSubstr("store=postgresql"));
+  CommandResult r = Mapctl(mapd, {"simulate", "--robots", "2", "--scans", "40"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("80 stored"));
+  r = Mapctl(mapd, {"maps", "create", "site-1", "--set", "fusion.eta_m=0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl(mapd, {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("30 stored"));
+  const CommandResult before = Mapctl(mapd, {"features", "--format", "json"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+  EXPECT_THAT(before.out, HasSubstr("sim-robot-2"));
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
+
+  // Another mapd on the same database serves the same maps, as they were.
+  MapdProcess again = Start("second.log");
+  ASSERT_GT(again.port, 0) << again.log();
+  r = Mapctl(again, {"maps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("site-1"));
+  EXPECT_THAT(r.out, HasSubstr("fusion.eta_m=0.25"));
+  r = Mapctl(again, {"status", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  EXPECT_THAT(r.out, HasSubstr("postgresql map default"));
+  const CommandResult after = Mapctl(again, {"features", "--format", "json"});
+  ASSERT_EQ(after.exit_code, 0) << after.err;
+  EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
+  r = Mapctl(again, {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("30 duplicate"));
+
+  // While it runs, a second mapd on the database refuses to start: each
+  // map has one writer.
+  MapdProcess second = Start("third.log");
+  EXPECT_EQ(second.port, 0);
+  EXPECT_THAT(ReadFileBytes(dir_.File("third.log")), HasSubstr("served by another mapd"));
+  EXPECT_EQ(Stop(again.pid, SIGTERM), 0) << again.log();
+}
+
+TEST_F(MapdOnPostgresTest, APasswordOnTheCommandLineIsRefused) {
+  const CommandResult r =
+      RunCommand({MAPD_BINARY, "--store", store_ + " password=hunter2", "--listen", "127.0.0.1:0"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("holds a password"));
+  EXPECT_THAT(r.err, HasSubstr("PGPASSWORD"));
+  EXPECT_THAT(r.err, ::testing::Not(HasSubstr("hunter2")));
+  const CommandResult both =
+      RunCommand({MAPD_BINARY, "--store", store_, "--db", dir_.File("map.db")});
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_THAT(both.err, HasSubstr("store is set with db"));
+}
+
+TEST_F(MapdOnPostgresTest, AnUnreachableServerIsAClearError) {
+  const CommandResult r =
+      RunCommand({MAPD_BINARY, "--store", "host=" + dir_.path() + " port=1 dbname=x", "--listen",
+                  "127.0.0.1:0"},
+                 "", std::chrono::seconds(60));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("cannot connect to PostgreSQL"));
+}
+
+}  // namespace
+}  // namespace mapd::testing
