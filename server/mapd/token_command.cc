@@ -8,6 +8,7 @@
 #include "service/auth.h"
 #include "service/file_modes.h"
 #include "service/token.h"
+#include "storage/postgres/store.h"
 #include "storage/sqlite/store.h"
 #include "storage/store.h"
 
@@ -16,6 +17,7 @@ namespace {
 
 struct TokenOptions {
   std::string db;
+  std::string store;  // PostgreSQL instead of a file
   std::string role;
   std::string name;
   std::string robot;
@@ -50,6 +52,17 @@ storage::AuditEntry OfflineAudit(const std::string& action, const std::string& t
 }
 
 StatusOr<std::unique_ptr<storage::Store>> Open(const TokenOptions& flags) {
+  if (flags.db.empty() == flags.store.empty())
+    return Status::InvalidArgument("give --db FILE or --store CONNINFO (one of them)");
+  if (!flags.store.empty()) {
+    // Tokens are the database's, whichever map: open the default map without
+    // its lock, so that this works beside the mapd that serves it.
+    MAPD_RETURN_IF_ERROR(storage::CheckConninfo(flags.store));
+    StatusOr<std::unique_ptr<storage::PgStore>> store =
+        storage::PgStore::Open(flags.store, "default", storage::StoreOptions{}, /*own=*/false);
+    if (!store.ok()) return store.status();
+    return std::unique_ptr<storage::Store>(std::move(store).value());
+  }
   MAPD_RETURN_IF_ERROR(service::CheckDatabaseFileModes(flags.db));
   StatusOr<std::unique_ptr<storage::SqliteStore>> store =
       storage::SqliteStore::Open(flags.db, storage::StoreOptions{});
@@ -123,10 +136,13 @@ void AddTokenCommand(CLI::App* app, std::function<int()>* action) {
   auto flags = std::make_shared<TokenOptions>();
   const auto add = [&](const char* name, const char* summary, int (*run)(const TokenOptions&)) {
     CLI::App* verb = token->add_subcommand(name, summary);
-    verb->add_option("--db", flags->db,
-                     "the database file mapd serves (with --data-dir DIR: DIR/default.db, which "
-                     "holds the tokens of every map)")
-        ->required();
+    CLI::Option* db =
+        verb->add_option("--db", flags->db,
+                         "the database file mapd serves (with --data-dir DIR: DIR/default.db, "
+                         "which holds the tokens of every map)");
+    verb->add_option("--store", flags->store,
+                     "instead of --db: the PostgreSQL database mapd serves (--store of mapd)")
+        ->excludes(db);
     verb->callback([flags, action, run] { *action = [flags, run] { return run(*flags); }; });
     return verb;
   };

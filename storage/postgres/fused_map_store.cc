@@ -5,6 +5,7 @@
 namespace mapd::storage {
 
 Status PgWriteTransaction::UpsertFused(const FusedRow& r) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(static_cast<int64_t>(r.id)).Int(r.kind);
   p.Double(r.segment.a.x()).Double(r.segment.a.y()).Double(r.segment.b.x()).Double(r.segment.b.y());
@@ -21,12 +22,14 @@ Status PgWriteTransaction::UpsertFused(const FusedRow& r) {
 }
 
 Status PgWriteTransaction::DeleteFused(uint64_t id) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(static_cast<int64_t>(id));
   return Query("DELETE FROM fused_features WHERE map = $1 AND id = $2", std::move(p)).status();
 }
 
 Status PgWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   const std::string boundary = EncodeBoundary(r.boundary);
   PgParams p = MapParams();
   p.Int(static_cast<int64_t>(r.id));
@@ -46,6 +49,7 @@ Status PgWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
 }
 
 Status PgWriteTransaction::DeleteFusedPlane(uint64_t id) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(static_cast<int64_t>(id));
   return Query("DELETE FROM fused_planes WHERE map = $1 AND id = $2", std::move(p)).status();

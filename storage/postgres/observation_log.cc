@@ -52,7 +52,8 @@ Status PgWriteScope::Commit() {
 // PgObservationLog
 
 StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::string& conninfo,
-                                                                   const std::string& map_id) {
+                                                                   const std::string& map_id,
+                                                                   bool own) {
   std::unique_ptr<PgObservationLog> log(new PgObservationLog());
   log->map_id_ = map_id;
   StatusOr<PgConnection> writer = PgConnection::Connect(conninfo);
@@ -60,7 +61,10 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   log->writer_ = std::move(writer).value();
   MAPD_RETURN_IF_ERROR(MigratePostgres(log->writer_));
   MAPD_RETURN_IF_ERROR(EnsureMapPartitions(log->writer_, map_id));
-  MAPD_RETURN_IF_ERROR(log->Own());
+  if (own) {
+    MAPD_RETURN_IF_ERROR(log->Own());
+    log->owner_ = true;
+  }
   StatusOr<PgConnection> reader = PgConnection::Connect(conninfo);
   if (!reader.ok()) return reader.status();
   log->reader_ = std::move(reader).value();
@@ -319,6 +323,7 @@ PgObservationWriter::PgObservationWriter(PgObservationLog* log) : log_(log) {
 }
 
 StatusOr<int64_t> PgObservationWriter::RobotId(const std::string& name, int64_t now_ns) {
+  MAPD_RETURN_IF_ERROR(CheckOwner());
   if (auto it = new_robots_.find(name); it != new_robots_.end()) return it->second;
   {
     std::lock_guard<std::mutex> lock(log_->cache_mu_);
@@ -362,7 +367,15 @@ StatusOr<SessionFrame> PgObservationWriter::Session(int64_t robot_id, const std:
   return f;
 }
 
+Status PgObservationWriter::CheckOwner() const {
+  if (log_->owner_) return Status::Ok();
+  return Status::FailedPrecondition("map '" + log_->map_id_ +
+                                    "' was opened without its lock (for tokens and audit rows "
+                                    "only); its data is written by the mapd that serves it");
+}
+
 StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservation& obs) {
+  MAPD_RETURN_IF_ERROR(CheckOwner());
   StatusOr<int64_t> robot_id = RobotId(obs.robot, obs.received_ns);
   if (!robot_id.ok()) return robot_id.status();
   StatusOr<SessionFrame> frame = Session(*robot_id, obs.session, obs.frame_kind, obs.received_ns);
@@ -410,6 +423,7 @@ StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservati
 }
 
 Status PgObservationWriter::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {
+  MAPD_RETURN_IF_ERROR(CheckOwner());
   const std::string tied = "session " + std::to_string(session_id) + " is tied already";
   if (new_ties_.count(session_id) != 0) return Status::FailedPrecondition(tied);
   StatusOr<SessionFrame> current = log_->GetSession(session_id);

@@ -50,8 +50,12 @@ class PgObservationLog final : public ObservationReader {
  public:
   // Connects twice to `conninfo`, migrates the schema, makes `map_id`'s
   // partition and loads the map's robots and sessions.
+  // `own` false: without the map's lock, for tools that write tokens and
+  // audit rows beside a running mapd (the writer then refuses map data).
   static StatusOr<std::unique_ptr<PgObservationLog>> Open(const std::string& conninfo,
-                                                          const std::string& map_id);
+                                                          const std::string& map_id,
+                                                          bool own = true);
+  bool owner() const { return owner_; }
 
   // The writer connection (writer thread only), for PgWriteScope and the
   // other intents' writers.
@@ -96,6 +100,7 @@ class PgObservationLog final : public ObservationReader {
   }
 
   std::string map_id_;
+  bool owner_ = false;  // holds the map's lock
   PgConnection writer_;
   PgConnection reader_;
   std::mutex reader_mu_;  // guards reader_
@@ -127,6 +132,10 @@ class PgObservationWriter final : public ObservationWriter {
   // id, made on first sight, and a session's id (0 if it has none).
   StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
   int64_t SessionId(int64_t robot_id, const std::string& name) const;
+  // FailedPrecondition unless the log holds the map's lock: robots,
+  // sessions, observations and ties (and so submaps and merges, which make
+  // robots) are written by the map's owner only.
+  Status CheckOwner() const;
 
  private:
   friend class PgObservationLog;

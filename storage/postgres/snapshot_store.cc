@@ -5,6 +5,7 @@ namespace mapd::storage {
 
 Status PgWriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int keep,
                                           SnapshotParts parts) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(snapshot.created_ns).Int(static_cast<int64_t>(snapshot.map_version));
   p.Int(snapshot.through_observation).Int(snapshot.through_tie_seq).Text(snapshot.params);
@@ -42,6 +43,7 @@ Status PgWriteTransaction::InsertSnapshot(const FusionSnapshot& snapshot, int ke
 }
 
 Status PgWriteTransaction::InsertSnapshotPart(int64_t key, int index, std::string_view bytes) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(key).Int(index).Bytes(bytes);
   return Query(
@@ -52,6 +54,7 @@ Status PgWriteTransaction::InsertSnapshotPart(int64_t key, int index, std::strin
 }
 
 StatusOr<int> PgWriteTransaction::DeleteUnusedSnapshotParts(int limit) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(limit);
   StatusOr<PgResult> r = Query(
@@ -64,6 +67,7 @@ StatusOr<int> PgWriteTransaction::DeleteUnusedSnapshotParts(int limit) {
 }
 
 StatusOr<uint64_t> PgWriteTransaction::DropRawObservations(int64_t received_before_ns, int limit) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   // As the SQLite backend: only what every kept snapshot reflects, only of
   // sessions whose tie they reflect, never the newest row (ids restart from
   // the newest stored + 1 when the map is opened again).

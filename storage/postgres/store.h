@@ -85,9 +85,11 @@ class PgStore final : public Store {
  public:
   // Connects to `conninfo` (libpq: "host=... dbname=..." or a
   // postgresql:// URI), migrates the schema and opens map `map_id`.
+  // `own` false: without the map's lock (PgObservationLog::Open), for
+  // `mapd token` beside a running mapd; map data is then refused.
   static StatusOr<std::unique_ptr<PgStore>> Open(const std::string& conninfo,
                                                  const std::string& map_id,
-                                                 const StoreOptions& options);
+                                                 const StoreOptions& options, bool own = true);
   ~PgStore() override = default;
 
   StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite() override;

@@ -51,6 +51,7 @@ SubmapMeta SubmapAt(const PgResult& q, int i) {
 }  // namespace
 
 StatusOr<int64_t> PgWriteTransaction::InsertSubmap(const NewSubmap& submap) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   const SubmapMeta& m = submap.meta;
   StatusOr<int64_t> robot_id = obs_->RobotId(m.robot, m.created_ns);
   if (!robot_id.ok()) return robot_id.status();
@@ -98,6 +99,7 @@ StatusOr<int64_t> PgWriteTransaction::InsertSubmap(const NewSubmap& submap) {
 }
 
 Status PgWriteTransaction::DeleteSubmap(int64_t id) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(id);
   StatusOr<PgResult> pinned = Query(
@@ -122,6 +124,7 @@ Status PgWriteTransaction::DeleteSubmap(int64_t id) {
 }
 
 StatusOr<MergeIds> PgWriteTransaction::RecordMerge(const NewMerge& merge) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   const MergeRecord& r = merge.record;
   PgParams p = MapParams();
   p.Int(r.created_ns).Text(MergeStateName(r.state)).Text(r.reason).Text(r.requested_by);
@@ -182,6 +185,7 @@ StatusOr<MergeIds> PgWriteTransaction::RecordMerge(const NewMerge& merge) {
 
 Status PgWriteTransaction::DecideMerge(int64_t id, MergeState state, const std::string& who,
                                        int64_t now_ns, const std::string& reason) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   if (state != MergeState::kAccepted && state != MergeState::kRejected) {
     return Status::InvalidArgument("a merge is decided as accepted or rejected only");
   }
@@ -207,6 +211,7 @@ Status PgWriteTransaction::DecideMerge(int64_t id, MergeState state, const std::
 
 Status PgWriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
                                        const geometry::Rigid3& T_map_submap) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(submap_id).Int(merge_id);
   AddPose(p, T_map_submap);
@@ -218,6 +223,7 @@ Status PgWriteTransaction::PlaceSubmap(int64_t submap_id, int64_t merge_id,
 }
 
 Status PgWriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   PgParams p = MapParams();
   p.Int(static_cast<int64_t>(map.version)).Int(map.built_ns).Double(map.resolution_m);
   p.Int(static_cast<int64_t>(map.occupied_voxels)).Int(static_cast<int64_t>(map.free_voxels));
@@ -233,6 +239,7 @@ Status PgWriteTransaction::PutGlobalMap(const GlobalMapRecord& map) {
 }
 
 Status PgWriteTransaction::DeleteGlobalMap() {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
   StatusOr<PgResult> r = Query("DELETE FROM global_map WHERE map = $1", MapParams());
   if (!r.ok()) return r.status();
   PgParams b = MapParams();

@@ -81,6 +81,31 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   EXPECT_EQ(Stop(again.pid, SIGTERM), 0) << again.log();
 }
 
+// The first admin token from the database, beside the running mapd (tokens
+// are the database's, whichever map or mapd).
+TEST_F(MapdOnPostgresTest, TokensBootstrapFromTheDatabaseWhileMapdRuns) {
+  MapdProcess mapd = Start("mapd.log");
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  CommandResult r = RunCommand(
+      {MAPD_BINARY, "token", "create", "--store", store_, "--role", "admin", "--name", "root"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string admin = r.out.substr(0, r.out.find('\n'));
+  ASSERT_EQ(admin.rfind("mapd_", 0), 0u) << r.out;
+  r = Mapctl(mapd, {"status"});  // a token exists now: no anonymous calls
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("UNAUTHENTICATED"));
+  r = Mapctl(mapd, {"--token", admin, "whoami"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("root (role admin"));
+  r = Mapctl(mapd, {"--token", admin, "audit"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("mapd token (offline)"));
+  r = RunCommand({MAPD_BINARY, "token", "list", "--store", store_});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("root"));
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
+}
+
 TEST_F(MapdOnPostgresTest, APasswordOnTheCommandLineIsRefused) {
   const CommandResult r =
       RunCommand({MAPD_BINARY, "--store", store_ + " password=hunter2", "--listen", "127.0.0.1:0"});
