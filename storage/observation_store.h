@@ -139,6 +139,13 @@ class ObservationWriter {
   // the robot and session on first sight. A batch whose frame kind disagrees
   // with its session's is refused with InvalidArgument; the transaction goes on.
   virtual StatusOr<InsertResult> InsertObservation(const NewObservation& obs) = 0;
+  // InsertObservation for each of `batches`, in order, as if one by one:
+  // result i is batches[i]'s, an InvalidArgument there being that batch's
+  // refusal (the others go on). The outer status fails the transaction. A
+  // backend may store them all in one round trip (PostgreSQL does); the
+  // default calls InsertObservation.
+  virtual StatusOr<std::vector<StatusOr<InsertResult>>> InsertObservations(
+      const std::vector<NewObservation>& batches);
   // Ties a session frame to the map frame (T_map_frame). FailedPrecondition
   // if it is tied already: a tie is never moved, so the map stays consistent.
   // The tie is recorded at set_tie_point()'s position in the commit order.

@@ -1,8 +1,21 @@
 // The backend-neutral helpers of the storage contract (storage/*_store.h).
+#include "storage/observation_store.h"
 #include "storage/snapshot_store.h"
 #include "storage/submap_store.h"
 
 namespace mapd::storage {
+
+StatusOr<std::vector<StatusOr<InsertResult>>> ObservationWriter::InsertObservations(
+    const std::vector<NewObservation>& batches) {
+  std::vector<StatusOr<InsertResult>> results;
+  results.reserve(batches.size());
+  for (const NewObservation& obs : batches) {
+    StatusOr<InsertResult> r = InsertObservation(obs);
+    if (!r.ok() && r.status().code() != StatusCode::kInvalidArgument) return r.status();
+    results.push_back(std::move(r));
+  }
+  return results;
+}
 
 const char* MergeStateName(MergeState state) {
   switch (state) {

@@ -433,24 +433,32 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   StatusOr<std::unique_ptr<storage::WriteTransaction>> txn = store_->BeginWrite();
   if (!txn.ok()) failure = txn.status();
 
-  for (size_t i = 0; i < group.size() && failure.ok(); ++i) {
+  // The whole group in one call: a backend with round trips (PostgreSQL)
+  // stores it in one.
+  std::vector<storage::NewObservation> rows(group.size());
+  const int64_t received_ns = UnixNowNs();
+  for (size_t i = 0; i < group.size(); ++i) {
     const IngestBatch& b = group[i].batch;
-    storage::NewObservation row;
+    storage::NewObservation& row = rows[i];
     row.robot = b.robot;
     row.session = b.session;
     row.seq = b.seq;
     row.stamp_ns = b.stamp_ns;
-    row.received_ns = UnixNowNs();
+    row.received_ns = received_ns;
     row.frame_kind = b.frame_kind;
     row.features = &b.features;
-    StatusOr<storage::InsertResult> r = (*txn)->InsertObservation(row);
+  }
+  StatusOr<std::vector<StatusOr<storage::InsertResult>>> results = Status::Internal("not run");
+  if (failure.ok()) {
+    results = (*txn)->InsertObservations(rows);
+    if (!results.ok()) failure = results.status();
+  }
+  for (size_t i = 0; i < group.size() && failure.ok(); ++i) {
+    const IngestBatch& b = group[i].batch;
+    StatusOr<storage::InsertResult>& r = (*results)[i];
     if (!r.ok()) {
-      if (r.status().code() == StatusCode::kInvalidArgument) {
-        outcomes[i] = {BatchOutcome::Kind::kRejected, r.status()};
-        continue;
-      }
-      failure = r.status();
-      break;
+      outcomes[i] = {BatchOutcome::Kind::kRejected, r.status()};  // InvalidArgument
+      continue;
     }
     {
       std::lock_guard<std::mutex> lock(names_mu_);

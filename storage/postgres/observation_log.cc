@@ -374,7 +374,7 @@ Status PgObservationWriter::CheckOwner() const {
                                     "only); its data is written by the mapd that serves it");
 }
 
-StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservation& obs) {
+StatusOr<SessionFrame> PgObservationWriter::FrameOf(const NewObservation& obs) {
   MAPD_RETURN_IF_ERROR(CheckOwner());
   StatusOr<int64_t> robot_id = RobotId(obs.robot, obs.received_ns);
   if (!robot_id.ok()) return robot_id.status();
@@ -387,6 +387,125 @@ StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservati
         (frame->kind == FrameKind::kMap ? "SESSION_FRAME_MAP" : "SESSION_FRAME_LOCAL") +
         "; start a new session_id to change it");
   }
+  return frame;
+}
+
+void PgObservationWriter::CountStored(const NewObservation& obs, int64_t robot_id) {
+  RobotDelta& d = robot_deltas_[robot_id];
+  d.batches += 1;
+  d.features += obs.features->lines.size() + obs.features->planes.size();
+  d.last_seen_ns = std::max(d.last_seen_ns, obs.received_ns);
+}
+
+StatusOr<std::vector<StatusOr<InsertResult>>> PgObservationWriter::InsertObservations(
+    const std::vector<NewObservation>& batches) {
+  std::vector<StatusOr<InsertResult>> results;
+  results.reserve(batches.size());
+  // Columns of the batches to insert, for unnest(): one statement for all.
+  std::vector<size_t> index;  // into batches
+  std::vector<int64_t> session, seq, stamp, received, lines, planes;
+  std::vector<double> pose[7];
+  std::vector<std::string> payloads;
+  for (size_t i = 0; i < batches.size(); ++i) {
+    const NewObservation& obs = batches[i];
+    StatusOr<SessionFrame> frame = FrameOf(obs);
+    if (!frame.ok() && frame.status().code() != StatusCode::kInvalidArgument) return frame.status();
+    if (!frame.ok()) {
+      results.push_back(frame.status());
+      continue;
+    }
+    InsertResult r;
+    r.frame = *frame;
+    results.push_back(r);
+    const geometry::SensorObservation& f = *obs.features;
+    index.push_back(i);
+    session.push_back(frame->session_id);
+    seq.push_back(static_cast<int64_t>(obs.seq));
+    stamp.push_back(obs.stamp_ns);
+    received.push_back(obs.received_ns);
+    const geometry::Rigid3& T = f.T_frame_sensor;
+    const double values[7] = {T.rotation.w(),   T.rotation.x(),    T.rotation.y(),
+                              T.rotation.z(),   T.translation.x(), T.translation.y(),
+                              T.translation.z()};
+    for (int k = 0; k < 7; ++k) pose[k].push_back(values[k]);
+    lines.push_back(static_cast<int64_t>(f.lines.size()));
+    planes.push_back(static_cast<int64_t>(f.planes.size()));
+    payloads.emplace_back();
+    EncodeFeatures(f, &payloads.back());
+  }
+  if (index.empty()) return results;
+  PgParams p;
+  p.Text(log_->map_id_).IntArray(session).IntArray(seq).IntArray(stamp).IntArray(received);
+  for (const std::vector<double>& column : pose) p.DoubleArray(column);
+  p.IntArray(lines).IntArray(planes);
+  p.BytesArray({payloads.begin(), payloads.end()});
+  p.Int(next_id_);
+  // Ids in input order for the batches not stored before (the first of a
+  // batch sent twice in this group): the same ids one by one would give.
+  StatusOr<PgResult> r = log_->writer_.Query(
+      "WITH input AS (SELECT * FROM unnest($2::int8[], $3::int8[], $4::int8[], $5::int8[], "
+      "$6::float8[], $7::float8[], $8::float8[], $9::float8[], $10::float8[], $11::float8[], "
+      "$12::float8[], $13::int8[], $14::int8[], $15::bytea[]) WITH ORDINALITY AS t(session_id, "
+      "seq, stamp_ns, received_ns, qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload, "
+      "ord)), "
+      "fresh AS (SELECT DISTINCT ON (session_id, seq) * FROM input i WHERE NOT EXISTS (SELECT 1 "
+      "FROM observations o WHERE o.map = $1 AND o.session_id = i.session_id AND o.seq = i.seq) "
+      "ORDER BY session_id, seq, ord), "
+      "numbered AS (SELECT *, $16 + row_number() OVER (ORDER BY ord) - 1 AS id FROM fresh) "
+      "INSERT INTO observations (map, id, session_id, seq, stamp_ns, received_ns, qw, qx, qy, qz, "
+      "tx, ty, tz, line_count, plane_count, payload) SELECT $1, id, session_id, seq, stamp_ns, "
+      "received_ns, qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload FROM numbered "
+      "RETURNING session_id, seq, id",
+      p);
+  if (!r.ok()) return r.status();
+  struct Key {
+    int64_t session, seq;
+    bool operator==(const Key& o) const { return session == o.session && seq == o.seq; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return std::hash<int64_t>()(k.session) * 1000003u ^ std::hash<int64_t>()(k.seq);
+    }
+  };
+  std::unordered_map<Key, std::pair<int64_t, bool>, KeyHash> stored;  // -> id, claimed
+  for (int i = 0; i < r->rows(); ++i) stored[{r->Int(i, 0), r->Int(i, 1)}] = {r->Int(i, 2), false};
+  next_id_ += r->rows();
+  std::vector<size_t> earlier;  // positions in `index` of batches stored before this group
+  for (size_t k = 0; k < index.size(); ++k) {
+    InsertResult& result = *results[index[k]];
+    auto it = stored.find({session[k], seq[k]});
+    if (it == stored.end()) {
+      earlier.push_back(k);
+    } else {
+      result.observation_id = it->second.first;
+      result.stored = !it->second.second;  // a second copy in the group is a duplicate
+      if (result.stored) CountStored(batches[index[k]], result.frame.robot_id);
+      it->second.second = true;
+    }
+  }
+  if (earlier.empty()) return results;
+  std::vector<int64_t> dup_session, dup_seq;
+  for (size_t k : earlier) {
+    dup_session.push_back(session[k]);
+    dup_seq.push_back(seq[k]);
+  }
+  PgParams q;
+  q.Text(log_->map_id_).IntArray(dup_session).IntArray(dup_seq);
+  StatusOr<PgResult> found = log_->writer_.Query(
+      "SELECT o.session_id, o.seq, o.id FROM observations o JOIN unnest($2::int8[], $3::int8[]) "
+      "AS d(session_id, seq) ON o.session_id = d.session_id AND o.seq = d.seq WHERE o.map = $1",
+      q);
+  if (!found.ok()) return found.status();
+  std::unordered_map<Key, int64_t, KeyHash> ids;
+  for (int i = 0; i < found->rows(); ++i)
+    ids[{found->Int(i, 0), found->Int(i, 1)}] = found->Int(i, 2);
+  for (size_t k : earlier) results[index[k]]->observation_id = ids[{session[k], seq[k]}];
+  return results;
+}
+
+StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservation& obs) {
+  StatusOr<SessionFrame> frame = FrameOf(obs);
+  if (!frame.ok()) return frame.status();
   InsertResult result;
   result.frame = *frame;
   const geometry::SensorObservation& f = *obs.features;
@@ -414,10 +533,7 @@ StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservati
   result.stored = r->Int(0, 1) != 0;
   if (result.stored) {
     ++next_id_;
-    RobotDelta& d = robot_deltas_[*robot_id];
-    d.batches += 1;
-    d.features += f.lines.size() + f.planes.size();
-    d.last_seen_ns = std::max(d.last_seen_ns, obs.received_ns);
+    CountStored(obs, frame->robot_id);
   }
   return result;
 }

@@ -117,6 +117,10 @@ class PgObservationLog final : public ObservationReader {
 class PgObservationWriter final : public ObservationWriter {
  public:
   StatusOr<InsertResult> InsertObservation(const NewObservation& obs) override;
+  // One INSERT ... SELECT FROM unnest(...) for the whole group (plus one
+  // SELECT when some were stored before): a round trip per group, not per batch.
+  StatusOr<std::vector<StatusOr<InsertResult>>> InsertObservations(
+      const std::vector<NewObservation>& batches) override;
   Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) override;
   void set_tie_point(int64_t newest_observation_id) override { tie_point_ = newest_observation_id; }
   bool ties_sessions() const override { return !new_ties_.empty(); }
@@ -146,6 +150,10 @@ class PgObservationWriter final : public ObservationWriter {
   };
   StatusOr<SessionFrame> Session(int64_t robot_id, const std::string& name, FrameKind kind,
                                  int64_t now_ns);
+  // The batch's session frame (robot and session made on first sight);
+  // InvalidArgument when its frame kind disagrees with the session's.
+  StatusOr<SessionFrame> FrameOf(const NewObservation& obs);
+  void CountStored(const NewObservation& obs, int64_t robot_id);
 
   PgObservationLog* log_;
   int64_t next_id_;  // the id the next stored observation gets

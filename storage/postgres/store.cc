@@ -8,8 +8,7 @@ StatusOr<std::unique_ptr<PgStore>> PgStore::Open(const std::string& conninfo,
                                                  const std::string& map_id,
                                                  const StoreOptions& options, bool own) {
   std::unique_ptr<PgStore> store(new PgStore());
-  StatusOr<std::unique_ptr<PgObservationLog>> log =
-      PgObservationLog::Open(conninfo, map_id, own);
+  StatusOr<std::unique_ptr<PgObservationLog>> log = PgObservationLog::Open(conninfo, map_id, own);
   if (!log.ok()) return log.status();
   store->log_ = std::move(log).value();
   store->path_ = "postgresql map " + map_id;

@@ -31,6 +31,10 @@ class PgWriteTransaction final : public WriteTransaction {
   StatusOr<InsertResult> InsertObservation(const NewObservation& obs) override {
     return obs_->InsertObservation(obs);
   }
+  StatusOr<std::vector<StatusOr<InsertResult>>> InsertObservations(
+      const std::vector<NewObservation>& batches) override {
+    return obs_->InsertObservations(batches);
+  }
   Status TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) override {
     return obs_->TieSession(session_id, T_map_frame);
   }

@@ -42,16 +42,17 @@ Figures Run(mapd::storage::testing::ObservationBackend& backend, int batches, in
   for (int done = 0; done < batches; done += group) {
     const auto t0 = std::chrono::steady_clock::now();
     Status s = backend.Write([&](ObservationWriter& w) {
+      std::vector<NewObservation> rows;
       for (int k = 0; k < group && done + k < batches; ++k) {
         NewObservation o;
         o.robot = "r" + std::to_string(k % 8);
         o.session = "s";
         o.seq = ++seq;
         o.features = &f;
-        StatusOr<InsertResult> r = w.InsertObservation(o);
-        if (!r.ok()) return r.status();
+        rows.push_back(o);
       }
-      return Status::Ok();
+      // As mapd's writer: the group in one call (one round trip on PostgreSQL).
+      return w.InsertObservations(rows).status();
     });
     if (!s.ok()) {
       std::fprintf(stderr, "write failed: %s\n", s.ToString().c_str());

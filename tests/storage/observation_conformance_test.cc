@@ -291,6 +291,49 @@ TEST_P(ObservationConformanceTest, RangesSessionsRecentPosesAndTrails) {
   EXPECT_EQ(backend_->reader().ListTrails("", 100)->size(), 2u);
 }
 
+// A group at once answers as one by one: new batches get ids in order,
+// resends (earlier or within the group) are duplicates naming the stored
+// row, and a batch refused for its frame kind leaves the others stored.
+TEST_P(ObservationConformanceTest, AGroupAtOnceAnswersAsOneByOne) {
+  auto first = InsertOne(Batch("r1", "s1", 1));
+  ASSERT_TRUE(first.ok());
+  std::vector<NewObservation> group = {Batch("r1", "s1", 2), Batch("r1", "s1", 1),
+                                       Batch("r2", "s1", 1), Batch("r1", "s1", 2),
+                                       Batch("r1", "s1", 3, FrameKind::kLocal),
+                                       Batch("r1", "s1", 4)};
+  std::vector<StatusOr<InsertResult>> results;
+  Status s = backend_->Write([&](ObservationWriter& w) {
+    StatusOr<std::vector<StatusOr<InsertResult>>> r = w.InsertObservations(group);
+    if (!r.ok()) return r.status();
+    results = *std::move(r);
+    return Status::Ok();
+  });
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(results.size(), group.size());
+  for (size_t i : {0u, 1u, 2u, 3u, 5u}) ASSERT_TRUE(results[i].ok()) << i;
+  EXPECT_TRUE(results[0]->stored);
+  EXPECT_EQ(results[0]->observation_id, first->observation_id + 1);
+  EXPECT_FALSE(results[1]->stored);
+  EXPECT_EQ(results[1]->observation_id, first->observation_id);
+  EXPECT_TRUE(results[2]->stored);
+  EXPECT_EQ(results[2]->observation_id, first->observation_id + 2);
+  EXPECT_FALSE(results[3]->stored);
+  EXPECT_EQ(results[3]->observation_id, results[0]->observation_id);
+  EXPECT_EQ(results[4].status().code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(results[5]->stored);
+  EXPECT_EQ(results[5]->observation_id, first->observation_id + 3);
+  EXPECT_EQ(results[2]->frame.robot_id, backend_->reader().FindSession("r2", "s1")->robot_id);
+  EXPECT_EQ(All().size(), 4u);
+  EXPECT_EQ(*backend_->reader().NewestObservationId(), results[5]->observation_id);
+  auto robots = backend_->reader().ListRobots();
+  ASSERT_TRUE(robots.ok());
+  EXPECT_EQ((*robots)[0].batches, 3u);  // r1: seq 1, 2, 4
+  // And the next one goes on from there.
+  auto next = InsertOne(Batch("r1", "s1", 5));
+  ASSERT_TRUE(next.ok());
+  EXPECT_EQ(next->observation_id, results[5]->observation_id + 1);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, ObservationConformanceTest,
                          ::testing::Values("sqlite", "postgresql"),
                          [](const ::testing::TestParamInfo<std::string>& p) { return p.param; });
