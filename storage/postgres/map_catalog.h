@@ -32,8 +32,8 @@ class PgMapCatalog {
   PgConnection conn_;
 };
 
-// Map ids on PostgreSQL are mapd's map ids: 1-64 of A-Z a-z 0-9 _ . -
-// (InvalidArgument otherwise; they are also part of a partition's name).
+// Map ids on PostgreSQL are mapd's map ids: 1-128 of A-Z a-z 0-9 _ . -, not
+// starting with '.' (InvalidArgument otherwise).
 Status CheckPgMapId(const std::string& id);
 
 }  // namespace mapd::storage

@@ -60,7 +60,10 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   if (!writer.ok()) return writer.status();
   log->writer_ = std::move(writer).value();
   MAPD_RETURN_IF_ERROR(MigratePostgres(log->writer_));
-  MAPD_RETURN_IF_ERROR(EnsureMapPartitions(log->writer_, map_id));
+  StatusOr<MapRow> row = EnsureMap(log->writer_, map_id, UnixNowNs());
+  if (!row.ok()) return row.status();
+  log->map_num_ = row->num;
+  log->partition_ = row->partition;
   if (own) {
     MAPD_RETURN_IF_ERROR(log->Own());
     log->owner_ = true;
@@ -76,16 +79,9 @@ Status PgObservationLog::Own() {
   // The lock is the writer connection's: it goes when the connection does
   // (mapd stops or dies and its socket closes). A paused mapd keeps it, so
   // nothing takes over from it either (leases with fencing: step 3).
-  PgParams p;
-  p.Text(map_id_).Int(UnixNowNs());
-  StatusOr<PgResult> r = writer_.Query(
-      "INSERT INTO maps (id, created_ns) VALUES ($1, $2) ON CONFLICT (id) DO NOTHING", p);
-  if (!r.ok()) return r.status();
-  PgParams q;
-  q.Text(map_id_);
-  r = writer_.Query("SELECT pg_try_advisory_lock(" + std::to_string(kMapLockClass) +
-                        ", num) FROM maps WHERE id = $1",
-                    q);
+  StatusOr<PgResult> r = writer_.Query("SELECT pg_try_advisory_lock(" +
+                                       std::to_string(kMapLockClass) + ", " +
+                                       std::to_string(map_num_) + ")");
   if (!r.ok()) return r.status();
   if (r->rows() != 1 || r->Int(0, 0) == 0) {
     return Status::FailedPrecondition(

@@ -80,14 +80,15 @@ class PgObservationLog final : public ObservationReader {
                                                      uint32_t max_points) override;
 
   const std::string& map_id() const { return map_id_; }
+  const std::string& partition() const { return partition_; }
 
  private:
   friend class PgObservationWriter;
   friend class PgStore;  // shares the connections with the other intents
   PgObservationLog() = default;
-  // Adds the map's row if missing and takes its ownership lock (a session
-  // advisory lock on the writer connection): one mapd writes a map at a time.
-  // FailedPrecondition when another holds it.
+  // Takes the map's ownership lock (a session advisory lock on the writer
+  // connection): one mapd writes a map at a time. FailedPrecondition when
+  // another holds it.
   Status Own();
   Status LoadCaches();
   static constexpr int32_t kMapLockClass = 0x6d617064;  // "mapd"
@@ -100,7 +101,9 @@ class PgObservationLog final : public ObservationReader {
   }
 
   std::string map_id_;
-  bool owner_ = false;  // holds the map's lock
+  int64_t map_num_ = 0;    // maps.num
+  std::string partition_;  // the map's observations' table
+  bool owner_ = false;     // holds the map's lock
   PgConnection writer_;
   PgConnection reader_;
   std::mutex reader_mu_;  // guards reader_

@@ -252,25 +252,49 @@ Status MigratePostgres(PgConnection& conn) {
 }
 
 Status CheckPgMapId(const std::string& id) {
-  bool ok = !id.empty() && id.size() <= 64;
+  bool ok = !id.empty() && id.size() <= 128 && id[0] != '.';
   for (char c : id) {
     ok = ok && ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                 c == '_' || c == '.' || c == '-');
   }
   if (ok) return Status::Ok();
-  return Status::InvalidArgument("'" + id + "' is not a map id (1-64 of A-Z a-z 0-9 _ . -)");
+  return Status::InvalidArgument("'" + id.substr(0, 200) +
+                                 "' is not a map id (1-128 of A-Z a-z 0-9 _ . -, not starting "
+                                 "with '.')");
 }
 
-Status EnsureMapPartitions(PgConnection& conn, const std::string& map_id) {
+StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_t now_ns) {
   MAPD_RETURN_IF_ERROR(CheckPgMapId(map_id));
-  // The alphabet has no quote of either kind, so the id is safe inside
-  // both. Under the migration lock: two mapd opening one new map together
-  // would otherwise race on CREATE TABLE IF NOT EXISTS.
-  Status s = conn.Exec("BEGIN; SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) +
-                       "); CREATE TABLE IF NOT EXISTS \"observations/" + map_id +
-                       "\" PARTITION OF observations FOR VALUES IN ('" + map_id + "'); COMMIT");
-  if (!s.ok()) (void)conn.Exec("ROLLBACK");
-  return s;
+  // Under the migration lock: two mapd opening one new map together would
+  // otherwise race on CREATE TABLE IF NOT EXISTS.
+  MAPD_RETURN_IF_ERROR(conn.Exec("BEGIN"));
+  StatusOr<MapRow> row = [&]() -> StatusOr<MapRow> {
+    MAPD_RETURN_IF_ERROR(
+        conn.Exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")"));
+    PgParams p;
+    p.Text(map_id).Int(now_ns);
+    StatusOr<PgResult> r = conn.Query(
+        "INSERT INTO maps (id, created_ns) VALUES ($1, $2) ON CONFLICT (id) DO NOTHING", p);
+    if (!r.ok()) return r.status();
+    PgParams q;
+    q.Text(map_id);
+    r = conn.Query("SELECT num FROM maps WHERE id = $1", q);
+    if (!r.ok()) return r.status();
+    MapRow m;
+    m.num = r->Int(0, 0);
+    // Named by number: a map id may be longer than an identifier (63 bytes).
+    m.partition = "observations_" + std::to_string(m.num);
+    // The id's alphabet has no quote, so it is safe inside the literal.
+    MAPD_RETURN_IF_ERROR(conn.Exec("CREATE TABLE IF NOT EXISTS " + m.partition +
+                                   " PARTITION OF observations FOR VALUES IN ('" + map_id + "')"));
+    return m;
+  }();
+  if (!row.ok()) {
+    (void)conn.Exec("ROLLBACK");
+    return row.status();
+  }
+  MAPD_RETURN_IF_ERROR(conn.Exec("COMMIT"));
+  return row;
 }
 
 }  // namespace mapd::storage

@@ -21,9 +21,13 @@ int CurrentPostgresSchemaVersion();
 // done. A database written by a newer mapd is refused (FailedPrecondition).
 Status MigratePostgres(PgConnection& conn);
 
-// Makes `map_id`'s partitions if missing. `map_id` must be a map id
-// ([A-Za-z0-9_.-], 1-64 characters): InvalidArgument otherwise.
-Status EnsureMapPartitions(PgConnection& conn, const std::string& map_id);
+// A map's row in `maps` and its observation partition.
+struct MapRow {
+  int64_t num = 0;        // keys the map's ownership lock
+  std::string partition;  // its observations' table, "observations_<num>"
+};
+// Adds `map_id`'s row and partition if missing (CheckPgMapId first).
+StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_t now_ns);
 
 }  // namespace mapd::storage
 

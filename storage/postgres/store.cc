@@ -96,7 +96,7 @@ StatusOr<StoreCounts> PgStore::Counts() {
 
 uint64_t PgStore::SizeBytes() const {
   PgParams p;
-  p.Text("\"observations/" + log_->map_id() + "\"");
+  p.Text(log_->partition());
   StatusOr<PgResult> r = Read("SELECT pg_total_relation_size($1::text::regclass)", std::move(p));
   return r.ok() && r->rows() == 1 ? static_cast<uint64_t>(r->Int(0, 0)) : 0;
 }

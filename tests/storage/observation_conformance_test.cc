@@ -297,8 +297,10 @@ TEST_P(ObservationConformanceTest, RangesSessionsRecentPosesAndTrails) {
 TEST_P(ObservationConformanceTest, AGroupAtOnceAnswersAsOneByOne) {
   auto first = InsertOne(Batch("r1", "s1", 1));
   ASSERT_TRUE(first.ok());
-  std::vector<NewObservation> group = {Batch("r1", "s1", 2), Batch("r1", "s1", 1),
-                                       Batch("r2", "s1", 1), Batch("r1", "s1", 2),
+  std::vector<NewObservation> group = {Batch("r1", "s1", 2),
+                                       Batch("r1", "s1", 1),
+                                       Batch("r2", "s1", 1),
+                                       Batch("r1", "s1", 2),
                                        Batch("r1", "s1", 3, FrameKind::kLocal),
                                        Batch("r1", "s1", 4)};
   std::vector<StatusOr<InsertResult>> results;
@@ -426,6 +428,35 @@ TEST_F(PostgresMapsTest, OneMapdWritesAMapAtATime) {
   EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-2").ok()) << "other maps are free";
   first->reset();  // its connection closes, and the lock with it
   EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-1").ok());
+}
+
+// Map ids up to mapd's 128 characters, longer than a PostgreSQL identifier:
+// partitions are named by number, so two long ids never share one.
+TEST_F(PostgresMapsTest, LongMapIdsStayApart) {
+  const std::string a = std::string(127, 'x') + "a", b = std::string(127, 'x') + "b";
+  testing::PostgresObservationBackend site_a(conninfo_, a), site_b(conninfo_, b);
+  ASSERT_TRUE(site_a.Reopen().ok());
+  ASSERT_TRUE(site_b.Reopen().ok());
+  geometry::SensorObservation f;
+  NewObservation o;
+  o.robot = "r1";
+  o.session = "s1";
+  o.seq = 1;
+  o.features = &f;
+  ASSERT_TRUE(
+      site_a.Write([&](ObservationWriter& w) { return w.InsertObservation(o).status(); }).ok());
+  int n = 0;
+  ASSERT_TRUE(site_b.reader()
+                  .ForEachObservation([&](const StoredObservation&) {
+                    ++n;
+                    return Status::Ok();
+                  })
+                  .ok());
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(PgObservationLog::Open(conninfo_, std::string(129, 'x')).status().code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(PgObservationLog::Open(conninfo_, ".hidden").status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 TEST_F(PostgresMapsTest, TheCatalogListsMapsAndKeepsTheirSettings) {
