@@ -54,6 +54,13 @@ class FusedMapWriter {
   virtual Status DeleteFused(uint64_t id) = 0;
   virtual Status UpsertFusedPlane(const FusedPlaneRow& row) = 0;
   virtual Status DeleteFusedPlane(uint64_t id) = 0;
+  // A commit's changes at once (ids unique within each list): upserts, then
+  // deletes. A backend may write each list in one statement (PostgreSQL
+  // does); the default calls the methods above one row at a time.
+  virtual Status WriteFused(const std::vector<FusedRow>& upserts,
+                            const std::vector<uint64_t>& deletes);
+  virtual Status WriteFusedPlanes(const std::vector<FusedPlaneRow>& upserts,
+                                  const std::vector<uint64_t>& deletes);
 };
 
 }  // namespace mapd::storage

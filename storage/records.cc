@@ -1,9 +1,24 @@
 // The backend-neutral helpers of the storage contract (storage/*_store.h).
+#include "storage/fused_map_store.h"
 #include "storage/observation_store.h"
 #include "storage/snapshot_store.h"
 #include "storage/submap_store.h"
 
 namespace mapd::storage {
+
+Status FusedMapWriter::WriteFused(const std::vector<FusedRow>& upserts,
+                                  const std::vector<uint64_t>& deletes) {
+  for (const FusedRow& row : upserts) MAPD_RETURN_IF_ERROR(UpsertFused(row));
+  for (uint64_t id : deletes) MAPD_RETURN_IF_ERROR(DeleteFused(id));
+  return Status::Ok();
+}
+
+Status FusedMapWriter::WriteFusedPlanes(const std::vector<FusedPlaneRow>& upserts,
+                                        const std::vector<uint64_t>& deletes) {
+  for (const FusedPlaneRow& row : upserts) MAPD_RETURN_IF_ERROR(UpsertFusedPlane(row));
+  for (uint64_t id : deletes) MAPD_RETURN_IF_ERROR(DeleteFusedPlane(id));
+  return Status::Ok();
+}
 
 StatusOr<std::vector<StatusOr<InsertResult>>> ObservationWriter::InsertObservations(
     const std::vector<NewObservation>& batches) {

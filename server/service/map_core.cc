@@ -668,12 +668,9 @@ Status MapCore::WriteFusedDelta(const FusedDelta& delta, storage::WriteTransacti
       }
     }
   }
-  for (const storage::FusedRow& row : upserts) MAPD_RETURN_IF_ERROR(txn->UpsertFused(row));
-  for (fusion::ClusterId id : deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFused(id));
-  for (const storage::FusedPlaneRow& row : plane_upserts)
-    MAPD_RETURN_IF_ERROR(txn->UpsertFusedPlane(row));
-  for (fusion::ClusterId id : plane_deletes) MAPD_RETURN_IF_ERROR(txn->DeleteFusedPlane(id));
-  return Status::Ok();
+  // Each list at once: a backend with round trips (PostgreSQL) writes it in one.
+  MAPD_RETURN_IF_ERROR(txn->WriteFused(upserts, {deletes.begin(), deletes.end()}));
+  return txn->WriteFusedPlanes(plane_upserts, {plane_deletes.begin(), plane_deletes.end()});
 }
 
 void MapCore::WaitForFuser(std::chrono::duration<double> timeout) const {

@@ -55,6 +55,99 @@ Status PgWriteTransaction::DeleteFusedPlane(uint64_t id) {
   return Query("DELETE FROM fused_planes WHERE map = $1 AND id = $2", std::move(p)).status();
 }
 
+namespace {
+
+std::vector<int64_t> Ids(const std::vector<uint64_t>& ids) {
+  return std::vector<int64_t>(ids.begin(), ids.end());
+}
+
+}  // namespace
+
+Status PgWriteTransaction::WriteFused(const std::vector<FusedRow>& upserts,
+                                      const std::vector<uint64_t>& deletes) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
+  if (!upserts.empty()) {
+    std::vector<int64_t> id, kind, support, members;
+    std::vector<double> ax, ay, bx, by, z_min, z_max;
+    std::vector<std::string_view> robots;
+    for (const FusedRow& r : upserts) {
+      id.push_back(static_cast<int64_t>(r.id));
+      kind.push_back(r.kind);
+      ax.push_back(r.segment.a.x());
+      ay.push_back(r.segment.a.y());
+      bx.push_back(r.segment.b.x());
+      by.push_back(r.segment.b.y());
+      z_min.push_back(r.z_min_m);
+      z_max.push_back(r.z_max_m);
+      support.push_back(r.support);
+      members.push_back(r.member_count);
+      robots.push_back(r.robots);
+    }
+    PgParams p = MapParams();
+    p.IntArray(id).IntArray(kind).DoubleArray(ax).DoubleArray(ay).DoubleArray(bx);
+    p.DoubleArray(by).DoubleArray(z_min).DoubleArray(z_max).IntArray(support).IntArray(members);
+    p.TextArray(robots);
+    StatusOr<PgResult> r = Query(
+        "INSERT INTO fused_features (map, id, kind, ax, ay, bx, by, z_min, z_max, support, "
+        "member_count, robots) SELECT $1, * FROM unnest($2::int8[], $3::int8[], $4::float8[], "
+        "$5::float8[], $6::float8[], $7::float8[], $8::float8[], $9::float8[], $10::int8[], "
+        "$11::int8[], $12::text[]) ON CONFLICT (map, id) DO UPDATE SET kind = EXCLUDED.kind, "
+        "ax = EXCLUDED.ax, ay = EXCLUDED.ay, bx = EXCLUDED.bx, by = EXCLUDED.by, z_min = "
+        "EXCLUDED.z_min, z_max = EXCLUDED.z_max, support = EXCLUDED.support, member_count = "
+        "EXCLUDED.member_count, robots = EXCLUDED.robots",
+        std::move(p));
+    if (!r.ok()) return r.status();
+  }
+  if (deletes.empty()) return Status::Ok();
+  PgParams d = MapParams();
+  d.IntArray(Ids(deletes));
+  return Query("DELETE FROM fused_features WHERE map = $1 AND id = ANY($2)", std::move(d)).status();
+}
+
+Status PgWriteTransaction::WriteFusedPlanes(const std::vector<FusedPlaneRow>& upserts,
+                                            const std::vector<uint64_t>& deletes) {
+  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
+  if (!upserts.empty()) {
+    std::vector<int64_t> id, support, members;
+    std::vector<double> nx, ny, nz, offset, area, z_min, z_max;
+    std::vector<std::string> boundaries;
+    std::vector<std::string_view> robots;
+    for (const FusedPlaneRow& r : upserts) {
+      id.push_back(static_cast<int64_t>(r.id));
+      nx.push_back(r.normal.x());
+      ny.push_back(r.normal.y());
+      nz.push_back(r.normal.z());
+      offset.push_back(r.offset_m);
+      boundaries.push_back(EncodeBoundary(r.boundary));
+      area.push_back(r.area_m2);
+      z_min.push_back(r.z_min_m);
+      z_max.push_back(r.z_max_m);
+      support.push_back(r.support);
+      members.push_back(r.member_count);
+      robots.push_back(r.robots);
+    }
+    PgParams p = MapParams();
+    p.IntArray(id).DoubleArray(nx).DoubleArray(ny).DoubleArray(nz).DoubleArray(offset);
+    p.BytesArray({boundaries.begin(), boundaries.end()}).DoubleArray(area).DoubleArray(z_min);
+    p.DoubleArray(z_max).IntArray(support).IntArray(members).TextArray(robots);
+    StatusOr<PgResult> r = Query(
+        "INSERT INTO fused_planes (map, id, nx, ny, nz, \"offset\", boundary, area, z_min, z_max, "
+        "support, member_count, robots) SELECT $1, * FROM unnest($2::int8[], $3::float8[], "
+        "$4::float8[], $5::float8[], $6::float8[], $7::bytea[], $8::float8[], $9::float8[], "
+        "$10::float8[], $11::int8[], $12::int8[], $13::text[]) ON CONFLICT (map, id) DO UPDATE "
+        "SET nx = EXCLUDED.nx, ny = EXCLUDED.ny, nz = EXCLUDED.nz, \"offset\" = "
+        "EXCLUDED.\"offset\", boundary = EXCLUDED.boundary, area = EXCLUDED.area, z_min = "
+        "EXCLUDED.z_min, z_max = EXCLUDED.z_max, support = EXCLUDED.support, member_count = "
+        "EXCLUDED.member_count, robots = EXCLUDED.robots",
+        std::move(p));
+    if (!r.ok()) return r.status();
+  }
+  if (deletes.empty()) return Status::Ok();
+  PgParams d = MapParams();
+  d.IntArray(Ids(deletes));
+  return Query("DELETE FROM fused_planes WHERE map = $1 AND id = ANY($2)", std::move(d)).status();
+}
+
 StatusOr<std::vector<FusedRow>> PgStore::LoadFused() {
   StatusOr<PgResult> q = Read(
       "SELECT id, kind, ax, ay, bx, by, z_min, z_max, support, member_count, robots "

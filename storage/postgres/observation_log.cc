@@ -79,9 +79,9 @@ Status PgObservationLog::Own() {
   // The lock is the writer connection's: it goes when the connection does
   // (mapd stops or dies and its socket closes). A paused mapd keeps it, so
   // nothing takes over from it either (leases with fencing: step 3).
-  StatusOr<PgResult> r = writer_.Query("SELECT pg_try_advisory_lock(" +
-                                       std::to_string(kMapLockClass) + ", " +
-                                       std::to_string(map_num_) + ")");
+  StatusOr<PgResult> r =
+      writer_.Query("SELECT pg_try_advisory_lock(" + std::to_string(kMapLockClass) + ", " +
+                    std::to_string(map_num_) + ")");
   if (!r.ok()) return r.status();
   if (r->rows() != 1 || r->Int(0, 0) == 0) {
     return Status::FailedPrecondition(

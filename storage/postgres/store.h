@@ -47,6 +47,11 @@ class PgWriteTransaction final : public WriteTransaction {
   Status DeleteFused(uint64_t id) override;
   Status UpsertFusedPlane(const FusedPlaneRow& row) override;
   Status DeleteFusedPlane(uint64_t id) override;
+  // One INSERT ... ON CONFLICT per list and one DELETE: a round trip each.
+  Status WriteFused(const std::vector<FusedRow>& upserts,
+                    const std::vector<uint64_t>& deletes) override;
+  Status WriteFusedPlanes(const std::vector<FusedPlaneRow>& upserts,
+                          const std::vector<uint64_t>& deletes) override;
   // SubmapWriter
   StatusOr<int64_t> InsertSubmap(const NewSubmap& submap) override;
   Status DeleteSubmap(int64_t id) override;

@@ -70,6 +70,56 @@ TEST_P(PlaneStoreConformanceTest, SnapshotsCarryThePlaneStateOrSayTheyHaveNone) 
   EXPECT_EQ(older->state, "lines");
 }
 
+// A commit's fused changes at once (WriteFused, WriteFusedPlanes) leave the
+// rows one row at a time would: upserts replace, deletes remove.
+TEST_P(PlaneStoreConformanceTest, FusedChangesAtOnceAsOneByOne) {
+  std::vector<FusedRow> lines(3);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    lines[i].id = 10 + i;
+    lines[i].segment = {{0.0 + i, 1}, {2.0 + i, 1.0 / 3.0}};
+    lines[i].z_min_m = -0.1;
+    lines[i].z_max_m = 2.5;
+    lines[i].support = 3;
+    lines[i].member_count = 4;
+    lines[i].robots = "r1,r2";
+  }
+  FusedPlaneRow plane;
+  plane.id = 7;
+  plane.normal = {0, 0, 1};
+  plane.offset_m = -0.25;
+  plane.boundary = {{0, 0, 0.25}, {1, 0, 0.25}, {1, 1, 0.25}};
+  plane.area_m2 = 0.5;
+  plane.support = 2;
+  plane.robots = "r1";
+  ASSERT_TRUE(Write([&](WriteTransaction* t) {
+                MAPD_RETURN_IF_ERROR(t->WriteFused(lines, {}));
+                return t->WriteFusedPlanes({plane}, {});
+              }).ok());
+  lines[1].support = 9;
+  lines[1].segment.b = {5, 5};
+  plane.area_m2 = 0.75;
+  ASSERT_TRUE(Write([&](WriteTransaction* t) {
+                MAPD_RETURN_IF_ERROR(t->WriteFused({lines[1]}, {10, 12, 99}));
+                return t->WriteFusedPlanes({plane}, {});
+              }).ok());
+  Reopen();
+  auto rows = store_->LoadFused();
+  ASSERT_TRUE(rows.ok()) << rows.status().ToString();
+  ASSERT_EQ(rows->size(), 1u);
+  EXPECT_EQ((*rows)[0].id, 11u);
+  EXPECT_EQ((*rows)[0].support, 9u);
+  EXPECT_EQ((*rows)[0].segment.a, lines[1].segment.a);
+  EXPECT_EQ((*rows)[0].segment.b, lines[1].segment.b);
+  EXPECT_EQ((*rows)[0].robots, "r1,r2");
+  auto planes = store_->LoadFusedPlanes();
+  ASSERT_TRUE(planes.ok());
+  ASSERT_EQ(planes->size(), 1u);
+  EXPECT_EQ((*planes)[0].area_m2, 0.75);
+  EXPECT_EQ((*planes)[0].boundary, plane.boundary);
+  ASSERT_TRUE(Write([&](WriteTransaction* t) { return t->WriteFusedPlanes({}, {7}); }).ok());
+  EXPECT_TRUE(store_->LoadFusedPlanes()->empty());
+}
+
 MAPD_ON_EVERY_BACKEND(PlaneStoreConformanceTest);
 
 }  // namespace
