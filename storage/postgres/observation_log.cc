@@ -56,6 +56,7 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
                                                                    bool own) {
   std::unique_ptr<PgObservationLog> log(new PgObservationLog());
   log->map_id_ = map_id;
+  log->conninfo_ = conninfo;
   StatusOr<PgConnection> writer = PgConnection::Connect(conninfo);
   if (!writer.ok()) return writer.status();
   log->writer_ = std::move(writer).value();
@@ -73,6 +74,56 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   log->reader_ = std::move(reader).value();
   MAPD_RETURN_IF_ERROR(log->LoadCaches());
   return log;
+}
+
+StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgParams& params) {
+  StatusOr<PgResult> r = reader_.Query(sql, params);
+  if (r.ok() || reader_.healthy()) return r;
+  // The connection broke (PostgreSQL restarted, the network failed): a
+  // read changes nothing, so connect again and try once more.
+  StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
+  if (!again.ok()) return r;
+  reader_ = std::move(again).value();
+  return reader_.Query(sql, params);
+}
+
+Status PgObservationLog::SetWriterSession(const std::string& sql) {
+  MAPD_RETURN_IF_ERROR(writer_.Exec(sql));
+  writer_session_ = sql;
+  return Status::Ok();
+}
+
+Status PgObservationLog::Reconnect() {
+  // libpq does not always mark a connection broken on the first failure
+  // after the server went away: ask it.
+  if (writer_.healthy() && writer_.Exec("SELECT 1").ok()) return Status::Ok();
+  StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
+  if (!again.ok()) return again.status();
+  writer_ = std::move(again).value();  // closes the broken one
+  if (!writer_session_.empty()) MAPD_RETURN_IF_ERROR(writer_.Exec(writer_session_));
+  if (!owner_) return Status::Ok();
+  MAPD_RETURN_IF_ERROR(Own());
+  // The lock was free for a while: the caches (and the engines fed from
+  // them) hold only if nobody wrote the map meanwhile.
+  PgParams p;
+  p.Text(map_id_);
+  StatusOr<PgResult> r = writer_.Query(
+      "SELECT (SELECT coalesce(max(id), 0) FROM observations WHERE map = $1), (SELECT "
+      "coalesce(max(tie_seq), 0) FROM sessions WHERE map = $1), (SELECT count(*) FROM sessions "
+      "WHERE map = $1), (SELECT count(*) FROM robots WHERE map = $1)",
+      p);
+  if (!r.ok()) return r.status();
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  if (r->Int(0, 0) != newest_observation_ || r->Int(0, 1) != max_tie_seq_ ||
+      r->Int(0, 2) != static_cast<int64_t>(sessions_.size()) ||
+      r->Int(0, 3) != static_cast<int64_t>(robot_ids_.size())) {
+    owner_ = false;  // never write over the other's rows
+    return Status::FailedPrecondition(
+        "map '" + map_id_ +
+        "' was written by another mapd while this one was disconnected from PostgreSQL; "
+        "restart this mapd to serve the map as it is now");
+  }
+  return Status::Ok();
 }
 
 Status PgObservationLog::Own() {
@@ -146,7 +197,7 @@ Status PgObservationLog::ForEachWhere(const std::string& condition,
       PgParams p;
       p.Text(map_id_).Int(last).Int(through_id).Int(kPageRows);
       if (!condition.empty()) p.IntArray(session_ids);
-      StatusOr<PgResult> r = reader_.Query(sql, p);
+      StatusOr<PgResult> r = ReadQuery(sql, p);
       if (!r.ok()) return r.status();
       for (int i = 0; i < r->rows(); ++i) {
         StoredObservation obs;
@@ -220,7 +271,7 @@ StatusOr<std::vector<RobotSummary>> PgObservationLog::ListRobots() {
   std::lock_guard<std::mutex> lock(reader_mu_);
   PgParams p;
   p.Text(map_id_);
-  StatusOr<PgResult> r = reader_.Query(
+  StatusOr<PgResult> r = ReadQuery(
       "SELECT r.id, r.name, r.first_seen_ns, r.last_seen_ns, r.batches, r.features, "
       "count(s.id), coalesce(bool_and(s.tied), false) FROM robots r LEFT JOIN sessions s ON "
       "s.map = r.map AND s.robot_id = r.id WHERE r.map = $1 AND r.name NOT LIKE '@%' "
@@ -254,7 +305,7 @@ StatusOr<std::vector<StampedPose>> PgObservationLog::RecentPoses(int64_t session
   PgParams p;
   p.Text(map_id_).Int(session_id).Int(limit);
   // UNIQUE (map, session_id, seq) is an index: `limit` rows whatever the session's length.
-  StatusOr<PgResult> r = reader_.Query(
+  StatusOr<PgResult> r = ReadQuery(
       "SELECT seq, stamp_ns, qw, qx, qy, qz, tx, ty, tz FROM observations WHERE map = $1 AND "
       "session_id = $2 ORDER BY seq DESC LIMIT $3",
       p);
@@ -278,7 +329,7 @@ StatusOr<std::vector<SessionTrailRows>> PgObservationLog::ListTrails(const std::
   p.Text(map_id_).Text(robot).Int(max_n);
   // As the SQLite backend: a session longer than $3 keeps every k-th pose,
   // k = ceil(n / ($3 - 1)), and its last one: at most $3 poses.
-  StatusOr<PgResult> r = reader_.Query(
+  StatusOr<PgResult> r = ReadQuery(
       "SELECT r.name, s.name, s.id, o.seq, o.stamp_ns, o.tx, o.ty, o.tz, o.n FROM "
       "(SELECT session_id, seq, stamp_ns, tx, ty, tz, "
       "row_number() OVER (PARTITION BY session_id ORDER BY seq) AS rn, "

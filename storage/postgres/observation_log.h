@@ -60,6 +60,14 @@ class PgObservationLog final : public ObservationReader {
   // The writer connection (writer thread only), for PgWriteScope and the
   // other intents' writers.
   PgConnection& writer() { return writer_; }
+  // Runs `sql` (SET ...) on the writer connection, now and after a reconnect.
+  Status SetWriterSession(const std::string& sql);
+  // Writer thread, after a write failed: when the writer's connection is
+  // broken (PostgreSQL restarted, the network failed), connects again and
+  // retakes the map's lock. FailedPrecondition if another mapd wrote the map
+  // meanwhile (this one then refuses map data: restart it); the connection's
+  // error while PostgreSQL is still away.
+  Status Reconnect();
   // A writer for the transaction open on writer() (writer thread only).
   std::unique_ptr<PgObservationWriter> NewWriter();
 
@@ -91,6 +99,9 @@ class PgObservationLog final : public ObservationReader {
   // another holds it.
   Status Own();
   Status LoadCaches();
+  // A query on reader_, connected again and retried once if the connection
+  // broke. REQUIRES: reader_mu_ held.
+  StatusOr<PgResult> ReadQuery(const std::string& sql, const PgParams& params = {});
   static constexpr int32_t kMapLockClass = 0x6d617064;  // "mapd"
   // Rows with after_id < id <= through_id and `condition` (SQL on o, with
   // parameters from $4 on), in id order, in pages; fn runs unlocked.
@@ -101,9 +112,11 @@ class PgObservationLog final : public ObservationReader {
   }
 
   std::string map_id_;
-  int64_t map_num_ = 0;    // maps.num
-  std::string partition_;  // the map's observations' table
-  bool owner_ = false;     // holds the map's lock
+  std::string conninfo_;
+  std::string writer_session_;  // SetWriterSession
+  int64_t map_num_ = 0;         // maps.num
+  std::string partition_;       // the map's observations' table
+  bool owner_ = false;          // holds the map's lock
   PgConnection writer_;
   PgConnection reader_;
   std::mutex reader_mu_;  // guards reader_

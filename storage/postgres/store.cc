@@ -23,9 +23,9 @@ StatusOr<std::unique_ptr<PgStore>> PgStore::Open(const std::string& conninfo,
           "synchronous_standby_names is empty (a commit would reach one disk only); configure "
           "one (docs/scale-out.md) or use storage.sync = normal");
     }
-    MAPD_RETURN_IF_ERROR(w.Exec("SET synchronous_commit = on"));
+    MAPD_RETURN_IF_ERROR(store->log_->SetWriterSession("SET synchronous_commit = on"));
   } else {
-    MAPD_RETURN_IF_ERROR(w.Exec("SET synchronous_commit = local"));
+    MAPD_RETURN_IF_ERROR(store->log_->SetWriterSession("SET synchronous_commit = local"));
   }
   return store;
 }
@@ -37,6 +37,7 @@ StatusOr<std::unique_ptr<WriteTransaction>> PgStore::BeginWrite() {
 }
 
 Status PgStore::ProbeWrite() {
+  MAPD_RETURN_IF_ERROR(log_->Reconnect());
   PgConnection& w = log_->writer();
   PgWriteScope scope(&w);
   MAPD_RETURN_IF_ERROR(scope.status());
@@ -59,7 +60,7 @@ PgParams PgStore::MapParams() const {
 
 StatusOr<PgResult> PgStore::Read(const std::string& sql, PgParams params) const {
   std::lock_guard<std::mutex> lock(log_->reader_mu_);
-  return log_->reader_.Query(sql, params);
+  return log_->ReadQuery(sql, params);
 }
 
 StatusOr<std::string> PgStore::GetBlob(const std::string& owner, const std::string& what) const {

@@ -104,7 +104,9 @@ class PgStore final : public Store {
   StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite() override;
   // Nothing to do: PostgreSQL checkpoints and vacuums by itself.
   Status Checkpoint() override { return Status::Ok(); }
-  // A 1 MiB write commits (and is deleted): the server takes writes again.
+  // Connects again if the writer's connection broke (PgObservationLog::
+  // Reconnect), then a 1 MiB write commits (and is deleted): the server
+  // takes writes again.
   Status ProbeWrite() override;
 
   // ObservationReader (PgObservationLog)

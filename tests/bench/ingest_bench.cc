@@ -265,7 +265,13 @@ int main(int argc, char** argv) {
   pb::Stats stats;
   for (;;) {
     grpc::ClientContext ctx;
-    if (!stats_stub->GetStats(&ctx, {}, &stats).ok() || stats.fusion_backlog() == 0) break;
+    const grpc::Status got = stats_stub->GetStats(&ctx, {}, &stats);
+    if (!got.ok()) {
+      std::fprintf(stderr, "GetStats failed while waiting for the fused map: %s\n",
+                   got.error_message().c_str());
+      break;
+    }
+    if (stats.fusion_backlog() == 0) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   const double fused_after = std::chrono::duration<double>(Clock::now() - t0).count();
