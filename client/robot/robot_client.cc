@@ -160,8 +160,7 @@ void RobotClient::ReaderLoop() {
       }
       pb::IngestAck ack;
       while (stream->Read(&ack)) {
-        HandleAck(ack);
-        got_ack = true;
+        if (HandleAck(ack)) got_ack = true;
       }
       {
         std::lock_guard<std::mutex> lock(mu_);
@@ -262,10 +261,10 @@ void RobotClient::WaitForChannel(std::chrono::steady_clock::time_point deadline)
   }
 }
 
-void RobotClient::HandleAck(const pb::IngestAck& ack) {
+bool RobotClient::HandleAck(const pb::IngestAck& ack) {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = order_of_.find(Key(ack.session_id(), ack.seq()));
-  if (it == order_of_.end()) return;  // not pending (e.g. a resend's second answer)
+  if (it == order_of_.end()) return false;  // not pending (e.g. a resend's second answer)
   switch (ack.result()) {
     case pb::IngestAck::STORED:
       ++counts_.stored;
@@ -274,19 +273,25 @@ void RobotClient::HandleAck(const pb::IngestAck& ack) {
       ++counts_.duplicate;
       break;
     case pb::IngestAck::REJECTED:
-      // UNAVAILABLE is the server draining: not a verdict on the batch. Keep it;
-      // it is resent on the next stream.
-      if (ack.code() == grpc::StatusCode::UNAVAILABLE) return;
+      // UNAVAILABLE is the server draining, or its database refusing writes
+      // for now: not a verdict on the batch. Keep it, and end this stream:
+      // the next one (after the backoff, which this does not reset) resends
+      // every batch still pending, once the server takes writes again.
+      if (ack.code() == grpc::StatusCode::UNAVAILABLE) {
+        if (cancel_target_ != nullptr) cancel_target_->TryCancel();
+        return false;
+      }
       ++counts_.rejected;
       rejections_.push_back(
           {ack.session_id(), ack.seq(), static_cast<grpc::StatusCode>(ack.code()), ack.message()});
       break;
     default:
-      return;  // RESULT_UNSPECIFIED: not final
+      return false;  // RESULT_UNSPECIFIED: not final
   }
   pending_.erase(it->second);
   order_of_.erase(it);
   cv_.notify_all();
+  return true;
 }
 
 }  // namespace mapd::robot

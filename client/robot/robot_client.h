@@ -118,7 +118,8 @@ class RobotClient {
   grpc::Status CheckMap();
   // Opens a stream and writes every pending batch to it. REQUIRES: write_mu_ held.
   void OpenStreamLocked();
-  void HandleAck(const mapserver::v1::IngestAck& ack);
+  // Counts a final answer (true) or keeps the batch pending (false).
+  bool HandleAck(const mapserver::v1::IngestAck& ack);
   // Asks the channel to connect and waits until it is ready, `deadline` or Stop.
   void WaitForChannel(std::chrono::steady_clock::time_point deadline);
   // Ends the reader as soon as possible: stops waiting, cancels the stream.

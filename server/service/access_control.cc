@@ -29,15 +29,18 @@ Principal AnonymousOperator() {
 
 }  // namespace
 
-bool AccessControl::Required() {
+StatusOr<bool> AccessControl::Required() {
   if (options_.required || options_.client_certs || tokens_exist_.load()) return true;
   StatusOr<bool> any = core_->store().AnyTokenEver();
-  // A database that cannot be read fails closed.
-  if (!any.ok() || *any) {
-    if (any.ok()) tokens_exist_ = true;
-    return true;
+  // A database that cannot be read fails closed, but as a refusal to retry
+  // (UNAVAILABLE), not a verdict on the caller: robots give up on
+  // UNAUTHENTICATED, and must not for a database restart.
+  if (!any.ok()) {
+    return Status::Unavailable("cannot tell whether calls need a credential: " +
+                               any.status().message() + "; retry");
   }
-  return false;
+  if (*any) tokens_exist_ = true;
+  return *any;
 }
 
 StatusOr<Principal> AccessControl::FromToken(std::string_view bearer) {
@@ -99,7 +102,9 @@ StatusOr<Principal> AccessControl::Authenticate(const grpc::ServerContextBase& c
       }
     }
   }
-  if (!Required()) {
+  StatusOr<bool> required = Required();
+  if (!required.ok()) return required.status();
+  if (!*required) {
     Principal anonymous = AnonymousOperator();
     anonymous.peer = context.peer();
     return anonymous;
@@ -126,7 +131,9 @@ StatusOr<Principal> AccessControl::AuthenticateHeader(const std::string* authori
     }
     return p;
   }
-  if (!Required()) {
+  StatusOr<bool> required = Required();
+  if (!required.ok()) return required.status();
+  if (!*required) {
     Principal anonymous = AnonymousOperator();
     anonymous.peer = peer;
     return anonymous;

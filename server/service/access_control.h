@@ -78,8 +78,9 @@ class AccessControl {
                   const std::string& robot, const std::string& target,
                   std::function<void(const Status&)> done);
 
-  // True when a call without a credential is refused now.
-  bool Required();
+  // True when a call without a credential is refused now; Unavailable when
+  // the database cannot say (the caller is refused, and may retry).
+  StatusOr<bool> Required();
 
   // An audit row stamped now, for a handler's own transaction.
   static storage::AuditEntry Entry(const Principal& principal, const std::string& action,

@@ -78,7 +78,9 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
 
 StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgParams& params) {
   StatusOr<PgResult> r = reader_.Query(sql, params);
-  if (r.ok() || reader_.healthy()) return r;
+  // Unavailable: the connection's trouble (libpq does not always mark it
+  // broken on the first failure after the server went away).
+  if (r.ok() || r.status().code() != StatusCode::kUnavailable) return r;
   // The connection broke (PostgreSQL restarted, the network failed): a
   // read changes nothing, so connect again and try once more.
   StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);

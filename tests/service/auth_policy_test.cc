@@ -11,7 +11,7 @@ namespace {
 using ::testing::HasSubstr;
 
 Principal Robot(const std::string& robot) {
-  return {robot + "-key", Role::kRobot, robot, false, "", ""};
+  return {robot + "-key", Role::kRobot, robot, false, "", "", {}};
 }
 
 TEST(AuthorizeTest, RoleTableMatchesTheDocs) {
@@ -31,10 +31,10 @@ TEST(AuthorizeTest, RoleTableMatchesTheDocs) {
   };
   for (const Row& r : rows) {
     SCOPED_TRACE(PermissionName(r.p));
-    EXPECT_EQ(Authorize({"x", Role::kReader, "", false, "", ""}, r.p, "A", "r1").ok(), r.reader);
+    EXPECT_EQ(Authorize({"x", Role::kReader, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.reader);
     EXPECT_EQ(Authorize(Robot("r1"), r.p, "A", "r1").ok(), r.robot_own);
-    EXPECT_EQ(Authorize({"x", Role::kOperator, "", false, "", ""}, r.p, "A", "r1").ok(), r.op);
-    EXPECT_EQ(Authorize({"x", Role::kAdmin, "", false, "", ""}, r.p, "A", "r1").ok(), r.admin);
+    EXPECT_EQ(Authorize({"x", Role::kOperator, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.op);
+    EXPECT_EQ(Authorize({"x", Role::kAdmin, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.admin);
   }
 }
 
@@ -51,14 +51,14 @@ TEST(AuthorizeTest, RobotIsConfinedToItsOwnRobotId) {
 
 TEST(AuthorizeTest, DenialNamesRoleAndPermission) {
   const Status s =
-      Authorize({"dash", Role::kReader, "", false, "", ""}, Permission::kMerge, "MergeSubmaps");
+      Authorize({"dash", Role::kReader, "", false, "", "", {}}, Permission::kMerge, "MergeSubmaps");
   EXPECT_EQ(s.code(), StatusCode::kPermissionDenied);
   EXPECT_THAT(s.message(), HasSubstr("'dash' (role reader)"));
   EXPECT_THAT(s.message(), HasSubstr("permission merge (granted to operator, admin)"));
 }
 
 TEST(AuthorizeTest, AnonymousMayDoAllButManageTokens) {
-  Principal anon{"anonymous", Role::kOperator, "", true, "", ""};
+  Principal anon{"anonymous", Role::kOperator, "", true, "", "", {}};
   EXPECT_TRUE(Authorize(anon, Permission::kWrite, "Ingest", "anything").ok());
   EXPECT_EQ(Authorize(anon, Permission::kManageTokens, "CreateToken").code(),
             StatusCode::kPermissionDenied);

@@ -38,7 +38,7 @@ class AuthFixture : public ServerFixture {
     if (!store.ok()) return "";
     auto txn = (*store)->BeginWrite();
     EXPECT_TRUE(txn.ok());
-    service::NewToken t{name, role, robot, "test"};
+    service::NewToken t{name, role, robot, "test", {}};
     auto issued = service::IssueToken(t, UnixNowNs(), txn->get());
     EXPECT_TRUE(issued.ok()) << issued.status().ToString();
     EXPECT_TRUE((*txn)->Commit().ok());
