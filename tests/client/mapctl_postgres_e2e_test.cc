@@ -3,12 +3,16 @@
 // across a restart, one mapd per map at a time, and no password on the
 // command line.
 #include <gmock/gmock.h>
+#include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "client/robot/robot_client.h"
+#include "client/sim_robot.h"
 #include "common/postgres.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
@@ -47,7 +51,8 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   EXPECT_THAT(r.out, HasSubstr("80 stored"));
   r = Mapctl(mapd, {"maps", "create", "site-1", "--set", "fusion.eta_m=0.25"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = Mapctl(mapd, {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30"});
+  r = Mapctl(mapd,
+             {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30", "--session", "s1"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("30 stored"));
   const CommandResult before = Mapctl(mapd, {"features", "--format", "json"});
@@ -69,7 +74,8 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   const CommandResult after = Mapctl(again, {"features", "--format", "json"});
   ASSERT_EQ(after.exit_code, 0) << after.err;
   EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
-  r = Mapctl(again, {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30"});
+  r = Mapctl(again,
+             {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30", "--session", "s1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("30 duplicate"));
 
@@ -126,6 +132,48 @@ TEST_F(MapdOnPostgresTest, AnUnreachableServerIsAClearError) {
                  "", std::chrono::seconds(60));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_THAT(r.err, HasSubstr("cannot connect to PostgreSQL"));
+}
+
+// PostgreSQL restarted under a robot streaming into mapd (fsync on, its own
+// cluster): the robot's batches are refused while it is away, resent after,
+// and every one ends up stored exactly once.
+TEST(MapdPostgresRestartTest, ARobotRidesOutAPostgresRestart) {
+  std::string why;
+  std::unique_ptr<PostgresCluster> cluster = PostgresCluster::Start(/*fsync=*/true, &why);
+  if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15): " << why;
+  TempDir dir;
+  MapdProcess mapd = StartMapd("", {"--store", cluster->NewDatabase()}, MAPD_BINARY,
+                               std::chrono::seconds(60), "serving", dir.File("mapd.log"));
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  robot::RobotClientOptions options;
+  options.give_up_after = std::chrono::seconds(60);
+  robot::RobotClient client(grpc::CreateChannel(mapd.address, grpc::InsecureChannelCredentials()),
+                            options);
+  client::SimRobotParams params;
+  params.robot_id = "pg-robot";
+  params.session_id = "restart";
+  client::SimRobot robot(client::DefaultWorld(), params);
+  constexpr int kBatches = 300;
+  for (int i = 0; i < kBatches; ++i) {
+    if (i == 100) {
+      ASSERT_TRUE(cluster->Stop("fast"));
+    }
+    if (i == 150) {
+      ASSERT_TRUE(cluster->Restart(&why)) << why;
+    }
+    client.Send(robot.NextBatch());
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_TRUE(client.WaitForAcks(std::chrono::seconds(90))) << mapd.log();
+  const robot::IngestCounts counts = client.counts();
+  EXPECT_EQ(counts.stored + counts.duplicate, static_cast<uint64_t>(kBatches));
+  EXPECT_EQ(counts.rejected, 0u);
+  EXPECT_GT(counts.reconnects, 0u) << "the refused batches came back on a new stream";
+  const CommandResult r = RunCommand({MAPCTL_BINARY, "--server", mapd.address, "status", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": " + std::to_string(kBatches)));
+  EXPECT_THAT(mapd.log(), HasSubstr("event=writable_again"));
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
 }
 
 }  // namespace
