@@ -1,6 +1,7 @@
 // `mapd token create|list|revoke --db FILE ...` (or --store CONNINFO for
-// PostgreSQL): token management offline, on the database directly. Access to that file is the trust root: it
-// makes the first admin token (bootstrap) and recovers from a lost one.
+// PostgreSQL): token management offline, on the database directly. Access
+// to the database is the trust root: it makes the first admin token
+// (bootstrap) and recovers from a lost one.
 // The secret of a new token is printed once, on stdout.
 #ifndef MAPD_MAPD_TOKEN_COMMAND_H_
 #define MAPD_MAPD_TOKEN_COMMAND_H_

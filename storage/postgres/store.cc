@@ -41,13 +41,11 @@ Status PgStore::ProbeWrite() {
   PgConnection& w = log_->writer();
   PgWriteScope scope(&w);
   MAPD_RETURN_IF_ERROR(scope.status());
-  PgParams p = MapParams();
   StatusOr<PgResult> r = w.Query(
       "INSERT INTO write_probe (map, data) VALUES ($1, decode(repeat('00', 1048576), 'hex'))",
-      std::move(p));
+      MapParams());
   if (!r.ok()) return r.status();
-  PgParams d = MapParams();
-  r = w.Query("DELETE FROM write_probe WHERE map = $1", std::move(d));
+  r = w.Query("DELETE FROM write_probe WHERE map = $1", MapParams());
   if (!r.ok()) return r.status();
   return scope.Commit();
 }
