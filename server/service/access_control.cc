@@ -36,8 +36,8 @@ StatusOr<bool> AccessControl::Required() {
   // (UNAVAILABLE), not a verdict on the caller: robots give up on
   // UNAUTHENTICATED, and must not for a database restart.
   if (!any.ok()) {
-    return Status::Unavailable("cannot tell whether calls need a credential: " +
-                               any.status().message() + "; retry");
+    return Status::Unavailable(
+        "cannot tell whether calls need a credential: " + any.status().message() + "; retry");
   }
   if (*any) tokens_exist_ = true;
   return *any;
