@@ -176,7 +176,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   server->server_->GetHealthCheckService()->SetServingStatus(false);
   Log(LogLevel::kInfo, "listening",
       {{"address", server->address()},
-       {!config.store.empty() ? "store" : config.data_dir.empty() ? "db" : "data_dir",
+       {!config.store.empty()     ? "store"
+        : config.data_dir.empty() ? "db"
+                                  : "data_dir",
         !config.store.empty()     ? "postgresql"
         : config.data_dir.empty() ? db
                                   : config.data_dir},

@@ -18,9 +18,9 @@
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_directory.h"
-#include "storage/postgres/map_catalog.h"
 #include "service/map_router.h"
 #include "service/map_service.h"
+#include "storage/postgres/map_catalog.h"
 
 namespace mapd::service {
 

@@ -31,7 +31,8 @@ TEST(AuthorizeTest, RoleTableMatchesTheDocs) {
   };
   for (const Row& r : rows) {
     SCOPED_TRACE(PermissionName(r.p));
-    EXPECT_EQ(Authorize({"x", Role::kReader, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.reader);
+    EXPECT_EQ(Authorize({"x", Role::kReader, "", false, "", "", {}}, r.p, "A", "r1").ok(),
+              r.reader);
     EXPECT_EQ(Authorize(Robot("r1"), r.p, "A", "r1").ok(), r.robot_own);
     EXPECT_EQ(Authorize({"x", Role::kOperator, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.op);
     EXPECT_EQ(Authorize({"x", Role::kAdmin, "", false, "", "", {}}, r.p, "A", "r1").ok(), r.admin);
