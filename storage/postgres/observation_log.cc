@@ -4,23 +4,11 @@
 
 #include "common/clock.h"
 #include "storage/observation_codec.h"
+#include "storage/postgres/pose_params.h"
 #include "storage/postgres/schema.h"
 
 namespace mapd::storage {
 namespace {
-
-// The seven pose columns as parameters, and back.
-void AddPose(PgParams& p, const geometry::Rigid3& T) {
-  p.Double(T.rotation.w()).Double(T.rotation.x()).Double(T.rotation.y()).Double(T.rotation.z());
-  p.Double(T.translation.x()).Double(T.translation.y()).Double(T.translation.z());
-}
-geometry::Rigid3 PoseAt(const PgResult& r, int row, int first) {
-  geometry::Rigid3 T;
-  T.rotation = Eigen::Quaterniond(r.Double(row, first), r.Double(row, first + 1),
-                                  r.Double(row, first + 2), r.Double(row, first + 3));
-  T.translation = {r.Double(row, first + 4), r.Double(row, first + 5), r.Double(row, first + 6)};
-  return T;
-}
 
 constexpr const char* kObservationColumns =
     "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "

@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "storage/blob_codec.h"
+#include "storage/postgres/pose_params.h"
 #include "storage/postgres/store.h"
 
 namespace mapd::storage {
@@ -12,18 +13,6 @@ namespace {
 
 std::string SubmapOwner(int64_t id) { return "submap/" + std::to_string(id); }
 constexpr char kGlobalMapOwner[] = "global_map";
-
-void AddPose(PgParams& p, const geometry::Rigid3& T) {
-  p.Double(T.rotation.w()).Double(T.rotation.x()).Double(T.rotation.y()).Double(T.rotation.z());
-  p.Double(T.translation.x()).Double(T.translation.y()).Double(T.translation.z());
-}
-geometry::Rigid3 PoseAt(const PgResult& r, int row, int first) {
-  geometry::Rigid3 T;
-  T.rotation = Eigen::Quaterniond(r.Double(row, first), r.Double(row, first + 1),
-                                  r.Double(row, first + 2), r.Double(row, first + 3));
-  T.translation = {r.Double(row, first + 4), r.Double(row, first + 5), r.Double(row, first + 6)};
-  return T;
-}
 
 constexpr char kSubmapColumns[] =
     "SELECT s.id, r.name, coalesce(s.session_id, 0), s.name, s.format, s.resolution, "
