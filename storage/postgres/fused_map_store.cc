@@ -4,56 +4,16 @@
 
 namespace mapd::storage {
 
-Status PgWriteTransaction::UpsertFused(const FusedRow& r) {
-  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
-  PgParams p = MapParams();
-  p.Int(static_cast<int64_t>(r.id)).Int(r.kind);
-  p.Double(r.segment.a.x()).Double(r.segment.a.y()).Double(r.segment.b.x()).Double(r.segment.b.y());
-  p.Double(r.z_min_m).Double(r.z_max_m).Int(r.support).Int(r.member_count).Text(r.robots);
-  return Query(
-             "INSERT INTO fused_features (map, id, kind, ax, ay, bx, by, z_min, z_max, support, "
-             "member_count, robots) VALUES ($1, $2, $3::int4, $4, $5, $6, $7, $8, $9, $10, $11, "
-             "$12) ON CONFLICT (map, id) DO UPDATE SET kind = EXCLUDED.kind, ax = EXCLUDED.ax, "
-             "ay = EXCLUDED.ay, bx = EXCLUDED.bx, by = EXCLUDED.by, z_min = EXCLUDED.z_min, "
-             "z_max = EXCLUDED.z_max, support = EXCLUDED.support, member_count = "
-             "EXCLUDED.member_count, robots = EXCLUDED.robots",
-             std::move(p))
-      .status();
+// The one-row forms are the list forms with one row: one statement each way.
+Status PgWriteTransaction::UpsertFused(const FusedRow& row) { return WriteFused({row}, {}); }
+
+Status PgWriteTransaction::DeleteFused(uint64_t id) { return WriteFused({}, {id}); }
+
+Status PgWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& row) {
+  return WriteFusedPlanes({row}, {});
 }
 
-Status PgWriteTransaction::DeleteFused(uint64_t id) {
-  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
-  PgParams p = MapParams();
-  p.Int(static_cast<int64_t>(id));
-  return Query("DELETE FROM fused_features WHERE map = $1 AND id = $2", std::move(p)).status();
-}
-
-Status PgWriteTransaction::UpsertFusedPlane(const FusedPlaneRow& r) {
-  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
-  const std::string boundary = EncodeBoundary(r.boundary);
-  PgParams p = MapParams();
-  p.Int(static_cast<int64_t>(r.id));
-  p.Double(r.normal.x()).Double(r.normal.y()).Double(r.normal.z()).Double(r.offset_m);
-  p.Bytes(boundary).Double(r.area_m2).Double(r.z_min_m).Double(r.z_max_m);
-  p.Int(r.support).Int(r.member_count).Text(r.robots);
-  return Query(
-             "INSERT INTO fused_planes (map, id, nx, ny, nz, \"offset\", boundary, area, z_min, "
-             "z_max, support, member_count, robots) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, "
-             "$10, $11, $12, $13) ON CONFLICT (map, id) DO UPDATE SET nx = EXCLUDED.nx, ny = "
-             "EXCLUDED.ny, nz = EXCLUDED.nz, \"offset\" = EXCLUDED.\"offset\", boundary = "
-             "EXCLUDED.boundary, area = EXCLUDED.area, z_min = EXCLUDED.z_min, z_max = "
-             "EXCLUDED.z_max, support = EXCLUDED.support, member_count = EXCLUDED.member_count, "
-             "robots = EXCLUDED.robots",
-             std::move(p))
-      .status();
-}
-
-Status PgWriteTransaction::DeleteFusedPlane(uint64_t id) {
-  MAPD_RETURN_IF_ERROR(obs_->CheckOwner());
-  PgParams p = MapParams();
-  p.Int(static_cast<int64_t>(id));
-  return Query("DELETE FROM fused_planes WHERE map = $1 AND id = $2", std::move(p)).status();
-}
+Status PgWriteTransaction::DeleteFusedPlane(uint64_t id) { return WriteFusedPlanes({}, {id}); }
 
 namespace {
 

@@ -541,38 +541,10 @@ StatusOr<std::vector<StatusOr<InsertResult>>> PgObservationWriter::InsertObserva
 }
 
 StatusOr<InsertResult> PgObservationWriter::InsertObservation(const NewObservation& obs) {
-  StatusOr<SessionFrame> frame = FrameOf(obs);
-  if (!frame.ok()) return frame.status();
-  InsertResult result;
-  result.frame = *frame;
-  const geometry::SensorObservation& f = *obs.features;
-  payload_.clear();
-  EncodeFeatures(f, &payload_);
-  PgParams p;
-  p.Text(log_->map_id_).Int(next_id_).Int(frame->session_id).Int(static_cast<int64_t>(obs.seq));
-  p.Int(obs.stamp_ns).Int(obs.received_ns);
-  AddPose(p, f.T_frame_sensor);
-  p.Int(static_cast<int64_t>(f.lines.size())).Int(static_cast<int64_t>(f.planes.size()));
-  p.Bytes(payload_);
-  // The duplicate's id in the same round trip: the CTE's insert returns no
-  // row on a conflict, and then the existing row answers.
-  StatusOr<PgResult> r = log_->writer_.Query(
-      "WITH ins AS (INSERT INTO observations (map, id, session_id, seq, stamp_ns, received_ns, "
-      "qw, qx, qy, qz, tx, ty, tz, line_count, plane_count, payload) VALUES ($1, $2, $3, $4, $5, "
-      "$6, $7, $8, $9, $10, $11, $12, $13, $14::int8, $15::int8, $16) "
-      "ON CONFLICT (map, session_id, seq) DO NOTHING RETURNING id) "
-      "SELECT id, true FROM ins UNION ALL SELECT id, false FROM observations WHERE map = $1 AND "
-      "session_id = $3 AND seq = $4 AND NOT EXISTS (SELECT 1 FROM ins)",
-      p);
-  if (!r.ok()) return r.status();
-  if (r->rows() == 0) return Status::Internal("observation insert returned no row");
-  result.observation_id = r->Int(0, 0);
-  result.stored = r->Int(0, 1) != 0;
-  if (result.stored) {
-    ++next_id_;
-    CountStored(obs, frame->robot_id);
-  }
-  return result;
+  // One batch is a group of one: the same statement, ids and answers.
+  StatusOr<std::vector<StatusOr<InsertResult>>> results = InsertObservations({obs});
+  if (!results.ok()) return results.status();
+  return std::move(results->front());
 }
 
 Status PgObservationWriter::TieSession(int64_t session_id, const geometry::Rigid3& T_map_frame) {

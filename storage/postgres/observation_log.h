@@ -179,7 +179,6 @@ class PgObservationWriter final : public ObservationWriter {
   std::unordered_map<int64_t, geometry::Rigid3> new_ties_;
   int64_t tie_point_ = 0;
   int64_t tie_seq_ = 0;
-  std::string payload_;
 };
 
 }  // namespace mapd::storage
