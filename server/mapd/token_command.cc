@@ -56,10 +56,12 @@ StatusOr<std::unique_ptr<storage::Store>> Open(const TokenOptions& flags) {
     return Status::InvalidArgument("give --db FILE or --store CONNINFO (one of them)");
   if (!flags.store.empty()) {
     // Tokens are the database's, whichever map: open the default map without
-    // its lock, so that this works beside the mapd that serves it.
+    // its lease, so that this works beside the mapd that serves it.
     MAPD_RETURN_IF_ERROR(storage::CheckConninfo(flags.store));
+    storage::PgOwnership not_owner;
+    not_owner.own = false;
     StatusOr<std::unique_ptr<storage::PgStore>> store =
-        storage::PgStore::Open(flags.store, "default", storage::StoreOptions{}, /*own=*/false);
+        storage::PgStore::Open(flags.store, "default", storage::StoreOptions{}, not_owner);
     if (!store.ok()) return store.status();
     return std::unique_ptr<storage::Store>(std::move(store).value());
   }

@@ -41,7 +41,7 @@ Status PgWriteScope::Commit() {
 
 StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::string& conninfo,
                                                                    const std::string& map_id,
-                                                                   bool own) {
+                                                                   const PgOwnership& ownership) {
   std::unique_ptr<PgObservationLog> log(new PgObservationLog());
   log->map_id_ = map_id;
   log->conninfo_ = conninfo;
@@ -53,8 +53,14 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   if (!row.ok()) return row.status();
   log->map_num_ = row->num;
   log->partition_ = row->partition;
-  if (own) {
-    MAPD_RETURN_IF_ERROR(log->Own());
+  if (ownership.own) {
+    const auto idle_ms = static_cast<int64_t>(ownership.idle_in_transaction_s * 1000);
+    MAPD_RETURN_IF_ERROR(log->SetWriterSession("SET idle_in_transaction_session_timeout = " +
+                                               std::to_string(std::max<int64_t>(idle_ms, 1))));
+    StatusOr<MapLease> lease =
+        AcquireMapLease(log->writer_, map_id, ownership.instance, ownership.lease_ttl_s);
+    if (!lease.ok()) return lease.status();
+    log->lease_ = *std::move(lease);
     log->owner_ = true;
   }
   StatusOr<PgConnection> reader = PgConnection::Connect(conninfo);
@@ -62,6 +68,10 @@ StatusOr<std::unique_ptr<PgObservationLog>> PgObservationLog::Open(const std::st
   log->reader_ = std::move(reader).value();
   MAPD_RETURN_IF_ERROR(log->LoadCaches());
   return log;
+}
+
+PgObservationLog::~PgObservationLog() {
+  if (owner_ && writer_.healthy()) (void)ReleaseMapLease(writer_, lease_);
 }
 
 StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgParams& params) {
@@ -79,8 +89,20 @@ StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgP
 
 Status PgObservationLog::SetWriterSession(const std::string& sql) {
   MAPD_RETURN_IF_ERROR(writer_.Exec(sql));
-  writer_session_ = sql;
+  writer_session_.push_back(sql);
   return Status::Ok();
+}
+
+Status PgObservationLog::Fence() {
+  if (!owner_) return disowned_;
+  Status s = FenceMapLease(writer_, lease_);
+  if (s.code() == StatusCode::kFailedPrecondition) Disown(s);
+  return s;
+}
+
+void PgObservationLog::Disown(const Status& why) {
+  disowned_ = why;
+  owner_ = false;
 }
 
 Status PgObservationLog::Reconnect() {
@@ -90,45 +112,17 @@ Status PgObservationLog::Reconnect() {
   StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
   if (!again.ok()) return again.status();
   writer_ = std::move(again).value();  // closes the broken one
-  if (!writer_session_.empty()) MAPD_RETURN_IF_ERROR(writer_.Exec(writer_session_));
+  for (const std::string& sql : writer_session_) MAPD_RETURN_IF_ERROR(writer_.Exec(sql));
   if (!owner_) return Status::Ok();
-  MAPD_RETURN_IF_ERROR(Own());
-  // The lock was free for a while: the caches (and the engines fed from
-  // them) hold only if nobody wrote the map meanwhile.
-  PgParams p;
-  p.Text(map_id_);
-  StatusOr<PgResult> r = writer_.Query(
-      "SELECT (SELECT coalesce(max(id), 0) FROM observations WHERE map = $1), (SELECT "
-      "coalesce(max(tie_seq), 0) FROM sessions WHERE map = $1), (SELECT count(*) FROM sessions "
-      "WHERE map = $1), (SELECT count(*) FROM robots WHERE map = $1)",
-      p);
-  if (!r.ok()) return r.status();
-  std::lock_guard<std::mutex> lock(cache_mu_);
-  if (r->Int(0, 0) != newest_observation_ || r->Int(0, 1) != max_tie_seq_ ||
-      r->Int(0, 2) != static_cast<int64_t>(sessions_.size()) ||
-      r->Int(0, 3) != static_cast<int64_t>(robot_ids_.size())) {
-    owner_ = false;  // never write over the other's rows
-    return Status::FailedPrecondition(
-        "map '" + map_id_ +
-        "' was written by another mapd while this one was disconnected from PostgreSQL; "
-        "restart this mapd to serve the map as it is now");
-  }
-  return Status::Ok();
-}
-
-Status PgObservationLog::Own() {
-  // The lock is the writer connection's: it goes when the connection does
-  // (mapd stops or dies and its socket closes). A paused mapd keeps it, so
-  // nothing takes over from it either (leases with fencing: step 3).
-  StatusOr<PgResult> r =
-      writer_.Query("SELECT pg_try_advisory_lock(" + std::to_string(kMapLockClass) + ", " +
-                    std::to_string(map_num_) + ")");
-  if (!r.ok()) return r.status();
-  if (r->rows() != 1 || r->Int(0, 0) == 0) {
-    return Status::FailedPrecondition(
-        "map '" + map_id_ +
-        "' is served by another mapd on this PostgreSQL database (it holds the map's lock); "
-        "stop that one first");
+  // The caches (and the engines fed from them) hold while the epoch is
+  // this log's: every write of the map is fenced by it, so nobody else wrote.
+  StatusOr<LeaseRow> now = GetMapLease(writer_, map_id_);
+  if (!now.ok()) return now.status();
+  if (now->owner != lease_.owner || now->epoch != lease_.epoch) {
+    Disown(Status::FailedPrecondition(
+        "map '" + map_id_ + "' was taken over by instance '" + now->owner + "' (" + now->address +
+        ") while this mapd was disconnected from PostgreSQL; that instance serves it now"));
+    return disowned_;
   }
   return Status::Ok();
 }
@@ -406,8 +400,9 @@ StatusOr<SessionFrame> PgObservationWriter::Session(int64_t robot_id, const std:
 
 Status PgObservationWriter::CheckOwner() const {
   if (log_->owner_) return Status::Ok();
+  if (!log_->disowned_.ok()) return log_->disowned_;
   return Status::FailedPrecondition("map '" + log_->map_id_ +
-                                    "' was opened without its lock (for tokens and audit rows "
+                                    "' was opened without its lease (for tokens and audit rows "
                                     "only); its data is written by the mapd that serves it");
 }
 

@@ -1,9 +1,10 @@
 // The observation intent (storage/observation_store.h) on PostgreSQL, for
 // one map of a shared database.
 //
-// Opening a map takes its ownership lock, so that one mapd writes it at a
-// time (a second gets FailedPrecondition). Like the SQLite backend it has two connections: the
-// writer's, used by one thread in group transactions, and a reader's, serialised on a mutex.
+// Opening a map takes its lease (map_lease.h), so that one mapd writes it at
+// a time (a second gets FailedPrecondition while the lease runs), and every
+// write transaction is fenced by the lease's epoch. Like the SQLite backend it has two connections:
+// the writer's, used by one thread in group transactions, and a reader's, serialised on a mutex.
 // Observation ids are given by the writer (the newest committed + 1): one
 // mapd writes a map at a time (its owner), so ids follow the commit order,
 // which snapshots and replay rely on, and no sequence gaps or cross-map
@@ -16,6 +17,7 @@
 #ifndef MAPD_STORAGE_POSTGRES_OBSERVATION_LOG_H_
 #define MAPD_STORAGE_POSTGRES_OBSERVATION_LOG_H_
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -24,6 +26,7 @@
 #include <vector>
 
 #include "storage/observation_store.h"
+#include "storage/postgres/map_lease.h"
 #include "storage/postgres/pq.h"
 
 namespace mapd::storage {
@@ -46,16 +49,36 @@ class PgWriteScope {
   bool open_ = false;
 };
 
+// Who opens a map, and whether to own it.
+struct PgOwnership {
+  // false: without the map's lease, for tools that write tokens and audit
+  // rows beside a running mapd (the writer then refuses map data).
+  bool own = true;
+  PgInstance instance = DefaultPgInstance();
+  double lease_ttl_s = 10;  // the lease Open takes; the owner renews it
+  // How long the writer's session may sit in an open transaction before
+  // PostgreSQL ends it: bounds how long a paused owner holds a takeover back.
+  double idle_in_transaction_s = 10;
+};
+
 class PgObservationLog final : public ObservationReader {
  public:
   // Connects twice to `conninfo`, migrates the schema, makes `map_id`'s
-  // partition and loads the map's robots and sessions.
-  // `own` false: without the map's lock, for tools that write tokens and
-  // audit rows beside a running mapd (the writer then refuses map data).
+  // partition, takes its lease (`ownership`) and loads the map's robots and
+  // sessions. FailedPrecondition naming the owner while another holds it.
   static StatusOr<std::unique_ptr<PgObservationLog>> Open(const std::string& conninfo,
                                                           const std::string& map_id,
-                                                          bool own = true);
+                                                          const PgOwnership& ownership = {});
+  // Lets the lease lapse (ReleaseMapLease), so that another takes the map at once.
+  ~PgObservationLog() override;
+  // Holds the map's lease; false once a fence found it taken over.
   bool owner() const { return owner_; }
+  // The lease taken at Open (epoch 0 when not an owner).
+  const MapLease& lease() const { return lease_; }
+  // Writer thread, first in each write transaction of the map's data:
+  // FenceMapLease. Once it finds the lease taken over, this log stops
+  // owning the map and every later write of its data is refused.
+  Status Fence();
 
   // The writer connection (writer thread only), for PgWriteScope and the
   // other intents' writers.
@@ -64,9 +87,9 @@ class PgObservationLog final : public ObservationReader {
   Status SetWriterSession(const std::string& sql);
   // Writer thread, after a write failed: when the writer's connection is
   // broken (PostgreSQL restarted, the network failed), connects again and
-  // retakes the map's lock. FailedPrecondition if another mapd wrote the map
-  // meanwhile (this one then refuses map data: restart it); the connection's
-  // error while PostgreSQL is still away.
+  // checks the lease is still this log's. FailedPrecondition if another
+  // mapd took the map meanwhile (this one then refuses map data); the
+  // connection's error while PostgreSQL is still away.
   Status Reconnect();
   // A writer for the transaction open on writer() (writer thread only).
   std::unique_ptr<PgObservationWriter> NewWriter();
@@ -94,15 +117,12 @@ class PgObservationLog final : public ObservationReader {
   friend class PgObservationWriter;
   friend class PgStore;  // shares the connections with the other intents
   PgObservationLog() = default;
-  // Takes the map's ownership lock (a session advisory lock on the writer
-  // connection): one mapd writes a map at a time. FailedPrecondition when
-  // another holds it.
-  Status Own();
+  // Stops owning the map for good: `why` answers every later write.
+  void Disown(const Status& why);
   Status LoadCaches();
   // A query on reader_, connected again and retried once if the connection
   // broke. REQUIRES: reader_mu_ held.
   StatusOr<PgResult> ReadQuery(const std::string& sql, const PgParams& params = {});
-  static constexpr int32_t kMapLockClass = 0x6d617064;  // "mapd"
   // Rows with after_id < id <= through_id and `condition` (SQL on o, with
   // parameters from $4 on), in id order, in pages; fn runs unlocked.
   Status ForEachWhere(const std::string& condition, const std::vector<int64_t>& session_ids,
@@ -113,10 +133,12 @@ class PgObservationLog final : public ObservationReader {
 
   std::string map_id_;
   std::string conninfo_;
-  std::string writer_session_;  // SetWriterSession
-  int64_t map_num_ = 0;         // maps.num
-  std::string partition_;       // the map's observations' table
-  bool owner_ = false;          // holds the map's lock
+  std::vector<std::string> writer_session_;  // SetWriterSession
+  int64_t map_num_ = 0;                      // maps.num
+  std::string partition_;                    // the map's observations' table
+  std::atomic<bool> owner_{false};           // holds the map's lease
+  MapLease lease_;                           // set at Open
+  Status disowned_;                          // why owner_ went false (writer thread)
   PgConnection writer_;
   PgConnection reader_;
   std::mutex reader_mu_;  // guards reader_
@@ -152,7 +174,7 @@ class PgObservationWriter final : public ObservationWriter {
   // id, made on first sight, and a session's id (0 if it has none).
   StatusOr<int64_t> RobotId(const std::string& name, int64_t now_ns);
   int64_t SessionId(int64_t robot_id, const std::string& name) const;
-  // FailedPrecondition unless the log holds the map's lock: robots,
+  // FailedPrecondition unless the log holds the map's lease: robots,
   // sessions, observations and ties (and so submaps and merges, which make
   // robots) are written by the map's owner only.
   Status CheckOwner() const;

@@ -207,6 +207,28 @@ const std::vector<const char*>& Migrations() {
       );
       CREATE TABLE write_probe (map text NOT NULL, data bytea NOT NULL);
       )sql",
+      // 1 -> 2: ownership by lease (map_lease.h). The lease replaces the
+      // session advisory lock, which a paused owner kept for ever.
+      R"sql(
+      -- One row per map with an owner: the instance's name, where clients
+      -- reach it, the epoch (fencing token, + 1 per take) and when the lease
+      -- ends on the database's clock.
+      CREATE TABLE map_leases (
+        map        text PRIMARY KEY REFERENCES maps (id),
+        owner      text NOT NULL,
+        address    text NOT NULL,
+        epoch      bigint NOT NULL,
+        expires_at timestamptz NOT NULL
+      );
+      -- The mapd instances: live while expires_at is ahead (heartbeats);
+      -- since = when the current run's first heartbeat came.
+      CREATE TABLE instances (
+        name       text PRIMARY KEY,
+        address    text NOT NULL,
+        since      timestamptz NOT NULL,
+        expires_at timestamptz NOT NULL
+      );
+      )sql",
   };
   return kMigrations;
 }

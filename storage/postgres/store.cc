@@ -6,9 +6,11 @@ namespace mapd::storage {
 
 StatusOr<std::unique_ptr<PgStore>> PgStore::Open(const std::string& conninfo,
                                                  const std::string& map_id,
-                                                 const StoreOptions& options, bool own) {
+                                                 const StoreOptions& options,
+                                                 const PgOwnership& ownership) {
   std::unique_ptr<PgStore> store(new PgStore());
-  StatusOr<std::unique_ptr<PgObservationLog>> log = PgObservationLog::Open(conninfo, map_id, own);
+  StatusOr<std::unique_ptr<PgObservationLog>> log =
+      PgObservationLog::Open(conninfo, map_id, ownership);
   if (!log.ok()) return log.status();
   store->log_ = std::move(log).value();
   store->path_ = "postgresql map " + map_id;
@@ -33,6 +35,7 @@ StatusOr<std::unique_ptr<PgStore>> PgStore::Open(const std::string& conninfo,
 StatusOr<std::unique_ptr<WriteTransaction>> PgStore::BeginWrite() {
   std::unique_ptr<PgWriteTransaction> txn(new PgWriteTransaction(this));
   MAPD_RETURN_IF_ERROR(txn->scope_.status());
+  MAPD_RETURN_IF_ERROR(log_->Fence());
   return std::unique_ptr<WriteTransaction>(std::move(txn));
 }
 
@@ -41,6 +44,7 @@ Status PgStore::ProbeWrite() {
   PgConnection& w = log_->writer();
   PgWriteScope scope(&w);
   MAPD_RETURN_IF_ERROR(scope.status());
+  MAPD_RETURN_IF_ERROR(log_->Fence());
   StatusOr<PgResult> r = w.Query(
       "INSERT INTO write_probe (map, data) VALUES ($1, decode(repeat('00', 1048576), 'hex'))",
       MapParams());

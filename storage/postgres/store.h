@@ -93,20 +93,27 @@ class PgWriteTransaction final : public WriteTransaction {
 class PgStore final : public Store {
  public:
   // Connects to `conninfo` (libpq: "host=... dbname=..." or a
-  // postgresql:// URI), migrates the schema and opens map `map_id`.
-  // `own` false: without the map's lock (PgObservationLog::Open), for
-  // `mapd token` beside a running mapd; map data is then refused.
+  // postgresql:// URI), migrates the schema and opens map `map_id`, taking
+  // its lease as `ownership` says (PgObservationLog::Open). Not owning is
+  // for `mapd token` beside a running mapd; map data is then refused.
   static StatusOr<std::unique_ptr<PgStore>> Open(const std::string& conninfo,
                                                  const std::string& map_id,
-                                                 const StoreOptions& options, bool own = true);
+                                                 const StoreOptions& options,
+                                                 const PgOwnership& ownership = {});
   ~PgStore() override = default;
 
+  // Fenced (PgObservationLog::Fence): FailedPrecondition naming the new
+  // owner once the map was taken over.
   StatusOr<std::unique_ptr<WriteTransaction>> BeginWrite() override;
+  // The lease taken at Open, and whether it is still held as far as the
+  // fence knows (the lease's renewal is the owner's, on a connection of its own).
+  const MapLease& lease() const { return log_->lease(); }
+  bool owner() const { return log_->owner(); }
   // Nothing to do: PostgreSQL checkpoints and vacuums by itself.
   Status Checkpoint() override { return Status::Ok(); }
   // Connects again if the writer's connection broke (PgObservationLog::
-  // Reconnect), then a 1 MiB write commits (and is deleted): the server
-  // takes writes again.
+  // Reconnect), then a fenced 1 MiB write commits (and is deleted): the
+  // server takes writes again.
   Status ProbeWrite() override;
 
   // ObservationReader (PgObservationLog)

@@ -83,7 +83,7 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   // map has one writer.
   MapdProcess second = Start("third.log");
   EXPECT_EQ(second.port, 0);
-  EXPECT_THAT(ReadFileBytes(dir_.File("third.log")), HasSubstr("served by another mapd"));
+  EXPECT_THAT(ReadFileBytes(dir_.File("third.log")), HasSubstr("is served by instance"));
   EXPECT_EQ(Stop(again.pid, SIGTERM), 0) << again.log();
 }
 

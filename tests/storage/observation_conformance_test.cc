@@ -2,6 +2,7 @@
 // idempotent batches, frame kinds, transactions, ties, reads and restarts.
 // PostgreSQL-only: several maps share one database and stay apart, and
 // several mapd migrating an empty database at once do it once.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <thread>
@@ -419,15 +420,20 @@ TEST_F(PostgresMapsTest, SeveralOpeningAnEmptyDatabaseTogetherMigrateItOnce) {
 }
 
 TEST_F(PostgresMapsTest, OneMapdWritesAMapAtATime) {
-  auto first = PgObservationLog::Open(conninfo_, "site-1");
+  PgOwnership a, b;
+  a.instance = {"mapd-a", "10.0.0.1:50051"};
+  b.instance = {"mapd-b", "10.0.0.2:50051"};
+  auto first = PgObservationLog::Open(conninfo_, "site-1", a);
   ASSERT_TRUE(first.ok()) << first.status().ToString();
-  auto second = PgObservationLog::Open(conninfo_, "site-1");
+  auto second = PgObservationLog::Open(conninfo_, "site-1", b);
   EXPECT_EQ(second.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(second.status().message().find("served by another mapd"), std::string::npos)
-      << second.status().message();
-  EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-2").ok()) << "other maps are free";
-  first->reset();  // its connection closes, and the lock with it
-  EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-1").ok());
+  EXPECT_THAT(second.status().message(),
+              ::testing::HasSubstr("served by instance 'mapd-a' (10.0.0.1:50051, epoch 1)"));
+  EXPECT_TRUE(PgObservationLog::Open(conninfo_, "site-2", b).ok()) << "other maps are free";
+  first->reset();  // closing lets its lease lapse
+  auto taken = PgObservationLog::Open(conninfo_, "site-1", b);
+  ASSERT_TRUE(taken.ok()) << taken.status().ToString();
+  EXPECT_EQ((*taken)->lease().epoch, 2);
 }
 
 // Map ids up to mapd's 128 characters, longer than a PostgreSQL identifier:

@@ -1,11 +1,14 @@
 // A PostgreSQL restart under a map's store: writes fail while it is away
 // (nothing is acknowledged that is not stored), the store connects again by
-// itself when mapd probes, and a map another mapd wrote meanwhile is refused.
+// itself when mapd probes, and a map another mapd took over meanwhile is
+// refused.
 // Each test runs its own cluster, with fsync on, since it stops it.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "common/postgres.h"
 #include "storage/postgres/store.h"
@@ -23,8 +26,12 @@ class PostgresRestartTest : public ::testing::Test {
     features_.lines.push_back({{0, 0, 0}, {2, 0, 0}});
   }
 
-  std::unique_ptr<Store> Open() {
-    StatusOr<std::unique_ptr<PgStore>> s = PgStore::Open(conninfo_, "site-1", StoreOptions{});
+  std::unique_ptr<Store> Open(const std::string& instance = "mapd-a", double lease_ttl_s = 10) {
+    PgOwnership ownership;
+    ownership.instance = {instance, instance + ":50051"};
+    ownership.lease_ttl_s = lease_ttl_s;
+    StatusOr<std::unique_ptr<PgStore>> s =
+        PgStore::Open(conninfo_, "site-1", StoreOptions{}, ownership);
     EXPECT_TRUE(s.ok()) << s.status().ToString();
     return s.ok() ? std::move(s).value() : nullptr;
   }
@@ -74,27 +81,31 @@ TEST_F(PostgresRestartTest, TheStoreConnectsAgainWhenPostgresComesBack) {
   auto robots = store->ListRobots();
   ASSERT_TRUE(robots.ok()) << robots.status().ToString();
   EXPECT_EQ((*robots)[0].batches, 2u);
-  // And it still holds the map: a second store is refused.
-  auto second = PgStore::Open(conninfo_, "site-1", StoreOptions{});
+  // And it still holds the map: another instance is refused.
+  PgOwnership b;
+  b.instance = {"mapd-b", ""};
+  auto second = PgStore::Open(conninfo_, "site-1", StoreOptions{}, b);
   EXPECT_EQ(second.status().code(), StatusCode::kFailedPrecondition);
 }
 
-TEST_F(PostgresRestartTest, AMapWrittenByAnotherMeanwhileIsRefused) {
-  std::unique_ptr<Store> store = Open();
+TEST_F(PostgresRestartTest, AMapTakenOverMeanwhileIsRefused) {
+  std::unique_ptr<Store> store = Open("mapd-a", /*lease_ttl_s=*/0.5);
   ASSERT_NE(store, nullptr);
   ASSERT_TRUE(Insert(*store, 1).ok());
-  ASSERT_TRUE(cluster_->Stop("immediate"));  // a crash: the lock goes with the connection
+  ASSERT_TRUE(cluster_->Stop("immediate"));  // a crash
   std::string why;
   ASSERT_TRUE(cluster_->Restart(&why)) << why;
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // the lease lapses
   {
-    std::unique_ptr<Store> other = Open();  // another mapd takes the free map
+    std::unique_ptr<Store> other = Open("mapd-b");  // another mapd takes the map
     ASSERT_NE(other, nullptr);
     ASSERT_TRUE(Insert(*other, 2).ok());
   }
   EXPECT_FALSE(Insert(*store, 3).ok());  // the broken connection
   const Status probe = store->ProbeWrite();
   EXPECT_EQ(probe.code(), StatusCode::kFailedPrecondition) << probe.ToString();
-  EXPECT_NE(probe.message().find("written by another mapd"), std::string::npos);
+  EXPECT_NE(probe.message().find("taken over by instance 'mapd-b'"), std::string::npos)
+      << probe.ToString();
   const auto refused = Insert(*store, 3);
   EXPECT_EQ(refused.status().code(), StatusCode::kFailedPrecondition);
 }
