@@ -28,6 +28,15 @@ struct ServerConfig {
   // Every map in one PostgreSQL database (libpq key=value string or
   // postgresql:// URI, no password); not with db_path or data_dir.
   std::string store;
+  // With store: who this instance is among the mapd serving that database
+  // (map_ownership.h). advertise_address: where clients reach it (host:port;
+  // empty: the listen address, its host replaced by this host's name when it
+  // listens on every interface). instance_name: stays the same across
+  // restarts (empty: the advertised address). lease_ttl_s: how long a map
+  // stays with an instance that stopped renewing, seconds.
+  std::string advertise_address;
+  std::string instance_name;
+  double lease_ttl_s = 4.0;
   bool sync_full = false;      // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;  // wait for a database lock held by another process
   fusion::FusionParams fusion;

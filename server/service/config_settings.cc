@@ -171,6 +171,15 @@ const std::vector<Setting>& Settings() {
                     "(docs/scale-out.md); the password comes from PGPASSWORD, ~/.pgpass or passfile=, never "
                     "from here; not with db or data_dir",
            [](C& c) -> auto& { return c.store; }),
+      Text("advertise_address", "with store: host:port where clients reach this mapd, sent to them in redirects "
+                                "(empty = listen, with this host's name if it listens on every interface)",
+           [](C& c) -> auto& { return c.advertise_address; }),
+      Text("instance_name", "with store: this mapd's name among those serving the database, the same across "
+                            "restarts (empty = the advertised address)",
+           [](C& c) -> auto& { return c.instance_name; }),
+      Real("lease_ttl_s", "with store: how long a map stays with a mapd that stopped renewing its lease before "
+                          "another takes it over, seconds",
+           [](C& c) -> auto& { return c.lease_ttl_s; }, {0.5, 600}),
       Choice("sync", "normal: an acknowledged batch survives a crash of mapd; full: it survives power loss too "
                      "(slower commits)",
              [](C& c) -> auto& { return c.sync_full; }, "normal", "full"),

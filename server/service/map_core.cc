@@ -50,7 +50,7 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   std::unique_ptr<MapCore> core(new MapCore(options));
   if (!options.postgres.empty()) {
     StatusOr<std::unique_ptr<storage::PgStore>> store =
-        storage::PgStore::Open(options.postgres, options.map_id, options.store);
+        storage::PgStore::Open(options.postgres, options.map_id, options.store, options.ownership);
     if (!store.ok()) {
       return Status(store.status().code(), "cannot open map '" + options.map_id +
                                                "' on PostgreSQL: " + store.status().message());
@@ -311,6 +311,7 @@ void MapCore::WriterLoop() {
   FusedDelta fused;
   std::deque<std::shared_ptr<WriteJob>> jobs;
   for (;;) {
+    writer_busy_since_ns_ = 0;  // waiting for work (or for the database to come back)
     // Backpressure: while the fuser is far behind, commit no new batches, so
     // robots see slower acks instead of the server growing without bound.
     // Other writes (submaps, merges, deletes, fused features) go on: an
@@ -375,6 +376,7 @@ void MapCore::WriterLoop() {
         TakeFusedRows(kMaxFusedRowsPerCommit, &fused);
       }
     }
+    writer_busy_since_ns_ = SteadyNowNs();
     if (probe) {
       write_health_.Record(store_->ProbeWrite(), WriteHealth::Attempt::kProbe);
       continue;

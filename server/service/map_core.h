@@ -42,6 +42,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/status.h"
 #include "fusion/engine.h"
 #include "fusion/params.h"
@@ -54,6 +55,7 @@
 #include "service/latency_histogram.h"
 #include "service/watch_hub.h"
 #include "service/write_health.h"
+#include "storage/postgres/observation_log.h"
 #include "storage/store.h"
 
 namespace mapd::service {
@@ -64,6 +66,7 @@ struct MapCoreOptions {
   // (storage/postgres/store.h) instead of a file.
   std::string postgres;
   std::string map_id;
+  storage::PgOwnership ownership;  // who takes the map's lease (map_ownership.h)
   storage::StoreOptions store;
   fusion::FusionParams fusion;
   fusion::PlaneFusionParams planes;   // non-vertical planes (fusion/plane_engine.h)
@@ -117,6 +120,13 @@ class MapCore final : public Core {
   static StatusOr<std::unique_ptr<MapCore>> Open(const MapCoreOptions& options);
 
   bool ready() const { return ready_.load(); }
+  // How long the writer has been on its current round of work, seconds; 0
+  // while it waits for work. A map's lease is renewed only while this stays
+  // short (map_ownership.h): a writer stuck in the database gives its map up.
+  double WriterBusyForS() const {
+    const int64_t since = writer_busy_since_ns_.load();
+    return since == 0 ? 0.0 : static_cast<double>(SteadyNowNs() - since) * 1e-9;
+  }
   // Ok once recovered; else Unavailable saying how far recovery is.
   Status CheckReady() const override;
   // Runs `fn` once recovery succeeded (at once if it has), on any thread.
@@ -330,7 +340,8 @@ class MapCore final : public Core {
 
   // Recovery (Open, Recover).
   std::atomic<bool> ready_{false};
-  std::atomic<bool> replaying_{false};  // serving, with the recovery replay still going
+  std::atomic<int64_t> writer_busy_since_ns_{0};  // WriterBusyForS
+  std::atomic<bool> replaying_{false};            // serving, with the recovery replay still going
   std::atomic<bool> cancel_recovery_{false};
   std::atomic<uint64_t> recovery_replayed_{0};
   std::atomic<int64_t> recovery_target_id_{0};

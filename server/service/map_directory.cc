@@ -101,42 +101,71 @@ StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenDataDir(const std::str
   return d;
 }
 
-StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenPostgres(std::vector<std::string> ids,
-                                                                   const std::string& where,
-                                                                   Opener opener) {
-  for (const std::string& id : ids) {
-    if (id == kDefaultMapId) continue;
-    if (Status s = CheckMapId(id, where + ": the map"); !s.ok()) return s;
-  }
+std::unique_ptr<MapDirectory> MapDirectory::ForPostgres(ServerWide server_wide, Opener opener) {
   std::unique_ptr<MapDirectory> d(new MapDirectory("", std::move(opener)));
   d->postgres_ = true;
-  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, "");
-  if (!map.ok()) return map.status();
-  for (const std::string& id : ids) {
-    if (id == kDefaultMapId) continue;
-    map = d->Open(id, "");
-    if (!map.ok()) return map.status();
-  }
+  d->server_wide_ = std::move(server_wide);
   return d;
+}
+
+StatusOr<ServedMap*> MapDirectory::Serve(const std::string& id) {
+  std::lock_guard<std::mutex> opening(create_mu_);
+  if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' is served here already");
+  return Open(id, "");
+}
+
+ServedMap* MapDirectory::Retire(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = maps_.find(id);
+  if (it == maps_.end()) return nullptr;
+  ServedMap* map = it->second.get();
+  retired_.push_back(std::move(it->second));
+  maps_.erase(it);
+  if (default_ == map) default_ = nullptr;
+  return map;
+}
+
+MapServiceImpl& MapDirectory::server_wide() const {
+  if (server_wide_.service) return *server_wide_.service;
+  std::lock_guard<std::mutex> lock(mu_);
+  return *default_->service;  // a local store's default map is never retired
+}
+
+Core& MapDirectory::server_wide_core() const {
+  if (server_wide_.core) return *server_wide_.core;
+  std::lock_guard<std::mutex> lock(mu_);
+  return *default_->core;
+}
+
+ServedMap* MapDirectory::default_map() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return default_;
 }
 
 StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path,
                                         const MapSettings* create_with) {
   if (!postgres_) MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
-  StatusOr<std::unique_ptr<ServedMap>> map =
-      opener_(id, db_path, default_ == nullptr ? nullptr : default_->service.get(), create_with);
+  MapServiceImpl* shared_with = server_wide_.service.get();
+  if (shared_with == nullptr) {
+    std::lock_guard<std::mutex> lock(mu_);
+    shared_with = default_ == nullptr ? nullptr : default_->service.get();
+  }
+  StatusOr<std::unique_ptr<ServedMap>> map = opener_(id, db_path, shared_with, create_with);
   if (!map.ok()) return map.status();
   ServedMap* raw = map->get();
   std::lock_guard<std::mutex> lock(mu_);
   maps_.emplace(id, std::move(map).value());
-  if (default_ == nullptr) default_ = raw;
+  if (id == kDefaultMapId) default_ = raw;
   return raw;
 }
 
 MapDirectory::~MapDirectory() {
+  // With a local store the other maps' services share the default map's:
+  // they go first. The server-wide parts go last (a member).
   std::unique_ptr<ServedMap> default_map;
   if (auto it = maps_.find(kDefaultMapId); it != maps_.end()) default_map = std::move(it->second);
   maps_.clear();
+  retired_.clear();
   default_map.reset();
 }
 

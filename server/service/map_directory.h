@@ -3,13 +3,15 @@
 // MapServiceImpl (handlers, uploads, merges). With --db there is one map,
 // "default"; with --data-dir every <id>.db file of the directory is a map,
 // "default" is made when missing, and Create() adds maps while serving.
+// With a PostgreSQL store the directory holds the maps this instance owns
+// (map_ownership.h opens them, Serve, and drops them, Retire).
 //
 // Each database file is locked (flock, exclusive) while it is served, so a
 // second mapd on the same file refuses to start instead of writing beside
 // the first.
 //
-// Maps are added while serving and never removed before the directory is
-// destroyed, so a ServedMap* stays valid for the server's life.
+// A ServedMap* stays valid for the directory's life: a retired map is kept
+// (stopped), since calls may still hold it.
 //
 // Thread safety: every method may be called from any thread.
 #ifndef MAPD_SERVICE_MAP_DIRECTORY_H_
@@ -58,6 +60,14 @@ struct ServedMap {
   std::unique_ptr<MapServiceImpl> service;
 };
 
+// What belongs to the server rather than a map (tokens, WhoAmI, the denial
+// counts): the default map's core and service, or on PostgreSQL its own
+// (server_wide_core.h), since the default map may be served elsewhere.
+struct ServerWide {
+  std::unique_ptr<Core> core;
+  std::unique_ptr<MapServiceImpl> service;
+};
+
 class MapDirectory {
  public:
   // Opens map `id` at `db_path` (locked by the caller's ServedMap) and its
@@ -75,12 +85,10 @@ class MapDirectory {
   // when missing), then the others by id.
   static StatusOr<std::unique_ptr<MapDirectory>> OpenDataDir(const std::string& data_dir,
                                                              Opener opener);
-  // The maps `ids` of a PostgreSQL database (`where` names it in messages):
-  // "default" first (made when missing), then the others. The opener gets
-  // an empty db_path, and a new map's settings to store with it.
-  static StatusOr<std::unique_ptr<MapDirectory>> OpenPostgres(std::vector<std::string> ids,
-                                                              const std::string& where,
-                                                              Opener opener);
+  // For the maps of a PostgreSQL database, none open yet (Serve). The
+  // opener gets an empty db_path, and a new map's settings to store with it;
+  // every map's service shares `server_wide`'s.
+  static std::unique_ptr<MapDirectory> ForPostgres(ServerWide server_wide, Opener opener);
 
   // The other maps first: their services share the default map's access
   // control and stream limiter.
@@ -89,7 +97,11 @@ class MapDirectory {
   // NotFound naming the id (never the other maps: the caller may not be
   // authenticated yet).
   StatusOr<ServedMap*> Find(const std::string& id) const;
-  ServedMap& default_map() const { return *default_; }
+  // The server's parts (ServerWide): the default map's, or ForPostgres's.
+  MapServiceImpl& server_wide() const;
+  Core& server_wide_core() const;
+  // The default map when served here, else null.
+  ServedMap* default_map() const;
   std::vector<ServedMap*> List() const;         // by id
   std::vector<std::string> Ids() const;         // sorted
   Core* FindCore(const std::string& id) const;  // null when not served
@@ -98,6 +110,13 @@ class MapDirectory {
   // or the opener's error.
   StatusOr<ServedMap*> Create(const std::string& id, const MapSettings& settings = {});
   bool can_create() const { return !data_dir_.empty() || postgres_; }
+  // PostgreSQL: opens existing map `id` here (the opener takes its lease).
+  StatusOr<ServedMap*> Serve(const std::string& id);
+  // Takes map `id` out of the directory (calls for it then find it gone)
+  // and returns it for the caller to stop; it is kept until the directory
+  // is destroyed. Null when it is not served.
+  ServedMap* Retire(const std::string& id);
+  bool postgres() const { return postgres_; }
   const std::string& data_dir() const { return data_dir_; }
 
  private:
@@ -112,7 +131,9 @@ class MapDirectory {
   std::mutex create_mu_;  // one Create at a time (it opens files)
   mutable std::mutex mu_;
   std::map<std::string, std::unique_ptr<ServedMap>> maps_;  // GUARDED_BY(mu_)
-  ServedMap* default_ = nullptr;                            // set once, first
+  std::vector<std::unique_ptr<ServedMap>> retired_;         // GUARDED_BY(mu_)
+  ServedMap* default_ = nullptr;  // GUARDED_BY(mu_); with a local store set once, first
+  ServerWide server_wide_;        // PostgreSQL only; destroyed after every map
 };
 
 }  // namespace mapd::service

@@ -37,11 +37,27 @@ StatusOr<std::string> MapRouter::MapIdOf(const grpc::ServerContextBase& context,
   return from_metadata.empty() ? std::string(kDefaultMapId) : from_metadata;
 }
 
-grpc::Status MapRouter::Forward(const grpc::ServerContextBase& context, const std::string& field,
+StatusOr<ServedMap*> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
+                                               const std::string& id) {
+  StatusOr<ServedMap*> map = maps_->Find(id);
+  if (map.ok() || !locate_) return map;
+  const std::optional<MapElsewhere> owner = locate_(id.empty() ? kDefaultMapId : id);
+  if (!owner) return map;  // no such map
+  if (!owner->live || owner->address.empty()) {
+    return Status::Unavailable("map '" + id +
+                               "' is being taken over by another mapd (its owner stopped); "
+                               "retry in a few seconds");
+  }
+  context.AddTrailingMetadata(kMapOwnerMetadata, owner->address);
+  return Status::Unavailable("map '" + id + "' is served by the mapd at " + owner->address +
+                             " (instance '" + owner->instance + "'); call it there");
+}
+
+grpc::Status MapRouter::Forward(grpc::ServerContextBase& context, const std::string& field,
                                 const std::function<grpc::Status(MapServiceImpl*)>& call) {
   StatusOr<std::string> id = MapIdOf(context, field);
   if (!id.ok()) return ToGrpcStatus(id.status());
-  StatusOr<ServedMap*> map = maps_->Find(*id);
+  StatusOr<ServedMap*> map = FindOrRedirect(context, *id);
   if (!map.ok()) return ToGrpcStatus(map.status());
   return call((*map)->service.get());
 }
@@ -51,7 +67,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
   using Refused = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<ServedMap*> map = maps_->Find(*id);
+  StatusOr<ServedMap*> map = FindOrRedirect(*context, *id);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   return (*map)->service->Ingest(context);
 }
@@ -61,7 +77,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<ServedMap*> map = maps_->Find(*id);
+  StatusOr<ServedMap*> map = FindOrRedirect(*context, *id);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   return (*map)->service->UploadSubmap(context, response);
 }
@@ -167,7 +183,7 @@ grpc::Status MapRouter::CreateMap(grpc::ServerContext* context, const pb::Create
   // The audit row says what happened, made or not (the server's log).
   const std::string result = map.ok() ? "ok" : map.status().ToString();
   const Status audited =
-      maps_->default_map().core->ExecuteWrite([&](storage::WriteTransaction* txn) {
+      maps_->server_wide_core().ExecuteWrite([&](storage::WriteTransaction* txn) {
         return txn->AppendAudit(AccessControl::Entry(*p, "CreateMap", target, result));
       });
   if (!map.ok()) return ToGrpcStatus(map.status());

@@ -10,6 +10,7 @@
 #define MAPD_SERVICE_MAP_ROUTER_H_
 
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
@@ -18,14 +19,29 @@
 namespace mapd::service {
 
 inline constexpr char kMapIdMetadata[] = "mapd-map-id";
+// Trailing metadata of a call refused because its map is served by another
+// mapd on the same database: that instance's address (host:port). Clients
+// call it there (RobotClient, mapctl, the Python client follow it).
+inline constexpr char kMapOwnerMetadata[] = "mapd-map-owner";
+
+// Where a map not served here is (map_ownership.h); nullopt when no map has
+// that id.
+struct MapElsewhere {
+  std::string instance;
+  std::string address;
+  bool live = false;  // false: its owner failed, another is taking it over
+};
+using MapLocator = std::function<std::optional<MapElsewhere>(const std::string& id)>;
 
 class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
                             mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
                                 mapserver::v1::MapService::Service>> {
  public:
-  // `on_create` runs for each map CreateMap made (health, logs).
-  MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create)
-      : maps_(maps), on_create_(std::move(on_create)) {}
+  // `on_create` runs for each map CreateMap made (health, logs); `locate`
+  // (PostgreSQL only, else null) says where maps not served here are.
+  MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create,
+            MapLocator locate = nullptr)
+      : maps_(maps), on_create_(std::move(on_create)), locate_(std::move(locate)) {}
 
   // The map a call names: `field` (a request's map_id), else the metadata,
   // else "default". InvalidArgument when both are set and differ, or when
@@ -102,12 +118,16 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
 
  private:
   // Runs `call` on the service of the map the call names, or answers why not.
-  grpc::Status Forward(const grpc::ServerContextBase& context, const std::string& field,
+  grpc::Status Forward(grpc::ServerContextBase& context, const std::string& field,
                        const std::function<grpc::Status(MapServiceImpl*)>& call);
-  MapServiceImpl* server_wide() const { return maps_->default_map().service.get(); }
+  // The map `id` names, or why it is not served here: UNAVAILABLE with the
+  // owner's address in kMapOwnerMetadata when another mapd serves it.
+  StatusOr<ServedMap*> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id);
+  MapServiceImpl* server_wide() const { return &maps_->server_wide(); }
 
   MapDirectory* const maps_;
   const std::function<void(ServedMap*)> on_create_;
+  const MapLocator locate_;
 };
 
 }  // namespace mapd::service

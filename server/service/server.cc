@@ -3,6 +3,7 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <malloc.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -14,6 +15,8 @@
 #include "service/file_modes.h"
 #include "service/log.h"
 #include "service/rpc_metrics.h"
+#include "service/server_wide_core.h"
+#include "storage/postgres/store.h"
 
 namespace mapd::service {
 namespace {
@@ -90,9 +93,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
       return Status(catalog.status().code(), "store: " + catalog.status().message());
     }
     server->catalog_ = std::make_unique<storage::PgMapCatalog>(std::move(catalog).value());
-    StatusOr<std::vector<std::string>> ids = server->catalog_->ListMaps();
-    if (!ids.ok()) return ids.status();
-    maps = MapDirectory::OpenPostgres(*ids, "the PostgreSQL database", opener);
+    StatusOr<ServerWide> server_wide = server->OpenServerWide();
+    if (!server_wide.ok()) return server_wide.status();
+    maps = MapDirectory::ForPostgres(std::move(server_wide).value(), opener);
   } else if (!config.data_dir.empty()) {
     maps = MapDirectory::OpenDataDir(config.data_dir, opener);
   } else {
@@ -100,8 +103,26 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   }
   if (!maps.ok()) return maps.status();
   server->maps_ = std::move(maps).value();
-  server->router_ =
-      std::make_unique<MapRouter>(server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); });
+  MapLocator locate;
+  if (!config.store.empty()) {
+    MapOwnership::Hooks hooks;
+    hooks.open = [s](const std::string& id) { return s->TakeMap(id); };
+    hooks.drop = [s](const std::string& id, const Status& why) { s->DropMap(id, why); };
+    OwnershipOptions o;
+    o.conninfo = config.store;
+    o.lease_ttl_s = config.lease_ttl_s;
+    StatusOr<std::unique_ptr<MapOwnership>> ownership =
+        MapOwnership::Create(o, server->maps_.get(), server->catalog_.get(), std::move(hooks));
+    if (!ownership.ok()) return ownership.status();
+    server->ownership_ = std::move(ownership).value();
+    locate = [s](const std::string& id) -> std::optional<MapElsewhere> {
+      std::optional<MapOwner> owner = s->ownership_->Locate(id);
+      if (!owner) return std::nullopt;
+      return MapElsewhere{owner->instance, owner->address, owner->live};
+    };
+  }
+  server->router_ = std::make_unique<MapRouter>(
+      server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); }, locate);
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -187,8 +208,77 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
        {"reason", "recovering the fused map"},
        {"malloc_huge_pages", MallocHugePages()}});
   for (ServedMap* map : server->maps_->List()) server->WatchMap(map);
+  if (server->ownership_ != nullptr) {
+    // Who this instance is, now that the port is bound (port 0 in tests).
+    server->ownership_->set_instance(server->Instance());
+    // The first round before returning: a lone instance serves its maps at once.
+    if (Status s = server->ownership_->RunOnce(); !s.ok()) return s;
+    server->ownership_->StartThread();
+    {
+      std::lock_guard<std::mutex> lock(server->health_mu_);
+      server->UpdateHealthLocked();  // "" is SERVING with no map here
+    }
+  }
   server->housekeeping_ = std::thread([s] { s->Housekeeping(); });
   return server;
+}
+
+StatusOr<ServerWide> MapServer::OpenServerWide() {
+  // The default map's store without its lease: tokens and audit rows only.
+  storage::PgOwnership not_owner;
+  not_owner.own = false;
+  StatusOr<std::unique_ptr<storage::PgStore>> store =
+      storage::PgStore::Open(config_.store, kDefaultMapId, CoreOptions(config_).store, not_owner);
+  if (!store.ok()) return Status(store.status().code(), "store: " + store.status().message());
+  ServerWide w;
+  w.core = std::make_unique<ServerWideCore>(std::move(store).value());
+  w.service = std::make_unique<MapServiceImpl>(w.core.get(), config_.ingest, config_.submaps,
+                                               config_.streams, auth_,
+                                               MapPlacement{kDefaultMapId, nullptr});
+  return w;
+}
+
+storage::PgInstance MapServer::Instance() const {
+  storage::PgInstance me;
+  me.address = config_.advertise_address;
+  if (me.address.empty()) {
+    std::string host = config_.listen.substr(0, config_.listen.rfind(':'));
+    if (host.empty() || host == "0.0.0.0" || host == "[::]") {
+      char name[256] = {};
+      if (::gethostname(name, sizeof name - 1) == 0) host = name;
+    }
+    me.address = host + ":" + std::to_string(port_);
+  }
+  me.name = config_.instance_name.empty() ? me.address : config_.instance_name;
+  return me;
+}
+
+Status MapServer::TakeMap(const std::string& id) {
+  {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    if (shut_down_) return Status::Unavailable("mapd is shutting down");
+  }
+  StatusOr<ServedMap*> map = maps_->Serve(id);
+  if (!map.ok()) return map.status();
+  auto* store = dynamic_cast<storage::PgStore*>(&(*map)->core->store());
+  Log(LogLevel::kInfo, "map_taken",
+      {{"map", id}, {"epoch", store ? std::to_string(store->lease().epoch) : "?"}});
+  WatchMap(*map);
+  return Status::Ok();
+}
+
+void MapServer::DropMap(const std::string& id, const Status& why) {
+  ServedMap* map = maps_->Retire(id);
+  if (map == nullptr) return;
+  Log(LogLevel::kWarn, "map_dropped",
+      {{"map", id},
+       {"why", why.message()},
+       {"action", "calls for it are redirected to its new owner; nothing acknowledged is lost"}});
+  map->service->StartDraining();
+  map->core->Stop();  // what is queued is refused by the fence; robots resend it
+  std::lock_guard<std::mutex> lock(health_mu_);
+  server_->GetHealthCheckService()->SetServingStatus("map/" + id, false);
+  UpdateHealthLocked();
 }
 
 StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenMap(const std::string& id,
@@ -277,6 +367,10 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenPostgresMap(std::unique_ptr<
   MapCoreOptions core_options = CoreOptions(config);
   core_options.postgres = config_.store;
   core_options.map_id = id;
+  core_options.ownership.instance = ownership_->instance();
+  core_options.ownership.lease_ttl_s = config_.lease_ttl_s;
+  // A paused owner's open transaction holds a takeover back this long at most.
+  core_options.ownership.idle_in_transaction_s = std::max(2 * config_.lease_ttl_s, 5.0);
   StatusOr<std::unique_ptr<MapCore>> core = MapCore::Open(core_options);
   if (!core.ok()) return fail(core.status());
   map->core = std::move(core).value();
@@ -355,13 +449,14 @@ void MapServer::Housekeeping() {
   while (!housekeeping_cv_.wait_for(lock, std::chrono::seconds(1),
                                     [this] { return housekeeping_stop_; })) {
     lock.unlock();
+    if (maps_->postgres()) maps_->server_wide().Tick();  // its audit rows and denials
     for (ServedMap* map : maps_->List()) map->service->Tick();
     FlushSuppressedLogs();
     // Give memory back after a burst: a flood of streams leaves gRPC's and
     // malloc's freed memory in the heap (1.5 GiB, never returned, before).
     // Trim once the burst is over (under 100 stream opens in the last
     // second), and every 30 s anyway.
-    const StreamLimiter& limiter = maps_->default_map().service->limiter();  // shared by all
+    const StreamLimiter& limiter = maps_->server_wide().limiter();  // shared by all
     const uint64_t events = limiter.admitted() + limiter.refused();
     const uint64_t last_second = events - last_events;
     last_events = events;
@@ -399,6 +494,7 @@ void MapServer::Shutdown() {
     shut_down_ = true;
   }
   Log(LogLevel::kInfo, "shutting_down", {{"grace_s", std::to_string(config_.shutdown_grace_s)}});
+  if (ownership_ != nullptr) ownership_->StopTaking();  // leases still renewed while draining
   {
     std::lock_guard<std::mutex> lock(health_mu_);
     UpdateHealthLocked();  // NOT_SERVING, every map
@@ -425,8 +521,11 @@ void MapServer::Shutdown() {
   StopHousekeeping();
   // The counts of the last denials (denial_audit.h), into the default map's
   // database, before it stops.
-  maps_->default_map().service->FlushDenials(/*all=*/true);
+  maps_->server_wide().FlushDenials(/*all=*/true);
   for (ServedMap* map : maps_->List()) map->core->Stop();  // commits what is queued, checkpoints
+  // The leases lapse as the stores close (MapServer's destructor), so that
+  // the maps' next owners take them at once.
+  if (ownership_ != nullptr) ownership_->Stop();
   Log(LogLevel::kInfo, "stopped");
 }
 

@@ -18,6 +18,7 @@
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_directory.h"
+#include "service/map_ownership.h"
 #include "service/map_router.h"
 #include "service/map_service.h"
 #include "storage/postgres/map_catalog.h"
@@ -41,8 +42,12 @@ class MapServer {
   // The port of health_listen (0 when it is not set).
   int health_port() const { return health_port_; }
   std::string address() const;
-  // The default map's core, for what runs beside the gRPC server (the web view).
-  Core* core() const { return maps_->default_map().core.get(); }
+  // The default map's core, for what runs beside the gRPC server (the web
+  // view); on PostgreSQL the server-wide one while another instance serves it.
+  Core* core() const {
+    ServedMap* d = maps_->default_map();
+    return d != nullptr ? d->core.get() : &maps_->server_wide_core();
+  }
   MapDirectory& maps() const { return *maps_; }
   // Who may call, for what runs beside it (the web view): the same rules
   // and the same per-identity limit on denial rows in the audit log.
@@ -66,6 +71,14 @@ class MapServer {
   StatusOr<std::unique_ptr<ServedMap>> OpenPostgresMap(std::unique_ptr<ServedMap> map,
                                                        MapServiceImpl* shared_with,
                                                        const MapSettings* create_with);
+  // PostgreSQL: the server-wide parts (server_wide_core.h).
+  StatusOr<ServerWide> OpenServerWide();
+  // PostgreSQL: this instance's name and advertised address (config_).
+  storage::PgInstance Instance() const;
+  // MapOwnership's hooks: serve map `id` here (its lease taken); stop
+  // serving it (its lease lost), redirecting its calls from then on.
+  Status TakeMap(const std::string& id);
+  void DropMap(const std::string& id, const Status& why);
   // What a map's MapCore takes from the (map's) configuration.
   static MapCoreOptions CoreOptions(const ServerConfig& config);
   // Logs and health for a map once it is in the directory.
@@ -82,6 +95,7 @@ class MapServer {
   // maps is serialised by MapDirectory (at start, then one Create at a time).
   std::unique_ptr<storage::PgMapCatalog> catalog_;
   std::unique_ptr<MapDirectory> maps_;
+  std::unique_ptr<MapOwnership> ownership_;  // PostgreSQL only; goes before maps_
   std::unique_ptr<MapRouter> router_;
   CallsInProgress calls_;  // before server_: its interceptors point here
   std::unique_ptr<grpc::Server> server_;

@@ -6,6 +6,7 @@ namespace mapd::storage {
 
 StatusOr<PgMapCatalog> PgMapCatalog::Open(const std::string& conninfo) {
   PgMapCatalog c;
+  c.conninfo_ = conninfo;
   StatusOr<PgConnection> conn = PgConnection::Connect(conninfo);
   if (!conn.ok()) return conn.status();
   c.conn_ = std::move(conn).value();
@@ -13,8 +14,20 @@ StatusOr<PgMapCatalog> PgMapCatalog::Open(const std::string& conninfo) {
   return c;
 }
 
+StatusOr<PgResult> PgMapCatalog::Query(const std::string& sql, const PgParams& params) {
+  std::lock_guard<std::mutex> lock(*mu_);
+  StatusOr<PgResult> r = conn_.Query(sql, params);
+  if (r.ok() || r.status().code() != StatusCode::kUnavailable) return r;
+  // PostgreSQL restarted or the network failed: every statement here is
+  // one transaction, so connect again and try once more.
+  StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
+  if (!again.ok()) return r;
+  conn_ = std::move(again).value();
+  return conn_.Query(sql, params);
+}
+
 StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {
-  StatusOr<PgResult> r = conn_.Query("SELECT id FROM maps ORDER BY id COLLATE \"C\"");
+  StatusOr<PgResult> r = Query("SELECT id FROM maps ORDER BY id COLLATE \"C\"", {});
   if (!r.ok()) return r.status();
   std::vector<std::string> ids;
   for (int i = 0; i < r->rows(); ++i) ids.push_back(r->Text(i, 0));
@@ -25,7 +38,7 @@ Status PgMapCatalog::CreateMap(const std::string& id, const std::string& setting
   MAPD_RETURN_IF_ERROR(CheckPgMapId(id));
   PgParams p;
   p.Text(id).Int(now_ns).Text(settings);
-  StatusOr<PgResult> r = conn_.Query(
+  StatusOr<PgResult> r = Query(
       "INSERT INTO maps (id, created_ns, settings) VALUES ($1, $2, $3) ON CONFLICT (id) DO "
       "NOTHING",
       p);
@@ -37,7 +50,7 @@ Status PgMapCatalog::CreateMap(const std::string& id, const std::string& setting
 StatusOr<std::string> PgMapCatalog::Settings(const std::string& id) {
   PgParams p;
   p.Text(id);
-  StatusOr<PgResult> r = conn_.Query("SELECT settings FROM maps WHERE id = $1", p);
+  StatusOr<PgResult> r = Query("SELECT settings FROM maps WHERE id = $1", p);
   if (!r.ok()) return r.status();
   if (r->rows() == 0) return Status::NotFound("no map '" + id + "' in the PostgreSQL database");
   return r->Text(0, 0);

@@ -6,6 +6,7 @@
 #define MAPD_STORAGE_POSTGRES_MAP_CATALOG_H_
 
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -15,6 +16,8 @@
 
 namespace mapd::storage {
 
+// Thread safety: every method may be called from any thread (one
+// connection, under a mutex; connected again once if it broke).
 class PgMapCatalog {
  public:
   // Connects and migrates the schema (schema.h).
@@ -29,6 +32,10 @@ class PgMapCatalog {
   StatusOr<std::string> Settings(const std::string& id);
 
  private:
+  StatusOr<PgResult> Query(const std::string& sql, const PgParams& params);
+
+  std::string conninfo_;
+  std::unique_ptr<std::mutex> mu_ = std::make_unique<std::mutex>();  // guards conn_
   PgConnection conn_;
 };
 

@@ -23,7 +23,7 @@ Status MigratePostgres(PgConnection& conn);
 
 // A map's row in `maps` and its observation partition.
 struct MapRow {
-  int64_t num = 0;        // keys the map's ownership lock
+  int64_t num = 0;        // names the partition
   std::string partition;  // its observations' table, "observations_<num>"
 };
 // Adds `map_id`'s row and partition if missing (CheckPgMapId first).

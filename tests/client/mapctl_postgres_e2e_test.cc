@@ -79,12 +79,48 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("30 duplicate"));
 
-  // While it runs, a second mapd on the database refuses to start: each
-  // map has one writer.
-  MapdProcess second = Start("third.log");
-  EXPECT_EQ(second.port, 0);
-  EXPECT_THAT(ReadFileBytes(dir_.File("third.log")), HasSubstr("is served by instance"));
   EXPECT_EQ(Stop(again.pid, SIGTERM), 0) << again.log();
+}
+
+// Failover: a second mapd on the database serves none of the first's maps
+// and redirects their calls to it; killed, the first's maps move to the
+// second within a few leases, with everything it acknowledged.
+TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
+  const std::vector<std::string> args = {"--store", store_, "--lease_ttl_s", "1"};
+  MapdProcess first =
+      StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "serving", dir_.File("first.log"));
+  ASSERT_GT(first.port, 0) << first.log();
+  CommandResult r = Mapctl(first, {"simulate", "--robots", "2", "--scans", "40"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const CommandResult before = Mapctl(first, {"features", "--format", "json"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+
+  MapdProcess second = StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "listening",
+                                 dir_.File("second.log"));
+  ASSERT_GT(second.port, 0) << second.log();
+  r = Mapctl(second, {"status"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("is served by the mapd at " + first.address));
+
+  Stop(first.pid, SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  for (;;) {
+    r = Mapctl(second, {"status", "--json"});
+    if (r.exit_code == 0 || std::chrono::steady_clock::now() - killed > std::chrono::seconds(20)) {
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(r.exit_code, 0) << r.err << second.log();
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
+  EXPECT_LT(took_s, 10.0) << "takeover with 1 s leases";
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  EXPECT_THAT(second.log(), HasSubstr("event=map_taken map=default epoch=2"));
+  const CommandResult after = Mapctl(second, {"features", "--format", "json"});
+  ASSERT_EQ(after.exit_code, 0) << after.err;
+  EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
+  EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
 }
 
 // The first admin token from the database, beside the running mapd (tokens

@@ -1,0 +1,147 @@
+#include "service/map_ownership.h"
+
+#include <chrono>
+#include <set>
+
+#include "service/log.h"
+#include "service/rendezvous.h"
+#include "storage/postgres/store.h"
+
+namespace mapd::service {
+
+StatusOr<std::unique_ptr<MapOwnership>> MapOwnership::Create(const OwnershipOptions& options,
+                                                             MapDirectory* maps,
+                                                             storage::PgMapCatalog* catalog,
+                                                             Hooks hooks) {
+  std::unique_ptr<MapOwnership> o(new MapOwnership(options, maps, catalog, std::move(hooks)));
+  StatusOr<storage::PgConnection> conn = storage::PgConnection::Connect(options.conninfo);
+  if (!conn.ok()) return conn.status();
+  o->conn_ = std::move(conn).value();
+  // A renewal waits for the map's open write transaction (the fence's row
+  // lock); never for longer than this, so that one stuck map cannot starve
+  // the others' renewals.
+  MAPD_RETURN_IF_ERROR(o->conn_.Exec("SET lock_timeout = '1s'"));
+  return o;
+}
+
+MapOwnership::~MapOwnership() { Stop(); }
+
+Status MapOwnership::RunOnce() {
+  std::lock_guard<std::mutex> lock(round_mu_);
+  if (!conn_.healthy() || !conn_.Exec("SELECT 1").ok()) {
+    StatusOr<storage::PgConnection> again = storage::PgConnection::Connect(options_.conninfo);
+    if (!again.ok()) return again.status();
+    conn_ = std::move(again).value();
+    MAPD_RETURN_IF_ERROR(conn_.Exec("SET lock_timeout = '1s'"));
+  }
+  MAPD_RETURN_IF_ERROR(storage::HeartbeatInstance(conn_, options_.instance, options_.lease_ttl_s));
+  RenewServed();
+  return TakeFree();
+}
+
+void MapOwnership::RenewServed() {
+  for (ServedMap* map : maps_->List()) {
+    auto* store = dynamic_cast<storage::PgStore*>(&map->core->store());
+    if (store == nullptr) continue;
+    Status lost;
+    if (!store->owner()) {
+      // The write fence found the map taken over: its writes are refused.
+      lost = Status::FailedPrecondition("map '" + map->id +
+                                        "': a write found its lease taken over by another mapd");
+    } else if (const double busy_s = map->core->WriterBusyForS();
+               busy_s > options_.lease_ttl_s / 2) {
+      // A writer stuck in the database serves nobody: let the lease lapse
+      // rather than hold the map. If it recovers first, the next round renews.
+      Log(LogLevel::kWarn, "lease_not_renewed",
+          {{"map", map->id}, {"writer_busy_s", std::to_string(busy_s)}});
+      continue;
+    } else {
+      Status renewed = storage::RenewMapLease(conn_, store->lease(), options_.lease_ttl_s);
+      if (renewed.code() == StatusCode::kFailedPrecondition) {
+        lost = renewed;
+      } else if (!renewed.ok()) {
+        Log(LogLevel::kWarn, "lease_renewal_failed",
+            {{"map", map->id}, {"error", renewed.ToString()}});
+        continue;
+      }
+    }
+    if (!lost.ok()) hooks_.drop(map->id, lost);
+  }
+}
+
+Status MapOwnership::TakeFree() {
+  StatusOr<std::vector<std::string>> ids = catalog_->ListMaps();
+  if (!ids.ok()) return ids.status();
+  StatusOr<std::vector<storage::LeaseRow>> leases = storage::ListMapLeases(conn_);
+  if (!leases.ok()) return leases.status();
+  StatusOr<std::vector<storage::InstanceRow>> live = storage::LiveInstances(conn_);
+  if (!live.ok()) return live.status();
+  std::vector<std::string> names;
+  for (const storage::InstanceRow& i : *live) names.push_back(i.name);
+  std::map<std::string, storage::LeaseRow> by_map;
+  for (storage::LeaseRow& l : *leases) by_map[l.map_id] = std::move(l);
+
+  std::map<std::string, MapOwner> view;
+  const std::string& me = options_.instance.name;
+  for (const std::string& id : *ids) {
+    auto lease = by_map.find(id);
+    const bool has_lease = lease != by_map.end();
+    if (has_lease) {
+      view[id] =
+          MapOwner{lease->second.owner, lease->second.address, lease->second.expires_in_s > 0};
+    } else {
+      view[id] = MapOwner{};
+    }
+    if (maps_->FindCore(id) != nullptr || !taking_) continue;  // served here, or stopping
+    if (has_lease && lease->second.expires_in_s > 0 && lease->second.owner != me) continue;
+    const bool mine = (has_lease && lease->second.owner == me) || RendezvousPick(id, names) == me;
+    const double lapsed_for_s = has_lease ? -lease->second.expires_in_s : 1e9;
+    if (!mine && lapsed_for_s < options_.lease_ttl_s) continue;  // its chosen one may take it
+    Status opened = hooks_.open(id);
+    if (opened.ok()) {
+      view[id] = MapOwner{me, options_.instance.address, true};
+    } else {
+      Log(LogLevel::kInfo, "map_not_taken", {{"map", id}, {"why", opened.ToString()}});
+    }
+  }
+  std::lock_guard<std::mutex> lock(view_mu_);
+  view_ = std::move(view);
+  return Status::Ok();
+}
+
+void MapOwnership::StartThread() {
+  thread_ = std::thread([this] { Loop(); });
+}
+
+void MapOwnership::Loop() {
+  const auto period = std::chrono::duration<double>(options_.lease_ttl_s / 4);
+  std::unique_lock<std::mutex> lock(stop_mu_);
+  while (!stop_cv_.wait_for(lock, period, [this] { return stop_; })) {
+    lock.unlock();
+    if (Status s = RunOnce(); !s.ok()) {
+      Log(LogLevel::kWarn, "ownership_round_failed", {{"error", s.ToString()}});
+    }
+    lock.lock();
+  }
+}
+
+void MapOwnership::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(stop_mu_);
+    if (stop_) return;
+    stop_ = true;
+  }
+  stop_cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  std::lock_guard<std::mutex> lock(round_mu_);
+  (void)storage::LeaveInstance(conn_, options_.instance);
+}
+
+std::optional<MapOwner> MapOwnership::Locate(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(view_mu_);
+  auto it = view_.find(id);
+  if (it == view_.end()) return std::nullopt;
+  return it->second;
+}
+
+}  // namespace mapd::service
