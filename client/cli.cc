@@ -21,16 +21,37 @@ std::unique_ptr<grpc::ClientContext> Context::NewCallContext() const {
 }
 
 std::unique_ptr<grpc::ClientContext> Context::NewStreamContext() const {
-  CheckMapOnce();
+  PrepareMapOnce();
   auto context = std::make_unique<grpc::ClientContext>();
   if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
   if (!map.empty()) context->AddMetadata("mapd-map-id", map);
   return context;
 }
 
-void Context::CheckMapOnce() const {
-  if (map.empty() || map == "default") return;  // every server serves that one
+void Context::Use(const std::string& address) const {
+  channel = connect(address);
+  stub = pb::MapService::NewStub(channel);
+}
+
+void Context::PrepareMapOnce() const {
   std::call_once(*map_checked_, [this] {
+    // Where the map is served: asked of each server given until one answers.
+    // A server from before LocateMap (UNIMPLEMENTED) serves its maps itself.
+    for (size_t i = 0; connect && i < servers.size(); ++i) {
+      if (i > 0) Use(servers[i]);
+      pb::LocateMapRequest request;
+      request.set_map_id(map);
+      pb::MapLocation where;
+      auto call = NewServerCallContext();
+      call->set_deadline(std::chrono::system_clock::now() +
+                         std::min(timeout(), std::chrono::milliseconds(3000)));
+      const grpc::Status s = stub->LocateMap(call.get(), request, &where);
+      if (s.error_code() == grpc::StatusCode::UNAVAILABLE && i + 1 < servers.size()) continue;
+      if (s.ok() && !where.here() && !where.address().empty()) Use(where.address());
+      if (!s.ok() && i > 0) Use(servers[0]);  // report the first server's error
+      break;
+    }
+    if (map.empty() || map == "default") return;  // every server serves that one
     const grpc::Status s = robot::CheckMapServed(stub.get(), NewServerCallContext().get(), map);
     if (s.ok()) return;
     if (s.error_code() == grpc::StatusCode::UNAVAILABLE) {
@@ -40,6 +61,17 @@ void Context::CheckMapOnce() const {
                ")");
     std::exit(kExitFailed);
   });
+}
+
+robot::RobotClientOptions Context::RobotOptions() const {
+  PrepareMapOnce();
+  robot::RobotClientOptions options;
+  options.give_up_after = timeout();
+  options.token = token;
+  options.map_id = map;
+  options.connect = connect;
+  for (size_t i = 1; i < servers.size(); ++i) options.addresses.push_back(servers[i]);
+  return options;
 }
 
 std::unique_ptr<grpc::ClientContext> Context::NewServerCallContext() const {

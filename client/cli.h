@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "client/robot/robot_client.h"
 #include "mapserver/v1/map_service.grpc.pb.h"
 
 namespace mapd::client {
@@ -29,14 +30,26 @@ enum ExitCode : int {
 };
 
 struct Context {
-  std::string server;     // host:port
-  double timeout_s = 10;  // RPC deadline; for ingest/simulate the wait for the last acks
-  std::string token;      // bearer token (--token / $MAPD_TOKEN); empty: none
+  // host:port; several, comma-separated: instances of one database, tried in
+  // turn (servers).
+  std::string server;
+  std::vector<std::string> servers;  // `server` split at its commas
+  double timeout_s = 10;             // RPC deadline; for ingest/simulate the wait for the last acks
+  std::string token;                 // bearer token (--token / $MAPD_TOKEN); empty: none
   // The map every call is about (--map / $MAPD_MAP), sent as the mapd-map-id
   // metadata; empty: the server's default map.
   std::string map;
-  std::shared_ptr<grpc::Channel> channel;
-  std::unique_ptr<mapserver::v1::MapService::Stub> stub;
+  // The server of `map`: the first of `servers` that answers, or, when
+  // several mapd share a database, the one its LocateMap names (settled by
+  // the first call about the map).
+  mutable std::shared_ptr<grpc::Channel> channel;
+  mutable std::unique_ptr<mapserver::v1::MapService::Stub> stub;
+  // Makes a channel to another address, with the same credentials.
+  std::function<std::shared_ptr<grpc::Channel>(const std::string& address)> connect;
+
+  // What a robot stream of this invocation takes: the token, the map, the
+  // wait, and the other instances to fail over to. Settles `channel` first.
+  robot::RobotClientOptions RobotOptions() const;
 
   // A context whose deadline is now + timeout_s, carrying the token and the map.
   // With a map other than "default", the first one first asks the server
@@ -52,7 +65,11 @@ struct Context {
   std::chrono::milliseconds timeout() const;
 
  private:
-  void CheckMapOnce() const;
+  // Once: finds the server of the map (LocateMap over `servers`), then with
+  // a map other than "default" checks that it serves it (see NewCallContext).
+  void PrepareMapOnce() const;
+  // Points channel and stub at `address`.
+  void Use(const std::string& address) const;
   std::shared_ptr<std::once_flag> map_checked_ = std::make_shared<std::once_flag>();
 };
 

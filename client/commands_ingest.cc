@@ -104,10 +104,7 @@ int RunIngest(const Context& ctx, const IngestOptions& flags) {
   std::istream& in = path == "-" ? std::cin : file;
   if (int rc = CheckReachable(ctx, "ingest"); rc != kExitOk) return rc;
 
-  robot::RobotClientOptions options;
-  options.give_up_after = ctx.timeout();
-  options.token = ctx.token;
-  options.map_id = ctx.map;
+  const robot::RobotClientOptions options = ctx.RobotOptions();  // settles ctx.channel
   robot::RobotClient client(ctx.channel, options);
   std::map<std::pair<std::string, uint64_t>, size_t> line_of;  // (session, seq) -> line number
   std::string line, parse_error;
@@ -207,10 +204,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& flags) {
   for (size_t i = 0; i < robots; ++i) {
     threads.emplace_back([&ctx, &params, &tallies, scans, i] {
       SimRobot sim(DefaultWorld(), params[i]);
-      robot::RobotClientOptions options;
-      options.give_up_after = ctx.timeout();
-      options.token = ctx.token;
-      options.map_id = ctx.map;
+      const robot::RobotClientOptions options = ctx.RobotOptions();  // settles ctx.channel
       robot::RobotClient client(ctx.channel, options);
       for (uint64_t s = 0; s < scans; ++s) client.Send(sim.NextBatch());
       tallies[i].status = client.Finish(ctx.timeout());

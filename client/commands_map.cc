@@ -62,6 +62,10 @@ int RunMaps(const Context& ctx, const JsonOptions& flags) {
       if (!settings.empty()) settings += ' ';
       settings.append(key).append("=").append(value);
     }
+    if (!m.served_by().empty()) {  // another mapd on the same database serves it
+      std::printf("%-20s  served by %s\n", m.map_id().c_str(), m.served_by().c_str());
+      continue;
+    }
     std::printf(
         "%-20s  %-11s  %12llu  %10llu  %12llu  %s\n", m.map_id().c_str(),
         m.serving() ? "serving" : "not serving", static_cast<unsigned long long>(m.map_version()),

@@ -88,10 +88,7 @@ int RecordLog(const ReplayOptions& flags, const std::string& session, Recording*
 void Stream(const Context& ctx, const ReplayOptions& flags,
             std::chrono::steady_clock::time_point t0, Recording* r,
             std::atomic<std::size_t>* sent) {
-  robot::RobotClientOptions options;
-  options.give_up_after = ctx.timeout();
-  options.token = ctx.token;
-  options.map_id = ctx.map;
+  const robot::RobotClientOptions options = ctx.RobotOptions();  // settles ctx.channel
   robot::RobotClient client(ctx.channel, options);
   for (std::size_t i = 0; i < r->batches.size(); ++i) {
     if (flags.rate > 0) {  // as recorded, or N times as fast

@@ -49,9 +49,9 @@ int main(int argc, char** argv) {
   // (subcommands inherit this).
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_option("--server", ctx.server,
-                 "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051)")
-      ->check(CLI::Validator([](std::string& v) { return mapd::client::ServerAddressProblem(v); },
-                             "HOST:PORT"));
+                 "HOST:PORT of mapd (default $MAPD_SERVER, else 127.0.0.1:50051); several, "
+                 "comma-separated, for mapd instances sharing one database: mapctl finds the one "
+                 "serving --map, and robot streams fail over between them");
   app.set_version_flag("--version", std::string("mapctl ") + MAPD_VERSION);
   app.add_option("--timeout", ctx.timeout_s, "seconds to wait for an answer")
       ->capture_default_str()
@@ -83,8 +83,16 @@ int main(int argc, char** argv) {
   mapd::client::AddRenderCommand(&app, &action);
   mapd::client::AddAuthCommands(&app, &action);
   if (int rc = mapd::client::ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;
-  if (std::string problem = mapd::client::ServerAddressProblem(ctx.server); !problem.empty()) {
-    return UsageError("", "server '" + ctx.server + "' (--server or $MAPD_SERVER): " + problem);
+  for (size_t start = 0;;) {  // several servers: instances of one database
+    const size_t comma = ctx.server.find(',', start);
+    ctx.servers.push_back(ctx.server.substr(start, comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (const std::string& server : ctx.servers) {
+    if (std::string problem = mapd::client::ServerAddressProblem(server); !problem.empty()) {
+      return UsageError("", "server '" + server + "' (--server or $MAPD_SERVER): " + problem);
+    }
   }
 
   // The channel connects lazily, on the first call: --help needs no server.
@@ -105,7 +113,10 @@ int main(int argc, char** argv) {
     }
     credentials = grpc::SslCredentials(ssl);
   }
-  ctx.channel = grpc::CreateCustomChannel(ctx.server, credentials, channel_args);
+  ctx.connect = [credentials, channel_args](const std::string& address) {
+    return grpc::CreateCustomChannel(address, credentials, channel_args);
+  };
+  ctx.channel = ctx.connect(ctx.servers[0]);
   ctx.stub = mapserver::v1::MapService::NewStub(ctx.channel);
   return action(ctx);
 }

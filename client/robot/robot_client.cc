@@ -9,7 +9,10 @@ namespace mapd::robot {
 namespace pb = mapserver::v1;
 
 RobotClient::RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options)
-    : channel_(std::move(channel)), stub_(pb::MapService::NewStub(channel_)), options_(options) {
+    : channel_(std::move(channel)),
+      stub_(pb::MapService::NewStub(channel_)),
+      options_(std::move(options)),
+      first_channel_(channel_) {
   reader_ = std::thread([this] { ReaderLoop(); });
 }
 
@@ -147,6 +150,7 @@ void RobotClient::ReaderLoop() {
     first_stream = false;
     bool got_ack = false;
     grpc::Status status;
+    std::string redirect;  // the map's owner, when this mapd does not serve it
     if (!map_checked) {
       status = CheckMap();
       map_checked = status.ok();
@@ -169,6 +173,10 @@ void RobotClient::ReaderLoop() {
       {
         std::lock_guard<std::mutex> write_lock(write_mu_);
         status = stream_->Finish();
+        const auto& trailing = context_->GetServerTrailingMetadata();
+        if (auto it = trailing.find("mapd-map-owner"); it != trailing.end()) {
+          redirect.assign(it->second.data(), it->second.size());
+        }
         stream_.reset();
         context_.reset();
       }
@@ -196,14 +204,52 @@ void RobotClient::ReaderLoop() {
       gave_up_ = true;
       break;
     }
+    // A redirect is followed after the shortest pause: the owner is known.
+    if (!redirect.empty() && options_.connect) backoff = options_.initial_backoff;
     cv_.wait_for(lock, backoff, [this] { return stopping_; });
     backoff = std::min(backoff * 2, options_.max_backoff);
     lock.unlock();
-    WaitForChannel(give_up_at);
+    if (MoveAfterFailure(status, redirect, give_up_at)) {
+      std::lock_guard<std::mutex> counted(mu_);
+      ++counts_.redirects;
+    }
   }
   std::lock_guard<std::mutex> lock(mu_);
   reader_done_ = true;
   cv_.notify_all();
+}
+
+bool RobotClient::MoveAfterFailure(const grpc::Status& status, const std::string& redirect,
+                                   std::chrono::steady_clock::time_point give_up_at) {
+  if (!options_.connect) {
+    WaitForChannel(give_up_at);
+    return false;
+  }
+  if (!redirect.empty()) {
+    ConnectTo(redirect);
+    return true;
+  }
+  if (options_.addresses.empty() || status.error_code() != grpc::StatusCode::UNAVAILABLE) {
+    WaitForChannel(give_up_at);
+    return false;
+  }
+  // Unreachable, or its map is being taken over: give the current server a
+  // little while (a restart, or the takeover finishing), then try the next.
+  WaitForChannel(std::min(give_up_at, std::chrono::steady_clock::now() + options_.max_backoff));
+  if (channel_->GetState(false) == GRPC_CHANNEL_READY) return false;
+  const size_t n = options_.addresses.size();
+  const size_t i = next_address_++ % (n + 1);
+  std::lock_guard<std::mutex> write_lock(write_mu_);
+  channel_ = i < n ? options_.connect(options_.addresses[i]) : first_channel_;
+  stub_ = pb::MapService::NewStub(channel_);
+  return true;
+}
+
+void RobotClient::ConnectTo(const std::string& address) {
+  std::shared_ptr<grpc::Channel> channel = options_.connect(address);
+  std::lock_guard<std::mutex> write_lock(write_mu_);
+  channel_ = std::move(channel);
+  stub_ = pb::MapService::NewStub(channel_);
 }
 
 grpc::Status CheckMapServed(pb::MapService::Stub* stub, grpc::ClientContext* context,

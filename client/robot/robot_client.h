@@ -22,6 +22,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -53,6 +54,14 @@ struct RobotClientOptions {
   // gives up when it does not know maps (FAILED_PRECONDITION: a mapd from
   // before maps would store them in its only map) or that map (NOT_FOUND).
   std::string map_id;
+  // Several mapd on one database (docs/scale-out.md): makes a channel to
+  // another instance (same credentials as the first). With it the client
+  // follows redirects (a stream refused with the owner's address in the
+  // trailing metadata mapd-map-owner goes there next) and, when the
+  // current server cannot be reached, tries `addresses` in turn. Null: one
+  // server, the channel given.
+  std::function<std::shared_ptr<grpc::Channel>(const std::string& address)> connect;
+  std::vector<std::string> addresses;  // host:port of the other instances
 };
 
 // What the server answered, over the client's lifetime.
@@ -62,6 +71,7 @@ struct IngestCounts {
   uint64_t duplicate = 0;   // acknowledged DUPLICATE (sent before, e.g. resent after a drop)
   uint64_t rejected = 0;    // acknowledged REJECTED (final: the batch is wrong)
   uint64_t reconnects = 0;  // streams opened after the first one
+  uint64_t redirects = 0;   // moves to another mapd (a redirect, or the current one unreachable)
 };
 
 // One batch the server refused.
@@ -122,11 +132,21 @@ class RobotClient {
   bool HandleAck(const mapserver::v1::IngestAck& ack);
   // Asks the channel to connect and waits until it is ready, `deadline` or Stop.
   void WaitForChannel(std::chrono::steady_clock::time_point deadline);
+  // Where the reader goes after a failed stream: the redirect's address, or
+  // with the current server unreachable the next of options_.addresses.
+  // Returns true when it moved. Reader thread only.
+  bool MoveAfterFailure(const grpc::Status& status, const std::string& redirect,
+                        std::chrono::steady_clock::time_point give_up_at);
+  // Points channel_ and stub_ at `address` (options_.connect). Reader thread only.
+  void ConnectTo(const std::string& address);
   // Ends the reader as soon as possible: stops waiting, cancels the stream.
   void CancelLocked();  // REQUIRES: mu_ held
 
+  // Replaced by the reader only, between streams, under write_mu_.
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<mapserver::v1::MapService::Stub> stub_;
+  std::shared_ptr<grpc::Channel> first_channel_;  // the one given
+  size_t next_address_ = 0;                       // into options_.addresses, then the first
   const RobotClientOptions options_;
 
   // Lock order: write_mu_ before mu_.

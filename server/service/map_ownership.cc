@@ -137,6 +137,11 @@ void MapOwnership::Stop() {
   (void)storage::LeaveInstance(conn_, options_.instance);
 }
 
+std::map<std::string, MapOwner> MapOwnership::Owners() const {
+  std::lock_guard<std::mutex> lock(view_mu_);
+  return view_;
+}
+
 std::optional<MapOwner> MapOwnership::Locate(const std::string& id) const {
   std::lock_guard<std::mutex> lock(view_mu_);
   auto it = view_.find(id);

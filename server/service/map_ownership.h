@@ -36,6 +36,7 @@
 
 #include "common/status.h"
 #include "service/map_directory.h"
+#include "service/map_locator.h"
 #include "storage/postgres/map_catalog.h"
 #include "storage/postgres/map_lease.h"
 
@@ -47,14 +48,7 @@ struct OwnershipOptions {
   double lease_ttl_s = 4.0;
 };
 
-// Where a map not served here is.
-struct MapOwner {
-  std::string instance;
-  std::string address;
-  bool live = false;  // its lease runs; false: being taken over
-};
-
-class MapOwnership {
+class MapOwnership final : public MapLocator {
  public:
   struct Hooks {
     // Opens map `id` here, taking its lease (MapDirectory).
@@ -69,7 +63,7 @@ class MapOwnership {
                                                         storage::PgMapCatalog* catalog,
                                                         Hooks hooks);
   // Stop() first.
-  ~MapOwnership();
+  ~MapOwnership() override;
 
   // One round now (at start: a lone instance serves its maps before it
   // answers anything), then a round every lease_ttl_s / 4 on a thread.
@@ -79,9 +73,10 @@ class MapOwnership {
   // leases are released as their stores close.
   void Stop();
 
-  // A map not served here: its owner as of the last round; nullopt when the
-  // map is not in the database.
-  std::optional<MapOwner> Locate(const std::string& id) const;
+  // MapLocator: the owners as of the last round (maps served here: this
+  // instance, live).
+  std::optional<MapOwner> Locate(const std::string& id) const override;
+  std::map<std::string, MapOwner> Owners() const override;
   // Who this instance is; before the first round (the port is known late).
   void set_instance(storage::PgInstance instance) { options_.instance = std::move(instance); }
   const storage::PgInstance& instance() const { return options_.instance; }

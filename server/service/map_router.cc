@@ -1,5 +1,7 @@
 #include "service/map_router.h"
 
+#include <map>
+
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
 
@@ -40,8 +42,8 @@ StatusOr<std::string> MapRouter::MapIdOf(const grpc::ServerContextBase& context,
 StatusOr<ServedMap*> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
                                                const std::string& id) {
   StatusOr<ServedMap*> map = maps_->Find(id);
-  if (map.ok() || !locate_) return map;
-  const std::optional<MapElsewhere> owner = locate_(id.empty() ? kDefaultMapId : id);
+  if (map.ok() || locator_ == nullptr) return map;
+  const std::optional<MapOwner> owner = locator_->Locate(id.empty() ? kDefaultMapId : id);
   if (!owner) return map;  // no such map
   if (!owner->live || owner->address.empty()) {
     return Status::Unavailable("map '" + id +
@@ -164,11 +166,50 @@ grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMap
                                  pb::ListMapsResponse* response) {
   StatusOr<Principal> p = server_wide()->access().Admit(*context, Permission::kReadMap, "ListMaps");
   if (!p.ok()) return ToGrpcStatus(p.status());
-  for (ServedMap* map : maps_->List()) {
+  std::map<std::string, pb::MapInfo> maps;
+  for (ServedMap* map : maps_->List()) ToProto(*map, &maps[map->id]);
+  if (locator_ != nullptr) {  // the database's other maps, and who serves them
+    for (const auto& [id, owner] : locator_->Owners()) {
+      if (maps.count(id) != 0) continue;
+      pb::MapInfo& info = maps[id];
+      info.set_map_id(id);
+      info.set_served_by(owner.address);
+    }
+  }
+  for (auto& [id, info] : maps) {
     // A token scoped to maps sees those only.
-    if (AuthorizeMap(*p, map->id, "ListMaps").ok()) ToProto(*map, response->add_maps());
+    if (AuthorizeMap(*p, id, "ListMaps").ok()) *response->add_maps() = std::move(info);
   }
   response->set_can_create(maps_->can_create());
+  return grpc::Status::OK;
+}
+
+void MapRouter::set_address(const std::string& address) {
+  std::lock_guard<std::mutex> lock(address_mu_);
+  address_ = address;
+}
+
+grpc::Status MapRouter::LocateMap(grpc::ServerContext* context, const pb::LocateMapRequest* request,
+                                  pb::MapLocation* response) {
+  StatusOr<Principal> p =
+      server_wide()->access().Admit(*context, Permission::kReadMap, "LocateMap");
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  StatusOr<std::string> id = MapIdOf(*context, request->map_id());
+  if (!id.ok()) return ToGrpcStatus(id.status());
+  if (Status s = AuthorizeMap(*p, *id, "LocateMap"); !s.ok()) return ToGrpcStatus(s);
+  response->set_map_id(*id);
+  if (maps_->Find(*id).ok()) {
+    std::lock_guard<std::mutex> lock(address_mu_);
+    response->set_address(address_);
+    response->set_here(true);
+    response->set_live(true);
+    return grpc::Status::OK;
+  }
+  const std::optional<MapOwner> owner = locator_ == nullptr ? std::nullopt : locator_->Locate(*id);
+  if (!owner) return ToGrpcStatus(maps_->Find(*id).status());  // NotFound
+  response->set_address(owner->address);
+  response->set_instance(owner->instance);
+  response->set_live(owner->live && !owner->address.empty());
   return grpc::Status::OK;
 }
 

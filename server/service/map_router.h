@@ -10,11 +10,13 @@
 #define MAPD_SERVICE_MAP_ROUTER_H_
 
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <string>
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/map_directory.h"
+#include "service/map_locator.h"
 
 namespace mapd::service {
 
@@ -24,24 +26,18 @@ inline constexpr char kMapIdMetadata[] = "mapd-map-id";
 // call it there (RobotClient, mapctl, the Python client follow it).
 inline constexpr char kMapOwnerMetadata[] = "mapd-map-owner";
 
-// Where a map not served here is (map_ownership.h); nullopt when no map has
-// that id.
-struct MapElsewhere {
-  std::string instance;
-  std::string address;
-  bool live = false;  // false: its owner failed, another is taking it over
-};
-using MapLocator = std::function<std::optional<MapElsewhere>(const std::string& id)>;
-
 class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
                             mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
                                 mapserver::v1::MapService::Service>> {
  public:
-  // `on_create` runs for each map CreateMap made (health, logs); `locate`
+  // `on_create` runs for each map CreateMap made (health, logs); `locator`
   // (PostgreSQL only, else null) says where maps not served here are.
   MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create,
-            MapLocator locate = nullptr)
-      : maps_(maps), on_create_(std::move(on_create)), locate_(std::move(locate)) {}
+            const MapLocator* locator = nullptr)
+      : maps_(maps), on_create_(std::move(on_create)), locator_(locator) {}
+  // Where clients reach this server (LocateMap), once it is known (the
+  // port is bound after the router is made).
+  void set_address(const std::string& address);
 
   // The map a call names: `field` (a request's map_id), else the metadata,
   // else "default". InvalidArgument when both are set and differ, or when
@@ -115,6 +111,9 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   grpc::Status CreateMap(grpc::ServerContext* context,
                          const mapserver::v1::CreateMapRequest* request,
                          mapserver::v1::MapInfo* response) override;
+  grpc::Status LocateMap(grpc::ServerContext* context,
+                         const mapserver::v1::LocateMapRequest* request,
+                         mapserver::v1::MapLocation* response) override;
 
  private:
   // Runs `call` on the service of the map the call names, or answers why not.
@@ -127,7 +126,9 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
 
   MapDirectory* const maps_;
   const std::function<void(ServedMap*)> on_create_;
-  const MapLocator locate_;
+  const MapLocator* const locator_;
+  mutable std::mutex address_mu_;
+  std::string address_;  // GUARDED_BY(address_mu_)
 };
 
 }  // namespace mapd::service

@@ -103,7 +103,6 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
   }
   if (!maps.ok()) return maps.status();
   server->maps_ = std::move(maps).value();
-  MapLocator locate;
   if (!config.store.empty()) {
     MapOwnership::Hooks hooks;
     hooks.open = [s](const std::string& id) { return s->TakeMap(id); };
@@ -115,14 +114,9 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
         MapOwnership::Create(o, server->maps_.get(), server->catalog_.get(), std::move(hooks));
     if (!ownership.ok()) return ownership.status();
     server->ownership_ = std::move(ownership).value();
-    locate = [s](const std::string& id) -> std::optional<MapElsewhere> {
-      std::optional<MapOwner> owner = s->ownership_->Locate(id);
-      if (!owner) return std::nullopt;
-      return MapElsewhere{owner->instance, owner->address, owner->live};
-    };
   }
   server->router_ = std::make_unique<MapRouter>(
-      server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); }, locate);
+      server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); }, server->ownership_.get());
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -208,6 +202,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
        {"reason", "recovering the fused map"},
        {"malloc_huge_pages", MallocHugePages()}});
   for (ServedMap* map : server->maps_->List()) server->WatchMap(map);
+  server->router_->set_address(server->Instance().address);
   if (server->ownership_ != nullptr) {
     // Who this instance is, now that the port is bound (port 0 in tests).
     server->ownership_->set_instance(server->Instance());

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cstdio>
 #include <string>
 #include <thread>
 #include <vector>
@@ -98,9 +99,26 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   MapdProcess second = StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "listening",
                                  dir_.File("second.log"));
   ASSERT_GT(second.port, 0) << second.log();
-  r = Mapctl(second, {"status"});
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_THAT(r.err, HasSubstr("is served by the mapd at " + first.address));
+  {  // The server's answer: UNAVAILABLE, the owner in the trailing metadata.
+    auto stub = mapserver::v1::MapService::NewStub(
+        grpc::CreateChannel(second.address, grpc::InsecureChannelCredentials()));
+    grpc::ClientContext call;
+    mapserver::v1::Stats stats;
+    const grpc::Status s = stub->GetStats(&call, mapserver::v1::GetStatsRequest(), &stats);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE);
+    EXPECT_THAT(s.error_message(), HasSubstr("is served by the mapd at " + first.address));
+    const auto& trailing = call.GetServerTrailingMetadata();
+    auto owner = trailing.find("mapd-map-owner");
+    ASSERT_NE(owner, trailing.end());
+    EXPECT_EQ(std::string(owner->second.data(), owner->second.size()), first.address);
+  }
+  // mapctl asks any instance and goes to the owner by itself.
+  r = Mapctl(second, {"status", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  r = Mapctl(second, {"maps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("served by " + first.address));
 
   Stop(first.pid, SIGKILL);
   const auto killed = std::chrono::steady_clock::now();
@@ -115,6 +133,7 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   const double took_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
   EXPECT_LT(took_s, 10.0) << "takeover with 1 s leases";
+  std::printf("takeover after kill -9, 1 s leases: %.2f s\n", took_s);
   EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
   EXPECT_THAT(second.log(), HasSubstr("event=map_taken map=default epoch=2"));
   const CommandResult after = Mapctl(second, {"features", "--format", "json"});

@@ -1,0 +1,31 @@
+// Where the maps of a shared database are served, for the router
+// (map_router.h): redirects, ListMaps and LocateMap. MapOwnership
+// (map_ownership.h) is the implementation; with a local store there is none.
+#ifndef MAPD_SERVICE_MAP_LOCATOR_H_
+#define MAPD_SERVICE_MAP_LOCATOR_H_
+
+#include <map>
+#include <optional>
+#include <string>
+
+namespace mapd::service {
+
+// The instance serving a map.
+struct MapOwner {
+  std::string instance;
+  std::string address;  // host:port; empty while nobody has taken the map
+  bool live = false;    // its lease runs; false: being taken over
+};
+
+class MapLocator {
+ public:
+  virtual ~MapLocator() = default;
+  // Map `id`'s owner as last seen; nullopt when the database has no such map.
+  virtual std::optional<MapOwner> Locate(const std::string& id) const = 0;
+  // Every map of the database and its owner as last seen.
+  virtual std::map<std::string, MapOwner> Owners() const = 0;
+};
+
+}  // namespace mapd::service
+
+#endif  // MAPD_SERVICE_MAP_LOCATOR_H_
