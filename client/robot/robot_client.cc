@@ -252,6 +252,18 @@ void RobotClient::ConnectTo(const std::string& address) {
   stub_ = pb::MapService::NewStub(channel_);
 }
 
+grpc::ChannelArguments RobotChannelArguments() {
+  grpc::ChannelArguments args;
+  args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
+  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
+  args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 5000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 3000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 0);  // only while a stream is open
+  args.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);    // a quiet stream keeps pinging
+  return args;
+}
+
 grpc::Status CheckMapServed(pb::MapService::Stub* stub, grpc::ClientContext* context,
                             const std::string& map) {
   pb::ListMapsResponse maps;

@@ -82,6 +82,14 @@ struct Rejection {
   std::string message;  // names the offending field, e.g. "lines[3].a.x is NaN"
 };
 
+// Arguments for a robot's channel (mapctl uses them): a restarted server is
+// found again within 2 s (gRPC's reconnect backoff grows to 120 s by
+// default), and a dead or frozen one is noticed within about 8 s (keepalive
+// pings every 5 s while a stream is open, answered within 3 s; mapd permits
+// pings that often, limits.min_client_ping_interval_s). The client then
+// resends to it, or with RobotClientOptions::connect fails over.
+grpc::ChannelArguments RobotChannelArguments();
+
 // Whether the server behind `stub` serves `map`, asked with ListMaps on
 // `context`: OK; FAILED_PRECONDITION when it knows no maps (a mapd from before
 // maps ignores a map's name and would store the batches in its only map);

@@ -104,9 +104,37 @@ Status MapOwnership::TakeFree() {
       Log(LogLevel::kInfo, "map_not_taken", {{"map", id}, {"why", opened.ToString()}});
     }
   }
+  if (taking_) {
+    if (auto hand = PickHandOff(*live)) {
+      const auto& [id, to] = *hand;
+      if (Status s = hooks_.hand_off(id); s.ok()) {
+        Log(LogLevel::kInfo, "map_handed_off",
+            {{"map", id}, {"to", to.instance}, {"address", to.address}});
+        view[id] = MapOwner{to.instance, to.address, false};  // until it has taken the map
+      } else {
+        Log(LogLevel::kWarn, "map_hand_off_failed", {{"map", id}, {"error", s.ToString()}});
+      }
+    }
+  }
   std::lock_guard<std::mutex> lock(view_mu_);
   view_ = std::move(view);
   return Status::Ok();
+}
+
+std::optional<std::pair<std::string, MapOwner>> MapOwnership::PickHandOff(
+    const std::vector<storage::InstanceRow>& live) const {
+  std::vector<std::string> names;
+  for (const storage::InstanceRow& i : live) names.push_back(i.name);
+  for (ServedMap* map : maps_->List()) {
+    const std::string pick = RendezvousPick(map->id, names);
+    if (pick.empty() || pick == options_.instance.name) continue;
+    for (const storage::InstanceRow& i : live) {
+      if (i.name == pick && i.alive_for_s >= 2 * options_.lease_ttl_s) {
+        return std::make_pair(map->id, MapOwner{i.name, i.address, true});
+      }
+    }
+  }
+  return std::nullopt;
 }
 
 void MapOwnership::StartThread() {

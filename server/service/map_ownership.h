@@ -13,8 +13,10 @@
 //     instances gives to this one at once, any other once its lease has
 //     lapsed for a whole lease_ttl_s more (its chosen instance is not taking
 //     it). A restarted instance takes its own maps back at once.
-// Maps are not moved away from a live owner: a new instance takes maps only
-// as owners fail or stop (rebalancing is not done yet).
+//   - hand one map per round to the instance rendezvous hashing gives it,
+//     once that one has been live for two leases (so that a restarting or
+//     flapping instance does not pull maps back and forth): maps spread
+//     over the live instances, and come back to a restarted one.
 //
 // The round's view of the leases answers Locate(): where a map not served
 // here is, for redirects, without a database query per call.
@@ -55,6 +57,9 @@ class MapOwnership final : public MapLocator {
     std::function<Status(const std::string& id)> open;
     // Stops serving map `id`: its lease is lost (`why`).
     std::function<void(const std::string& id, const Status& why)> drop;
+    // Hands map `id` to another instance: stops serving it here (streams
+    // drained, what is queued committed) and releases its lease.
+    std::function<Status(const std::string& id)> hand_off;
   };
 
   // Connects; no round runs yet.
@@ -89,7 +94,11 @@ class MapOwnership final : public MapLocator {
                Hooks hooks)
       : options_(std::move(options)), maps_(maps), catalog_(catalog), hooks_(std::move(hooks)) {}
   void RenewServed();
+  // Takes free maps, hands one off (above) and refreshes view_.
   Status TakeFree();
+  // The map served here to hand off this round, if any, and to whom.
+  std::optional<std::pair<std::string, MapOwner>> PickHandOff(
+      const std::vector<storage::InstanceRow>& live) const;
   void Loop();
 
   OwnershipOptions options_;  // instance: set before the thread starts

@@ -53,7 +53,10 @@ struct StreamLimits {
   double stream_open_burst = 400.0;
   double keepalive_time_s = 60.0;     // ping an idle connection this often
   double keepalive_timeout_s = 20.0;  // ... and drop it when the ping is not answered within this
-  double min_client_ping_interval_s = 10.0;  // clients pinging more often are dropped (ping flood)
+  // Clients pinging more often are dropped (ping flood). Robots ping every
+  // 5 s while streaming (robot::RobotChannelArguments), to notice a frozen
+  // server in seconds.
+  double min_client_ping_interval_s = 5.0;
   double max_connection_idle_s = 600.0;  // close connections without streams after this; 0 = never
   double max_connection_age_s = 0.0;     // close any connection after this (gracefully); 0 = never
   // A read (GetFeatureMap) waits at most this long for the fuser to reflect

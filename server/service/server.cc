@@ -107,6 +107,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     MapOwnership::Hooks hooks;
     hooks.open = [s](const std::string& id) { return s->TakeMap(id); };
     hooks.drop = [s](const std::string& id, const Status& why) { s->DropMap(id, why); };
+    hooks.hand_off = [s](const std::string& id) { return s->HandOffMap(id); };
     OwnershipOptions o;
     o.conninfo = config.store;
     o.lease_ttl_s = config.lease_ttl_s;
@@ -262,6 +263,20 @@ Status MapServer::TakeMap(const std::string& id) {
   return Status::Ok();
 }
 
+Status MapServer::HandOffMap(const std::string& id) {
+  ServedMap* map = maps_->Retire(id);
+  if (map == nullptr) return Status::NotFound("map '" + id + "' is not served here");
+  map->service->StartDraining();  // streams end UNAVAILABLE; robots go to the new owner
+  map->core->Stop();              // commits what is queued, writes a snapshot
+  {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    server_->GetHealthCheckService()->SetServingStatus("map/" + id, false);
+    UpdateHealthLocked();
+  }
+  auto* store = dynamic_cast<storage::PgStore*>(&map->core->store());
+  return store == nullptr ? Status::Ok() : store->ReleaseLease();
+}
+
 void MapServer::DropMap(const std::string& id, const Status& why) {
   ServedMap* map = maps_->Retire(id);
   if (map == nullptr) return;
@@ -337,7 +352,9 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenPostgresMap(std::unique_ptr<
   if (create_with != nullptr) {
     // Checked first, then stored with the map's row: a refused setting leaves no map.
     if (Status s = ApplyMapSettings(*create_with, config_, &config); !s.ok()) return fail(s);
-    Status made = catalog_->CreateMap(id, MapSettingsText(*create_with), UnixNowNs());
+    // With a lease for this instance, so that no other takes the new map first.
+    Status made = catalog_->CreateMap(id, MapSettingsText(*create_with), UnixNowNs(),
+                                      &ownership_->instance(), config_.lease_ttl_s);
     if (made.code() == StatusCode::kAlreadyExists) {
       return Status::AlreadyExists("map '" + id +
                                    "' is in the PostgreSQL database but not served here; restart "

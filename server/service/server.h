@@ -79,6 +79,8 @@ class MapServer {
   // serving it (its lease lost), redirecting its calls from then on.
   Status TakeMap(const std::string& id);
   void DropMap(const std::string& id, const Status& why);
+  // MapOwnership's hook: stop serving map `id` and release its lease.
+  Status HandOffMap(const std::string& id);
   // What a map's MapCore takes from the (map's) configuration.
   static MapCoreOptions CoreOptions(const ServerConfig& config);
   // Logs and health for a map once it is in the directory.

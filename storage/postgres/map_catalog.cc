@@ -34,14 +34,21 @@ StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {
   return ids;
 }
 
-Status PgMapCatalog::CreateMap(const std::string& id, const std::string& settings, int64_t now_ns) {
+Status PgMapCatalog::CreateMap(const std::string& id, const std::string& settings, int64_t now_ns,
+                               const PgInstance* owner, double ttl_s) {
   MAPD_RETURN_IF_ERROR(CheckPgMapId(id));
   PgParams p;
   p.Text(id).Int(now_ns).Text(settings);
-  StatusOr<PgResult> r = Query(
+  std::string sql =
       "INSERT INTO maps (id, created_ns, settings) VALUES ($1, $2, $3) ON CONFLICT (id) DO "
-      "NOTHING",
-      p);
+      "NOTHING";
+  if (owner != nullptr) {
+    p.Text(owner->name).Text(owner->address).Double(ttl_s);
+    sql = "WITH made AS (" + sql +
+          " RETURNING id) INSERT INTO map_leases (map, owner, address, epoch, expires_at) "
+          "SELECT id, $4, $5, 0, clock_timestamp() + make_interval(secs => $6) FROM made";
+  }
+  StatusOr<PgResult> r = Query(sql, p);
   if (!r.ok()) return r.status();
   if (r->affected() == 0) return Status::AlreadyExists("map '" + id + "' exists already");
   return Status::Ok();

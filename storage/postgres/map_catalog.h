@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/status.h"
+#include "storage/postgres/map_lease.h"
 #include "storage/postgres/pq.h"
 
 namespace mapd::storage {
@@ -26,8 +27,11 @@ class PgMapCatalog {
   // Every map's id, sorted.
   StatusOr<std::vector<std::string>> ListMaps();
   // Adds map `id` with `settings` (opaque text); AlreadyExists if it exists,
-  // InvalidArgument for a malformed id.
-  Status CreateMap(const std::string& id, const std::string& settings, int64_t now_ns);
+  // InvalidArgument for a malformed id. With `owner`, in the same statement a
+  // lease for it (epoch 0, ttl_s): the instance that makes a map serves it
+  // (its PgStore::Open takes epoch 1), another does not take it first.
+  Status CreateMap(const std::string& id, const std::string& settings, int64_t now_ns,
+                   const PgInstance* owner = nullptr, double ttl_s = 0);
   // A map's settings ('' when it has none); NotFound when there is no such map.
   StatusOr<std::string> Settings(const std::string& id);
 

@@ -100,6 +100,13 @@ Status PgObservationLog::Fence() {
   return s;
 }
 
+Status PgObservationLog::Release() {
+  if (!owner_) return Status::Ok();
+  Disown(Status::FailedPrecondition("map '" + map_id_ +
+                                    "' was handed to another mapd; that one serves it now"));
+  return ReleaseMapLease(writer_, lease_);
+}
+
 void PgObservationLog::Disown(const Status& why) {
   disowned_ = why;
   owner_ = false;

@@ -75,6 +75,9 @@ class PgObservationLog final : public ObservationReader {
   bool owner() const { return owner_; }
   // The lease taken at Open (epoch 0 when not an owner).
   const MapLease& lease() const { return lease_; }
+  // Lets the lease lapse now and stops owning the map (a handoff): another
+  // instance takes it at once. Writer connection: the writer must be idle.
+  Status Release();
   // Writer thread, first in each write transaction of the map's data:
   // FenceMapLease. Once it finds the lease taken over, this log stops
   // owning the map and every later write of its data is refused.

@@ -87,17 +87,22 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
 // and redirects their calls to it; killed, the first's maps move to the
 // second within a few leases, with everything it acknowledged.
 TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
-  const std::vector<std::string> args = {"--store", store_, "--lease_ttl_s", "1"};
-  MapdProcess first =
-      StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "serving", dir_.File("first.log"));
+  // Named so that rendezvous hashing leaves "default" with the first (no
+  // handoff to the second before the kill).
+  const auto args = [this](const std::string& name) {
+    return std::vector<std::string>{"--store",         store_, "--lease_ttl_s", "1",
+                                    "--instance_name", name};
+  };
+  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
+                                "serving", dir_.File("first.log"));
   ASSERT_GT(first.port, 0) << first.log();
   CommandResult r = Mapctl(first, {"simulate", "--robots", "2", "--scans", "40"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const CommandResult before = Mapctl(first, {"features", "--format", "json"});
   ASSERT_EQ(before.exit_code, 0) << before.err;
 
-  MapdProcess second = StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "listening",
-                                 dir_.File("second.log"));
+  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
+                                 "listening", dir_.File("second.log"));
   ASSERT_GT(second.port, 0) << second.log();
   {  // The server's answer: UNAVAILABLE, the owner in the trailing metadata.
     auto stub = mapserver::v1::MapService::NewStub(

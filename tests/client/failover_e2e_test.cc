@@ -1,0 +1,297 @@
+// Failover with three mapd processes on one PostgreSQL (docs/scale-out.md,
+// sections 3-4), driven as a fleet would: maps spread over the instances by
+// rendezvous hashing, robots streaming with RobotClient given every
+// instance's address, then an owner killed (-9) or frozen (SIGSTOP). What
+// must hold: the maps acknowledge batches again from another process within
+// seconds, every batch a robot sent is stored exactly once, and a frozen
+// owner that wakes after a takeover commits nothing.
+#include <gmock/gmock.h>
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "client/robot/robot_client.h"
+#include "client/sim_robot.h"
+#include "common/postgres.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+#include "service/rendezvous.h"
+
+namespace mapd::testing {
+namespace {
+
+namespace pb = mapserver::v1;
+using ::testing::HasSubstr;
+using Clock = std::chrono::steady_clock;
+using client::DefaultWorld;
+using client::SimRobot;
+using client::SimRobotParams;
+
+constexpr int kInstances = 3;
+const std::vector<std::string> kMaps = {"default", "site-1", "site-2",
+                                        "site-3",  "site-4", "site-5"};
+
+std::string Name(int i) { return "mapd-" + std::to_string(i + 1); }
+
+double SecondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+std::shared_ptr<grpc::Channel> Connect(const std::string& address) {
+  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(),
+                                   robot::RobotChannelArguments());
+}
+
+// One robot streaming to one map, a batch every 20 ms, until stopped.
+class StreamingRobot {
+ public:
+  StreamingRobot(const std::string& map, const std::vector<std::string>& addresses) : map_(map) {
+    robot::RobotClientOptions options;
+    options.map_id = map;
+    options.give_up_after = std::chrono::seconds(60);
+    options.connect = Connect;
+    options.addresses.assign(addresses.begin() + 1, addresses.end());
+    client_ = std::make_unique<robot::RobotClient>(Connect(addresses[0]), options);
+    SimRobotParams params;
+    params.robot_id = "robot-" + map;
+    params.session_id = "s";
+    sim_ = std::make_unique<SimRobot>(DefaultWorld(), params);
+    thread_ = std::thread([this] {
+      while (!stop_) {
+        client_->Send(sim_->NextBatch());
+        ++sent_;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    });
+  }
+  ~StreamingRobot() { Stop(); }
+
+  void Stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  // Answers so far: stored and duplicate.
+  uint64_t acked() const {
+    const robot::IngestCounts c = client_->counts();
+    return c.stored + c.duplicate;
+  }
+  uint64_t sent() const { return sent_; }
+  robot::RobotClient& client() { return *client_; }
+  const std::string& map() const { return map_; }
+
+ private:
+  const std::string map_;
+  std::unique_ptr<robot::RobotClient> client_;
+  std::unique_ptr<SimRobot> sim_;
+  std::atomic<bool> stop_{false};
+  std::atomic<uint64_t> sent_{0};
+  std::thread thread_;
+};
+
+class FailoverTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    PostgresCluster* cluster = PostgresCluster::Shared();
+    if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15)";
+    store_ = cluster->NewDatabase();
+    for (int i = 0; i < kInstances; ++i) {
+      mapd_.push_back(StartMapd(
+          "", {"--store", store_, "--lease_ttl_s", "1", "--instance_name", Name(i)}, MAPD_BINARY,
+          std::chrono::seconds(60), i == 0 ? "serving" : "listening", dir_.File(Name(i) + ".log")));
+      ASSERT_GT(mapd_.back().port, 0) << mapd_.back().log();
+      addresses_.push_back(mapd_.back().address);
+      names_.push_back(Name(i));
+    }
+    for (const std::string& map : kMaps) {
+      if (map == "default") continue;
+      CommandResult r =
+          RunCommand({MAPCTL_BINARY, "--server", addresses_[0], "maps", "create", map}, "",
+                     std::chrono::seconds(60));
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+  }
+
+  void TearDown() override {
+    robots_.clear();
+    for (const MapdProcess& m : mapd_) Stop(m.pid, SIGKILL);
+  }
+
+  // Where `map` is served, as instance `asked` says (empty when it cannot say).
+  std::string Owner(int asked, const std::string& map) {
+    auto stub = pb::MapService::NewStub(Connect(addresses_[asked]));
+    grpc::ClientContext call;
+    call.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    pb::LocateMapRequest request;
+    request.set_map_id(map);
+    pb::MapLocation where;
+    if (!stub->LocateMap(&call, request, &where).ok() || !where.live()) return "";
+    return where.address();
+  }
+
+  // Waits until every map is served by the live instance rendezvous hashing
+  // gives it, as every live instance says.
+  bool WaitUntilSpread(const std::vector<int>& live, std::chrono::seconds timeout) {
+    std::vector<std::string> names;
+    for (int i : live) names.push_back(names_[i]);
+    const auto deadline = Clock::now() + timeout;
+    while (Clock::now() < deadline) {
+      bool spread = true;
+      for (const std::string& map : kMaps) {
+        const std::string want = service::RendezvousPick(map, names);
+        const int want_index =
+            static_cast<int>(std::find(names_.begin(), names_.end(), want) - names_.begin());
+        for (int i : live) spread = spread && Owner(i, map) == addresses_[want_index];
+      }
+      if (spread) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    return false;
+  }
+
+  void StartRobots() {
+    for (const std::string& map : kMaps) {
+      robots_.push_back(std::make_unique<StreamingRobot>(map, addresses_));
+    }
+  }
+
+  // Seconds from `since` until every robot of `maps` had a batch acknowledged
+  // (negative: not within `timeout`), one figure per map.
+  std::map<std::string, double> WaitForAcks(const std::vector<std::string>& maps,
+                                            Clock::time_point since, double timeout_s) {
+    std::map<std::string, uint64_t> at_start;
+    for (const auto& r : robots_) at_start[r->map()] = r->acked();
+    std::map<std::string, double> took;
+    while (took.size() < maps.size() && SecondsSince(since) < timeout_s) {
+      for (const auto& r : robots_) {
+        if (std::find(maps.begin(), maps.end(), r->map()) == maps.end()) continue;
+        if (took.count(r->map()) == 0 && r->acked() > at_start[r->map()]) {
+          took[r->map()] = SecondsSince(since);
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    for (const std::string& m : maps) took.emplace(m, -1.0);
+    return took;
+  }
+
+  // Stops the robots, waits for every ack, and checks each map stored each
+  // batch exactly once: its robot's stored count is what it sent.
+  void FinishAndCheckExactlyOnce(int ask) {
+    for (auto& r : robots_) r->Stop();
+    for (auto& r : robots_) {
+      const grpc::Status s = r->client().Finish(std::chrono::seconds(60));
+      EXPECT_TRUE(s.ok()) << r->map() << ": " << s.error_message();
+      const robot::IngestCounts c = r->client().counts();
+      EXPECT_EQ(c.rejected, 0u) << r->map();
+      EXPECT_EQ(c.stored + c.duplicate, r->sent()) << r->map();
+    }
+    for (auto& r : robots_) {
+      const std::string owner = Owner(ask, r->map());
+      ASSERT_FALSE(owner.empty()) << r->map();
+      auto stub = pb::MapService::NewStub(Connect(owner));
+      grpc::ClientContext call;
+      call.AddMetadata("mapd-map-id", r->map());
+      pb::ListRobotsResponse robots;
+      const grpc::Status s = stub->ListRobots(&call, pb::ListRobotsRequest(), &robots);
+      ASSERT_TRUE(s.ok()) << r->map() << ": " << s.error_message();
+      ASSERT_EQ(robots.robots_size(), 1) << r->map();
+      EXPECT_EQ(robots.robots(0).batches(), r->sent())
+          << r->map() << ": every batch sent is stored exactly once";
+    }
+  }
+
+  TempDir dir_;
+  std::string store_;
+  std::vector<MapdProcess> mapd_;
+  std::vector<std::string> addresses_, names_;
+  std::vector<std::unique_ptr<StreamingRobot>> robots_;
+};
+
+TEST_F(FailoverTest, AKilledOwnersMapsMoveWithinSecondsAndNothingIsLost) {
+  ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)))
+      << "maps spread over the instances by rendezvous hashing";
+  StartRobots();
+  const std::vector<std::string> all(kMaps.begin(), kMaps.end());
+  for (const auto& [map, s] : WaitForAcks(all, Clock::now(), 30)) ASSERT_GE(s, 0) << map;
+
+  // The instance serving the most maps dies.
+  std::map<int, std::vector<std::string>> served;
+  for (const std::string& map : kMaps) {
+    const std::string owner = Owner(0, map);
+    for (int i = 0; i < kInstances; ++i) {
+      if (addresses_[i] == owner) served[i].push_back(map);
+    }
+  }
+  int victim = 0;
+  for (const auto& [i, maps] : served) {
+    if (maps.size() > served[victim].size()) victim = i;
+  }
+  ASSERT_FALSE(served[victim].empty());
+  const auto killed = Clock::now();
+  Stop(mapd_[victim].pid, SIGKILL);
+  const std::map<std::string, double> took = WaitForAcks(served[victim], killed, 30);
+  double worst = 0;
+  for (const auto& [map, s] : took) {
+    EXPECT_GE(s, 0) << map << " never acknowledged again";
+    EXPECT_LT(s, 10.0) << map;  // the benchmark's target is 5 s p50; CI runs loaded
+    worst = std::max(worst, s);
+    std::printf("kill -9: %s acknowledges again after %.2f s\n", map.c_str(), s);
+  }
+  std::vector<int> live;
+  for (int i = 0; i < kInstances; ++i) {
+    if (i != victim) live.push_back(i);
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  FinishAndCheckExactlyOnce(live[0]);
+  EXPECT_THAT(ReadFileBytes(mapd_[live[0]].log_path) + ReadFileBytes(mapd_[live[1]].log_path),
+              HasSubstr("event=map_taken map=" + served[victim][0]));
+}
+
+TEST_F(FailoverTest, AFrozenOwnerIsFencedWhenItWakes) {
+  ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)));
+  StartRobots();
+  const std::vector<std::string> all(kMaps.begin(), kMaps.end());
+  for (const auto& [map, s] : WaitForAcks(all, Clock::now(), 30)) ASSERT_GE(s, 0) << map;
+
+  // Freeze the owner of site-1 past its lease: the others take its maps.
+  const std::string owner = Owner(0, "site-1");
+  int frozen = 0;
+  while (addresses_[frozen] != owner) ++frozen;
+  std::vector<std::string> its_maps;
+  for (const std::string& map : kMaps) {
+    if (Owner((frozen + 1) % kInstances, map) == owner) its_maps.push_back(map);
+  }
+  const auto stopped = Clock::now();
+  ASSERT_EQ(kill(mapd_[frozen].pid, SIGSTOP), 0);
+  // Robots notice the frozen server by keepalive and go to the new owners.
+  const std::map<std::string, double> took = WaitForAcks(its_maps, stopped, 40);
+  for (const auto& [map, s] : took) {
+    EXPECT_GE(s, 0) << map << " never acknowledged again";
+    std::printf("SIGSTOP: %s acknowledges again after %.2f s\n", map.c_str(), s);
+  }
+  // It wakes: its next commit or renewal finds the lease taken over; it drops
+  // the maps and redirects.
+  ASSERT_EQ(kill(mapd_[frozen].pid, SIGCONT), 0);
+  const auto deadline = Clock::now() + std::chrono::seconds(15);
+  while (Clock::now() < deadline &&
+         ReadFileBytes(mapd_[frozen].log_path).find("event=map_dropped") == std::string::npos) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_THAT(ReadFileBytes(mapd_[frozen].log_path), HasSubstr("event=map_dropped map=site-1"));
+  EXPECT_EQ(Owner(frozen, "site-1").empty(), false);
+  EXPECT_NE(Owner(frozen, "site-1"), owner) << "the woken instance redirects to the new owner";
+  FinishAndCheckExactlyOnce((frozen + 1) % kInstances);
+}
+
+}  // namespace
+}  // namespace mapd::testing
