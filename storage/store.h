@@ -82,6 +82,10 @@ class Store : public ObservationReader,
   virtual uint64_t SizeBytes() const = 0;
   // Where the data is, for operators: a file path.
   virtual const std::string& path() const = 0;
+  // Whether this store may still write the map's data. Always with a local
+  // file; a shared database's store stops once another process took the map
+  // over (storage/postgres/map_lease.h), and its writes are refused for good.
+  virtual bool owns_map() const { return true; }
 };
 
 }  // namespace mapd::storage

@@ -179,6 +179,7 @@ void MapCore::RunWriteJobs(std::deque<std::shared_ptr<WriteJob>>& jobs) {
       s = (*txn)->Commit();
     }
     txn = Status::Ok();  // ends the transaction (rolls back unless committed)
+    s = UnlessTakenOver(s);
     write_health_.Record(s);
     if (s.ok() && !tied.empty()) {
       // In commit order with the observations: the tied sessions' stored
@@ -231,7 +232,17 @@ void MapCore::Submit(IngestBatch batch, DoneCallback done) {
         Status::Unavailable("mapd is shutting down; resend this batch after reconnecting")});
 }
 
-void MapCore::Stop() {
+Status MapCore::UnlessTakenOver(const Status& failure) const {
+  if (failure.ok() || store_->owns_map()) return failure;
+  // For good, and not the batch's fault: UNAVAILABLE, so the robot resends it
+  // (to the map's new owner), and the writer pauses between tries instead of
+  // retrying at once (write_health.h) until the map is dropped here.
+  return Status::Unavailable("map '" + options_.map_id +
+                             "' was taken over by another mapd; resend there (" +
+                             failure.message() + ")");
+}
+
+void MapCore::Stop(bool flush) {
   cancel_recovery_ = true;
   delayed_refusals_.Stop();  // the refusals still waiting are answered now
   watch_hub_.Close();        // watches end at once (MapServer closes them earlier)
@@ -247,7 +258,7 @@ void MapCore::Stop() {
     stopping_ = true;
     stop_flush_deadline_ =
         std::chrono::steady_clock::now() +
-        std::chrono::milliseconds(static_cast<int64_t>(options_.stop_flush_s * 1000));
+        std::chrono::milliseconds(static_cast<int64_t>(flush ? options_.stop_flush_s * 1000 : 0));
     background.swap(background_jobs_);
     queue_cv_.notify_all();
   }
@@ -479,6 +490,7 @@ void MapCore::CommitGroup(std::vector<Pending>& group, FusedDelta& fused) {
   if (failure.ok() && !fused.empty()) failure = WriteFusedDelta(fused, txn->get());
   if (failure.ok()) failure = (*txn)->Commit();
   txn = Status::Ok();  // ends the transaction (rolls back if Commit did not happen)
+  failure = UnlessTakenOver(failure);
   write_health_.Record(failure);
 
   if (!failure.ok()) {

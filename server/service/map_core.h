@@ -120,6 +120,9 @@ class MapCore final : public Core {
   static StatusOr<std::unique_ptr<MapCore>> Open(const MapCoreOptions& options);
 
   bool ready() const { return ready_.load(); }
+  // `failure` of a write, or UNAVAILABLE saying the map was taken over when
+  // the store no longer owns it (storage::Store::owns_map).
+  Status UnlessTakenOver(const Status& failure) const;
   // How long the writer has been on its current round of work, seconds; 0
   // while it waits for work. A map's lease is renewed only while this stays
   // short (map_ownership.h): a writer stuck in the database gives its map up.
@@ -156,8 +159,10 @@ class MapCore final : public Core {
   // Stops taking batches, commits (and acknowledges) everything queued, stops
   // the fuser where it is (what it has not fused is committed and replayed at
   // the next start: a stop never waits for the fusion backlog), snapshots the
-  // fusion state, checkpoints. Idempotent.
-  void Stop();
+  // fusion state, checkpoints. Idempotent. `flush` false: while the database
+  // refuses writes, refuse what is queued at once rather than retry for
+  // stop_flush_s (a map taken over by another mapd: its writes never work).
+  void Stop(bool flush = true);
 
   // The published lines and, if `planes` is not null, the published
   // non-vertical planes (same snapshot of the map; kind kLine leaves them

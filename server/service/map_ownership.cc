@@ -65,7 +65,12 @@ void MapOwnership::RenewServed() {
         continue;
       }
     }
-    if (!lost.ok()) hooks_.drop(map->id, lost);
+    if (lost.ok()) continue;
+    hooks_.drop(map->id, lost);
+    // Not here any more, and who has it is learnt next round: "being taken
+    // over" until then rather than a redirect to this instance.
+    std::lock_guard<std::mutex> lock(view_mu_);
+    view_[map->id] = MapOwner{};
   }
 }
 
@@ -93,8 +98,11 @@ Status MapOwnership::TakeFree() {
       view[id] = MapOwner{};
     }
     if (maps_->FindCore(id) != nullptr || !taking_) continue;  // served here, or stopping
-    if (has_lease && lease->second.expires_in_s > 0 && lease->second.owner != me) continue;
-    const bool mine = (has_lease && lease->second.owner == me) || RendezvousPick(id, names) == me;
+    const bool live = has_lease && lease->second.expires_in_s > 0;
+    if (live && lease->second.owner != me) continue;
+    // Its own live lease: this instance restarted (same name). A lapsed one
+    // of its own it released (a handoff), and takes back only as any other.
+    const bool mine = (live && lease->second.owner == me) || RendezvousPick(id, names) == me;
     const double lapsed_for_s = has_lease ? -lease->second.expires_in_s : 1e9;
     if (!mine && lapsed_for_s < options_.lease_ttl_s) continue;  // its chosen one may take it
     Status opened = hooks_.open(id);

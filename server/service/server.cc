@@ -285,7 +285,7 @@ void MapServer::DropMap(const std::string& id, const Status& why) {
        {"why", why.message()},
        {"action", "calls for it are redirected to its new owner; nothing acknowledged is lost"}});
   map->service->StartDraining();
-  map->core->Stop();  // what is queued is refused by the fence; robots resend it
+  map->core->Stop(/*flush=*/false);  // the fence refuses what is queued; robots resend it
   std::lock_guard<std::mutex> lock(health_mu_);
   server_->GetHealthCheckService()->SetServingStatus("map/" + id, false);
   UpdateHealthLocked();

@@ -109,6 +109,7 @@ class PgStore final : public Store {
   // fence knows (the lease's renewal is the owner's, on a connection of its own).
   const MapLease& lease() const { return log_->lease(); }
   bool owner() const { return log_->owner(); }
+  bool owns_map() const override { return log_->owner(); }
   // Hands the map off (PgObservationLog::Release), once its writer stopped.
   Status ReleaseLease() { return log_->Release(); }
   // Nothing to do: PostgreSQL checkpoints and vacuums by itself.

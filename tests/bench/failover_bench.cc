@@ -1,0 +1,284 @@
+// Failover through real mapd processes (docs/scale-out.md, "Failover,
+// measured"): three mapd on one PostgreSQL (fsync on), maps spread by
+// rendezvous hashing, one robot per map streaming a batch every 20 ms with
+// RobotClient given every instance's address. Then, `--kills` times: kill -9
+// the instance serving the most maps and time, per map, how long until its
+// robot's batches are acknowledged again (the takeover); restart the killed
+// instance (same name and port) and measure the longest pause in each map's
+// acknowledgements while maps are handed back to it (the graceful handoff).
+// At the end every robot's batches must be stored exactly once.
+//
+//   failover_bench [--kills 20] [--maps 6] [--lease_ttl_s S (default: mapd's)]
+#include <grpcpp/grpcpp.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "client/support/streaming_robot.h"
+#include "common/postgres.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+#include "service/rendezvous.h"
+
+namespace {
+
+namespace pb = mapserver::v1;
+using Clock = std::chrono::steady_clock;
+using mapd::testing::MapdProcess;
+using mapd::testing::StreamingRobot;
+
+double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+// Samples every robot's acknowledgements every 5 ms: the time of each map's
+// last ack, and the longest pause between acks since Reset().
+class AckMonitor {
+ public:
+  explicit AckMonitor(const std::vector<std::unique_ptr<StreamingRobot>>* robots)
+      : robots_(robots), thread_([this] { Loop(); }) {}
+  ~AckMonitor() {
+    stop_ = true;
+    thread_.join();
+  }
+  void Reset() {
+    std::lock_guard<std::mutex> lock(mu_);
+    longest_.clear();
+  }
+  std::map<std::string, double> Longest() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return longest_;
+  }
+
+ private:
+  void Loop() {
+    std::map<std::string, uint64_t> acked;
+    std::map<std::string, Clock::time_point> last;
+    while (!stop_) {
+      const Clock::time_point now = Clock::now();
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        for (const auto& r : *robots_) {
+          const uint64_t a = r->acked();
+          if (last.count(r->map()) == 0) last[r->map()] = now;
+          if (a != acked[r->map()]) {
+            acked[r->map()] = a;
+            last[r->map()] = now;
+          }
+          double& longest = longest_[r->map()];
+          longest = std::max(longest, Seconds(now - last[r->map()]));
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+
+  const std::vector<std::unique_ptr<StreamingRobot>>* robots_;
+  mutable std::mutex mu_;
+  std::map<std::string, double> longest_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+struct Fleet {
+  std::string store;
+  std::vector<std::string> extra;  // --lease_ttl_s
+  mapd::testing::TempDir dir;
+  std::vector<MapdProcess> mapd;
+  std::vector<std::string> addresses, names;
+
+  MapdProcess Start(int i, const std::string& listen) {
+    std::vector<std::string> args = {"--store", store,      "--instance_name",
+                                     names[i],  "--listen", listen};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return mapd::testing::StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "listening",
+                                    dir.File(names[i] + ".log"));
+  }
+
+  std::string Owner(const std::string& map) const {
+    for (const std::string& address : addresses) {
+      auto stub = pb::MapService::NewStub(mapd::testing::Connect(address));
+      grpc::ClientContext call;
+      call.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+      pb::LocateMapRequest request;
+      request.set_map_id(map);
+      pb::MapLocation where;
+      if (stub->LocateMap(&call, request, &where).ok()) return where.live() ? where.address() : "";
+    }
+    return "";
+  }
+
+  bool Spread(const std::vector<std::string>& maps) const {
+    for (const std::string& map : maps) {
+      const std::string want = mapd::service::RendezvousPick(map, names);
+      const size_t i =
+          static_cast<size_t>(std::find(names.begin(), names.end(), want) - names.begin());
+      if (Owner(map) != addresses[i]) return false;
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int kills = 20, n_maps = 6;
+  std::string ttl;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--kills")) kills = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--maps")) n_maps = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--lease_ttl_s")) ttl = argv[i + 1];
+  }
+  std::string why;
+  auto cluster = mapd::testing::PostgresCluster::Start(/*fsync=*/true, &why);
+  if (cluster == nullptr) {
+    std::fprintf(stderr, "no PostgreSQL: %s\n", why.c_str());
+    return 1;
+  }
+  Fleet fleet;
+  fleet.store = cluster->NewDatabase();
+  if (!ttl.empty()) fleet.extra = {"--lease_ttl_s", ttl};
+  for (int i = 0; i < 3; ++i) {
+    fleet.names.push_back("mapd-" + std::to_string(i + 1));
+    fleet.mapd.push_back(fleet.Start(i, "127.0.0.1:0"));
+    if (fleet.mapd.back().port == 0) {
+      std::fprintf(stderr, "mapd did not start:\n%s\n", fleet.mapd.back().log().c_str());
+      return 1;
+    }
+    fleet.addresses.push_back(fleet.mapd.back().address);
+  }
+  std::vector<std::string> maps = {"default"};
+  for (int i = 1; i < n_maps; ++i) {
+    maps.push_back("site-" + std::to_string(i));
+    auto r = mapd::testing::RunCommand(
+        {MAPCTL_BINARY, "--server", fleet.addresses[0], "maps", "create", maps.back()}, "",
+        std::chrono::seconds(60));
+    if (r.exit_code != 0) {
+      std::fprintf(stderr, "maps create: %s\n", r.err.c_str());
+      return 1;
+    }
+  }
+  auto wait_spread = [&](double timeout_s) {
+    const auto start = Clock::now();
+    while (!fleet.Spread(maps)) {
+      if (Seconds(Clock::now() - start) > timeout_s) return -1.0;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return Seconds(Clock::now() - start);
+  };
+  if (wait_spread(60) < 0) {
+    std::fprintf(stderr, "the maps did not spread over the instances\n");
+    return 1;
+  }
+  std::vector<std::unique_ptr<StreamingRobot>> robots;
+  for (const std::string& map : maps) {
+    robots.push_back(std::make_unique<StreamingRobot>(map, fleet.addresses));
+  }
+  AckMonitor monitor(&robots);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+
+  std::vector<double> takeover_s, handback_gap_s;
+  for (int k = 0; k < kills; ++k) {
+    std::map<int, std::vector<size_t>> served;  // instance -> robots
+    for (size_t r = 0; r < robots.size(); ++r) {
+      const std::string owner = fleet.Owner(robots[r]->map());
+      for (int i = 0; i < 3; ++i) {
+        if (fleet.addresses[i] == owner) served[i].push_back(r);
+      }
+    }
+    int victim = k % 3;
+    for (const auto& [i, rs] : served) {
+      if (rs.size() > served[victim].size()) victim = i;
+    }
+    std::map<size_t, uint64_t> before;
+    for (size_t r : served[victim]) before[r] = robots[r]->acked();
+    const auto killed = Clock::now();
+    mapd::testing::Stop(fleet.mapd[victim].pid, SIGKILL);
+    std::map<size_t, double> took;
+    while (took.size() < served[victim].size() && Seconds(Clock::now() - killed) < 60) {
+      for (size_t r : served[victim]) {
+        if (took.count(r) == 0 && robots[r]->acked() > before[r]) {
+          took[r] = Seconds(Clock::now() - killed);
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    double worst = 0;
+    for (size_t r : served[victim]) {
+      const double s = took.count(r) ? took[r] : 60.0;
+      takeover_s.push_back(s);
+      worst = std::max(worst, s);
+    }
+    // Back on its own port: the robots' address lists stay right.
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    monitor.Reset();
+    fleet.mapd[victim] = fleet.Start(victim, fleet.addresses[victim]);
+    if (fleet.mapd[victim].port == 0) {
+      std::fprintf(stderr, "restart failed:\n%s\n", fleet.mapd[victim].log().c_str());
+      return 1;
+    }
+    const double spread_s = wait_spread(120);
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    double gap = 0;
+    for (const auto& [map, s] : monitor.Longest()) gap = std::max(gap, s);
+    handback_gap_s.push_back(gap);
+    std::printf(
+        "kill %2d: %s served %zu maps, acknowledged again after %.2f s (worst); "
+        "restarted, maps back after %.1f s, longest ack pause meanwhile %.2f s\n",
+        k + 1, fleet.names[victim].c_str(), served[victim].size(), worst, spread_s, gap);
+    std::fflush(stdout);
+  }
+
+  for (auto& r : robots) r->Stop();
+  bool exact = true;
+  for (auto& r : robots) {
+    const grpc::Status s = r->client().Finish(std::chrono::seconds(60));
+    const mapd::robot::IngestCounts c = r->client().counts();
+    if (!s.ok() || c.rejected != 0 || c.stored + c.duplicate != r->sent()) {
+      std::printf(
+          "%s: %s, sent %llu, stored %llu, duplicate %llu, rejected %llu\n", r->map().c_str(),
+          s.error_message().c_str(), static_cast<unsigned long long>(r->sent()),
+          static_cast<unsigned long long>(c.stored), static_cast<unsigned long long>(c.duplicate),
+          static_cast<unsigned long long>(c.rejected));
+      exact = false;
+    }
+    const std::string owner = fleet.Owner(r->map());
+    auto stub = pb::MapService::NewStub(mapd::testing::Connect(owner));
+    grpc::ClientContext call;
+    call.AddMetadata("mapd-map-id", r->map());
+    pb::ListRobotsResponse listed;
+    if (!stub->ListRobots(&call, pb::ListRobotsRequest(), &listed).ok() ||
+        listed.robots_size() != 1 || listed.robots(0).batches() != r->sent()) {
+      std::printf("%s: stored %llu batches, sent %llu\n", r->map().c_str(),
+                  listed.robots_size() == 1
+                      ? static_cast<unsigned long long>(listed.robots(0).batches())
+                      : 0ull,
+                  static_cast<unsigned long long>(r->sent()));
+      exact = false;
+    }
+  }
+  std::printf(
+      "\n%d kills, %zu map takeovers: acknowledged again after p50 %.2f s, p90 %.2f s, max "
+      "%.2f s\nhandback after each restart: longest ack pause p50 %.2f s, max %.2f s\n"
+      "every batch stored exactly once: %s\n",
+      kills, takeover_s.size(), Percentile(takeover_s, 0.5), Percentile(takeover_s, 0.9),
+      Percentile(takeover_s, 1.0), Percentile(handback_gap_s, 0.5), Percentile(handback_gap_s, 1.0),
+      exact ? "yes" : "NO");
+  for (const MapdProcess& m : fleet.mapd) mapd::testing::Stop(m.pid, SIGTERM);
+  return exact ? 0 : 1;
+}
