@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 
 namespace mapd::robot {
@@ -151,6 +152,8 @@ void RobotClient::ReaderLoop() {
     bool got_ack = false;
     grpc::Status status;
     std::string redirect;  // the map's owner, when this mapd does not serve it
+    // Set when the map is being taken over: how soon the server expects to know more.
+    std::optional<std::chrono::milliseconds> retry_after;
     if (!map_checked) {
       status = CheckMap();
       map_checked = status.ok();
@@ -176,6 +179,10 @@ void RobotClient::ReaderLoop() {
         const auto& trailing = context_->GetServerTrailingMetadata();
         if (auto it = trailing.find("mapd-map-owner"); it != trailing.end()) {
           redirect.assign(it->second.data(), it->second.size());
+        }
+        if (auto it = trailing.find("mapd-retry-after-ms"); it != trailing.end()) {
+          retry_after = std::chrono::milliseconds(
+              std::atoi(std::string(it->second.data(), it->second.size()).c_str()));
         }
         stream_.reset();
         context_.reset();
@@ -204,10 +211,12 @@ void RobotClient::ReaderLoop() {
       gave_up_ = true;
       break;
     }
-    // A redirect is followed after the shortest pause: the owner is known.
+    // A redirect is followed after the shortest pause: the owner is known. A
+    // takeover in progress is asked about again as often as it may end.
     if (!redirect.empty() && options_.connect) backoff = options_.initial_backoff;
-    cv_.wait_for(lock, backoff, [this] { return stopping_; });
-    backoff = std::min(backoff * 2, options_.max_backoff);
+    const auto pause = retry_after ? std::max(options_.initial_backoff, *retry_after) : backoff;
+    cv_.wait_for(lock, pause, [this] { return stopping_; });
+    if (!retry_after) backoff = std::min(backoff * 2, options_.max_backoff);
     lock.unlock();
     if (MoveAfterFailure(status, redirect, give_up_at)) {
       std::lock_guard<std::mutex> counted(mu_);
@@ -235,7 +244,17 @@ bool RobotClient::MoveAfterFailure(const grpc::Status& status, const std::string
   }
   // Unreachable, or its map is being taken over: give the current server a
   // little while (a restart, or the takeover finishing), then try the next.
-  WaitForChannel(std::min(give_up_at, std::chrono::steady_clock::now() + options_.max_backoff));
+  // A refused connection (the process is gone) moves on at once.
+  const auto deadline =
+      std::min(give_up_at, std::chrono::steady_clock::now() + options_.max_backoff);
+  for (grpc_connectivity_state state = channel_->GetState(true);
+       state != GRPC_CHANNEL_READY && state != GRPC_CHANNEL_TRANSIENT_FAILURE;
+       state = channel_->GetState(true)) {
+    if (!channel_->WaitForStateChange(state, std::chrono::system_clock::now() +
+                                                 (deadline - std::chrono::steady_clock::now()))) {
+      break;  // the deadline passed
+    }
+  }
   if (channel_->GetState(false) == GRPC_CHANNEL_READY) return false;
   const size_t n = options_.addresses.size();
   const size_t i = next_address_++ % (n + 1);

@@ -36,7 +36,7 @@ struct ServerConfig {
   // stays with an instance that stopped renewing, seconds.
   std::string advertise_address;
   std::string instance_name;
-  double lease_ttl_s = 4.0;
+  double lease_ttl_s = 3.0;
   bool sync_full = false;      // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;  // wait for a database lock held by another process
   fusion::FusionParams fusion;

@@ -178,6 +178,25 @@ std::map<std::string, MapOwner> MapOwnership::Owners() const {
   return view_;
 }
 
+std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
+  std::optional<MapOwner> seen = Locate(id);
+  if (!seen) return seen;
+  std::lock_guard<std::mutex> lock(lookup_mu_);
+  if (!lookup_conn_.healthy()) {
+    StatusOr<storage::PgConnection> c = storage::PgConnection::Connect(options_.conninfo);
+    if (!c.ok()) return seen;
+    lookup_conn_ = std::move(c).value();
+  }
+  StatusOr<storage::LeaseRow> row = storage::GetMapLease(lookup_conn_, id);
+  if (!row.ok()) return seen;
+  MapOwner now{row->owner, row->address, row->expires_in_s > 0};
+  if (now.live) {
+    std::lock_guard<std::mutex> view_lock(view_mu_);
+    view_[id] = now;
+  }
+  return now;
+}
+
 std::optional<MapOwner> MapOwnership::Locate(const std::string& id) const {
   std::lock_guard<std::mutex> lock(view_mu_);
   auto it = view_.find(id);

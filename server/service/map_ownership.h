@@ -47,7 +47,7 @@ namespace mapd::service {
 struct OwnershipOptions {
   std::string conninfo;
   storage::PgInstance instance;  // name and advertised address
-  double lease_ttl_s = 4.0;
+  double lease_ttl_s = 3.0;
 };
 
 class MapOwnership final : public MapLocator {
@@ -81,7 +81,9 @@ class MapOwnership final : public MapLocator {
   // MapLocator: the owners as of the last round (maps served here: this
   // instance, live).
   std::optional<MapOwner> Locate(const std::string& id) const override;
+  std::optional<MapOwner> LocateNow(const std::string& id) override;
   std::map<std::string, MapOwner> Owners() const override;
+  int retry_after_ms() const override { return static_cast<int>(options_.lease_ttl_s * 250); }
   // Who this instance is; before the first round (the port is known late).
   void set_instance(storage::PgInstance instance) { options_.instance = std::move(instance); }
   const storage::PgInstance& instance() const { return options_.instance; }
@@ -108,6 +110,8 @@ class MapOwnership final : public MapLocator {
   const Hooks hooks_;
   storage::PgConnection conn_;  // the rounds' (one at a time: round_mu_)
   std::mutex round_mu_;
+  storage::PgConnection lookup_conn_;  // LocateNow's, under lookup_mu_
+  std::mutex lookup_mu_;
 
   mutable std::mutex view_mu_;
   std::map<std::string, MapOwner> view_;  // GUARDED_BY(view_mu_): every map of the database

@@ -43,9 +43,12 @@ StatusOr<ServedMap*> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
                                                const std::string& id) {
   StatusOr<ServedMap*> map = maps_->Find(id);
   if (map.ok() || locator_ == nullptr) return map;
-  const std::optional<MapOwner> owner = locator_->Locate(id.empty() ? kDefaultMapId : id);
-  if (!owner) return map;  // no such map
+  const std::string key = id.empty() ? std::string(kDefaultMapId) : id;
+  std::optional<MapOwner> owner = locator_->Locate(key);
+  if (!owner) return map;                              // no such map
+  if (!owner->live) owner = locator_->LocateNow(key);  // taken over since the last round?
   if (!owner->live || owner->address.empty()) {
+    context.AddTrailingMetadata(kRetryAfterMetadata, std::to_string(locator_->retry_after_ms()));
     return Status::Unavailable("map '" + id +
                                "' is being taken over by another mapd (its owner stopped); "
                                "retry in a few seconds");

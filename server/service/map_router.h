@@ -25,6 +25,9 @@ inline constexpr char kMapIdMetadata[] = "mapd-map-id";
 // mapd on the same database: that instance's address (host:port). Clients
 // call it there (RobotClient, mapctl, the Python client follow it).
 inline constexpr char kMapOwnerMetadata[] = "mapd-map-owner";
+// With a call refused because its map is being taken over: how soon to
+// retry, milliseconds (the takeover rounds' period).
+inline constexpr char kRetryAfterMetadata[] = "mapd-retry-after-ms";
 
 class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_UploadSubmap<
                             mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
@@ -33,7 +36,7 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   // `on_create` runs for each map CreateMap made (health, logs); `locator`
   // (PostgreSQL only, else null) says where maps not served here are.
   MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create,
-            const MapLocator* locator = nullptr)
+            MapLocator* locator = nullptr)
       : maps_(maps), on_create_(std::move(on_create)), locator_(locator) {}
   // Where clients reach this server (LocateMap), once it is known (the
   // port is bound after the router is made).
@@ -126,7 +129,7 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
 
   MapDirectory* const maps_;
   const std::function<void(ServedMap*)> on_create_;
-  const MapLocator* const locator_;
+  MapLocator* const locator_;
   mutable std::mutex address_mu_;
   std::string address_;  // GUARDED_BY(address_mu_)
 };
