@@ -9,6 +9,10 @@ namespace mapd::robot {
 
 namespace pb = mapserver::v1;
 
+// While failing over, the pause between tries stays under this many initial
+// backoffs (ReaderLoop).
+constexpr int kFailoverBackoffFactor = 4;
+
 RobotClient::RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options)
     : channel_(std::move(channel)),
       stub_(pb::MapService::NewStub(channel_)),
@@ -219,6 +223,10 @@ void RobotClient::ReaderLoop() {
     if (!retry_after) backoff = std::min(backoff * 2, options_.max_backoff);
     lock.unlock();
     if (MoveAfterFailure(status, redirect, give_up_at)) {
+      // Failing over: the map's new owner takes it within a few seconds, and
+      // the robot should find it within a fraction of one, not after a
+      // backoff grown on the instances that were not it yet.
+      backoff = std::min(backoff, kFailoverBackoffFactor * options_.initial_backoff);
       std::lock_guard<std::mutex> counted(mu_);
       ++counts_.redirects;
     }

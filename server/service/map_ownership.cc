@@ -1,7 +1,6 @@
 #include "service/map_ownership.h"
 
 #include <chrono>
-#include <set>
 
 #include "service/log.h"
 #include "service/rendezvous.h"
@@ -97,7 +96,11 @@ Status MapOwnership::TakeFree() {
     } else {
       view[id] = MapOwner{};
     }
-    if (maps_->FindCore(id) != nullptr || !taking_) continue;  // served here, or stopping
+    if (maps_->FindCore(id) != nullptr) continue;  // served here
+    // A lease of this instance for a map it does not serve (dropped, handed
+    // off): never a redirect to itself.
+    if (view[id].instance == me) view[id].live = false;
+    if (!taking_) continue;  // stopping
     const bool live = has_lease && lease->second.expires_in_s > 0;
     if (live && lease->second.owner != me) continue;
     // Its own live lease: this instance restarted (same name). A lapsed one
@@ -119,6 +122,9 @@ Status MapOwnership::TakeFree() {
         Log(LogLevel::kInfo, "map_handed_off",
             {{"map", id}, {"to", to.instance}, {"address", to.address}});
         view[id] = MapOwner{to.instance, to.address, false};  // until it has taken the map
+        // The handoff drained and stopped a map, which may take a while: the
+        // other maps' leases must not lapse meanwhile.
+        RenewServed();
       } else {
         Log(LogLevel::kWarn, "map_hand_off_failed", {{"map", id}, {"error", s.ToString()}});
       }
