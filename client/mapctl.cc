@@ -91,7 +91,9 @@ int main(int argc, char** argv) {
   }
   for (const std::string& server : ctx.servers) {
     if (std::string problem = mapd::client::ServerAddressProblem(server); !problem.empty()) {
-      return UsageError("", "server '" + server + "' (--server or $MAPD_SERVER): " + problem);
+      std::string what = "server '";
+      what.append(server).append("' (--server or $MAPD_SERVER): ").append(problem);
+      return UsageError("", what);
     }
   }
 
