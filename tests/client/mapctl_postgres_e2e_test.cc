@@ -141,7 +141,12 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   std::printf("takeover after kill -9, 1 s leases: %.2f s\n", took_s);
   EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
   EXPECT_THAT(second.log(), HasSubstr("event=map_taken map=default epoch=2"));
-  const CommandResult after = Mapctl(second, {"features", "--format", "json"});
+  // The fused map is recovered in the background (slow under sanitizers).
+  CommandResult after = Mapctl(second, {"features", "--format", "json"});
+  for (int i = 0; i < 300 && after.exit_code != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    after = Mapctl(second, {"features", "--format", "json"});
+  }
   ASSERT_EQ(after.exit_code, 0) << after.err;
   EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
   EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
