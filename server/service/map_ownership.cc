@@ -132,6 +132,7 @@ Status MapOwnership::TakeFree() {
   }
   std::lock_guard<std::mutex> lock(view_mu_);
   view_ = std::move(view);
+  view_ready_ = true;
   return Status::Ok();
 }
 
@@ -186,7 +187,9 @@ std::map<std::string, MapOwner> MapOwnership::Owners() const {
 
 std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
   std::optional<MapOwner> seen = Locate(id);
-  if (!seen) return seen;
+  // A map the last round did not see does not exist, unless no round has
+  // finished yet (calls come in as soon as the port is open).
+  if (!seen && view_ready_) return seen;
   std::lock_guard<std::mutex> lock(lookup_mu_);
   if (!lookup_conn_.healthy()) {
     StatusOr<storage::PgConnection> c = storage::PgConnection::Connect(options_.conninfo);
@@ -194,7 +197,12 @@ std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
     lookup_conn_ = std::move(c).value();
   }
   StatusOr<storage::LeaseRow> row = storage::GetMapLease(lookup_conn_, id);
-  if (!row.ok()) return seen;
+  if (!row.ok()) {
+    if (seen || row.status().code() != StatusCode::kNotFound) return seen;
+    // No lease: a map nobody has taken yet, or no such map.
+    if (!catalog_->Settings(id).ok()) return std::nullopt;
+    return MapOwner{};
+  }
   MapOwner now{row->owner, row->address, row->expires_in_s > 0};
   if (now.live) {
     std::lock_guard<std::mutex> view_lock(view_mu_);

@@ -115,6 +115,7 @@ class MapOwnership final : public MapLocator {
 
   mutable std::mutex view_mu_;
   std::map<std::string, MapOwner> view_;  // GUARDED_BY(view_mu_): every map of the database
+  std::atomic<bool> view_ready_{false};   // a round has filled view_
 
   std::mutex stop_mu_;
   std::condition_variable stop_cv_;

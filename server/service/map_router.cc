@@ -45,8 +45,9 @@ StatusOr<ServedMap*> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
   if (map.ok() || locator_ == nullptr) return map;
   const std::string key = id.empty() ? std::string(kDefaultMapId) : id;
   std::optional<MapOwner> owner = locator_->Locate(key);
-  if (!owner) return map;                              // no such map
-  if (!owner->live) owner = locator_->LocateNow(key);  // taken over since the last round?
+  // Taken over since the last round, or before the first one?
+  if (!owner || !owner->live) owner = locator_->LocateNow(key);
+  if (!owner) return map;  // no such map
   if (!owner->live || owner->address.empty()) {
     context.AddTrailingMetadata(kRetryAfterMetadata, std::to_string(locator_->retry_after_ms()));
     return Status::Unavailable("map '" + id +
