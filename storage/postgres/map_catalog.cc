@@ -16,14 +16,8 @@ StatusOr<PgMapCatalog> PgMapCatalog::Open(const std::string& conninfo) {
 
 StatusOr<PgResult> PgMapCatalog::Query(const std::string& sql, const PgParams& params) {
   std::lock_guard<std::mutex> lock(*mu_);
-  StatusOr<PgResult> r = conn_.Query(sql, params);
-  if (r.ok() || r.status().code() != StatusCode::kUnavailable) return r;
-  // PostgreSQL restarted or the network failed: every statement here is
-  // one transaction, so connect again and try once more.
-  StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
-  if (!again.ok()) return r;
-  conn_ = std::move(again).value();
-  return conn_.Query(sql, params);
+  // Every statement here is one transaction.
+  return QueryReconnectingOnce(conn_, conninfo_, sql, params);
 }
 
 StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {

@@ -75,16 +75,7 @@ PgObservationLog::~PgObservationLog() {
 }
 
 StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgParams& params) {
-  StatusOr<PgResult> r = reader_.Query(sql, params);
-  // Unavailable: the connection's trouble (libpq does not always mark it
-  // broken on the first failure after the server went away).
-  if (r.ok() || r.status().code() != StatusCode::kUnavailable) return r;
-  // The connection broke (PostgreSQL restarted, the network failed): a
-  // read changes nothing, so connect again and try once more.
-  StatusOr<PgConnection> again = PgConnection::Connect(conninfo_);
-  if (!again.ok()) return r;
-  reader_ = std::move(again).value();
-  return reader_.Query(sql, params);
+  return QueryReconnectingOnce(reader_, conninfo_, sql, params);  // a read changes nothing
 }
 
 Status PgObservationLog::SetWriterSession(const std::string& sql) {

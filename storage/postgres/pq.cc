@@ -197,6 +197,16 @@ Status CheckConninfo(const std::string& conninfo) {
   return Status::Ok();
 }
 
+StatusOr<PgResult> QueryReconnectingOnce(PgConnection& conn, const std::string& conninfo,
+                                         const std::string& sql, const PgParams& params) {
+  StatusOr<PgResult> r = conn.Query(sql, params);
+  if (r.ok() || r.status().code() != StatusCode::kUnavailable) return r;
+  StatusOr<PgConnection> again = PgConnection::Connect(conninfo);
+  if (!again.ok()) return r;
+  conn = std::move(again).value();  // closes the broken one
+  return conn.Query(sql, params);
+}
+
 Status PgError(PGconn* conn, const PGresult* result, std::string_view what) {
   std::string message = result != nullptr ? PQresultErrorMessage(result) : "";
   if (message.empty() && conn != nullptr) message = PQerrorMessage(conn);
@@ -207,8 +217,8 @@ Status PgError(PGconn* conn, const PGresult* result, std::string_view what) {
   if (sqlstate == "23505") return Status::AlreadyExists(text);
   if (sqlstate == "53100" || sqlstate == "53200" || sqlstate == "53300" || sqlstate == "54000")
     return Status::ResourceExhausted(text);
-  if (sqlstate.rfind("08", 0) == 0 || sqlstate == "40001" || sqlstate == "40P01" ||
-      sqlstate == "57P01" || sqlstate == "57P02" || sqlstate == "57P03" ||
+  if (sqlstate.empty() || sqlstate.rfind("08", 0) == 0 || sqlstate == "40001" ||
+      sqlstate == "40P01" || sqlstate == "57P01" || sqlstate == "57P02" || sqlstate == "57P03" ||
       (conn != nullptr && PQstatus(conn) != CONNECTION_OK))
     return Status::Unavailable(text);
   return Status::Internal(text);

@@ -91,6 +91,14 @@ class PgConnection {
   std::unique_ptr<PGconn, PgConnDeleter> conn_;
 };
 
+// Runs one read-only statement (or any statement that is a transaction of
+// its own) on `conn`; when the connection has broken (PostgreSQL restarted,
+// the network failed: Unavailable), connects to `conninfo` again, replaces
+// `conn`, and tries once more. Safe only where running the statement twice
+// changes nothing.
+StatusOr<PgResult> QueryReconnectingOnce(PgConnection& conn, const std::string& conninfo,
+                                         const std::string& sql, const PgParams& params = {});
+
 // Checks a connection string (libpq key=value or postgresql:// URI) before
 // use: InvalidArgument with libpq's reason when it does not parse, or when it
 // holds a password (command lines and config files are read by others; the
@@ -100,7 +108,10 @@ Status CheckConninfo(const std::string& conninfo);
 // A failed result (or connection) as a Status naming `what` we were doing:
 // unique violations are AlreadyExists, a full disk or exhausted resources
 // ResourceExhausted, a lost connection, shutdown, serialization failure or
-// deadlock Unavailable (the caller may retry), anything else Internal.
+// deadlock Unavailable (the caller may retry), anything else Internal. An
+// error with no SQLSTATE did not come from the server (libpq's own, e.g.
+// "server closed the connection unexpectedly", which libpq does not always
+// mark as a broken connection): Unavailable.
 Status PgError(PGconn* conn, const PGresult* result, std::string_view what);
 
 }  // namespace mapd::storage
