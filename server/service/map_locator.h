@@ -23,10 +23,13 @@ class MapLocator {
   // Map `id`'s owner as last seen; nullopt when the database has no such map.
   virtual std::optional<MapOwner> Locate(const std::string& id) const = 0;
   // The same read from the database now, for a map last seen without a live
-  // owner (being taken over): the takeover may have happened since.
+  // owner (being taken over: the takeover may have happened since) or not
+  // seen at all (made since on another instance). As last seen when the
+  // database cannot be reached.
   virtual std::optional<MapOwner> LocateNow(const std::string& id) = 0;
-  // Every map of the database and its owner as last seen.
-  virtual std::map<std::string, MapOwner> Owners() const = 0;
+  // Every map of the database and its owner, read now (as last seen when
+  // the database cannot be reached).
+  virtual std::map<std::string, MapOwner> Owners() = 0;
   // How soon a map being taken over is worth asking for again: the view is
   // refreshed this often, milliseconds.
   virtual int retry_after_ms() const = 0;

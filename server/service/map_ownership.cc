@@ -132,7 +132,6 @@ Status MapOwnership::TakeFree() {
   }
   std::lock_guard<std::mutex> lock(view_mu_);
   view_ = std::move(view);
-  view_ready_ = true;
   return Status::Ok();
 }
 
@@ -180,22 +179,43 @@ void MapOwnership::Stop() {
   (void)storage::LeaveInstance(conn_, options_.instance);
 }
 
-std::map<std::string, MapOwner> MapOwnership::Owners() const {
-  std::lock_guard<std::mutex> lock(view_mu_);
+std::map<std::string, MapOwner> MapOwnership::Owners() {
+  {
+    // Read now: a map made on another instance a moment ago is listed.
+    std::lock_guard<std::mutex> lock(lookup_mu_);
+    StatusOr<std::vector<std::string>> ids = catalog_->ListMaps();
+    StatusOr<std::vector<storage::LeaseRow>> leases =
+        Status::Unavailable("cannot connect to PostgreSQL");
+    if (ids.ok() && ConnectLookupLocked()) leases = storage::ListMapLeases(lookup_conn_);
+    if (leases.ok()) {
+      std::map<std::string, MapOwner> owners;
+      for (const std::string& id : *ids) owners[id] = MapOwner{};
+      for (const storage::LeaseRow& l : *leases) {
+        if (owners.count(l.map_id) != 0) {
+          owners[l.map_id] = MapOwner{l.owner, l.address, l.expires_in_s > 0};
+        }
+      }
+      return owners;
+    }
+  }
+  std::lock_guard<std::mutex> lock(view_mu_);  // the database is away: as last seen
   return view_;
+}
+
+bool MapOwnership::ConnectLookupLocked() {
+  if (lookup_conn_.healthy()) return true;
+  StatusOr<storage::PgConnection> c = storage::PgConnection::Connect(options_.conninfo);
+  if (!c.ok()) return false;
+  lookup_conn_ = std::move(c).value();
+  return true;
 }
 
 std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
   std::optional<MapOwner> seen = Locate(id);
-  // A map the last round did not see does not exist, unless no round has
-  // finished yet (calls come in as soon as the port is open).
-  if (!seen && view_ready_) return seen;
+  // A map the last round did not see may have been made since, on another
+  // instance (or no round has finished yet): ask the database.
   std::lock_guard<std::mutex> lock(lookup_mu_);
-  if (!lookup_conn_.healthy()) {
-    StatusOr<storage::PgConnection> c = storage::PgConnection::Connect(options_.conninfo);
-    if (!c.ok()) return seen;
-    lookup_conn_ = std::move(c).value();
-  }
+  if (!ConnectLookupLocked()) return seen;
   StatusOr<storage::LeaseRow> row = storage::GetMapLease(lookup_conn_, id);
   if (!row.ok()) {
     if (seen || row.status().code() != StatusCode::kNotFound) return seen;

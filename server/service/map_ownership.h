@@ -78,11 +78,11 @@ class MapOwnership final : public MapLocator {
   // leases are released as their stores close.
   void Stop();
 
-  // MapLocator: the owners as of the last round (maps served here: this
-  // instance, live).
+  // MapLocator. Locate: as of the last round (maps served here: this
+  // instance, live). LocateNow and Owners: read from the database.
   std::optional<MapOwner> Locate(const std::string& id) const override;
   std::optional<MapOwner> LocateNow(const std::string& id) override;
-  std::map<std::string, MapOwner> Owners() const override;
+  std::map<std::string, MapOwner> Owners() override;
   int retry_after_ms() const override { return static_cast<int>(options_.lease_ttl_s * 250); }
   // Who this instance is; before the first round (the port is known late).
   void set_instance(storage::PgInstance instance) { options_.instance = std::move(instance); }
@@ -102,6 +102,8 @@ class MapOwnership final : public MapLocator {
   std::optional<std::pair<std::string, MapOwner>> PickHandOff(
       const std::vector<storage::InstanceRow>& live) const;
   void Loop();
+  // lookup_conn_, connected if it was not; false when it cannot be.
+  bool ConnectLookupLocked();
 
   OwnershipOptions options_;  // instance: set before the thread starts
   std::atomic<bool> taking_{true};
@@ -110,12 +112,11 @@ class MapOwnership final : public MapLocator {
   const Hooks hooks_;
   storage::PgConnection conn_;  // the rounds' (one at a time: round_mu_)
   std::mutex round_mu_;
-  storage::PgConnection lookup_conn_;  // LocateNow's, under lookup_mu_
+  storage::PgConnection lookup_conn_;  // LocateNow's and Owners', under lookup_mu_
   std::mutex lookup_mu_;
 
   mutable std::mutex view_mu_;
   std::map<std::string, MapOwner> view_;  // GUARDED_BY(view_mu_): every map of the database
-  std::atomic<bool> view_ready_{false};   // a round has filled view_
 
   std::mutex stop_mu_;
   std::condition_variable stop_cv_;

@@ -209,7 +209,12 @@ grpc::Status MapRouter::LocateMap(grpc::ServerContext* context, const pb::Locate
     response->set_live(true);
     return grpc::Status::OK;
   }
-  const std::optional<MapOwner> owner = locator_ == nullptr ? std::nullopt : locator_->Locate(*id);
+  std::optional<MapOwner> owner;
+  if (locator_ != nullptr) {
+    owner = locator_->Locate(*id);
+    // Taken over, or made on another instance, since the last round?
+    if (!owner || !owner->live) owner = locator_->LocateNow(*id);
+  }
   if (!owner) return ToGrpcStatus(maps_->Find(*id).status());  // NotFound
   response->set_address(owner->address);
   response->set_instance(owner->instance);
