@@ -6,9 +6,12 @@
 // robot's batches are acknowledged again (the takeover); restart the killed
 // instance (same name and port) and measure the longest pause in each map's
 // acknowledgements while maps are handed back to it (the graceful handoff).
-// At the end every robot's batches must be stored exactly once.
+// Then `--rolls` rolling restarts: each instance in turn stopped with SIGTERM
+// (it drains, commits and releases its leases) and started again, with the
+// longest pause in any map's acknowledgements per restart. At the end every
+// robot's batches must be stored exactly once and none refused.
 //
-//   failover_bench [--kills 20] [--maps 6] [--lease_ttl_s S (default: mapd's)]
+//   failover_bench [--kills 20] [--rolls 3] [--maps 6] [--lease_ttl_s S (default: mapd's)]
 #include <grpcpp/grpcpp.h>
 #include <signal.h>
 
@@ -25,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "client/support/ack_monitor.h"
 #include "client/support/streaming_robot.h"
 #include "common/postgres.h"
 #include "common/process.h"
@@ -35,6 +39,7 @@ namespace {
 
 namespace pb = mapserver::v1;
 using Clock = std::chrono::steady_clock;
+using mapd::testing::AckMonitor;
 using mapd::testing::MapdProcess;
 using mapd::testing::StreamingRobot;
 
@@ -45,55 +50,6 @@ double Percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
 }
-
-// Samples every robot's acknowledgements every 5 ms: the time of each map's
-// last ack, and the longest pause between acks since Reset().
-class AckMonitor {
- public:
-  explicit AckMonitor(const std::vector<std::unique_ptr<StreamingRobot>>* robots)
-      : robots_(robots), thread_([this] { Loop(); }) {}
-  ~AckMonitor() {
-    stop_ = true;
-    thread_.join();
-  }
-  void Reset() {
-    std::lock_guard<std::mutex> lock(mu_);
-    longest_.clear();
-  }
-  std::map<std::string, double> Longest() const {
-    std::lock_guard<std::mutex> lock(mu_);
-    return longest_;
-  }
-
- private:
-  void Loop() {
-    std::map<std::string, uint64_t> acked;
-    std::map<std::string, Clock::time_point> last;
-    while (!stop_) {
-      const Clock::time_point now = Clock::now();
-      {
-        std::lock_guard<std::mutex> lock(mu_);
-        for (const auto& r : *robots_) {
-          const uint64_t a = r->acked();
-          if (last.count(r->map()) == 0) last[r->map()] = now;
-          if (a != acked[r->map()]) {
-            acked[r->map()] = a;
-            last[r->map()] = now;
-          }
-          double& longest = longest_[r->map()];
-          longest = std::max(longest, Seconds(now - last[r->map()]));
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-  }
-
-  const std::vector<std::unique_ptr<StreamingRobot>>* robots_;
-  mutable std::mutex mu_;
-  std::map<std::string, double> longest_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
 
 struct Fleet {
   std::string store;
@@ -137,10 +93,11 @@ struct Fleet {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int kills = 20, n_maps = 6;
+  int kills = 20, rolls = 3, n_maps = 6;
   std::string ttl;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--kills")) kills = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--rolls")) rolls = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--maps")) n_maps = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lease_ttl_s")) ttl = argv[i + 1];
   }
@@ -244,6 +201,30 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
 
+  std::vector<double> rolling_gap_s;
+  bool clean_stops = true;
+  for (int roll = 0; roll < rolls; ++roll) {
+    for (int i = 0; i < 3; ++i) {
+      monitor.Reset();
+      const int code = mapd::testing::Stop(fleet.mapd[i].pid, SIGTERM, std::chrono::seconds(30));
+      clean_stops = clean_stops && code == 0;
+      fleet.mapd[i] = fleet.Start(i, fleet.addresses[i]);
+      if (fleet.mapd[i].port == 0) {
+        std::fprintf(stderr, "restart failed:\n%s\n", fleet.mapd[i].log().c_str());
+        return 1;
+      }
+      const double spread_s = wait_spread(120);
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      double gap = 0;
+      for (const auto& [map, s] : monitor.Longest()) gap = std::max(gap, s);
+      rolling_gap_s.push_back(gap);
+      std::printf(
+          "roll %d, %s: SIGTERM exit %d, maps back after %.1f s, longest ack pause %.2f s\n",
+          roll + 1, fleet.names[i].c_str(), code, spread_s, gap);
+      std::fflush(stdout);
+    }
+  }
+
   for (auto& r : robots) r->Stop();
   bool exact = true;
   for (auto& r : robots) {
@@ -275,10 +256,12 @@ int main(int argc, char** argv) {
   std::printf(
       "\n%d kills, %zu map takeovers: acknowledged again after p50 %.2f s, p90 %.2f s, max "
       "%.2f s\nhandback after each restart: longest ack pause p50 %.2f s, max %.2f s\n"
-      "every batch stored exactly once: %s\n",
+      "%zu graceful restarts (SIGTERM, %s): longest ack pause p50 %.2f s, max %.2f s\n"
+      "every batch stored exactly once, none refused: %s\n",
       kills, takeover_s.size(), Percentile(takeover_s, 0.5), Percentile(takeover_s, 0.9),
       Percentile(takeover_s, 1.0), Percentile(handback_gap_s, 0.5), Percentile(handback_gap_s, 1.0),
-      exact ? "yes" : "NO");
+      rolling_gap_s.size(), clean_stops ? "all exited 0" : "NOT ALL EXITED 0",
+      Percentile(rolling_gap_s, 0.5), Percentile(rolling_gap_s, 1.0), exact ? "yes" : "NO");
   for (const MapdProcess& m : fleet.mapd) mapd::testing::Stop(m.pid, SIGTERM);
-  return exact ? 0 : 1;
+  return exact && clean_stops ? 0 : 1;
 }

@@ -1,14 +1,17 @@
 // Failover with three mapd processes on one PostgreSQL (docs/scale-out.md,
 // sections 3-4), driven as a fleet would: maps spread over the instances by
 // rendezvous hashing, robots streaming with RobotClient given every
-// instance's address, then an owner killed (-9) or frozen (SIGSTOP). What
-// must hold: the maps acknowledge batches again from another process within
-// seconds, every batch a robot sent is stored exactly once, and a frozen
-// owner that wakes after a takeover commits nothing.
+// instance's address, then an owner killed (-9), frozen (SIGSTOP), or each
+// instance restarted in turn (SIGTERM, a rolling restart). What must hold:
+// the maps acknowledge batches again from another process within seconds,
+// every batch a robot sent is stored exactly once, a frozen owner that wakes
+// after a takeover commits nothing, and a rolling restart pauses each map's
+// ingest briefly and refuses nothing.
 #include <gmock/gmock.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <atomic>
@@ -22,6 +25,7 @@
 #include <vector>
 
 #include "client/robot/robot_client.h"
+#include "client/support/ack_monitor.h"
 #include "client/support/streaming_robot.h"
 #include "common/postgres.h"
 #include "common/process.h"
@@ -47,8 +51,10 @@ double SecondsSince(Clock::time_point t) {
 
 class FailoverTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    PostgresCluster* cluster = PostgresCluster::Shared();
+  void SetUp() override { StartFleet(PostgresCluster::Shared()); }
+
+  // Three instances on a new database of `cluster`, and the maps.
+  void StartFleet(PostgresCluster* cluster) {
     if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15)";
     store_ = cluster->NewDatabase();
     for (int i = 0; i < kInstances; ++i) {
@@ -56,6 +62,7 @@ class FailoverTest : public ::testing::Test {
           "", {"--store", store_, "--lease_ttl_s", "1", "--instance_name", Name(i)}, MAPD_BINARY,
           std::chrono::seconds(60), i == 0 ? "serving" : "listening", dir_.File(Name(i) + ".log")));
       ASSERT_GT(mapd_.back().port, 0) << mapd_.back().log();
+      logs_.push_back(mapd_.back().log_path);
       addresses_.push_back(mapd_.back().address);
       names_.push_back(Name(i));
     }
@@ -70,9 +77,9 @@ class FailoverTest : public ::testing::Test {
 
   void TearDown() override {
     if (HasFailure()) {  // who took, dropped and handed off what
-      for (const MapdProcess& m : mapd_) {
+      for (const std::string& log_path : logs_) {
         std::string events;
-        std::istringstream log(ReadFileBytes(m.log_path));
+        std::istringstream log(ReadFileBytes(log_path));
         for (std::string line; std::getline(log, line);) {
           if (line.find("event=map_") != std::string::npos ||
               line.find("lease") != std::string::npos ||
@@ -80,7 +87,7 @@ class FailoverTest : public ::testing::Test {
             events += line + "\n";
           }
         }
-        std::printf("--- %s\n%s", m.log_path.c_str(), events.c_str());
+        std::printf("--- %s\n%s", log_path.c_str(), events.c_str());
       }
     }
     robots_.clear();
@@ -117,6 +124,16 @@ class FailoverTest : public ::testing::Test {
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
     return false;
+  }
+
+  // Starts instance `i` again after it stopped: same name, same port.
+  void Restart(int i) {
+    mapd_[i] = StartMapd("",
+                         {"--store", store_, "--lease_ttl_s", "1", "--instance_name", Name(i),
+                          "--listen", addresses_[i]},
+                         MAPD_BINARY, std::chrono::seconds(60), "listening",
+                         dir_.File(Name(i) + "-" + std::to_string(++restarts_) + ".log"));
+    logs_.push_back(mapd_[i].log_path);
   }
 
   void StartRobots() {
@@ -173,6 +190,8 @@ class FailoverTest : public ::testing::Test {
   }
 
   TempDir dir_;
+  int restarts_ = 0;
+  std::vector<std::string> logs_;  // every instance's, restarted ones too
   std::string store_;
   std::vector<MapdProcess> mapd_;
   std::vector<std::string> addresses_, names_;
@@ -259,6 +278,73 @@ TEST_F(FailoverTest, AFrozenOwnerIsFencedWhenItWakes) {
   EXPECT_FALSE(now_at.empty());
   EXPECT_NE(now_at, owner) << "the woken instance redirects to the new owner";
   FinishAndCheckExactlyOnce((frozen + 1) % kInstances);
+}
+
+// With a cluster of its own, with fsync on, since it crashes it.
+class FailoverPostgresRestartTest : public FailoverTest {
+ protected:
+  void SetUp() override {
+    std::string why;
+    cluster_ = PostgresCluster::Start(/*fsync=*/true, &why);
+    if (cluster_ == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15): " << why;
+    StartFleet(cluster_.get());
+  }
+  std::unique_ptr<PostgresCluster> cluster_;
+};
+
+TEST_F(FailoverPostgresRestartTest, EveryInstanceCarriesOnAfterPostgresCrashes) {
+  ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)));
+  StartRobots();
+  const std::vector<std::string> all(kMaps.begin(), kMaps.end());
+  for (const auto& [map, s] : WaitForAcks(all, Clock::now(), 30)) ASSERT_GE(s, 0) << map;
+
+  // A crash (no checkpoint), away longer than a lease: the robots keep what
+  // is not acknowledged, every instance reconnects, and the maps go on.
+  ASSERT_TRUE(cluster_->Stop("immediate"));
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  std::string why;
+  ASSERT_TRUE(cluster_->Restart(&why)) << why;
+  const auto back = Clock::now();
+  for (const auto& [map, s] : WaitForAcks(all, back, 60)) {
+    EXPECT_GE(s, 0) << map << " never acknowledged again";
+    std::printf("PostgreSQL back: %s acknowledges again after %.2f s\n", map.c_str(), s);
+  }
+  for (int i = 0; i < kInstances; ++i) {
+    EXPECT_EQ(waitpid(mapd_[i].pid, nullptr, WNOHANG), 0) << Name(i) << " is still running";
+  }
+  ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)))
+      << "every instance is live again and serves its maps";
+  // Every batch acknowledged is stored (fsync on), and the resends of those
+  // that were not are stored once.
+  FinishAndCheckExactlyOnce(0);
+}
+
+TEST_F(FailoverTest, ARollingRestartPausesEachMapBrieflyAndRefusesNothing) {
+  ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)));
+  StartRobots();
+  const std::vector<std::string> all(kMaps.begin(), kMaps.end());
+  for (const auto& [map, s] : WaitForAcks(all, Clock::now(), 30)) ASSERT_GE(s, 0) << map;
+
+  // Each instance in turn: SIGTERM (it drains, commits and releases its
+  // leases), start it again, wait until the maps are spread back to it.
+  AckMonitor watch(&robots_);
+  for (int i = 0; i < kInstances; ++i) {
+    EXPECT_EQ(Stop(mapd_[i].pid, SIGTERM, std::chrono::seconds(30)), 0)
+        << Name(i) << " stops cleanly:\n"
+        << mapd_[i].log();
+    Restart(i);
+    ASSERT_GT(mapd_[i].port, 0) << mapd_[i].log();
+    ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)))
+        << "maps spread back after " << Name(i) << " restarted";
+    EXPECT_THAT(mapd_[i].log(), HasSubstr("event=map_taken"))
+        << Name(i) << " serves maps again after its restart";
+  }
+  for (const auto& [map, gap] : watch.Longest()) {
+    std::printf("rolling restart: %s paused at most %.2f s\n", map.c_str(), gap);
+    // The target is 2 s (docs/scale-out.md); CI runs loaded and sanitized.
+    EXPECT_LT(gap, 5.0) << map;
+  }
+  FinishAndCheckExactlyOnce(0);  // which also checks nothing was refused
 }
 
 }  // namespace
