@@ -9,6 +9,10 @@
     with MapClient(channel).watch() as feed:   # the change feed; LiveFeatureMap applies it
         for delta in feed: ...
 
+With several mapd on one database (docs/scale-out.md), give RobotClient the
+other instances' addresses and MapClient a connect function: they find each
+map's owner (redirects, LocateMap) and follow it when it moves.
+
 A robot's laser scans become line observations with mapd_client.laser
 (extract_lines, line_batch: the C++ robot library's extractor, the same lines),
 its 3D scans plane observations with mapd_client.planes (extract_planes,
@@ -20,9 +24,11 @@ time into <build>/client/python; see the "Python" section of the project README.
 
 from mapd_client._proto import pb, pb_grpc
 from mapd_client.map_client import FeatureMap, MapClient, MapNotServed, connect
-from mapd_client.robot_client import IngestCounts, IngestError, Rejection, RobotClient
+from mapd_client.robot_client import (ROBOT_CHANNEL_OPTIONS, IngestCounts, IngestError,
+                                      Rejection, RobotClient, robot_channel)
 from mapd_client.watch import FeatureWatch, LiveFeatureMap
 
 __all__ = ["pb", "pb_grpc", "connect", "MapClient", "MapNotServed", "FeatureMap", "RobotClient",
            "IngestCounts",
-           "IngestError", "Rejection", "FeatureWatch", "LiveFeatureMap"]
+           "IngestError", "Rejection", "FeatureWatch", "LiveFeatureMap", "robot_channel",
+           "ROBOT_CHANNEL_OPTIONS"]

@@ -43,19 +43,29 @@ class MapNotServed(Exception):
 
 class MapClient:
     def __init__(self, channel: grpc.Channel, token: str = "", timeout_s: float = 30.0,
-                 map_id: str = ""):
+                 map_id: str = "", connect: Optional[Callable[[str], grpc.Channel]] = None):
         """map_id: the map every call is about, when mapd serves several; "" =
         the server's default map. Another map than "default" is looked up
         with ListMaps before the first call, which raises MapNotServed if the
-        server knows no maps or not this one."""
+        server knows no maps or not this one.
+
+        connect(address) -> channel: with several mapd on one database, the
+        first call about the map asks LocateMap which instance serves it and
+        goes there through connect (e.g. mapd_client.connect). Without it,
+        a call to an instance that does not serve the map fails UNAVAILABLE
+        naming the owner. After a failover, a new MapClient finds the new
+        owner."""
         self._stub = pb_grpc.MapServiceStub(channel)
+        self._connect = connect
+        self._owner_channel: Optional[grpc.Channel] = None
         self._metadata = [("authorization", "Bearer " + token)] if token else []
         self._timeout_s = timeout_s
         self._map_id = map_id
         self._map_checked = map_id in ("", "default")
 
-    def _md(self) -> List[Tuple[str, str]]:
-        """The metadata of a call about the map, once the map is known served."""
+    def _map_stub(self) -> pb_grpc.MapServiceStub:
+        """The stub for calls about the map, once the map is known served (and,
+        with connect, located): called before the call's arguments are."""
         if not self._map_checked:
             try:
                 served = [m.map_id for m in self.maps().maps]
@@ -69,9 +79,33 @@ class MapClient:
                 raise MapNotServed(f"the server does not serve map '{self._map_id}'; it serves: "
                                    + ", ".join(served))
             self._map_checked = True
+        if self._connect is not None and self._owner_channel is None:
+            self._go_to_owner()
+        return self._stub
+
+    def _md(self) -> List[Tuple[str, str]]:
+        """The metadata of a call about the map."""
         if not self._map_id:
             return self._metadata
         return self._metadata + [("mapd-map-id", self._map_id)]
+
+    def _go_to_owner(self) -> None:
+        """Moves this client's map calls to the instance serving the map."""
+        try:
+            where = self.locate()
+        except grpc.RpcError as error:
+            if error.code() == grpc.StatusCode.UNIMPLEMENTED:
+                return  # a mapd from before LocateMap serves its maps itself
+            raise
+        if where.here or not where.live or not where.address:
+            return  # here, or nobody yet: the call's own error says so
+        self._owner_channel = self._connect(where.address)
+        self._stub = pb_grpc.MapServiceStub(self._owner_channel)
+
+    def locate(self) -> pb.MapLocation:
+        """Which mapd instance serves this client's map (LocateMap)."""
+        return self._stub.LocateMap(pb.LocateMapRequest(map_id=self._map_id),
+                                    timeout=self._timeout_s, metadata=self._metadata)
 
     # -- maps
 
@@ -101,8 +135,8 @@ class MapClient:
         features: List[pb.FusedFeature] = []
         planes: List[pb.FusedPlane] = []
         version = pending = 0
-        for page in self._stub.GetFeatureMap(request, timeout=self._timeout_s,
-                                             metadata=self._md()):
+        for page in self._map_stub().GetFeatureMap(request, timeout=self._timeout_s,
+                                                   metadata=self._md()):
             features.extend(page.features)
             planes.extend(page.planes)
             version, pending = page.map_version, page.fusion_pending
@@ -115,23 +149,23 @@ class MapClient:
         messages (LiveFeatureMap applies them); it reconnects from the last
         complete map_version when mapd restarts. close() or `with` ends it.
         A bad filter raises grpc.RpcError INVALID_ARGUMENT naming the field."""
-        return FeatureWatch(self._stub, self._md(), watch_request(bbox, kind, robot_id),
+        return FeatureWatch(self._map_stub(), self._md(), watch_request(bbox, kind, robot_id),
                             since_map_version=since_map_version, reconnect=reconnect)
 
     def stats(self) -> pb.Stats:
-        return self._stub.GetStats(pb.GetStatsRequest(), timeout=self._timeout_s,
-                                   metadata=self._md())
+        return self._map_stub().GetStats(pb.GetStatsRequest(), timeout=self._timeout_s,
+                                         metadata=self._md())
 
     def robots(self) -> List[pb.RobotInfo]:
-        return list(self._stub.ListRobots(pb.ListRobotsRequest(), timeout=self._timeout_s,
-                                          metadata=self._md()).robots)
+        return list(self._map_stub().ListRobots(pb.ListRobotsRequest(), timeout=self._timeout_s,
+                                                metadata=self._md()).robots)
 
     def trails(self, robot_id: str = "", max_poses_per_session: int = 0) -> List[pb.SessionTrail]:
         """Each robot session's sensor positions (map frame where frame_tied)."""
         request = pb.GetTrailsRequest(robot_id=robot_id,
                                       max_poses_per_session=max_poses_per_session)
-        return list(self._stub.GetTrails(request, timeout=self._timeout_s,
-                                         metadata=self._md()))
+        return list(self._map_stub().GetTrails(request, timeout=self._timeout_s,
+                                               metadata=self._md()))
 
     # -- voxel submaps
 
@@ -155,17 +189,17 @@ class MapClient:
             yield pb.UploadSubmapRequest(header=header)
             for at in range(0, len(data), CHUNK_BYTES):
                 yield pb.UploadSubmapRequest(chunk=data[at:at + CHUNK_BYTES])
-        return self._stub.UploadSubmap(requests(), metadata=self._md())
+        return self._map_stub().UploadSubmap(requests(), metadata=self._md())
 
     def list_submaps(self, robot_id: str = "") -> List[pb.SubmapInfo]:
-        return list(self._stub.ListSubmaps(pb.ListSubmapsRequest(robot_id=robot_id),
-                                           timeout=self._timeout_s,
-                                           metadata=self._md()).submaps)
+        return list(self._map_stub().ListSubmaps(pb.ListSubmapsRequest(robot_id=robot_id),
+                                                 timeout=self._timeout_s,
+                                                 metadata=self._md()).submaps)
 
     def get_submap(self, submap_id: int) -> Tuple[pb.SubmapInfo, bytes]:
         """The stored file and its info."""
-        return self._read_chunks(self._stub.GetSubmap(pb.GetSubmapRequest(id=submap_id),
-                                                      metadata=self._md()))
+        return self._read_chunks(self._map_stub().GetSubmap(pb.GetSubmapRequest(id=submap_id),
+                                                            metadata=self._md()))
 
     def global_map(self) -> Tuple[pb.SubmapInfo, bytes]:
         """The global map (OctoMap binary): the union of every submap placed in
@@ -176,7 +210,7 @@ class MapClient:
     def global_map_info(self) -> Tuple[pb.SubmapInfo, pb.GlobalMapInfo, bytes]:
         """The global map with its version and members (submap ids and poses)."""
         info, about, parts = pb.SubmapInfo(), pb.GlobalMapInfo(), []
-        for chunk in self._stub.GetGlobalMap(pb.GetGlobalMapRequest(), metadata=self._md()):
+        for chunk in self._map_stub().GetGlobalMap(pb.GetGlobalMapRequest(), metadata=self._md()):
             if chunk.HasField("info"):
                 info = chunk.info
             if chunk.HasField("global"):
@@ -185,8 +219,8 @@ class MapClient:
         return info, about, b"".join(parts)
 
     def delete_submap(self, submap_id: int) -> None:
-        self._stub.DeleteSubmap(pb.DeleteSubmapRequest(id=submap_id), timeout=self._timeout_s,
-                                metadata=self._md())
+        self._map_stub().DeleteSubmap(pb.DeleteSubmapRequest(id=submap_id),
+                                      timeout=self._timeout_s, metadata=self._md())
 
     def merge(self, submap_ids: Sequence[int],
               progress: Optional[Callable[[str, float], None]] = None,
@@ -198,7 +232,7 @@ class MapClient:
         MERGE_STATE_PROPOSED) until approve_merge()."""
         request = pb.MergeSubmapsRequest(submap_ids=submap_ids, review=review)
         result = None
-        for message in self._stub.MergeSubmaps(request, metadata=self._md()):
+        for message in self._map_stub().MergeSubmaps(request, metadata=self._md()):
             if progress is not None and message.stage:
                 progress(message.stage, message.fraction)
             if message.HasField("result"):
@@ -208,21 +242,21 @@ class MapClient:
         return result
 
     def list_merges(self, state: int = pb.MERGE_STATE_UNSPECIFIED) -> List[pb.MergeRecord]:
-        return list(self._stub.ListMerges(pb.ListMergesRequest(state=state),
-                                          timeout=self._timeout_s,
-                                          metadata=self._md()).merges)
+        return list(self._map_stub().ListMerges(pb.ListMergesRequest(state=state),
+                                                timeout=self._timeout_s,
+                                                metadata=self._md()).merges)
 
     def get_merge(self, merge_id: int) -> pb.MergeRecord:
-        return self._stub.GetMerge(pb.GetMergeRequest(id=merge_id), timeout=self._timeout_s,
-                                   metadata=self._md())
+        return self._map_stub().GetMerge(pb.GetMergeRequest(id=merge_id), timeout=self._timeout_s,
+                                         metadata=self._md())
 
     def approve_merge(self, merge_id: int) -> pb.MergeRecord:
-        return self._stub.ApproveMerge(pb.ApproveMergeRequest(id=merge_id),
-                                       timeout=self._timeout_s, metadata=self._md())
+        return self._map_stub().ApproveMerge(pb.ApproveMergeRequest(id=merge_id),
+                                             timeout=self._timeout_s, metadata=self._md())
 
     def reject_merge(self, merge_id: int, reason: str) -> pb.MergeRecord:
-        return self._stub.RejectMerge(pb.RejectMergeRequest(id=merge_id, reason=reason),
-                                      timeout=self._timeout_s, metadata=self._md())
+        return self._map_stub().RejectMerge(pb.RejectMergeRequest(id=merge_id, reason=reason),
+                                            timeout=self._timeout_s, metadata=self._md())
 
     @staticmethod
     def _read_chunks(stream) -> Tuple[pb.SubmapInfo, bytes]:

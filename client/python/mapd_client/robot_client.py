@@ -16,6 +16,13 @@ The same guarantees as the C++ client (client/robot_client.h):
   cannot help); other failures are retried until give_up_after_s passes with
   no ack.
 
+Several mapd on one database (docs/scale-out.md): given the other instances'
+addresses (or a connect function), the client follows a redirect to the
+map's owner (trailing metadata mapd-map-owner), waits as asked while the map
+is being taken over (mapd-retry-after-ms), and moves to the next address
+when the server cannot be reached, so a robot finds its map's new owner
+within a lease or so of the old one dying.
+
 Acks are matched to batches by (session_id, seq), which must be unique among
 the batches in flight. send(), wait_for_acks(), finish() and the accessors may
 be called from any thread; one reader thread collects the acks and owns
@@ -26,7 +33,7 @@ import dataclasses
 import queue
 import threading
 import time
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import grpc
 
@@ -42,6 +49,7 @@ class IngestCounts:
     duplicate: int = 0   # acknowledged DUPLICATE (stored before, e.g. resent after a drop)
     rejected: int = 0    # acknowledged REJECTED (final: the batch is wrong)
     reconnects: int = 0  # streams opened after the first one
+    redirects: int = 0   # moves to another instance (a redirect, or the next address)
 
 
 @dataclasses.dataclass
@@ -63,6 +71,34 @@ class IngestError(Exception):
 
 _CODES = {c.value[0]: c for c in grpc.StatusCode}
 
+# A robot's channel: a dead host is noticed in seconds by keepalive pings
+# (mapd permits one every 5 s), and a restarted one is found again quickly.
+ROBOT_CHANNEL_OPTIONS = [
+    ("grpc.initial_reconnect_backoff_ms", 200), ("grpc.min_reconnect_backoff_ms", 200),
+    ("grpc.max_reconnect_backoff_ms", 2000), ("grpc.keepalive_time_ms", 5000),
+    ("grpc.keepalive_timeout_ms", 3000), ("grpc.keepalive_permit_without_calls", 0),
+    ("grpc.http2.max_pings_without_data", 0),
+]
+
+
+def robot_channel(address: str,
+                  credentials: Optional[grpc.ChannelCredentials] = None) -> grpc.Channel:
+    """A channel with ROBOT_CHANNEL_OPTIONS: plain, or TLS with `credentials`."""
+    if credentials is None:
+        return grpc.insecure_channel(address, options=ROBOT_CHANNEL_OPTIONS)
+    return grpc.secure_channel(address, credentials, options=ROBOT_CHANNEL_OPTIONS)
+
+
+def _trailing(error: grpc.RpcError, key: str) -> str:
+    try:
+        metadata = error.trailing_metadata() or ()
+    except AttributeError:
+        return ""
+    for k, v in metadata:
+        if k == key:
+            return v.decode() if isinstance(v, bytes) else v
+    return ""
+
 
 class RobotClient:
     """One Ingest stream with resend-on-reconnect. Use as a context manager or
@@ -71,15 +107,27 @@ class RobotClient:
     def __init__(self, channel: grpc.Channel, token: str = "",
                  give_up_after_s: float = 30.0, initial_backoff_s: float = 0.1,
                  max_backoff_s: float = 2.0, max_unacknowledged: int = 1000,
-                 map_id: str = ""):
+                 map_id: str = "", addresses: Sequence[str] = (),
+                 connect: Optional[Callable[[str], grpc.Channel]] = None):
         """map_id: the map the batches are for when mapd serves several;
         "" = the server's default map. Another map than "default" is first
         looked up with ListMaps: a server that knows no maps (a mapd from
         before them would store the batches in its only map) or not this one
         makes finish() raise IngestError FAILED_PRECONDITION / NOT_FOUND, with
-        nothing sent."""
+        nothing sent.
+
+        addresses: the other mapd instances ("host:port") sharing the map's
+        database; connect(address) makes a channel to one (default:
+        robot_channel, plain; pass one with TLS credentials off loopback).
+        With either, redirects are followed and the addresses tried in turn
+        when the server cannot be reached."""
+        self._first_channel = channel
         self._channel = channel
         self._stub = pb_grpc.MapServiceStub(channel)
+        self._addresses = list(addresses)
+        self._connect = connect or (robot_channel if self._addresses else None)
+        self._next_address = 0
+        self._owned_channel: Optional[grpc.Channel] = None  # one this client made
         self._metadata = [("authorization", "Bearer " + token)] if token else []
         self._map_id = map_id
         if map_id:
@@ -165,6 +213,7 @@ class RobotClient:
             if not self._reader_done:
                 self._cancel_locked()
         self._reader.join()
+        self._close_owned_channel()
         with self._mu:
             if not self._pending:
                 return
@@ -179,6 +228,13 @@ class RobotClient:
         with self._mu:
             self._cancel_locked()
         self._reader.join()
+        self._close_owned_channel()
+
+    def _close_owned_channel(self) -> None:
+        with self._write_mu:
+            owned, self._owned_channel = self._owned_channel, None
+        if owned is not None:
+            owned.close()
 
     def __enter__(self) -> "RobotClient":
         return self
@@ -275,6 +331,8 @@ class RobotClient:
             first = False
             got_ack = False
             code, message = grpc.StatusCode.OK, ""
+            redirect = ""  # the map's owner, when this mapd does not serve it
+            retry_after_s: Optional[float] = None  # set while the map is being taken over
             if not map_checked:
                 code, message = self._check_map()
                 map_checked = code == grpc.StatusCode.OK
@@ -286,6 +344,10 @@ class RobotClient:
                         got_ack = True
                 except grpc.RpcError as error:
                     code, message = error.code(), error.details() or ""
+                    redirect = _trailing(error, "mapd-map-owner")
+                    retry_after = _trailing(error, "mapd-retry-after-ms")
+                    if retry_after.isdigit():
+                        retry_after_s = int(retry_after) / 1000.0
                 self._close_stream(requests)
 
             with self._cv:
@@ -310,12 +372,81 @@ class RobotClient:
                 if now >= give_up_at or refused:
                     self._gave_up = True
                     break
-                self._cv.wait_for(lambda: self._stopping, timeout=backoff)
-                backoff = min(backoff * 2, self._max_backoff_s)
-            self._wait_for_channel(give_up_at)
+                # A redirect is followed after the shortest pause: the owner is
+                # known. A takeover in progress is asked about again as often
+                # as it may end.
+                if redirect and self._connect is not None:
+                    backoff = self._initial_backoff_s
+                pause = (backoff if retry_after_s is None
+                         else max(self._initial_backoff_s, retry_after_s))
+                self._cv.wait_for(lambda: self._stopping, timeout=pause)
+                if retry_after_s is None:
+                    backoff = min(backoff * 2, self._max_backoff_s)
+            if self._move_after_failure(code, redirect, give_up_at):
+                # Failing over: the new owner takes the map within a few
+                # seconds; find it within a fraction of one, not after a
+                # backoff grown on the instances that were not it yet.
+                backoff = min(backoff, 4 * self._initial_backoff_s)
+                with self._mu:
+                    self._counts.redirects += 1
         with self._cv:
             self._reader_done = True
             self._cv.notify_all()
+
+    def _move_after_failure(self, code: grpc.StatusCode, redirect: str,
+                            give_up_at: float) -> bool:
+        """After a failed stream: to the owner named by a redirect, or to the
+        next address when this server cannot be reached; True if moved."""
+        if self._connect is None:
+            self._wait_for_channel(give_up_at)
+            return False
+        if redirect:
+            self._switch_to(self._connect(redirect))
+            return True
+        if not self._addresses or code != grpc.StatusCode.UNAVAILABLE:
+            self._wait_for_channel(give_up_at)
+            return False
+        # Unreachable, or its map is being taken over: give this server a
+        # little while (a restart, or the takeover finishing), then try the
+        # next. A refused connection (the process is gone) moves on at once.
+        deadline = min(give_up_at, time.monotonic() + self._max_backoff_s)
+        if self._wait_ready_or_failing(deadline) == grpc.ChannelConnectivity.READY:
+            return False
+        n = len(self._addresses)
+        i = self._next_address % (n + 1)
+        self._next_address += 1
+        self._switch_to(self._connect(self._addresses[i]) if i < n else self._first_channel)
+        return True
+
+    def _switch_to(self, channel: grpc.Channel) -> None:
+        with self._write_mu:
+            old = self._owned_channel
+            self._channel = channel
+            self._stub = pb_grpc.MapServiceStub(channel)
+            self._owned_channel = channel if channel is not self._first_channel else None
+        if old is not None and old is not channel:
+            old.close()
+
+    def _wait_ready_or_failing(self, deadline: float) -> grpc.ChannelConnectivity:
+        """The channel's state once READY or TRANSIENT_FAILURE, or at deadline."""
+        states: "queue.Queue[grpc.ChannelConnectivity]" = queue.Queue()
+        self._channel.subscribe(states.put, try_to_connect=True)
+        state = grpc.ChannelConnectivity.IDLE
+        try:
+            while time.monotonic() < deadline:
+                with self._mu:
+                    if self._stopping:
+                        break
+                try:
+                    state = states.get(timeout=min(0.2, max(0.0, deadline - time.monotonic())))
+                except queue.Empty:
+                    continue
+                if state in (grpc.ChannelConnectivity.READY,
+                             grpc.ChannelConnectivity.TRANSIENT_FAILURE):
+                    break
+        finally:
+            self._channel.unsubscribe(states.put)
+        return state
 
     def _wait_for_channel(self, deadline: float) -> None:
         # One future (it asks the channel to connect), waited on in slices so
