@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Packaging checks that need no container runtime (CI job "package"):
-#   1. deploy/mapd.service passes `systemd-analyze verify` (on a copy whose
-#      ExecStart names the built binary, since /usr/local/bin/mapd need not exist);
+#   1. deploy/mapd.service and deploy/mapd@.service pass `systemd-analyze verify`
+#      (on copies whose ExecStart names the built binary, since /usr/local/bin/mapd
+#      need not exist);
 #   2. every shared library that mapd, mapd-health and mapctl load (ldd) belongs
 #      to a Debian package that deploy/Containerfile's runtime stage installs:
 #      one of RUNTIME_PACKAGES or a (recursive) dependency of one;
@@ -25,6 +26,13 @@ else
   echo "check-package: systemd-analyze verify deploy/mapd.service:"; echo "$out"; fail=1
 fi
 systemd-analyze security --offline=true "$unit_dir/mapd.service" 2>/dev/null | tail -1 | sed 's/^/check-package: /' || true
+# The template for instances on a shared PostgreSQL, as its instance 1.
+sed "s|/usr/local/bin/mapd |$(realpath "$build/server/mapd/mapd") |" "deploy/mapd@.service" > "$unit_dir/mapd@1.service"
+if out="$(systemd-analyze verify "$unit_dir/mapd@1.service" 2>&1)" && [ -z "$out" ]; then
+  echo "check-package: systemd-analyze verify deploy/mapd@.service: ok"
+else
+  echo "check-package: systemd-analyze verify deploy/mapd@.service:"; echo "$out"; fail=1
+fi
 
 # 2. Runtime libraries against the Containerfile.
 read -r -a wanted <<< "$(sed -n 's/^ARG RUNTIME_PACKAGES="\(.*\)"$/\1/p' deploy/Containerfile)"

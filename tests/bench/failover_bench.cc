@@ -29,8 +29,8 @@
 #include <vector>
 
 #include "client/support/ack_monitor.h"
+#include "client/support/fleet.h"
 #include "client/support/streaming_robot.h"
-#include "common/postgres.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 #include "service/rendezvous.h"
@@ -40,6 +40,7 @@ namespace {
 namespace pb = mapserver::v1;
 using Clock = std::chrono::steady_clock;
 using mapd::testing::AckMonitor;
+using mapd::testing::Fleet;
 using mapd::testing::MapdProcess;
 using mapd::testing::StreamingRobot;
 
@@ -50,45 +51,6 @@ double Percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
 }
-
-struct Fleet {
-  std::string store;
-  std::vector<std::string> extra;  // --lease_ttl_s
-  mapd::testing::TempDir dir;
-  std::vector<MapdProcess> mapd;
-  std::vector<std::string> addresses, names;
-
-  MapdProcess Start(int i, const std::string& listen) {
-    std::vector<std::string> args = {"--store", store,      "--instance_name",
-                                     names[i],  "--listen", listen};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return mapd::testing::StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "listening",
-                                    dir.File(names[i] + ".log"));
-  }
-
-  std::string Owner(const std::string& map) const {
-    for (const std::string& address : addresses) {
-      auto stub = pb::MapService::NewStub(mapd::testing::Connect(address));
-      grpc::ClientContext call;
-      call.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
-      pb::LocateMapRequest request;
-      request.set_map_id(map);
-      pb::MapLocation where;
-      if (stub->LocateMap(&call, request, &where).ok()) return where.live() ? where.address() : "";
-    }
-    return "";
-  }
-
-  bool Spread(const std::vector<std::string>& maps) const {
-    for (const std::string& map : maps) {
-      const std::string want = mapd::service::RendezvousPick(map, names);
-      const size_t i =
-          static_cast<size_t>(std::find(names.begin(), names.end(), want) - names.begin());
-      if (Owner(map) != addresses[i]) return false;
-    }
-    return true;
-  }
-};
 
 }  // namespace
 
@@ -101,43 +63,13 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--maps")) n_maps = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lease_ttl_s")) ttl = argv[i + 1];
   }
-  std::string why;
-  auto cluster = mapd::testing::PostgresCluster::Start(/*fsync=*/true, &why);
-  if (cluster == nullptr) {
-    std::fprintf(stderr, "no PostgreSQL: %s\n", why.c_str());
-    return 1;
-  }
   Fleet fleet;
-  fleet.store = cluster->NewDatabase();
+  if (!fleet.StartDatabase()) return 1;
   if (!ttl.empty()) fleet.extra = {"--lease_ttl_s", ttl};
-  for (int i = 0; i < 3; ++i) {
-    fleet.names.push_back("mapd-" + std::to_string(i + 1));
-    fleet.mapd.push_back(fleet.Start(i, "127.0.0.1:0"));
-    if (fleet.mapd.back().port == 0) {
-      std::fprintf(stderr, "mapd did not start:\n%s\n", fleet.mapd.back().log().c_str());
-      return 1;
-    }
-    fleet.addresses.push_back(fleet.mapd.back().address);
-  }
-  std::vector<std::string> maps = {"default"};
-  for (int i = 1; i < n_maps; ++i) {
-    maps.push_back("site-" + std::to_string(i));
-    auto r = mapd::testing::RunCommand(
-        {MAPCTL_BINARY, "--server", fleet.addresses[0], "maps", "create", maps.back()}, "",
-        std::chrono::seconds(60));
-    if (r.exit_code != 0) {
-      std::fprintf(stderr, "maps create: %s\n", r.err.c_str());
-      return 1;
-    }
-  }
-  auto wait_spread = [&](double timeout_s) {
-    const auto start = Clock::now();
-    while (!fleet.Spread(maps)) {
-      if (Seconds(Clock::now() - start) > timeout_s) return -1.0;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    return Seconds(Clock::now() - start);
-  };
+  if (!fleet.Launch(3)) return 1;
+  const std::vector<std::string> maps = fleet.CreateMaps(n_maps);
+  if (maps.empty()) return 1;
+  auto wait_spread = [&](double timeout_s) { return fleet.WaitSpread(maps, timeout_s); };
   if (wait_spread(60) < 0) {
     std::fprintf(stderr, "the maps did not spread over the instances\n");
     return 1;
@@ -238,17 +170,10 @@ int main(int argc, char** argv) {
           static_cast<unsigned long long>(c.rejected));
       exact = false;
     }
-    const std::string owner = fleet.Owner(r->map());
-    auto stub = pb::MapService::NewStub(mapd::testing::Connect(owner));
-    grpc::ClientContext call;
-    call.AddMetadata("mapd-map-id", r->map());
-    pb::ListRobotsResponse listed;
-    if (!stub->ListRobots(&call, pb::ListRobotsRequest(), &listed).ok() ||
-        listed.robots_size() != 1 || listed.robots(0).batches() != r->sent()) {
+    const auto stored = fleet.StoredBatches(r->map());
+    if (stored.size() != 1 || stored[0].second != r->sent()) {
       std::printf("%s: stored %llu batches, sent %llu\n", r->map().c_str(),
-                  listed.robots_size() == 1
-                      ? static_cast<unsigned long long>(listed.robots(0).batches())
-                      : 0ull,
+                  stored.size() == 1 ? static_cast<unsigned long long>(stored[0].second) : 0ull,
                   static_cast<unsigned long long>(r->sent()));
       exact = false;
     }

@@ -1,7 +1,7 @@
 // A robot streaming to one map of a fleet of mapd sharing a database, for
-// the failover test and benchmark: a simulated batch every 20 ms through a
-// RobotClient given every instance's address (it follows redirects and
-// fails over), with its acknowledgements counted.
+// the failover test and the fleet benchmarks: a simulated batch every 20 ms
+// (or as given) through a RobotClient given every instance's address (it
+// follows redirects and fails over), with its acknowledgements counted.
 #ifndef MAPD_TESTS_CLIENT_SUPPORT_STREAMING_ROBOT_H_
 #define MAPD_TESTS_CLIENT_SUPPORT_STREAMING_ROBOT_H_
 
@@ -24,10 +24,14 @@ inline std::shared_ptr<grpc::Channel> Connect(const std::string& address) {
                                    robot::RobotChannelArguments());
 }
 
-// One robot streaming to one map, a batch every 20 ms, until stopped.
+// One robot streaming to one map, a batch every `period`, until stopped;
+// its id is "robot-<map>" unless given.
 class StreamingRobot {
  public:
-  StreamingRobot(const std::string& map, const std::vector<std::string>& addresses) : map_(map) {
+  StreamingRobot(const std::string& map, const std::vector<std::string>& addresses,
+                 const std::string& robot_id = "",
+                 std::chrono::milliseconds period = std::chrono::milliseconds(20))
+      : map_(map) {
     robot::RobotClientOptions options;
     options.map_id = map;
     options.give_up_after = std::chrono::seconds(60);
@@ -35,14 +39,14 @@ class StreamingRobot {
     options.addresses.assign(addresses.begin() + 1, addresses.end());
     client_ = std::make_unique<robot::RobotClient>(Connect(addresses[0]), options);
     client::SimRobotParams params;
-    params.robot_id = "robot-" + map;
+    params.robot_id = robot_id.empty() ? "robot-" + map : robot_id;
     params.session_id = "s";
     sim_ = std::make_unique<client::SimRobot>(client::DefaultWorld(), params);
-    thread_ = std::thread([this] {
+    thread_ = std::thread([this, period] {
       while (!stop_) {
         client_->Send(sim_->NextBatch());
         ++sent_;
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        std::this_thread::sleep_for(period);
       }
     });
   }
