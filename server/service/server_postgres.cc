@@ -57,6 +57,18 @@ Status MapServer::TakeMap(const std::string& id) {
   return Status::Ok();
 }
 
+namespace {
+
+// What a call still holding a map that moved elsewhere gets: the map's
+// connections are closed (a retired map holds none), and a new call is
+// redirected to the owner.
+Status Served(const std::string& id, const std::string& how) {
+  return Status::Unavailable("map '" + id + "' is no longer served here (" + how +
+                             "); call again: you will be sent to its owner");
+}
+
+}  // namespace
+
 Status MapServer::HandOffMap(const std::string& id) {
   ServedMap* map = maps_->Retire(id);
   if (map == nullptr) return Status::NotFound("map '" + id + "' is not served here");
@@ -68,7 +80,10 @@ Status MapServer::HandOffMap(const std::string& id) {
     UpdateHealthLocked();
   }
   auto* store = dynamic_cast<storage::PgStore*>(&map->core->store());
-  return store == nullptr ? Status::Ok() : store->ReleaseLease();
+  if (store == nullptr) return Status::Ok();
+  Status released = store->ReleaseLease();
+  store->Close(Served(id, "handed to another mapd"));
+  return released;
 }
 
 void MapServer::DropMap(const std::string& id, const Status& why) {
@@ -80,6 +95,9 @@ void MapServer::DropMap(const std::string& id, const Status& why) {
        {"action", "calls for it are redirected to its new owner; nothing acknowledged is lost"}});
   map->service->StartDraining();
   map->core->Stop(/*flush=*/false);  // the fence refuses what is queued; robots resend it
+  if (auto* store = dynamic_cast<storage::PgStore*>(&map->core->store()); store != nullptr) {
+    store->Close(Served(id, "taken over by another mapd"));
+  }
   std::lock_guard<std::mutex> lock(health_mu_);
   server_->GetHealthCheckService()->SetServingStatus("map/" + id, false);
   UpdateHealthLocked();

@@ -75,6 +75,7 @@ PgObservationLog::~PgObservationLog() {
 }
 
 StatusOr<PgResult> PgObservationLog::ReadQuery(const std::string& sql, const PgParams& params) {
+  if (!closed_.ok()) return closed_;
   return QueryReconnectingOnce(reader_, conninfo_, sql, params);  // a read changes nothing
 }
 
@@ -98,12 +99,26 @@ Status PgObservationLog::Release() {
   return ReleaseMapLease(writer_, lease_);
 }
 
+void PgObservationLog::Close(const Status& why) {
+  if (owner_) (void)Release();
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  closed_ = why;
+  reader_ = PgConnection();
+  writer_ = PgConnection();
+}
+
+Status PgObservationLog::CheckOpen() {
+  std::lock_guard<std::mutex> lock(reader_mu_);
+  return closed_;
+}
+
 void PgObservationLog::Disown(const Status& why) {
   disowned_ = why;
   owner_ = false;
 }
 
 Status PgObservationLog::Reconnect() {
+  MAPD_RETURN_IF_ERROR(CheckOpen());
   // libpq does not always mark a connection broken on the first failure
   // after the server went away: ask it.
   if (writer_.healthy() && writer_.Exec("SELECT 1").ok()) return Status::Ok();
@@ -112,14 +127,36 @@ Status PgObservationLog::Reconnect() {
   writer_ = std::move(again).value();  // closes the broken one
   for (const std::string& sql : writer_session_) MAPD_RETURN_IF_ERROR(writer_.Exec(sql));
   if (!owner_) return Status::Ok();
-  // The caches (and the engines fed from them) hold while the epoch is
-  // this log's: every write of the map is fenced by it, so nobody else wrote.
+  // Nobody else wrote while the epoch is this log's: every write of the map
+  // is fenced by it.
   StatusOr<LeaseRow> now = GetMapLease(writer_, map_id_);
   if (!now.ok()) return now.status();
   if (now->owner != lease_.owner || now->epoch != lease_.epoch) {
     Disown(Status::FailedPrecondition(
         "map '" + map_id_ + "' was taken over by instance '" + now->owner + "' (" + now->address +
         ") while this mapd was disconnected from PostgreSQL; that instance serves it now"));
+    return disowned_;
+  }
+  // But this log's own last commit may have landed although its answer was
+  // lost with the connection (PostgreSQL crashed after committing): read the
+  // caches again, or the next ids and new robots would collide with its rows.
+  int64_t newest_before = 0, tie_before = 0;
+  {
+    std::lock_guard<std::mutex> lock(cache_mu_);
+    newest_before = newest_observation_;
+    tie_before = max_tie_seq_;
+  }
+  MAPD_RETURN_IF_ERROR(LoadCaches());
+  std::lock_guard<std::mutex> lock(cache_mu_);
+  if (newest_observation_ != newest_before || max_tie_seq_ != tie_before) {
+    // Its observations (or a tie of frames) are stored but were never
+    // fused, their robots told to resend (answered DUPLICATE): the engine is
+    // out of step with the database. Give the map up; the ownership round
+    // opens it again (the lease is still this instance's) and replays them.
+    Disown(Status::FailedPrecondition(
+        "map '" + map_id_ + "': a commit whose answer was lost with the connection did land (" +
+        std::to_string(newest_observation_ - newest_before) +
+        " observations); the map is opened again so that its fused map includes them"));
     return disowned_;
   }
   return Status::Ok();

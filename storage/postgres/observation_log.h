@@ -78,6 +78,14 @@ class PgObservationLog final : public ObservationReader {
   // Lets the lease lapse now and stops owning the map (a handoff): another
   // instance takes it at once. Writer connection: the writer must be idle.
   Status Release();
+  // Closes both connections for good, releasing the lease first if still
+  // held: the map is served elsewhere now and its writer has stopped. Every
+  // later read, write or reconnect answers `why`, and nothing connects again,
+  // so a map handed off or dropped holds no connection while calls that
+  // started before still hold it.
+  void Close(const Status& why);
+  // Ok until Close, then its `why`.
+  Status CheckOpen();
   // Writer thread, first in each write transaction of the map's data:
   // FenceMapLease. Once it finds the lease taken over, this log stops
   // owning the map and every later write of its data is refused.
@@ -144,7 +152,8 @@ class PgObservationLog final : public ObservationReader {
   Status disowned_;                          // why owner_ went false (writer thread)
   PgConnection writer_;
   PgConnection reader_;
-  std::mutex reader_mu_;  // guards reader_
+  std::mutex reader_mu_;  // guards reader_ and closed_
+  Status closed_;         // set by Close: why nothing connects again
 
   // Committed robots and sessions, and the newest committed observation id.
   mutable std::mutex cache_mu_;

@@ -156,6 +156,7 @@ StatusOr<PgConnection> PgConnection::Connect(const std::string& conninfo) {
 }
 
 Status PgConnection::Exec(const std::string& sql) {
+  if (!conn_) return Status::Unavailable("no connection to PostgreSQL (closed)");
   std::unique_ptr<PGresult, PgResultDeleter> r(PQexec(conn_.get(), sql.c_str()));
   const ExecStatusType s = PQresultStatus(r.get());
   if (s == PGRES_COMMAND_OK || s == PGRES_TUPLES_OK) return Status::Ok();
@@ -163,6 +164,7 @@ Status PgConnection::Exec(const std::string& sql) {
 }
 
 StatusOr<PgResult> PgConnection::Query(const std::string& sql, const PgParams& params) {
+  if (!conn_) return Status::Unavailable("no connection to PostgreSQL (closed)");
   std::vector<int> formats(params.types_.size(), 1);
   PGresult* r = PQexecParams(conn_.get(), sql.c_str(), params.size(), params.types_.data(),
                              params.values_.data(), params.lengths_.data(), formats.data(),

@@ -75,6 +75,7 @@ class PgParams {
 
 class PgConnection {
  public:
+  // Not connected: every statement is Unavailable.
   PgConnection() = default;
   // Connects; Unavailable with libpq's reason when it cannot. The password
   // comes from the connection string, PGPASSWORD or ~/.pgpass (libpq).

@@ -33,6 +33,7 @@ StatusOr<std::unique_ptr<PgStore>> PgStore::Open(const std::string& conninfo,
 }
 
 StatusOr<std::unique_ptr<WriteTransaction>> PgStore::BeginWrite() {
+  MAPD_RETURN_IF_ERROR(log_->CheckOpen());
   std::unique_ptr<PgWriteTransaction> txn(new PgWriteTransaction(this));
   MAPD_RETURN_IF_ERROR(txn->scope_.status());
   MAPD_RETURN_IF_ERROR(log_->Fence());

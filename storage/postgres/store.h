@@ -112,6 +112,9 @@ class PgStore final : public Store {
   bool owns_map() const override { return log_->owner(); }
   // Hands the map off (PgObservationLog::Release), once its writer stopped.
   Status ReleaseLease() { return log_->Release(); }
+  // Closes the map's connections for good (PgObservationLog::Close), once it
+  // is served elsewhere and its writer stopped.
+  void Close(const Status& why) { log_->Close(why); }
   // Nothing to do: PostgreSQL checkpoints and vacuums by itself.
   Status Checkpoint() override { return Status::Ok(); }
   // Connects again if the writer's connection broke (PgObservationLog::

@@ -157,6 +157,9 @@ int main(int argc, char** argv) {
     }
   }
 
+  // Each map holds two sessions at its owner; one handed off or dropped holds none.
+  std::printf("PostgreSQL sessions on the fleet's database: %d (%zu maps, 3 instances)\n",
+              fleet.DatabaseSessions(), maps.size());
   for (auto& r : robots) r->Stop();
   bool exact = true;
   for (auto& r : robots) {

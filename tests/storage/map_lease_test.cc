@@ -216,5 +216,68 @@ TEST_F(MapLeaseTest, InstancesAreLiveWhileTheyHeartbeat) {
   EXPECT_TRUE(LiveInstances(conn_)->empty());
 }
 
+TEST_F(MapLeaseTest, AClosedStoreHoldsNoConnectionAndRefusesEverything) {
+  auto sessions = [&] {
+    StatusOr<PgResult> r =
+        conn_.Query("SELECT count(*) FROM pg_stat_activity WHERE datname = current_database()");
+    return r.ok() ? static_cast<int>(r->Int(0, 0)) : -1;
+  };
+  const int before = sessions();
+  std::unique_ptr<PgStore> store = OpenStore(kA);
+  ASSERT_NE(store, nullptr);
+  ASSERT_TRUE(Insert(*store, "r1", 1).ok());
+  ASSERT_TRUE(store->ListRobots().ok());
+  EXPECT_GT(sessions(), before);
+
+  // Handed off: the lease is released and both connections are closed.
+  store->Close(Status::Unavailable("map 'site-1' is no longer served here"));
+  for (int i = 0; i < 50 && sessions() > before; ++i) Sleep(0.02);
+  EXPECT_EQ(sessions(), before) << "a map handed off holds no connection";
+  for (const Status& s :
+       {store->ListRobots().status(), store->ProbeWrite(), Insert(*store, "r1", 2).status()}) {
+    EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.ToString();
+    EXPECT_THAT(s.message(), HasSubstr("no longer served here")) << s.ToString();
+  }
+  // Nothing connected again, and another instance takes the map at once.
+  EXPECT_EQ(sessions(), before);
+  std::unique_ptr<PgStore> taker = OpenStore(kB);
+  ASSERT_NE(taker, nullptr);
+  auto robots = taker->ListRobots();
+  ASSERT_TRUE(robots.ok());
+  EXPECT_EQ((*robots)[0].batches, 1u);
+}
+
+TEST_F(MapLeaseTest, ACommitThatLandedWhileItsAnswerWasLostMakesTheStoreGiveTheMapUp) {
+  std::unique_ptr<PgStore> store = OpenStore(kA);
+  ASSERT_NE(store, nullptr);
+  ASSERT_TRUE(Insert(*store, "r1", 1).ok());
+  // As if PostgreSQL crashed after committing the store's next transaction
+  // but before answering: the row is there, the store never heard of it.
+  ASSERT_TRUE(conn_
+                  .Exec("INSERT INTO observations SELECT map, id + 1, session_id, seq + 1, "
+                        "stamp_ns, received_ns, qw, qx, qy, qz, tx, ty, tz, line_count, "
+                        "plane_count, payload FROM observations WHERE map = 'site-1' AND id = 1")
+                  .ok());
+  ASSERT_TRUE(conn_
+                  .Exec("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = "
+                        "current_database() AND pid <> pg_backend_pid()")
+                  .ok());
+  const Status probe = store->ProbeWrite();
+  EXPECT_EQ(probe.code(), StatusCode::kFailedPrecondition) << probe.ToString();
+  EXPECT_THAT(probe.message(), HasSubstr("did land (1 observations)"));
+  EXPECT_FALSE(store->owns_map()) << "the engine is out of step: the map must be opened again";
+  EXPECT_FALSE(Insert(*store, "r1", 3).ok()) << "no write on stale ids";
+  // The same instance opens it again at once (its lease) and writes on.
+  store.reset();
+  std::unique_ptr<PgStore> again = OpenStore(kA);
+  ASSERT_NE(again, nullptr);
+  auto newest = again->NewestObservationId();
+  ASSERT_TRUE(newest.ok());
+  EXPECT_EQ(*newest, 2);
+  auto next = Insert(*again, "r1", 3);
+  ASSERT_TRUE(next.ok()) << next.status().ToString();
+  EXPECT_EQ(*next, 3);
+}
+
 }  // namespace
 }  // namespace mapd::storage

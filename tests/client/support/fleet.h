@@ -7,10 +7,12 @@
 #define MAPD_TESTS_CLIENT_SUPPORT_FLEET_H_
 
 #include <grpcpp/grpcpp.h>
+#include <libpq-fe.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <thread>
@@ -123,6 +125,18 @@ struct Fleet {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     return seconds();
+  }
+
+  // Sessions open on the fleet's database (pg_stat_activity), this one's
+  // included; -1 when it cannot be asked.
+  int DatabaseSessions() const {
+    PGconn* conn = PQconnectdb(store.c_str());
+    PGresult* r =
+        PQexec(conn, "SELECT count(*) FROM pg_stat_activity WHERE datname = current_database()");
+    const int n = PQresultStatus(r) == PGRES_TUPLES_OK ? std::atoi(PQgetvalue(r, 0, 0)) : -1;
+    PQclear(r);
+    PQfinish(conn);
+    return n;
   }
 
   // The batches map `map` stored per robot (ListRobots at its owner); empty
