@@ -352,10 +352,16 @@ void MapCore::WriterLoop() {
           AbandonQueuedWrites(lock);
           break;
         }
-        // Nothing to retry: probe whether writes work again.
-        probe = queue_.empty() && fused_pending_.empty() && write_jobs_.empty() &&
-                background_jobs_.empty();
-        if (probe && stopping_) break;
+        if (stopping_ && queue_.empty() && fused_pending_.empty() && write_jobs_.empty() &&
+            background_jobs_.empty()) {
+          break;  // nothing left to retry
+        }
+        // Probe whether writes work again before retrying the work: the probe
+        // is what connects to PostgreSQL again after it restarted (a commit
+        // on the broken connection fails at BEGIN for ever), and fused rows
+        // that failed to commit stay pending, so "work left" is no sign the
+        // database is back. The work is retried once a probe passes.
+        probe = true;
       } else {
         if (backlogged) {
           // The fuser's progress is signalled on fuse_cv_, not here: look again soon.

@@ -44,9 +44,14 @@ void MapOwnership::RenewServed() {
     if (store == nullptr) continue;
     Status lost;
     if (!store->owner()) {
-      // The write fence found the map taken over: its writes are refused.
-      lost = Status::FailedPrecondition("map '" + map->id +
-                                        "': a write found its lease taken over by another mapd");
+      // The write fence found the map taken over (its writes are refused),
+      // or a reconnect found the engine out of step (PgObservationLog::
+      // Reconnect); either way the map is dropped here, and in the second
+      // case opened again by the next round (its lease is still this one's).
+      lost = Status::FailedPrecondition(
+          "map '" + map->id +
+          "': its store gave it up (a write found its lease taken over by another mapd, or a "
+          "lost commit answer left the fused map behind the database)");
     } else if (const double busy_s = map->core->WriterBusyForS();
                busy_s > options_.lease_ttl_s / 2) {
       // A writer stuck in the database serves nobody: let the lease lapse
@@ -101,11 +106,11 @@ Status MapOwnership::TakeFree() {
     // off): never a redirect to itself.
     if (view[id].instance == me) view[id].live = false;
     if (!taking_) continue;  // stopping
-    const bool live = has_lease && lease->second.expires_in_s > 0;
-    if (live && lease->second.owner != me) continue;
+    const bool lease_live = has_lease && lease->second.expires_in_s > 0;
+    if (lease_live && lease->second.owner != me) continue;
     // Its own live lease: this instance restarted (same name). A lapsed one
     // of its own it released (a handoff), and takes back only as any other.
-    const bool mine = (live && lease->second.owner == me) || RendezvousPick(id, names) == me;
+    const bool mine = (lease_live && lease->second.owner == me) || RendezvousPick(id, names) == me;
     const double lapsed_for_s = has_lease ? -lease->second.expires_in_s : 1e9;
     if (!mine && lapsed_for_s < options_.lease_ttl_s) continue;  // its chosen one may take it
     Status opened = hooks_.open(id);

@@ -83,7 +83,8 @@ class FailoverTest : public ::testing::Test {
         for (std::string line; std::getline(log, line);) {
           if (line.find("event=map_") != std::string::npos ||
               line.find("lease") != std::string::npos ||
-              line.find("ownership") != std::string::npos) {
+              line.find("level=warn") != std::string::npos ||
+              line.find("level=error") != std::string::npos) {
             events += line + "\n";
           }
         }
