@@ -333,7 +333,7 @@ void MapCore::WriterLoop() {
       backlogged =
           committed_count_ - fused_count_ > options_.max_fusion_backlog && !stop_requested_;
     }
-    bool probe = false;
+    bool probe = false, retry = true;  // retry: take the queued work this round
     {
       std::unique_lock<std::mutex> lock(queue_mu_);
       // While backlogged, queued batches are not work (see above).
@@ -352,16 +352,17 @@ void MapCore::WriterLoop() {
           AbandonQueuedWrites(lock);
           break;
         }
-        if (stopping_ && queue_.empty() && fused_pending_.empty() && write_jobs_.empty() &&
-            background_jobs_.empty()) {
-          break;  // nothing left to retry
-        }
-        // Probe whether writes work again before retrying the work: the probe
-        // is what connects to PostgreSQL again after it restarted (a commit
-        // on the broken connection fails at BEGIN for ever), and fused rows
-        // that failed to commit stay pending, so "work left" is no sign the
-        // database is back. The work is retried once a probe passes.
+        // Probe whether writes work again, then retry the work (refused
+        // again while the database still fails): the probe is what connects
+        // to PostgreSQL again after it restarted (a commit on the broken
+        // connection fails at BEGIN for ever), and fused rows that failed to
+        // commit stay pending, so there may always be work to retry.
         probe = true;
+        if (queue_.empty() && fused_pending_.empty() && write_jobs_.empty() &&
+            background_jobs_.empty()) {
+          if (stopping_) break;  // nothing left to retry
+          retry = false;
+        }
       } else {
         if (backlogged) {
           // The fuser's progress is signalled on fuse_cv_, not here: look again soon.
@@ -374,7 +375,7 @@ void MapCore::WriterLoop() {
           break;  // nothing left
         if (!has_work()) continue;
       }
-      if (!probe) {
+      if (retry) {
         jobs.swap(write_jobs_);
         // One background write per round, after this round's batches.
         if (!background_jobs_.empty()) {
@@ -394,10 +395,8 @@ void MapCore::WriterLoop() {
       }
     }
     writer_busy_since_ns_ = SteadyNowNs();
-    if (probe) {
-      write_health_.Record(store_->ProbeWrite(), WriteHealth::Attempt::kProbe);
-      continue;
-    }
+    if (probe) write_health_.Record(store_->ProbeWrite(), WriteHealth::Attempt::kProbe);
+    if (!retry) continue;
     if (!group.empty() || !fused.empty()) CommitGroup(group, fused);
     group.clear();
     fused.clear();
