@@ -205,7 +205,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     // Who this instance is, now that the port is bound (port 0 in tests).
     server->ownership_->set_instance(server->Instance());
     // The first round before returning: a lone instance serves its maps at once.
-    if (Status s = server->ownership_->RunOnce(); !s.ok()) return s;
+    if (Status round = server->ownership_->RunOnce(); !round.ok()) return round;
     server->ownership_->StartThread();
     {
       std::lock_guard<std::mutex> lock(server->health_mu_);
