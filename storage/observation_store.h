@@ -25,6 +25,7 @@ enum class FrameKind : int {
 struct SessionFrame {
   int64_t session_id = 0;
   int64_t robot_id = 0;
+  std::string name;  // the robot's name for the session
   FrameKind kind = FrameKind::kMap;
   bool tied = false;             // T_map_frame is known
   geometry::Rigid3 T_map_frame;  // valid when tied
@@ -59,6 +60,7 @@ struct StoredObservation {
   int64_t session_id = 0;
   uint64_t seq = 0;
   int64_t stamp_ns = 0;
+  int64_t received_ns = 0;  // when mapd stored it (raw retention counts from here)
   geometry::SensorObservation features;
 };
 

@@ -12,7 +12,7 @@ namespace {
 
 constexpr const char* kObservationColumns =
     "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
-    "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.map = o.map AND s.id = "
+    "o.ty, o.tz, o.payload, o.received_ns FROM observations o JOIN sessions s ON s.map = o.map AND s.id = "
     "o.session_id WHERE o.map = $1 AND o.id > $2 AND o.id <= $3 ";
 
 }  // namespace
@@ -184,6 +184,7 @@ Status PgObservationLog::LoadCaches() {
     SessionFrame f;
     f.session_id = sessions->Int(i, 0);
     f.robot_id = sessions->Int(i, 1);
+    f.name = sessions->Text(i, 2);
     f.kind = static_cast<FrameKind>(sessions->Int(i, 3));
     f.tied = sessions->Int(i, 4) != 0;
     if (f.tied) f.T_map_frame = PoseAt(*sessions, i, 5);
@@ -225,6 +226,7 @@ Status PgObservationLog::ForEachWhere(const std::string& condition,
         obs.session_id = r->Int(i, 2);
         obs.seq = static_cast<uint64_t>(r->Int(i, 3));
         obs.stamp_ns = r->Int(i, 4);
+        obs.received_ns = r->Int(i, 13);
         obs.features.T_frame_sensor = PoseAt(*r, i, 5);
         Status s = DecodeFeatures(r->Bytes(i, 12), &obs.features);
         if (!s.ok())
@@ -417,6 +419,7 @@ StatusOr<SessionFrame> PgObservationWriter::Session(int64_t robot_id, const std:
   }
   SessionFrame f;
   f.robot_id = robot_id;
+  f.name = name;
   f.kind = kind;
   f.tied = kind == FrameKind::kMap;  // a map-frame session is tied by identity
   PgParams p;

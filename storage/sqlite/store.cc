@@ -143,6 +143,7 @@ Status SqliteStore::Prepare() {
     SessionFrame f;
     f.session_id = sessions->ColumnInt(0);
     f.robot_id = sessions->ColumnInt(1);
+    f.name = sessions->ColumnText(2);
     f.kind = static_cast<FrameKind>(sessions->ColumnInt(3));
     f.tied = sessions->ColumnInt(4) != 0;
     if (f.tied) f.T_map_frame = ColumnPose(*sessions, 5);
@@ -222,6 +223,7 @@ StatusOr<SessionFrame> SqliteWriteTransaction::Session(int64_t robot_id, const s
   }
   SessionFrame f;
   f.robot_id = robot_id;
+  f.name = name;
   f.kind = kind;
   f.tied = kind == FrameKind::kMap;  // a map-frame session is tied by identity
   Statement& s = store_->insert_session_;
@@ -615,7 +617,8 @@ namespace {
 
 constexpr const char* kObservationColumns =
     "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
-    "o.ty, o.tz, o.payload FROM observations o JOIN sessions s ON s.id = o.session_id ";
+    "o.ty, o.tz, o.payload, o.received_ns FROM observations o JOIN sessions s ON s.id = "
+    "o.session_id ";
 
 // Calls fn for every row of a query on kObservationColumns.
 Status ForEachObservationRow(Statement& q,
@@ -630,6 +633,7 @@ Status ForEachObservationRow(Statement& q,
     obs.session_id = q.ColumnInt(2);
     obs.seq = static_cast<uint64_t>(q.ColumnInt(3));
     obs.stamp_ns = q.ColumnInt(4);
+    obs.received_ns = q.ColumnInt(13);
     obs.features.T_frame_sensor = ColumnPose(q, 5);
     Status s = DecodeFeatures(q.ColumnBlob(12), &obs.features);
     if (!s.ok())

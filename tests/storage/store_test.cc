@@ -134,6 +134,8 @@ TEST_P(StoreConformanceTest, EverythingSurvivesAReopen) {
   EXPECT_EQ(seen[0].seq, 1u);
   EXPECT_EQ(seen[1].seq, 2u);
   EXPECT_LT(seen[0].id, seen[1].id);
+  EXPECT_EQ(seen[1].stamp_ns, 1002);
+  EXPECT_EQ(seen[1].received_ns, 2002);
   ASSERT_EQ(seen[0].features.lines.size(), 2u);
   EXPECT_EQ(seen[0].features.lines[1].b, Eigen::Vector3d(3, 1, 0));
   EXPECT_EQ(seen[0].features.T_frame_sensor.translation, Eigen::Vector3d(1, 2, 0));
@@ -145,6 +147,11 @@ TEST_P(StoreConformanceTest, EverythingSurvivesAReopen) {
   EXPECT_EQ((*fused)[0].segment.b, Eigen::Vector2d(3, 0));
   EXPECT_EQ((*fused)[0].support, 2u);
   EXPECT_EQ((*fused)[0].robots, "r1");
+  auto sessions = store_->ListSessions();
+  ASSERT_TRUE(sessions.ok());
+  ASSERT_EQ(sessions->size(), 1u);
+  EXPECT_EQ((*sessions)[0].name, "s1");
+  EXPECT_EQ(store_->FindSession("r1", "s1")->name, "s1");
   // And a duplicate is still recognised after the restart.
   EXPECT_FALSE(InsertOne(Batch("r1", "s1", 2))->stored);
 }
