@@ -1,5 +1,6 @@
 #include "mapd/command_line.h"
 
+#include "mapd/migrate_command.h"
 #include "mapd/token_command.h"
 #include "service/config_settings.h"
 
@@ -29,7 +30,8 @@ void AddFlags(CLI::App* app, CommandLine* line) {
         ->type_name("<" + s.kind + ">")
         ->default_str(s.get(defaults));
   }
-  AddTokenCommand(app, &line->token);
+  AddTokenCommand(app, &line->offline);
+  AddMigrateCommand(app, &line->offline);
 }
 
 Status ApplyCommandLine(const CommandLine& line, service::ServerConfig* config) {

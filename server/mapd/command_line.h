@@ -23,7 +23,7 @@ struct CommandLine {
   bool print_config = false;
   bool version = false;
   std::vector<std::pair<std::string, std::string>> settings;  // (key, value) in command-line order
-  std::function<int()> token;                                 // set by `mapd token ...`
+  std::function<int()> offline;  // set by `mapd token ...` and `mapd migrate ...`
 };
 
 // Adds every flag and the token subcommand to `app`; parsing fills `*line`.

@@ -49,12 +49,16 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "mapd%s: %s (see 'mapd%s --help')\n",
-                 app.got_subcommand("token") ? " token" : "", e.what(),
-                 app.got_subcommand("token") ? " token" : "");
+    std::string command;  // " token", " migrate" or ""
+    for (const char* name : {"token", "migrate"})
+      if (app.got_subcommand(name)) command = std::string(" ") + name;
+    std::fprintf(stderr, "mapd%s: %s (see 'mapd%s --help')\n", command.c_str(), e.what(),
+                 command.c_str());
     return 2;
   }
-  if (line.token) return line.token();  // offline token management (token_command.h)
+  // Offline work on the database: token management (token_command.h), moving
+  // a map (migrate_command.h).
+  if (line.offline) return line.offline();
   if (line.version) {
     std::printf("mapd %s\n", MAPD_VERSION);
     return 0;

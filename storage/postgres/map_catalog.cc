@@ -21,7 +21,8 @@ StatusOr<PgResult> PgMapCatalog::Query(const std::string& sql, const PgParams& p
 }
 
 StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {
-  StatusOr<PgResult> r = Query("SELECT id FROM maps ORDER BY id COLLATE \"C\"", {});
+  StatusOr<PgResult> r =
+      Query("SELECT id FROM maps WHERE NOT importing ORDER BY id COLLATE \"C\"", {});
   if (!r.ok()) return r.status();
   std::vector<std::string> ids;
   for (int i = 0; i < r->rows(); ++i) ids.push_back(r->Text(i, 0));
@@ -51,10 +52,71 @@ Status PgMapCatalog::CreateMap(const std::string& id, const std::string& setting
 StatusOr<std::string> PgMapCatalog::Settings(const std::string& id) {
   PgParams p;
   p.Text(id);
-  StatusOr<PgResult> r = Query("SELECT settings FROM maps WHERE id = $1", p);
+  StatusOr<PgResult> r = Query("SELECT settings FROM maps WHERE id = $1 AND NOT importing", p);
   if (!r.ok()) return r.status();
   if (r->rows() == 0) return Status::NotFound("no map '" + id + "' in the PostgreSQL database");
   return r->Text(0, 0);
+}
+
+Status PgMapCatalog::BeginImport(const std::string& id, const std::string& settings, int64_t now_ns,
+                                 const PgInstance& importer, double ttl_s, bool* restarted) {
+  MAPD_RETURN_IF_ERROR(CheckPgMapId(id));
+  *restarted = false;
+  PgParams p;
+  p.Text(id);
+  StatusOr<PgResult> r = Query(
+      "SELECT m.importing, l.owner, extract(epoch FROM l.expires_at - clock_timestamp())::float8 "
+      "FROM maps m LEFT JOIN map_leases l ON l.map = m.id WHERE m.id = $1",
+      p);
+  if (!r.ok()) return r.status();
+  if (r->rows() > 0) {
+    if (!(r->Int(0, 0) != 0)) {
+      return Status::AlreadyExists("map '" + id +
+                                   "' exists in the PostgreSQL database already; a migration "
+                                   "makes a new map (choose another id)");
+    }
+    if (!r->IsNull(0, 1) && r->Double(0, 2) > 0 && r->Text(0, 1) != importer.name) {
+      return Status::FailedPrecondition("map '" + id + "' is being imported by " + r->Text(0, 1) +
+                                        " now; wait for it to end");
+    }
+    MAPD_RETURN_IF_ERROR(DiscardImport(id));
+    *restarted = true;
+  }
+  PgParams q;
+  q.Text(id).Int(now_ns).Text(settings).Text(importer.name).Text(importer.address).Double(ttl_s);
+  r = Query(
+      "WITH made AS (INSERT INTO maps (id, created_ns, settings, importing) VALUES ($1, $2, $3, "
+      "true) ON CONFLICT (id) DO NOTHING RETURNING id) INSERT INTO map_leases (map, owner, "
+      "address, epoch, expires_at) SELECT id, $4, $5, 0, clock_timestamp() + make_interval(secs "
+      "=> $6) FROM made",
+      q);
+  if (!r.ok()) return r.status();
+  if (r->affected() == 0)
+    return Status::FailedPrecondition("map '" + id + "' was made meanwhile by someone else");
+  return Status::Ok();
+}
+
+Status PgMapCatalog::FinishImport(const std::string& id) {
+  PgParams p;
+  p.Text(id);
+  StatusOr<PgResult> r = Query("UPDATE maps SET importing = false WHERE id = $1 AND importing", p);
+  if (!r.ok()) return r.status();
+  if (r->affected() == 0) return Status::NotFound("no map '" + id + "' is being imported");
+  return Status::Ok();
+}
+
+Status PgMapCatalog::DiscardImport(const std::string& id) {
+  PgParams p;
+  p.Text(id);
+  StatusOr<PgResult> r = Query("SELECT importing FROM maps WHERE id = $1", p);
+  if (!r.ok()) return r.status();
+  if (r->rows() == 0) return Status::Ok();
+  if (!(r->Int(0, 0) != 0)) {
+    return Status::FailedPrecondition("map '" + id +
+                                      "' is not being imported; only an import is discarded");
+  }
+  std::lock_guard<std::mutex> lock(*mu_);
+  return DeleteMapRows(conn_, id);
 }
 
 }  // namespace mapd::storage

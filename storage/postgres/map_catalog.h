@@ -32,8 +32,25 @@ class PgMapCatalog {
   // (its PgStore::Open takes epoch 1), another does not take it first.
   Status CreateMap(const std::string& id, const std::string& settings, int64_t now_ns,
                    const PgInstance* owner = nullptr, double ttl_s = 0);
-  // A map's settings ('' when it has none); NotFound when there is no such map.
+  // A map's settings ('' when it has none); NotFound when there is no such
+  // map (or it is being imported).
   StatusOr<std::string> Settings(const std::string& id);
+
+  // --- Imports (mapd migrate): a map copied in from elsewhere is in the
+  // catalog, so that its rows have an owner, but neither listed nor served
+  // until FinishImport.
+  // Adds map `id` as importing with `settings`, and a lease for `importer`
+  // (who then opens it: PgStore::Open with that instance). AlreadyExists if
+  // the map exists; FailedPrecondition naming the holder while another
+  // import of it is alive. An import whose lease lapsed (its copier died)
+  // is discarded first, and *restarted is set.
+  Status BeginImport(const std::string& id, const std::string& settings, int64_t now_ns,
+                     const PgInstance& importer, double ttl_s, bool* restarted);
+  // The import is complete: mapd lists and serves the map from now on.
+  Status FinishImport(const std::string& id);
+  // Deletes an importing map and every row of it (a copy that failed).
+  // FailedPrecondition for a map that is not importing.
+  Status DiscardImport(const std::string& id);
 
  private:
   StatusOr<PgResult> Query(const std::string& sql, const PgParams& params);

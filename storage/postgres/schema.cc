@@ -230,6 +230,12 @@ const std::vector<const char*>& Migrations() {
         expires_at timestamptz NOT NULL
       );
       )sql",
+      // 2 -> 3: a map being copied in (mapd migrate) is in the catalog, so
+      // that its rows have an owner, but no mapd lists or serves it until
+      // the copy is complete.
+      R"sql(
+      ALTER TABLE maps ADD COLUMN importing boolean NOT NULL DEFAULT false;
+      )sql",
   };
   return kMigrations;
 }
@@ -318,6 +324,51 @@ StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_
   }
   MAPD_RETURN_IF_ERROR(conn.Exec("COMMIT"));
   return row;
+}
+
+Status DeleteMapRows(PgConnection& conn, const std::string& map_id) {
+  MAPD_RETURN_IF_ERROR(CheckPgMapId(map_id));
+  // Every table keyed by map (Migrations()) but observations, whose rows go
+  // with the map's partition; tokens are the database's.
+  static constexpr const char* kTables[] = {"merge_inputs",
+                                            "merges",
+                                            "submap_placements",
+                                            "global_map",
+                                            "blob_parts",
+                                            "submaps",
+                                            "fusion_snapshot_parts",
+                                            "fusion_snapshots",
+                                            "fused_features",
+                                            "fused_planes",
+                                            "audit_log",
+                                            "write_probe",
+                                            "sessions",
+                                            "robots",
+                                            "map_leases"};
+  MAPD_RETURN_IF_ERROR(conn.Exec("BEGIN"));
+  Status s = [&]() -> Status {
+    MAPD_RETURN_IF_ERROR(
+        conn.Exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")"));
+    PgParams p;
+    p.Text(map_id);
+    StatusOr<PgResult> num = conn.Query("SELECT num FROM maps WHERE id = $1", p);
+    if (!num.ok()) return num.status();
+    for (const char* table : kTables) {
+      StatusOr<PgResult> r = conn.Query(std::string("DELETE FROM ") + table + " WHERE map = $1", p);
+      if (!r.ok()) return r.status();
+    }
+    if (num->rows() > 0) {
+      MAPD_RETURN_IF_ERROR(
+          conn.Exec("DROP TABLE IF EXISTS observations_" + std::to_string(num->Int(0, 0))));
+    }
+    StatusOr<PgResult> r = conn.Query("DELETE FROM maps WHERE id = $1", p);
+    return r.status();
+  }();
+  if (!s.ok()) {
+    (void)conn.Exec("ROLLBACK");
+    return s;
+  }
+  return conn.Exec("COMMIT");
 }
 
 }  // namespace mapd::storage

@@ -28,6 +28,9 @@ struct MapRow {
 };
 // Adds `map_id`'s row and partition if missing (CheckPgMapId first).
 StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_t now_ns);
+// Deletes every row of `map_id`, its partition and its catalog row, in one
+// transaction. Ok if there is no such map.
+Status DeleteMapRows(PgConnection& conn, const std::string& map_id);
 
 }  // namespace mapd::storage
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "storage/postgres/map_catalog.h"
+#include "storage/postgres/store.h"
 #include "storage/support/observation_backends.h"
 
 namespace mapd::storage {
@@ -477,6 +478,61 @@ TEST_F(PostgresMapsTest, TheCatalogListsMapsAndKeepsTheirSettings) {
   EXPECT_EQ(*catalog->Settings("site-7"), "fusion.eta_m = 0.2\n");
   EXPECT_EQ(*catalog->Settings("default"), "");
   EXPECT_EQ(catalog->Settings("site-8").status().code(), StatusCode::kNotFound);
+}
+
+// mapd migrate's map: in the catalog while it is copied, but neither listed
+// nor served; a copier that died leaves a part that the next one discards.
+TEST_F(PostgresMapsTest, AnImportingMapIsHiddenUntilFinishedAndADeadOneIsDiscarded) {
+  StatusOr<PgMapCatalog> catalog = PgMapCatalog::Open(conninfo_);
+  ASSERT_TRUE(catalog.ok()) << catalog.status().ToString();
+  const PgInstance first{"migrate-1", ""}, second{"migrate-2", ""};
+  bool restarted = true;
+  ASSERT_TRUE(
+      catalog->BeginImport("site-1", "fusion.eta_m = 0.2\n", 1, first, 0.5, &restarted).ok());
+  EXPECT_FALSE(restarted);
+  EXPECT_TRUE(catalog->ListMaps()->empty());
+  EXPECT_EQ(catalog->Settings("site-1").status().code(), StatusCode::kNotFound);
+  // The importer writes under its lease; another one is refused meanwhile.
+  const auto open = [&](const PgInstance& as) {
+    PgOwnership own;
+    own.instance = as;
+    StatusOr<std::unique_ptr<PgStore>> store =
+        PgStore::Open(conninfo_, "site-1", StoreOptions{}, own);
+    EXPECT_TRUE(store.ok()) << store.status().ToString();
+    return store.ok() ? std::move(store).value() : nullptr;
+  };
+  std::unique_ptr<PgStore> part = open(first);
+  ASSERT_NE(part, nullptr);
+  {
+    geometry::SensorObservation features;
+    NewObservation o;
+    o.robot = "r1";
+    o.session = "s1";
+    o.seq = 1;
+    o.features = &features;
+    auto txn = part->BeginWrite();
+    ASSERT_TRUE(txn.ok());
+    ASSERT_TRUE((*txn)->InsertObservation(o).ok());
+    ASSERT_TRUE((*txn)->Commit().ok());
+  }
+  Status busy = catalog->BeginImport("site-1", "", 2, second, 5, &restarted);
+  EXPECT_EQ(busy.code(), StatusCode::kFailedPrecondition) << busy.ToString();
+  EXPECT_THAT(busy.message(), ::testing::HasSubstr("migrate-1"));
+  // The first importer is gone (its lease lapsed): the next one starts over.
+  part.reset();
+  ASSERT_TRUE(catalog->BeginImport("site-1", "", 3, second, 5, &restarted).ok());
+  EXPECT_TRUE(restarted);
+  part = open(second);
+  ASSERT_NE(part, nullptr);
+  EXPECT_EQ(*part->NewestObservationId(), 0) << "the dead import's rows are gone";
+  part.reset();
+  ASSERT_TRUE(catalog->FinishImport("site-1").ok());
+  EXPECT_EQ(*catalog->ListMaps(), std::vector<std::string>{"site-1"});
+  EXPECT_EQ(*catalog->Settings("site-1"), "");
+  EXPECT_EQ(catalog->BeginImport("site-1", "", 4, first, 5, &restarted).code(),
+            StatusCode::kAlreadyExists);
+  EXPECT_EQ(catalog->DiscardImport("site-1").code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(*catalog->ListMaps(), std::vector<std::string>{"site-1"});
 }
 
 TEST_F(PostgresMapsTest, ABadMapIdOrServerIsAClearError) {

@@ -1,0 +1,149 @@
+// `mapd migrate` as an operator runs it: a map of a --data-dir mapd moves
+// into PostgreSQL, is served there as it was, and moves back; a map in use,
+// a taken id and a wrong target are refused with the reason.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/postgres.h"
+#include "common/process.h"
+#include "common/temp_dir.h"
+
+namespace mapd::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+class MigrateE2eTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    PostgresCluster* cluster = PostgresCluster::Shared();
+    if (cluster == nullptr) GTEST_SKIP() << "no PostgreSQL (install postgresql-15)";
+    store_ = cluster->NewDatabase();
+  }
+  MapdProcess Start(const std::vector<std::string>& args, const std::string& log_name) {
+    return StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), "serving",
+                     dir_.File(log_name));
+  }
+  CommandResult Mapctl(const MapdProcess& mapd, std::vector<std::string> args) {
+    args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd.address});
+    return RunCommand(args, "", std::chrono::seconds(120));
+  }
+  CommandResult Migrate(std::vector<std::string> args) {
+    args.insert(args.begin(), {MAPD_BINARY, "migrate"});
+    return RunCommand(args, "", std::chrono::seconds(120));
+  }
+  std::string Dir(const std::string& name) {
+    std::filesystem::create_directory(dir_.File(name));
+    return dir_.File(name);
+  }
+
+  TempDir dir_;
+  std::string store_;
+};
+
+TEST_F(MigrateE2eTest, AMapMovesIntoPostgresAndBackAndIsServedAsItWas) {
+  const std::string maps = Dir("maps");
+  MapdProcess mapd = Start({"--data-dir", maps}, "files.log");
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  CommandResult r = Mapctl(mapd, {"maps", "create", "site-1", "--set", "fusion.eta_m=0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl(mapd,
+             {"--map", "site-1", "simulate", "--robots", "2", "--scans", "40", "--session", "s1"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const CommandResult before = Mapctl(mapd, {"--map", "site-1", "features", "--format", "json"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+  ASSERT_THAT(before.out, HasSubstr("sim-robot-2"));
+
+  // Served: refused, and nothing is made in the database.
+  r = Migrate({"--from", maps + "/site-1.db", "--to", store_, "--map", "site-1"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("in use by another mapd"));
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
+
+  r = Migrate({"--from", maps + "/site-1.db", "--to", store_, "--map", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("80 observations (ids kept)"));
+  r = Migrate({"--from", maps + "/site-1.db", "--to", store_, "--map", "site-1"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("exists in the PostgreSQL database already"));
+
+  // Served from PostgreSQL: the same fused map (rebuilt from the copied
+  // observations), its own settings, and a robot's resends are duplicates.
+  MapdProcess pg = Start({"--store", store_}, "postgres.log");
+  ASSERT_GT(pg.port, 0) << pg.log();
+  r = Mapctl(pg, {"maps"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("site-1"));
+  EXPECT_THAT(r.out, HasSubstr("fusion.eta_m=0.25"));
+  const CommandResult served = Mapctl(pg, {"--map", "site-1", "features", "--format", "json"});
+  ASSERT_EQ(served.exit_code, 0) << served.err;
+  EXPECT_EQ(served.out, before.out);
+  r = Mapctl(pg,
+             {"--map", "site-1", "simulate", "--robots", "2", "--scans", "40", "--session", "s1"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_THAT(r.out, HasSubstr("80 duplicate"));
+  EXPECT_EQ(Stop(pg.pid, SIGTERM), 0) << pg.log();
+
+  // And back into another directory, settings file included.
+  const std::string back = Dir("back");
+  r = Migrate({"--from", store_, "--from-map", "site-1", "--to", back, "--map", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_TRUE(std::filesystem::exists(back + "/site-1.conf"));
+  EXPECT_FALSE(std::filesystem::exists(back + "/site-1.db.migrating"));
+  MapdProcess files = Start({"--data-dir", back}, "back.log");
+  ASSERT_GT(files.port, 0) << files.log();
+  const CommandResult again = Mapctl(files, {"--map", "site-1", "features", "--format", "json"});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.out, before.out);
+  EXPECT_EQ(Stop(files.pid, SIGTERM), 0) << files.log();
+}
+
+TEST_F(MigrateE2eTest, BadSourcesAndTargetsAreRefusedWithTheReason) {
+  const std::string maps = Dir("maps");
+  CommandResult r = Migrate({"--from", maps + "/nothing.db", "--to", store_, "--map", "x"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("no database file"));
+  EXPECT_FALSE(std::filesystem::exists(maps + "/nothing.db"));
+
+  MapdProcess mapd = Start({"--data-dir", maps}, "files.log");
+  ASSERT_GT(mapd.port, 0) << mapd.log();
+  ASSERT_EQ(Mapctl(mapd, {"simulate", "--robots", "1", "--scans", "5"}).exit_code, 0);
+  EXPECT_EQ(Stop(mapd.pid, SIGTERM), 0) << mapd.log();
+  const std::string from = maps + "/default.db";
+
+  r = Migrate({"--from", from, "--to", dir_.File("not-a-map.txt"), "--map", "x"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("is none of: a PostgreSQL database"));
+  r = Migrate({"--from", from, "--to", store_});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("give --map ID"));
+  r = Migrate({"--from", from, "--to", store_, "--map", "../x"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("is not a map id"));
+  r = Migrate({"--from", from, "--to", maps, "--map", "default"});  // onto itself
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("exists already"));
+  r = Migrate({"--from", from, "--to", maps, "--map", "site-9", "--with-tokens"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("tokens live in default.db"));
+  EXPECT_FALSE(std::filesystem::exists(maps + "/site-9.db"));
+  r = Migrate({"--from", from, "--to", "host=/nonexistent dbname=x", "--map", "x"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, Not(HasSubstr("copied")));
+
+  // A new single file works, and the source is unchanged.
+  r = Migrate({"--from", from, "--to", dir_.File("copy.db")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("5 observations"));
+  r = Migrate({"--from", from, "--to", dir_.File("copy2.db")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+}  // namespace
+}  // namespace mapd::testing
