@@ -56,8 +56,13 @@ TEST_F(MigrateE2eTest, AMapMovesIntoPostgresAndBackAndIsServedAsItWas) {
   r = Mapctl(mapd,
              {"--map", "site-1", "simulate", "--robots", "2", "--scans", "40", "--session", "s1"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  const CommandResult before = Mapctl(mapd, {"--map", "site-1", "features", "--format", "json"});
-  ASSERT_EQ(before.exit_code, 0) << before.err;
+  // Once the fuser reflects all 80 batches (fusion_pending can say 0 while a
+  // read raced the fuser's last group: map_version counts fused batches).
+  CommandResult before;
+  do {
+    before = Mapctl(mapd, {"--map", "site-1", "features", "--format", "json"});
+    ASSERT_EQ(before.exit_code, 0) << before.err;
+  } while (before.out.find("\"map_version\": 80,") == std::string::npos);
   ASSERT_THAT(before.out, HasSubstr("sim-robot-2"));
 
   // Served: refused, and nothing is made in the database.
