@@ -141,13 +141,14 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
 
   FeatureList features;
   PlaneList planes;
-  uint64_t map_version = 0;
+  uint64_t map_version = 0, fusion_pending = 0;
   auto call = ctx.NewCallContext();
   std::unique_ptr<grpc::ClientReader<pb::FeatureMapPage>> reader =
       ctx.stub->GetFeatureMap(call.get(), request);
   pb::FeatureMapPage page;
   while (reader->Read(&page)) {
     map_version = page.map_version();
+    fusion_pending = page.fusion_pending();
     for (pb::FusedFeature& f : *page.mutable_features()) features.push_back(std::move(f));
     for (pb::FusedPlane& p : *page.mutable_planes()) planes.push_back(std::move(p));
   }
@@ -160,7 +161,7 @@ int RunFeatures(const Context& ctx, const FeaturesOptions& flags) {
       text = FormatFeatureTable(features, planes);
       break;
     case OutputFormat::kJson:
-      text = FormatFeatureJson(features, map_version, planes);
+      text = FormatFeatureJson(features, map_version, planes, fusion_pending);
       break;
     case OutputFormat::kGeoJson:
       text = FormatGeoJson(features, planes);

@@ -177,12 +177,13 @@ std::string FormatFeatureTable(const FeatureList& features, const PlaneList& pla
 }
 
 std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
-                              const PlaneList& planes) {
+                              const PlaneList& planes, uint64_t fusion_pending) {
   pb::FeatureMapPage page;
   for (const pb::FusedFeature& f : features) *page.add_features() = f;
   for (const pb::FusedPlane& p : planes) *page.add_planes() = p;
   page.set_total(features.size());
   page.set_map_version(map_version);
+  page.set_fusion_pending(fusion_pending);
   return MessageToJson(page);
 }
 

@@ -39,9 +39,11 @@ std::string MessageToJson(const google::protobuf::Message& message);
 // planes, one line per plane (id, normal, offset, area, z range, support,
 // robots) and their count.
 std::string FormatFeatureTable(const FeatureList& features, const PlaneList& planes = {});
-// A FeatureMapPage holding every feature and plane, as protobuf JSON.
+// A FeatureMapPage holding every feature and plane, as protobuf JSON, with
+// the server's map_version and fusion_pending (acknowledged batches the map
+// did not reflect yet when it was read).
 std::string FormatFeatureJson(const FeatureList& features, uint64_t map_version,
-                              const PlaneList& planes = {});
+                              const PlaneList& planes = {}, uint64_t fusion_pending = 0);
 // A GeoJSON FeatureCollection: one LineString per feature (properties id,
 // kind, support, member_count, z_min, z_max, robots), then one Polygon per
 // plane: the ground projection (x, y) of its boundary, counter-clockwise for

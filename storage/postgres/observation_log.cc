@@ -12,8 +12,8 @@ namespace {
 
 constexpr const char* kObservationColumns =
     "SELECT o.id, s.robot_id, o.session_id, o.seq, o.stamp_ns, o.qw, o.qx, o.qy, o.qz, o.tx, "
-    "o.ty, o.tz, o.payload, o.received_ns FROM observations o JOIN sessions s ON s.map = o.map AND s.id = "
-    "o.session_id WHERE o.map = $1 AND o.id > $2 AND o.id <= $3 ";
+    "o.ty, o.tz, o.payload, o.received_ns FROM observations o JOIN sessions s ON s.map = o.map "
+    "AND s.id = o.session_id WHERE o.map = $1 AND o.id > $2 AND o.id <= $3 ";
 
 }  // namespace
 
