@@ -46,7 +46,7 @@ bool IsConninfo(const std::string& s) {
          s.find('=') != std::string::npos;
 }
 
-int Fail(const Status& s) {
+int MigrateFailed(const Status& s) {
   std::fprintf(stderr, "mapd migrate: %s\n", s.ToString().c_str());
   return 1;
 }
@@ -304,9 +304,9 @@ Status ToSqlite(const MigrateOptions& o, Source& src, Leases* leases) {
 int Run(const MigrateOptions& o) {
   Leases leases;
   StatusOr<Source> src = OpenSource(o, &leases);
-  if (!src.ok()) return Fail(src.status());
+  if (!src.ok()) return MigrateFailed(src.status());
   const Status s = IsConninfo(o.to) ? ToPostgres(o, *src, &leases) : ToSqlite(o, *src, &leases);
-  return s.ok() ? 0 : Fail(s);
+  return s.ok() ? 0 : MigrateFailed(s);
 }
 
 }  // namespace
