@@ -204,7 +204,7 @@ Status ToPostgres(const MigrateOptions& o, Source& src, Leases* leases) {
     StatusOr<storage::MapCopyReport> report =
         storage::CopyMap(*src.store, **store, CopyOptions(o, leases));
     if (!report.ok()) return report.status();
-    MAPD_RETURN_IF_ERROR(catalog->FinishImport(o.map));
+    MAPD_RETURN_IF_ERROR(catalog->FinishImport((*store)->lease()));
     PrintReport(*report, "map '" + o.map + "' of the PostgreSQL database",
                 std::chrono::duration<double>(Clock::now() - start).count());
     return Status::Ok();

@@ -70,7 +70,7 @@ Status PgMapCatalog::BeginImport(const std::string& id, const std::string& setti
       p);
   if (!r.ok()) return r.status();
   if (r->rows() > 0) {
-    if (!(r->Int(0, 0) != 0)) {
+    if (r->Int(0, 0) == 0) {
       return Status::AlreadyExists("map '" + id +
                                    "' exists in the PostgreSQL database already; a migration "
                                    "makes a new map (choose another id)");
@@ -96,12 +96,19 @@ Status PgMapCatalog::BeginImport(const std::string& id, const std::string& setti
   return Status::Ok();
 }
 
-Status PgMapCatalog::FinishImport(const std::string& id) {
+Status PgMapCatalog::FinishImport(const MapLease& lease) {
   PgParams p;
-  p.Text(id);
-  StatusOr<PgResult> r = Query("UPDATE maps SET importing = false WHERE id = $1 AND importing", p);
+  p.Text(lease.map_id).Text(lease.owner).Int(lease.epoch);
+  StatusOr<PgResult> r = Query(
+      "UPDATE maps SET importing = false WHERE id = $1 AND importing AND EXISTS (SELECT 1 FROM "
+      "map_leases WHERE map = $1 AND owner = $2 AND epoch = $3)",
+      p);
   if (!r.ok()) return r.status();
-  if (r->affected() == 0) return Status::NotFound("no map '" + id + "' is being imported");
+  if (r->affected() == 0) {
+    return Status::FailedPrecondition("map '" + lease.map_id +
+                                      "' is no longer being imported under this lease (another "
+                                      "import took it over)");
+  }
   return Status::Ok();
 }
 
@@ -111,7 +118,7 @@ Status PgMapCatalog::DiscardImport(const std::string& id) {
   StatusOr<PgResult> r = Query("SELECT importing FROM maps WHERE id = $1", p);
   if (!r.ok()) return r.status();
   if (r->rows() == 0) return Status::Ok();
-  if (!(r->Int(0, 0) != 0)) {
+  if (r->Int(0, 0) == 0) {
     return Status::FailedPrecondition("map '" + id +
                                       "' is not being imported; only an import is discarded");
   }

@@ -47,7 +47,10 @@ class PgMapCatalog {
   Status BeginImport(const std::string& id, const std::string& settings, int64_t now_ns,
                      const PgInstance& importer, double ttl_s, bool* restarted);
   // The import is complete: mapd lists and serves the map from now on.
-  Status FinishImport(const std::string& id);
+  // FailedPrecondition unless `lease` (the importer's, PgStore::lease()) is
+  // still the map's: a copier paused past its lease cannot publish the map
+  // another import is filling.
+  Status FinishImport(const MapLease& lease);
   // Deletes an importing map and every row of it (a copy that failed).
   // FailedPrecondition for a map that is not importing.
   Status DiscardImport(const std::string& id);

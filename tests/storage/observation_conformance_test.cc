@@ -522,11 +522,18 @@ TEST_F(PostgresMapsTest, AnImportingMapIsHiddenUntilFinishedAndADeadOneIsDiscard
   part.reset();
   ASSERT_TRUE(catalog->BeginImport("site-1", "", 3, second, 5, &restarted).ok());
   EXPECT_TRUE(restarted);
+  MapLease dead;
+  dead.map_id = "site-1";
+  dead.owner = first.name;
+  dead.epoch = 1;
   part = open(second);
   ASSERT_NE(part, nullptr);
   EXPECT_EQ(*part->NewestObservationId(), 0) << "the dead import's rows are gone";
+  EXPECT_EQ(catalog->FinishImport(dead).code(), StatusCode::kFailedPrecondition)
+      << "a copier that woke up late cannot publish the new import";
+  EXPECT_TRUE(catalog->ListMaps()->empty());
+  ASSERT_TRUE(catalog->FinishImport(part->lease()).ok());
   part.reset();
-  ASSERT_TRUE(catalog->FinishImport("site-1").ok());
   EXPECT_EQ(*catalog->ListMaps(), std::vector<std::string>{"site-1"});
   EXPECT_EQ(*catalog->Settings("site-1"), "");
   EXPECT_EQ(catalog->BeginImport("site-1", "", 4, first, 5, &restarted).code(),
