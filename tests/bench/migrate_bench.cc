@@ -117,8 +117,7 @@ int main(int argc, char** argv) {
   if (r.exit_code != 0) return Fail("simulate", r);
   std::printf("filled: %s(%.1f s)\n", r.out.c_str(), Seconds(Clock::now() - fill));
   // The source's fused map once its fuser reflects every batch (map_version
-  // counts fused batches; fusion_pending can say 0 while a read raced the
-  // fuser's last group).
+  // counts fused batches).
   const std::string all_fused =
       "\"map_version\": " + std::to_string(std::stoll(robots) * std::stoll(scans)) + ",";
   CommandResult expected;
