@@ -82,6 +82,20 @@ int main(int argc, char** argv) {
   mapd::client::AddExportCommands(&app, &action);
   mapd::client::AddRenderCommand(&app, &action);
   mapd::client::AddAuthCommands(&app, &action);
+  // Moving a map between stores works on the databases, not through the
+  // API, so it is `mapd migrate`; whoever looks for it here is told so
+  // rather than "argument not expected". Hidden from the command list.
+  CLI::App* migrate = app.add_subcommand("migrate", "see `mapd migrate --help`");
+  migrate->group("");
+  migrate->allow_extras();
+  migrate->callback([&action] {
+    action = [](const mapd::client::Context&) {
+      return UsageError("migrate",
+                        "moving a map between stores is `mapd migrate` (run beside the "
+                        "databases, with the map's mapd stopped; docs/scale-out.md): mapctl "
+                        "speaks only the API");
+    };
+  });
   if (int rc = mapd::client::ParseCommandLine(&app, argc, argv); rc != kContinue) return rc;
   for (size_t start = 0;;) {  // several servers: instances of one database
     const size_t comma = ctx.server.find(',', start);

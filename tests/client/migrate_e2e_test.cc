@@ -146,6 +146,11 @@ TEST_F(MigrateE2eTest, BadSourcesAndTargetsAreRefusedWithTheReason) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, Not(HasSubstr("copied")));
 
+  // Looked for under mapctl: told where it is.
+  r = RunCommand({MAPCTL_BINARY, "migrate", "--from", from, "--to", store_, "--map", "x"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("is `mapd migrate`"));
+
   // A new single file works, and the source is unchanged.
   r = Migrate({"--from", from, "--to", dir_.File("copy.db")});
   ASSERT_EQ(r.exit_code, 0) << r.err;
