@@ -63,13 +63,13 @@ struct Context {
   // deadline and the token, no map and no map check.
   std::unique_ptr<grpc::ClientContext> NewServerCallContext() const;
   std::chrono::milliseconds timeout() const;
+  // Points channel and stub at `address` (e.g. the owner a redirect names).
+  void Use(const std::string& address) const;
 
  private:
   // Once: finds the server of the map (LocateMap over `servers`), then with
   // a map other than "default" checks that it serves it (see NewCallContext).
   void PrepareMapOnce() const;
-  // Points channel and stub at `address`.
-  void Use(const std::string& address) const;
   std::shared_ptr<std::once_flag> map_checked_ = std::make_shared<std::once_flag>();
 };
 

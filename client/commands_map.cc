@@ -1,4 +1,5 @@
-// mapctl status | robots | features | maps [create ID [--set KEY=VALUE ...]]
+// mapctl status | robots | features | maps [--archived] [create ID [--set KEY=VALUE ...] |
+// delete ID [--purge] | restore ID]
 #include <cstdio>
 #include <map>
 #include <string>
@@ -7,6 +8,7 @@
 #include "client/commands.h"
 #include "client/format.h"
 #include "client/format_svg.h"
+#include "client/text_util.h"
 #include "common/clock.h"
 
 namespace mapd::client {
@@ -16,6 +18,11 @@ namespace pb = mapserver::v1;
 
 struct JsonOptions {
   bool json = false;
+};
+
+struct MapsOptions {
+  bool json = false;
+  bool archived = false;
 };
 
 struct FeaturesOptions {
@@ -38,10 +45,11 @@ int RunStatus(const Context& ctx, const JsonOptions& flags) {
   return kExitOk;
 }
 
-int RunMaps(const Context& ctx, const JsonOptions& flags) {
+int RunMaps(const Context& ctx, const MapsOptions& flags) {
   pb::ListMapsResponse maps;
-  const grpc::Status status =
-      ctx.stub->ListMaps(ctx.NewServerCallContext().get(), pb::ListMapsRequest(), &maps);
+  pb::ListMapsRequest request;
+  request.set_archived(flags.archived);
+  const grpc::Status status = ctx.stub->ListMaps(ctx.NewServerCallContext().get(), request, &maps);
   if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
     // A mapd from before maps serves exactly one, the default.
     std::printf("%-20s  %s\n", "default", "(a mapd from before maps: its only map)");
@@ -50,6 +58,13 @@ int RunMaps(const Context& ctx, const JsonOptions& flags) {
   if (!status.ok()) return ReportRpcError(ctx, "maps", status);
   if (flags.json) {
     std::fputs(MessageToJson(maps).c_str(), stdout);
+    return kExitOk;
+  }
+  if (flags.archived) {
+    std::printf("%-20s  %s\n", "ARCHIVED MAP", "ARCHIVED AT");
+    for (const pb::MapInfo& m : maps.maps()) {
+      std::printf("%-20s  %s\n", m.map_id().c_str(), IsoTime(m.archived_ns()).c_str());
+    }
     return kExitOk;
   }
   std::printf("%-20s  %-11s  %12s  %10s  %12s  %s\n", "MAP", "STATE", "MAP VERSION", "FEATURES",
@@ -102,6 +117,68 @@ int RunCreateMap(const Context& ctx, const CreateMapOptions& flags) {
   }
   if (!status.ok()) return ReportRpcError(ctx, "maps create", status);
   std::printf("created map %s\n", info.map_id().c_str());
+  return kExitOk;
+}
+
+// A map-management call on the server given, or on the map's owner when
+// that server names another (several mapd on one database).
+template <typename Call>
+grpc::Status CallMapOwner(const Context& ctx, Call call) {
+  auto context = ctx.NewServerCallContext();
+  grpc::Status status = call(context.get());
+  if (status.error_code() != grpc::StatusCode::UNAVAILABLE) return status;
+  const auto& trailers = context->GetServerTrailingMetadata();
+  auto owner = trailers.find("mapd-map-owner");
+  if (owner == trailers.end()) return status;
+  ctx.Use(std::string(owner->second.data(), owner->second.size()));
+  return call(ctx.NewServerCallContext().get());
+}
+
+struct DeleteMapOptions {
+  std::string id;
+  bool purge = false;
+};
+
+int RunDeleteMap(const Context& ctx, const DeleteMapOptions& flags) {
+  pb::DeleteMapRequest request;
+  request.set_map_id(flags.id);
+  request.set_purge(flags.purge);
+  pb::DeleteMapResponse response;
+  const grpc::Status status = CallMapOwner(ctx, [&](grpc::ClientContext* call) {
+    return ctx.stub->DeleteMap(call, request, &response);
+  });
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    PrintError("maps delete: the server at " + ctx.server +
+               " cannot delete maps (a mapd from before DeleteMap); upgrade it");
+    return kExitFailed;
+  }
+  if (!status.ok()) return ReportRpcError(ctx, "maps delete", status);
+  if (response.purged()) {
+    std::printf("deleted map %s for good\n", response.map_id().c_str());
+  } else {
+    std::printf("archived map %s (%s); 'mapctl maps restore %s' serves it again\n",
+                response.map_id().c_str(), response.where().c_str(), response.map_id().c_str());
+  }
+  return kExitOk;
+}
+
+int RunRestoreMap(const Context& ctx, const CreateMapOptions& flags) {
+  pb::RestoreMapRequest request;
+  request.set_map_id(flags.id);
+  pb::MapInfo info;
+  const grpc::Status status =
+      ctx.stub->RestoreMap(ctx.NewServerCallContext().get(), request, &info);
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    PrintError("maps restore: the server at " + ctx.server +
+               " cannot restore maps (a mapd from before RestoreMap); upgrade it");
+    return kExitFailed;
+  }
+  if (!status.ok()) return ReportRpcError(ctx, "maps restore", status);
+  std::printf("restored map %s", info.map_id().c_str());
+  if (!info.served_by().empty()) std::printf(" (served by %s)", info.served_by().c_str());
+  std::printf(": %llu fused features at map version %llu\n",
+              static_cast<unsigned long long>(info.fused_features()),
+              static_cast<unsigned long long>(info.map_version()));
   return kExitOk;
 }
 
@@ -216,17 +293,20 @@ void AddMapCommands(CLI::App* app, Action* action) {
       "--json", BindCommand(status, action, RunStatus)->json,
       "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
 
-  CLI::App* maps = app->add_subcommand("maps", "the maps the server serves; maps create ID");
+  CLI::App* maps = app->add_subcommand(
+      "maps", "the maps the server serves; maps create | delete | restore ID");
   maps->footer(
       "Each map is its own map frame, fused map, submaps and merges; name one with\n"
-      "'mapctl --map ID <command>' or $MAPD_MAP. mapd --data-dir serves several.");
+      "'mapctl --map ID <command>' or $MAPD_MAP. mapd --data-dir serves several.\n"
+      "A deleted map is archived (kept, unserved) until restored or deleted --purge.");
   // Not BindCommand: CLI11 runs this callback after `create`'s, whose action stays.
-  auto list = std::make_shared<JsonOptions>();
+  auto list = std::make_shared<MapsOptions>();
   maps->callback([maps, list, action] {
     if (!maps->get_subcommands().empty()) return;
     *action = [list](const Context& ctx) { return RunMaps(ctx, *list); };
   });
   maps->add_flag("--json", list->json, "the ListMapsResponse in protobuf JSON");
+  maps->add_flag("--archived", list->archived, "the archived maps instead (maps delete ID)");
   CLI::App* create = maps->add_subcommand("create", "make a new, empty map (role admin)");
   auto created = BindCommand(create, action, RunCreateMap);
   create
@@ -238,6 +318,20 @@ void AddMapCommands(CLI::App* app, Action* action) {
                    "KEY=VALUE: the map's own setting over mapd's, for fusion.*, planes.* and "
                    "merge.* keys (mapd --help); repeat for more")
       ->take_all();
+  CLI::App* remove = maps->add_subcommand(
+      "delete", "stop serving a map and archive it, or delete it for good (role admin)");
+  remove->footer(
+      "Its robots' streams end (they resend to nobody until it is restored), calls for it\n"
+      "are NOT_FOUND. Archived: mapd --data-dir moves its files to DIR/archive/, a\n"
+      "PostgreSQL map keeps its rows; 'maps restore ID' serves it again as it was.\n"
+      "--purge deletes its data for good (an archived map's too). Not the default map.");
+  auto removed = BindCommand(remove, action, RunDeleteMap);
+  remove->add_option("id", removed->id, "the map id")->required();
+  remove->add_flag("--purge", removed->purge, "delete its data for good instead of archiving it");
+  CLI::App* restore =
+      maps->add_subcommand("restore", "serve an archived map again, as it was (role admin)");
+  restore->add_option("id", BindCommand(restore, action, RunRestoreMap)->id, "the map id")
+      ->required();
 
   CLI::App* robots =
       app->add_subcommand("robots", "the robots seen, with their sessions and counts");

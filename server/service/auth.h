@@ -26,7 +26,7 @@ enum class Permission {
   kMerge,         // MergeSubmaps, ApproveMerge, RejectMerge
   kReadAudit,     // ListAudit
   kManageTokens,  // CreateToken, ListTokens, RevokeToken
-  kManageMaps,    // CreateMap
+  kManageMaps,    // CreateMap, DeleteMap, RestoreMap
 };
 
 struct Principal {

@@ -14,8 +14,10 @@ namespace pb = mapserver::v1;
 
 IngestReactor::IngestReactor(grpc::CallbackServerContext* context, Core* core,
                              const IngestOptions* options, IngestStreams* streams,
-                             AccessControl* access, Principal caller, StreamSlot slot)
-    : core_(core),
+                             AccessControl* access, Principal caller, StreamSlot slot,
+                             CallHold hold)
+    : hold_(std::move(hold)),
+      core_(core),
       options_(options),
       streams_(streams),
       peer_(context->peer()),

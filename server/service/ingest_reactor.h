@@ -66,7 +66,8 @@ class IngestStreams {
 class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   IngestReactor(grpc::CallbackServerContext* context, Core* core, const IngestOptions* options,
-                IngestStreams* streams, AccessControl* access, Principal caller, StreamSlot slot);
+                IngestStreams* streams, AccessControl* access, Principal caller, StreamSlot slot,
+                CallHold hold = nullptr);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -82,6 +83,7 @@ class IngestReactor : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::Byt
   void MaybeReadLocked();                       // REQUIRES: mu_ held
   void MaybeFinishLocked();                     // REQUIRES: mu_ held
 
+  const CallHold hold_;  // first: released last, after every member that uses the map
   Core* const core_;
   const IngestOptions* const options_;
   IngestStreams* const streams_;

@@ -4,11 +4,14 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 
 #include "service/file_modes.h"
+#include "service/map_archive.h"
 
 namespace mapd::service {
 namespace {
@@ -66,7 +69,7 @@ DatabaseLock::~DatabaseLock() {
 StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenSingle(const std::string& db_path,
                                                                  Opener opener) {
   std::unique_ptr<MapDirectory> d(new MapDirectory("", std::move(opener)));
-  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, db_path);
+  StatusOr<MapHold> map = d->Open(kDefaultMapId, db_path);
   if (!map.ok()) return map.status();
   return d;
 }
@@ -92,7 +95,7 @@ StatusOr<std::unique_ptr<MapDirectory>> MapDirectory::OpenDataDir(const std::str
     return Status::FailedPrecondition("cannot list --data-dir '" + data_dir + "': " + ec.message());
   std::sort(ids.begin(), ids.end());
   std::unique_ptr<MapDirectory> d(new MapDirectory(data_dir, std::move(opener)));
-  StatusOr<ServedMap*> map = d->Open(kDefaultMapId, PathOf(data_dir, kDefaultMapId));
+  StatusOr<MapHold> map = d->Open(kDefaultMapId, PathOf(data_dir, kDefaultMapId));
   if (!map.ok()) return map.status();
   for (const std::string& id : ids) {
     map = d->Open(id, PathOf(data_dir, id));
@@ -108,21 +111,47 @@ std::unique_ptr<MapDirectory> MapDirectory::ForPostgres(ServerWide server_wide, 
   return d;
 }
 
-StatusOr<ServedMap*> MapDirectory::Serve(const std::string& id) {
+StatusOr<MapHold> MapDirectory::Serve(const std::string& id) {
   std::lock_guard<std::mutex> opening(create_mu_);
   if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' is served here already");
   return Open(id, "");
 }
 
-ServedMap* MapDirectory::Retire(const std::string& id) {
+StatusOr<MapHold> MapDirectory::Reopen(const std::string& id) {
+  MAPD_RETURN_IF_ERROR(CheckMapId(id, "map_id"));
+  if (data_dir_.empty()) {
+    return Status::FailedPrecondition("only a --data-dir mapd opens a map from its file");
+  }
+  std::lock_guard<std::mutex> opening(create_mu_);
+  if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' is served here already");
+  return Open(id, PathOf(data_dir_, id));
+}
+
+MapHold MapDirectory::Retire(const std::string& id) {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = maps_.find(id);
   if (it == maps_.end()) return nullptr;
-  ServedMap* map = it->second.get();
+  MapHold map = it->second;
   retired_.push_back(std::move(it->second));
   maps_.erase(it);
-  if (default_ == map) default_ = nullptr;
+  if (default_ == map.get()) default_ = nullptr;
   return map;
+}
+
+size_t MapDirectory::Reap() {
+  std::vector<MapHold> unheld;  // freed after the lock: a map's stop may take a while
+  size_t held = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    // use_count() is exact here: a retired map is reachable from retired_
+    // and from holds made before it was retired, and no new hold is made.
+    auto keep = std::partition(retired_.begin(), retired_.end(),
+                               [](const MapHold& m) { return m.use_count() > 1; });
+    held = static_cast<size_t>(keep - retired_.begin());
+    std::move(keep, retired_.end(), std::back_inserter(unheld));
+    retired_.erase(keep, retired_.end());
+  }
+  return held;
 }
 
 MapServiceImpl& MapDirectory::server_wide() const {
@@ -142,8 +171,8 @@ ServedMap* MapDirectory::default_map() const {
   return default_;
 }
 
-StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string& db_path,
-                                        const MapSettings* create_with) {
+StatusOr<MapHold> MapDirectory::Open(const std::string& id, const std::string& db_path,
+                                     const MapSettings* create_with) {
   if (!postgres_) MAPD_RETURN_IF_ERROR(CheckDatabaseFileModes(db_path));
   MapServiceImpl* shared_with = server_wide_.service.get();
   if (shared_with == nullptr) {
@@ -152,37 +181,37 @@ StatusOr<ServedMap*> MapDirectory::Open(const std::string& id, const std::string
   }
   StatusOr<std::unique_ptr<ServedMap>> map = opener_(id, db_path, shared_with, create_with);
   if (!map.ok()) return map.status();
-  ServedMap* raw = map->get();
+  MapHold held(std::move(map).value());
   std::lock_guard<std::mutex> lock(mu_);
-  maps_.emplace(id, std::move(map).value());
-  if (id == kDefaultMapId) default_ = raw;
-  return raw;
+  maps_.emplace(id, held);
+  if (id == kDefaultMapId) default_ = held.get();
+  return held;
 }
 
 MapDirectory::~MapDirectory() {
   // With a local store the other maps' services share the default map's:
   // they go first. The server-wide parts go last (a member).
-  std::unique_ptr<ServedMap> default_map;
+  MapHold default_map;
   if (auto it = maps_.find(kDefaultMapId); it != maps_.end()) default_map = std::move(it->second);
   maps_.clear();
   retired_.clear();
   default_map.reset();
 }
 
-StatusOr<ServedMap*> MapDirectory::Find(const std::string& id) const {
+StatusOr<MapHold> MapDirectory::Find(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = maps_.find(id.empty() ? std::string(kDefaultMapId) : id);
   if (it == maps_.end()) {
     return Status::NotFound("map '" + id.substr(0, 128) +
                             "' is not served here; ListMaps (mapctl maps) names the maps");
   }
-  return it->second.get();
+  return it->second;
 }
 
-std::vector<ServedMap*> MapDirectory::List() const {
+std::vector<MapHold> MapDirectory::List() const {
   std::lock_guard<std::mutex> lock(mu_);
-  std::vector<ServedMap*> out;
-  for (const auto& [id, map] : maps_) out.push_back(map.get());
+  std::vector<MapHold> out;
+  for (const auto& [id, map] : maps_) out.push_back(map);
   return out;
 }
 
@@ -193,12 +222,14 @@ std::vector<std::string> MapDirectory::Ids() const {
   return out;
 }
 
-Core* MapDirectory::FindCore(const std::string& id) const {
-  StatusOr<ServedMap*> map = Find(id);
-  return map.ok() ? (*map)->core.get() : nullptr;
+std::shared_ptr<Core> MapDirectory::FindCore(const std::string& id) const {
+  StatusOr<MapHold> map = Find(id);
+  if (!map.ok()) return nullptr;
+  Core* core = (*map)->core.get();
+  return std::shared_ptr<Core>(*std::move(map), core);  // holds the map
 }
 
-StatusOr<ServedMap*> MapDirectory::Create(const std::string& id, const MapSettings& settings) {
+StatusOr<MapHold> MapDirectory::Create(const std::string& id, const MapSettings& settings) {
   MAPD_RETURN_IF_ERROR(CheckMapId(id, "map_id"));
   if (!can_create()) {
     return Status::FailedPrecondition(
@@ -208,6 +239,13 @@ StatusOr<ServedMap*> MapDirectory::Create(const std::string& id, const MapSettin
   std::lock_guard<std::mutex> creating(create_mu_);
   if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' exists already");
   if (postgres_) return Open(id, "", &settings);  // the opener adds the map's row
+  if (IsArchived(data_dir_, id)) {
+    return Status::AlreadyExists("map '" + id + "' is archived (" +
+                                 ArchivedMapPath(data_dir_, id) +
+                                 "): restore it (mapctl maps restore " + id +
+                                 ") or delete it for good (mapctl maps delete " + id +
+                                 " --purge) first");
+  }
   const std::string path = PathOf(data_dir_, id);
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) {

@@ -10,8 +10,9 @@
 // second mapd on the same file refuses to start instead of writing beside
 // the first.
 //
-// A ServedMap* stays valid for the directory's life: a retired map is kept
-// (stopped), since calls may still hold it.
+// A call holds the map it works on (MapHold) until it ends. A map taken out
+// of the directory (Retire: DeleteMap, a handoff, a lost lease) stays
+// allocated, stopped, while anything holds it; Reap frees it after that.
 //
 // Thread safety: every method may be called from any thread.
 #ifndef MAPD_SERVICE_MAP_DIRECTORY_H_
@@ -60,6 +61,9 @@ struct ServedMap {
   std::unique_ptr<MapServiceImpl> service;
 };
 
+// A served map, held: it is not freed while a hold lives (Reap).
+using MapHold = std::shared_ptr<ServedMap>;
+
 // What belongs to the server rather than a map (tokens, WhoAmI, the denial
 // counts): the default map's core and service, or on PostgreSQL its own
 // (server_wide_core.h), since the default map may be served elsewhere.
@@ -96,42 +100,49 @@ class MapDirectory {
 
   // NotFound naming the id (never the other maps: the caller may not be
   // authenticated yet).
-  StatusOr<ServedMap*> Find(const std::string& id) const;
+  StatusOr<MapHold> Find(const std::string& id) const;
   // The server's parts (ServerWide): the default map's, or ForPostgres's.
   MapServiceImpl& server_wide() const;
   Core& server_wide_core() const;
   // The default map when served here, else null.
   ServedMap* default_map() const;
-  std::vector<ServedMap*> List() const;         // by id
-  std::vector<std::string> Ids() const;         // sorted
-  Core* FindCore(const std::string& id) const;  // null when not served
+  std::vector<MapHold> List() const;  // by id
+  std::vector<std::string> Ids() const;  // sorted
+  // The map's core, held (as Find), or null when not served.
+  std::shared_ptr<Core> FindCore(const std::string& id) const;
   // A new, empty map with its own `settings`. FailedPrecondition with one
   // database (--db), AlreadyExists, InvalidArgument for a bad id or setting,
   // or the opener's error.
-  StatusOr<ServedMap*> Create(const std::string& id, const MapSettings& settings = {});
+  StatusOr<MapHold> Create(const std::string& id, const MapSettings& settings = {});
   bool can_create() const { return !data_dir_.empty() || postgres_; }
   // PostgreSQL: opens existing map `id` here (the opener takes its lease).
-  StatusOr<ServedMap*> Serve(const std::string& id);
+  StatusOr<MapHold> Serve(const std::string& id);
+  // --data-dir: opens map `id` from its file, which is back in the
+  // directory (map_archive.h); AlreadyExists when it is served.
+  StatusOr<MapHold> Reopen(const std::string& id);
   // Takes map `id` out of the directory (calls for it then find it gone)
-  // and returns it for the caller to stop; it is kept until the directory
-  // is destroyed. Null when it is not served.
-  ServedMap* Retire(const std::string& id);
+  // and returns it for the caller to stop. It stays allocated while calls
+  // hold it. Null when it is not served.
+  MapHold Retire(const std::string& id);
+  // Frees the retired maps no call holds any more (their connections,
+  // file locks and memory); returns how many retired maps are still held.
+  size_t Reap();
   bool postgres() const { return postgres_; }
   const std::string& data_dir() const { return data_dir_; }
 
  private:
   MapDirectory(std::string data_dir, Opener opener)
       : data_dir_(std::move(data_dir)), opener_(std::move(opener)) {}
-  StatusOr<ServedMap*> Open(const std::string& id, const std::string& db_path,
-                            const MapSettings* create_with = nullptr);
+  StatusOr<MapHold> Open(const std::string& id, const std::string& db_path,
+                         const MapSettings* create_with = nullptr);
 
   const std::string data_dir_;  // empty: one database, or PostgreSQL
   bool postgres_ = false;       // maps of a PostgreSQL database
   const Opener opener_;
   std::mutex create_mu_;  // one Create at a time (it opens files)
   mutable std::mutex mu_;
-  std::map<std::string, std::unique_ptr<ServedMap>> maps_;  // GUARDED_BY(mu_)
-  std::vector<std::unique_ptr<ServedMap>> retired_;         // GUARDED_BY(mu_)
+  std::map<std::string, MapHold> maps_;  // GUARDED_BY(mu_)
+  std::vector<MapHold> retired_;         // GUARDED_BY(mu_)
   ServedMap* default_ = nullptr;  // GUARDED_BY(mu_); with a local store set once, first
   ServerWide server_wide_;        // PostgreSQL only; destroyed after every map
 };

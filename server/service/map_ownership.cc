@@ -39,7 +39,7 @@ Status MapOwnership::RunOnce() {
 }
 
 void MapOwnership::RenewServed() {
-  for (ServedMap* map : maps_->List()) {
+  for (const MapHold& map : maps_->List()) {
     auto* store = dynamic_cast<storage::PgStore*>(&map->core->store());
     if (store == nullptr) continue;
     Status lost;
@@ -144,7 +144,7 @@ std::optional<std::pair<std::string, MapOwner>> MapOwnership::PickHandOff(
     const std::vector<storage::InstanceRow>& live) const {
   std::vector<std::string> names;
   for (const storage::InstanceRow& i : live) names.push_back(i.name);
-  for (ServedMap* map : maps_->List()) {
+  for (const MapHold& map : maps_->List()) {
     const std::string pick = RendezvousPick(map->id, names);
     if (pick.empty() || pick == options_.instance.name) continue;
     for (const storage::InstanceRow& i : live) {
@@ -228,12 +228,23 @@ std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
     if (!catalog_->Settings(id).ok()) return std::nullopt;
     return MapOwner{};
   }
+  // A lease of a map that is not listed: archived (held by nobody, for
+  // ever) or being imported. Neither is served anywhere.
+  if (catalog_->Settings(id).status().code() == StatusCode::kNotFound) {
+    Forget(id);
+    return std::nullopt;
+  }
   MapOwner now{row->owner, row->address, row->expires_in_s > 0};
   if (now.live) {
     std::lock_guard<std::mutex> view_lock(view_mu_);
     view_[id] = now;
   }
   return now;
+}
+
+void MapOwnership::Forget(const std::string& id) {
+  std::lock_guard<std::mutex> lock(view_mu_);
+  view_.erase(id);
 }
 
 std::optional<MapOwner> MapOwnership::Locate(const std::string& id) const {

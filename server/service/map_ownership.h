@@ -82,6 +82,9 @@ class MapOwnership final : public MapLocator {
   // instance, live). LocateNow and Owners: read from the database.
   std::optional<MapOwner> Locate(const std::string& id) const override;
   std::optional<MapOwner> LocateNow(const std::string& id) override;
+  // Map `id` is no longer in the database's list (archived or deleted
+  // here): Locate forgets it until a round sees it again.
+  void Forget(const std::string& id);
   std::map<std::string, MapOwner> Owners() override;
   int retry_after_ms() const override { return static_cast<int>(options_.lease_ttl_s * 250); }
   // Who this instance is; before the first round (the port is known late).

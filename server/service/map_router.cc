@@ -39,9 +39,9 @@ StatusOr<std::string> MapRouter::MapIdOf(const grpc::ServerContextBase& context,
   return from_metadata.empty() ? std::string(kDefaultMapId) : from_metadata;
 }
 
-StatusOr<ServedMap*> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
-                                               const std::string& id) {
-  StatusOr<ServedMap*> map = maps_->Find(id);
+StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
+                                            const std::string& id) {
+  StatusOr<MapHold> map = maps_->Find(id);
   if (map.ok() || locator_ == nullptr) return map;
   const std::string key = id.empty() ? std::string(kDefaultMapId) : id;
   std::optional<MapOwner> owner = locator_->Locate(key);
@@ -63,9 +63,9 @@ grpc::Status MapRouter::Forward(grpc::ServerContextBase& context, const std::str
                                 const std::function<grpc::Status(MapServiceImpl*)>& call) {
   StatusOr<std::string> id = MapIdOf(context, field);
   if (!id.ok()) return ToGrpcStatus(id.status());
-  StatusOr<ServedMap*> map = FindOrRedirect(context, *id);
+  StatusOr<MapHold> map = FindOrRedirect(context, *id);
   if (!map.ok()) return ToGrpcStatus(map.status());
-  return call((*map)->service.get());
+  return call((*map)->service.get());  // `map` holds it until the call returns
 }
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
@@ -73,9 +73,10 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
   using Refused = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<ServedMap*> map = FindOrRedirect(*context, *id);
+  StatusOr<MapHold> map = FindOrRedirect(*context, *id);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
-  return (*map)->service->Ingest(context);
+  MapServiceImpl* service = (*map)->service.get();
+  return service->Ingest(context, *std::move(map));
 }
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
@@ -83,9 +84,10 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<ServedMap*> map = FindOrRedirect(*context, *id);
+  StatusOr<MapHold> map = FindOrRedirect(*context, *id);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
-  return (*map)->service->UploadSubmap(context, response);
+  MapServiceImpl* service = (*map)->service.get();
+  return service->UploadSubmap(context, response, *std::move(map));
 }
 
 grpc::Status MapRouter::GetFeatureMap(grpc::ServerContext* c, const pb::FeatureMapRequest* r,
@@ -166,12 +168,14 @@ grpc::Status MapRouter::WhoAmI(grpc::ServerContext* c, const pb::WhoAmIRequest* 
   return server_wide()->WhoAmI(c, r, out);
 }
 
-grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMapsRequest*,
+grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMapsRequest* request,
                                  pb::ListMapsResponse* response) {
   StatusOr<Principal> p = server_wide()->access().Admit(*context, Permission::kReadMap, "ListMaps");
   if (!p.ok()) return ToGrpcStatus(p.status());
+  response->set_can_create(maps_->can_create());
+  if (request->archived()) return ListArchived(*p, response);
   std::map<std::string, pb::MapInfo> maps;
-  for (ServedMap* map : maps_->List()) ToProto(*map, &maps[map->id]);
+  for (const MapHold& map : maps_->List()) ToProto(*map, &maps[map->id]);
   if (locator_ != nullptr) {  // the database's other maps, and who serves them
     for (const auto& [id, owner] : locator_->Owners()) {
       if (maps.count(id) != 0) continue;
@@ -184,8 +188,27 @@ grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMap
     // A token scoped to maps sees those only.
     if (AuthorizeMap(*p, id, "ListMaps").ok()) *response->add_maps() = std::move(info);
   }
-  response->set_can_create(maps_->can_create());
   return grpc::Status::OK;
+}
+
+grpc::Status MapRouter::ListArchived(const Principal& caller, pb::ListMapsResponse* response) {
+  StatusOr<std::vector<ArchivedMap>> archived = lifecycle_->ListArchived();
+  if (!archived.ok()) return ToGrpcStatus(archived.status());
+  for (const ArchivedMap& a : *archived) {
+    if (!AuthorizeMap(caller, a.id, "ListMaps").ok()) continue;
+    pb::MapInfo* info = response->add_maps();
+    info->set_map_id(a.id);
+    info->set_archived_ns(a.archived_ns);
+  }
+  return grpc::Status::OK;
+}
+
+Status MapRouter::Audit(const Principal& caller, const std::string& action,
+                        const std::string& target, const Status& result) {
+  return maps_->server_wide_core().ExecuteWrite([&](storage::WriteTransaction* txn) {
+    return txn->AppendAudit(
+        AccessControl::Entry(caller, action, target, result.ok() ? "ok" : result.ToString()));
+  });
 }
 
 void MapRouter::set_address(const std::string& address) {
@@ -229,15 +252,11 @@ grpc::Status MapRouter::CreateMap(grpc::ServerContext* context, const pb::Create
   StatusOr<Principal> p = access.Admit(*context, Permission::kManageMaps, "CreateMap", "", target);
   if (!p.ok()) return ToGrpcStatus(p.status());
   const MapSettings settings(request->settings().begin(), request->settings().end());
-  StatusOr<ServedMap*> map = maps_->Create(request->map_id(), settings);
+  StatusOr<MapHold> map = maps_->Create(request->map_id(), settings);
   // The audit row says what happened, made or not (the server's log).
-  const std::string result = map.ok() ? "ok" : map.status().ToString();
-  const Status audited =
-      maps_->server_wide_core().ExecuteWrite([&](storage::WriteTransaction* txn) {
-        return txn->AppendAudit(AccessControl::Entry(*p, "CreateMap", target, result));
-      });
+  const Status audited = Audit(*p, "CreateMap", target, map.status());
   if (!map.ok()) return ToGrpcStatus(map.status());
-  if (on_create_) on_create_(*map);
+  lifecycle_->Created(map->get());
   // An empty map recovers at once: answer once it takes batches, so that the
   // caller's next call is not UNAVAILABLE.
   (*map)->core->WaitUntilReady(std::chrono::seconds(10));
@@ -246,6 +265,65 @@ grpc::Status MapRouter::CreateMap(grpc::ServerContext* context, const pb::Create
     return grpc::Status(grpc::StatusCode::INTERNAL,
                         "map '" + request->map_id() +
                             "' was made, but its audit row was not stored: " + audited.ToString());
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status MapRouter::DeleteMap(grpc::ServerContext* context, const pb::DeleteMapRequest* request,
+                                  pb::DeleteMapResponse* response) {
+  const std::string& id = request->map_id();
+  const std::string target = "map " + id.substr(0, 128) + (request->purge() ? " (purge)" : "");
+  StatusOr<Principal> p =
+      server_wide()->access().Admit(*context, Permission::kManageMaps, "DeleteMap", "", target);
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  if (Status s = CheckMapId(id, "map_id"); !s.ok()) return ToGrpcStatus(s);
+  StatusOr<std::string> where = lifecycle_->DeleteMap(id, request->purge());
+  if (where.status().code() == StatusCode::kNotFound && locator_ != nullptr) {
+    // Served by another mapd of the database? Then the caller goes there.
+    StatusOr<MapHold> elsewhere = FindOrRedirect(*context, id);
+    if (!elsewhere.ok() && elsewhere.status().code() != StatusCode::kNotFound)
+      return ToGrpcStatus(elsewhere.status());
+  }
+  const Status audited = Audit(*p, "DeleteMap", target, where.status());
+  if (!where.ok()) return ToGrpcStatus(where.status());
+  response->set_map_id(id);
+  response->set_purged(request->purge());
+  response->set_where(*where);
+  if (!audited.ok()) {
+    return grpc::Status(grpc::StatusCode::INTERNAL, "map '" + id +
+                                                        "' was deleted, but its audit row was "
+                                                        "not stored: " +
+                                                        audited.ToString());
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status MapRouter::RestoreMap(grpc::ServerContext* context,
+                                   const pb::RestoreMapRequest* request, pb::MapInfo* response) {
+  const std::string& id = request->map_id();
+  const std::string target = "map " + id.substr(0, 128);
+  StatusOr<Principal> p =
+      server_wide()->access().Admit(*context, Permission::kManageMaps, "RestoreMap", "", target);
+  if (!p.ok()) return ToGrpcStatus(p.status());
+  if (Status s = CheckMapId(id, "map_id"); !s.ok()) return ToGrpcStatus(s);
+  StatusOr<MapHold> map = lifecycle_->RestoreMap(id);
+  const Status audited = Audit(*p, "RestoreMap", target, map.status());
+  if (!map.ok()) return ToGrpcStatus(map.status());
+  response->set_map_id(id);
+  if (*map != nullptr) {
+    // Answer once it takes batches (a restored map recovers its fused map).
+    (*map)->core->WaitUntilReady(std::chrono::seconds(30));
+    ToProto(**map, response);
+  } else if (locator_ != nullptr) {
+    if (std::optional<MapOwner> owner = locator_->LocateNow(id)) {
+      response->set_served_by(owner->address);
+    }
+  }
+  if (!audited.ok()) {
+    return grpc::Status(grpc::StatusCode::INTERNAL, "map '" + id +
+                                                        "' was restored, but its audit row was "
+                                                        "not stored: " +
+                                                        audited.ToString());
   }
   return grpc::Status::OK;
 }

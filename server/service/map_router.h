@@ -4,8 +4,11 @@
 // the request's map_id, else the call's mapd-map-id metadata, else
 // "default"; a stream (Ingest, UploadSubmap) by its metadata. Tokens and
 // WhoAmI are the server's and go to the default map's service, whose
-// database holds them; ListAudit reads the named map's log. ListMaps and CreateMap are answered
-// here.
+// database holds them; ListAudit reads the named map's log. ListMaps,
+// CreateMap, DeleteMap and RestoreMap are answered here (map_lifecycle.h).
+//
+// Each call holds its map (MapHold) until it returns, a stream until it
+// ends, so that a deleted map is freed only once no call uses it.
 #ifndef MAPD_SERVICE_MAP_ROUTER_H_
 #define MAPD_SERVICE_MAP_ROUTER_H_
 
@@ -16,6 +19,7 @@
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/map_directory.h"
+#include "service/map_lifecycle.h"
 #include "service/map_locator.h"
 
 namespace mapd::service {
@@ -33,11 +37,10 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
                             mapserver::v1::MapService::WithRawCallbackMethod_Ingest<
                                 mapserver::v1::MapService::Service>> {
  public:
-  // `on_create` runs for each map CreateMap made (health, logs); `locator`
-  // (PostgreSQL only, else null) says where maps not served here are.
-  MapRouter(MapDirectory* maps, std::function<void(ServedMap*)> on_create,
-            MapLocator* locator = nullptr)
-      : maps_(maps), on_create_(std::move(on_create)), locator_(locator) {}
+  // `lifecycle` makes, deletes and restores maps; `locator` (PostgreSQL
+  // only, else null) says where maps not served here are.
+  MapRouter(MapDirectory* maps, MapLifecycle* lifecycle, MapLocator* locator = nullptr)
+      : maps_(maps), lifecycle_(lifecycle), locator_(locator) {}
   // Where clients reach this server (LocateMap), once it is known (the
   // port is bound after the router is made).
   void set_address(const std::string& address);
@@ -117,6 +120,12 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   grpc::Status LocateMap(grpc::ServerContext* context,
                          const mapserver::v1::LocateMapRequest* request,
                          mapserver::v1::MapLocation* response) override;
+  grpc::Status DeleteMap(grpc::ServerContext* context,
+                         const mapserver::v1::DeleteMapRequest* request,
+                         mapserver::v1::DeleteMapResponse* response) override;
+  grpc::Status RestoreMap(grpc::ServerContext* context,
+                          const mapserver::v1::RestoreMapRequest* request,
+                          mapserver::v1::MapInfo* response) override;
 
  private:
   // Runs `call` on the service of the map the call names, or answers why not.
@@ -124,11 +133,16 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
                        const std::function<grpc::Status(MapServiceImpl*)>& call);
   // The map `id` names, or why it is not served here: UNAVAILABLE with the
   // owner's address in kMapOwnerMetadata when another mapd serves it.
-  StatusOr<ServedMap*> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id);
+  StatusOr<MapHold> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id);
+  // The archived maps, for ListMaps.
+  grpc::Status ListArchived(const Principal& caller, mapserver::v1::ListMapsResponse* response);
+  // Writes `action`'s row in the server's audit log; the error when it failed.
+  Status Audit(const Principal& caller, const std::string& action, const std::string& target,
+               const Status& result);
   MapServiceImpl* server_wide() const { return &maps_->server_wide(); }
 
   MapDirectory* const maps_;
-  const std::function<void(ServedMap*)> on_create_;
+  MapLifecycle* const lifecycle_;
   MapLocator* const locator_;
   mutable std::mutex address_mu_;
   std::string address_;  // GUARDED_BY(address_mu_)

@@ -98,7 +98,7 @@ void MapServiceImpl::Tick() {
 }
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ingest(
-    grpc::CallbackServerContext* context) {
+    grpc::CallbackServerContext* context, CallHold hold) {
   // Recovery first (no database read while the map is rebuilt), then the
   // stream limits: a flood of opens costs one refusal each, before any token
   // lookup or audit row (the per-client bucket also bounds the refused writes
@@ -120,7 +120,7 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapServiceImpl::Ing
     return new RefusedIngest(ToGrpcStatus(may));
   }
   return new IngestReactor(context, core_, &ingest_options_, &ingest_streams_, access_,
-                           *std::move(who), std::move(slot));
+                           *std::move(who), std::move(slot), std::move(hold));
 }
 
 grpc::Status MapServiceImpl::GetFeatureMap(grpc::ServerContext* context,
@@ -255,7 +255,7 @@ grpc::Status MapServiceImpl::GetStats(grpc::ServerContext* context, const pb::Ge
 }
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
-    grpc::CallbackServerContext* context, pb::SubmapInfo* response) {
+    grpc::CallbackServerContext* context, pb::SubmapInfo* response, CallHold hold) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StreamSlot slot;
   if (Status admitted = limiter_->TryOpen(context->peer(), &slot); !admitted.ok()) {
@@ -272,7 +272,7 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapServiceImpl::UploadSubmap(
   }
   if (draining_)
     return new Refused(grpc::Status(grpc::StatusCode::UNAVAILABLE, "mapd is shutting down"));
-  return submaps_.Upload(context, response, std::move(slot), *std::move(p));
+  return submaps_.Upload(context, response, std::move(slot), *std::move(p), std::move(hold));
 }
 grpc::Status MapServiceImpl::ListSubmaps(grpc::ServerContext* context,
                                          const pb::ListSubmapsRequest* request,

@@ -64,7 +64,12 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   }
 
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Ingest(
-      grpc::CallbackServerContext* context) override;
+      grpc::CallbackServerContext* context) override {
+    return Ingest(context, nullptr);
+  }
+  // The stream holds `hold` (its map) until it ends.
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Ingest(
+      grpc::CallbackServerContext* context, CallHold hold);
 
   grpc::Status GetFeatureMap(grpc::ServerContext* context,
                              const mapserver::v1::FeatureMapRequest* request,
@@ -85,7 +90,11 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
 
   // Voxel submaps: delegated to SubmapService (submap_service.h).
   grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(
-      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response) override;
+      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response) override {
+    return UploadSubmap(context, response, nullptr);
+  }
+  grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* UploadSubmap(
+      grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response, CallHold hold);
   grpc::Status ListSubmaps(grpc::ServerContext* context,
                            const mapserver::v1::ListSubmapsRequest* request,
                            mapserver::v1::ListSubmapsResponse* response) override;

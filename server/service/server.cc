@@ -113,8 +113,8 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     if (!ownership.ok()) return ownership.status();
     server->ownership_ = std::move(ownership).value();
   }
-  server->router_ = std::make_unique<MapRouter>(
-      server->maps_.get(), [s](ServedMap* map) { s->WatchMap(map); }, server->ownership_.get());
+  server->router_ =
+      std::make_unique<MapRouter>(server->maps_.get(), s, server->ownership_.get());
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -199,7 +199,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
        {"health", "NOT_SERVING"},
        {"reason", "recovering the fused map"},
        {"malloc_huge_pages", MallocHugePages()}});
-  for (ServedMap* map : server->maps_->List()) server->WatchMap(map);
+  for (const MapHold& map : server->maps_->List()) server->WatchMap(map.get());
   server->router_->set_address(server->Instance().address);
   if (server->ownership_ != nullptr) {
     // Who this instance is, now that the port is bound (port 0 in tests).
@@ -319,7 +319,7 @@ void MapServer::WatchMap(ServedMap* map) {
 void MapServer::UpdateHealthLocked() {
   grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService();
   bool all = !shut_down_;
-  for (ServedMap* map : maps_->List()) {
+  for (const MapHold& map : maps_->List()) {
     const bool serving = !shut_down_ && map->core->ready() && map->core->write_health().ok();
     health->SetServingStatus("map/" + map->id, serving);
     all = all && serving;
@@ -335,7 +335,8 @@ void MapServer::Housekeeping() {
                                     [this] { return housekeeping_stop_; })) {
     lock.unlock();
     if (maps_->postgres()) maps_->server_wide().Tick();  // its audit rows and denials
-    for (ServedMap* map : maps_->List()) map->service->Tick();
+    for (const MapHold& map : maps_->List()) map->service->Tick();
+    maps_->Reap();  // deleted, handed-off and dropped maps, once no call holds them
     FlushSuppressedLogs();
     // Give memory back after a burst: a flood of streams leaves gRPC's and
     // malloc's freed memory in the heap (1.5 GiB, never returned, before).
@@ -357,7 +358,7 @@ void MapServer::Housekeeping() {
 
 bool MapServer::WaitUntilServing(std::chrono::duration<double> timeout) const {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (ServedMap* map : maps_->List()) {
+  for (const MapHold& map : maps_->List()) {
     const MapCore& core = *map->core;
     if (!core.WaitUntilReady(deadline - std::chrono::steady_clock::now()) ||
         !core.CheckReady().ok()) {
@@ -384,7 +385,7 @@ void MapServer::Shutdown() {
     std::lock_guard<std::mutex> lock(health_mu_);
     UpdateHealthLocked();  // NOT_SERVING, every map
   }
-  for (ServedMap* map : maps_->List()) map->service->StartDraining();
+  for (const MapHold& map : maps_->List()) map->service->StartDraining();
   // The calls in progress get the grace period; then gRPC gets 100 ms more
   // (for a call that came in just now) before it cancels what is left and
   // closes the idle connections, which it would otherwise wait for
@@ -407,7 +408,7 @@ void MapServer::Shutdown() {
   // The counts of the last denials (denial_audit.h), into the default map's
   // database, before it stops.
   maps_->server_wide().FlushDenials(/*all=*/true);
-  for (ServedMap* map : maps_->List()) map->core->Stop();  // commits what is queued, checkpoints
+  for (const MapHold& map : maps_->List()) map->core->Stop();  // commits what is queued, checkpoints
   // The leases lapse as the stores close (MapServer's destructor), so that
   // the maps' next owners take them at once.
   if (ownership_ != nullptr) ownership_->Stop();

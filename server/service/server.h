@@ -18,6 +18,7 @@
 #include "service/config.h"
 #include "service/map_core.h"
 #include "service/map_directory.h"
+#include "service/map_lifecycle.h"
 #include "service/map_ownership.h"
 #include "service/map_router.h"
 #include "service/map_service.h"
@@ -25,7 +26,7 @@
 
 namespace mapd::service {
 
-class MapServer {
+class MapServer final : public MapLifecycle {
  public:
   // Opens the database (or the maps of data_dir) and starts listening at
   // once. Each fused map is recovered in the background (MapCore::Open):
@@ -61,6 +62,12 @@ class MapServer {
   // Blocks until the gRPC server has shut down.
   void Wait();
 
+  // MapLifecycle (server_maps.cc).
+  void Created(ServedMap* map) override { WatchMap(map); }
+  StatusOr<std::string> DeleteMap(const std::string& id, bool purge) override;
+  StatusOr<MapHold> RestoreMap(const std::string& id) override;
+  StatusOr<std::vector<ArchivedMap>> ListArchived() override;
+
  private:
   MapServer() = default;
   // Opens map `id` (MapDirectory::Opener).
@@ -88,7 +95,11 @@ class MapServer {
   // Each map SERVING once it is recovered, while its database takes writes
   // and until Shutdown(); "" while every map is. REQUIRES: health_mu_ held.
   void UpdateHealthLocked();
-  void Housekeeping();  // every second: idle uploads, log summaries, memory trim
+  // DeleteMap's parts: stop map `id` and archive it; delete an archive.
+  StatusOr<std::string> Archive(const std::string& id, MapHold map);
+  Status Purge(const std::string& id);
+  bool IsArchived(const std::string& id);
+  void Housekeeping();  // every second: idle uploads, log summaries, freed maps, memory trim
   void StopHousekeeping();
 
   ServerConfig config_;
@@ -99,6 +110,7 @@ class MapServer {
   std::unique_ptr<MapDirectory> maps_;
   std::unique_ptr<MapOwnership> ownership_;  // PostgreSQL only; goes before maps_
   std::unique_ptr<MapRouter> router_;
+  std::mutex lifecycle_mu_;  // one DeleteMap or RestoreMap at a time
   CallsInProgress calls_;  // before server_: its interceptors point here
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;

@@ -48,12 +48,12 @@ Status MapServer::TakeMap(const std::string& id) {
     std::lock_guard<std::mutex> lock(health_mu_);
     if (shut_down_) return Status::Unavailable("mapd is shutting down");
   }
-  StatusOr<ServedMap*> map = maps_->Serve(id);
+  StatusOr<MapHold> map = maps_->Serve(id);
   if (!map.ok()) return map.status();
   auto* store = dynamic_cast<storage::PgStore*>(&(*map)->core->store());
   Log(LogLevel::kInfo, "map_taken",
       {{"map", id}, {"epoch", store ? std::to_string(store->lease().epoch) : "?"}});
-  WatchMap(*map);
+  WatchMap(map->get());
   return Status::Ok();
 }
 
@@ -70,7 +70,7 @@ Status Served(const std::string& id, const std::string& how) {
 }  // namespace
 
 Status MapServer::HandOffMap(const std::string& id) {
-  ServedMap* map = maps_->Retire(id);
+  MapHold map = maps_->Retire(id);
   if (map == nullptr) return Status::NotFound("map '" + id + "' is not served here");
   map->service->StartDraining();  // streams end UNAVAILABLE; robots go to the new owner
   map->core->Stop();              // commits what is queued, writes a snapshot
@@ -87,7 +87,7 @@ Status MapServer::HandOffMap(const std::string& id) {
 }
 
 void MapServer::DropMap(const std::string& id, const Status& why) {
-  ServedMap* map = maps_->Retire(id);
+  MapHold map = maps_->Retire(id);
   if (map == nullptr) return;
   Log(LogLevel::kWarn, "map_dropped",
       {{"map", id},
@@ -134,7 +134,9 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenPostgresMap(std::unique_ptr<
         return fail(Status(s.code(), where + ": " + s.message()));
       }
       map->settings = *std::move(settings);
-    } else if (text.status().code() != StatusCode::kNotFound) {  // NotFound: a new default map
+    } else if (text.status().code() != StatusCode::kNotFound || id != kDefaultMapId) {
+      // NotFound: a new default map; any other map was archived or
+      // deleted since the ownership round listed it.
       return fail(text.status());
     }
   }

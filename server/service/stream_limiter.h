@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -19,6 +20,10 @@
 #include "service/options.h"
 
 namespace mapd::service {
+
+// What keeps a stream's map allocated while the stream is open (a
+// MapHold, map_directory.h): a stream outlives the call that opened it.
+using CallHold = std::shared_ptr<const void>;
 
 class StreamLimiter;
 

@@ -243,7 +243,7 @@ std::string SubmapService::UploadTarget(const pb::SubmapHeader& header) {
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(
     grpc::CallbackServerContext* context, pb::SubmapInfo* response, StreamSlot slot,
-    Principal caller) {
+    Principal caller, CallHold hold) {
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   if (draining_) return new Refused(ShuttingDown());
   std::lock_guard<std::mutex> lock(uploads_mu_);
@@ -256,7 +256,8 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* SubmapService::Upload(
                          " uploads are in progress (limits.max_concurrent_uploads); retry later"));
   }
   ++active_uploads_;
-  auto* reactor = new UploadReactor(this, context, response, std::move(slot), std::move(caller));
+  auto* reactor = new UploadReactor(this, context, response, std::move(slot), std::move(caller),
+                                    std::move(hold));
   uploads_.insert(reactor);
   return reactor;
 }

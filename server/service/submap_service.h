@@ -107,7 +107,7 @@ class SubmapService {
   // header's robot id against it before accepting any chunk.
   grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* Upload(
       grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response, StreamSlot slot,
-      Principal caller);
+      Principal caller, CallHold hold = nullptr);
   // Ends uploads idle for longer than upload_idle_timeout_s (called every second).
   void ExpireIdleUploads();
 

@@ -10,8 +10,10 @@ namespace mapd::service {
 namespace pb = mapserver::v1;
 
 UploadReactor::UploadReactor(SubmapService* service, grpc::CallbackServerContext* context,
-                             pb::SubmapInfo* response, StreamSlot slot, Principal caller)
-    : service_(service),
+                             pb::SubmapInfo* response, StreamSlot slot, Principal caller,
+                             CallHold hold)
+    : hold_(std::move(hold)),
+      service_(service),
       context_(context),
       response_(response),
       slot_(std::move(slot)),

@@ -35,7 +35,8 @@ class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmap
  public:
   // Starts reading. `service` outlives every reactor (it waits for them).
   UploadReactor(SubmapService* service, grpc::CallbackServerContext* context,
-                mapserver::v1::SubmapInfo* response, StreamSlot slot, Principal caller);
+                mapserver::v1::SubmapInfo* response, StreamSlot slot, Principal caller,
+                CallHold hold = nullptr);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
@@ -51,6 +52,7 @@ class UploadReactor : public grpc::ServerReadReactor<mapserver::v1::UploadSubmap
   // otherwise the refusal finishes the call (asynchronously, once audited).
   bool CallerMayUpload();
 
+  const CallHold hold_;  // first: released last, after every member that uses the map
   SubmapService* const service_;
   grpc::CallbackServerContext* const context_;
   mapserver::v1::SubmapInfo* const response_;

@@ -24,7 +24,7 @@ constexpr std::chrono::milliseconds kPoll(250);  // how soon a stream sees Stop(
 constexpr std::chrono::seconds kPing(10);
 
 struct EventStream {
-  service::Core* core = nullptr;
+  std::shared_ptr<service::Core> core;  // held while the stream is open
   std::shared_ptr<service::Watcher> watcher;
   std::vector<service::ChangePtr> replay;  // sent first, then the queue
   bool resync = true;
@@ -91,7 +91,8 @@ struct EventStream {
 
 }  // namespace
 
-void ServeEvents(service::Core* core, const httplib::Request& req, httplib::Response& res,
+void ServeEvents(std::shared_ptr<service::Core> core, const httplib::Request& req,
+                 httplib::Response& res,
                  const std::atomic<bool>* stopping, std::atomic<int>* streams) {
   constexpr int kMaxStreams = 16;
   std::string since_text = req.get_header_value("Last-Event-ID");
@@ -104,7 +105,7 @@ void ServeEvents(service::Core* core, const httplib::Request& req, httplib::Resp
   }
   if (since > core->watch_hub().version()) since = 0;  // another map: start over
   auto stream = std::make_shared<EventStream>();
-  stream->core = core;
+  stream->core = std::move(core);
   if (streams->fetch_add(1) >= kMaxStreams) {
     streams->fetch_sub(1);
     return SendError(
@@ -113,7 +114,8 @@ void ServeEvents(service::Core* core, const httplib::Request& req, httplib::Resp
   }
   // The hub cancels a blocked write at shutdown; here the write timeout
   // bounds it and the stream sees `stopping` within kPoll.
-  StatusOr<service::WatchHub::Subscription> sub = core->watch_hub().Subscribe(since, [] {});
+  StatusOr<service::WatchHub::Subscription> sub =
+      stream->core->watch_hub().Subscribe(since, [] {});
   if (!sub.ok()) {
     streams->fetch_sub(1);
     return SendError(res, sub.status());

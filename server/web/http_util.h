@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "common/status.h"
@@ -18,8 +19,9 @@ void SendError(httplib::Response& res, const Status& status);
 StatusOr<uint64_t> ParseId(const std::string& text, const std::string& what);
 
 // GET /api/events (events.cc). Ends when the client goes, at `stopping`, or
-// when the hub closes.
-void ServeEvents(service::Core* core, const httplib::Request& req, httplib::Response& res,
+// when the hub closes; holds `core` until then.
+void ServeEvents(std::shared_ptr<service::Core> core, const httplib::Request& req,
+                 httplib::Response& res,
                  const std::atomic<bool>* stopping, std::atomic<int>* streams);
 // GET /api/robots (robots.cc).
 void ServeRobots(service::Core* core, httplib::Response& res);

@@ -161,7 +161,7 @@ void WebServer::Route() {
   // then finds the map it is about (?map=ID; absent: the default map).
   struct Admitted {
     service::Principal who;
-    service::Core* core = nullptr;
+    std::shared_ptr<service::Core> core;  // held until the request is answered
   };
   auto authenticate = [this](const Request& req) {
     const std::string* header =
@@ -175,10 +175,14 @@ void WebServer::Route() {
     StatusOr<service::Principal> who = authenticate(req);
     Status s = who.ok() ? access_.Check(*who, permission, action, "", "web") : who.status();
     const std::string map = req.has_param("map") ? req.get_param_value("map") : "default";
-    service::Core* core = nullptr;
+    std::shared_ptr<service::Core> core;
     if (s.ok()) s = access_.CheckMap(*who, map, action);
     if (s.ok()) {
-      core = !options_.find_map ? (map == "default" ? core_ : nullptr) : options_.find_map(map);
+      if (options_.find_map) {
+        core = options_.find_map(map);
+      } else if (map == "default") {
+        core = std::shared_ptr<service::Core>(std::shared_ptr<void>(), core_);  // not owned
+      }
       if (core == nullptr) {
         s = Status::NotFound("map '" + EscapeControlChars(map.substr(0, 128)) +
                              "' is not served here; /api/maps lists the maps");
@@ -191,7 +195,8 @@ void WebServer::Route() {
     }
     return Admitted{*who, core};
   };
-  auto read = [admit](const Request& req, Response& res, const char* action) -> service::Core* {
+  auto read = [admit](const Request& req, Response& res,
+                      const char* action) -> std::shared_ptr<service::Core> {
     StatusOr<Admitted> a = admit(req, res, service::Permission::kReadMap, action);
     return a.ok() ? a->core : nullptr;
   };
@@ -213,7 +218,7 @@ void WebServer::Route() {
     SendJson(res, {{"maps", std::move(maps)}});
   });
   http_->Get("/api/features", [read](const Request& req, Response& res) {
-    service::Core* core = read(req, res, "GetFeatureMap");
+    std::shared_ptr<service::Core> core = read(req, res, "GetFeatureMap");
     if (core == nullptr) return;
     uint64_t version = 0;
     std::vector<service::PlaneView> planes;
@@ -222,21 +227,21 @@ void WebServer::Route() {
     SendJson(res, MapJson(version, lines, planes));
   });
   http_->Get("/api/events", [this, read](const Request& req, Response& res) {
-    service::Core* core = read(req, res, "WatchFeatureMap");
-    if (core != nullptr) ServeEvents(core, req, res, &stopping_, &event_streams_);
+    std::shared_ptr<service::Core> core = read(req, res, "WatchFeatureMap");
+    if (core != nullptr) ServeEvents(std::move(core), req, res, &stopping_, &event_streams_);
   });
   http_->Get("/api/robots", [read](const Request& req, Response& res) {
-    if (service::Core* core = read(req, res, "ListRobots")) ServeRobots(core, res);
+    if (auto core = read(req, res, "ListRobots")) ServeRobots(core.get(), res);
   });
   http_->Get("/api/global-map.png", [read](const Request& req, Response& res) {
-    if (service::Core* core = read(req, res, "GetGlobalMap")) ServeGlobalMap(core, res);
+    if (auto core = read(req, res, "GetGlobalMap")) ServeGlobalMap(core.get(), res);
   });
   http_->Get("/metrics", [read](const Request& req, Response& res) {
-    if (service::Core* core = read(req, res, "GetStats"))
+    if (auto core = read(req, res, "GetStats"))
       res.set_content(MetricsText(*core), "text/plain; version=0.0.4; charset=utf-8");
   });
   http_->Get("/api/merges", [read](const Request& req, Response& res) {
-    service::Core* core = read(req, res, "ListMerges");
+    std::shared_ptr<service::Core> core = read(req, res, "ListMerges");
     if (core == nullptr) return;
     const std::string state = req.get_param_value("state");
     if (!state.empty() && state != "proposed" && state != "accepted" && state != "rejected" &&
@@ -259,7 +264,7 @@ void WebServer::Route() {
     const char* action = approve ? "ApproveMerge" : "RejectMerge";
     StatusOr<Admitted> admitted = admit(req, res, service::Permission::kMerge, action);
     if (!admitted.ok()) return;
-    service::Core* const core = admitted->core;
+    service::Core* const core = admitted->core.get();
     StatusOr<uint64_t> id = ParseId(req.matches[1], "merge id");
     if (!id.ok()) return SendError(res, id.status());
     std::string reason;

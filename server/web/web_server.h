@@ -53,7 +53,8 @@ struct WebServerOptions {
   // The server's maps (service/map_directory.h): their ids, and a map's core
   // (null when not served). Unset: the one core Start() is given, as "default".
   std::function<std::vector<std::string>()> list_maps;
-  std::function<service::Core*(const std::string&)> find_map;
+  // The map's core, held while a request uses it (MapDirectory::FindCore).
+  std::function<std::shared_ptr<service::Core>(const std::string&)> find_map;
 };
 
 class WebServer {

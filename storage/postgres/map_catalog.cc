@@ -22,7 +22,8 @@ StatusOr<PgResult> PgMapCatalog::Query(const std::string& sql, const PgParams& p
 
 StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {
   StatusOr<PgResult> r =
-      Query("SELECT id FROM maps WHERE NOT importing ORDER BY id COLLATE \"C\"", {});
+      Query("SELECT id FROM maps WHERE NOT importing AND archived_ns = 0 ORDER BY id COLLATE \"C\"",
+            {});
   if (!r.ok()) return r.status();
   std::vector<std::string> ids;
   for (int i = 0; i < r->rows(); ++i) ids.push_back(r->Text(i, 0));
@@ -52,7 +53,8 @@ Status PgMapCatalog::CreateMap(const std::string& id, const std::string& setting
 StatusOr<std::string> PgMapCatalog::Settings(const std::string& id) {
   PgParams p;
   p.Text(id);
-  StatusOr<PgResult> r = Query("SELECT settings FROM maps WHERE id = $1 AND NOT importing", p);
+  StatusOr<PgResult> r =
+      Query("SELECT settings FROM maps WHERE id = $1 AND NOT importing AND archived_ns = 0", p);
   if (!r.ok()) return r.status();
   if (r->rows() == 0) return Status::NotFound("no map '" + id + "' in the PostgreSQL database");
   return r->Text(0, 0);
@@ -124,6 +126,57 @@ Status PgMapCatalog::DiscardImport(const std::string& id) {
   }
   std::lock_guard<std::mutex> lock(*mu_);
   return DeleteMapRows(conn_, id);
+}
+
+Status PgMapCatalog::ArchiveMap(const MapLease& lease, int64_t now_ns) {
+  PgParams p;
+  p.Text(lease.map_id).Text(lease.owner).Int(lease.epoch).Int(now_ns);
+  // One statement: the fence and the flag commit together.
+  StatusOr<PgResult> r = Query(
+      "WITH fenced AS (UPDATE map_leases SET owner = '', address = '', epoch = epoch + 1, "
+      "expires_at = 'infinity' WHERE map = $1 AND owner = $2 AND epoch = $3 RETURNING map) "
+      "UPDATE maps SET archived_ns = $4 WHERE id IN (SELECT map FROM fenced) AND archived_ns = 0 "
+      "AND NOT importing",
+      p);
+  if (!r.ok()) return r.status();
+  if (r->affected() == 0) {
+    return Status::FailedPrecondition("map '" + lease.map_id +
+                                      "' is no longer served under this lease (another mapd took "
+                                      "it over); nothing was archived");
+  }
+  return Status::Ok();
+}
+
+StatusOr<std::vector<PgMapCatalog::Archived>> PgMapCatalog::ListArchived() {
+  StatusOr<PgResult> r = Query(
+      "SELECT id, archived_ns FROM maps WHERE archived_ns <> 0 ORDER BY id COLLATE \"C\"", {});
+  if (!r.ok()) return r.status();
+  std::vector<Archived> out;
+  for (int i = 0; i < r->rows(); ++i) out.push_back({r->Text(i, 0), r->Int(i, 1)});
+  return out;
+}
+
+Status PgMapCatalog::RestoreMap(const std::string& id) {
+  MAPD_RETURN_IF_ERROR(CheckPgMapId(id));
+  PgParams p;
+  p.Text(id);
+  StatusOr<PgResult> r = Query(
+      "WITH back AS (UPDATE maps SET archived_ns = 0 WHERE id = $1 AND archived_ns <> 0 "
+      "RETURNING id) UPDATE map_leases SET expires_at = clock_timestamp() WHERE map IN (SELECT "
+      "id FROM back)",
+      p);
+  if (!r.ok()) return r.status();
+  if (r->affected() == 1) return Status::Ok();
+  r = Query("SELECT archived_ns FROM maps WHERE id = $1", p);
+  if (!r.ok()) return r.status();
+  if (r->rows() == 0) return Status::NotFound("no map '" + id + "' in the PostgreSQL database");
+  return Status::FailedPrecondition("map '" + id + "' is not archived");
+}
+
+Status PgMapCatalog::PurgeArchived(const std::string& id) {
+  MAPD_RETURN_IF_ERROR(CheckPgMapId(id));
+  std::lock_guard<std::mutex> lock(*mu_);
+  return DeleteMapRows(conn_, id, /*only_archived=*/true);
 }
 
 }  // namespace mapd::storage

@@ -24,7 +24,7 @@ class PgMapCatalog {
   // Connects and migrates the schema (schema.h).
   static StatusOr<PgMapCatalog> Open(const std::string& conninfo);
 
-  // Every map's id, sorted.
+  // Every map's id, sorted (not the archived or importing ones).
   StatusOr<std::vector<std::string>> ListMaps();
   // Adds map `id` with `settings` (opaque text); AlreadyExists if it exists,
   // InvalidArgument for a malformed id. With `owner`, in the same statement a
@@ -33,7 +33,7 @@ class PgMapCatalog {
   Status CreateMap(const std::string& id, const std::string& settings, int64_t now_ns,
                    const PgInstance* owner = nullptr, double ttl_s = 0);
   // A map's settings ('' when it has none); NotFound when there is no such
-  // map (or it is being imported).
+  // map (or it is being imported, or archived).
   StatusOr<std::string> Settings(const std::string& id);
 
   // --- Imports (mapd migrate): a map copied in from elsewhere is in the
@@ -54,6 +54,26 @@ class PgMapCatalog {
   // Deletes an importing map and every row of it (a copy that failed).
   // FailedPrecondition for a map that is not importing.
   Status DiscardImport(const std::string& id);
+
+  // --- Archives (DeleteMap without purge): the map's rows stay, and no
+  // instance lists or serves it until RestoreMap.
+  struct Archived {
+    std::string id;
+    int64_t archived_ns = 0;
+  };
+  // Archives the map of `lease` (its owner's, whose writer has stopped):
+  // the lease passes to nobody, for ever, with the next epoch, so that a
+  // write of the old owner's can no longer commit. FailedPrecondition when
+  // `lease` is no longer the map's.
+  Status ArchiveMap(const MapLease& lease, int64_t now_ns);
+  // The archived maps, by id.
+  StatusOr<std::vector<Archived>> ListArchived();
+  // Lists and serves map `id` again (its lease lapsed: any instance takes
+  // it). NotFound / FailedPrecondition when it is not there / not archived.
+  Status RestoreMap(const std::string& id);
+  // Deletes an archived map and every row of it, for good (NotFound /
+  // FailedPrecondition as RestoreMap).
+  Status PurgeArchived(const std::string& id);
 
  private:
   StatusOr<PgResult> Query(const std::string& sql, const PgParams& params);

@@ -236,6 +236,12 @@ const std::vector<const char*>& Migrations() {
       R"sql(
       ALTER TABLE maps ADD COLUMN importing boolean NOT NULL DEFAULT false;
       )sql",
+      // 3 -> 4: an archived map (DeleteMap without purge) keeps its rows but
+      // is neither listed nor served; its lease is held by nobody, for ever
+      // (owner '', expires_at 'infinity'), so that no instance takes it.
+      R"sql(
+      ALTER TABLE maps ADD COLUMN archived_ns bigint NOT NULL DEFAULT 0;
+      )sql",
   };
   return kMigrations;
 }
@@ -326,7 +332,7 @@ StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_
   return row;
 }
 
-Status DeleteMapRows(PgConnection& conn, const std::string& map_id) {
+Status DeleteMapRows(PgConnection& conn, const std::string& map_id, bool only_archived) {
   MAPD_RETURN_IF_ERROR(CheckPgMapId(map_id));
   // Every table keyed by map (Migrations()) but observations, whose rows go
   // with the map's partition; tokens are the database's.
@@ -351,8 +357,15 @@ Status DeleteMapRows(PgConnection& conn, const std::string& map_id) {
         conn.Exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")"));
     PgParams p;
     p.Text(map_id);
-    StatusOr<PgResult> num = conn.Query("SELECT num FROM maps WHERE id = $1", p);
+    StatusOr<PgResult> num =
+        conn.Query("SELECT num, archived_ns FROM maps WHERE id = $1 FOR UPDATE", p);
     if (!num.ok()) return num.status();
+    if (only_archived && num->rows() == 0) {
+      return Status::NotFound("no map '" + map_id + "' in the PostgreSQL database");
+    }
+    if (only_archived && num->Int(0, 1) == 0) {
+      return Status::FailedPrecondition("map '" + map_id + "' is not archived");
+    }
     for (const char* table : kTables) {
       StatusOr<PgResult> r = conn.Query(std::string("DELETE FROM ") + table + " WHERE map = $1", p);
       if (!r.ok()) return r.status();

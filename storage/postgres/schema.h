@@ -29,8 +29,10 @@ struct MapRow {
 // Adds `map_id`'s row and partition if missing (CheckPgMapId first).
 StatusOr<MapRow> EnsureMap(PgConnection& conn, const std::string& map_id, int64_t now_ns);
 // Deletes every row of `map_id`, its partition and its catalog row, in one
-// transaction. Ok if there is no such map.
-Status DeleteMapRows(PgConnection& conn, const std::string& map_id);
+// transaction. Ok if there is no such map, unless `only_archived`: then
+// NotFound, and FailedPrecondition for a map that is not archived (checked
+// under the map row's lock, so that a restore and a purge do not interleave).
+Status DeleteMapRows(PgConnection& conn, const std::string& map_id, bool only_archived = false);
 
 }  // namespace mapd::storage
 
