@@ -293,8 +293,8 @@ void AddMapCommands(CLI::App* app, Action* action) {
       "--json", BindCommand(status, action, RunStatus)->json,
       "the Stats message in protobuf JSON (.proto field names; 64-bit counts are strings)");
 
-  CLI::App* maps = app->add_subcommand(
-      "maps", "the maps the server serves; maps create | delete | restore ID");
+  CLI::App* maps =
+      app->add_subcommand("maps", "the maps the server serves; maps create | delete | restore ID");
   maps->footer(
       "Each map is its own map frame, fused map, submaps and merges; name one with\n"
       "'mapctl --map ID <command>' or $MAPD_MAP. mapd --data-dir serves several.\n"

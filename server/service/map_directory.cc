@@ -240,8 +240,7 @@ StatusOr<MapHold> MapDirectory::Create(const std::string& id, const MapSettings&
   if (Find(id).ok()) return Status::AlreadyExists("map '" + id + "' exists already");
   if (postgres_) return Open(id, "", &settings);  // the opener adds the map's row
   if (IsArchived(data_dir_, id)) {
-    return Status::AlreadyExists("map '" + id + "' is archived (" +
-                                 ArchivedMapPath(data_dir_, id) +
+    return Status::AlreadyExists("map '" + id + "' is archived (" + ArchivedMapPath(data_dir_, id) +
                                  "): restore it (mapctl maps restore " + id +
                                  ") or delete it for good (mapctl maps delete " + id +
                                  " --purge) first");

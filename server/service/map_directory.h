@@ -106,7 +106,7 @@ class MapDirectory {
   Core& server_wide_core() const;
   // The default map when served here, else null.
   ServedMap* default_map() const;
-  std::vector<MapHold> List() const;  // by id
+  std::vector<MapHold> List() const;     // by id
   std::vector<std::string> Ids() const;  // sorted
   // The map's core, held (as Find), or null when not served.
   std::shared_ptr<Core> FindCore(const std::string& id) const;
@@ -143,8 +143,8 @@ class MapDirectory {
   mutable std::mutex mu_;
   std::map<std::string, MapHold> maps_;  // GUARDED_BY(mu_)
   std::vector<MapHold> retired_;         // GUARDED_BY(mu_)
-  ServedMap* default_ = nullptr;  // GUARDED_BY(mu_); with a local store set once, first
-  ServerWide server_wide_;        // PostgreSQL only; destroyed after every map
+  ServedMap* default_ = nullptr;         // GUARDED_BY(mu_); with a local store set once, first
+  ServerWide server_wide_;               // PostgreSQL only; destroyed after every map
 };
 
 }  // namespace mapd::service

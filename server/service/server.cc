@@ -113,8 +113,7 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     if (!ownership.ok()) return ownership.status();
     server->ownership_ = std::move(ownership).value();
   }
-  server->router_ =
-      std::make_unique<MapRouter>(server->maps_.get(), s, server->ownership_.get());
+  server->router_ = std::make_unique<MapRouter>(server->maps_.get(), s, server->ownership_.get());
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
@@ -408,7 +407,8 @@ void MapServer::Shutdown() {
   // The counts of the last denials (denial_audit.h), into the default map's
   // database, before it stops.
   maps_->server_wide().FlushDenials(/*all=*/true);
-  for (const MapHold& map : maps_->List()) map->core->Stop();  // commits what is queued, checkpoints
+  for (const MapHold& map : maps_->List())
+    map->core->Stop();  // commits what is queued, checkpoints
   // The leases lapse as the stores close (MapServer's destructor), so that
   // the maps' next owners take them at once.
   if (ownership_ != nullptr) ownership_->Stop();

@@ -111,7 +111,7 @@ class MapServer final : public MapLifecycle {
   std::unique_ptr<MapOwnership> ownership_;  // PostgreSQL only; goes before maps_
   std::unique_ptr<MapRouter> router_;
   std::mutex lifecycle_mu_;  // one DeleteMap or RestoreMap at a time
-  CallsInProgress calls_;  // before server_: its interceptors point here
+  CallsInProgress calls_;    // before server_: its interceptors point here
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
   int health_port_ = 0;

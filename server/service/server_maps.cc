@@ -61,8 +61,9 @@ StatusOr<std::string> MapServer::Archive(const std::string& id, MapHold map) {
   }
   if (maps_->postgres()) {
     auto* store = dynamic_cast<storage::PgStore*>(&map->core->store());
-    Status archived = store != nullptr ? catalog_->ArchiveMap(store->lease(), UnixNowNs())
-                                       : Status::Internal("map '" + id + "' has no PostgreSQL store");
+    Status archived = store != nullptr
+                          ? catalog_->ArchiveMap(store->lease(), UnixNowNs())
+                          : Status::Internal("map '" + id + "' has no PostgreSQL store");
     if (store != nullptr) {
       // Without the archive the lease lapses (nobody renews it) and an
       // instance takes the map again: nothing is lost either way.
@@ -88,10 +89,10 @@ StatusOr<std::string> MapServer::Archive(const std::string& id, MapHold map) {
     // Serve it again rather than leave it half gone.
     StatusOr<MapHold> back = maps_->Reopen(id);
     if (back.ok()) WatchMap(back->get());
-    return Status(moved.code(), "map '" + id + "' was not archived: " + moved.message() +
-                                    (back.ok() ? "; it is served again"
-                                               : "; it could not be served again: " +
-                                                     back.status().message()));
+    return Status(moved.code(),
+                  "map '" + id + "' was not archived: " + moved.message() +
+                      (back.ok() ? "; it is served again"
+                                 : "; it could not be served again: " + back.status().message()));
   }
   const std::string where = ArchivedMapPath(config_.data_dir, id);
   Log(LogLevel::kInfo, "map_archived", {{"map", id}, {"where", where}});
@@ -137,9 +138,10 @@ StatusOr<MapHold> MapServer::RestoreMap(const std::string& id) {
   if (!map.ok()) {
     // Back into the archive: a map that cannot be served must not stop the next start.
     Status back = ArchiveMapFiles(config_.data_dir, id);
-    return Status(map.status().code(),
-                  "map '" + id + "' cannot be served: " + map.status().message() +
-                      (back.ok() ? "; it stays archived" : "; its files are back in the directory"));
+    return Status(
+        map.status().code(),
+        "map '" + id + "' cannot be served: " + map.status().message() +
+            (back.ok() ? "; it stays archived" : "; its files are back in the directory"));
   }
   WatchMap(map->get());
   Log(LogLevel::kInfo, "map_restored", {{"map", id}, {"from", config_.data_dir}});

@@ -117,6 +117,13 @@ StatusOr<std::unique_ptr<ServedMap>> MapServer::OpenPostgresMap(std::unique_ptr<
     // With a lease for this instance, so that no other takes the new map first.
     Status made = catalog_->CreateMap(id, MapSettingsText(*create_with), UnixNowNs(),
                                       &ownership_->instance(), config_.lease_ttl_s);
+    if (made.code() == StatusCode::kAlreadyExists && IsArchived(id)) {
+      return Status::AlreadyExists("map '" + id +
+                                   "' is archived in the PostgreSQL database: restore it (mapctl "
+                                   "maps restore " +
+                                   id + ") or delete it for good (mapctl maps delete " + id +
+                                   " --purge) first");
+    }
     if (made.code() == StatusCode::kAlreadyExists) {
       return Status::AlreadyExists("map '" + id +
                                    "' is in the PostgreSQL database but not served here; restart "

@@ -92,8 +92,8 @@ struct EventStream {
 }  // namespace
 
 void ServeEvents(std::shared_ptr<service::Core> core, const httplib::Request& req,
-                 httplib::Response& res,
-                 const std::atomic<bool>* stopping, std::atomic<int>* streams) {
+                 httplib::Response& res, const std::atomic<bool>* stopping,
+                 std::atomic<int>* streams) {
   constexpr int kMaxStreams = 16;
   std::string since_text = req.get_header_value("Last-Event-ID");
   if (since_text.empty()) since_text = req.get_param_value("since");
@@ -114,8 +114,7 @@ void ServeEvents(std::shared_ptr<service::Core> core, const httplib::Request& re
   }
   // The hub cancels a blocked write at shutdown; here the write timeout
   // bounds it and the stream sees `stopping` within kPoll.
-  StatusOr<service::WatchHub::Subscription> sub =
-      stream->core->watch_hub().Subscribe(since, [] {});
+  StatusOr<service::WatchHub::Subscription> sub = stream->core->watch_hub().Subscribe(since, [] {});
   if (!sub.ok()) {
     streams->fetch_sub(1);
     return SendError(res, sub.status());

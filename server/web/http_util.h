@@ -21,8 +21,8 @@ StatusOr<uint64_t> ParseId(const std::string& text, const std::string& what);
 // GET /api/events (events.cc). Ends when the client goes, at `stopping`, or
 // when the hub closes; holds `core` until then.
 void ServeEvents(std::shared_ptr<service::Core> core, const httplib::Request& req,
-                 httplib::Response& res,
-                 const std::atomic<bool>* stopping, std::atomic<int>* streams);
+                 httplib::Response& res, const std::atomic<bool>* stopping,
+                 std::atomic<int>* streams);
 // GET /api/robots (robots.cc).
 void ServeRobots(service::Core* core, httplib::Response& res);
 // GET /api/global-map.png (global_map.cc).

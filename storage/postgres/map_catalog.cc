@@ -21,9 +21,8 @@ StatusOr<PgResult> PgMapCatalog::Query(const std::string& sql, const PgParams& p
 }
 
 StatusOr<std::vector<std::string>> PgMapCatalog::ListMaps() {
-  StatusOr<PgResult> r =
-      Query("SELECT id FROM maps WHERE NOT importing AND archived_ns = 0 ORDER BY id COLLATE \"C\"",
-            {});
+  StatusOr<PgResult> r = Query(
+      "SELECT id FROM maps WHERE NOT importing AND archived_ns = 0 ORDER BY id COLLATE \"C\"", {});
   if (!r.ok()) return r.status();
   std::vector<std::string> ids;
   for (int i = 0; i < r->rows(); ++i) ids.push_back(r->Text(i, 0));
@@ -134,7 +133,8 @@ Status PgMapCatalog::ArchiveMap(const MapLease& lease, int64_t now_ns) {
   // One statement: the fence and the flag commit together.
   StatusOr<PgResult> r = Query(
       "WITH fenced AS (UPDATE map_leases SET owner = '', address = '', epoch = epoch + 1, "
-      "expires_at = 'infinity' WHERE map = $1 AND owner = $2 AND epoch = $3 RETURNING map) "
+      "expires_at = clock_timestamp() + interval '1000 years' WHERE map = $1 AND owner = $2 AND "
+      "epoch = $3 RETURNING map) "
       "UPDATE maps SET archived_ns = $4 WHERE id IN (SELECT map FROM fenced) AND archived_ns = 0 "
       "AND NOT importing",
       p);

@@ -238,7 +238,8 @@ const std::vector<const char*>& Migrations() {
       )sql",
       // 3 -> 4: an archived map (DeleteMap without purge) keeps its rows but
       // is neither listed nor served; its lease is held by nobody, for ever
-      // (owner '', expires_at 'infinity'), so that no instance takes it.
+      // (owner '', expiring in 1000 years: 'infinity' would break the lease
+      // arithmetic, which subtracts timestamps), so that no instance takes it.
       R"sql(
       ALTER TABLE maps ADD COLUMN archived_ns bigint NOT NULL DEFAULT 0;
       )sql",

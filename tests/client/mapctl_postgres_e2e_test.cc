@@ -22,6 +22,7 @@ namespace mapd::testing {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 class MapdOnPostgresTest : public ::testing::Test {
  protected:
@@ -149,6 +150,69 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   }
   ASSERT_EQ(after.exit_code, 0) << after.err;
   EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
+  EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
+}
+
+// DeleteMap and RestoreMap with two mapd on one database: asked of either,
+// done by the map's owner; an archived map is served by neither, and comes
+// back as it was.
+TEST_F(MapdOnPostgresTest, AMapIsArchivedRestoredAndPurgedThroughEitherInstance) {
+  const auto args = [this](const std::string& name) {
+    return std::vector<std::string>{"--store", store_, "--instance_name", name};
+  };
+  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
+                                "serving", dir_.File("first.log"));
+  ASSERT_GT(first.port, 0) << first.log();
+  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
+                                 "listening", dir_.File("second.log"));
+  ASSERT_GT(second.port, 0) << second.log();
+  CommandResult r = Mapctl(first, {"maps", "create", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl(first, {"--map", "site-1", "simulate", "--robots", "1", "--scans", "30"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const CommandResult before = Mapctl(first, {"--map", "site-1", "features", "--format", "json"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
+
+  // Asked of the instance that does not serve it: mapctl follows the redirect.
+  r = Mapctl(second, {"maps", "delete", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err << first.log();
+  EXPECT_THAT(r.out, HasSubstr("archived map site-1 (postgresql)"));
+  for (const MapdProcess* mapd : {&first, &second}) {
+    r = Mapctl(*mapd, {"maps"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, Not(HasSubstr("site-1"))) << mapd->address;
+    r = Mapctl(*mapd, {"--map", "site-1", "status"});
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_THAT(r.err, HasSubstr("site-1"));
+  }
+  r = Mapctl(second, {"maps", "--archived"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("site-1"));
+  r = Mapctl(first, {"maps", "create", "site-1"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("is archived"));
+
+  r = Mapctl(second, {"maps", "restore", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err << second.log();
+  EXPECT_THAT(r.out, HasSubstr("restored map site-1"));
+  CommandResult after = Mapctl(first, {"--map", "site-1", "features", "--format", "json"});
+  for (int i = 0; i < 100 && after.out != before.out; ++i) {  // a handoff may be under way
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    after = Mapctl(first, {"--map", "site-1", "features", "--format", "json"});
+  }
+  EXPECT_EQ(after.out, before.out) << after.err;
+
+  r = Mapctl(first, {"maps", "delete", "site-1", "--purge"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("deleted map site-1 for good"));
+  r = Mapctl(second, {"maps", "--archived"});
+  EXPECT_THAT(r.out, Not(HasSubstr("site-1")));
+  r = Mapctl(second, {"maps", "create", "site-1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Mapctl(second, {"--map", "site-1", "robots", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, Not(HasSubstr("sim-robot"))) << "a new map, empty";
+  EXPECT_EQ(Stop(first.pid, SIGTERM), 0) << first.log();
   EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
 }
 

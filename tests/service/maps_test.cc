@@ -12,69 +12,14 @@
 #include "common/health.h"
 #include "server_fixture.h"
 #include "service/support/auth_fixture.h"
+#include "service/support/maps_fixture.h"
 
 namespace mapd::testing {
 namespace {
 
 using ::testing::HasSubstr;
 
-class MapsTest : public ServerFixture {
- protected:
-  void SetUp() override {
-    Configure();
-    UseDataDir();
-    StartServer();
-  }
-
-  grpc::Status CreateMap(const std::string& id, pb::MapInfo* info = nullptr) {
-    grpc::ClientContext ctx;
-    pb::CreateMapRequest request;
-    request.set_map_id(id);
-    pb::MapInfo ignored;
-    return stub_->CreateMap(&ctx, request, info ? info : &ignored);
-  }
-
-  pb::ListMapsResponse ListMaps() {
-    grpc::ClientContext ctx;
-    pb::ListMapsResponse maps;
-    const grpc::Status s = stub_->ListMaps(&ctx, {}, &maps);
-    EXPECT_TRUE(s.ok()) << s.error_message();
-    return maps;
-  }
-
-  // One Ingest stream opened for `map` (metadata); every ack.
-  std::vector<pb::IngestAck> StreamTo(const std::string& map,
-                                      const std::vector<pb::ObservationBatch>& batches,
-                                      grpc::Status* end = nullptr) {
-    grpc::ClientContext ctx;
-    ctx.AddMetadata("mapd-map-id", map);
-    auto stream = stub_->Ingest(&ctx);
-    for (const auto& b : batches) stream->Write(b);
-    stream->WritesDone();
-    std::vector<pb::IngestAck> acks;
-    pb::IngestAck ack;
-    while (stream->Read(&ack)) acks.push_back(ack);
-    const grpc::Status s = stream->Finish();
-    if (end != nullptr) *end = s;
-    return acks;
-  }
-
-  std::vector<pb::FusedFeature> FeaturesOf(const std::string& map) {
-    pb::FeatureMapRequest request;
-    request.set_map_id(map);
-    request.set_max_wait_ms(5000);
-    return Features(request);
-  }
-
-  uint64_t StoredBatches(const std::string& map) {
-    grpc::ClientContext ctx;
-    pb::GetStatsRequest request;
-    request.set_map_id(map);
-    pb::Stats stats;
-    EXPECT_TRUE(stub_->GetStats(&ctx, request, &stats).ok());
-    return stats.batches();
-  }
-};
+using MapsTest = MapsFixture;
 
 TEST_F(MapsTest, TheDefaultMapIsMadeAndListed) {
   EXPECT_TRUE(std::filesystem::exists(dir_.File("default.db")));
@@ -397,6 +342,21 @@ TEST_F(ScopedTokenTest, AScopedAdminManagesNeitherTokensNorMaps) {
   auto ctx = As(scoped);
   EXPECT_EQ(stub_->CreateMap(ctx.get(), request, &info).error_code(),
             grpc::StatusCode::PERMISSION_DENIED);
+  for (const char* map : {"site-7", "default"}) {
+    pb::DeleteMapRequest remove;
+    remove.set_map_id(map);
+    pb::DeleteMapResponse removed;
+    auto delete_ctx = As(scoped);
+    EXPECT_EQ(stub_->DeleteMap(delete_ctx.get(), remove, &removed).error_code(),
+              grpc::StatusCode::PERMISSION_DENIED)
+        << map;
+    pb::RestoreMapRequest restore;
+    restore.set_map_id(map);
+    auto restore_ctx = As(scoped);
+    EXPECT_EQ(stub_->RestoreMap(restore_ctx.get(), restore, &info).error_code(),
+              grpc::StatusCode::PERMISSION_DENIED)
+        << map;
+  }
   // A map id that is not one is refused when the token is made.
   const grpc::Status bad = CreateTokenAs(admin_, pb::ROLE_READER, "bad", "", nullptr, {"../x"});
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);

@@ -542,6 +542,72 @@ TEST_F(PostgresMapsTest, AnImportingMapIsHiddenUntilFinishedAndADeadOneIsDiscard
   EXPECT_EQ(*catalog->ListMaps(), std::vector<std::string>{"site-1"});
 }
 
+// DeleteMap's archive: the map's rows stay, nobody lists, serves or takes
+// it, its old owner is fenced off, and it comes back as it was; a purge
+// deletes it for good.
+TEST_F(PostgresMapsTest, AnArchivedMapIsFencedHiddenAndRestoredAsItWas) {
+  StatusOr<PgMapCatalog> catalog = PgMapCatalog::Open(conninfo_);
+  ASSERT_TRUE(catalog.ok()) << catalog.status().ToString();
+  ASSERT_TRUE(catalog->CreateMap("site-1", "fusion.eta_m = 0.2\n", 1).ok());
+  const auto open = [&](const std::string& name) -> StatusOr<std::unique_ptr<PgStore>> {
+    PgOwnership own;
+    own.instance = PgInstance{name, "10.0.0.1:50051"};
+    own.lease_ttl_s = 30;
+    return PgStore::Open(conninfo_, "site-1", StoreOptions{}, own);
+  };
+  const auto insert = [](PgStore& store, uint64_t seq) {
+    geometry::SensorObservation features;
+    NewObservation o;
+    o.robot = "r1";
+    o.session = "s1";
+    o.seq = seq;
+    o.features = &features;
+    auto txn = store.BeginWrite();
+    if (!txn.ok()) return txn.status();
+    MAPD_RETURN_IF_ERROR((*txn)->InsertObservation(o).status());
+    return (*txn)->Commit();
+  };
+  StatusOr<std::unique_ptr<PgStore>> owner = open("mapd-a");
+  ASSERT_TRUE(owner.ok()) << owner.status().ToString();
+  ASSERT_TRUE(insert(**owner, 1).ok());
+
+  ASSERT_TRUE(catalog->ArchiveMap((*owner)->lease(), 42).ok());
+  EXPECT_TRUE(catalog->ListMaps()->empty());
+  EXPECT_EQ(catalog->Settings("site-1").status().code(), StatusCode::kNotFound);
+  ASSERT_EQ(catalog->ListArchived()->size(), 1u);
+  EXPECT_EQ((*catalog->ListArchived())[0].id, "site-1");
+  EXPECT_EQ((*catalog->ListArchived())[0].archived_ns, 42);
+  // The old owner can no longer write; no instance can take the map.
+  EXPECT_FALSE(insert(**owner, 2).ok());
+  StatusOr<std::unique_ptr<PgStore>> taker = open("mapd-b");
+  EXPECT_EQ(taker.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(catalog->ArchiveMap((*owner)->lease(), 43).code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(catalog->CreateMap("site-1", "", 2).code(), StatusCode::kAlreadyExists);
+  owner->reset();
+
+  EXPECT_EQ(catalog->RestoreMap("site-2").code(), StatusCode::kNotFound);
+  ASSERT_TRUE(catalog->RestoreMap("site-1").ok());
+  EXPECT_EQ(catalog->RestoreMap("site-1").code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(*catalog->ListMaps(), std::vector<std::string>{"site-1"});
+  EXPECT_EQ(*catalog->Settings("site-1"), "fusion.eta_m = 0.2\n");
+  EXPECT_TRUE(catalog->ListArchived()->empty());
+  taker = open("mapd-b");
+  ASSERT_TRUE(taker.ok()) << taker.status().ToString();
+  EXPECT_EQ(*(*taker)->NewestObservationId(), 1) << "its rows are as they were";
+  EXPECT_EQ(catalog->PurgeArchived("site-1").code(), StatusCode::kFailedPrecondition)
+      << "only an archived map is purged";
+
+  ASSERT_TRUE(catalog->ArchiveMap((*taker)->lease(), 44).ok());
+  taker->reset();
+  ASSERT_TRUE(catalog->PurgeArchived("site-1").ok());
+  EXPECT_EQ(catalog->PurgeArchived("site-1").code(), StatusCode::kNotFound);
+  EXPECT_TRUE(catalog->ListArchived()->empty());
+  ASSERT_TRUE(catalog->CreateMap("site-1", "", 5).ok()) << "its id is free again";
+  taker = open("mapd-b");
+  ASSERT_TRUE(taker.ok()) << taker.status().ToString();
+  EXPECT_EQ(*(*taker)->NewestObservationId(), 0) << "a new, empty map";
+}
+
 TEST_F(PostgresMapsTest, ABadMapIdOrServerIsAClearError) {
   auto bad = PgObservationLog::Open(conninfo_, "site 7; DROP TABLE robots");
   EXPECT_EQ(bad.status().code(), StatusCode::kInvalidArgument);
