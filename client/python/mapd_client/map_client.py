@@ -109,10 +109,11 @@ class MapClient:
 
     # -- maps
 
-    def maps(self) -> pb.ListMapsResponse:
-        """The maps the server serves (ListMaps)."""
-        return self._stub.ListMaps(pb.ListMapsRequest(), timeout=self._timeout_s,
-                                   metadata=self._metadata)
+    def maps(self, archived: bool = False) -> pb.ListMapsResponse:
+        """The maps the server serves (ListMaps); archived=True: the archived
+        ones instead (delete_map), with archived_ns."""
+        return self._stub.ListMaps(pb.ListMapsRequest(archived=archived),
+                                   timeout=self._timeout_s, metadata=self._metadata)
 
     def create_map(self, map_id: str, settings: Optional[dict] = None) -> pb.MapInfo:
         """A new, empty map (role admin; mapd --data-dir). settings: its own
@@ -120,6 +121,17 @@ class MapClient:
         {"fusion.eta_m": "0.2"}."""
         request = pb.CreateMapRequest(map_id=map_id, settings=settings or {})
         return self._stub.CreateMap(request, timeout=self._timeout_s, metadata=self._metadata)
+
+    def delete_map(self, map_id: str, purge: bool = False) -> pb.DeleteMapResponse:
+        """Stops serving a map (role admin) and archives it, or with
+        purge=True deletes its data for good. Not the default map."""
+        request = pb.DeleteMapRequest(map_id=map_id, purge=purge)
+        return self._stub.DeleteMap(request, timeout=self._timeout_s, metadata=self._metadata)
+
+    def restore_map(self, map_id: str) -> pb.MapInfo:
+        """Serves an archived map again, as it was (role admin)."""
+        request = pb.RestoreMapRequest(map_id=map_id)
+        return self._stub.RestoreMap(request, timeout=self._timeout_s, metadata=self._metadata)
 
     # -- the fused map
 

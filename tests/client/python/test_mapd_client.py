@@ -228,6 +228,19 @@ def test_several_maps_each_its_own(tmp_path):
         assert admin.stats().batches == 0  # the default map
         assert [m.map_id for m in admin.maps().maps] == ["default", "site-1"]
 
+        # Archived: served no more, kept; restored as it was.
+        fused = site.feature_map(max_wait_ms=5000).features
+        assert "archive" in admin.delete_map("site-1").where
+        assert [m.map_id for m in admin.maps().maps] == ["default"]
+        assert [m.map_id for m in admin.maps(archived=True).maps] == ["site-1"]
+        with pytest.raises(MapNotServed):
+            MapClient(channel, map_id="site-1").stats()
+        assert admin.restore_map("site-1").map_id == "site-1"
+        assert MapClient(channel, map_id="site-1").feature_map(max_wait_ms=5000).features == fused
+        with pytest.raises(grpc.RpcError) as refused:
+            admin.delete_map("default")
+        assert refused.value.code() == grpc.StatusCode.FAILED_PRECONDITION
+
         with pytest.raises(MapNotServed, match="does not serve map 'site-2'"):
             MapClient(channel, map_id="site-2").stats()
         lost = RobotClient(channel, map_id="site-2", give_up_after_s=5)
