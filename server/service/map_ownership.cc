@@ -113,6 +113,10 @@ Status MapOwnership::TakeFree() {
     const bool mine = (lease_live && lease->second.owner == me) || RendezvousPick(id, names) == me;
     const double lapsed_for_s = has_lease ? -lease->second.expires_in_s : 1e9;
     if (!mine && lapsed_for_s < options_.lease_ttl_s) continue;  // its chosen one may take it
+    {
+      std::lock_guard<std::mutex> lock(view_mu_);
+      if (leaving_.count(id) != 0) continue;  // being deleted here
+    }
     Status opened = hooks_.open(id);
     if (opened.ok()) {
       view[id] = MapOwner{me, options_.instance.address, true};
@@ -245,6 +249,15 @@ std::optional<MapOwner> MapOwnership::LocateNow(const std::string& id) {
 void MapOwnership::Forget(const std::string& id) {
   std::lock_guard<std::mutex> lock(view_mu_);
   view_.erase(id);
+}
+
+void MapOwnership::MarkLeaving(const std::string& id, bool leaving) {
+  std::lock_guard<std::mutex> lock(view_mu_);
+  if (leaving) {
+    leaving_.insert(id);
+  } else {
+    leaving_.erase(id);
+  }
 }
 
 std::optional<MapOwner> MapOwnership::Locate(const std::string& id) const {

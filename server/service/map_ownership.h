@@ -32,6 +32,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -85,6 +86,9 @@ class MapOwnership final : public MapLocator {
   // Map `id` is no longer in the database's list (archived or deleted
   // here): Locate forgets it until a round sees it again.
   void Forget(const std::string& id);
+  // While DeleteMap stops map `id` here, its lease is still this
+  // instance's: rounds must not open it again meanwhile.
+  void MarkLeaving(const std::string& id, bool leaving);
   std::map<std::string, MapOwner> Owners() override;
   int retry_after_ms() const override { return static_cast<int>(options_.lease_ttl_s * 250); }
   // Who this instance is; before the first round (the port is known late).
@@ -120,6 +124,7 @@ class MapOwnership final : public MapLocator {
 
   mutable std::mutex view_mu_;
   std::map<std::string, MapOwner> view_;  // GUARDED_BY(view_mu_): every map of the database
+  std::set<std::string> leaving_;         // GUARDED_BY(view_mu_): MarkLeaving
 
   std::mutex stop_mu_;
   std::condition_variable stop_cv_;

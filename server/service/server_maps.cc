@@ -32,14 +32,19 @@ StatusOr<std::string> MapServer::DeleteMap(const std::string& id, bool purge) {
         "serve maps from a --data-dir");
   }
   std::lock_guard<std::mutex> lock(lifecycle_mu_);
-  if (MapHold map = maps_->Retire(id); map != nullptr) {
-    StatusOr<std::string> where = Archive(id, std::move(map));
-    if (!where.ok() || !purge) return where;
-  } else if (!IsArchived(id)) {
+  // Its lease stays this instance's until archived: no round may reopen it.
+  if (ownership_ != nullptr) ownership_->MarkLeaving(id, true);
+  MapHold map = maps_->Retire(id);
+  const bool served = map != nullptr;
+  StatusOr<std::string> where = served ? Archive(id, std::move(map)) : std::string();
+  if (ownership_ != nullptr) ownership_->MarkLeaving(id, false);
+  if (served && (!where.ok() || !purge)) return where;
+  if (!served && !IsArchived(id)) {
     return Status::NotFound("map '" + id +
                             "' is neither served here nor archived; ListMaps (mapctl maps) "
                             "names the maps");
-  } else if (!purge) {
+  }
+  if (!served && !purge) {
     return Status::FailedPrecondition("map '" + id +
                                       "' is archived already; purge deletes it for good "
                                       "(mapctl maps delete " +
@@ -128,6 +133,8 @@ StatusOr<MapHold> MapServer::RestoreMap(const std::string& id) {
     // Served here at once; the ownership rounds may hand it on later. If
     // another instance's round took it first, it is served there.
     if (Status taken = TakeMap(id); !taken.ok()) {
+      // A round here may have opened it meanwhile (AlreadyExists).
+      if (StatusOr<MapHold> here = maps_->Find(id); here.ok()) return here;
       Log(LogLevel::kInfo, "map_not_taken", {{"map", id}, {"why", taken.ToString()}});
       return MapHold();
     }
