@@ -34,6 +34,15 @@ bool Exists(const std::string& path) {
   return ::lstat(path.c_str(), &st) == 0;
 }
 
+// The first of map `id`'s files that is in `dir`; "" when none is.
+std::string FirstThere(const std::string& dir, const std::string& id) {
+  for (const std::string& f : MapFiles(id)) {
+    std::string path = (fs::path(dir) / f).string();
+    if (Exists(path)) return path;
+  }
+  return "";
+}
+
 // Renames `from` to `to` unless `to` exists; a missing `from` is fine.
 Status MoveIfThere(const std::string& from, const std::string& to) {
   if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0 ||
@@ -73,12 +82,9 @@ Status ArchiveMapFiles(const std::string& data_dir, const std::string& id) {
     return Status::Internal("cannot make the archive directory '" + archive +
                             "': " + std::strerror(errno));
   }
-  for (const std::string& f : MapFiles(id)) {
-    const std::string there = (fs::path(archive) / f).string();
-    if (Exists(there)) {
-      return Status::AlreadyExists("'" + there + "' exists already (an earlier archive of map '" +
-                                   id + "'); move it away first");
-    }
+  if (const std::string there = FirstThere(archive, id); !there.empty()) {
+    return Status::AlreadyExists("'" + there + "' exists already (an earlier archive of map '" +
+                                 id + "'); move it away first");
   }
   MAPD_RETURN_IF_ERROR(Move(data_dir, archive, id, /*database_first=*/true));
   // Its modification time says when it was archived (ListArchivedFiles).
@@ -92,12 +98,9 @@ Status RestoreMapFiles(const std::string& data_dir, const std::string& id) {
     return Status::NotFound("map '" + id + "' is not archived (no " +
                             ArchivedMapPath(data_dir, id) + ")");
   }
-  for (const std::string& f : MapFiles(id)) {
-    const std::string here = (fs::path(data_dir) / f).string();
-    if (Exists(here)) {
-      return Status::AlreadyExists("'" + here + "' exists; move it away to restore map '" + id +
-                                   "'");
-    }
+  if (const std::string here = FirstThere(data_dir, id); !here.empty()) {
+    return Status::AlreadyExists("'" + here + "' exists; move it away to restore map '" + id +
+                                 "'");
   }
   // The database last: until it is back, the map is not in the directory.
   return Move(ArchiveDir(data_dir), data_dir, id, /*database_first=*/false);

@@ -36,7 +36,7 @@ class MapServer final : public MapLifecycle {
   static StatusOr<std::unique_ptr<MapServer>> Start(const ServerConfig& config);
   // Waits until every map is recovered; false on timeout or failed recovery.
   bool WaitUntilServing(std::chrono::duration<double> timeout) const;
-  ~MapServer();
+  ~MapServer() override;
 
   // The port actually bound (useful with port 0).
   int port() const { return port_; }
