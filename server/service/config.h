@@ -37,6 +37,11 @@ struct ServerConfig {
   std::string advertise_address;
   std::string instance_name;
   double lease_ttl_s = 3.0;
+  // With store: relay calls for a map another instance serves to it
+  // (map_forwarder.h); with tls_cert only if forward_ca names the CA of the
+  // instances' certificates, and never with tls_client_ca. Off: redirects.
+  bool forward = true;
+  std::string forward_ca;
   bool sync_full = false;      // synchronous=FULL (survives power loss)
   int busy_timeout_ms = 5000;  // wait for a database lock held by another process
   fusion::FusionParams fusion;

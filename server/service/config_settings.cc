@@ -180,6 +180,13 @@ const std::vector<Setting>& Settings() {
       Real("lease_ttl_s", "with store: how long a map stays with a mapd that stopped renewing its lease before "
                           "another takes it over, seconds",
            [](C& c) -> auto& { return c.lease_ttl_s; }, {0.5, 600}),
+      Flag("forward", "with store: relay unary and server-streaming calls for a map another mapd serves to it, for "
+                      "clients that know one address (streams of batches and uploads are redirected); false: "
+                      "redirect every such call",
+           [](C& c) -> auto& { return c.forward; }),
+      Text("forward_ca", "with store and tls_cert: PEM CA of the other instances' certificates, to forward calls "
+                         "to them over TLS (empty: with TLS, calls are redirected; never with tls_client_ca)",
+           [](C& c) -> auto& { return c.forward_ca; }),
       Choice("sync", "normal: an acknowledged batch survives a crash of mapd; full: it survives power loss too "
                      "(slower commits)",
              [](C& c) -> auto& { return c.sync_full; }, "normal", "full"),

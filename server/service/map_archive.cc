@@ -99,8 +99,7 @@ Status RestoreMapFiles(const std::string& data_dir, const std::string& id) {
                             ArchivedMapPath(data_dir, id) + ")");
   }
   if (const std::string here = FirstThere(data_dir, id); !here.empty()) {
-    return Status::AlreadyExists("'" + here + "' exists; move it away to restore map '" + id +
-                                 "'");
+    return Status::AlreadyExists("'" + here + "' exists; move it away to restore map '" + id + "'");
   }
   // The database last: until it is back, the map is not in the directory.
   return Move(ArchiveDir(data_dir), data_dir, id, /*database_first=*/false);

@@ -9,6 +9,21 @@ namespace mapd::service {
 namespace {
 
 namespace pb = mapserver::v1;
+using Stub = pb::MapService::Stub;
+
+// A forwarded server stream: the owner's messages, written on as they come.
+template <typename Message>
+grpc::Status Relay(grpc::ClientContext* relayed, std::unique_ptr<grpc::ClientReader<Message>> from,
+                   grpc::ServerWriter<Message>* to) {
+  Message m;
+  while (from->Read(&m)) {
+    if (!to->Write(m)) {  // the caller went away
+      relayed->TryCancel();
+      break;
+    }
+  }
+  return from->Finish();
+}
 
 void ToProto(ServedMap& map, pb::MapInfo* out) {
   const CoreStats s = map.core->Stats();
@@ -39,8 +54,8 @@ StatusOr<std::string> MapRouter::MapIdOf(const grpc::ServerContextBase& context,
   return from_metadata.empty() ? std::string(kDefaultMapId) : from_metadata;
 }
 
-StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
-                                            const std::string& id) {
+StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context, const std::string& id,
+                                            std::string* forward_to) {
   StatusOr<MapHold> map = maps_->Find(id);
   if (map.ok() || locator_ == nullptr) return map;
   const std::string key = id.empty() ? std::string(kDefaultMapId) : id;
@@ -54,18 +69,33 @@ StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context,
                                "' is being taken over by another mapd (its owner stopped); "
                                "retry in a few seconds");
   }
+  if (forward_to != nullptr && forwarder_ != nullptr && MapForwarder::MayForward(context)) {
+    *forward_to = owner->address;
+    return Status::Unavailable("map '" + id + "' is served by the mapd at " + owner->address);
+  }
   context.AddTrailingMetadata(kMapOwnerMetadata, owner->address);
   return Status::Unavailable("map '" + id + "' is served by the mapd at " + owner->address +
                              " (instance '" + owner->instance + "'); call it there");
 }
 
 grpc::Status MapRouter::Forward(grpc::ServerContextBase& context, const std::string& field,
-                                const std::function<grpc::Status(MapServiceImpl*)>& call) {
+                                const std::function<grpc::Status(MapServiceImpl*)>& call,
+                                const Remote& remote) {
   StatusOr<std::string> id = MapIdOf(context, field);
   if (!id.ok()) return ToGrpcStatus(id.status());
-  StatusOr<MapHold> map = FindOrRedirect(context, *id);
-  if (!map.ok()) return ToGrpcStatus(map.status());
-  return call((*map)->service.get());  // `map` holds it until the call returns
+  std::string owner;
+  StatusOr<MapHold> map = FindOrRedirect(context, *id, &owner);
+  if (map.ok()) return call((*map)->service.get());  // `map` holds it until the call returns
+  if (owner.empty()) return ToGrpcStatus(map.status());
+  std::unique_ptr<grpc::ClientContext> relayed = forwarder_->ContextFor(context);
+  const grpc::Status status = remote(forwarder_->StubTo(owner), relayed.get());
+  MapForwarder::CopyRedirect(*relayed, context);
+  if (status.error_code() == grpc::StatusCode::UNAVAILABLE &&
+      relayed->GetServerTrailingMetadata().count(kMapOwnerMetadata) == 0) {
+    // The owner did not answer: a client that follows redirects tries it itself.
+    context.AddTrailingMetadata(kMapOwnerMetadata, owner);
+  }
+  return status;
 }
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
@@ -92,59 +122,87 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
 
 grpc::Status MapRouter::GetFeatureMap(grpc::ServerContext* c, const pb::FeatureMapRequest* r,
                                       grpc::ServerWriter<pb::FeatureMapPage>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetFeatureMap(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetFeatureMap(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->GetFeatureMap(cc, *r), w); });
 }
 grpc::Status MapRouter::WatchFeatureMap(grpc::ServerContext* c, const pb::WatchFeatureMapRequest* r,
                                         grpc::ServerWriter<pb::FeatureMapDelta>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->WatchFeatureMap(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->WatchFeatureMap(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->WatchFeatureMap(cc, *r), w); });
 }
 grpc::Status MapRouter::ListRobots(grpc::ServerContext* c, const pb::ListRobotsRequest* r,
                                    pb::ListRobotsResponse* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ListRobots(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->ListRobots(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->ListRobots(cc, *r, out); });
 }
 grpc::Status MapRouter::GetStats(grpc::ServerContext* c, const pb::GetStatsRequest* r,
                                  pb::Stats* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetStats(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetStats(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->GetStats(cc, *r, out); });
 }
 grpc::Status MapRouter::GetTrails(grpc::ServerContext* c, const pb::GetTrailsRequest* r,
                                   grpc::ServerWriter<pb::SessionTrail>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetTrails(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetTrails(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->GetTrails(cc, *r), w); });
 }
 grpc::Status MapRouter::ListSubmaps(grpc::ServerContext* c, const pb::ListSubmapsRequest* r,
                                     pb::ListSubmapsResponse* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ListSubmaps(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->ListSubmaps(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->ListSubmaps(cc, *r, out); });
 }
 grpc::Status MapRouter::GetSubmap(grpc::ServerContext* c, const pb::GetSubmapRequest* r,
                                   grpc::ServerWriter<pb::DataChunk>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetSubmap(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetSubmap(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->GetSubmap(cc, *r), w); });
 }
 grpc::Status MapRouter::DeleteSubmap(grpc::ServerContext* c, const pb::DeleteSubmapRequest* r,
                                      pb::DeleteSubmapResponse* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->DeleteSubmap(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->DeleteSubmap(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->DeleteSubmap(cc, *r, out); });
 }
 grpc::Status MapRouter::MergeSubmaps(grpc::ServerContext* c, const pb::MergeSubmapsRequest* r,
                                      grpc::ServerWriter<pb::MergeProgress>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->MergeSubmaps(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->MergeSubmaps(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->MergeSubmaps(cc, *r), w); });
 }
 grpc::Status MapRouter::GetGlobalMap(grpc::ServerContext* c, const pb::GetGlobalMapRequest* r,
                                      grpc::ServerWriter<pb::DataChunk>* w) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetGlobalMap(c, r, w); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetGlobalMap(c, r, w); },
+      [&](Stub* s, grpc::ClientContext* cc) { return Relay(cc, s->GetGlobalMap(cc, *r), w); });
 }
 grpc::Status MapRouter::ListMerges(grpc::ServerContext* c, const pb::ListMergesRequest* r,
                                    pb::ListMergesResponse* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ListMerges(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->ListMerges(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->ListMerges(cc, *r, out); });
 }
 grpc::Status MapRouter::GetMerge(grpc::ServerContext* c, const pb::GetMergeRequest* r,
                                  pb::MergeRecord* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->GetMerge(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->GetMerge(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->GetMerge(cc, *r, out); });
 }
 grpc::Status MapRouter::ApproveMerge(grpc::ServerContext* c, const pb::ApproveMergeRequest* r,
                                      pb::MergeRecord* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ApproveMerge(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->ApproveMerge(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->ApproveMerge(cc, *r, out); });
 }
 grpc::Status MapRouter::RejectMerge(grpc::ServerContext* c, const pb::RejectMergeRequest* r,
                                     pb::MergeRecord* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->RejectMerge(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->RejectMerge(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->RejectMerge(cc, *r, out); });
 }
 
 grpc::Status MapRouter::CreateToken(grpc::ServerContext* c, const pb::CreateTokenRequest* r,
@@ -161,7 +219,9 @@ grpc::Status MapRouter::RevokeToken(grpc::ServerContext* c, const pb::RevokeToke
 }
 grpc::Status MapRouter::ListAudit(grpc::ServerContext* c, const pb::ListAuditRequest* r,
                                   pb::ListAuditResponse* out) {
-  return Forward(*c, r->map_id(), [&](MapServiceImpl* m) { return m->ListAudit(c, r, out); });
+  return Forward(
+      *c, r->map_id(), [&](MapServiceImpl* m) { return m->ListAudit(c, r, out); },
+      [&](Stub* s, grpc::ClientContext* cc) { return s->ListAudit(cc, *r, out); });
 }
 grpc::Status MapRouter::WhoAmI(grpc::ServerContext* c, const pb::WhoAmIRequest* r,
                                pb::WhoAmIResponse* out) {

@@ -19,6 +19,7 @@
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/map_directory.h"
+#include "service/map_forwarder.h"
 #include "service/map_lifecycle.h"
 #include "service/map_locator.h"
 
@@ -38,9 +39,11 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
                                 mapserver::v1::MapService::Service>> {
  public:
   // `lifecycle` makes, deletes and restores maps; `locator` (PostgreSQL
-  // only, else null) says where maps not served here are.
-  MapRouter(MapDirectory* maps, MapLifecycle* lifecycle, MapLocator* locator = nullptr)
-      : maps_(maps), lifecycle_(lifecycle), locator_(locator) {}
+  // only, else null) says where maps not served here are, and `forwarder`
+  // (null: redirects only) relays calls for them (map_forwarder.h).
+  MapRouter(MapDirectory* maps, MapLifecycle* lifecycle, MapLocator* locator = nullptr,
+            MapForwarder* forwarder = nullptr)
+      : maps_(maps), lifecycle_(lifecycle), locator_(locator), forwarder_(forwarder) {}
   // Where clients reach this server (LocateMap), once it is known (the
   // port is bound after the router is made).
   void set_address(const std::string& address);
@@ -128,12 +131,19 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
                           mapserver::v1::MapInfo* response) override;
 
  private:
-  // Runs `call` on the service of the map the call names, or answers why not.
+  // The same call made on the map's owner (another mapd), by its stub.
+  using Remote =
+      std::function<grpc::Status(mapserver::v1::MapService::Stub*, grpc::ClientContext*)>;
+  // Runs `call` on the service of the map the call names, or `remote` on
+  // the mapd that serves it (forwarding), or answers why not.
   grpc::Status Forward(grpc::ServerContextBase& context, const std::string& field,
-                       const std::function<grpc::Status(MapServiceImpl*)>& call);
+                       const std::function<grpc::Status(MapServiceImpl*)>& call,
+                       const Remote& remote);
   // The map `id` names, or why it is not served here: UNAVAILABLE with the
-  // owner's address in kMapOwnerMetadata when another mapd serves it.
-  StatusOr<MapHold> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id);
+  // owner's address in kMapOwnerMetadata when another mapd serves it, or,
+  // with `forward_to` and forwarding on, that address in *forward_to.
+  StatusOr<MapHold> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id,
+                                   std::string* forward_to = nullptr);
   // The archived maps, for ListMaps.
   grpc::Status ListArchived(const Principal& caller, mapserver::v1::ListMapsResponse* response);
   // Writes `action`'s row in the server's audit log; the error when it failed.
@@ -144,6 +154,7 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   MapDirectory* const maps_;
   MapLifecycle* const lifecycle_;
   MapLocator* const locator_;
+  MapForwarder* const forwarder_;
   mutable std::mutex address_mu_;
   std::string address_;  // GUARDED_BY(address_mu_)
 };

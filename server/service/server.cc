@@ -113,7 +113,24 @@ StatusOr<std::unique_ptr<MapServer>> MapServer::Start(const ServerConfig& config
     if (!ownership.ok()) return ownership.status();
     server->ownership_ = std::move(ownership).value();
   }
-  server->router_ = std::make_unique<MapRouter>(server->maps_.get(), s, server->ownership_.get());
+  if (!config.store.empty() && config.forward && config.tls_client_ca.empty()) {
+    std::shared_ptr<grpc::ChannelCredentials> to_peers;
+    if (config.tls_cert.empty()) {
+      to_peers = grpc::InsecureChannelCredentials();
+    } else if (!config.forward_ca.empty()) {
+      StatusOr<std::string> ca = ReadFile(config.forward_ca);
+      if (!ca.ok()) return Status::InvalidArgument("forward_ca: " + ca.status().message());
+      grpc::SslCredentialsOptions ssl;
+      ssl.pem_root_certs = *ca;
+      to_peers = grpc::SslCredentials(ssl);
+    }
+    if (to_peers != nullptr) {
+      server->forwarder_ = std::make_unique<MapForwarder>(
+          to_peers, config.instance_name, static_cast<int>(config.max_message_bytes));
+    }
+  }
+  server->router_ = std::make_unique<MapRouter>(server->maps_.get(), s, server->ownership_.get(),
+                                                server->forwarder_.get());
   SetLogRateLimit(config.streams.log_lines_per_s);
 
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();

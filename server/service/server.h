@@ -109,6 +109,7 @@ class MapServer final : public MapLifecycle {
   std::unique_ptr<storage::PgMapCatalog> catalog_;
   std::unique_ptr<MapDirectory> maps_;
   std::unique_ptr<MapOwnership> ownership_;  // PostgreSQL only; goes before maps_
+  std::unique_ptr<MapForwarder> forwarder_;  // PostgreSQL with forwarding only
   std::unique_ptr<MapRouter> router_;
   std::mutex lifecycle_mu_;  // one DeleteMap or RestoreMap at a time
   CallsInProgress calls_;    // before server_: its interceptors point here

@@ -87,6 +87,49 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
 // Failover: a second mapd on the database serves none of the first's maps
 // and redirects their calls to it; killed, the first's maps move to the
 // second within a few leases, with everything it acknowledged.
+// A client that knows only `via` (no redirects followed): its calls are
+// forwarded to `owner` and answered; a stream of batches is redirected.
+void ExpectForwardedByAndRedirectingStreams(const MapdProcess& via, const MapdProcess& owner) {
+  auto stub = mapserver::v1::MapService::NewStub(
+      grpc::CreateChannel(via.address, grpc::InsecureChannelCredentials()));
+  grpc::ClientContext call;
+  mapserver::v1::Stats stats;
+  const grpc::Status s = stub->GetStats(&call, mapserver::v1::GetStatsRequest(), &stats);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(stats.batches(), 80u);
+  // A server stream, relayed message by message.
+  grpc::ClientContext read;
+  mapserver::v1::FeatureMapRequest request;
+  request.set_max_wait_ms(5000);
+  auto pages = stub->GetFeatureMap(&read, request);
+  mapserver::v1::FeatureMapPage page;
+  size_t features = 0;
+  while (pages->Read(&page)) features += static_cast<size_t>(page.features_size());
+  ASSERT_TRUE(pages->Finish().ok());
+  EXPECT_GT(features, 0u);
+  // A call forwarded already is not forwarded again (no loop between two
+  // instances with stale views): redirected.
+  grpc::ClientContext again;
+  again.AddMetadata("mapd-forwarded-by", "another");
+  EXPECT_EQ(stub->GetStats(&again, mapserver::v1::GetStatsRequest(), &stats).error_code(),
+            grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(again.GetServerTrailingMetadata().count("mapd-map-owner"), 1u);
+  // Batches: UNAVAILABLE, the owner in the trailing metadata.
+  grpc::ClientContext ingest;
+  auto stream = stub->Ingest(&ingest);
+  stream->WritesDone();
+  mapserver::v1::IngestAck ack;
+  while (stream->Read(&ack)) {
+  }
+  const grpc::Status refused = stream->Finish();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_THAT(refused.error_message(), HasSubstr("is served by the mapd at " + owner.address));
+  const auto& trailing = ingest.GetServerTrailingMetadata();
+  auto named = trailing.find("mapd-map-owner");
+  ASSERT_NE(named, trailing.end());
+  EXPECT_EQ(std::string(named->second.data(), named->second.size()), owner.address);
+}
+
 TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   // Named so that rendezvous hashing leaves "default" with the first (no
   // handoff to the second before the kill).
@@ -105,19 +148,7 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
                                  "listening", dir_.File("second.log"));
   ASSERT_GT(second.port, 0) << second.log();
-  {  // The server's answer: UNAVAILABLE, the owner in the trailing metadata.
-    auto stub = mapserver::v1::MapService::NewStub(
-        grpc::CreateChannel(second.address, grpc::InsecureChannelCredentials()));
-    grpc::ClientContext call;
-    mapserver::v1::Stats stats;
-    const grpc::Status s = stub->GetStats(&call, mapserver::v1::GetStatsRequest(), &stats);
-    EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE);
-    EXPECT_THAT(s.error_message(), HasSubstr("is served by the mapd at " + first.address));
-    const auto& trailing = call.GetServerTrailingMetadata();
-    auto owner = trailing.find("mapd-map-owner");
-    ASSERT_NE(owner, trailing.end());
-    EXPECT_EQ(std::string(owner->second.data(), owner->second.size()), first.address);
-  }
+  ExpectForwardedByAndRedirectingStreams(second, first);
   // mapctl asks any instance and goes to the owner by itself.
   r = Mapctl(second, {"status", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -150,6 +181,36 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   }
   ASSERT_EQ(after.exit_code, 0) << after.err;
   EXPECT_EQ(after.out, before.out) << "the fused map is recovered from the database";
+  EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
+}
+
+// --forward false: every call for a map served elsewhere is redirected.
+TEST_F(MapdOnPostgresTest, WithoutForwardingCallsAreRedirected) {
+  const auto args = [this](const std::string& name) {
+    return std::vector<std::string>{"--store", store_,      "--instance_name",
+                                    name,      "--forward", "false"};
+  };
+  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
+                                "serving", dir_.File("first.log"));
+  ASSERT_GT(first.port, 0) << first.log();
+  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
+                                 "listening", dir_.File("second.log"));
+  ASSERT_GT(second.port, 0) << second.log();
+  auto stub = mapserver::v1::MapService::NewStub(
+      grpc::CreateChannel(second.address, grpc::InsecureChannelCredentials()));
+  grpc::ClientContext call;
+  mapserver::v1::Stats stats;
+  const grpc::Status s = stub->GetStats(&call, mapserver::v1::GetStatsRequest(), &stats);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_THAT(s.error_message(), HasSubstr("is served by the mapd at " + first.address));
+  const auto& trailing = call.GetServerTrailingMetadata();
+  auto owner = trailing.find("mapd-map-owner");
+  ASSERT_NE(owner, trailing.end());
+  EXPECT_EQ(std::string(owner->second.data(), owner->second.size()), first.address);
+  // mapctl follows the redirect.
+  const CommandResult r = Mapctl(second, {"status", "--json"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Stop(first.pid, SIGTERM), 0) << first.log();
   EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
 }
 
