@@ -16,8 +16,8 @@ constexpr int kFailoverBackoffFactor = 4;
 RobotClient::RobotClient(std::shared_ptr<grpc::Channel> channel, RobotClientOptions options)
     : channel_(std::move(channel)),
       stub_(pb::MapService::NewStub(channel_)),
-      options_(std::move(options)),
-      first_channel_(channel_) {
+      first_channel_(channel_),
+      options_(std::move(options)) {
   reader_ = std::thread([this] { ReaderLoop(); });
 }
 
@@ -118,6 +118,8 @@ void RobotClient::OpenStreamLocked() {
   context_ = std::make_unique<grpc::ClientContext>();
   if (!options_.token.empty()) context_->AddMetadata("authorization", "Bearer " + options_.token);
   if (!options_.map_id.empty()) context_->AddMetadata("mapd-map-id", options_.map_id);
+  // It goes to the owner itself: redirected there, not relayed (mapd's map_forwarder.h).
+  if (options_.connect) context_->AddMetadata("mapd-follows-redirects", "1");
   stream_ = stub_->Ingest(context_.get());
   half_closed_ = false;
   std::vector<pb::ObservationBatch> resend;

@@ -14,23 +14,37 @@ std::string Value(const grpc::ServerContextBase& context, const char* key) {
 }  // namespace
 
 bool MapForwarder::MayForward(const grpc::ServerContextBase& caller) {
-  if (caller.client_metadata().count(kForwardedMetadata) != 0) return false;
+  if (caller.client_metadata().count(kForwardedMetadata) != 0 ||
+      caller.client_metadata().count(kFollowsRedirectsMetadata) != 0) {
+    return false;
+  }
   // A token (or the open mode) travels with the call; a certificate does not.
   const std::shared_ptr<const grpc::AuthContext> auth = caller.auth_context();
   const bool certificate = auth != nullptr && auth->IsPeerAuthenticated();
   return !certificate || !Value(caller, "authorization").empty();
 }
 
-mapserver::v1::MapService::Stub* MapForwarder::StubTo(const std::string& address) {
-  std::lock_guard<std::mutex> lock(mu_);
-  auto& stub = stubs_[address];
-  if (stub == nullptr) {
+MapForwarder::Peer& MapForwarder::PeerLocked(const std::string& address) {
+  Peer& peer = peers_[address];
+  if (peer.stub == nullptr) {
     grpc::ChannelArguments args;
     args.SetMaxReceiveMessageSize(max_message_bytes_);
-    stub =
-        mapserver::v1::MapService::NewStub(grpc::CreateCustomChannel(address, credentials_, args));
+    args.SetMaxSendMessageSize(max_message_bytes_);
+    std::shared_ptr<grpc::Channel> channel = grpc::CreateCustomChannel(address, credentials_, args);
+    peer.stub = mapserver::v1::MapService::NewStub(channel);
+    peer.generic = std::make_unique<grpc::GenericStub>(channel);
   }
-  return stub.get();
+  return peer;
+}
+
+mapserver::v1::MapService::Stub* MapForwarder::StubTo(const std::string& address) {
+  std::lock_guard<std::mutex> lock(mu_);
+  return PeerLocked(address).stub.get();
+}
+
+grpc::GenericStub* MapForwarder::GenericStubTo(const std::string& address) {
+  std::lock_guard<std::mutex> lock(mu_);
+  return PeerLocked(address).generic.get();
 }
 
 std::unique_ptr<grpc::ClientContext> MapForwarder::ContextFor(

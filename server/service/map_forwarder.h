@@ -2,9 +2,8 @@
 // on one database, a call for a map another instance serves is relayed to
 // that instance and its answer returned, for clients that know one address
 // and do not follow redirects (grpcurl, scripts, clients from before
-// redirects). Unary and server-streaming calls are forwarded; a stream of
-// batches or an upload is redirected (RobotClient follows redirects, and a
-// relayed stream would double the load of the busiest path).
+// redirects). Every map call is forwarded: unary and server-streaming ones
+// by MapRouter, streams of batches and uploads by stream_relay.h.
 //
 // The forwarded call carries the caller's token, map and deadline, and
 // kForwardedMetadata: a forwarded call is never forwarded again (two
@@ -17,6 +16,7 @@
 #ifndef MAPD_SERVICE_MAP_FORWARDER_H_
 #define MAPD_SERVICE_MAP_FORWARDER_H_
 
+#include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
 #include <map>
@@ -29,6 +29,10 @@
 namespace mapd::service {
 
 inline constexpr char kForwardedMetadata[] = "mapd-forwarded-by";
+// Sent by clients that follow redirects themselves (RobotClient with
+// `connect`, in C++ and Python): they are redirected to the owner rather
+// than relayed, which spares every later message a hop.
+inline constexpr char kFollowsRedirectsMetadata[] = "mapd-follows-redirects";
 
 class MapForwarder {
  public:
@@ -41,11 +45,13 @@ class MapForwarder {
         forwarder_(std::move(forwarder)),
         max_message_bytes_(max_message_bytes) {}
 
-  // Whether `caller`'s call may be forwarded: not forwarded already, and
-  // not known by a client certificate alone.
+  // Whether `caller`'s call may be forwarded: not forwarded already, from a
+  // client that does not follow redirects, not known by a client
+  // certificate alone.
   static bool MayForward(const grpc::ServerContextBase& caller);
-  // A stub for the mapd at `address` (host:port); channels are kept.
+  // Stubs for the mapd at `address` (host:port); channels are kept.
   mapserver::v1::MapService::Stub* StubTo(const std::string& address);
+  grpc::GenericStub* GenericStubTo(const std::string& address);
   // The forwarded call's context: `caller`'s deadline, token and map.
   std::unique_ptr<grpc::ClientContext> ContextFor(const grpc::ServerContextBase& caller) const;
   // The owner's redirect metadata (a map that moved meanwhile), copied
@@ -56,9 +62,14 @@ class MapForwarder {
   const std::shared_ptr<grpc::ChannelCredentials> credentials_;
   const std::string forwarder_;
   const int max_message_bytes_;
+  struct Peer {
+    std::unique_ptr<mapserver::v1::MapService::Stub> stub;
+    std::unique_ptr<grpc::GenericStub> generic;
+  };
+  Peer& PeerLocked(const std::string& address);  // REQUIRES: mu_ held
+
   std::mutex mu_;
-  std::map<std::string, std::unique_ptr<mapserver::v1::MapService::Stub>>
-      stubs_;  // GUARDED_BY(mu_)
+  std::map<std::string, Peer> peers_;  // GUARDED_BY(mu_)
 };
 
 }  // namespace mapd::service

@@ -4,6 +4,7 @@
 
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
+#include "service/stream_relay.h"
 
 namespace mapd::service {
 namespace {
@@ -103,7 +104,9 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
   using Refused = RefusedStream<grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<MapHold> map = FindOrRedirect(*context, *id);
+  std::string owner;
+  StatusOr<MapHold> map = FindOrRedirect(*context, *id, &owner);
+  if (!owner.empty()) return RelayIngest(context, forwarder_, owner);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   MapServiceImpl* service = (*map)->service.get();
   return service->Ingest(context, *std::move(map));
@@ -114,7 +117,9 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
   using Refused = RefusedStream<grpc::ServerReadReactor<pb::UploadSubmapRequest>>;
   StatusOr<std::string> id = MapIdOf(*context, "");
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
-  StatusOr<MapHold> map = FindOrRedirect(*context, *id);
+  std::string owner;
+  StatusOr<MapHold> map = FindOrRedirect(*context, *id, &owner);
+  if (!owner.empty()) return RelayUpload(context, response, forwarder_, owner);
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   MapServiceImpl* service = (*map)->service.get();
   return service->UploadSubmap(context, response, *std::move(map));

@@ -87,9 +87,9 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
 // Failover: a second mapd on the database serves none of the first's maps
 // and redirects their calls to it; killed, the first's maps move to the
 // second within a few leases, with everything it acknowledged.
-// A client that knows only `via` (no redirects followed): its calls are
-// forwarded to `owner` and answered; a stream of batches is redirected.
-void ExpectForwardedByAndRedirectingStreams(const MapdProcess& via, const MapdProcess& owner) {
+// A client that knows only `via` (no redirects followed): its calls and
+// streams are forwarded to `owner` and answered there.
+void ExpectForwardedBy(const MapdProcess& via, const MapdProcess& owner) {
   auto stub = mapserver::v1::MapService::NewStub(
       grpc::CreateChannel(via.address, grpc::InsecureChannelCredentials()));
   grpc::ClientContext call;
@@ -114,8 +114,42 @@ void ExpectForwardedByAndRedirectingStreams(const MapdProcess& via, const MapdPr
   EXPECT_EQ(stub->GetStats(&again, mapserver::v1::GetStatsRequest(), &stats).error_code(),
             grpc::StatusCode::UNAVAILABLE);
   EXPECT_EQ(again.GetServerTrailingMetadata().count("mapd-map-owner"), 1u);
-  // Batches: UNAVAILABLE, the owner in the trailing metadata.
+  // A stream of batches, relayed both ways: the owner stores and acknowledges.
+  {
+    client::SimRobotParams params;
+    params.robot_id = "relayed";
+    client::SimRobot robot(client::DefaultWorld(), params);
+    grpc::ClientContext ingest;
+    auto stream = stub->Ingest(&ingest);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(stream->Write(robot.NextBatch()));
+    stream->WritesDone();
+    mapserver::v1::IngestAck ack;
+    int stored = 0;
+    while (stream->Read(&ack)) stored += ack.result() == mapserver::v1::IngestAck::STORED ? 1 : 0;
+    const grpc::Status end = stream->Finish();
+    EXPECT_TRUE(end.ok()) << end.error_message();
+    EXPECT_EQ(stored, 3);
+  }
+  // An upload, relayed: the owner's verdict comes back (here a refusal).
+  {
+    grpc::ClientContext upload;
+    mapserver::v1::SubmapInfo info;
+    auto writer = stub->UploadSubmap(&upload, &info);
+    mapserver::v1::UploadSubmapRequest part;
+    part.mutable_header()->set_robot_id("relayed");
+    part.mutable_header()->set_name("not-a-map");
+    part.mutable_header()->set_format(mapserver::v1::SUBMAP_FORMAT_OCTOMAP_BT);
+    ASSERT_TRUE(writer->Write(part));
+    part.set_chunk("these bytes are no OctoMap");
+    writer->Write(part);
+    writer->WritesDone();
+    const grpc::Status refused = writer->Finish();
+    EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << refused.error_message();
+  }
+  // The stream of a client already forwarded once: redirected, the owner in
+  // the trailing metadata.
   grpc::ClientContext ingest;
+  ingest.AddMetadata("mapd-forwarded-by", "another");
   auto stream = stub->Ingest(&ingest);
   stream->WritesDone();
   mapserver::v1::IngestAck ack;
@@ -142,17 +176,17 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   ASSERT_GT(first.port, 0) << first.log();
   CommandResult r = Mapctl(first, {"simulate", "--robots", "2", "--scans", "40"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  const CommandResult before = Mapctl(first, {"features", "--format", "json"});
-  ASSERT_EQ(before.exit_code, 0) << before.err;
 
   MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
                                  "listening", dir_.File("second.log"));
   ASSERT_GT(second.port, 0) << second.log();
-  ExpectForwardedByAndRedirectingStreams(second, first);
+  ExpectForwardedBy(second, first);  // 80 batches, then 3 relayed
+  const CommandResult before = Mapctl(first, {"features", "--format", "json"});
+  ASSERT_EQ(before.exit_code, 0) << before.err;
   // mapctl asks any instance and goes to the owner by itself.
   r = Mapctl(second, {"status", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 83"));
   r = Mapctl(second, {"maps"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("served by " + first.address));
@@ -171,7 +205,7 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
   EXPECT_LT(took_s, 10.0) << "takeover with 1 s leases";
   std::printf("takeover after kill -9, 1 s leases: %.2f s\n", took_s);
-  EXPECT_THAT(r.out, HasSubstr("\"batches\": 80"));
+  EXPECT_THAT(r.out, HasSubstr("\"batches\": 83"));
   EXPECT_THAT(second.log(), HasSubstr("event=map_taken map=default epoch=2"));
   // The fused map is recovered in the background (slow under sanitizers).
   CommandResult after = Mapctl(second, {"features", "--format", "json"});

@@ -132,6 +132,8 @@ class RobotClient:
         self._map_id = map_id
         if map_id:
             self._metadata.append(("mapd-map-id", map_id))
+        if self._connect is not None:  # redirected to the owner, not relayed by another mapd
+            self._metadata.append(("mapd-follows-redirects", "1"))
         self._give_up_after_s = give_up_after_s
         self._initial_backoff_s = initial_backoff_s
         self._max_backoff_s = max_backoff_s
