@@ -35,6 +35,15 @@ class MapdOnPostgresTest : public ::testing::Test {
     return StartMapd("", {"--store", store_, "--limits.read_wait_s", "120"}, MAPD_BINARY,
                      std::chrono::seconds(60), "serving", dir_.File(log_name));
   }
+  // One of several instances on the database: named `name`, started until
+  // its log says `ready` ("serving" for the first, "listening" for others).
+  MapdProcess StartInstance(const std::string& name, const char* ready,
+                            std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"--store", store_, "--instance_name", name};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return StartMapd("", args, MAPD_BINARY, std::chrono::seconds(60), ready,
+                     dir_.File(name + ".log"));
+  }
   CommandResult Mapctl(const MapdProcess& mapd, std::vector<std::string> args) {
     args.insert(args.begin(), {MAPCTL_BINARY, "--server", mapd.address});
     return RunCommand(args, "", std::chrono::seconds(120));
@@ -167,18 +176,12 @@ void ExpectForwardedBy(const MapdProcess& via, const MapdProcess& owner) {
 TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   // Named so that rendezvous hashing leaves "default" with the first (no
   // handoff to the second before the kill).
-  const auto args = [this](const std::string& name) {
-    return std::vector<std::string>{"--store",         store_, "--lease_ttl_s", "1",
-                                    "--instance_name", name};
-  };
-  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
-                                "serving", dir_.File("first.log"));
+  MapdProcess first = StartInstance("mapd-1", "serving", {"--lease_ttl_s", "1"});
   ASSERT_GT(first.port, 0) << first.log();
   CommandResult r = Mapctl(first, {"simulate", "--robots", "2", "--scans", "40"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
 
-  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
-                                 "listening", dir_.File("second.log"));
+  MapdProcess second = StartInstance("mapd-2", "listening", {"--lease_ttl_s", "1"});
   ASSERT_GT(second.port, 0) << second.log();
   ExpectForwardedBy(second, first);  // 80 batches, then 3 relayed
   const CommandResult before = Mapctl(first, {"features", "--format", "json"});
@@ -220,15 +223,9 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
 
 // --forward false: every call for a map served elsewhere is redirected.
 TEST_F(MapdOnPostgresTest, WithoutForwardingCallsAreRedirected) {
-  const auto args = [this](const std::string& name) {
-    return std::vector<std::string>{"--store", store_,      "--instance_name",
-                                    name,      "--forward", "false"};
-  };
-  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
-                                "serving", dir_.File("first.log"));
+  MapdProcess first = StartInstance("mapd-1", "serving", {"--forward", "false"});
   ASSERT_GT(first.port, 0) << first.log();
-  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
-                                 "listening", dir_.File("second.log"));
+  MapdProcess second = StartInstance("mapd-2", "listening", {"--forward", "false"});
   ASSERT_GT(second.port, 0) << second.log();
   auto stub = mapserver::v1::MapService::NewStub(
       grpc::CreateChannel(second.address, grpc::InsecureChannelCredentials()));
@@ -252,14 +249,9 @@ TEST_F(MapdOnPostgresTest, WithoutForwardingCallsAreRedirected) {
 // done by the map's owner; an archived map is served by neither, and comes
 // back as it was.
 TEST_F(MapdOnPostgresTest, AMapIsArchivedRestoredAndPurgedThroughEitherInstance) {
-  const auto args = [this](const std::string& name) {
-    return std::vector<std::string>{"--store", store_, "--instance_name", name};
-  };
-  MapdProcess first = StartMapd("", args("mapd-1"), MAPD_BINARY, std::chrono::seconds(60),
-                                "serving", dir_.File("first.log"));
+  MapdProcess first = StartInstance("mapd-1", "serving");
   ASSERT_GT(first.port, 0) << first.log();
-  MapdProcess second = StartMapd("", args("mapd-2"), MAPD_BINARY, std::chrono::seconds(60),
-                                 "listening", dir_.File("second.log"));
+  MapdProcess second = StartInstance("mapd-2", "listening");
   ASSERT_GT(second.port, 0) << second.log();
   CommandResult r = Mapctl(first, {"maps", "create", "site-1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
