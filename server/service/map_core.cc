@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <iterator>
 
 #include "common/clock.h"
 #include "fusion/projection.h"
@@ -23,6 +24,14 @@ using Clock = std::chrono::steady_clock;
 constexpr int kFuserNice = 5;
 // Fused rows written with one group commit at most (WriterLoop).
 constexpr size_t kMaxFusedRowsPerCommit = 512;
+// Observations the fuser takes per round at most (FuserLoop). Its progress
+// (fused_count_, which the writer's backpressure and read-your-writes waits
+// watch) moves once per round, and snapshots are taken between rounds. A
+// round of the whole queue, up to limits.max_fusion_backlog (50,000)
+// observations, is ~3 s of fusion during which the writer sees the backlog
+// full and holds every commit: the soak's p99 acknowledgement was 1-3 s
+// (docs/long-running.md). 512 are 30-60 ms of fusion at the soak's rates.
+constexpr size_t kMaxObservationsPerFuseRound = 512;
 
 // Records one change feed into a set of clusters to rewrite.
 void Accumulate(const fusion::ChangeFeed& feed, std::unordered_set<fusion::ClusterId>* delta) {
@@ -569,7 +578,10 @@ void MapCore::FuserLoop() {
         continue;
       }
       if (fuser_stopping_) break;  // unfused work stays committed (Stop)
-      work.swap(fuse_queue_);
+      const size_t take = std::min(fuse_queue_.size(), kMaxObservationsPerFuseRound);
+      const auto end = fuse_queue_.begin() + static_cast<std::ptrdiff_t>(take);
+      work.assign(std::make_move_iterator(fuse_queue_.begin()), std::make_move_iterator(end));
+      fuse_queue_.erase(fuse_queue_.begin(), end);
     }
     FusedDelta delta;
     size_t done = 0;
