@@ -74,7 +74,11 @@ TEST_F(MapdOnPostgresTest, MapsLiveInTheDatabaseAcrossARestart) {
   // Another mapd on the same database serves the same maps, as they were.
   MapdProcess again = Start("second.log");
   ASSERT_GT(again.port, 0) << again.log();
-  r = Mapctl(again, {"maps"});
+  // Once site-1 is open (listed before as "served by" its own address).
+  r = RunUntil([&] { return Mapctl(again, {"maps"}); },
+               [](const CommandResult& c) {
+                 return c.exit_code == 0 && c.out.find("served by") == std::string::npos;
+               });
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("site-1"));
   EXPECT_THAT(r.out, HasSubstr("fusion.eta_m=0.25"));

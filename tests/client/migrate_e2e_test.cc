@@ -52,23 +52,6 @@ class MigrateE2eTest : public ::testing::Test {
     ADD_FAILURE() << "site-1 never reflected " << batches << " batches: " << r.out << r.err;
     return "";
   }
-  // `mapctl maps` once site-1 is served by `mapd` itself: an instance on
-  // PostgreSQL serves its default map first and opens the maps it takes
-  // after (until then site-1 is listed as "served by" its address; CI,
-  // 2026-12-07, under the suite's load).
-  CommandResult MapsOnceServed(const MapdProcess& mapd) {
-    CommandResult r;
-    for (int i = 0; i < 600; ++i) {
-      r = Mapctl(mapd, {"maps"});
-      if (r.exit_code == 0 && r.out.find("served by") == std::string::npos &&
-          r.out.find("site-1") != std::string::npos) {
-        return r;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    ADD_FAILURE() << "site-1 never served: " << r.out << r.err;
-    return r;
-  }
   std::string Dir(const std::string& name) {
     std::filesystem::create_directory(dir_.File(name));
     return dir_.File(name);
@@ -107,7 +90,11 @@ TEST_F(MigrateE2eTest, AMapMovesIntoPostgresAndBackAndIsServedAsItWas) {
   // observations), its own settings, and a robot's resends are duplicates.
   MapdProcess pg = Start({"--store", store_}, "postgres.log");
   ASSERT_GT(pg.port, 0) << pg.log();
-  r = MapsOnceServed(pg);
+  // Once site-1 is open (listed before as "served by" pg's own address).
+  r = RunUntil([&] { return Mapctl(pg, {"maps"}); },
+               [](const CommandResult& c) {
+                 return c.exit_code == 0 && c.out.find("served by") == std::string::npos;
+               });
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("site-1"));
   EXPECT_THAT(r.out, HasSubstr("fusion.eta_m=0.25"));

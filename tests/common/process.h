@@ -211,6 +211,22 @@ inline CommandResult RunCommand(const std::vector<std::string>& argv,
   return r;
 }
 
+// Runs `run()` (returning a CommandResult) every 100 ms until `done(result)`
+// or `timeout`; returns the last result. For what a server does a moment
+// after it says it serves: an instance on PostgreSQL serves its default map
+// first and opens the other maps it takes after.
+template <typename Run, typename Done>
+CommandResult RunUntil(const Run& run, const Done& done,
+                       std::chrono::milliseconds timeout = std::chrono::seconds(60)) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  CommandResult r = run();
+  while (!done(r) && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    r = run();
+  }
+  return r;
+}
+
 // Sends `signal` to `pid` and waits for it to exit (SIGKILL after `timeout`).
 // Returns its exit status as DecodeWaitStatus (e.g. 0 for a clean exit, 137
 // if it had to be killed), or -1 if `pid` is not our child.
