@@ -126,30 +126,11 @@ class MapCoreTest : public ::testing::Test {
   }
 
   // Holds the fuser (MapCoreOptions::hold_fuser_for_test) while hold_fuser_
-  // is set; fuser_held_ says it was asked while holding.
+  // is set, but for fuser_rounds_left_ more rounds; fuser_held_ says it was
+  // asked while holding.
   void UseFuserHold() {
     options_.hold_fuser_for_test = [this] {
-      const bool hold = hold_fuser_.load();
-      if (hold) fuser_held_ = true;
-      return hold;
-    };
-  }
-  // Holds the running fuser and waits until it is held: it asks before
-  // each round and at least once a second when idle.
-  void HoldTheFuser() {
-    hold_fuser_ = true;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!fuser_held_.load() && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    ASSERT_TRUE(fuser_held_.load()) << "the fuser never asked";
-  }
-
-  // Runs the fuser for fuser_rounds_left_ rounds (MapCoreOptions::
-  // hold_fuser_for_test is asked before each), then holds it; fuser_held_
-  // says it was asked while holding.
-  void UseFuserRounds() {
-    fuser_rounds_left_ = 1 << 30;  // until HoldTheFuserInRounds
-    options_.hold_fuser_for_test = [this] {
+      if (!hold_fuser_.load()) return false;
       if (fuser_rounds_left_.load() > 0) {
         --fuser_rounds_left_;
         return false;
@@ -158,9 +139,10 @@ class MapCoreTest : public ::testing::Test {
       return true;
     };
   }
-  void HoldTheFuserInRounds() {
-    fuser_rounds_left_ = 0;
-    fuser_held_ = false;
+  // Holds the running fuser and waits until it is held: it asks before
+  // each round and at least once a second when idle.
+  void HoldTheFuser() {
+    hold_fuser_ = true;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (!fuser_held_.load() && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -628,9 +610,9 @@ TEST_F(MapCoreTest, AStopDuringTheServingReplaySnapshotsNothing) {
 // backpressure held every commit and read-your-writes waits waited for the
 // whole round (p99 acknowledgement 1-3 s, docs/long-running.md).
 TEST_F(MapCoreTest, TheFuserWorksThroughABacklogInRoundsThatEachCount) {
-  UseFuserRounds();
+  UseFuserHold();
   Open();
-  HoldTheFuserInRounds();
+  HoldTheFuser();
   constexpr int kBatches = 1100;
   std::mt19937_64 rng(7);
   std::vector<IngestBatch> batches;
