@@ -10,52 +10,20 @@
 // Target (issue "Hardening, second round", item 6): the robot's every ack
 // within 1 s under the flood with the machine busy. Not a test: run it on
 // demand (docs/reliability.md, "Rapid reset").
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <thread>
 
 #include "common/haproxy.h"
 #include "common/latency_probes.h"
+#include "common/mapd_metrics.h"
 #include "common/process.h"
 #include "common/rapid_reset.h"
 #include "common/temp_dir.h"
 
-namespace {
-
 namespace t = mapd::testing;
-
-// The sum of mapd's grpc_server_handled_total for Ingest, from its web port's
-// /metrics (a plain HTTP/1.0 GET); -1 if it cannot be read.
-double IngestCallsHandled(int web_port) {
-  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = htons(static_cast<uint16_t>(web_port));
-  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return close(fd), -1;
-  const std::string request = "GET /metrics HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
-  if (write(fd, request.data(), request.size()) != static_cast<ssize_t>(request.size()))
-    return close(fd), -1;
-  std::string body;
-  char buf[65536];
-  for (ssize_t n; (n = read(fd, buf, sizeof buf)) > 0;) body.append(buf, static_cast<size_t>(n));
-  close(fd);
-  double total = 0;
-  std::istringstream lines(body);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("grpc_server_handled_total{", 0) == 0 &&
-        line.find("grpc_method=\"Ingest\"") != std::string::npos)
-      total += std::stod(line.substr(line.rfind(' ') + 1));
-  }
-  return total;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   double seconds = 8;
@@ -97,7 +65,7 @@ int main(int argc, char** argv) {
 
   t::LatencyProbes probes(front);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const double calls_before = IngestCallsHandled(web_port), cpu_before = t::CpuSeconds(mapd.pid);
+  const double calls_before = t::IngestCallsHandled(web_port), cpu_before = t::CpuSeconds(mapd.pid);
   t::RapidResetResult flood;
   {
     t::CpuHogs busy(hogs);
@@ -107,7 +75,7 @@ int main(int argc, char** argv) {
     flood = t::RunRapidReset(target, std::chrono::duration<double>(seconds));
   }
   const double cpu_flood = t::CpuSeconds(mapd.pid) - cpu_before;
-  const double calls = IngestCallsHandled(web_port) - calls_before;
+  const double calls = t::IngestCallsHandled(web_port) - calls_before;
   const t::LatencyProbes::Result r = probes.Stop();
   const int proxy_exit = proxy.pid > 0 ? t::Stop(proxy.pid) : 0;
   const int mapd_exit = t::Stop(mapd.pid);

@@ -59,8 +59,9 @@ class FailoverTest : public ::testing::Test {
     store_ = cluster->NewDatabase();
     for (int i = 0; i < kInstances; ++i) {
       mapd_.push_back(StartMapd(
-          "", {"--store", store_, "--lease_ttl_s", "1", "--instance_name", Name(i)}, MAPD_BINARY,
-          std::chrono::seconds(60), i == 0 ? "serving" : "listening", dir_.File(Name(i) + ".log")));
+          "", {"--store", store_, "--lease_ttl_s", lease_ttl_s_, "--instance_name", Name(i)},
+          MAPD_BINARY, std::chrono::seconds(60), i == 0 ? "serving" : "listening",
+          dir_.File(Name(i) + ".log")));
       ASSERT_GT(mapd_.back().port, 0) << mapd_.back().log();
       logs_.push_back(mapd_.back().log_path);
       addresses_.push_back(mapd_.back().address);
@@ -130,8 +131,8 @@ class FailoverTest : public ::testing::Test {
   // Starts instance `i` again after it stopped: same name, same port.
   void Restart(int i) {
     mapd_[i] = StartMapd("",
-                         {"--store", store_, "--lease_ttl_s", "1", "--instance_name", Name(i),
-                          "--listen", addresses_[i]},
+                         {"--store", store_, "--lease_ttl_s", lease_ttl_s_, "--instance_name",
+                          Name(i), "--listen", addresses_[i]},
                          MAPD_BINARY, std::chrono::seconds(60), "listening",
                          dir_.File(Name(i) + "-" + std::to_string(++restarts_) + ".log"));
     logs_.push_back(mapd_[i].log_path);
@@ -190,6 +191,10 @@ class FailoverTest : public ::testing::Test {
     }
   }
 
+  // A second-long lease moves a dead owner's maps in seconds (the kill and
+  // SIGSTOP tests); a live instance whose writer stalls for half of it gives
+  // its maps up, which a loaded CI machine does.
+  std::string lease_ttl_s_ = "1";
   TempDir dir_;
   int restarts_ = 0;
   std::vector<std::string> logs_;  // every instance's, restarted ones too
@@ -320,7 +325,20 @@ TEST_F(FailoverPostgresRestartTest, EveryInstanceCarriesOnAfterPostgresCrashes) 
   FinishAndCheckExactlyOnce(0);
 }
 
-TEST_F(FailoverTest, ARollingRestartPausesEachMapBrieflyAndRefusesNothing) {
+// A rolling restart hands maps over cleanly (each instance leaves and
+// releases its leases), so it needs no short lease: with mapd's default
+// (3 s), the pauses measured are the handovers', not lapses of a live
+// instance's lease on a slow machine (CI, 2026-12-07: a map paused 16 s
+// moving back and forth after one).
+class RollingRestartTest : public FailoverTest {
+ protected:
+  void SetUp() override {
+    lease_ttl_s_ = "3";
+    FailoverTest::SetUp();
+  }
+};
+
+TEST_F(RollingRestartTest, EachMapPausesBrieflyAndNothingIsRefused) {
   ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)));
   StartRobots();
   const std::vector<std::string> all(kMaps.begin(), kMaps.end());

@@ -1,8 +1,9 @@
 // The rapid-reset mitigation we ship (deploy/haproxy.cfg, docs/reliability.md
 // "Rapid reset"): HAProxy 2.6 in front of a real mapd, an HTTP/2 rapid-reset
 // flood from one client address through it, and a normal robot and health
-// checks from another. The proxy must close the flooding connections and
-// refuse the reconnects, and the robot must lose nothing. How fast the robot
+// checks from another. The flood must not reach mapd (the proxy closes
+// flooding connections and refuses the reconnects), and the robot must lose
+// nothing. How fast the robot
 // is answered meanwhile is measured by tests/bench/rapid_reset_bench, not
 // here (a timed assertion would flake on a busy machine).
 #include "common/rapid_reset.h"
@@ -10,18 +11,21 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
 
 #include "common/haproxy.h"
 #include "common/latency_probes.h"
+#include "common/mapd_metrics.h"
 #include "common/process.h"
 #include "common/temp_dir.h"
 
 namespace mapd::testing {
 namespace {
 
-TEST(RapidResetTest, TheShippedHaproxyConfigClosesTheFloodAndTheRobotLosesNothing) {
+TEST(RapidResetTest, TheShippedHaproxyConfigKeepsTheFloodFromMapdAndTheRobotLosesNothing) {
   TempDir dir;
-  MapdProcess mapd = StartMapd(dir.File("map.db"));
+  const int web_port = FreeLoopbackPort();
+  MapdProcess mapd = StartMapd(dir.File("map.db"), {"--http.port", std::to_string(web_port)});
   ASSERT_GT(mapd.port, 0) << mapd.log();
   HaproxyProcess proxy = StartHaproxy(MAPD_HAPROXY_CONFIG, mapd.address, dir.File("haproxy.log"));
   if (proxy.pid < 0 && access(kHaproxyBinary, X_OK) != 0) {
@@ -31,25 +35,36 @@ TEST(RapidResetTest, TheShippedHaproxyConfigClosesTheFloodAndTheRobotLosesNothin
   ASSERT_GT(proxy.pid, 0) << proxy.log();
 
   LatencyProbes probes(proxy.address);  // from 127.0.0.1
+  const double calls_before = IngestCallsHandled(web_port);
+  ASSERT_GE(calls_before, 0) << "mapd's /metrics on port " << web_port;
   RapidResetTarget target;
   target.port = std::atoi(proxy.address.substr(proxy.address.rfind(':') + 1).c_str());
   target.source_host = "127.0.0.2";  // the attacker: another client address
-  // Two seconds, and on until the proxy has closed two flooding connections
-  // (a machine busy with CI's sanitizer jobs may not flood 1,000 streams in
-  // two seconds; without the config's rules this runs into the one-minute cap
-  // with one connection HAProxy keeps open).
-  target.min_closed_connections = 2;
-  const RapidResetResult flood = RunRapidReset(target, std::chrono::seconds(2));
+  const RapidResetResult flood = RunRapidReset(target, std::chrono::seconds(4));
+  // Streams of the flood that reached mapd (the robot's is one call, open).
+  const double reached = IngestCallsHandled(web_port) - calls_before;
   const LatencyProbes::Result robot = probes.Stop();
+  std::printf(
+      "flood: %ld connections (%ld closed by haproxy), %ld reconnects refused, %ld streams (%ld "
+      "on one connection at most), %ld resets and %ld GOAWAYs received in %.1f s; %.0f reached "
+      "mapd; robot ack max %.1f ms, health max %.1f ms\n",
+      flood.connections, flood.closed_by_peer, flood.failed_connects, flood.streams,
+      flood.most_streams_on_one_connection, flood.resets_received, flood.goaways, flood.seconds,
+      reached, Quantile(robot.ack_ms, 1.0), Quantile(robot.health_ms, 1.0));
 
-  // Every flooding connection was closed by the proxy (the first after its
-  // first 1,000 streams, the reconnects at once), except perhaps the last,
-  // made as the flood's time ran out. Without the config's rules HAProxy
-  // passes the whole flood on to mapd on one connection it keeps open.
-  // A reconnect refused at connect() (the proxy's rule met before the
-  // connection was accepted, which load decides: CI, 2026-12-05) counts as
-  // refused too; without the rules there is one connection and no refusal.
-  EXPECT_GE(flood.connections + flood.failed_connects, 2);
+  // What the config's rules guarantee: the flood does not reach mapd. They
+  // let 1,000 requests a source through per 10 s; without them HAProxy
+  // passes 20,000-25,000 streams of a 3 s flood on to mapd (here, idle).
+  EXPECT_LT(reached, 5000);
+  // How: HAProxy closes a flooding connection once it has counted 1,000 of
+  // its requests, and refuses the reconnects. It counts only the streams it
+  // analyses, and a stream reset in the same read is dropped first: a
+  // connection may carry 25,000-35,000 streams before it is closed, and in
+  // some runs (6 of 48 here) HAProxy drains the first connection without
+  // counting any (it stays open, and next to nothing reaches mapd either;
+  // HAProxy 2.6 has no per-connection reset limit, docs/reliability.md).
+  // So: every connection but the last was closed.
+  EXPECT_GE(flood.connections, 1);
   EXPECT_GE(flood.closed_by_peer, flood.connections - 1);
   // The robot's every batch was stored, health answered throughout.
   EXPECT_GT(robot.batches_sent, 50);
@@ -57,11 +72,6 @@ TEST(RapidResetTest, TheShippedHaproxyConfigClosesTheFloodAndTheRobotLosesNothin
   EXPECT_EQ(robot.acks_other, 0);
   EXPECT_GT(robot.health_ms.size(), 10u);
   EXPECT_EQ(robot.health_failures, 0);
-  std::printf(
-      "flood: %ld connections, all closed by haproxy, %ld reconnects refused; robot ack max %.1f "
-      "ms, health max %.1f ms\n",
-      flood.connections, flood.failed_connects, Quantile(robot.ack_ms, 1.0),
-      Quantile(robot.health_ms, 1.0));
 
   EXPECT_EQ(Stop(mapd.pid), 0);
   Stop(proxy.pid);

@@ -62,6 +62,9 @@ class FeatureWatch:
         self._call = None
         self.resume_version = since_map_version
         self.reconnects = 0
+        # The error the last reconnect was for ("CODE: details"; "" before any
+        # or after a clean end): what to look at when a watch does not move.
+        self.last_error = ""
 
     def close(self) -> None:
         self._closed.set()
@@ -113,6 +116,7 @@ class FeatureWatch:
             if error is not None and (not self._reconnect or not received or code in _PERMANENT):
                 raise error
             self.reconnects += 1
+            self.last_error = f"{code.name}: {error.details()}" if error is not None else ""
             if self._closed.wait(backoff):
                 return
             backoff = min(backoff * 2, self._max_backoff_s)

@@ -46,9 +46,10 @@ def ingest(address, batches):
     assert robot.counts().stored == len(batches)
 
 
-def settle(client, watcher, bbox=None):
+def settle(client, watcher, bbox=None, mapd=None):
     """Waits (bounded) for the fuser to be idle and the watch to reach its
-    version; returns GetFeatureMap's map then and the watcher's state."""
+    version; returns GetFeatureMap's map then and the watcher's state. On
+    timeout it says where the watch stands (and the tail of mapd's log)."""
     deadline = time.monotonic() + 60
     while True:
         fused = client.feature_map(bbox=bbox, max_wait_ms=5000)
@@ -56,7 +57,16 @@ def settle(client, watcher, bbox=None):
         if fused.fusion_pending == 0 and version == fused.map_version:
             return fused, features, planes
         assert watcher.error is None, watcher.error
-        assert time.monotonic() < deadline, (fused.map_version, version)
+        if time.monotonic() >= deadline:
+            log = ""
+            if mapd is not None:
+                with open(mapd.log_path, errors="replace") as f:
+                    log = "".join(f.readlines()[-40:])
+            pytest.fail(f"the watch is at version {version}, the map at {fused.map_version} "
+                        f"(fusion pending {fused.fusion_pending}); feed: {watcher.feed.reconnects} "
+                        f"reconnects, resume_version {watcher.feed.resume_version}, last error "
+                        f"{watcher.feed.last_error!r}, watcher alive {watcher.is_alive()}\n"
+                        f"mapd's log:\n{log}")
         time.sleep(0.05)
 
 
@@ -97,8 +107,9 @@ def test_resumes_after_a_restart_and_ends_equal_to_the_feature_map(mapd):
     assert mapd.stop() == 0  # the watch ends with UNAVAILABLE
     mapd.start(listen=mapd.address)  # the same port, the same database
     ingest(mapd.address, walk("r1", 10, first_seq=11) + walk("r2", 10))
-    assert_same(*settle(client, watcher))
+    assert_same(*settle(client, watcher, mapd=mapd))
     assert feed.reconnects >= 1 and feed.resume_version > before
+    assert feed.last_error.startswith("UNAVAILABLE: "), feed.last_error  # shutdown, or down
     assert {r for f in watcher.state()[1].values() for r in f.robots} == {"r1", "r2"}
     feed.close()
     watcher.join(timeout=30)
