@@ -88,13 +88,18 @@ StatusOr<std::unique_ptr<MapCore>> MapCore::Open(const MapCoreOptions& options) 
   });
   core->fuser_ = std::thread([c = core.get()] {
     pthread_setname_np(pthread_self(), "mapd-fuser");
-    // Fusion is throughput work and acks wait only for the writer: on a busy
-    // machine the threads that answer robots get the CPU first (issue 46: one
-    // robot's junk kept the fuser at 100 % and the others' acks waited for
-    // a core). Linux: a thread's nice value is its own.
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kFuserNice);
     c->HoldFuserForTest();
-    if (c->Recover()) {
+    // Recovery runs at the process's priority: until it ends the map is not
+    // served (a replay from scratch) or its reads wait for it (from a
+    // snapshot), and a busy instance taking over a dead one's maps must not
+    // starve it.
+    const bool recovered = c->Recover();
+    // Then fusion is throughput work and acks wait only for the writer: on a
+    // busy machine the threads that answer robots get the CPU first (issue
+    // 46: one robot's junk kept the fuser at 100 % and the others' acks
+    // waited for a core). Linux: a thread's nice value is its own.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kFuserNice);
+    if (recovered) {
       c->FuserLoop();
     } else {
       c->ParkFuser();

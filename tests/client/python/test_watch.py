@@ -31,8 +31,8 @@ class Watcher(threading.Thread):
                     with self.lock:
                         self.snapshot = (self.live.map_version, dict(self.live.features),
                                          dict(self.live.planes))
-        except grpc.RpcError as error:
-            self.error = error
+        except Exception as error:  # pylint: disable=broad-except
+            self.error = error  # an RpcError, or anything that ended the thread
 
     def state(self):
         with self.lock:
