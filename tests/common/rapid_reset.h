@@ -37,13 +37,6 @@ struct RapidResetTarget {
   int port = 0;
   std::string source_host;  // bind to this IPv4 address first (empty: any)
   std::string path = "/mapserver.v1.MapService/Ingest";
-  // Flood past the duration until the peer closed or refused this many
-  // connections (a proxy may refuse a flooder's reconnects at connect()
-  // rather than accept and close them, by timing), for at most `overtime_cap`
-  // more. Lets a test wait for what it asserts instead of betting on how much
-  // a busy machine floods in a time.
-  long min_closed_connections = 0;
-  std::chrono::seconds overtime_cap{60};
 };
 
 struct RapidResetResult {
@@ -220,15 +213,10 @@ inline RapidResetResult RunRapidReset(const RapidResetTarget& target,
                                       std::chrono::duration<double> duration) {
   RapidResetResult result;
   const auto start = std::chrono::steady_clock::now();
-  const auto planned_end = start + std::chrono::duration_cast<std::chrono::nanoseconds>(duration);
-  const auto deadline = [&] {
-    return result.closed_by_peer + result.failed_connects < target.min_closed_connections
-               ? planned_end + target.overtime_cap
-               : planned_end;
-  };
-  while (std::chrono::steady_clock::now() < deadline()) {
+  const auto deadline = start + std::chrono::duration_cast<std::chrono::nanoseconds>(duration);
+  while (std::chrono::steady_clock::now() < deadline) {
     const rapid_reset_internal::ConnectionFlood c =
-        rapid_reset_internal::FloodConnection(target, deadline());
+        rapid_reset_internal::FloodConnection(target, deadline);
     if (!c.connected) {
       ++result.failed_connects;
       std::this_thread::sleep_for(std::chrono::milliseconds(1));

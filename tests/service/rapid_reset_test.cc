@@ -3,9 +3,9 @@
 // flood from one client address through it, and a normal robot and health
 // checks from another. The flood must not reach mapd (the proxy closes
 // flooding connections and refuses the reconnects), and the robot must lose
-// nothing. How fast the robot
-// is answered meanwhile is measured by tests/bench/rapid_reset_bench, not
-// here (a timed assertion would flake on a busy machine).
+// nothing. How fast the robot is answered meanwhile is measured by
+// tests/bench/rapid_reset_bench, not here (a timed assertion would flake on a
+// busy machine).
 #include "common/rapid_reset.h"
 
 #include <gtest/gtest.h>
@@ -60,7 +60,7 @@ TEST(RapidResetTest, TheShippedHaproxyConfigKeepsTheFloodFromMapdAndTheRobotLose
   // its requests, and refuses the reconnects. It counts only the streams it
   // analyses, and a stream reset in the same read is dropped first: a
   // connection may carry 25,000-35,000 streams before it is closed, and in
-  // some runs (6 of 48 here) HAProxy drains the first connection without
+  // some runs (8 of 62 here) HAProxy drains the first connection without
   // counting any (it stays open, and next to nothing reaches mapd either;
   // HAProxy 2.6 has no per-connection reset limit, docs/reliability.md).
   // So: every connection but the last was closed.
