@@ -2,7 +2,8 @@
 //
 // Layout, little-endian, doubles as their IEEE bits so that a restored engine
 // continues bit for bit:
-//   "MAPDFUS1" | u32 version | params key (string) | body | u64 FNV-1a of all before
+//   "MAPDFUS1" | u32 version | params key (string) | body | u64 checksum of all before
+//   (version 3: WordChecksum; version 2, the same layout: FNV-1a)
 //   body: nodes (parent, size, anchor, next member, folded stats, root stats),
 //         counters, split records, published features, the snapper's lines,
 //         the consolidator's pieces, whether it has free-space evidence and
@@ -24,7 +25,10 @@ constexpr char kMagic[8] = {'M', 'A', 'P', 'D', 'F', 'U', 'S', '1'};
 // 2: the consolidator's pieces. Retirement's section (retired pieces, the
 // ledger) follows the evidence only when the params key has retirement on,
 // so the layout without it is unchanged.
-constexpr uint32_t kVersion = 2;
+// 3: closed by WordChecksum instead of FNV-1a (version 2 is still read).
+constexpr uint32_t kVersion = 3;
+constexpr SnapshotFormat kFormats[] = {{2, SnapshotChecksum::kFnv1a},
+                                       {kVersion, SnapshotChecksum::kWords}};
 
 class Writer : public StateWriter {
  public:
@@ -203,7 +207,7 @@ Status FusionEngine::SaveState(std::string* out) const {
       }
     }
   }
-  w.U64(Fnv1a(*out));
+  w.U64(WordChecksum(*out));
   return Status::Ok();
 }
 
@@ -214,7 +218,7 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     return Status::Unimplemented("snapshots are for fusion.mode = bounded");
   }
   StatusOr<std::string_view> payload =
-      OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), kVersion,
+      OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), {kFormats[0], kFormats[1]},
                    FusionParamsKey(params), "fusion snapshot");
   if (!payload.ok()) return payload.status();
   Reader r(*payload);

@@ -93,8 +93,9 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
     const PlaneFusionParams& params, std::string_view state) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   StatusOr<std::string_view> payload =
-      OpenSnapshot(state, std::string_view(kPlaneMagic, sizeof(kPlaneMagic)), kPlaneVersion,
-                   PlaneFusionParamsKey(params), "plane fusion snapshot");
+      OpenSnapshot(state, std::string_view(kPlaneMagic, sizeof(kPlaneMagic)),
+                   {{kPlaneVersion, SnapshotChecksum::kFnv1a}}, PlaneFusionParamsKey(params),
+                   "plane fusion snapshot");
   if (!payload.ok()) return payload.status();
   PlaneReader r(*payload);
   auto engine = std::make_unique<PlaneFusionEngine>(params);

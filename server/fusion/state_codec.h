@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,6 +28,49 @@ inline uint64_t Fnv1a(std::string_view bytes) {
     h *= 1099511628211ULL;
   }
   return h;
+}
+
+// The checksum of newer snapshots: four lanes over 8-byte words, each round
+// multiply, rotate, multiply (the round of xxHash64, with its primes), the
+// lanes folded and the tail bytes and length mixed in at the end. Every bit of
+// a word reaches every bit of its lane. Byte-wise FNV-1a spent 27 ms on a
+// 24 MB fusion state (two thirds of its encoding); this about a tenth of that.
+inline uint64_t WordChecksum(std::string_view bytes) {
+  constexpr uint64_t kP1 = 0x9E3779B185EBCA87ULL;
+  constexpr uint64_t kP2 = 0xC2B2AE3D27D4EB4FULL;
+  const auto rotl = [](uint64_t x, int r) { return (x << r) | (x >> (64 - r)); };
+  const auto round = [&](uint64_t acc, uint64_t word) { return rotl(acc + word * kP2, 31) * kP1; };
+  uint64_t lane[4] = {kP1 + kP2, kP2, 0, 0 - kP1};
+  const char* p = bytes.data();
+  size_t n = bytes.size();
+  for (; n >= 32; n -= 32, p += 32) {
+    for (int k = 0; k < 4; ++k) {
+      uint64_t word;
+      std::memcpy(&word, p + 8 * k, 8);
+      lane[k] = round(lane[k], word);
+    }
+  }
+  uint64_t h = rotl(lane[0], 1) + rotl(lane[1], 7) + rotl(lane[2], 12) + rotl(lane[3], 18);
+  for (int k = 0; k < 4; ++k) h = (h ^ round(0, lane[k])) * kP1 + 0x85EBCA77C2B2AE63ULL;
+  h ^= bytes.size();
+  for (; n >= 8; n -= 8, p += 8) {
+    uint64_t word;
+    std::memcpy(&word, p, 8);
+    h = rotl(h ^ round(0, word), 27) * kP1 + 0x85EBCA77C2B2AE63ULL;
+  }
+  for (; n > 0; --n, ++p)
+    h = rotl(h ^ (static_cast<unsigned char>(*p) * 0x27D4EB2F165667C5ULL), 11) * kP1;
+  h ^= h >> 33;
+  h *= kP2;
+  h ^= h >> 29;
+  return h;
+}
+
+// How a snapshot format closes (OpenSnapshot).
+enum class SnapshotChecksum { kFnv1a, kWords };
+
+inline uint64_t ChecksumOf(std::string_view bytes, SnapshotChecksum kind) {
+  return kind == SnapshotChecksum::kWords ? WordChecksum(bytes) : Fnv1a(bytes);
 }
 
 class StateWriter {
@@ -102,14 +146,22 @@ class StateReader {
   bool ok_ = true;
 };
 
+// A format version an engine reads, and the checksum that closes it.
+struct SnapshotFormat {
+  uint32_t version;
+  SnapshotChecksum checksum;
+};
+
 // Every snapshot is framed alike: magic, format version, the parameters key
 // (a snapshot is valid only for the parameters it was taken with), the
-// engine's payload, then the FNV-1a of all before it. Checks the frame and
-// returns the payload. `what` names the snapshot in errors ("fusion
-// snapshot"): InvalidArgument when corrupt, FailedPrecondition when taken
-// with other parameters.
+// engine's payload, then the checksum of all before it (the format says
+// which). Checks the frame against the formats the engine reads and returns
+// the payload. `what` names the snapshot in errors ("fusion snapshot"):
+// InvalidArgument when corrupt, FailedPrecondition when taken with other
+// parameters.
 inline StatusOr<std::string_view> OpenSnapshot(std::string_view state, std::string_view magic,
-                                               uint32_t version, const std::string& params_key,
+                                               std::initializer_list<SnapshotFormat> formats,
+                                               const std::string& params_key,
                                                const std::string& what) {
   const auto corrupt = [&what](const std::string& why) {
     return Status::InvalidArgument(what + " is corrupt: " + why);
@@ -118,11 +170,17 @@ inline StatusOr<std::string_view> OpenSnapshot(std::string_view state, std::stri
     return corrupt("not a " + what);
   }
   const std::string_view body = state.substr(0, state.size() - 8);
+  StateReader r(body.substr(magic.size()));
+  const uint32_t version = r.U32();
+  const SnapshotFormat* format = nullptr;
+  for (const SnapshotFormat& f : formats) {
+    if (f.version == version) format = &f;
+  }
+  // (A newer mapd's snapshot: this one replays the observations instead.)
+  if (format == nullptr) return corrupt("unknown format version " + std::to_string(version));
   uint64_t stored_hash;
   std::memcpy(&stored_hash, state.data() + body.size(), 8);
-  if (Fnv1a(body) != stored_hash) return corrupt("checksum mismatch");
-  StateReader r(body.substr(magic.size()));
-  if (r.U32() != version) return corrupt("unknown format version");
+  if (ChecksumOf(body, format->checksum) != stored_hash) return corrupt("checksum mismatch");
   const std::string key = r.Str();
   if (!r.ok()) return corrupt("truncated header");
   if (key != params_key) {

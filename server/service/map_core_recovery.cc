@@ -418,6 +418,10 @@ void MapCore::MaybeSnapshot(bool force) {
   snap.through_observation = fused_through_id_;
   snap.through_tie_seq = fused_tie_seq_;
   snap.params = fusion::FusionParamsKey(options_.fusion);
+  if (!force) {
+    std::lock_guard<std::mutex> lock(snapshot_spare_mu_);
+    snap.state.swap(snapshot_spare_);  // SaveState clears it, keeping its memory
+  }
   {
     // This thread is the engine's only writer: a shared lock is enough.
     std::shared_lock<std::shared_mutex> lock(engine_mu_);
@@ -439,8 +443,13 @@ void MapCore::MaybeSnapshot(bool force) {
   last_snapshot_ = Clock::now();
   const size_t bytes = snap.state.size();
   const int64_t created_ns = snap.created_ns;
-  auto shared = std::make_shared<const storage::FusionSnapshot>(std::move(snap));
-  const auto done = [this, bytes, created_ns, encode_ms, covered, t0](const Status& s) {
+  auto shared = std::make_shared<storage::FusionSnapshot>(std::move(snap));
+  const auto done = [this, shared, bytes, created_ns, encode_ms, covered, t0](const Status& s) {
+    {
+      // Every write that reads the bytes has run: they serve the next snapshot.
+      std::lock_guard<std::mutex> lock(snapshot_spare_mu_);
+      snapshot_spare_.swap(shared->state);
+    }
     if (!s.ok()) {
       snapshot_in_flight_ = false;
       // Still to replay after a restart; the next snapshot is due at once.

@@ -26,3 +26,11 @@ mapd_set_warnings(fusion_cpu_guard)
 add_executable(fusion_adversarial_bench fusion_adversarial_bench.cc)
 target_link_libraries(fusion_adversarial_bench PRIVATE fusion)
 mapd_set_warnings(fusion_adversarial_bench)
+
+# The fuser's stall per snapshot on a real state (a soak's database):
+# ./snapshot_bench DB [RUNS]
+if(TARGET storage_sqlite)
+  add_executable(snapshot_bench snapshot_bench.cc)
+  target_link_libraries(snapshot_bench PRIVATE fusion storage_sqlite)
+  mapd_set_warnings(snapshot_bench)
+endif()

@@ -262,12 +262,25 @@ double ThreadCpuSeconds(pid_t pid, const std::string& name) {
   return 0;
 }
 
-double P99(std::vector<double> v) {
+double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
-  const size_t k =
-      std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())));
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
   std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
   return v[k];
+}
+
+double P99(std::vector<double> v) { return Quantile(std::move(v), 0.99); }
+
+// Appends the encode_ms of every "event=snapshot_written" line of a mapd log
+// (the fuser's stall per snapshot; a restart truncates the log, so read it
+// before each).
+void CollectSnapshotEncodes(const std::string& log, std::vector<double>* encode_ms) {
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("event=snapshot_written") == std::string::npos) continue;
+    const size_t at = line.find("encode_ms=");
+    if (at != std::string::npos) encode_ms->push_back(std::atof(line.c_str() + at + 10));
+  }
 }
 
 // --- The tie at the end: two views of a room as submaps, one per robot.
@@ -420,6 +433,7 @@ int main(int argc, char** argv) {
   uint64_t window_batches = 0, window_fused = 0;
   double window_cpu = ThreadCpuSeconds(mapd.pid, "mapd-fuser");
   std::vector<std::string> restarts;
+  std::vector<double> encode_ms;  // snapshot_written's, of every mapd before a restart
   for (;;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const pb::Stats stats = GetStats(stub.get());
@@ -463,6 +477,7 @@ int main(int argc, char** argv) {
     const MapSnapshot before = GetMap(stub.get());
     if (restart_due) {
       ++next_restart;
+      CollectSnapshotEncodes(mapd.log(), &encode_ms);
       mapd::testing::Stop(mapd.pid, SIGKILL);
       const auto t0 = Clock::now();
       // Back as soon as it listens (it recovers the map after that).
@@ -504,6 +519,8 @@ int main(int argc, char** argv) {
     start_robots();
   }
   const pb::Stats end_stats = GetStats(stub.get());
+  if (next_restart == 0 || opt.restart_at[next_restart - 1] < opt.total)
+    CollectSnapshotEncodes(mapd.log(), &encode_ms);
   std::printf(
       "\nsoak: %.0f s to %.2fM raw features, %llu batches rejected; %llu fused features, %llu "
       "retired walls (a static world: should be 0)\n",
@@ -517,7 +534,11 @@ int main(int argc, char** argv) {
       "recovered from |\n"
       "|---|---|---|---|---|\n");
   for (const std::string& r : restarts) std::printf("%s\n", r.c_str());
-  std::printf("\n");
+  std::printf(
+      "\nsnapshots taken while streaming: %zu, encoding on the fuser thread median %.0f ms, "
+      "p90 %.0f ms, max %.0f ms\n\n",
+      encode_ms.size(), Quantile(encode_ms, 0.5), Quantile(encode_ms, 0.9),
+      Quantile(encode_ms, 1.0));
   const double tie_s = TieLateRobot(stub.get(), mapd.log_path, late_name);
   std::printf("tie of %s's session with %.2fM raw features stored: %.2f s\n", late_name.c_str(),
               GetStats(stub.get()).raw_features() / 1e6, tie_s);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fusion/engine.h"
+#include "fusion/state_codec.h"
 
 namespace mapd::fusion {
 namespace {
@@ -190,6 +191,55 @@ TEST(SnapshotStateTest, RefusesCorruptOrForeignState) {
   std::string unused;
   FusionEngine exact(Mode(FusionMode::kExact));
   EXPECT_EQ(exact.SaveState(&unused).code(), StatusCode::kUnimplemented);
+}
+
+// Version 3 changed only the checksum (FNV-1a -> WordChecksum): a database
+// written by an older mapd still starts from its snapshot, and any bit that
+// changes is caught by either.
+TEST(SnapshotStateTest, ReadsVersion2AndEveryFlippedBitIsCaught) {
+  std::mt19937_64 rng(2);
+  FusionEngine engine(Mode(FusionMode::kBounded));
+  for (ObservationId o = 1; o <= 50; ++o) ASSERT_TRUE(engine.Add(o, 0, SiteView(o, &rng)).ok());
+  const FusionParams params = Mode(FusionMode::kBounded);
+  const std::string good = State(engine);
+  constexpr size_t kVersionAt = 8;  // after the magic
+  ASSERT_EQ(static_cast<uint8_t>(good[kVersionAt]), 3u);
+
+  const auto close = [](std::string body, uint8_t version, bool fnv) {
+    body[kVersionAt] = static_cast<char>(version);
+    const uint64_t sum = fnv ? Fnv1a(body) : WordChecksum(body);
+    body.append(reinterpret_cast<const char*>(&sum), 8);
+    return body;
+  };
+  const std::string body = good.substr(0, good.size() - 8);
+  StatusOr<std::unique_ptr<FusionEngine>> old =
+      FusionEngine::LoadState(params, close(body, 2, true));
+  ASSERT_TRUE(old.ok()) << old.status().ToString();
+  EXPECT_EQ(State(**old), good);  // and saved again as version 3
+  // Each format with the other's checksum, and a format from the future.
+  EXPECT_NE(
+      FusionEngine::LoadState(params, close(body, 2, false)).status().message().find("checksum"),
+      std::string::npos);
+  EXPECT_NE(
+      FusionEngine::LoadState(params, close(body, 3, true)).status().message().find("checksum"),
+      std::string::npos);
+  EXPECT_NE(FusionEngine::LoadState(params, close(body, 4, false))
+                .status()
+                .message()
+                .find("unknown format version 4"),
+            std::string::npos);
+
+  // Every single bit of the body (past the version), one at a time, in a
+  // stretch of 1 KiB that covers lanes, words and the tail.
+  const size_t from = body.size() > 1024 ? body.size() - 1024 : kVersionAt + 4;
+  for (size_t byte = from; byte < body.size(); ++byte) {
+    for (int bit = 0; bit < 8; ++bit) {
+      std::string flipped = good;
+      flipped[byte] ^= static_cast<char>(1 << bit);
+      ASSERT_NE(WordChecksum(std::string_view(flipped).substr(0, body.size())), WordChecksum(body))
+          << "byte " << byte << " bit " << bit;
+    }
+  }
 }
 
 TEST(BoundedEngineTest, RefusesTheSameObservationTwiceInARow) {
