@@ -76,11 +76,12 @@ void FusionShare::Committed(const std::string& robot) {
   ++robots_[robot].pending;
 }
 
-void FusionShare::Fused(const std::string& robot, double cpu_s) {
+void FusionShare::Fused(const std::string& robot, std::optional<double> cpu_s) {
   std::lock_guard<std::mutex> lock(mu_);
   Robot& r = robots_[robot];
   if (r.pending > 0) --r.pending;
-  r.cost_s = r.cost_s > 0.0 ? (1.0 - kCostWeight) * r.cost_s + kCostWeight * cpu_s : cpu_s;
+  if (!cpu_s) return;
+  r.cost_s = r.cost_s > 0.0 ? (1.0 - kCostWeight) * r.cost_s + kCostWeight * *cpu_s : *cpu_s;
 }
 
 void FusionShare::Reset() {

@@ -9,7 +9,8 @@
 //
 //   - per robot, the observations committed but not fused yet (pending), and
 //     what the fuser spent on its recent observations (CPU seconds per
-//     observation, an exponential average);
+//     observation, an exponential average; MapCore measures a random
+//     quarter of them);
 //   - the work a robot keeps waiting = pending x its cost per observation;
 //   - once the work waiting in total exceeds after_s seconds, a batch of a
 //     robot whose waiting work exceeds factor times the average of the other
@@ -30,6 +31,7 @@
 #include <cstdint>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,8 +64,9 @@ class FusionShare {
   Status Admit(const std::string& robot);
   // One observation of `robot` was committed and handed to the fuser.
   void Committed(const std::string& robot);
-  // The fuser finished one observation of `robot`, spending cpu_s on it.
-  void Fused(const std::string& robot, double cpu_s);
+  // The fuser finished one observation of `robot`, spending cpu_s on it
+  // (nullopt: not measured; the cost is an average over those that are).
+  void Fused(const std::string& robot, std::optional<double> cpu_s);
   // The fuser stopped (or restarted) with observations pending: forget them.
   void Reset();
 

@@ -590,13 +590,6 @@ void MapCore::FuserLoop() {
     }
     FusedDelta delta;
     size_t done = 0;
-    // What each observation cost the fuser, for FusionShare. The thread's CPU
-    // clock is a system call (no vDSO): read per round, and shared out by each
-    // observation's wall time (vDSO) at the round's CPU/wall ratio. Read per
-    // observation it took 6 % of the fuser's time in the city soak.
-    const double round_cpu_s = ThreadCpuSeconds();
-    const auto round_start = Clock::now();
-    round_costs_.clear();
     for (const ToFuse& t : work) {
       if (fuser_abandon_.load()) break;  // Stop(): the rest is replayed at the next start
       ++done;
@@ -614,22 +607,23 @@ void MapCore::FuserLoop() {
         continue;
       }
       // Locked per observation, so queries never wait for a whole backlog.
-      const auto fuse_start = Clock::now();
+      // What the observation cost the fuser, for FusionShare, measured for a
+      // random quarter of them: the thread's CPU clock is a system call (no
+      // vDSO), and read twice per observation it took 6 % of the fuser's time
+      // in the city soak. Random, so that no robot can send its costly
+      // observations where they are not measured.
+      const bool measured = (cost_sampler_() & 3) == 0;
+      const double cpu_before_s = measured ? ThreadCpuSeconds() : 0.0;
       {
         std::unique_lock<std::shared_mutex> lock(engine_mu_);
         Fuse(t.features, t.observation_id, t.robot_id, t.T_map_frame, &delta);
         ++map_version_;
       }
-      round_costs_.push_back({&t.robot, SecondsSince(fuse_start)});
+      fusion_share_.Fused(t.robot, measured
+                                       ? std::optional<double>(ThreadCpuSeconds() - cpu_before_s)
+                                       : std::nullopt);
       fused_through_id_ = std::max(fused_through_id_, t.observation_id);
       ++fused_since_snapshot_;
-    }
-    if (!round_costs_.empty()) {
-      const double wall_s = SecondsSince(round_start);
-      const double on_cpu =
-          wall_s > 0.0 ? std::min(1.0, (ThreadCpuSeconds() - round_cpu_s) / wall_s) : 1.0;
-      for (const auto& [robot, fuse_wall_s] : round_costs_)
-        fusion_share_.Fused(*robot, fuse_wall_s * on_cpu);
     }
     if (done > 0) PublishChange(delta);
     if (!delta.empty()) {

@@ -35,6 +35,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <shared_mutex>
 #include <string>
 #include <thread>
@@ -336,12 +337,7 @@ class MapCore final : public Core {
   // up to this sequence number.
   int64_t fused_through_id_ = 0;
   int64_t fused_tie_seq_ = 0;
-  // Fuser thread: the robot and wall seconds of each observation of a round.
-  struct FuseCost {
-    const std::string* robot;
-    double wall_s;
-  };
-  std::vector<FuseCost> round_costs_;
+  std::minstd_rand cost_sampler_;  // fuser thread: which observations' cost is measured
   // Fuser thread (read by Stop() after joining it): Stop() interrupted a tie.
   bool partial_tie_ = false;
   std::chrono::steady_clock::time_point last_snapshot_ = std::chrono::steady_clock::now();

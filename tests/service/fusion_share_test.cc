@@ -94,6 +94,21 @@ TEST(FusionShareTest, ARefusedRobotIsAdmittedOnceTheFuserCaughtUp) {
   EXPECT_TRUE(share.Admit("junk").ok());
 }
 
+// MapCore measures a random quarter of the observations: the others count as
+// fused and leave the cost as measured.
+TEST(FusionShareTest, AnUnmeasuredObservationIsFusedAndKeepsTheCost) {
+  FusionShare share(After(1.0));
+  Measure(&share, "r", 0.002);
+  Commit(&share, "r", 3);
+  share.Fused("r", std::nullopt);
+  ASSERT_EQ(share.Shares().size(), 1u);
+  EXPECT_EQ(share.Shares()[0].pending, 2u);
+  EXPECT_NEAR(share.Shares()[0].cost_per_obs_s, 0.002, 1e-12);
+  share.Fused("r", 0.004);
+  EXPECT_NEAR(share.Shares()[0].cost_per_obs_s,
+              (1.0 - FusionShare::kCostWeight) * 0.002 + FusionShare::kCostWeight * 0.004, 1e-12);
+}
+
 TEST(FusionShareTest, ZeroTurnsTheCheckOff) {
   FusionShare share(After(0.0));
   Commit(&share, "junk", 100000);
