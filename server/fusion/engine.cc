@@ -349,6 +349,7 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot, const Vec
     if (!folded[i]) FileInGrid(nodes[i], features[i].segment);
   }
   std::vector<uint32_t> roots;
+  roots.reserve(nodes.size());
   for (uint32_t node : nodes) roots.push_back(Find(node));
   std::sort(roots.begin(), roots.end());
   roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
@@ -365,6 +366,7 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   // The groups published before by the components this Add touched: every such
   // component was merged into a root of `roots`, so its id is in merged_ids.
   std::vector<ClusterId> old_groups;
+  old_groups.reserve(merged_ids.size());
   for (ClusterId id : merged_ids) {
     if (auto split = split_.find(id); split != split_.end()) {
       old_groups.insert(old_groups.end(), split->second.published.begin(),
@@ -377,6 +379,7 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   }
   // The touched components' groups now: refit once each, publish at min_support.
   std::vector<ClusterId> new_groups;
+  new_groups.reserve(roots.size());
   for (uint32_t root : roots) {
     const ClusterStats& whole = *stats_[root];
     if (!MayCut(root)) {  // one group: the component itself

@@ -373,6 +373,7 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_ga
   if (piece.pierced) return out;
   const Segment2& s = piece.fit.segment;
   std::vector<SearchBand> bands;
+  bands.reserve(3);  // (reserved: called for every refit piece, so allocations count)
   bands.push_back({s, params_.wall_offset_m + params_.wall_gap_m + 0.5 * kPieceStepM + kSlackM});
   const double length = s.length();
   if (free_space_ && params_.wall_occluded_gap_m > params_.wall_gap_m && length > 0.0) {
@@ -393,10 +394,13 @@ std::vector<ClusterId> WallConsolidator::Neighbours(ClusterId id, bool record_ga
   // find them: if they are filed in a cell of `exact`.
   std::vector<PieceIndex::SegmentBand> exact;
   if (cached_search) {
+    exact.reserve(bands.size());
     for (const SearchBand& band : bands) {
       exact.push_back(index_.BandOf(band.segment, band.radius_m));
     }
-    for (ClusterId other : candidates_.Candidates(id, bands)) {
+    const std::vector<ClusterId>& candidates = candidates_.Candidates(id, bands);
+    out.reserve(candidates.size());
+    for (ClusterId other : candidates) {
       if (other == id) continue;
       auto it = pieces_.find(other);
       if (it == pieces_.end() || it->second.retired) continue;  // not filed
@@ -551,6 +555,7 @@ void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
   }
   for (const std::vector<uint32_t>& group : groups) {  // each ascending, as `component`
     Wall wall;
+    wall.pieces.reserve(group.size());
     for (uint32_t i : group) wall.pieces.push_back(component[i]);
     std::vector<const ClusterStats*> parts;
     parts.reserve(group.size());
@@ -567,6 +572,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   TakeEvidence();
   std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
   std::vector<ClusterId> work;
+  work.reserve(2 * touched_pieces_.size() + 4 * touched_walls_.size());
   const auto live = [this](ClusterId id) {
     auto it = pieces_.find(id);
     return it != pieces_.end() && !it->second.retired;
@@ -584,6 +590,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   // The neighbour cache first: a walk reads lists of untouched pieces, which
   // must already mirror every touched piece's change.
   std::vector<ClusterId> refresh;
+  refresh.reserve(touched_pieces_.size());
   if (all_neighbours_stale_) {
     for (const auto& [id, piece] : pieces_) {
       if (!piece.retired) refresh.push_back(id);
@@ -606,7 +613,12 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   // oversized component found before: then every piece it reached is a wall
   // of its own, and so is every piece of the smaller components it swallowed
   // (found through pieces not oversized before, or touched).
-  const std::unordered_set<ClusterId> touched(work.begin(), work.end());
+  std::vector<ClusterId> touched = work;  // sorted: one allocation, not a node per piece
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  const auto was_touched = [&touched](ClusterId id) {
+    return std::binary_search(touched.begin(), touched.end(), id);
+  };
   std::unordered_set<ClusterId> visited;
   std::unordered_set<ClusterId> oversized_now;
   std::vector<std::vector<ClusterId>> components;
@@ -652,14 +664,14 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     std::vector<ClusterId> expand;
     for (ClusterId id : component) {
       oversized_now.insert(id);
-      if (!pieces_.at(id).oversized || touched.count(id) != 0) expand.push_back(id);
+      if (!pieces_.at(id).oversized || was_touched(id)) expand.push_back(id);
     }
     while (!expand.empty()) {
       const ClusterId id = expand.back();
       expand.pop_back();
       for (ClusterId other : CachedNeighbours(id)) {
         // An untouched piece oversized before stays a wall of its own.
-        if (pieces_.at(other).oversized && touched.count(other) == 0) continue;
+        if (pieces_.at(other).oversized && !was_touched(other)) continue;
         if (!visited.insert(other).second) continue;
         component.push_back(other);
         oversized_now.insert(other);
