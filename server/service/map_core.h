@@ -337,7 +337,8 @@ class MapCore final : public Core {
   // up to this sequence number.
   int64_t fused_through_id_ = 0;
   int64_t fused_tie_seq_ = 0;
-  std::minstd_rand cost_sampler_;  // fuser thread: which observations' cost is measured
+  // Fuser thread: which observations' cost is measured (seeded per process).
+  std::minstd_rand cost_sampler_{std::random_device{}()};
   // Fuser thread (read by Stop() after joining it): Stop() interrupted a tie.
   bool partial_tie_ = false;
   std::chrono::steady_clock::time_point last_snapshot_ = std::chrono::steady_clock::now();
@@ -346,8 +347,8 @@ class MapCore final : public Core {
   std::atomic<bool> snapshot_in_flight_{false};
   // The last snapshot's bytes, handed back by the writer once stored, so that
   // the next one is encoded into memory already mapped: a fresh 24 MB string
-  // (the city at 1M) costs its growth copies and a page fault per 4 KiB, and
-  // took 106-220 ms to encode against 41 ms reused (tests/bench/snapshot_bench).
+  // (the city at 1M) costs its growth copies and a page fault per 4 KiB: 144 ms
+  // to encode against 52 ms reused (both with FNV-1a; tests/bench/snapshot_bench).
   std::mutex snapshot_spare_mu_;
   std::string snapshot_spare_;  // GUARDED_BY(snapshot_spare_mu_)
 
