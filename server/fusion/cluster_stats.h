@@ -53,8 +53,10 @@ struct ClusterStats {
   FusedFeature ToFused(const Fit& fit) const;
 
  private:
-  // Merge without the hull.
-  void MergeAllButHull(ClusterStats&& other, uint32_t support_cap);
+  // Merge without the hull; from a const ClusterStats& it copies nothing
+  // but what it keeps.
+  template <typename Stats>
+  void MergeAllButHull(Stats&& other, uint32_t support_cap);
 };
 
 }  // namespace mapd::fusion

@@ -124,8 +124,7 @@ bool FusionEngine::Impl::ReachesMinSupport(const std::vector<uint32_t>& nodes,
   for (uint32_t i : subset) {
     const uint32_t n = nodes[i];
     if (bounded_ && folded_[n]) {
-      SupportCounter copy = folded_[n]->observations;
-      support.Merge(std::move(copy), support_cap_);
+      support.Merge(folded_[n]->observations, support_cap_);
     } else {
       support.Add(observation_of_[n], support_cap_);
     }
@@ -182,7 +181,19 @@ Status FusionEngine::Impl::Validate(ObservationId observation,
     return Status::InvalidArgument("observation " + std::to_string(observation) +
                                    " was added before");
   }
+  // Duplicate ids in the batch: a scan of the earlier ones for a batch of a
+  // scan's size (no allocation per feature), a set beyond.
+  constexpr size_t kScanBelow = 64;
   std::unordered_set<FeatureId> batch_ids;
+  const auto seen_in_batch = [&](size_t i) {
+    if (features.size() < kScanBelow) {
+      for (size_t j = 0; j < i; ++j) {
+        if (features[j].id == features[i].id) return true;
+      }
+      return false;
+    }
+    return !batch_ids.insert(features[i].id).second;
+  };
   for (size_t i = 0; i < features.size(); ++i) {
     const GroundFeature& f = features[i];
     const std::string name = "features[" + std::to_string(i) + "]";
@@ -200,7 +211,7 @@ Status FusionEngine::Impl::Validate(ObservationId observation,
         f.z_min_m > f.z_max_m) {
       return Status::InvalidArgument(name + " has an invalid z range");
     }
-    if ((!bounded_ && node_of_.count(f.id) != 0) || !batch_ids.insert(f.id).second) {
+    if ((!bounded_ && node_of_.count(f.id) != 0) || seen_in_batch(i)) {
       return Status::InvalidArgument(name + ": feature id " + std::to_string(f.id) +
                                      " is not unique");
     }

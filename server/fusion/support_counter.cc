@@ -41,6 +41,30 @@ void SupportCounter::Merge(SupportCounter&& other, uint32_t cap) {
   SaturateAbove(cap);
 }
 
+void SupportCounter::Merge(const SupportCounter& other, uint32_t cap) {
+  if (exact() && other.exact()) {
+    // The sorted union of both id lists, whichever holds more.
+    const std::vector<ObservationId>& more = other.ids_;
+    if (more.empty()) {
+    } else if (ids_.empty() || more.front() > ids_.back()) {
+      ids_.insert(ids_.end(), more.begin(), more.end());
+    } else if (more.back() < ids_.front()) {
+      ids_.insert(ids_.begin(), more.begin(), more.end());
+    } else {
+      std::vector<ObservationId> both;
+      both.reserve(ids_.size() + more.size());
+      std::set_union(ids_.begin(), ids_.end(), more.begin(), more.end(), std::back_inserter(both));
+      ids_ = std::move(both);
+    }
+  } else {
+    const uint32_t shared = last_ == other.last_ ? 1 : 0;
+    count_ = count() + other.count() - shared;
+    std::vector<ObservationId>().swap(ids_);
+  }
+  last_ = std::max(last_, other.last_);
+  SaturateAbove(cap);
+}
+
 void SupportCounter::SaturateAbove(uint32_t cap) {
   if (!exact() || ids_.size() <= cap) return;
   count_ = static_cast<uint32_t>(ids_.size());

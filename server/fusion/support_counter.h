@@ -29,6 +29,9 @@ class SupportCounter {
   void Add(ObservationId id, uint32_t cap);
   // Absorbs `other` (left in an unspecified state).
   void Merge(SupportCounter&& other, uint32_t cap);
+  // The same count and state as Merge(copy of other), without the copy: a
+  // wall merges its pieces' counters on every refit (WallConsolidator::WallsOf).
+  void Merge(const SupportCounter& other, uint32_t cap);
 
   uint32_t count() const { return exact() ? static_cast<uint32_t>(ids_.size()) : count_; }
   bool exact() const { return count_ == 0; }

@@ -619,8 +619,16 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   const auto was_touched = [&touched](ClusterId id) {
     return std::binary_search(touched.begin(), touched.end(), id);
   };
-  std::unordered_set<ClusterId> visited;
-  std::unordered_set<ClusterId> oversized_now;
+  const uint64_t walk = ++resolve_count_;
+  // Whether this walk reached `id` before; marks it reached.
+  const auto reached = [&](ClusterId id) {
+    Piece& piece = pieces_.at(id);
+    const bool before = piece.reached_in == walk;
+    piece.reached_in = walk;
+    return before;
+  };
+  const auto mark_oversized = [&](ClusterId id) { pieces_.at(id).oversized_in = walk; };
+  const auto oversized_now = [&](ClusterId id) { return pieces_.at(id).oversized_in == walk; };
   std::vector<std::vector<ClusterId>> components;
   std::vector<ClusterId> singles;  // pieces of oversized components reached
   const auto drag = [&](ClusterId id) {
@@ -631,7 +639,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     }
   };
   for (size_t next = 0; next < work.size(); ++next) {
-    if (!visited.insert(work[next]).second) continue;
+    if (reached(work[next])) continue;
     std::vector<ClusterId> component;
     std::vector<ClusterId> stack{work[next]};
     bool oversized = false;
@@ -645,9 +653,9 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
         break;
       }
       for (ClusterId other : CachedNeighbours(id)) {
-        if (visited.insert(other).second) {
+        if (!reached(other)) {
           stack.push_back(other);
-        } else if (oversized_now.count(other) != 0) {
+        } else if (oversized_now(other)) {
           oversized = true;
         }
       }
@@ -663,7 +671,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     }
     std::vector<ClusterId> expand;
     for (ClusterId id : component) {
-      oversized_now.insert(id);
+      mark_oversized(id);
       if (!pieces_.at(id).oversized || was_touched(id)) expand.push_back(id);
     }
     while (!expand.empty()) {
@@ -672,9 +680,9 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
       for (ClusterId other : CachedNeighbours(id)) {
         // An untouched piece oversized before stays a wall of its own.
         if (pieces_.at(other).oversized && !was_touched(other)) continue;
-        if (!visited.insert(other).second) continue;
+        if (reached(other)) continue;
         component.push_back(other);
-        oversized_now.insert(other);
+        mark_oversized(other);
         drag(other);
         expand.push_back(other);
       }
@@ -687,19 +695,19 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   size_t most_walls = singles.size();
   for (const std::vector<ClusterId>& component : components) most_walls += component.size();
   walls->reserve(most_walls);
-  std::unordered_set<ClusterId> now;
   for (const std::vector<ClusterId>& component : components) {
-    const size_t first = walls->size();
     WallsOf(component, walls);
-    for (size_t w = first; w < walls->size(); ++w) now.insert((*walls)[w].stats.id);
     for (ClusterId id : component) pieces_.at(id).oversized = false;
   }
   std::sort(singles.begin(), singles.end());
   for (ClusterId id : singles) {
     WallsOf({id}, walls);
-    now.insert(id);
     pieces_.at(id).oversized = true;
   }
+  std::vector<ClusterId> now;  // the walls' ids (a single's is its own)
+  now.reserve(walls->size());
+  for (const Wall& wall : *walls) now.push_back(wall.stats.id);
+  std::sort(now.begin(), now.end());
   // Record membership: every piece of a component belongs to one of its walls.
   for (const Wall& wall : *walls) {
     walls_[wall.stats.id] = wall.pieces;
@@ -710,7 +718,7 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     }
   }
   for (ClusterId wall : affected) {
-    if (now.count(wall) == 0) removed->push_back(wall);
+    if (!std::binary_search(now.begin(), now.end(), wall)) removed->push_back(wall);
   }
   std::sort(removed->begin(), removed->end());
 }

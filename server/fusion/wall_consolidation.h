@@ -162,6 +162,11 @@ class WallConsolidator {
     // Seen through since its last support (wall_retirement.h): not filed in
     // the index, on no wall.
     bool retired = false;
+    // Resolve()'s walk: the number of the last Resolve() that reached it, and
+    // that found it in an oversized component (marks, not sets: a set of
+    // ids allocated a node per piece reached, every Resolve()).
+    uint64_t reached_in = 0;
+    uint64_t oversized_in = 0;
   };
   // Counts this observation's passes over watched cells (the ledger) and
   // retires every wall whose pieces are seen through on retire_fraction of
@@ -216,6 +221,7 @@ class WallConsolidator {
   // touched pieces are recomputed first, their changes mirrored.
   std::unordered_map<ClusterId, std::vector<ClusterId>> neighbours_;
   bool all_neighbours_stale_ = false;  // the evidence appeared: recompute every list
+  uint64_t resolve_count_ = 0;         // numbers Resolve()'s walks (Piece::reached_in)
   // Index cells (kPieceStepM) of bridged occluded gaps -> the pieces bridged. Entries of pieces
   // since gone or re-joined otherwise only cause a redundant re-resolve.
   std::unordered_map<uint64_t, std::vector<ClusterId>> gap_watch_;

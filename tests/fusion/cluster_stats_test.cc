@@ -49,8 +49,15 @@ TEST(ClusterStatsTest, MergeAllEqualsMergingOneByOne) {
     }
     std::vector<const ClusterStats*> pointers;
     for (const ClusterStats& part : parts) pointers.push_back(&part);
+    const std::vector<ClusterStats> before = parts;
     const ClusterStats all = ClusterStats::MergeAll(pointers, 8);
+    for (int i = 0; i < count; ++i) {  // merged in place, not moved from
+      ASSERT_EQ(parts[i].observations.ids(), before[i].observations.ids());
+      ASSERT_EQ(parts[i].robots, before[i].robots);
+      ASSERT_EQ(parts[i].hull, before[i].hull);
+    }
     ASSERT_EQ(all.id, one_by_one.id);
+    ASSERT_EQ(all.plane_members, one_by_one.plane_members);
     ASSERT_EQ(all.member_count, one_by_one.member_count);
     ASSERT_EQ(all.moments.count, one_by_one.moments.count);
     ASSERT_EQ(all.moments.mean, one_by_one.moments.mean);
