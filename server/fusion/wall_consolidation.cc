@@ -8,6 +8,7 @@
 
 #include "fusion/chain_guard.h"
 #include "fusion/occlusion_proof.h"
+#include "fusion/piercing.h"
 
 namespace mapd::fusion {
 
@@ -18,14 +19,10 @@ using geometry::Vec2;
 namespace {
 
 constexpr double kSlackM = 1e-6;
-// Piercing ignores this much of each end of a piece: its fitted end may
-// overshoot the wall's corner, past which the space is free.
-constexpr double kPierceTrimM = 0.5;
-// Evidence is sampled along lines at this step: every cell a line crosses.
-constexpr double kSampleStepM = 0.5 * FreeSpaceGrid::kCellM;
 
 std::atomic<bool> verify_neighbour_cache{false};
 std::atomic<size_t> neighbour_cache_mismatch_count{0};
+std::atomic<size_t> piercing_mismatch_count{0};
 
 // Inserts x into the ascending ids if absent; erases it if present.
 void InsertSorted(std::vector<ClusterId>* ids, ClusterId x) {
@@ -48,9 +45,9 @@ uint64_t IndexCellKey(const Vec2& p) {
 // Points every kSampleStepM from p + t0 u to p + t1 u (both included).
 template <typename Fn>
 bool AnySample(const Vec2& p, const Vec2& u, double t0, double t1, Fn&& fn) {
-  const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / kSampleStepM)));
+  const int steps = SampleSteps(t0, t1);
   for (int i = 0; i <= steps; ++i) {
-    if (fn(p + (t0 + (t1 - t0) * static_cast<double>(i) / steps) * u)) return true;
+    if (fn(SampleAt(p, u, t0, t1, i, steps))) return true;
   }
   return false;
 }
@@ -85,15 +82,6 @@ bool NearIdentical(const Segment2& p, const Segment2& q, double offset_m) {
   const bool same = (p.a - q.a).squaredNorm() <= d2 && (p.b - q.b).squaredNorm() <= d2;
   const bool swapped = (p.a - q.b).squaredNorm() <= d2 && (p.b - q.a).squaredNorm() <= d2;
   return same || swapped;
-}
-
-bool Pierced(const Segment2& s, const FreeSpaceGrid& free_space) {
-  const double length = s.length();
-  if (!(length > 2.0 * kPierceTrimM)) return false;
-  const Vec2 u = s.direction() / length;
-  FreeSpaceGrid::Probe probe(free_space);
-  return AnySample(s.a, u, kPierceTrimM, length - kPierceTrimM,
-                   [&](const Vec2& x) { return probe.IsFree(x); });
 }
 
 bool OnOneWall(const Segment2& p, ClusterId p_id, const Segment2& q, ClusterId q_id,
@@ -213,8 +201,25 @@ void WallConsolidator::Index(ClusterId id, const Segment2& s, bool insert) {
   }
 }
 
+void WallConsolidator::UpdatePiercing(Piece* piece, double shift_m) {
+  if (free_space_ == nullptr) {
+    piece->pierced = false;
+    piece->pierce_clearance_m = 0.0;  // checked afresh once there is evidence
+    return;
+  }
+  if (!piece->pierced && shift_m < piece->pierce_clearance_m) {
+    piece->pierce_clearance_m -= shift_m;  // no sample reached a cell free at the check
+    return;
+  }
+  const PierceCheck check = CheckPiercing(piece->fit.segment, *free_space_);
+  piece->pierced = check.pierced;
+  piece->pierce_clearance_m = check.clearance_m;
+}
+
 bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit) {
   bool reindex = true;
+  // How far its piercing samples moved (infinite: check afresh).
+  double shift_m = std::numeric_limits<double>::infinity();
   bool supported = true;  // a new piece was just supported
   auto it = pieces_.find(stats.id);
   if (it != pieces_.end()) {
@@ -238,13 +243,14 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
       reindex = !SameFiledCells(index_, piece.fit.segment, fit.segment);
       if (reindex) Index(stats.id, piece.fit.segment, false);
       if (piece.has_wall) touched_walls_.push_back(piece.wall);
+      shift_m = SampleShiftBound(piece.fit.segment, fit.segment);
     }
     piece.fit = fit;
   } else {
     it = pieces_.emplace(stats.id, Piece()).first;
     it->second.fit = fit;
   }
-  it->second.pierced = free_space_ != nullptr && Pierced(fit.segment, *free_space_);
+  UpdatePiercing(&it->second, shift_m);
   piece_stats_[stats.id] = stats;
   if (reindex) Index(stats.id, fit.segment, true);
   if (ledger_) ledger_->Watch(stats.id, fit.segment, supported);
@@ -326,6 +332,7 @@ void WallConsolidator::Erase(ClusterId piece) {
 
 void WallConsolidator::SetVerifyNeighbourCache(bool on) { verify_neighbour_cache = on; }
 size_t WallConsolidator::neighbour_cache_mismatches() { return neighbour_cache_mismatch_count; }
+size_t WallConsolidator::piercing_mismatches() { return piercing_mismatch_count; }
 
 void WallConsolidator::RefreshNeighbours(ClusterId id) {
   std::vector<ClusterId> now = Neighbours(id);
@@ -482,9 +489,11 @@ void WallConsolidator::TakeEvidence() {
   // a filing step and half a cell diagonal of it: one query from the index
   // cell's centre, reaching half its diagonal further. A sample's cell centre
   // lies within half a cell diagonal of the piece's segment.
-  const double radius =
-      0.5 * kPieceStepM + 0.71 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM + kSlackM;
-  const double on_segment_m = 0.71 * FreeSpaceGrid::kCellM + kSlackM;
+  // Pieces whose samples come within kPierceClearanceCapM of a new free
+  // cell too: their clearance (piercing.h) may have shrunk.
+  const double radius = 0.5 * kPieceStepM + 0.71 * kPieceStepM + 0.71 * FreeSpaceGrid::kCellM +
+                        kPierceClearanceCapM + kSlackM;
+  const double on_segment_m = 0.71 * FreeSpaceGrid::kCellM + kPierceClearanceCapM + kSlackM;
   std::vector<ClusterId> recheck;
   for (const auto& entry : by_index_cell) {
     // Not a structured binding: C++17 lambdas cannot capture those (clang refuses).
@@ -514,7 +523,9 @@ void WallConsolidator::TakeEvidence() {
   recheck.erase(std::unique(recheck.begin(), recheck.end()), recheck.end());
   for (ClusterId id : recheck) {
     Piece& piece = pieces_.at(id);
-    if (!Pierced(piece.fit.segment, *free_space_)) continue;
+    const PierceCheck check = CheckPiercing(piece.fit.segment, *free_space_);
+    piece.pierce_clearance_m = check.clearance_m;
+    if (!check.pierced) continue;
     TouchNeighboursIfOversized(id);
     piece.pierced = true;
     touched_pieces_.push_back(id);
@@ -570,6 +581,16 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   removed->clear();
   walls->clear();
   TakeEvidence();
+  if (verify_neighbour_cache && free_space_ != nullptr) {
+    // Every touched piece's flag as a fresh check has it (piercing.h).
+    for (ClusterId id : touched_pieces_) {
+      auto it = pieces_.find(id);
+      if (it == pieces_.end() || it->second.retired) continue;
+      if (it->second.pierced != Pierced(it->second.fit.segment, *free_space_)) {
+        ++piercing_mismatch_count;
+      }
+    }
+  }
   std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
   std::vector<ClusterId> work;
   work.reserve(2 * touched_pieces_.size() + 4 * touched_walls_.size());

@@ -66,6 +66,7 @@
 #include "fusion/free_space.h"
 #include "fusion/grid_index.h"
 #include "fusion/params.h"
+#include "fusion/piercing.h"
 #include "fusion/wall_candidates.h"
 #include "fusion/wall_retirement.h"
 
@@ -85,9 +86,6 @@ bool OnOneWall(const geometry::Segment2& p, ClusterId p_id, const geometry::Segm
                const FreeSpaceGrid* free_space = nullptr,
                std::vector<geometry::Vec2>* gap_samples = nullptr,
                const FreeSpaceGrid* proof = nullptr);
-
-// Whether an observed-free cell lies on `s` (its ends trimmed, see above).
-bool Pierced(const geometry::Segment2& s, const FreeSpaceGrid& free_space);
 
 class WallConsolidator {
  public:
@@ -146,9 +144,11 @@ class WallConsolidator {
   void Resolve(std::vector<ClusterId>* removed, std::vector<Wall>* walls);
 
   // Test hook: while on, every cached neighbour list Resolve() reads is
-  // compared with a fresh search; mismatches are counted (process-wide).
+  // compared with a fresh search, and every touched piece's piercing with a
+  // fresh check; mismatches are counted (process-wide).
   static void SetVerifyNeighbourCache(bool on);
   static size_t neighbour_cache_mismatches();
+  static size_t piercing_mismatches();
 
  private:
   struct Piece {
@@ -156,6 +156,9 @@ class WallConsolidator {
     ClusterId wall = 0;
     bool has_wall = false;
     bool pierced = false;  // an observed-free cell on its fitted segment: joins nothing
+    // Not pierced: how far its samples may still move before a fresh check
+    // (piercing.h), metres; 0 until checked with evidence.
+    double pierce_clearance_m = 0.0;
     // Its component had more than max_wall_pieces pieces at the last Resolve()
     // (it is then a wall of its own).
     bool oversized = false;
@@ -172,6 +175,9 @@ class WallConsolidator {
   // retires every wall whose pieces are seen through on retire_fraction of
   // their cells.
   void RetireSeenThrough();
+  // Sets piece->pierced for its fit, whose samples moved at most shift_m
+  // since the last call: without a fresh check while within its clearance.
+  void UpdatePiercing(Piece* piece, double shift_m);
   // A piece of an oversized component is about to change or vanish: its
   // current neighbours are resolved again.
   void TouchNeighboursIfOversized(ClusterId id);
