@@ -44,12 +44,11 @@ using mapd::fusion::GroundFeature;
 using mapd::geometry::Vec2;
 
 // docs/long-running.md, "The CPU guard": this workload's fused features per
-// CPU-second on the doc's machine (2026-12-06, median of five, after issue
-// 40's cost work, on a day that host ran the code before it at 48,450 rather
-// than the 84,500 of 2026-12-05; the soak's fuser thread, sharing its cores
-// with robots and gRPC, read 52,700-78,600 on the same city that day).
-// Update it with the doc.
-constexpr double kStatedFeaturesPerCpuS = 60300.0;
+// CPU-second on the doc's machine (2026-12-07, median of five, after the
+// piercing clearance; that day the code of the morning read about 140,000
+// and the soak's fuser, sharing its cores with robots and gRPC, 104,000-133,000
+// on the same city). Update it with the doc.
+constexpr double kStatedFeaturesPerCpuS = 158200.0;
 
 double CpuSeconds() {
   rusage u{};
