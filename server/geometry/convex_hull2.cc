@@ -28,10 +28,13 @@ std::vector<Vec2> ConvexHull(std::vector<Vec2> points) {
 }
 
 bool StrictlyInsideHull(const std::vector<Vec2>& hull, const Vec2& p) {
-  if (hull.size() < 3) return false;
-  for (size_t i = 0; i < hull.size(); ++i) {
-    const Vec2& a = hull[i];
-    const Vec2& b = hull[(i + 1) % hull.size()];
+  const size_t n = hull.size();
+  if (n < 3) return false;
+  // Edges (i - 1, i), the closing one first: no division per edge (the
+  // fusion asks this of every folded feature's endpoints).
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2& a = hull[i == 0 ? n - 1 : i - 1];
+    const Vec2& b = hull[i];
     const Vec2 e = b - a, q = p - a;
     if (!(e.x() * q.y() - e.y() * q.x() > 0.0))
       return false;  // counter-clockwise: left of every edge
