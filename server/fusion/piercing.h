@@ -4,13 +4,13 @@
 // so every cell it crosses is sampled).
 //
 // A refit moves a piece by millimetres on most observations, and sampling a
-// long piece afresh each time was 13 % of the fusion's instructions (the CPU
-// guard's workload). So a check also says how far each sample lies from the
-// nearest observed-free cell (its clearance, at most kPierceClearanceCapM):
-// while the samples of the refitted segment lie within that of the checked
-// ones (SampleShiftBound), none is in a free cell that was free at the check.
-// Cells freed since are the consolidator's to catch: it rechecks every piece
-// whose samples they come within kPierceClearanceCapM of (TakeEvidence).
+// long piece afresh each time was 12 % of the CPU guard's instructions. So a
+// check also says how far each sample lies from the nearest observed-free
+// cell (its clearance, at most kPierceClearanceCapM): while the samples of
+// the refitted segment lie within that of the checked ones
+// (SampleShiftBound), none is in a cell that was free at the check. Cells
+// freed since are the consolidator's to catch: it rechecks every piece whose
+// samples they come within kPierceClearanceCapM of (TakeEvidence).
 #ifndef MAPD_FUSION_PIERCING_H_
 #define MAPD_FUSION_PIERCING_H_
 

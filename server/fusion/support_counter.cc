@@ -43,7 +43,7 @@ void SupportCounter::Merge(SupportCounter&& other, uint32_t cap) {
 
 void SupportCounter::Merge(const SupportCounter& other, uint32_t cap) {
   if (exact() && other.exact()) {
-    // The sorted union of both id lists, whichever holds more.
+    // The sorted union of both id lists.
     const std::vector<ObservationId>& more = other.ids_;
     if (more.empty()) {
     } else if (ids_.empty() || more.front() > ids_.back()) {
