@@ -118,6 +118,25 @@ TEST(FusionEngineTest, RefusedInputLeavesTheEngineUnchanged) {
   EXPECT_EQ(engine.feature_count(), 2u);
 }
 
+// A feature id twice in one batch names the later one, whether the batch is
+// scanned (small) or checked through a set (64 features and more).
+TEST(FusionEngineTest, ADuplicateIdInABatchNamesTheLaterFeature) {
+  for (const size_t size : {3u, 70u}) {
+    FusionEngine engine(Support(1));
+    std::vector<GroundFeature> batch;
+    for (size_t i = 0; i < size; ++i) {
+      const double y = static_cast<double>(i);
+      batch.push_back(Wall(100 + i, {0, y}, {5, y}));
+    }
+    const size_t later = size - 1;
+    batch[later].id = batch[1].id;
+    const Status s = engine.Add(1, 0, batch);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(s.message(), "features[" + std::to_string(later) + "]: feature id 101 is not unique");
+    EXPECT_EQ(engine.feature_count(), 0u);
+  }
+}
+
 // Support counts distinct observations, not members: one scan that sees a wall
 // as several segments counts once (proto FusedFeature.support).
 TEST(FusionEngineTest, SupportCountsDistinctObservations) {
