@@ -20,25 +20,9 @@ void SupportCounter::Add(ObservationId id, uint32_t cap) {
 }
 
 void SupportCounter::Merge(SupportCounter&& other, uint32_t cap) {
-  if (exact() && other.exact()) {
-    if (ids_.size() < other.ids_.size()) ids_.swap(other.ids_);
-    if (other.ids_.empty()) {
-    } else if (other.ids_.front() > ids_.back()) {
-      ids_.insert(ids_.end(), other.ids_.begin(), other.ids_.end());
-    } else {
-      std::vector<ObservationId> both;
-      both.reserve(ids_.size() + other.ids_.size());
-      std::set_union(ids_.begin(), ids_.end(), other.ids_.begin(), other.ids_.end(),
-                     std::back_inserter(both));
-      ids_ = std::move(both);
-    }
-  } else {
-    const uint32_t shared = last_ == other.last_ ? 1 : 0;
-    count_ = count() + other.count() - shared;
-    std::vector<ObservationId>().swap(ids_);
-  }
-  last_ = std::max(last_, other.last_);
-  SaturateAbove(cap);
+  // Union into the longer list: take other's when it is longer.
+  if (exact() && other.exact() && ids_.size() < other.ids_.size()) ids_.swap(other.ids_);
+  Merge(static_cast<const SupportCounter&>(other), cap);
 }
 
 void SupportCounter::Merge(const SupportCounter& other, uint32_t cap) {
