@@ -465,7 +465,7 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
 
 void FusionEngine::Impl::PublishWall(const WallConsolidator::Wall& wall, ChangeFeed* feed,
                                      std::vector<Vec2>* moved_points) {
-  const ClusterStats& stats = wall.stats;
+  const ClusterStats& stats = wall.stats();
   const ClusterStats::Fit& fit = wall.fit;
   auto it = published_.find(stats.id);
   if (it == published_.end()) {

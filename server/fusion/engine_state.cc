@@ -390,7 +390,7 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
     return Corrupt("published features disagree with the published clusters");
   }
   for (const WallConsolidator::Wall& wall : walls) {
-    if (e.published_.count(wall.stats.id) == 0) {
+    if (e.published_.count(wall.stats().id) == 0) {
       return Corrupt("published features disagree with the published clusters");
     }
   }

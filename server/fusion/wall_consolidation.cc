@@ -4,7 +4,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <unordered_set>
 
 #include "fusion/chain_guard.h"
 #include "fusion/occlusion_proof.h"
@@ -274,7 +273,7 @@ void WallConsolidator::RetireSeenThrough() {
     auto it = walls_.find(wall);
     if (it == walls_.end()) continue;
     size_t cells = 0, seen = 0;
-    for (ClusterId id : it->second) {
+    for (ClusterId id : it->second.pieces) {
       const auto [piece_cells, piece_seen] = ledger_->SeenThrough(id);
       cells += piece_cells;
       seen += piece_seen;
@@ -283,7 +282,7 @@ void WallConsolidator::RetireSeenThrough() {
         static_cast<double>(seen) < params_.retire_fraction * static_cast<double>(cells)) {
       continue;
     }
-    const std::vector<ClusterId> members = it->second;  // Retire() touches walls_'s wall
+    const std::vector<ClusterId> members = it->second.pieces;  // Retire() touches walls_'s wall
     for (ClusterId id : members) Retire(id);
   }
 }
@@ -568,11 +567,16 @@ void WallConsolidator::WallsOf(const std::vector<ClusterId>& component,
     Wall wall;
     wall.pieces.reserve(group.size());
     for (uint32_t i : group) wall.pieces.push_back(component[i]);
-    std::vector<const ClusterStats*> parts;
-    parts.reserve(group.size());
-    for (uint32_t i : group) parts.push_back(&piece_stats_.at(component[i]));
-    wall.stats = ClusterStats::MergeAll(parts, support_cap_);
-    wall.fit = group.size() == 1 ? pieces_.at(component[group.front()]).fit : wall.stats.Refit();
+    if (group.size() == 1) {
+      wall.single = &piece_stats_.at(component[group.front()]);
+      wall.fit = pieces_.at(component[group.front()]).fit;
+    } else {
+      std::vector<const ClusterStats*> parts;
+      parts.reserve(group.size());
+      for (uint32_t i : group) parts.push_back(&piece_stats_.at(component[i]));
+      wall.merged = ClusterStats::MergeAll(parts, support_cap_);
+      wall.fit = wall.merged->Refit();
+    }
     walls->push_back(std::move(wall));
   }
 }
@@ -591,7 +595,11 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
       }
     }
   }
-  std::unordered_set<ClusterId> affected(touched_walls_.begin(), touched_walls_.end());
+  const uint64_t walk = ++resolve_count_;
+  // The walls recomputed: the touched ones and those the walk drags in
+  // (marked affected_in; a wall missing from walls_ is listed, possibly more
+  // than once, and goes as removed).
+  std::vector<ClusterId> affected = touched_walls_;
   std::vector<ClusterId> work;
   work.reserve(2 * touched_pieces_.size() + 4 * touched_walls_.size());
   const auto live = [this](ClusterId id) {
@@ -603,8 +611,9 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   }
   for (ClusterId wall : touched_walls_) {
     auto it = walls_.find(wall);
-    if (it == walls_.end()) continue;
-    for (ClusterId id : it->second) {
+    if (it == walls_.end() || it->second.affected_in == walk) continue;
+    it->second.affected_in = walk;
+    for (ClusterId id : it->second.pieces) {
       if (live(id)) work.push_back(id);
     }
   }
@@ -640,7 +649,6 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   const auto was_touched = [&touched](ClusterId id) {
     return std::binary_search(touched.begin(), touched.end(), id);
   };
-  const uint64_t walk = ++resolve_count_;
   // Whether this walk reached `id` before; marks it reached.
   const auto reached = [&](ClusterId id) {
     Piece& piece = pieces_.at(id);
@@ -654,15 +662,21 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   std::vector<ClusterId> singles;  // pieces of oversized components reached
   const auto drag = [&](ClusterId id) {
     const Piece& piece = pieces_.at(id);
-    if (piece.has_wall && affected.insert(piece.wall).second) {
-      auto it = walls_.find(piece.wall);
-      if (it != walls_.end()) work.insert(work.end(), it->second.begin(), it->second.end());
+    if (!piece.has_wall) return;
+    auto it = walls_.find(piece.wall);
+    if (it == walls_.end()) {
+      affected.push_back(piece.wall);
+    } else if (it->second.affected_in != walk) {
+      it->second.affected_in = walk;
+      affected.push_back(piece.wall);
+      work.insert(work.end(), it->second.pieces.begin(), it->second.pieces.end());
     }
   };
+  std::vector<ClusterId> stack;
   for (size_t next = 0; next < work.size(); ++next) {
     if (reached(work[next])) continue;
     std::vector<ClusterId> component;
-    std::vector<ClusterId> stack{work[next]};
+    stack.assign(1, work[next]);
     bool oversized = false;
     while (!stack.empty() && !oversized) {
       const ClusterId id = stack.back();
@@ -711,7 +725,8 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
     singles.insert(singles.end(), component.begin(), component.end());
   }
 
-  for (ClusterId wall : affected) walls_.erase(wall);
+  std::sort(affected.begin(), affected.end());
+  affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
   // At most a wall per piece: no reallocation moves the walls' statistics.
   size_t most_walls = singles.size();
   for (const std::vector<ClusterId>& component : components) most_walls += component.size();
@@ -727,21 +742,25 @@ void WallConsolidator::Resolve(std::vector<ClusterId>* removed, std::vector<Wall
   }
   std::vector<ClusterId> now;  // the walls' ids (a single's is its own)
   now.reserve(walls->size());
-  for (const Wall& wall : *walls) now.push_back(wall.stats.id);
+  for (const Wall& wall : *walls) now.push_back(wall.stats().id);
   std::sort(now.begin(), now.end());
+  // The affected walls gone; the others' members are overwritten in place
+  // (their lists' storage reused).
+  for (ClusterId wall : affected) {
+    if (std::binary_search(now.begin(), now.end(), wall)) continue;
+    walls_.erase(wall);
+    removed->push_back(wall);  // ascending, as `affected`
+  }
   // Record membership: every piece of a component belongs to one of its walls.
   for (const Wall& wall : *walls) {
-    walls_[wall.stats.id] = wall.pieces;
-    for (ClusterId id : wall.pieces) {
-      Piece& piece = pieces_.at(id);
-      piece.wall = wall.stats.id;
+    const ClusterId id = wall.stats().id;
+    walls_[id].pieces = wall.pieces;
+    for (ClusterId piece_id : wall.pieces) {
+      Piece& piece = pieces_.at(piece_id);
+      piece.wall = id;
       piece.has_wall = true;
     }
   }
-  for (ClusterId wall : affected) {
-    if (!std::binary_search(now.begin(), now.end(), wall)) removed->push_back(wall);
-  }
-  std::sort(removed->begin(), removed->end());
 }
 
 }  // namespace mapd::fusion

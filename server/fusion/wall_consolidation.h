@@ -59,6 +59,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -134,9 +135,15 @@ class WallConsolidator {
   void Retire(ClusterId piece);
 
   struct Wall {
-    ClusterStats stats;  // stats.id names the wall
+    // The wall's statistics; stats().id names the wall. A one-piece wall's
+    // are its piece's own, by reference: valid until the consolidator next
+    // changes (most walls are one piece, and copying their statistics was a
+    // tenth of the fuser's allocations).
+    const ClusterStats& stats() const { return merged ? *merged : *single; }
+    std::optional<ClusterStats> merged;  // two pieces or more
+    const ClusterStats* single = nullptr;
     ClusterStats::Fit fit;
-    std::vector<ClusterId> pieces;  // ascending; pieces.front() == stats.id
+    std::vector<ClusterId> pieces;  // ascending; pieces.front() == stats().id
   };
   // Recomputes the walls touched since the last call. `removed`: walls that
   // existed and exist no more; `walls`: every wall that contains a touched
@@ -209,7 +216,11 @@ class WallConsolidator {
   const size_t max_wall_pieces_;  // max_wall_pieces in bounded mode, else no limit
   std::map<ClusterId, ClusterStats> piece_stats_;
   std::unordered_map<ClusterId, Piece> pieces_;
-  std::unordered_map<ClusterId, std::vector<ClusterId>> walls_;  // members, ascending
+  struct WallMembers {
+    std::vector<ClusterId> pieces;  // ascending
+    uint64_t affected_in = 0;       // the last Resolve() that recomputed the wall
+  };
+  std::unordered_map<ClusterId, WallMembers> walls_;
   std::vector<ClusterId> touched_pieces_;
   std::vector<ClusterId> touched_walls_;       // walls of pieces that changed or vanished
   PieceIndex index_;                           // pieces filed at points along their fitted segment
