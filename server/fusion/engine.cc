@@ -136,7 +136,7 @@ bool FusionEngine::Impl::ReachesMinSupport(const std::vector<uint32_t>& nodes,
 void FusionEngine::Impl::FileInGrid(uint32_t node, const Segment2& segment) {
   const FeatureCircle c = CircleOf(segment);
   grid_.Insert(c.centre, {segment, c.centre, c.radius_m, node});
-  if (bounded_) cover_grid_.Insert(c.centre, {c.centre, node});
+  if (bounded_) cover_grid_.Insert(c.centre, {segment, node});
 }
 
 uint32_t FusionEngine::Impl::Find(uint32_t x) {
@@ -290,8 +290,8 @@ bool FusionEngine::Impl::FindCover(const GroundFeature& f, uint32_t* node) const
   cover_grid_.ForEachNear(
       centre, params_.cover_m + kSearchSlackM,
       [&](const CoverItem& g) {
-        if ((g.centre - centre).squaredNorm() > cover_sq) return;
-        const Segment2& segment = anchors_[g.node].segment;
+        if ((g.segment.midpoint() - centre).squaredNorm() > cover_sq) return;
+        const Segment2& segment = g.segment;
         const double d_sq = EndpointDistanceSq(f.segment, segment);
         if (d_sq > best_sq || (found && d_sq == best_sq && g.node > *node)) return;
         if (stats_[FindConst(g.node)]->support() < support_cap_) return;  // not established
