@@ -101,9 +101,9 @@ bool ErodedCorners(const HalfPlane (&planes)[3], Vec2 (&corners)[3]) {
 bool FreeSpaceGrid::Quiet(int64_t ty, size_t row_first, size_t row_last, int64_t cx_first,
                           int64_t cx_last) const {
   for (int64_t tx = FloorDiv(cx_first, kTileCells); tx * kTileCells <= cx_last; ++tx) {
-    auto it = tiles_.find(TileKey(tx, ty));
-    if (it == tiles_.end()) return false;  // counts of zero
-    const TileData& tile = *it->second;
+    const TileData* found = tiles_.Find(TileKey(tx, ty));
+    if (found == nullptr) return false;  // counts of zero
+    const TileData& tile = *found;
     const int first = static_cast<int>(std::max(cx_first, tx * kTileCells) - tx * kTileCells);
     const int last =
         static_cast<int>(std::min(cx_last, (tx + 1) * kTileCells - 1) - tx * kTileCells);
@@ -117,9 +117,31 @@ bool FreeSpaceGrid::Quiet(int64_t ty, size_t row_first, size_t row_last, int64_t
 }
 
 FreeSpaceGrid::TileData& FreeSpaceGrid::TileAt(int64_t tx, int64_t ty) {
-  std::unique_ptr<TileData>& tile = tiles_[TileKey(tx, ty)];
-  if (!tile) tile = std::make_unique<TileData>();
-  return *tile;
+  return tiles_.FindOrAdd(TileKey(tx, ty));
+}
+
+FreeSpaceGrid::TileData& FreeSpaceGrid::TileTable::FindOrAdd(uint64_t key) {
+  if (2 * (size_ + 1) > slots_.size()) Grow();
+  size_t i = Home(key);
+  for (; slots_[i].tile != nullptr; i = (i + 1) & mask_) {
+    if (slots_[i].key == key) return *slots_[i].tile;
+  }
+  storage_.push_back(std::make_unique<TileData>());
+  slots_[i] = {key, storage_.back().get()};
+  ++size_;
+  return *slots_[i].tile;
+}
+
+void FreeSpaceGrid::TileTable::Grow() {
+  std::vector<Slot> old = std::move(slots_);
+  slots_.assign(old.empty() ? 64 : 2 * old.size(), Slot());
+  mask_ = slots_.size() - 1;
+  for (const Slot& slot : old) {
+    if (slot.tile == nullptr) continue;
+    size_t i = Home(slot.key);
+    while (slots_[i].tile != nullptr) i = (i + 1) & mask_;
+    slots_[i] = slot;
+  }
 }
 
 void FreeSpaceGrid::AddView(const Vec2& origin, const Segment2& segment) {
@@ -304,28 +326,27 @@ Vec2 FreeSpaceGrid::CellCentre(uint64_t cell_key) {
 std::vector<std::pair<uint64_t, const FreeSpaceGrid::Tile*>> FreeSpaceGrid::SortedTiles() const {
   std::vector<std::pair<uint64_t, const Tile*>> out;
   out.reserve(tiles_.size());
-  for (const auto& [key, tile] : tiles_) {
+  tiles_.ForEach([&out](uint64_t key, const TileData& tile) {
     // A tile that only Watch created (no count yet).
-    if (std::all_of(tile->counts.begin(), tile->counts.end(), [](uint8_t c) { return c == 0; })) {
-      continue;
+    if (std::all_of(tile.counts.begin(), tile.counts.end(), [](uint8_t c) { return c == 0; })) {
+      return;
     }
-    out.emplace_back(key, &tile->counts);
-  }
+    out.emplace_back(key, &tile.counts);
+  });
   std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   return out;
 }
 
 void FreeSpaceGrid::RestoreTile(uint64_t key, const Tile& tile) {
-  auto data = std::make_unique<TileData>();
-  data->counts = tile;
+  TileData& data = tiles_.FindOrAdd(key);
+  data.counts = tile;
   for (size_t i = 0; i < tile.size(); ++i) {
     if (tile[i] < min_count_) continue;
     // Snapshots written before counts stopped at min_count hold up to 255:
     // stopped here too, so the next snapshot has a fresh engine's bytes.
-    data->counts[i] = static_cast<uint8_t>(min_count_);
-    data->saturated[i / kTileCells] |= 1u << (i % kTileCells);
+    data.counts[i] = static_cast<uint8_t>(min_count_);
+    data.saturated[i / kTileCells] |= 1u << (i % kTileCells);
   }
-  tiles_[key] = std::move(data);
 }
 
 }  // namespace mapd::fusion

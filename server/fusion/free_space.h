@@ -36,7 +36,6 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
 #include "fusion/floor_int.h"
@@ -80,8 +79,8 @@ class FreeSpaceGrid {
       const int64_t tx = cx >> kTileShift, ty = cy >> kTileShift;  // floor division
       const uint64_t key = TileKey(tx, ty);
       if (!has_tile_ || key != tile_key_) {
-        auto it = grid_.tiles_.find(key);
-        tile_ = it == grid_.tiles_.end() ? nullptr : &it->second->counts;
+        const TileData* found = grid_.tiles_.Find(key);
+        tile_ = found == nullptr ? nullptr : &found->counts;
         tile_key_ = key;
         has_tile_ = true;
       }
@@ -136,6 +135,49 @@ class FreeSpaceGrid {
     std::array<uint32_t, kTileCells> watched{};  // see Watch
   };
   static_assert(kTileCells == 32, "one uint32_t mask per tile row");
+
+  // Tile key -> tile, by open addressing (linear probing, a power-of-two
+  // table at most half full; tiles are never erased). AddView looks tiles up
+  // for every strip of rows it tests: std::unordered_map's identity hash
+  // took a division per bucket and per chained node, half of that test's
+  // time in a city soak; this a multiply and, mostly, one slot.
+  class TileTable {
+   public:
+    size_t size() const { return size_; }
+    const TileData* Find(uint64_t key) const {
+      if (size_ == 0) return nullptr;
+      for (size_t i = Home(key);; i = (i + 1) & mask_) {
+        if (slots_[i].tile == nullptr) return nullptr;
+        if (slots_[i].key == key) return slots_[i].tile;
+      }
+    }
+    // The tile at key, created (zero) if absent.
+    TileData& FindOrAdd(uint64_t key);
+    // fn(key, tile) for every tile, in no particular order.
+    template <typename Fn>
+    void ForEach(Fn&& fn) const {
+      for (const Slot& slot : slots_) {
+        if (slot.tile != nullptr) fn(slot.key, *slot.tile);
+      }
+    }
+
+   private:
+    struct Slot {
+      uint64_t key = 0;
+      TileData* tile = nullptr;  // null: empty
+    };
+    size_t Home(uint64_t key) const {
+      uint64_t h = key * 0x9E3779B97F4A7C15ULL;
+      h ^= h >> 32;
+      return static_cast<size_t>(h) & mask_;
+    }
+    void Grow();
+
+    std::vector<Slot> slots_;
+    size_t mask_ = 0;
+    size_t size_ = 0;
+    std::vector<std::unique_ptr<TileData>> storage_;
+  };
   static constexpr int kTileShift = 5;  // kTileCells == 1 << kTileShift
 
   static uint64_t TileKey(int64_t tx, int64_t ty) {
@@ -151,7 +193,7 @@ class FreeSpaceGrid {
   const uint32_t min_count_;
   const double range_m_;
   bool skip_quiet_rows_ = true;
-  std::unordered_map<uint64_t, std::unique_ptr<TileData>> tiles_;
+  TileTable tiles_;
   // AddView's scratch: the tiles of the tile row it is in, by column.
   std::vector<TileData*> row_tiles_;
   std::vector<uint64_t> newly_free_;      // cell keys (TileKey packing of cell indices)
