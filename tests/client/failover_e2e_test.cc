@@ -29,6 +29,7 @@
 #include "client/support/streaming_robot.h"
 #include "common/postgres.h"
 #include "common/process.h"
+#include "common/sanitizers.h"
 #include "common/temp_dir.h"
 #include "service/rendezvous.h"
 
@@ -240,7 +241,8 @@ TEST_F(FailoverTest, AKilledOwnersMapsMoveWithinSecondsAndNothingIsLost) {
   double worst = 0;
   for (const auto& [map, s] : took) {
     EXPECT_GE(s, 0) << map << " never acknowledged again";
-    EXPECT_LT(s, 10.0) << map;  // the benchmark's target is 5 s p50; CI runs loaded
+    // The benchmark's target is 5 s p50; CI runs loaded, and some jobs sanitized.
+    EXPECT_LT(s, kSanitized ? 20.0 : 10.0) << map;
     worst = std::max(worst, s);
     std::printf("kill -9: %s acknowledges again after %.2f s\n", map.c_str(), s);
   }
@@ -366,10 +368,13 @@ TEST_F(RollingRestartTest, EachMapPausesBrieflyAndNothingIsRefused) {
     ASSERT_TRUE(WaitUntilSpread({0, 1, 2}, std::chrono::seconds(30)))
         << "maps spread back after " << Name(i) << " restarted";
   }
+  // The target, 2 s, is failover_bench's (docs/scale-out.md). This bound only
+  // catches a map left stuck: a plain build pauses 1-3 s on a loaded CI host,
+  // an ASan build up to ~6 s (CI, 2026-12-07: 5.8 s, every handover clean).
+  const double bound_s = kSanitized ? 15.0 : 5.0;
   for (const auto& [map, gap] : watch.Longest()) {
     std::printf("rolling restart: %s paused at most %.2f s\n", map.c_str(), gap);
-    // The target is 2 s (docs/scale-out.md); CI runs loaded and sanitized.
-    EXPECT_LT(gap, 5.0) << map;
+    EXPECT_LT(gap, bound_s) << map;
   }
   FinishAndCheckExactlyOnce(0);  // which also checks nothing was refused
 }
