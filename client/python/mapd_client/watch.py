@@ -39,7 +39,8 @@ class FeatureWatch:
 
     On a stream that ends for any reason but a permanent error (UNAVAILABLE
     when mapd shuts down, a broken connection) it waits (backoff 0.5 s
-    doubling to 10 s, reset by any message) and watches again from
+    doubling to 10 s, reset by any message), then for the server to be
+    reachable again (however long mapd is down), and watches again from
     `resume_version`, the map_version of the last message with more = false
     (0 while a resync is incomplete: the client dropped its map for it). A
     permanent error (INVALID_ARGUMENT naming the field, PERMISSION_DENIED ...)
@@ -88,7 +89,12 @@ class FeatureWatch:
             with self._lock:
                 if self._closed.is_set():
                     return
-                self._call = self._stub.WatchFeatureMap(request, metadata=self._metadata)
+                # A reconnect waits for the server (wait_for_ready) rather than
+                # failing at once while it is down: grpcio's iterator can block
+                # for ever on a call that failed before reaching any server
+                # (grpc/grpc#20562; seen with Debian's 1.51 across a restart).
+                self._call = self._stub.WatchFeatureMap(request, metadata=self._metadata,
+                                                        wait_for_ready=received or None)
             try:
                 for delta in self._call:
                     received = True

@@ -105,6 +105,10 @@ def test_resumes_after_a_restart_and_ends_equal_to_the_feature_map(mapd):
     before = feed.resume_version
     assert before > 0
     assert mapd.stop() == 0  # the watch ends with UNAVAILABLE
+    # Down for longer than the first backoff (0.5 s): the reconnect finds no
+    # server and must wait for it, not hang on a call that failed to connect
+    # (it did, under ASan in CI, where mapd restarts slowly).
+    time.sleep(1.5)
     mapd.start(listen=mapd.address)  # the same port, the same database
     ingest(mapd.address, walk("r1", 10, first_seq=11) + walk("r2", 10))
     assert_same(*settle(client, watcher, mapd=mapd))
