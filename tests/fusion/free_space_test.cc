@@ -126,6 +126,50 @@ FusionParams WithEvidence(double occluded_gap_m, FusionMode mode = FusionMode::k
 // passes must be those of a grid that visits every row. A robot revisiting
 // a small block from many poses, far and short segments among the views
 // (erosion turns their triangles over), watches switched on and off.
+// The tile table (open addressing) through its growth: thousands of tiles,
+// negative and far-off indices, each found again, and none invented.
+TEST(FreeSpaceGridTest, EveryTileIsFoundAgainAfterTheTableGrows) {
+  constexpr double kTileM = FreeSpaceGrid::kCellM * FreeSpaceGrid::kTileCells;
+  FreeSpaceGrid grid(1, kRangeM);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> cell(0, FreeSpaceGrid::kTileCells - 1);
+  std::vector<Vec2> marked, unmarked;
+  for (int tx = -45; tx <= 45; ++tx) {
+    for (int ty = -45; ty <= 45; ++ty) {
+      // Far-off tiles too: keys whose high bits differ, not only the low ones.
+      const double far = (tx + ty) % 11 == 0 ? 1e5 : 0.0;
+      const Vec2 origin(tx * kTileM + far, ty * kTileM - far);
+      const int cx = cell(rng), cy = cell(rng);
+      const auto at = [&](int x, int y) -> Vec2 {
+        return origin + FreeSpaceGrid::kCellM * Vec2(x + 0.5, y + 0.5);
+      };
+      marked.push_back(at(cx, cy));
+      unmarked.push_back(at((cx + 1) % FreeSpaceGrid::kTileCells, cy));
+      grid.AddLine(Segment2{marked.back(), marked.back()});
+    }
+  }
+  ASSERT_EQ(grid.tile_count(), marked.size());
+  for (size_t i = 0; i < marked.size(); ++i) {
+    ASSERT_TRUE(grid.IsFree(marked[i])) << i;
+    ASSERT_FALSE(grid.IsFree(unmarked[i])) << i;
+  }
+  EXPECT_FALSE(grid.IsFree(Vec2(-3e5, 2e5)));  // no tile there
+  const auto tiles = grid.SortedTiles();
+  ASSERT_EQ(tiles.size(), marked.size());
+  FreeSpaceGrid restored(1, kRangeM);
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    if (i > 0) {
+      ASSERT_LT(tiles[i - 1].first, tiles[i].first);
+    }
+    restored.RestoreTile(tiles[i].first, *tiles[i].second);
+  }
+  ASSERT_EQ(restored.tile_count(), marked.size());
+  for (size_t i = 0; i < marked.size(); ++i) {
+    ASSERT_TRUE(restored.IsFree(marked[i])) << i;
+    ASSERT_FALSE(restored.IsFree(unmarked[i])) << i;
+  }
+}
+
 TEST(FreeSpaceGridTest, SkippingQuietRowsChangesNothing) {
   for (const uint32_t min_count : {1u, 3u}) {
     FreeSpaceGrid skipping(min_count, 30.0), reference(min_count, 30.0);
