@@ -180,9 +180,9 @@ const std::vector<Setting>& Settings() {
       Real("lease_ttl_s", "with store: how long a map stays with a mapd that stopped renewing its lease before "
                           "another takes it over, seconds",
            [](C& c) -> auto& { return c.lease_ttl_s; }, {0.5, 600}),
-      Flag("forward", "with store: relay unary and server-streaming calls for a map another mapd serves to it, for "
-                      "clients that know one address (streams of batches and uploads are redirected); false: "
-                      "redirect every such call",
+      Flag("forward", "with store: relay calls and streams (batches, uploads) for a map another mapd serves to "
+                      "it, for clients that know one address (clients that follow redirects are redirected); "
+                      "false: redirect every such call",
            [](C& c) -> auto& { return c.forward; }),
       Text("forward_ca", "with store and tls_cert: PEM CA of the other instances' certificates, to forward calls "
                          "to them over TLS (empty: with TLS, calls are redirected; never with tls_client_ca)",
@@ -380,8 +380,8 @@ const std::vector<Setting>& Settings() {
       Real("limits.upload_idle_timeout_s", "an upload that sends nothing for this long is ended "
            "(DEADLINE_EXCEEDED), seconds",
            [](C& c) -> auto& { return c.submaps.upload_idle_timeout_s; }, {0, 86400, true}),
-      Count("limits.max_streams", "Ingest and UploadSubmap streams open at once, server-wide; one more gets "
-            "RESOURCE_EXHAUSTED at once",
+      Count("limits.max_streams", "Ingest and UploadSubmap streams open at once, server-wide (those relayed "
+            "to another instance too); one more gets RESOURCE_EXHAUSTED at once",
             [](C& c) -> auto& { return c.streams.max_streams; }, 1, 10000000),
       Count("limits.max_streams_per_connection", "concurrent streams of one HTTP/2 connection "
             "(SETTINGS_MAX_CONCURRENT_STREAMS)",

@@ -2,6 +2,7 @@
 
 #include <map>
 
+#include "service/log.h"
 #include "service/refused_stream.h"
 #include "service/status_mapping.h"
 #include "service/stream_relay.h"
@@ -79,6 +80,16 @@ StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context, co
                              " (instance '" + owner->instance + "'); call it there");
 }
 
+Status MapRouter::AdmitRelay(const grpc::ServerContextBase& context, const char* rpc,
+                             StreamSlot* slot) {
+  Status admitted = server_wide()->limiter().TryOpen(context.peer(), slot);
+  if (!admitted.ok()) {
+    Log(LogLevel::kWarn, "stream_refused",
+        {{"rpc", rpc}, {"peer", context.peer()}, {"relay", "true"}, {"why", admitted.message()}});
+  }
+  return admitted;
+}
+
 grpc::Status MapRouter::Forward(grpc::ServerContextBase& context, const std::string& field,
                                 const std::function<grpc::Status(MapServiceImpl*)>& call,
                                 const Remote& remote) {
@@ -106,7 +117,13 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* MapRouter::Ingest(
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
   std::string owner;
   StatusOr<MapHold> map = FindOrRedirect(*context, *id, &owner);
-  if (!owner.empty()) return RelayIngest(context, forwarder_, owner);
+  if (!owner.empty()) {
+    StreamSlot slot;
+    if (Status s = AdmitRelay(*context, "Ingest", &slot); !s.ok()) {
+      return new Refused(ToGrpcStatus(s));
+    }
+    return RelayIngest(context, forwarder_, owner, std::move(slot));
+  }
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   MapServiceImpl* service = (*map)->service.get();
   return service->Ingest(context, *std::move(map));
@@ -119,7 +136,13 @@ grpc::ServerReadReactor<pb::UploadSubmapRequest>* MapRouter::UploadSubmap(
   if (!id.ok()) return new Refused(ToGrpcStatus(id.status()));
   std::string owner;
   StatusOr<MapHold> map = FindOrRedirect(*context, *id, &owner);
-  if (!owner.empty()) return RelayUpload(context, response, forwarder_, owner);
+  if (!owner.empty()) {
+    StreamSlot slot;
+    if (Status s = AdmitRelay(*context, "UploadSubmap", &slot); !s.ok()) {
+      return new Refused(ToGrpcStatus(s));
+    }
+    return RelayUpload(context, response, forwarder_, owner, std::move(slot));
+  }
   if (!map.ok()) return new Refused(ToGrpcStatus(map.status()));
   MapServiceImpl* service = (*map)->service.get();
   return service->UploadSubmap(context, response, *std::move(map));

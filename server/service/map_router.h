@@ -22,6 +22,7 @@
 #include "service/map_forwarder.h"
 #include "service/map_lifecycle.h"
 #include "service/map_locator.h"
+#include "service/stream_limiter.h"
 
 namespace mapd::service {
 
@@ -144,6 +145,10 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   // with `forward_to` and forwarding on, that address in *forward_to.
   StatusOr<MapHold> FindOrRedirect(grpc::ServerContextBase& context, const std::string& id,
                                    std::string* forward_to = nullptr);
+  // A stream this instance would relay to its map's owner: its place under
+  // this instance's limits.max_streams and stream_opens_per_s, or why not
+  // (ResourceExhausted, logged as the local streams' refusals are).
+  Status AdmitRelay(const grpc::ServerContextBase& context, const char* rpc, StreamSlot* slot);
   // The archived maps, for ListMaps.
   grpc::Status ListArchived(const Principal& caller, mapserver::v1::ListMapsResponse* response);
   // Writes `action`'s row in the server's audit log; the error when it failed.

@@ -52,6 +52,8 @@ class MapServiceImpl final : public mapserver::v1::MapService::WithCallbackMetho
   void Tick();
   void FlushDenials(bool all) { access_->FlushDenials(all); }
   const StreamLimiter& limiter() const { return *limiter_; }
+  // Also admits the streams this instance relays to a map's owner.
+  StreamLimiter& limiter() { return *limiter_; }
 
   // From now on new batches, uploads and merges are refused with UNAVAILABLE
   // and merges in flight are abandoned (shutdown).

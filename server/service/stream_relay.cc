@@ -19,8 +19,11 @@ constexpr char kIngestMethod[] = "/mapserver.v1.MapService/Ingest";
 class RelayEnd {
  protected:
   RelayEnd(grpc::CallbackServerContext* context, std::unique_ptr<grpc::ClientContext> upstream,
-           std::string owner)
-      : context_(context), upstream_(std::move(upstream)), owner_(std::move(owner)) {}
+           std::string owner, StreamSlot slot)
+      : context_(context),
+        upstream_(std::move(upstream)),
+        owner_(std::move(owner)),
+        slot_(std::move(slot)) {}
   virtual ~RelayEnd() = default;
 
   // The owner's call is done: the caller's status, with the owner's
@@ -59,6 +62,7 @@ class RelayEnd {
   const std::string owner_;
 
  private:
+  StreamSlot slot_;  // released with the relay
   std::mutex mu_;
   bool upstream_done_ = false;  // GUARDED_BY(mu_)
   int halves_done_ = 0;         // GUARDED_BY(mu_)
@@ -68,8 +72,8 @@ class IngestRelay final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
                           public RelayEnd {
  public:
   IngestRelay(grpc::CallbackServerContext* context, std::unique_ptr<grpc::ClientContext> upstream,
-              std::string owner, grpc::GenericStub* stub)
-      : RelayEnd(context, std::move(upstream), std::move(owner)), to_owner_(this) {
+              std::string owner, StreamSlot slot, grpc::GenericStub* stub)
+      : RelayEnd(context, std::move(upstream), std::move(owner), std::move(slot)), to_owner_(this) {
     stub->PrepareBidiStreamingCall(upstream_.get(), kIngestMethod, grpc::StubOptions(), &to_owner_);
     to_owner_.StartRead(&from_owner_);
     to_owner_.StartCall();
@@ -120,8 +124,9 @@ class IngestRelay final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc:
 class UploadRelay final : public grpc::ServerReadReactor<pb::UploadSubmapRequest>, public RelayEnd {
  public:
   UploadRelay(grpc::CallbackServerContext* context, std::unique_ptr<grpc::ClientContext> upstream,
-              std::string owner, pb::SubmapInfo* response, pb::MapService::Stub* stub)
-      : RelayEnd(context, std::move(upstream), std::move(owner)),
+              std::string owner, StreamSlot slot, pb::SubmapInfo* response,
+              pb::MapService::Stub* stub)
+      : RelayEnd(context, std::move(upstream), std::move(owner), std::move(slot)),
         response_(response),
         to_owner_(this) {
     stub->async()->UploadSubmap(upstream_.get(), response_, &to_owner_);
@@ -165,16 +170,18 @@ class UploadRelay final : public grpc::ServerReadReactor<pb::UploadSubmapRequest
 }  // namespace
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* RelayIngest(
-    grpc::CallbackServerContext* context, MapForwarder* forwarder, const std::string& owner) {
-  return new IngestRelay(context, forwarder->ContextFor(*context), owner,
+    grpc::CallbackServerContext* context, MapForwarder* forwarder, const std::string& owner,
+    StreamSlot slot) {
+  return new IngestRelay(context, forwarder->ContextFor(*context), owner, std::move(slot),
                          forwarder->GenericStubTo(owner));
 }
 
 grpc::ServerReadReactor<pb::UploadSubmapRequest>* RelayUpload(grpc::CallbackServerContext* context,
                                                               pb::SubmapInfo* response,
                                                               MapForwarder* forwarder,
-                                                              const std::string& owner) {
-  return new UploadRelay(context, forwarder->ContextFor(*context), owner, response,
+                                                              const std::string& owner,
+                                                              StreamSlot slot) {
+  return new UploadRelay(context, forwarder->ContextFor(*context), owner, std::move(slot), response,
                          forwarder->StubTo(owner));
 }
 

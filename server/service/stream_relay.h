@@ -7,7 +7,9 @@
 // status (and redirect metadata) ends the caller's stream.
 //
 // Each relay is owned by gRPC and deletes itself once both its halves (the
-// caller's call and the call to the owner) are done.
+// caller's call and the call to the owner) are done. It holds its place under
+// this instance's limits.max_streams (`slot`) until then: a relay costs the
+// relaying instance a stream as much as a local one does.
 #ifndef MAPD_SERVICE_STREAM_RELAY_H_
 #define MAPD_SERVICE_STREAM_RELAY_H_
 
@@ -18,17 +20,19 @@
 
 #include "mapserver/v1/map_service.grpc.pb.h"
 #include "service/map_forwarder.h"
+#include "service/stream_limiter.h"
 
 namespace mapd::service {
 
 // Ingest (raw messages: the owner parses and acknowledges them).
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* RelayIngest(
-    grpc::CallbackServerContext* context, MapForwarder* forwarder, const std::string& owner);
+    grpc::CallbackServerContext* context, MapForwarder* forwarder, const std::string& owner,
+    StreamSlot slot);
 
 // UploadSubmap; `response` is filled with the owner's answer.
 grpc::ServerReadReactor<mapserver::v1::UploadSubmapRequest>* RelayUpload(
     grpc::CallbackServerContext* context, mapserver::v1::SubmapInfo* response,
-    MapForwarder* forwarder, const std::string& owner);
+    MapForwarder* forwarder, const std::string& owner, StreamSlot slot);
 
 }  // namespace mapd::service
 

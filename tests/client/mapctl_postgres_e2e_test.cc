@@ -225,6 +225,57 @@ TEST_F(MapdOnPostgresTest, ASecondMapdTakesTheMapsOfAKilledOne) {
   EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
 }
 
+// A relayed stream holds a place under the relaying instance's
+// limits.max_streams, as a local one does: relaying is no way around them.
+TEST_F(MapdOnPostgresTest, ARelayingInstanceCountsTheStreamsItRelays) {
+  MapdProcess first = StartInstance("mapd-1", "serving");
+  ASSERT_GT(first.port, 0) << first.log();
+  MapdProcess second = StartInstance("mapd-2", "listening", {"--limits.max_streams", "1"});
+  ASSERT_GT(second.port, 0) << second.log();
+  auto stub = mapserver::v1::MapService::NewStub(
+      grpc::CreateChannel(second.address, grpc::InsecureChannelCredentials()));
+  client::SimRobotParams params;
+  params.robot_id = "relayed";
+  client::SimRobot robot(client::DefaultWorld(), params);
+  // One stream relayed to the owner, held open (a batch acknowledged through it).
+  grpc::ClientContext held;
+  auto open = stub->Ingest(&held);
+  ASSERT_TRUE(open->Write(robot.NextBatch()));
+  mapserver::v1::IngestAck ack;
+  ASSERT_TRUE(open->Read(&ack));
+  EXPECT_EQ(ack.result(), mapserver::v1::IngestAck::STORED);
+  // The second at once is refused by the relaying instance, naming the limit.
+  const auto one_batch = [&](grpc::ClientContext* call) {
+    auto stream = stub->Ingest(call);
+    stream->Write(robot.NextBatch());
+    stream->WritesDone();
+    while (stream->Read(&ack)) {
+    }
+    return stream->Finish();
+  };
+  grpc::ClientContext second_call;
+  const grpc::Status refused = one_batch(&second_call);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
+  EXPECT_THAT(refused.error_message(), HasSubstr("limits.max_streams = 1"));
+  EXPECT_THAT(second.log(), HasSubstr("event=stream_refused rpc=Ingest"));
+  // Once the first ends, its place is free again (the relay lets it go when
+  // both its calls are done, just after the client sees the end).
+  open->WritesDone();
+  while (open->Read(&ack)) {
+  }
+  ASSERT_TRUE(open->Finish().ok());
+  grpc::Status later;
+  for (int i = 0; i < 50; ++i) {
+    grpc::ClientContext call;
+    later = one_batch(&call);
+    if (later.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_TRUE(later.ok()) << later.error_message();
+  EXPECT_EQ(Stop(first.pid, SIGTERM), 0) << first.log();
+  EXPECT_EQ(Stop(second.pid, SIGTERM), 0) << second.log();
+}
+
 // --forward false: every call for a map served elsewhere is redirected.
 TEST_F(MapdOnPostgresTest, WithoutForwardingCallsAreRedirected) {
   MapdProcess first = StartInstance("mapd-1", "serving", {"--forward", "false"});
