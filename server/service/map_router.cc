@@ -71,6 +71,14 @@ StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context, co
                                "' is being taken over by another mapd (its owner stopped); "
                                "retry in a few seconds");
   }
+  if (IsSelf(*owner)) {
+    // This mapd holds the lease and is opening the map: neither forward the
+    // call to itself nor send the client back here.
+    context.AddTrailingMetadata(kRetryAfterMetadata, std::to_string(locator_->retry_after_ms()));
+    return Status::Unavailable("map '" + id +
+                               "' is being opened by this mapd (taken over, its data loading); "
+                               "retry in a moment");
+  }
   if (forward_to != nullptr && forwarder_ != nullptr && MapForwarder::MayForward(context)) {
     *forward_to = owner->address;
     return Status::Unavailable("map '" + id + "' is served by the mapd at " + owner->address);
@@ -269,7 +277,8 @@ grpc::Status MapRouter::ListMaps(grpc::ServerContext* context, const pb::ListMap
       if (maps.count(id) != 0) continue;
       pb::MapInfo& info = maps[id];
       info.set_map_id(id);
-      info.set_served_by(owner.address);
+      // Leased here and still opening: served here, not serving yet.
+      if (!IsSelf(owner)) info.set_served_by(owner.address);
     }
   }
   for (auto& [id, info] : maps) {
@@ -304,6 +313,11 @@ void MapRouter::set_address(const std::string& address) {
   address_ = address;
 }
 
+bool MapRouter::IsSelf(const MapOwner& owner) const {
+  std::lock_guard<std::mutex> lock(address_mu_);
+  return !owner.address.empty() && owner.address == address_;
+}
+
 grpc::Status MapRouter::LocateMap(grpc::ServerContext* context, const pb::LocateMapRequest* request,
                                   pb::MapLocation* response) {
   StatusOr<Principal> p =
@@ -329,6 +343,7 @@ grpc::Status MapRouter::LocateMap(grpc::ServerContext* context, const pb::Locate
   if (!owner) return ToGrpcStatus(maps_->Find(*id).status());  // NotFound
   response->set_address(owner->address);
   response->set_instance(owner->instance);
+  response->set_here(IsSelf(*owner));  // leased here, still opening
   response->set_live(owner->live && !owner->address.empty());
   return grpc::Status::OK;
 }

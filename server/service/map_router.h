@@ -155,6 +155,9 @@ class MapRouter final : public mapserver::v1::MapService::WithCallbackMethod_Upl
   Status Audit(const Principal& caller, const std::string& action, const std::string& target,
                const Status& result);
   MapServiceImpl* server_wide() const { return &maps_->server_wide(); }
+  // Whether `owner` is this mapd (the address it advertises): a map leased
+  // here that is not in maps_ yet is being opened.
+  bool IsSelf(const MapOwner& owner) const;
 
   MapDirectory* const maps_;
   MapLifecycle* const lifecycle_;
