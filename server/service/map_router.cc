@@ -62,8 +62,10 @@ StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context, co
   if (map.ok() || locator_ == nullptr) return map;
   const std::string key = id.empty() ? std::string(kDefaultMapId) : id;
   std::optional<MapOwner> owner = locator_->Locate(key);
-  // Taken over since the last round, or before the first one?
-  if (!owner || !owner->live) owner = locator_->LocateNow(key);
+  // Taken over since the last round, or before the first one? Or leased
+  // here by the last round's view but not served: handed over since, or
+  // still opening (read again: only maps in transition cost a query).
+  if (!owner || !owner->live || IsSelf(*owner)) owner = locator_->LocateNow(key);
   if (!owner) return map;  // no such map
   if (!owner->live || owner->address.empty()) {
     context.AddTrailingMetadata(kRetryAfterMetadata, std::to_string(locator_->retry_after_ms()));
@@ -72,8 +74,9 @@ StatusOr<MapHold> MapRouter::FindOrRedirect(grpc::ServerContextBase& context, co
                                "retry in a few seconds");
   }
   if (IsSelf(*owner)) {
-    // This mapd holds the lease and is opening the map: neither forward the
-    // call to itself nor send the client back here.
+    // This mapd holds the lease and is opening the map (or handing it over
+    // this moment): neither forward the call to itself nor send the client
+    // back here.
     context.AddTrailingMetadata(kRetryAfterMetadata, std::to_string(locator_->retry_after_ms()));
     return Status::Unavailable("map '" + id +
                                "' is being opened by this mapd (taken over, its data loading); "
