@@ -364,12 +364,20 @@ void FusionEngine::Impl::Add(ObservationId observation, RobotId robot, const Vec
   for (uint32_t node : nodes) roots.push_back(Find(node));
   std::sort(roots.begin(), roots.end());
   roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+  // Components that gained a node (and any link: only new nodes link) are
+  // refitted in full; the others only grew by folds, which may settle.
+  std::vector<uint32_t> grown;
+  for (size_t i = 0; i < features.size(); ++i) {
+    if (!folded[i]) grown.push_back(Find(nodes[i]));
+  }
+  std::sort(grown.begin(), grown.end());
   ChangeFeed feed;
-  Publish(roots, merged_ids, &feed);
+  Publish(roots, grown, merged_ids, &feed);
   if (changes != nullptr) *changes = std::move(feed);
 }
 
 void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
+                                 const std::vector<uint32_t>& grown,
                                  const std::vector<ClusterId>& merged_ids, ChangeFeed* feed) {
   // Fitted endpoints that appeared, moved or vanished: the corner result can
   // change near them (CornerSnapper::CollectAffected).
@@ -391,18 +399,18 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   // The touched components' groups now: refit once each, publish at min_support.
   std::vector<ClusterId> new_groups;
   new_groups.reserve(roots.size());
+  std::vector<ClusterId> settled;  // pieces whose walls only need new counts
   for (uint32_t root : roots) {
     const ClusterStats& whole = *stats_[root];
-    if (!MayCut(root)) {  // one group: the component itself
+    std::vector<std::vector<uint32_t>> groups;
+    if (MayCut(root)) groups = GroupNodes(root);
+    if (groups.size() <= 1) {  // one group: the component itself
       if (whole.support() < params_.min_support) continue;
-      PublishGroup(whole);
-      new_groups.push_back(whole.id);
-      continue;
-    }
-    const std::vector<std::vector<uint32_t>> groups = GroupNodes(root);
-    if (groups.size() == 1) {
-      if (whole.support() < params_.min_support) continue;
-      PublishGroup(whole);
+      if (std::binary_search(grown.begin(), grown.end(), root)) {
+        PublishGroup(whole);
+      } else {
+        PublishFolded(whole, &settled);
+      }
       new_groups.push_back(whole.id);
       continue;
     }
@@ -437,7 +445,24 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
     published_.erase(it);
     feed->removed.push_back(id);
   }
-  for (const WallConsolidator::Wall& wall : walls) PublishWall(wall, feed, &moved_points);
+  // Walls whose counts alone changed: not corner candidates, nothing of theirs moved.
+  std::vector<ClusterId> recounted;
+  for (const WallConsolidator::Wall& wall : walls) {
+    PublishWall(wall, feed, &moved_points, &recounted);
+  }
+  // The walls of settled pieces that Resolve did not recompute: same
+  // geometry, new counts.
+  for (ClusterId piece : settled) {
+    if (!consolidator_.OnAWall(piece)) continue;
+    const ClusterId id = consolidator_.WallOf(piece);
+    if (std::any_of(walls.begin(), walls.end(),
+                    [id](const WallConsolidator::Wall& w) { return w.stats().id == id; })) {
+      continue;  // recomputed whole: PublishWall set its counts
+    }
+    if (CurrentCounts(consolidator_.WallPieces(id)).Set(&published_.at(id))) {
+      recounted.push_back(id);
+    }
+  }
   // The corner pass, local to the moved endpoints.
   std::vector<ClusterId> dirty = feed->added;
   dirty.insert(dirty.end(), feed->updated.begin(), feed->updated.end());
@@ -458,23 +483,82 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
       feed->updated.push_back(id);  // a neighbour's corner moved it
     }
   }
+  feed->updated.insert(feed->updated.end(), recounted.begin(), recounted.end());
   std::sort(feed->added.begin(), feed->added.end());
   std::sort(feed->updated.begin(), feed->updated.end());
+  feed->updated.erase(std::unique(feed->updated.begin(), feed->updated.end()), feed->updated.end());
   std::sort(feed->removed.begin(), feed->removed.end());
 }
 
+void FusionEngine::Impl::PublishFolded(const ClusterStats& whole, std::vector<ClusterId>* settled) {
+  const ClusterStats::Fit fit = whole.Refit();
+  // Only a cluster that is a node's own feature id: CurrentStats finds it.
+  if (bounded_ && params_.refit_tolerance_m > 0.0 && node_of_.count(whole.id) != 0 &&
+      consolidator_.Settle(whole, fit, params_.refit_tolerance_m)) {
+    settled->push_back(whole.id);
+    return;
+  }
+  consolidator_.Upsert(whole, fit);
+}
+
+const ClusterStats& FusionEngine::Impl::CurrentStats(ClusterId piece) const {
+  if (auto node = node_of_.find(piece); node != node_of_.end() && split_.count(piece) == 0) {
+    const ClusterStats& whole = *stats_[FindConst(node->second)];
+    if (whole.id == piece) return whole;
+  }
+  return consolidator_.pieces().at(piece);
+}
+
+WallCounts FusionEngine::Impl::CurrentCounts(const std::vector<ClusterId>& pieces) const {
+  const ClusterStats& first = CurrentStats(pieces.front());
+  WallCounts counts{first.member_count, first.plane_members, first.support(), first.z_min_m,
+                    first.z_max_m};
+  if (pieces.size() == 1) return counts;
+  SupportCounter support = first.observations;
+  for (size_t i = 1; i < pieces.size(); ++i) {
+    const ClusterStats& part = CurrentStats(pieces[i]);
+    counts.member_count += part.member_count;
+    counts.plane_members += part.plane_members;
+    counts.z_min_m = std::min(counts.z_min_m, part.z_min_m);
+    counts.z_max_m = std::max(counts.z_max_m, part.z_max_m);
+    support.Merge(part.observations, support_cap_);
+  }
+  counts.support = support.count();
+  return counts;
+}
+
+bool WallCounts::Set(FusedFeature* f) const {
+  const bool changed = f->member_count != member_count || f->plane_members != plane_members ||
+                       f->support != support || f->z_min_m != z_min_m || f->z_max_m != z_max_m;
+  f->member_count = member_count;
+  f->plane_members = plane_members;
+  f->support = support;
+  f->z_min_m = z_min_m;
+  f->z_max_m = z_max_m;
+  return changed;
+}
+
 void FusionEngine::Impl::PublishWall(const WallConsolidator::Wall& wall, ChangeFeed* feed,
-                                     std::vector<Vec2>* moved_points) {
+                                     std::vector<Vec2>* moved_points,
+                                     std::vector<ClusterId>* recounted) {
   const ClusterStats& stats = wall.stats();
   const ClusterStats::Fit& fit = wall.fit;
+  // Its counts from the pieces' current statistics: a settled piece's copy in
+  // the consolidator may be older.
+  const WallCounts counts = CurrentCounts(wall.pieces);
   auto it = published_.find(stats.id);
   if (it == published_.end()) {
     feed->added.push_back(stats.id);
   } else {
-    const FusedFeature& old = it->second;
-    if (old.member_count == stats.member_count && old.support == stats.support() &&
-        old.fitted.a == fit.segment.a && old.fitted.b == fit.segment.b) {
-      return;  // a wall next to this Add's changes that they did not change
+    FusedFeature& old = it->second;
+    if (old.fitted.a == fit.segment.a && old.fitted.b == fit.segment.b) {
+      // A wall next to this Add's changes, or a settled one: at most its
+      // counts changed, and the corner result stands.
+      if (counts.Set(&old) || old.robots != stats.robots) {
+        old.robots = stats.robots;
+        recounted->push_back(stats.id);
+      }
+      return;
     }
     feed->updated.push_back(stats.id);
     moved_points->push_back(old.fitted.a);
@@ -483,7 +567,8 @@ void FusionEngine::Impl::PublishWall(const WallConsolidator::Wall& wall, ChangeF
   moved_points->push_back(fit.segment.a);
   moved_points->push_back(fit.segment.b);
   snapper_.Upsert(stats.id, fit.segment, fit.line);
-  published_[stats.id] = stats.ToFused(fit);
+  FusedFeature& fused = published_[stats.id] = stats.ToFused(fit);
+  counts.Set(&fused);
 }
 
 std::optional<FusedFeature> FusionEngine::Impl::Get(ClusterId id) const {
@@ -559,7 +644,9 @@ std::vector<FusedFeature> FusionEngine::Retired() const {
   std::vector<FusedFeature> out;
   for (ClusterId id : impl_->consolidator_.RetiredPieces()) {
     const ClusterStats& stats = impl_->consolidator_.pieces().at(id);
-    out.push_back(stats.ToFused(stats.Refit()));
+    FusedFeature retired = stats.ToFused(stats.Refit());
+    impl_->CurrentCounts({id}).Set(&retired);  // a piece retired while settled
+    out.push_back(std::move(retired));
   }
   return out;
 }

@@ -60,6 +60,18 @@ struct IndexedFeature {
   uint32_t node;
 };
 
+// A published wall's counts: what a settled piece changes (its geometry and
+// robots stay).
+struct WallCounts {
+  uint32_t member_count = 0;
+  uint32_t plane_members = 0;
+  uint32_t support = 0;
+  double z_min_m = 0.0;
+  double z_max_m = 0.0;
+  // Writes them into f; returns whether any differed.
+  bool Set(FusedFeature* f) const;
+};
+
 class FusionEngine::Impl {
  public:
   explicit Impl(const FusionParams& params)
@@ -147,6 +159,13 @@ class FusionEngine::Impl {
   }
   // Files node `node`, whose own feature is `segment`, in the centre grid.
   void FileInGrid(uint32_t node, const Segment2& segment);
+  // A piece's statistics now: its component's if it is the component's one
+  // group (the consolidator's copy may be older: a settled piece), else the
+  // consolidator's (always current for the groups of a cut component).
+  const ClusterStats& CurrentStats(ClusterId piece) const;
+  // The counts of a wall of `pieces` (ascending) from their current
+  // statistics, merged as ClusterStats::MergeAll does.
+  WallCounts CurrentCounts(const std::vector<ClusterId>& pieces) const;
 
  private:
   uint32_t Find(uint32_t x);
@@ -158,13 +177,20 @@ class FusionEngine::Impl {
   // cover_m, criteria met; the nearest, ties by node), or false.
   bool FindCover(const GroundFeature& f, uint32_t* node) const;
   void LinkToEarlier(uint32_t node, const GroundFeature& f, std::vector<ClusterId>* merged_ids);
-  void Publish(const std::vector<uint32_t>& roots, const std::vector<ClusterId>& merged_ids,
-               ChangeFeed* feed);
+  // `grown`: the roots of `roots` that gained a node (ascending).
+  void Publish(const std::vector<uint32_t>& roots, const std::vector<uint32_t>& grown,
+               const std::vector<ClusterId>& merged_ids, ChangeFeed* feed);
   // Hands one group (support >= min_support) to the consolidator.
   void PublishGroup(const ClusterStats& stats) { consolidator_.Upsert(stats, stats.Refit()); }
-  // Publishes one wall unless it is unchanged.
+  // The same for a component that is one group and grew only by folds,
+  // unless its piece settles (FusionParams::refit_tolerance_m): then its id is
+  // appended to `settled`.
+  void PublishFolded(const ClusterStats& whole, std::vector<ClusterId>* settled);
+  // Publishes one wall unless it is unchanged; one whose fitted segment did
+  // not move but whose counts did is appended to `recounted` instead of the
+  // feed (the caller adds it to feed->updated after the corner pass).
   void PublishWall(const WallConsolidator::Wall& wall, ChangeFeed* feed,
-                   std::vector<Vec2>* moved_points);
+                   std::vector<Vec2>* moved_points, std::vector<ClusterId>* recounted);
 };
 
 }  // namespace mapd::fusion

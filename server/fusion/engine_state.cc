@@ -217,9 +217,19 @@ StatusOr<std::unique_ptr<FusionEngine>> FusionEngine::LoadState(const FusionPara
   if (params.mode != FusionMode::kBounded) {
     return Status::Unimplemented("snapshots are for fusion.mode = bounded");
   }
+  // A snapshot taken without settled walls (refit_tolerance_m 0, as every
+  // release before it) is a state a settling engine can continue from: all
+  // its pieces are current. The reverse is not (a settled piece's copy is
+  // older than its cluster), so only this direction.
+  std::vector<std::string> keys = {FusionParamsKey(params)};
+  if (params.refit_tolerance_m > 0.0) {
+    FusionParams every_refit = params;
+    every_refit.refit_tolerance_m = 0.0;
+    keys.push_back(FusionParamsKey(every_refit));
+  }
   StatusOr<std::string_view> payload =
       OpenSnapshot(state, std::string_view(kMagic, sizeof(kMagic)), {kFormats[0], kFormats[1]},
-                   FusionParamsKey(params), "fusion snapshot");
+                   keys, "fusion snapshot");
   if (!payload.ok()) return payload.status();
   Reader r(*payload);
   auto engine = std::make_unique<FusionEngine>(params);

@@ -45,6 +45,8 @@ Status FusionParams::Validate() const {
   }
   MAPD_RETURN_IF_ERROR(
       CheckParamRange("fusion params", "retire_fraction", retire_fraction, 0.0, 1.0));
+  MAPD_RETURN_IF_ERROR(
+      CheckParamRange("fusion params", "refit_tolerance_m", refit_tolerance_m, 0.0, 0.05));
   if (retire_fraction == 0.0) {
     return Status::InvalidArgument("fusion params: retire_fraction must be > 0");
   }
@@ -111,6 +113,11 @@ std::string FusionParamsKey(const FusionParams& p) {
                   p.max_component_nodes, p.max_link_candidates, p.max_wall_length_m,
                   p.max_wall_pieces);
     key += text;
+    // Appended only when on, so that snapshots taken without it stay loadable.
+    if (p.refit_tolerance_m > 0.0) {
+      std::snprintf(text, sizeof(text), " refit_tolerance_m=%.17g", p.refit_tolerance_m);
+      key += text;
+    }
   }
   return key;
 }

@@ -94,7 +94,7 @@ StatusOr<std::unique_ptr<PlaneFusionEngine>> PlaneFusionEngine::LoadState(
   MAPD_RETURN_IF_ERROR(params.Validate());
   StatusOr<std::string_view> payload =
       OpenSnapshot(state, std::string_view(kPlaneMagic, sizeof(kPlaneMagic)),
-                   {{kPlaneVersion, SnapshotChecksum::kFnv1a}}, PlaneFusionParamsKey(params),
+                   {{kPlaneVersion, SnapshotChecksum::kFnv1a}}, {PlaneFusionParamsKey(params)},
                    "plane fusion snapshot");
   if (!payload.ok()) return payload.status();
   PlaneReader r(*payload);

@@ -6,6 +6,7 @@
 #ifndef MAPD_FUSION_STATE_CODEC_H_
 #define MAPD_FUSION_STATE_CODEC_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <initializer_list>
@@ -157,12 +158,13 @@ struct SnapshotFormat {
 // (a snapshot is valid only for the parameters it was taken with), the
 // engine's payload, then the checksum of all before it (the format says
 // which). Checks the frame against the formats the engine reads and returns
-// the payload. `what` names the snapshot in errors ("fusion snapshot"):
-// InvalidArgument when corrupt, FailedPrecondition when taken with other
-// parameters.
+// the payload. `params_keys`: the keys whose snapshots the engine can
+// continue from (its own first). `what` names the snapshot in errors
+// ("fusion snapshot"): InvalidArgument when corrupt, FailedPrecondition when
+// taken with other parameters.
 inline StatusOr<std::string_view> OpenSnapshot(std::string_view state, std::string_view magic,
                                                std::initializer_list<SnapshotFormat> formats,
-                                               const std::string& params_key,
+                                               const std::vector<std::string>& params_keys,
                                                const std::string& what) {
   const auto corrupt = [&what](const std::string& why) {
     return Status::InvalidArgument(what + " is corrupt: " + why);
@@ -184,7 +186,7 @@ inline StatusOr<std::string_view> OpenSnapshot(std::string_view state, std::stri
   if (ChecksumOf(body, format->checksum) != stored_hash) return corrupt("checksum mismatch");
   const std::string key = r.Str();
   if (!r.ok()) return corrupt("truncated header");
-  if (key != params_key) {
+  if (std::find(params_keys.begin(), params_keys.end(), key) == params_keys.end()) {
     return Status::FailedPrecondition(what + " was taken with other parameters (" + key + ")");
   }
   return r.rest();

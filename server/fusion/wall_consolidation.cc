@@ -257,6 +257,27 @@ bool WallConsolidator::Upsert(const ClusterStats& stats, const ClusterStats::Fit
   return true;
 }
 
+bool WallConsolidator::Settle(const ClusterStats& stats, const ClusterStats::Fit& fit,
+                              double tolerance_m) {
+  auto it = pieces_.find(stats.id);
+  if (it == pieces_.end() || it->second.retired || !it->second.has_wall) return false;
+  const Piece& piece = it->second;
+  const ClusterStats& upserted = piece_stats_.at(stats.id);
+  // A new robot changes the wall's robot list, which the caller's count
+  // update does not recompute.
+  if (stats.robots.size() != upserted.robots.size()) return false;
+  const double tolerance_sq = tolerance_m * tolerance_m;
+  if ((fit.segment.a - piece.fit.segment.a).squaredNorm() > tolerance_sq ||
+      (fit.segment.b - piece.fit.segment.b).squaredNorm() > tolerance_sq) {
+    return false;
+  }
+  // As Upsert would: a feature that adds members or support is a sighting.
+  const bool supported =
+      stats.member_count > upserted.member_count || stats.support() > upserted.support();
+  if (ledger_) ledger_->Watch(stats.id, piece.fit.segment, supported);
+  return true;
+}
+
 void WallConsolidator::RetireSeenThrough() {
   std::vector<ClusterId> changed;
   ledger_->AddPasses(free_space_->TakeWatchedPasses(), &changed);

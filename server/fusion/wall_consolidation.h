@@ -100,7 +100,23 @@ class WallConsolidator {
   // Piece stats.id appeared or changed. Returns false (and records nothing)
   // if it is unchanged: same member count, support and fitted segment.
   bool Upsert(const ClusterStats& stats, const ClusterStats::Fit& fit);
+  // Settled walls (FusionParams::refit_tolerance_m): if piece stats.id is
+  // published (not retired) and `fit` moves neither endpoint of the fit it
+  // was last upserted with by more than tolerance_m, and stats adds no robot
+  // to it, records the sighting (retirement) and returns true: the piece
+  // keeps the statistics and fit it was last upserted with, so its wall is a
+  // function of what was upserted, as a restored snapshot has it. Else
+  // returns false and changes nothing (the caller then upserts).
+  bool Settle(const ClusterStats& stats, const ClusterStats::Fit& fit, double tolerance_m);
   void Erase(ClusterId piece);
+  // The wall a published piece is on, and a wall's pieces (ascending), as of
+  // the last Resolve(). REQUIRES: the piece is published / the wall exists.
+  ClusterId WallOf(ClusterId piece) const { return pieces_.at(piece).wall; }
+  bool OnAWall(ClusterId piece) const {
+    auto it = pieces_.find(piece);
+    return it != pieces_.end() && it->second.has_wall;
+  }
+  const std::vector<ClusterId>& WallPieces(ClusterId wall) const { return walls_.at(wall).pieces; }
   bool HasPiece(ClusterId piece) const { return pieces_.count(piece) != 0; }
   // Free-space evidence: the visibility triangle of `segment` seen from
   // `origin`. A no-op unless wall_occluded_gap_m > 0. The grid exists from the

@@ -305,6 +305,10 @@ const std::vector<Setting>& Settings() {
       Real("fusion.retire_fraction", "retirement: a piece leaves the published map when at least this "
            "share of its cells (0.5 m trimmed at each end) are seen through; it comes back when seen again",
            [](C& c) -> auto& { return c.fusion.retire_fraction; }, {0, 1, true}),
+      Real("fusion.refit_tolerance_m", "bounded mode: a published wall whose refit moves neither endpoint "
+           "by more than this keeps its geometry (only its counts are updated), sparing the "
+           "re-consolidation and corner pass; metres, 0 = every refit re-resolves",
+           [](C& c) -> auto& { return c.fusion.refit_tolerance_m; }, {0, 0.05}),
       Real("fusion.max_wall_length_m", "no wall is longer than this: a longer feature is refused and "
            "clusters do not grow past it (bounds the work one observation can cause), metres",
            [](C& c) -> auto& { return c.fusion.max_wall_length_m; }, {1, 1e6}),

@@ -17,13 +17,15 @@
 // the alarm, not the target.
 //
 //   fusion_cpu_guard [--features N] [--origin pose|soak|none] [--min-ratio R]
-//                    [--retire-views N]
+//                    [--retire-views N] [--refit-tolerance M]
 //
 // --origin soak feeds the sensor origin the soak's city batches carried
 // before issue 40 (the map origin plus the jitter: the batches' lines were in
 // the map frame, T_frame_sensor the identity), to measure that workload.
 // --origin none adds the scans without one: no evidence, for comparison.
 // --retire-views 0 turns retirement off (fusion.retire_views), for comparison.
+// --refit-tolerance 0 re-resolves every refit (fusion.refit_tolerance_m), for
+// comparison.
 // deploy/test.sh runs it after ctest, with the defaults.
 #include <sys/resource.h>
 
@@ -75,11 +77,9 @@ struct RunResult {
 
 // One run of the workload in a fresh engine, timed in CPU seconds.
 RunResult RunOnce(const std::vector<PoolScan>& pool, uint64_t target, bool soak_origin,
-                  bool no_origin, int retire_views) {
+                  bool no_origin, const mapd::fusion::FusionParams& fusion) {
   RunResult result;
   const size_t n = pool.size();
-  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on, retirement on
-  if (retire_views >= 0) fusion.retire_views = static_cast<uint32_t>(retire_views);
   mapd::fusion::FusionEngine engine(fusion);
   std::mt19937_64 rng(1);
   std::normal_distribution<double> jitter(0.0, 0.01);
@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
   bool soak_origin = false;
   bool no_origin = false;
   double min_ratio = 0.5;
-  int retire_views = -1;  // the default
+  mapd::fusion::FusionParams fusion;  // the defaults: bounded, evidence on, retirement on
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--features" && i + 1 < argc) {
@@ -159,14 +159,21 @@ int main(int argc, char** argv) {
     } else if (a == "--min-ratio" && i + 1 < argc) {
       min_ratio = std::atof(argv[++i]);
     } else if (a == "--retire-views" && i + 1 < argc) {
-      retire_views = std::atoi(argv[++i]);  // 0: retirement off, for comparison
+      fusion.retire_views = static_cast<uint32_t>(std::atoi(argv[++i]));  // 0: off
+    } else if (a == "--refit-tolerance" && i + 1 < argc) {
+      fusion.refit_tolerance_m = std::atof(argv[++i]);  // 0: every refit re-resolves
     } else {
       std::fprintf(stderr,
                    "usage: %s [--features N] [--origin pose|soak|none] [--min-ratio R] "
-                   "[--retire-views N]\n",
+                   "[--retire-views N] [--refit-tolerance M]\n",
                    argv[0]);
       return 2;
     }
+  }
+
+  if (const mapd::Status valid = fusion.Validate(); !valid.ok()) {
+    std::fprintf(stderr, "%s\n", valid.ToString().c_str());
+    return 2;
   }
 
   // The soak's city pool (tests/bench/soak_bench.cc, CityPool), once: scans
@@ -188,7 +195,7 @@ int main(int argc, char** argv) {
   // a row are all below the bar, so one slow run is no alarm.
   constexpr int kAttempts = 3;
   for (int attempt = 1; attempt <= kAttempts; ++attempt) {
-    const RunResult r = RunOnce(pool, target, soak_origin, no_origin, retire_views);
+    const RunResult r = RunOnce(pool, target, soak_origin, no_origin, fusion);
     if (!r.ok) return 1;
     const double measured = static_cast<double>(r.added) / r.cpu_s;
     const double ratio = measured / kStatedFeaturesPerCpuS;

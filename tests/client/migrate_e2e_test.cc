@@ -90,10 +90,12 @@ TEST_F(MigrateE2eTest, AMapMovesIntoPostgresAndBackAndIsServedAsItWas) {
   // observations), its own settings, and a robot's resends are duplicates.
   MapdProcess pg = Start({"--store", store_}, "postgres.log");
   ASSERT_GT(pg.port, 0) << pg.log();
-  // Once site-1 is open (listed before as "served by" pg's own address).
+  // Once site-1 is open: listed before as "not serving" while pg opens it
+  // (and, before that fix, as "served by" pg's own address).
   r = RunUntil([&] { return Mapctl(pg, {"maps"}); },
                [](const CommandResult& c) {
-                 return c.exit_code == 0 && c.out.find("served by") == std::string::npos;
+                 return c.exit_code == 0 && c.out.find("served by") == std::string::npos &&
+                        c.out.find("not serving") == std::string::npos;
                });
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("site-1"));

@@ -2,6 +2,7 @@
 // of nodes and publishes what the exact engine publishes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -45,9 +46,16 @@ std::vector<GroundFeature> View(ObservationId observation, std::mt19937_64* rng)
   return out;
 }
 
-TEST(BoundedEngineTest, RevisitedWallsKeepFewNodesAndTheExactMap) {
+// With refit_tolerance_m 0 the exact map; with the default, the same walls
+// and counts, their geometry within the tolerance (settled walls).
+class RevisitedWallsTest : public ::testing::TestWithParam<double> {};
+
+TEST_P(RevisitedWallsTest, KeepFewNodesAndTheExactMap) {
+  const double tolerance_m = GetParam();
   FusionEngine exact(Mode(FusionMode::kExact));
-  FusionEngine bounded(Mode(FusionMode::kBounded));
+  FusionParams bounded_params = Mode(FusionMode::kBounded);
+  bounded_params.refit_tolerance_m = tolerance_m;
+  FusionEngine bounded(bounded_params);
   std::mt19937_64 rng(7);
   constexpr ObservationId kObservations = 3000;
   size_t nodes_at_half = 0;
@@ -72,13 +80,16 @@ TEST(BoundedEngineTest, RevisitedWallsKeepFewNodesAndTheExactMap) {
     EXPECT_EQ(b[i].id, e[i].id);
     EXPECT_EQ(b[i].member_count, e[i].member_count);
     EXPECT_EQ(b[i].robots, e[i].robots);
-    EXPECT_LE((b[i].segment.a - e[i].segment.a).norm(), 1e-6);
-    EXPECT_LE((b[i].segment.b - e[i].segment.b).norm(), 1e-6);
+    EXPECT_LE((b[i].segment.a - e[i].segment.a).norm(), 1e-6 + tolerance_m);
+    EXPECT_LE((b[i].segment.b - e[i].segment.b).norm(), 1e-6 + tolerance_m);
     // Support past the exact cap is a count that may only overcount
     // (support_counter.h); here no two pieces ever merged, so it is exact.
     EXPECT_EQ(b[i].support, e[i].support);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(BoundedEngineTest, RevisitedWallsTest,
+                         ::testing::Values(0.0, FusionParams().refit_tolerance_m));
 
 TEST(BoundedEngineTest, YoungClustersFoldNothing) {
   // Below the established support every feature stays a node, as in exact mode.
@@ -163,6 +174,99 @@ TEST_P(SnapshotTest, SnapshotPlusReplayEqualsFullReplay) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, SnapshotTest, ::testing::Range(1u, 6u));
+
+// ---- Settled walls (FusionParams::refit_tolerance_m) -----------------------
+
+// The revisited site with free-space evidence: every view from a sensor in
+// front of the walls, as mapd feeds it.
+Status AddSite(FusionEngine* engine, ObservationId o, const std::vector<GroundFeature>& view,
+               ChangeFeed* changes = nullptr) {
+  return engine->AddFrom(o, o % 3, Vec2(10.0, -4.0), view, changes);
+}
+
+// Folds into established walls leave their geometry within the tolerance of
+// the exact refit; their counts are exact (as with tolerance 0); and a
+// snapshot taken among settled walls restores bit for bit.
+TEST(SettledWallsTest, KeepGeometryWithinTheToleranceAndCountsExact) {
+  FusionParams every_refit = Mode(FusionMode::kBounded);
+  every_refit.refit_tolerance_m = 0.0;
+  const FusionParams settling = Mode(FusionMode::kBounded);
+  ASSERT_GT(settling.refit_tolerance_m, 0.0) << "the default settles";
+  FusionEngine reference(every_refit), engine(settling);
+  std::unique_ptr<FusionEngine> restored;
+  std::mt19937_64 rng(11);
+  constexpr ObservationId kObservations = 400, kCut = 250;
+  size_t geometry_differs = 0;
+  for (ObservationId o = 1; o <= kObservations; ++o) {
+    const std::vector<GroundFeature> view = SiteView(o, &rng);
+    ASSERT_TRUE(AddSite(&reference, o, view).ok());
+    ASSERT_TRUE(AddSite(&engine, o, view).ok());
+    if (restored) {
+      ASSERT_TRUE(AddSite(restored.get(), o, view).ok());
+    }
+    if (o == kCut) {
+      StatusOr<std::unique_ptr<FusionEngine>> loaded =
+          FusionEngine::LoadState(settling, State(engine));
+      ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
+      restored = std::move(loaded).value();
+    }
+    if (o % 50 != 0) continue;
+    const std::vector<FusedFeature> r = reference.Published(), e = engine.Published();
+    ASSERT_EQ(r.size(), e.size()) << "at observation " << o;
+    for (size_t i = 0; i < r.size(); ++i) {
+      ASSERT_EQ(e[i].id, r[i].id);
+      EXPECT_EQ(e[i].member_count, r[i].member_count) << e[i].id;
+      EXPECT_EQ(e[i].support, r[i].support) << e[i].id;
+      EXPECT_EQ(e[i].robots, r[i].robots) << e[i].id;
+      EXPECT_EQ(e[i].z_max_m, r[i].z_max_m) << e[i].id;
+      const double fitted_m =
+          std::max((e[i].fitted.a - r[i].fitted.a).norm(), (e[i].fitted.b - r[i].fitted.b).norm());
+      const double segment_m = std::max((e[i].segment.a - r[i].segment.a).norm(),
+                                        (e[i].segment.b - r[i].segment.b).norm());
+      // A one-piece wall's fit is within the tolerance; a wall of pieces and
+      // a corner between two walls may move by a little more.
+      EXPECT_LE(fitted_m, 2.0 * settling.refit_tolerance_m) << e[i].id;
+      EXPECT_LE(segment_m, 2.0 * settling.refit_tolerance_m) << e[i].id;
+      geometry_differs += fitted_m > 0.0;
+    }
+  }
+  EXPECT_GT(geometry_differs, 0u) << "nothing settled: the test tests little";
+  ExpectSameMap(engine, *restored);
+  EXPECT_EQ(State(engine), State(*restored));
+}
+
+// A fold that settles still reports its wall as updated, with the new count,
+// and leaves its fitted segment where it was.
+TEST(SettledWallsTest, AFoldThatSettlesReportsTheNewCounts) {
+  FusionEngine engine(Mode(FusionMode::kBounded));
+  std::mt19937_64 rng(5);
+  ObservationId o = 1;
+  for (; o <= 600; ++o) ASSERT_TRUE(AddSite(&engine, o, View(o, &rng)).ok());
+  const std::vector<FusedFeature> before = engine.Published();
+  ASSERT_EQ(before.size(), 3u);
+  // The walls' own average view: folds into every representative it meets
+  // and moves no fit by a millimetre.
+  std::vector<GroundFeature> view = View(o, &rng);
+  const Segment2 walls[] = {{{0, 0}, {8, 0}}, {{8, 0.2}, {8, 6}}, {{12, 3}, {20, 3}}};
+  for (int k = 0; k < 3; ++k) view[k].segment = walls[k];
+  const size_t nodes = engine.node_count();
+  ChangeFeed changes;
+  ASSERT_TRUE(AddSite(&engine, o, view, &changes).ok());
+  ASSERT_EQ(engine.node_count(), nodes) << "the view did not fold";
+  const std::vector<FusedFeature> after = engine.Published();
+  ASSERT_EQ(after.size(), 3u);
+  std::vector<ClusterId> ids;
+  for (size_t i = 0; i < 3; ++i) {
+    ids.push_back(after[i].id);
+    EXPECT_EQ(after[i].member_count, before[i].member_count + 1) << after[i].id;
+    EXPECT_EQ(after[i].fitted.a, before[i].fitted.a) << "settled walls keep their geometry";
+    EXPECT_EQ(after[i].fitted.b, before[i].fitted.b);
+    EXPECT_EQ(after[i].segment.a, before[i].segment.a);
+  }
+  EXPECT_EQ(changes.updated, ids);
+  EXPECT_TRUE(changes.added.empty());
+  EXPECT_TRUE(changes.removed.empty());
+}
 
 TEST(SnapshotStateTest, RefusesCorruptOrForeignState) {
   std::mt19937_64 rng(1);
@@ -250,6 +354,44 @@ TEST(BoundedEngineTest, RefusesTheSameObservationTwiceInARow) {
   const Status again = bounded.Add(1, 0, view);
   EXPECT_EQ(again.code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(bounded.feature_count(), 3u);
+}
+
+// Upgrades: a snapshot taken without settled walls (every release before
+// them) loads into an engine with them, which continues from it; a snapshot
+// with settled walls does not load without them (its pieces' copies may be
+// older than their clusters): that engine replays instead.
+TEST(SettledWallsTest, SnapshotsWithoutThemLoadButNotTheReverse) {
+  FusionParams every_refit = Mode(FusionMode::kBounded);
+  every_refit.refit_tolerance_m = 0.0;
+  const FusionParams settling = Mode(FusionMode::kBounded);
+  FusionEngine old_release(every_refit), settled(settling);
+  std::mt19937_64 rng(9);
+  for (ObservationId o = 1; o <= 300; ++o) {
+    const std::vector<GroundFeature> view = View(o, &rng);
+    ASSERT_TRUE(AddSite(&old_release, o, view).ok());
+    ASSERT_TRUE(AddSite(&settled, o, view).ok());
+  }
+  StatusOr<std::unique_ptr<FusionEngine>> upgraded =
+      FusionEngine::LoadState(settling, State(old_release));
+  ASSERT_TRUE(upgraded.ok()) << upgraded.status().ToString();
+  ExpectSameMap(old_release, **upgraded);
+  for (ObservationId o = 301; o <= 400; ++o) {
+    const std::vector<GroundFeature> view = View(o, &rng);
+    ASSERT_TRUE(AddSite(upgraded->get(), o, view).ok());
+    ASSERT_TRUE(AddSite(&old_release, o, view).ok());
+  }
+  const std::vector<FusedFeature> a = (*upgraded)->Published(), b = old_release.Published();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].member_count, b[i].member_count);
+    EXPECT_LE((a[i].fitted.a - b[i].fitted.a).norm(), 2.0 * settling.refit_tolerance_m);
+  }
+  const StatusOr<std::unique_ptr<FusionEngine>> downgraded =
+      FusionEngine::LoadState(every_refit, State(settled));
+  ASSERT_FALSE(downgraded.ok());
+  EXPECT_EQ(downgraded.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(downgraded.status().message().find("other parameters"), std::string::npos)
+      << downgraded.status().ToString();
 }
 
 }  // namespace

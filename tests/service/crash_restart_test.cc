@@ -220,7 +220,9 @@ TEST(CrashRestartTest, AcknowledgedBatchesSurviveSigkillAndTheMapEqualsABatchRec
     const double apart_m =
         std::min(std::max((a - wall.segment.a).norm(), (b - wall.segment.b).norm()),
                  std::max((a - wall.segment.b).norm(), (b - wall.segment.a).norm()));
-    EXPECT_LE(apart_m, 1e-9) << wall.id;
+    // Settled walls (docs/algorithms.md A.5) keep a fit within the refit
+    // tolerance of the exact one; corners may move by a little more.
+    EXPECT_LE(apart_m, 1e-9 + 2.0 * engine.params().refit_tolerance_m) << wall.id;
   }
 
   // The persisted fused table agrees with the served map too.
