@@ -386,12 +386,16 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
   // component was merged into a root of `roots`, so its id is in merged_ids.
   std::vector<ClusterId> old_groups;
   old_groups.reserve(merged_ids.size());
+  // Components the guard had cut: a piece of one holds a group's statistics,
+  // not the component's, so it may not settle into the whole.
+  std::vector<ClusterId> were_cut;
   for (ClusterId id : merged_ids) {
     if (auto split = split_.find(id); split != split_.end()) {
       old_groups.insert(old_groups.end(), split->second.published.begin(),
                         split->second.published.end());
       extra_groups_ -= split->second.group_count - 1;
       split_.erase(split);
+      were_cut.push_back(id);
     } else if (consolidator_.HasPiece(id)) {
       old_groups.push_back(id);
     }
@@ -406,7 +410,8 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
     if (MayCut(root)) groups = GroupNodes(root);
     if (groups.size() <= 1) {  // one group: the component itself
       if (whole.support() < params_.min_support) continue;
-      if (std::binary_search(grown.begin(), grown.end(), root)) {
+      if (std::binary_search(grown.begin(), grown.end(), root) ||
+          std::find(were_cut.begin(), were_cut.end(), whole.id) != were_cut.end()) {
         PublishGroup(whole);
       } else {
         PublishFolded(whole, &settled);

@@ -6,6 +6,7 @@
 // A markdown table on stdout, for docs/long-running.md.
 //
 //   fusion_modes_bench [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case N]
+//   [--refit-tolerance M]
 //   [--floor N [--exact]]
 #include <algorithm>
 #include <chrono>
@@ -300,10 +301,12 @@ int main(int argc, char** argv) {
       params.mode = mapd::fusion::FusionMode::kExact;
     } else if (a == "--guard-rms" && has_value) {
       params.chain_max_rms_m = std::atof(argv[++i]);
+    } else if (a == "--refit-tolerance" && has_value) {
+      params.refit_tolerance_m = std::atof(argv[++i]);  // settled walls; 0: off
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--data DIR] [--cover M] [--guard-rms M] [--floor-case "
-                   "N] [--floor N [--exact]]\n",
+                   "N] [--refit-tolerance M] [--floor N [--exact]]\n",
                    argv[0]);
       return 2;
     }
@@ -316,8 +319,10 @@ int main(int argc, char** argv) {
     mapd::bench::FloorRevisit(params, 8, floor_total, floor_total / 10);
     return 0;
   }
-  std::printf("cover_m = %.3f m, chain_max_rms_m = %.3f m; other parameters at their defaults\n\n",
-              params.cover_m, params.chain_max_rms_m);
+  std::printf(
+      "cover_m = %.3f m, chain_max_rms_m = %.3f m, refit_tolerance_m = %.4f m; other parameters "
+      "at their defaults\n\n",
+      params.cover_m, params.chain_max_rms_m, params.refit_tolerance_m);
   mapd::bench::PrintHeader();
   if (seeds > 0) mapd::bench::CityCases(seeds, params);
   mapd::bench::LaserCases(data_dir, params);
