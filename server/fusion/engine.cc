@@ -464,7 +464,9 @@ void FusionEngine::Impl::Publish(const std::vector<uint32_t>& roots,
                     [id](const WallConsolidator::Wall& w) { return w.stats().id == id; })) {
       continue;  // recomputed whole: PublishWall set its counts
     }
-    if (CurrentCounts(consolidator_.WallPieces(id)).Set(&published_.at(id))) {
+    auto published = published_.find(id);
+    if (published == published_.end()) continue;  // not expected: every wall is published
+    if (CurrentCounts(consolidator_.WallPieces(id)).Set(&published->second)) {
       recounted.push_back(id);
     }
   }
