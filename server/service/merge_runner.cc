@@ -1,6 +1,7 @@
 #include "service/merge_runner.h"
 
 #include <chrono>
+#include <condition_variable>
 #include <thread>
 #include <utility>
 
@@ -9,6 +10,13 @@
 #include "service/voxel_merge.h"
 
 namespace mapd::service {
+namespace {
+
+void PublishPrepared(const PreparedSubmaps& prepared) {
+  RpcMetrics::Default().SetPreparedSubmaps(prepared.size(), prepared.bytes());
+}
+
+}  // namespace
 
 bool MergeJob::Wait(std::chrono::milliseconds timeout, std::vector<MergeProgressEvent>* events) {
   std::unique_lock<std::mutex> lock(mu_);
@@ -48,26 +56,62 @@ void MergeJob::Finish(StatusOr<voxel::MergeOutcome> result) {
   cv_.notify_all();
 }
 
-struct MergeRunner::State {
-  State(size_t c, size_t q) : max_concurrent(c), max_queued(q) {}
-  const size_t max_concurrent;
-  const size_t max_queued;
-  mutable std::mutex mu;
-  size_t running = 0;                            // GUARDED_BY(mu)
-  std::deque<std::shared_ptr<MergeJob>> queued;  // GUARDED_BY(mu)
-  bool stopping = false;                         // GUARDED_BY(mu)
+struct MergeRunner::Preparation {
+  PreparedKey key;
+  std::string bytes;
+  voxel::MergeParams params;
 };
 
-MergeRunner::MergeRunner(size_t max_concurrent, size_t max_queued)
-    : state_(std::make_shared<State>(max_concurrent, max_queued)) {}
+struct MergeRunner::State {
+  State(size_t c, size_t q, size_t budget) : max_concurrent(c), max_queued(q), prepared(budget) {}
+  const size_t max_concurrent;
+  const size_t max_queued;
+  PreparedSubmaps prepared;  // thread-safe itself
+  mutable std::mutex mu;
+  size_t running = 0;                                     // GUARDED_BY(mu)
+  std::deque<std::shared_ptr<MergeJob>> queued;           // GUARDED_BY(mu)
+  std::deque<std::unique_ptr<Preparation>> preparations;  // GUARDED_BY(mu)
+  bool stopping = false;                                  // GUARDED_BY(mu)
+  size_t preparing = 0;                                   // GUARDED_BY(mu)
+  std::condition_variable prepared_cv;                    // preparing fell
+  uint64_t next_owner = 1;                                // GUARDED_BY(mu)
+};
 
-MergeRunner::~MergeRunner() { Shutdown(); }
+MergeRunner::MergeRunner(size_t max_concurrent, size_t max_queued, size_t prepared_budget_bytes)
+    : state_(std::make_shared<State>(max_concurrent, max_queued, prepared_budget_bytes)) {}
 
-StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(std::vector<uint64_t> ids,
+MergeRunner::~MergeRunner() {
+  Shutdown();
+  // Preparations are short (a second at most for a campus crop) and touch
+  // the process's metrics: waited for, unlike merges, so that none outlives
+  // the server.
+  std::unique_lock<std::mutex> lock(state_->mu);
+  state_->prepared_cv.wait(lock, [this] { return state_->preparing == 0; });
+}
+
+uint64_t MergeRunner::NewOwner() {
+  std::lock_guard<std::mutex> lock(state_->mu);
+  return state_->next_owner++;
+}
+
+void MergeRunner::CloseOwner(uint64_t owner) {
+  state_->prepared.ForgetOwner(owner);
+  PublishPrepared(state_->prepared);
+}
+
+void MergeRunner::Forget(uint64_t owner, uint64_t id) {
+  state_->prepared.Forget({owner, id});
+  PublishPrepared(state_->prepared);
+}
+
+const PreparedSubmaps& MergeRunner::prepared() const { return state_->prepared; }
+
+StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(uint64_t owner, std::vector<uint64_t> ids,
                                                         std::vector<std::string> bytes,
                                                         const voxel::MergeParams& params) {
   if (!VoxelMergeBuilt()) return MergeVoxelSubmaps({}, params, {}).status();  // Unimplemented
   auto job = std::make_shared<MergeJob>();
+  job->owner_ = owner;
   job->ids_ = std::move(ids);
   job->bytes_ = std::move(bytes);
   job->params_ = params;
@@ -75,7 +119,7 @@ StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(std::vector<uint64_t> id
   if (state_->stopping) return Status::Unavailable("mapd is shutting down; merge not started");
   if (state_->running < state_->max_concurrent) {
     ++state_->running;
-    std::thread(&MergeRunner::Work, state_, job).detach();
+    std::thread(&MergeRunner::Work, state_, job, nullptr).detach();
     return job;
   }
   if (state_->queued.size() < state_->max_queued) {
@@ -89,26 +133,117 @@ StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(std::vector<uint64_t> id
       ", limits.max_queued_merges = " + std::to_string(state_->max_queued) + "); retry later");
 }
 
-void MergeRunner::Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> job) {
-  while (job) {
-    if (!job->abandoned()) {
-      std::vector<voxel::SubmapInput> inputs(job->ids_.size());
-      for (size_t i = 0; i < inputs.size(); ++i) inputs[i] = {job->ids_[i], job->bytes_[i]};
-      MergeJob* j = job.get();
+void MergeRunner::PrepareAhead(uint64_t owner, uint64_t id, std::string bytes,
+                               const voxel::MergeParams& params) {
+  if (!VoxelMergeBuilt() || !state_->prepared.enabled()) return;
+  auto preparation =
+      std::make_unique<Preparation>(Preparation{{owner, id}, std::move(bytes), params});
+  std::unique_ptr<Preparation> dropped;  // freed after the lock
+  std::lock_guard<std::mutex> lock(state_->mu);
+  if (state_->stopping) return;
+  if (state_->running < state_->max_concurrent) {
+    ++state_->running;
+    ++state_->preparing;
+    std::thread(&MergeRunner::Work, state_, nullptr, std::move(preparation)).detach();
+    return;
+  }
+  if (state_->preparations.size() >= kMaxPreparations) {
+    dropped = std::move(state_->preparations.front());
+    state_->preparations.pop_front();
+  }
+  state_->preparations.push_back(std::move(preparation));
+}
+
+void MergeRunner::RunMerge(State* state, MergeJob* job) {
+  std::vector<voxel::SubmapInput> inputs(job->ids_.size());
+  for (size_t i = 0; i < inputs.size(); ++i) inputs[i] = {job->ids_[i], job->bytes_[i]};
+  const auto progress = [job](const std::string& stage, double fraction) {
+    job->Publish({stage, fraction});
+  };
+  if (!state->prepared.enabled()) {
+    job->Finish(MergeVoxelSubmaps(inputs, job->params_, progress));
+    return;
+  }
+
+  // The inputs' views: kept ones, and the others prepared now (and kept after).
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::shared_ptr<voxel::PreparedSubmap>> views(inputs.size());
+  std::vector<voxel::SubmapInput> missing;
+  std::vector<size_t> missing_at;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    views[i] = state->prepared.Take({job->owner_, inputs[i].id});
+    if (views[i] == nullptr) {
+      missing.push_back(inputs[i]);
+      missing_at.push_back(i);
+    }
+  }
+  StatusOr<voxel::MergeOutcome> result = Status::Internal("not merged");
+  auto prepared = PrepareVoxelSubmaps(missing, job->params_);
+  if (prepared.ok()) {
+    for (size_t k = 0; k < missing_at.size(); ++k) views[missing_at[k]] = (*prepared)[k];
+    const double reading_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result = MergePreparedVoxelSubmaps(views, job->params_, progress);
+    if (result.ok()) {  // the inputs read here count as the merge's reading
+      result->times.reading_s += reading_s;
+      result->times.total_s += reading_s;
+    }
+  } else {
+    result = prepared.status();
+  }
+  job->Finish(std::move(result));  // before the views go back: the caller waits
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    state->prepared.Put({job->owner_, inputs[i].id}, std::move(views[i]));
+  }
+  PublishPrepared(state->prepared);
+}
+
+void MergeRunner::RunPreparation(State* state, const Preparation& preparation) {
+  if (state->prepared.Has(preparation.key)) return;  // a merge read it meanwhile
+  const auto start = std::chrono::steady_clock::now();
+  auto views =
+      PrepareVoxelSubmaps({{preparation.key.submap_id, preparation.bytes}}, preparation.params);
+  if (!views.ok()) {  // the upload was checked; its merges will report this
+    Log(LogLevel::kWarn, "submap_not_prepared",
+        {{"submap", std::to_string(preparation.key.submap_id)},
+         {"why", views.status().ToString()}});
+    return;
+  }
+  Log(LogLevel::kDebug, "submap_prepared",
+      {{"submap", std::to_string(preparation.key.submap_id)},
+       {"s",
+        std::to_string(
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count())}});
+  state->prepared.Put(preparation.key, std::move(views->front()));
+  PublishPrepared(state->prepared);
+}
+
+void MergeRunner::Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> job,
+                       std::unique_ptr<Preparation> preparation) {
+  while (job != nullptr || preparation != nullptr) {
+    if (job != nullptr && !job->abandoned()) {
       const auto start = std::chrono::steady_clock::now();
-      StatusOr<voxel::MergeOutcome> result =
-          MergeVoxelSubmaps(inputs, job->params_, [j](const std::string& stage, double fraction) {
-            j->Publish({stage, fraction});
-          });
+      RunMerge(state.get(), job.get());
       RpcMetrics::Default().RecordMerge(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-      job->Finish(std::move(result));
+    } else if (preparation != nullptr) {
+      RunPreparation(state.get(), *preparation);
+      std::lock_guard<std::mutex> lock(state->mu);
+      --state->preparing;
+      state->prepared_cv.notify_all();
     }
     job.reset();
+    preparation.reset();
     std::lock_guard<std::mutex> lock(state->mu);
-    if (!state->stopping && !state->queued.empty()) {
+    if (state->stopping) {
+      --state->running;
+    } else if (!state->queued.empty()) {       // merges first: someone waits for them
       job = std::move(state->queued.front());  // this thread keeps its slot
       state->queued.pop_front();
+    } else if (!state->preparations.empty()) {
+      preparation = std::move(state->preparations.front());
+      state->preparations.pop_front();
+      ++state->preparing;
     } else {
       --state->running;
     }
@@ -117,10 +252,12 @@ void MergeRunner::Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> j
 
 void MergeRunner::Shutdown() {
   std::deque<std::shared_ptr<MergeJob>> dropped;
+  std::deque<std::unique_ptr<Preparation>> not_prepared;
   {
     std::lock_guard<std::mutex> lock(state_->mu);
     state_->stopping = true;
     dropped.swap(state_->queued);
+    not_prepared.swap(state_->preparations);
   }
   for (const auto& job : dropped) {
     job->Finish(Status::Unavailable(

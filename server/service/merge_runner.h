@@ -13,6 +13,12 @@
 // Storing results is the handler's business (on its own thread, through
 // MapCore), never the worker's: nothing is written after an abandon.
 //
+// Prepared submaps (prepared_submaps.h): with a budget, the runner keeps the
+// views merges read of their inputs, and prepares uploads ahead
+// (PrepareAhead) in a free slot when no merge waits, so that a merge starts
+// from its inputs' views. A merge's decision does not depend on it: the same
+// views are computed the same way, earlier.
+//
 // Thread safety: every method may be called from any thread.
 #ifndef MAPD_SERVICE_MERGE_RUNNER_H_
 #define MAPD_SERVICE_MERGE_RUNNER_H_
@@ -28,6 +34,7 @@
 #include <vector>
 
 #include "common/status.h"
+#include "service/prepared_submaps.h"
 #include "voxel/merge.h"
 
 namespace mapd::service {
@@ -55,6 +62,7 @@ class MergeJob {
   void Finish(StatusOr<voxel::MergeOutcome> result);
   bool abandoned();
 
+  uint64_t owner_ = 0;
   std::vector<uint64_t> ids_;
   std::vector<std::string> bytes_;
   voxel::MergeParams params_;
@@ -68,15 +76,36 @@ class MergeJob {
 
 class MergeRunner {
  public:
-  MergeRunner(size_t max_concurrent, size_t max_queued);
+  // prepared_budget_bytes: memory for prepared submaps (0: none; every
+  // merge reads its inputs, as without the runner's help).
+  MergeRunner(size_t max_concurrent, size_t max_queued, size_t prepared_budget_bytes = 0);
   ~MergeRunner();  // Shutdown()
 
-  // Starts the merge now, or queues it behind the running ones.
-  // Unimplemented when mapd was built without voxel merging; ResourceExhausted when max_concurrent
-  // run and max_queued wait already; Unavailable after Shutdown().
-  StatusOr<std::shared_ptr<MergeJob>> Submit(std::vector<uint64_t> ids,
+  // A token for one map's submaps (submap ids are per map; so are merge
+  // parameters): the owner of the views prepared for it. Never reused.
+  uint64_t NewOwner();
+  // The map is closing: its views are freed and none is kept after.
+  void CloseOwner(uint64_t owner);
+
+  // Starts the merge of `owner`'s submaps `ids` now, or queues it behind the
+  // running ones. Unimplemented when mapd was built without voxel merging;
+  // ResourceExhausted when max_concurrent run and max_queued wait already;
+  // Unavailable after Shutdown().
+  StatusOr<std::shared_ptr<MergeJob>> Submit(uint64_t owner, std::vector<uint64_t> ids,
                                              std::vector<std::string> bytes,
                                              const voxel::MergeParams& params);
+
+  // Prepares submap `id` for merging (an upload), when a slot is free and no
+  // merge waits; with `params`, which must be those its merges will use. No-op
+  // without a budget or the voxel library. At most kMaxPreparations wait; the
+  // oldest is dropped beyond (its merges read it themselves).
+  void PrepareAhead(uint64_t owner, uint64_t id, std::string bytes,
+                    const voxel::MergeParams& params);
+  static constexpr size_t kMaxPreparations = 32;
+  // Submap `id` is deleted: its view is freed.
+  void Forget(uint64_t owner, uint64_t id);
+
+  const PreparedSubmaps& prepared() const;
   // Refuses new jobs; queued ones end with Unavailable; running ones finish
   // in the background and are dropped. Does not wait for them.
   void Shutdown();
@@ -85,7 +114,13 @@ class MergeRunner {
 
  private:
   struct State;
-  static void Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> job);
+  struct Preparation;
+  // Runs `job` or `preparation`, then what waits (merges first) on this slot.
+  static void Work(std::shared_ptr<State> state, std::shared_ptr<MergeJob> job,
+                   std::unique_ptr<Preparation> preparation);
+  // Merges and finishes `job`; its inputs' views are kept after.
+  static void RunMerge(State* state, MergeJob* job);
+  static void RunPreparation(State* state, const Preparation& preparation);
   std::shared_ptr<State> state_;
 };
 

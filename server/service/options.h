@@ -121,6 +121,9 @@ struct SubmapOptions {
   // Threads one merge uses (voxel::MergeParams::threads); 0: the machine's
   // cores. max_concurrent_merges merges run at once, the rest queue.
   size_t merge_threads = 0;
+  // Memory for submaps read and viewed ahead of their merges (MiB; 0: none,
+  // every merge reads its inputs). Uploads are prepared in a free merge slot.
+  size_t prepared_submaps_mib = 512;
   bool resample_resolutions = false;  // false: different resolutions are refused
   bool log_odds_fusion = false;       // false: the paper's overlap rule
   // The correlation generator (voxel::CorrelationParams): run after the

@@ -73,6 +73,16 @@ void RpcMetrics::RecordRejectedBatch(grpc::StatusCode code) {
   ++rejected_batches_[code];
 }
 
+void RpcMetrics::SetPreparedSubmaps(uint64_t count, uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(mu_);
+  prepared_ = {count, bytes};
+}
+
+RpcMetrics::Prepared RpcMetrics::PreparedSubmaps() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return prepared_;
+}
+
 void RpcMetrics::RecordMerge(double seconds) { merges_.Record(seconds); }
 
 std::vector<RpcMetrics::Method> RpcMetrics::Methods() const {

@@ -32,6 +32,12 @@ class RpcMetrics {
   void RecordCall(std::string_view full_method, grpc::StatusCode code, double seconds);
   void RecordRejectedBatch(grpc::StatusCode code);
   void RecordMerge(double seconds);
+  // The merge runner's prepared submaps (prepared_submaps.h) now.
+  void SetPreparedSubmaps(uint64_t count, uint64_t bytes);
+  struct Prepared {
+    uint64_t count = 0, bytes = 0;
+  };
+  Prepared PreparedSubmaps() const;
 
   struct Method {
     std::string service;  // "mapserver.v1.MapService"
@@ -57,6 +63,7 @@ class RpcMetrics {
   std::map<std::string, std::unique_ptr<Entry>, std::less<>> methods_;  // GUARDED_BY(mu_)
   std::map<grpc::StatusCode, uint64_t> rejected_batches_;               // GUARDED_BY(mu_)
   LatencyHistogram merges_;
+  Prepared prepared_;  // GUARDED_BY(mu_)
 };
 
 // "OK", "INVALID_ARGUMENT", ...: the code's name as gRPC spells it.

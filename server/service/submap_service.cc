@@ -88,7 +88,9 @@ SubmapService::SubmapService(Core* core, const SubmapOptions& options, AccessCon
       merges_(shared_merges != nullptr
                   ? std::move(shared_merges)
                   : std::make_shared<MergeRunner>(options.max_concurrent_merges,
-                                                  options.max_queued_merges)),
+                                                  options.max_queued_merges,
+                                                  options.prepared_submaps_mib << 20)),
+      prepared_owner_(merges_->NewOwner()),
       global_(std::make_unique<GlobalMapBuilder>(core, GlobalFusionParams(options))) {}
 
 SubmapService::~SubmapService() {
@@ -96,6 +98,7 @@ SubmapService::~SubmapService() {
   // still be returning from Finish.
   std::unique_lock<std::mutex> lock(uploads_mu_);
   uploads_cv_.wait(lock, [this] { return storing_ == 0 && uploads_.empty(); });
+  merges_->CloseOwner(prepared_owner_);  // the runner may serve other maps on
 }
 
 void SubmapService::StartDraining() {
@@ -205,6 +208,7 @@ grpc::Status SubmapService::Delete(const pb::DeleteSubmapRequest& request,
   });
   if (s.ok()) {
     Log(LogLevel::kInfo, "submap_deleted", {{"id", std::to_string(id)}, {"by", caller.name}});
+    merges_->Forget(prepared_owner_, static_cast<uint64_t>(id));
     global_->Invalidate();  // it may have been a member
   }
   return ToGrpcStatus(s);
@@ -355,7 +359,7 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
   m.bounds_max = summary->bounds_max;
   m.created_ns = UnixNowNs();
   submap.session = header.session_id();
-  submap.data = std::move(bytes);
+  submap.data = bytes;
   int64_t id = 0;
   Status s = core_->ExecuteWrite([&](storage::WriteTransaction* txn) {
     StatusOr<int64_t> r = txn->InsertSubmap(submap);
@@ -375,6 +379,9 @@ grpc::Status SubmapService::StoreUpload(const pb::SubmapHeader& header, std::str
        {"name", m.name},
        {"bytes", std::to_string(size_bytes)},
        {"occupied", std::to_string(m.occupied_voxels)}});
+  // Read and viewed for its merges now, in a free merge slot.
+  merges_->PrepareAhead(prepared_owner_, static_cast<uint64_t>(id), std::move(bytes),
+                        ToMergeParams(options_));
   return grpc::Status::OK;
 }
 

@@ -81,6 +81,7 @@
 #include "service/config.h"
 #include "service/core.h"
 #include "service/stream_limiter.h"
+#include "voxel/merge.h"  // MergeParams (types only)
 
 namespace mapd::service {
 
@@ -88,6 +89,10 @@ class GlobalMapBuilder;
 class MergeJob;
 class MergeRunner;
 class UploadReactor;
+
+// The merge parameters of a map's options (its merges, and its uploads'
+// preparation for them).
+voxel::MergeParams ToMergeParams(const SubmapOptions& options);
 
 class SubmapService {
  public:
@@ -187,6 +192,8 @@ class SubmapService {
   AccessControl* const access_;
   std::atomic<bool> draining_{false};
   std::shared_ptr<MergeRunner> merges_;
+  // This map's token for the views merges_ keeps (MergeRunner::NewOwner).
+  const uint64_t prepared_owner_;
   // Keeps the stored global map the union of the placed submaps.
   std::unique_ptr<GlobalMapBuilder> global_;
 

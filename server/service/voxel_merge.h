@@ -6,6 +6,8 @@
 #ifndef MAPD_SERVICE_VOXEL_MERGE_H_
 #define MAPD_SERVICE_VOXEL_MERGE_H_
 
+#include <cstddef>
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -22,6 +24,18 @@ bool VoxelMergeBuilt();
 StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapInput>& inputs,
                                                 const voxel::MergeParams& params,
                                                 const voxel::ProgressCallback& progress);
+
+// voxel::PrepareSubmaps, or Unimplemented without the voxel library.
+StatusOr<std::vector<std::shared_ptr<voxel::PreparedSubmap>>> PrepareVoxelSubmaps(
+    const std::vector<voxel::SubmapInput>& inputs, const voxel::MergeParams& params);
+
+// voxel::MergePreparedSubmaps, or Unimplemented without the voxel library.
+StatusOr<voxel::MergeOutcome> MergePreparedVoxelSubmaps(
+    const std::vector<std::shared_ptr<voxel::PreparedSubmap>>& inputs,
+    const voxel::MergeParams& params, const voxel::ProgressCallback& progress);
+
+// voxel::PreparedSubmap::MemoryBytes (0 without the voxel library: there are no views).
+std::size_t PreparedVoxelSubmapBytes(const voxel::PreparedSubmap& view);
 
 // voxel::ExtendGlobalMap, or Unimplemented without the voxel library.
 StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(

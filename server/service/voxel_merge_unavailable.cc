@@ -12,6 +12,21 @@ StatusOr<voxel::MergeOutcome> MergeVoxelSubmaps(const std::vector<voxel::SubmapI
       "MergeSubmaps: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
 }
 
+StatusOr<std::vector<std::shared_ptr<voxel::PreparedSubmap>>> PrepareVoxelSubmaps(
+    const std::vector<voxel::SubmapInput>&, const voxel::MergeParams&) {
+  return Status::Unimplemented(
+      "MergeSubmaps: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
+StatusOr<voxel::MergeOutcome> MergePreparedVoxelSubmaps(
+    const std::vector<std::shared_ptr<voxel::PreparedSubmap>>&, const voxel::MergeParams&,
+    const voxel::ProgressCallback&) {
+  return Status::Unimplemented(
+      "MergeSubmaps: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
+}
+
+std::size_t PreparedVoxelSubmapBytes(const voxel::PreparedSubmap&) { return 0; }
+
 StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(std::string_view,
                                                      const std::vector<voxel::PlacedSubmap>&,
                                                      const voxel::FusionParams&) {

@@ -31,6 +31,7 @@ struct CellBits {
     return true;
   }
   bool empty() const { return words.empty(); }
+  std::size_t MemoryBytes() const { return words.capacity() * sizeof(std::uint64_t); }
   bool Contains(const Eigen::Vector3i& c) const {
     const Eigen::Vector3i o = c - lo;
     return !empty() && (o.array() >= 0).all() && (o.array() < size.array()).all();

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "voxel/memory_bytes.h"
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel::internal {
@@ -23,6 +24,11 @@ class VoxelIndex {
 
   // The index of the occupied voxel `key`, -1 when it is not occupied.
   int Find(const VoxelKey& key) const;
+
+  // Heap bytes held, approximately (voxel/memory_bytes.h).
+  std::size_t MemoryBytes() const {
+    return voxel::MemoryBytes(bricks_) + voxel::MemoryBytes(cells_);
+  }
 
   // out[((x * edge) + y) * edge + z] = 1 where lo + (x, y, z) is occupied, else
   // 0, for x, y, z in [0, edge): a dense copy of a small window.

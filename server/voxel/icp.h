@@ -102,6 +102,8 @@ class IcpTarget {
 
   const std::vector<Eigen::Vector3d>& points() const { return *points_; }
   double voxel_size_m() const { return voxel_size_m_; }
+  // Heap bytes of its index, approximately.
+  std::size_t MemoryBytes() const { return index_ == nullptr ? 0 : index_->MemoryBytes(); }
   // Ok, or why no index was built.
   const Status& status() const { return status_; }
   // REQUIRES: status().ok().

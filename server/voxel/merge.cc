@@ -19,6 +19,35 @@
 #include "voxel/voxel_grid.h"
 
 namespace mapd::voxel {
+
+// The params are a copy, so that the features (which point to them) stay
+// valid as long as the view does.
+struct PreparedSubmap::Parts {
+  MergeParams params;
+  uint64_t id = 0;
+  OcTreePtr tree;
+  VoxelGrid grid;
+  std::optional<SubmapFeatures> features;  // set once grid is
+};
+
+PreparedSubmap::PreparedSubmap(std::unique_ptr<Parts> parts) : parts_(std::move(parts)) {}
+PreparedSubmap::~PreparedSubmap() = default;
+uint64_t PreparedSubmap::id() const { return parts_->id; }
+
+std::size_t PreparedSubmap::MemoryBytes() const {
+  std::size_t bytes = sizeof(Parts) + parts_->grid.MemoryBytes();
+  if (parts_->tree != nullptr) {
+    // OcTree::memoryUsage() counts 16 bytes a node and 64 a child array;
+    // malloc gives them 32- and 80-byte chunks (measured: the heap grows by
+    // this to within 1 %, 1.7x memoryUsage()).
+    const std::size_t nodes = parts_->tree->calcNumNodes();
+    const std::size_t inner = nodes - parts_->tree->getNumLeafNodes();
+    bytes += 32 * nodes + 80 * inner;
+  }
+  if (parts_->features.has_value()) bytes += parts_->features->MemoryBytes();
+  return bytes;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -44,13 +73,6 @@ class Progress {
   const ProgressCallback& callback_;
 };
 
-struct Submap {
-  uint64_t id = 0;
-  OcTreePtr tree;
-  VoxelGrid grid;
-  std::optional<SubmapFeatures> features;  // set once grid is
-};
-
 Status OverBudget(Clock::time_point start, const MergeParams& params, const char* stage) {
   if (SecondsSince(start) <= params.max_seconds) return Status::Ok();
   return Status::ResourceExhausted(
@@ -68,38 +90,44 @@ std::string RefusalsOf(uint64_t id, const std::vector<PairReport>& pairs) {
   return out;
 }
 
-}  // namespace
-
-StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
-                                    const MergeParams& params,
-                                    const ProgressCallback& progress_callback) {
-  const Clock::time_point start = Clock::now();
-  const Progress progress(progress_callback);
-  MAPD_RETURN_IF_ERROR(params.Validate());
-  if (inputs.size() < 2) {
+// InvalidArgument for fewer than two inputs or an id given twice.
+Status CheckInputIds(const std::vector<uint64_t>& input_ids) {
+  if (input_ids.size() < 2) {
     return Status::InvalidArgument("a merge needs at least two submaps, got " +
-                                   std::to_string(inputs.size()));
+                                   std::to_string(input_ids.size()));
   }
   std::set<uint64_t> ids;
-  for (const auto& input : inputs) {
-    if (!ids.insert(input.id).second)
-      return Status::InvalidArgument(Name(input.id) + " is given twice");
+  for (uint64_t id : input_ids) {
+    if (!ids.insert(id).second) return Status::InvalidArgument(Name(id) + " is given twice");
   }
-  MergeOutcome outcome;
+  return Status::Ok();
+}
 
-  // Parse (the safe reader) and view every input.
-  Clock::time_point stage_start = Clock::now();
-  std::vector<Submap> submaps(inputs.size());
+// The merge proper, on views of every input. `release`: the views are the
+// merge's own, freed as soon as each part is done with (the peak is lower).
+StatusOr<MergeOutcome> MergeViews(const std::vector<PreparedSubmap::Parts*>& submaps,
+                                  const MergeParams& params,
+                                  const ProgressCallback& progress_callback,
+                                  Clock::time_point start, double reading_s, bool release);
+
+}  // namespace
+
+StatusOr<std::vector<std::shared_ptr<PreparedSubmap>>> PrepareSubmaps(
+    const std::vector<SubmapInput>& inputs, const MergeParams& params) {
+  MAPD_RETURN_IF_ERROR(params.Validate());
   // With the correlation generator first (the default), every pair levels
   // both maps: their gravity frames are computed here, with the views, one
   // input per thread.
   const bool level_now = params.correlation.enabled && params.correlation.after_corner_stages == 0;
+  std::vector<std::shared_ptr<PreparedSubmap>> prepared(inputs.size());
   std::vector<Status> read(inputs.size());
   // Gravity() records its time; here that time is part of reading_s, so the
   // per-input records (one each: the threads must not share one) are dropped.
   std::vector<StageTimes> view_times(inputs.size());
   ParallelFor(inputs.size(), params.threads, [&](std::size_t i, std::size_t) {
-    submaps[i].id = inputs[i].id;
+    auto parts = std::make_unique<PreparedSubmap::Parts>();
+    parts->params = params;
+    parts->id = inputs[i].id;
     auto tree = ReadOctree(inputs[i].bytes);
     if (!tree.ok()) {
       read[i] = Status(tree.status().code(), Name(inputs[i].id) + ": " + tree.status().message());
@@ -110,22 +138,69 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
       read[i] = Status(grid.status().code(), Name(inputs[i].id) + ": " + grid.status().message());
       return;
     }
-    submaps[i].tree = std::move(tree).value();
-    submaps[i].grid = std::move(grid).value();
-    submaps[i].features.emplace(submaps[i].id, &submaps[i].grid, &params);
-    if (level_now) submaps[i].features->Gravity(&view_times[i]);  // errors: AlignPair's to report
+    parts->tree = std::move(tree).value();
+    parts->grid = std::move(grid).value();
+    parts->features.emplace(parts->id, &parts->grid, &parts->params);
+    if (level_now) parts->features->Gravity(&view_times[i]);  // errors: AlignPair's to report
+    prepared[i] = std::make_shared<PreparedSubmap>(std::move(parts));
   });
   for (const Status& status : read) MAPD_RETURN_IF_ERROR(status);
-  outcome.times.reading_s = SecondsSince(stage_start);
-  double finest = submaps[0].grid.resolution();
-  for (const auto& submap : submaps) {
-    const double resolution = submap.grid.resolution();
-    if (resolution != submaps[0].grid.resolution() &&
+  return prepared;
+}
+
+StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
+                                    const MergeParams& params,
+                                    const ProgressCallback& progress_callback) {
+  const Clock::time_point start = Clock::now();
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  std::vector<uint64_t> ids;
+  for (const SubmapInput& input : inputs) ids.push_back(input.id);
+  MAPD_RETURN_IF_ERROR(CheckInputIds(ids));
+  // Parse (the safe reader) and view every input.
+  auto prepared = PrepareSubmaps(inputs, params);
+  if (!prepared.ok()) return prepared.status();
+  std::vector<PreparedSubmap::Parts*> views;
+  for (const auto& submap : *prepared) views.push_back(&submap->parts());
+  return MergeViews(views, params, progress_callback, start, SecondsSince(start),
+                    /*release=*/true);
+}
+
+StatusOr<MergeOutcome> MergePreparedSubmaps(
+    const std::vector<std::shared_ptr<PreparedSubmap>>& inputs, const MergeParams& params,
+    const ProgressCallback& progress_callback) {
+  const Clock::time_point start = Clock::now();
+  MAPD_RETURN_IF_ERROR(params.Validate());
+  std::vector<uint64_t> ids;
+  std::vector<PreparedSubmap::Parts*> views;
+  for (const auto& input : inputs) {
+    if (input == nullptr) return Status::InvalidArgument("a prepared input is missing");
+    ids.push_back(input->id());
+    views.push_back(&input->parts());
+  }
+  MAPD_RETURN_IF_ERROR(CheckInputIds(ids));
+  return MergeViews(views, params, progress_callback, start, 0.0, /*release=*/false);
+}
+
+namespace {
+
+StatusOr<MergeOutcome> MergeViews(const std::vector<PreparedSubmap::Parts*>& submaps,
+                                  const MergeParams& params,
+                                  const ProgressCallback& progress_callback,
+                                  Clock::time_point start, double reading_s, bool release) {
+  const Progress progress(progress_callback);
+  MergeOutcome outcome;
+  outcome.times.reading_s = reading_s;
+  for (PreparedSubmap::Parts* submap : submaps) submap->features->StartMerge();
+  Clock::time_point stage_start;
+  double finest = submaps[0]->grid.resolution();
+  for (const PreparedSubmap::Parts* submap : submaps) {
+    const double resolution = submap->grid.resolution();
+    if (resolution != submaps[0]->grid.resolution() &&
         params.resolution_policy == ResolutionPolicy::kRefuse) {
       // Named by the service's setting: this is the message an operator sees.
       return Status::FailedPrecondition(
-          Name(submaps[0].id) + " has resolution " + Metres(submaps[0].grid.resolution()) + ", " +
-          Name(submap.id) + " has " + Metres(resolution) +
+          Name(submaps[0]->id) + " has resolution " + Metres(submaps[0]->grid.resolution()) + ", " +
+          Name(submap->id) + " has " + Metres(resolution) +
           "; merge.resolution_policy is refuse (allowed: refuse, resample); set it to resample "
           "to merge them at the finest resolution");
     }
@@ -141,17 +216,17 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   const bool corners_first =
       !params.correlation.enabled || params.correlation.after_corner_stages > 0;
   for (std::size_t i = 0; i < submaps.size() && corners_first; ++i) {
-    auto corners = submaps[i].features->Corners(&outcome.times);
+    auto corners = submaps[i]->features->Corners(&outcome.times);
     if (!corners.ok()) return corners.status();
     const std::size_t found = (*corners)->size();
     // With the correlation generator, too few corners is for AlignPair to
     // report: corridors and doorways have few corners but walls and floor.
     if (found == 0 && !params.correlation.enabled) {
-      return Status::FailedPrecondition("no corners found in " + Name(submaps[i].id));
+      return Status::FailedPrecondition("no corners found in " + Name(submaps[i]->id));
     }
     if (static_cast<int>(found) < params.min_matched_corners && !params.correlation.enabled) {
       return Status::FailedPrecondition("only " + std::to_string(found) + " corners found in " +
-                                        Name(submaps[i].id) + ", need " +
+                                        Name(submaps[i]->id) + ", need " +
                                         std::to_string(params.min_matched_corners));
     }
     progress.Report("corners",
@@ -164,8 +239,8 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   progress.Report("matching", 0.4);
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     for (std::size_t j = i + 1; j < submaps.size(); ++j) {
-      const PairSide a{submaps[i].id, &submaps[i].grid, &*submaps[i].features};
-      const PairSide b{submaps[j].id, &submaps[j].grid, &*submaps[j].features};
+      const PairSide a{submaps[i]->id, &submaps[i]->grid, &*submaps[i]->features};
+      const PairSide b{submaps[j]->id, &submaps[j]->grid, &*submaps[j]->features};
       const double seconds_left = params.max_seconds - SecondsSince(start);
       auto pair = AlignPair(a, b, params, finest, seconds_left, &outcome.times);
       if (!pair.ok()) return pair.status();
@@ -181,10 +256,11 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
     }
   }
 
-  for (auto& submap : submaps) {
-    const bool extracted = submap.features->corners_extracted();
+  for (PreparedSubmap::Parts* submap : submaps) {
+    const bool extracted = submap->features->corners_used();
     outcome.corners.push_back(
-        extracted ? static_cast<int64_t>((*submap.features->Corners(&outcome.times))->size()) : -1);
+        extracted ? static_cast<int64_t>((*submap->features->Corners(&outcome.times))->size())
+                  : -1);
   }
 
   // B.7: the maximum spanning tree from the first input.
@@ -199,21 +275,21 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   for (std::size_t i = 1; i < submaps.size(); ++i) {
     if (placement.placed[i]) continue;
     if (!unplaced.empty()) unplaced += " | ";
-    unplaced += Name(submaps[i].id) + " (" + RefusalsOf(submaps[i].id, outcome.pairs) + ")";
+    unplaced += Name(submaps[i]->id) + " (" + RefusalsOf(submaps[i]->id, outcome.pairs) + ")";
   }
   if (!unplaced.empty()) {
-    return Status::FailedPrecondition("not connected to " + Name(submaps[0].id) +
+    return Status::FailedPrecondition("not connected to " + Name(submaps[0]->id) +
                                       " by accepted merges: " + unplaced);
   }
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     Alignment alignment;
-    alignment.id = submaps[i].id;
+    alignment.id = submaps[i]->id;
     alignment.T_reference_submap = placement.T_root_node[i];
     const int parent = placement.parent[i];
     // The evidence of the tree edge that placed it.
     for (const auto& pair : outcome.pairs) {
       if (parent < 0 || !pair.accepted) continue;
-      const uint64_t pid = submaps[static_cast<std::size_t>(parent)].id;
+      const uint64_t pid = submaps[static_cast<std::size_t>(parent)]->id;
       if ((pair.id_a == pid && pair.id_b == alignment.id) ||
           (pair.id_b == pid && pair.id_a == alignment.id)) {
         alignment.matched_corners = pair.matched_corners;
@@ -243,9 +319,10 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   // The grids and their features are done with: fusion works on the trees.
   // Freed first, fusion's merged tree and leaf lists reuse their memory (the
   // merge's peak was in fusion, with them still held).
-  for (Submap& submap : submaps) {
-    submap.features.reset();
-    submap.grid = VoxelGrid();
+  for (PreparedSubmap::Parts* submap : submaps) {
+    if (!release) break;
+    submap->features.reset();
+    submap->grid = VoxelGrid();
   }
 
   // B.6: fusion into the first input's frame, breadth-first along the tree.
@@ -256,12 +333,12 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   fusion.max_free_voxels = params.max_fusion_free_voxels;
   fusion.threads = params.threads;
   FusionStats stats;
-  auto merged = StartMergedMap(*submaps[0].tree, finest, fusion, &stats);
+  auto merged = StartMergedMap(*submaps[0]->tree, finest, fusion, &stats);
   if (!merged.ok()) return merged.status();
   for (std::size_t k = 1; k < placement.order.size(); ++k) {
     const auto i = static_cast<std::size_t>(placement.order[k]);
     MAPD_RETURN_IF_ERROR(
-        FuseInto(*submaps[i].tree, placement.T_root_node[i], fusion, merged->get(), &stats));
+        FuseInto(*submaps[i]->tree, placement.T_root_node[i], fusion, merged->get(), &stats));
     progress.Report(
         "fusion", 0.8 + 0.2 * static_cast<double>(k) / static_cast<double>(placement.order.size()));
     MAPD_RETURN_IF_ERROR(OverBudget(start, params, "fusion"));
@@ -275,7 +352,7 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
     } else if (task == 1) {
       outcome.occupied_voxels = CountOccupiedVoxels(**merged);
     } else {
-      submaps[task - 2].tree.reset();
+      if (release) submaps[task - 2]->tree.reset();
     }
   });
   if (!bytes.ok()) return bytes.status();
@@ -287,4 +364,5 @@ StatusOr<MergeOutcome> MergeSubmaps(const std::vector<SubmapInput>& inputs,
   return outcome;
 }
 
+}  // namespace
 }  // namespace mapd::voxel

@@ -53,6 +53,8 @@ class OverlapIndex {
   bool OccupiedNear(const VoxelKey& key) const;
   // A knows `key` (free or occupied).
   bool Observed(const VoxelKey& key) const;
+  // Heap bytes held.
+  std::size_t MemoryBytes() const { return near_.MemoryBytes() + observed_.MemoryBytes(); }
 
  private:
   const VoxelGrid* grid_;

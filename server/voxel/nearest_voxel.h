@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "voxel/cell_bits.h"
+#include "voxel/memory_bytes.h"
 
 namespace mapd::voxel {
 
@@ -61,6 +62,13 @@ class NearestVoxelIndex {
 
   // Whether the bit sets are kept (false: the hash answers).
   bool dense() const { return !occupied_.empty(); }
+
+  // Heap bytes held, approximately (voxel/memory_bytes.h).
+  std::size_t MemoryBytes() const {
+    return near_.MemoryBytes() + occupied_.MemoryBytes() + voxel::MemoryBytes(rank_) +
+           voxel::MemoryBytes(first_) + voxel::MemoryBytes(sorted_) + voxel::MemoryBytes(order_) +
+           voxel::MemoryBytes(cells_);
+  }
 
  private:
   // The best point so far: the nearest, ties to the lower index.

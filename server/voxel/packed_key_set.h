@@ -45,6 +45,10 @@ class PackedKeySet {
   bool empty() const { return keys_.empty(); }
   // In the order of first insertion.
   const std::vector<std::uint64_t>& keys() const { return keys_; }
+  // Heap bytes held.
+  std::size_t MemoryBytes() const {
+    return (slots_.capacity() + keys_.capacity()) * sizeof(std::uint64_t);
+  }
 
   // No packed key is all ones (they use 48 bits).
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};

@@ -8,10 +8,12 @@
 #include "common/clock.h"
 #include "voxel/corner_extraction.h"
 #include "voxel/gravity_alignment.h"
+#include "voxel/memory_bytes.h"
 
 namespace mapd::voxel {
 
 StatusOr<const CornerSet*> SubmapFeatures::Corners(StageTimes* times) {
+  corners_used_ = true;
   if (!corners_.has_value()) {
     const auto start = std::chrono::steady_clock::now();
     // The shared normals when they are the ones corner extraction uses (and
@@ -65,6 +67,18 @@ const Eigen::Vector3d& SubmapFeatures::OccupiedCentroid() {
     centroid_ = sum / static_cast<double>(std::max<std::size_t>(1, grid_->num_occupied()));
   }
   return *centroid_;
+}
+
+std::size_t SubmapFeatures::MemoryBytes() const {
+  std::size_t bytes = 0;
+  if (corners_.has_value()) bytes += voxel::MemoryBytes(*corners_);
+  if (surface_.has_value()) {
+    bytes += surface_->index.MemoryBytes() + voxel::MemoryBytes(surface_->normals.normals) +
+             voxel::MemoryBytes(surface_->normals.curvature);
+  }
+  if (overlap_.has_value()) bytes += overlap_->MemoryBytes();
+  if (icp_target_ != nullptr) bytes += icp_target_->MemoryBytes();
+  return bytes;
 }
 
 }  // namespace mapd::voxel

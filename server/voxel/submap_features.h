@@ -7,6 +7,7 @@
 #ifndef MAPD_VOXEL_SUBMAP_FEATURES_H_
 #define MAPD_VOXEL_SUBMAP_FEATURES_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -31,7 +32,10 @@ class SubmapFeatures {
   // times->corners_s. Errors: ExtractCorners's (bad params, a map beyond its
   // limits), naming the submap.
   StatusOr<const CornerSet*> Corners(StageTimes* times);
-  bool corners_extracted() const { return corners_.has_value(); }
+  // Whether Corners() was called since StartMerge() (a prepared submap
+  // keeps its corners from merge to merge; a merge reports only those it used).
+  bool corners_used() const { return corners_used_; }
+  void StartMerge() { corners_used_ = false; }
 
   // The levelling and wall histogram; the first call computes them and adds
   // its seconds to times->correlation_s. FailedPrecondition (kept) when the
@@ -54,11 +58,16 @@ class SubmapFeatures {
   // where two transforms of this submap are compared (DistinctTransforms).
   const Eigen::Vector3d& OccupiedCentroid();
 
+  // Heap bytes of what has been computed so far, approximately
+  // (voxel/memory_bytes.h).
+  std::size_t MemoryBytes() const;
+
  private:
   uint64_t id_;
   const VoxelGrid* grid_;
   const MergeParams* params_;
   std::optional<CornerSet> corners_;
+  bool corners_used_ = false;
   std::optional<StatusOr<GravityFrame>> gravity_;
   std::optional<internal::GridSurface> surface_;
   std::optional<OverlapIndex> overlap_;

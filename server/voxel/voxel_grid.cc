@@ -167,4 +167,12 @@ VoxelKey VoxelGrid::PointToKey(const Eigen::Vector3d& point) const {
                   static_cast<int>(std::floor(scaled.z())));
 }
 
+std::size_t VoxelGrid::MemoryBytes() const {
+  std::size_t bytes = occupied_keys_.capacity() * sizeof(VoxelKey) +
+                      occupied_centres_.capacity() * sizeof(Eigen::Vector3d) +
+                      occupied_.MemoryBytes();
+  for (const PackedKeySet& cubes : free_) bytes += cubes.MemoryBytes();
+  return bytes;
+}
+
 }  // namespace mapd::voxel

@@ -87,6 +87,8 @@ class VoxelGrid {
   // order the map gave them (FromOcTree: its leaves'). For views that need
   // free space per region (mapctl occupancy-grid) without probing key by key.
   void ForEachFreeCube(const std::function<void(const VoxelKey& min_key, int edge)>& fn) const;
+  // Heap bytes held.
+  std::size_t MemoryBytes() const;
   // At least one free voxel (maps built from points alone carry none).
   bool has_free_space() const {
     for (const auto& cubes : free_) {

@@ -148,6 +148,12 @@ void RpcFamilies(Writer* w) {
   w->Family("mapd_merge_duration_seconds", "histogram",
             "Time a voxel merge computed (MergeSubmaps), seconds.");
   w->Histogram("mapd_merge_duration_seconds", rpc.MergeSeconds());
+  const service::RpcMetrics::Prepared prepared = rpc.PreparedSubmaps();
+  w->Family("mapd_prepared_submaps", "gauge",
+            "Submaps read and levelled ahead of their merges, kept (merge.prepared_submaps_mib).");
+  w->Sample("mapd_prepared_submaps", static_cast<double>(prepared.count));
+  w->Family("mapd_prepared_submap_bytes", "gauge", "Memory those prepared submaps hold, bytes.");
+  w->Sample("mapd_prepared_submap_bytes", static_cast<double>(prepared.bytes));
 }
 
 }  // namespace

@@ -278,7 +278,8 @@ TEST_F(ServerFixture, SubmapRpcsAnswerInEveryBuild) {
 TEST(VoxelMergeSwitchTest, TheRunnerRefusesMergesOnlyWhenMergingIsNotBuilt) {
   EXPECT_EQ(service::VoxelMergeBuilt(), MAPD_TEST_WITH_VOXEL == 1);
   service::MergeRunner runner(1, 1);
-  StatusOr<std::shared_ptr<service::MergeJob>> job = runner.Submit({1, 2}, {"", ""}, {});
+  StatusOr<std::shared_ptr<service::MergeJob>> job =
+      runner.Submit(runner.NewOwner(), {1, 2}, {"", ""}, {});
   if (service::VoxelMergeBuilt()) {
     ASSERT_TRUE(job.ok()) << job.status().ToString();
     std::vector<service::MergeProgressEvent> events;

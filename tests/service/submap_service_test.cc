@@ -14,6 +14,7 @@
 
 #include "common/octomap_scenes.h"
 #include "server_fixture.h"
+#include "service/rpc_metrics.h"
 #include "storage/sqlite/sqlite.h"
 #include "voxel/merge.h"
 
@@ -565,6 +566,49 @@ TEST_F(SubmapServiceTest, FirstTieOfTwoLocalSessionsMakesTheReferenceFrameTheMap
 }
 
 // --- Shutdown with a merge in flight.
+
+// Uploads are read and levelled for their merges ahead, in a free merge slot
+// (merge.prepared_submaps_mib); a deleted submap's view goes; a merge from
+// the views stores the pose a merge from the bytes stores.
+TEST_F(SubmapServiceTest, UploadsArePreparedAheadAndMergeAsFromTheBytes) {
+  const auto prepared_count = [] { return service::RpcMetrics::Default().PreparedSubmaps().count; };
+  const auto wait_for_prepared = [&](uint64_t count) {
+    for (int i = 0; i < 600 && prepared_count() != count; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return prepared_count() == count;
+  };
+  const std::string west = West(), east = East();
+  const uint64_t a = UploadOk(Header("r1", "west"), west);
+  const uint64_t b = UploadOk(Header("r2", "east"), east);
+  const uint64_t c =
+      UploadOk(Header("r3", "spare"), RoomSubmap(scene_, 0, 4, Eigen::Isometry3d::Identity()));
+  ASSERT_TRUE(wait_for_prepared(3)) << prepared_count() << " prepared";
+  EXPECT_GT(service::RpcMetrics::Default().PreparedSubmaps().bytes, 3 * west.size());
+  ASSERT_TRUE(Delete(c).ok());
+  EXPECT_EQ(prepared_count(), 2u);
+  const MergeCall from_views = Merge({a, b});
+  ASSERT_TRUE(from_views.status.ok()) << from_views.status.error_message();
+  EXPECT_EQ(prepared_count(), 2u);  // kept for the next merges
+
+  config_.submaps.prepared_submaps_mib = 0;
+  Restart();
+  EXPECT_EQ(prepared_count(), 0u);  // the closed map's views went with it
+  const uint64_t a2 = UploadOk(Header("r4", "west"), west);
+  const uint64_t b2 = UploadOk(Header("r5", "east"), east);
+  const MergeCall from_bytes = Merge({a2, b2});
+  ASSERT_TRUE(from_bytes.status.ok()) << from_bytes.status.error_message();
+  EXPECT_EQ(prepared_count(), 0u);
+  ASSERT_EQ(from_views.result.alignments_size(), 2);
+  ASSERT_EQ(from_bytes.result.alignments_size(), 2);
+  const pb::Rigid3& T_views = from_views.result.alignments(1).t_reference_submap();
+  const pb::Rigid3& T_bytes = from_bytes.result.alignments(1).t_reference_submap();
+  EXPECT_EQ(T_views.SerializeAsString(), T_bytes.SerializeAsString())
+      << T_views.DebugString() << "vs\n"
+      << T_bytes.DebugString();
+  EXPECT_EQ(from_views.result.alignments(1).residual_m(),
+            from_bytes.result.alignments(1).residual_m());
+}
 
 TEST_F(SubmapServiceTest, ShutdownDoesNotWaitForAMergeInFlight) {
   config_.shutdown_grace_s = 600;  // a shutdown that waited for the merge would show

@@ -16,11 +16,13 @@
 #include "voxel/merge.h"
 #include "voxel/parallel.h"
 #include "voxel/support/corner_scene.h"
+#include "voxel/support/same_outcome.h"
 #include "voxel/support/voxel_scene.h"
 
 namespace mapd::voxel {
 namespace {
 
+using testing::ExpectSameOutcome;
 using testing::Pose;
 using testing::RasteriseSubmap;
 
@@ -62,24 +64,6 @@ TEST(ParallelSortTest, SortsAsStdSortOnAnyThreadCount) {
       ASSERT_EQ(sorted, expected) << n << " values on " << threads << " threads";
     }
   }
-}
-
-void ExpectSameOutcome(const MergeOutcome& one, const MergeOutcome& many) {
-  ASSERT_EQ(one.alignments.size(), many.alignments.size());
-  for (std::size_t i = 0; i < one.alignments.size(); ++i) {
-    EXPECT_TRUE(one.alignments[i].T_reference_submap.matrix() ==
-                many.alignments[i].T_reference_submap.matrix())
-        << one.alignments[i].T_reference_submap.matrix() << "\nvs\n"
-        << many.alignments[i].T_reference_submap.matrix();
-  }
-  ASSERT_EQ(one.pairs.size(), many.pairs.size());
-  for (std::size_t i = 0; i < one.pairs.size(); ++i) {
-    EXPECT_EQ(one.pairs[i].residual_m, many.pairs[i].residual_m);
-    EXPECT_EQ(one.pairs[i].overlap_score, many.pairs[i].overlap_score);
-    EXPECT_EQ(one.pairs[i].support_fraction, many.pairs[i].support_fraction);
-    EXPECT_EQ(one.pairs[i].reason, many.pairs[i].reason);
-  }
-  EXPECT_TRUE(one.merged_bt == many.merged_bt) << "the merged maps differ";
 }
 
 // Outdoors-like: two crops of the grove, the second turned 30 deg, placed by

@@ -15,6 +15,7 @@ mapd_add_test(voxel_merging_test
           ${CMAKE_CURRENT_LIST_DIR}/global_map_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/map_edit_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/merge_threads_test.cc
+          ${CMAKE_CURRENT_LIST_DIR}/prepared_submap_test.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/lattice_copy.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/corridor_scene.cc
           ${CMAKE_CURRENT_LIST_DIR}/support/voxel_scene.cc
