@@ -104,8 +104,6 @@ void MergeRunner::Forget(uint64_t owner, uint64_t id) {
   PublishPrepared(state_->prepared);
 }
 
-const PreparedSubmaps& MergeRunner::prepared() const { return state_->prepared; }
-
 StatusOr<std::shared_ptr<MergeJob>> MergeRunner::Submit(uint64_t owner, std::vector<uint64_t> ids,
                                                         std::vector<std::string> bytes,
                                                         const voxel::MergeParams& params) {

@@ -105,7 +105,6 @@ class MergeRunner {
   // Submap `id` is deleted: its view is freed.
   void Forget(uint64_t owner, uint64_t id);
 
-  const PreparedSubmaps& prepared() const;
   // Refuses new jobs; queued ones end with Unavailable; running ones finish
   // in the background and are dropped. Does not wait for them.
   void Shutdown();

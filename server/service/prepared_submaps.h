@@ -26,6 +26,7 @@
 #include <mutex>
 #include <set>
 #include <utility>
+#include <vector>
 
 #include "voxel/merge.h"  // types only
 
