@@ -115,6 +115,7 @@ void GlobalMapBuilder::Stop() {
   {
     std::lock_guard<std::mutex> lock(mu_);
     stop_ = true;
+    stopping_ = true;
     cv_.notify_all();
   }
   if (worker_.joinable()) worker_.join();
@@ -141,6 +142,12 @@ void GlobalMapBuilder::Loop() {
     lock.unlock();
     Status built = first ? BackfillPlacements(core_) : Status::Ok();
     if (built.ok()) built = BuildOnce();
+    if (stopping_ && built.code() == StatusCode::kUnavailable) {
+      // Nothing was stored: the next start finds the members changed and
+      // builds again. Not counted as built, so no waiter takes it for one.
+      Log(LogLevel::kInfo, "global_map_abandoned", {{"why", "shutdown"}});
+      return;
+    }
     if (!built.ok() && built.code() != StatusCode::kUnimplemented) {
       Log(LogLevel::kError, "global_map_failed", {{"error", built.ToString()}});
     }
@@ -194,6 +201,7 @@ Status GlobalMapBuilder::BuildOnce() {
   bytes.reserve(members.size() - first);
   std::vector<voxel::PlacedSubmap> fuse;
   for (size_t i = first; i < members.size(); ++i) {
+    if (stopping_) return Status::Unavailable("the global map build was stopped");
     StatusOr<std::string> data = store.GetSubmapData(members[i].submap_id);
     if (!data.ok()) return data.status();
     bytes.push_back(*std::move(data));
@@ -203,8 +211,9 @@ Status GlobalMapBuilder::BuildOnce() {
                     members[i].T_map_submap.ToIsometry(), bytes[i - first]});
   }
   const auto start = std::chrono::steady_clock::now();
-  StatusOr<voxel::GlobalMapBuild> build = ExtendVoxelGlobalMap(
-      incremental ? std::string_view(previous->data) : std::string_view(), fuse, params_);
+  StatusOr<voxel::GlobalMapBuild> build =
+      ExtendVoxelGlobalMap(incremental ? std::string_view(previous->data) : std::string_view(),
+                           fuse, params_, &stopping_);
   if (!build.ok()) return build.status();
   storage::GlobalMapRecord record;
   record.version = had_map ? previous->version + 1 : 1;

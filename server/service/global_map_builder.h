@@ -15,6 +15,7 @@
 #ifndef MAPD_SERVICE_GLOBAL_MAP_BUILDER_H_
 #define MAPD_SERVICE_GLOBAL_MAP_BUILDER_H_
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -44,7 +45,8 @@ class GlobalMapBuilder {
   bool WaitUntilCurrent(std::chrono::milliseconds timeout);
   // Why the last build failed (empty: it did not).
   std::string last_error() const;
-  // Ends the worker after the build in progress (a fusion is not interrupted).
+  // Ends the worker. A build in progress is abandoned after the fusion of
+  // its current member and stores nothing; the next start builds again.
   void Stop();
 
  private:
@@ -56,11 +58,12 @@ class GlobalMapBuilder {
   const voxel::FusionParams params_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
-  uint64_t requested_ = 1;   // GUARDED_BY(mu_): Invalidate() calls, plus the start
-  uint64_t built_ = 0;       // GUARDED_BY(mu_): requests covered by a finished build
-  bool stop_ = false;        // GUARDED_BY(mu_)
-  bool backfilled_ = false;  // GUARDED_BY(mu_): old merges' placements recorded
-  std::string last_error_;   // GUARDED_BY(mu_)
+  uint64_t requested_ = 1;             // GUARDED_BY(mu_): Invalidate() calls, plus the start
+  uint64_t built_ = 0;                 // GUARDED_BY(mu_): requests covered by a finished build
+  bool stop_ = false;                  // GUARDED_BY(mu_)
+  std::atomic<bool> stopping_{false};  // stop_, read by a build in progress
+  bool backfilled_ = false;            // GUARDED_BY(mu_): old merges' placements recorded
+  std::string last_error_;             // GUARDED_BY(mu_)
   std::thread worker_;
 };
 

@@ -28,8 +28,8 @@ std::size_t PreparedVoxelSubmapBytes(const voxel::PreparedSubmap& view) {
 
 StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(
     std::string_view base_bt, const std::vector<voxel::PlacedSubmap>& members,
-    const voxel::FusionParams& params) {
-  return voxel::ExtendGlobalMap(base_bt, members, params);
+    const voxel::FusionParams& params, const std::atomic<bool>* stop) {
+  return voxel::ExtendGlobalMap(base_bt, members, params, stop);
 }
 
 }  // namespace mapd::service

@@ -6,6 +6,7 @@
 #ifndef MAPD_SERVICE_VOXEL_MERGE_H_
 #define MAPD_SERVICE_VOXEL_MERGE_H_
 
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <string_view>
@@ -40,7 +41,7 @@ std::size_t PreparedVoxelSubmapBytes(const voxel::PreparedSubmap& view);
 // voxel::ExtendGlobalMap, or Unimplemented without the voxel library.
 StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(
     std::string_view base_bt, const std::vector<voxel::PlacedSubmap>& members,
-    const voxel::FusionParams& params);
+    const voxel::FusionParams& params, const std::atomic<bool>* stop);
 
 }  // namespace mapd::service
 

@@ -29,7 +29,8 @@ std::size_t PreparedVoxelSubmapBytes(const voxel::PreparedSubmap&) { return 0; }
 
 StatusOr<voxel::GlobalMapBuild> ExtendVoxelGlobalMap(std::string_view,
                                                      const std::vector<voxel::PlacedSubmap>&,
-                                                     const voxel::FusionParams&) {
+                                                     const voxel::FusionParams&,
+                                                     const std::atomic<bool>*) {
   return Status::Unimplemented(
       "no global map: this mapd was built without voxel merging (MAPD_WITH_VOXEL=OFF)");
 }

@@ -19,11 +19,19 @@ StatusOr<OcTreePtr> ReadMember(const PlacedSubmap& member) {
   return tree;
 }
 
+Status CheckNotStopped(const std::atomic<bool>* stop) {
+  if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+    return Status::Unavailable("the global map build was stopped");
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 StatusOr<GlobalMapBuild> ExtendGlobalMap(std::string_view base_bt,
                                          const std::vector<PlacedSubmap>& members,
-                                         const FusionParams& params) {
+                                         const FusionParams& params,
+                                         const std::atomic<bool>* stop) {
   MAPD_RETURN_IF_ERROR(params.Validate());
   for (const PlacedSubmap& m : members) {
     if (!m.T_map_submap.matrix().allFinite()) {
@@ -47,6 +55,7 @@ StatusOr<GlobalMapBuild> ExtendGlobalMap(std::string_view base_bt,
     // trees are not all held at once).
     double finest = 0;
     for (const PlacedSubmap& m : members) {
+      MAPD_RETURN_IF_ERROR(CheckNotStopped(stop));
       auto summary = InspectSubmap(m.bytes);
       if (!summary.ok()) {
         return Status::InvalidArgument("submap " + std::to_string(m.id) +
@@ -69,10 +78,12 @@ StatusOr<GlobalMapBuild> ExtendGlobalMap(std::string_view base_bt,
     }
   }
   for (; next < members.size(); ++next) {
+    MAPD_RETURN_IF_ERROR(CheckNotStopped(stop));
     auto tree = ReadMember(members[next]);
     if (!tree.ok()) return tree.status();
     MAPD_RETURN_IF_ERROR(FuseInto(**tree, members[next].T_map_submap, params, map.get(), &stats));
   }
+  MAPD_RETURN_IF_ERROR(CheckNotStopped(stop));
   auto bytes = WriteBinaryOctree(*map);
   if (!bytes.ok()) return bytes.status();
   GlobalMapBuild build;

@@ -14,6 +14,7 @@
 #define MAPD_VOXEL_GLOBAL_MAP_H_
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -44,9 +45,15 @@ struct GlobalMapBuild {
 // is resampled into the map's grid (a finer one loses detail: the caller
 // rebuilds when a finer member joins). InvalidArgument for unreadable bytes
 // (naming the submap), a non-finite pose, or an empty base without members.
+//
+// `stop` (may be null) is read before each member is read or fused and
+// before the map is written: once it is set, the build ends with Unavailable
+// and nothing (a server shutting down does not wait for a whole build; the
+// fusion of the member in progress is finished first).
 StatusOr<GlobalMapBuild> ExtendGlobalMap(std::string_view base_bt,
                                          const std::vector<PlacedSubmap>& members,
-                                         const FusionParams& params);
+                                         const FusionParams& params,
+                                         const std::atomic<bool>* stop = nullptr);
 
 }  // namespace mapd::voxel
 

@@ -657,10 +657,19 @@ TEST_F(SubmapServiceTest, ShutdownDoesNotWaitForAMergeInFlight) {
   EXPECT_THAT(call.status.error_message(), HasSubstr("nothing was stored"));
   EXPECT_FALSE(call.has_result);
 
-  // Nothing of the abandoned merge was stored.
+  // Nothing of the abandoned merge was stored. The global map of the first
+  // merge (its build may have been abandoned by the same shutdown) is there
+  // after the restart, once, with both inputs.
   Restart();
   EXPECT_EQ(MergeRows().size(), 1u);
   EXPECT_EQ(List().size(), 3u);
+  std::string global;
+  pb::GlobalMapInfo about;
+  ASSERT_TRUE(Download(0, &global, nullptr, &about).ok());
+  EXPECT_EQ(about.version(), 1u);
+  ASSERT_EQ(about.members_size(), 2);
+  EXPECT_EQ(about.members(0).submap_id(), a);
+  EXPECT_EQ(about.members(1).submap_id(), b);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <string>
 
 #include "voxel/support/lattice_copy.h"
@@ -81,6 +82,28 @@ TEST(GlobalMapTest, BadInputIsAClearError) {
   EXPECT_EQ(ExtendGlobalMap("", {}, {}).status().code(), StatusCode::kInvalidArgument);
   bad = ExtendGlobalMap("garbage", {{1, h.T_map_west, h.west}}, {});
   EXPECT_NE(bad.status().message().find("stored global map"), std::string::npos);
+}
+
+// A server shutting down stops a build: Unavailable, whether the map is new
+// or extended, and the same inputs build as before once the flag is clear.
+TEST(GlobalMapTest, AStoppedBuildEndsUnavailableWithNothing) {
+  const Halves h = RoomHalves();
+  std::atomic<bool> stop{true};
+  auto stopped =
+      ExtendGlobalMap("", {{1, h.T_map_west, h.west}, {2, h.T_map_east, h.east}}, {}, &stop);
+  ASSERT_FALSE(stopped.ok());
+  EXPECT_EQ(stopped.status().code(), StatusCode::kUnavailable);
+  EXPECT_NE(stopped.status().message().find("stopped"), std::string::npos);
+  auto first = ExtendGlobalMap("", {{1, h.T_map_west, h.west}}, {});
+  ASSERT_TRUE(first.ok()) << first.status().ToString();
+  EXPECT_EQ(ExtendGlobalMap(first->bt, {{2, h.T_map_east, h.east}}, {}, &stop).status().code(),
+            StatusCode::kUnavailable);
+  stop = false;
+  auto built = ExtendGlobalMap(first->bt, {{2, h.T_map_east, h.east}}, {}, &stop);
+  ASSERT_TRUE(built.ok()) << built.status().ToString();
+  auto unstoppable = ExtendGlobalMap(first->bt, {{2, h.T_map_east, h.east}}, {});
+  ASSERT_TRUE(unstoppable.ok());
+  EXPECT_TRUE(built->bt == unstoppable->bt);
 }
 
 }  // namespace
