@@ -31,7 +31,7 @@ struct Sample {
 // voxels changed no outcome of the benchmark's 108 pairs and took 8 % off
 // fr_078_tidyup merges (docs/archive/voxel-merge-history.md, "Exact speed-ups and free
 // pieces of two voxels").
-LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
+LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m, int threads) {
   const double res = grid.resolution();
   const int piece = std::max(1, static_cast<int>(std::lround(0.5 * cell_m / res)));
   const double cell_volume = std::pow(cell_m / res, 3);
@@ -42,9 +42,12 @@ LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
     const std::size_t per_edge = static_cast<std::size_t>((edge + piece - 1) / piece);
     count += per_edge * per_edge * per_edge;
   });
+  // Sized on every thread first (a fresh block's page zeroing shared), then
+  // filled in order on this one.
   LargeVector<Sample> samples;
-  samples.reserve(count);
-  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples.push_back({c, 0.0F, true});
+  ResizeInParallel(&samples, count, threads);
+  std::size_t k = 0;
+  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples[k++] = {c, 0.0F, true};
   grid.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
     const int step = std::min(edge, piece);
     const auto volume = static_cast<float>(std::pow(step, 3) / cell_volume);
@@ -52,7 +55,7 @@ LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m) {
       for (int y = 0; y < edge; y += step) {
         for (int z = 0; z < edge; z += step) {
           const Eigen::Vector3d corner = (min_key + VoxelKey(x, y, z)).cast<double>() * res;
-          samples.push_back({corner + Eigen::Vector3d::Constant(0.5 * step * res), volume, false});
+          samples[k++] = {corner + Eigen::Vector3d::Constant(0.5 * step * res), volume, false};
         }
       }
     }
@@ -408,7 +411,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
   // the content rows), so the search maps 16M-cell buffers once, not twice.
   CoarseGrid grid(n, origin_a, cell);
   {
-    for (const Sample& s : Samples(a, cell)) grid.Add(R_a * s.p, s);
+    for (const Sample& s : Samples(a, cell, threads)) grid.Add(R_a * s.p, s);
     grid.Finish(cover_radius);
     const auto& occ = grid.occ();
     const auto& dilated = grid.dilated_occ();
@@ -416,11 +419,11 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
     const auto& cover = grid.cover();
     rows_a = grid.extent();
     const std::size_t cells = static_cast<std::size_t>(rows_a[0]) * rows_a[1] * n2;
-    occ_rows_a.resize(cells);
-    hit_rows_a.resize(cells);
-    cover_rows_a.resize(cells);
-    std::size_t k = 0;
-    for (std::size_t x = 0; x < static_cast<std::size_t>(rows_a[0]); ++x) {
+    for (auto* rows : {&occ_rows_a, &hit_rows_a, &cover_rows_a})
+      ResizeInParallel(rows, cells, threads);
+    const std::size_t row_cells = static_cast<std::size_t>(rows_a[1]) * n2;
+    ParallelFor(static_cast<std::size_t>(rows_a[0]), threads, [&](std::size_t x, std::size_t) {
+      std::size_t k = x * row_cells;
       for (std::size_t y = 0; y < static_cast<std::size_t>(rows_a[1]); ++y) {
         for (std::size_t i = (x * n1 + y) * n2, end = i + n2; i < end; ++i, ++k) {
           occ_rows_a[k] = occ[i];
@@ -428,10 +431,10 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
           cover_rows_a[k] = cover[i];
         }
       }
-    }
+    });
     cells_a = static_cast<double>(grid.occupied_cells());
   }
-  const LargeVector<Sample> samples_b = Samples(b, cell);
+  const LargeVector<Sample> samples_b = Samples(b, cell, threads);
 
   std::vector<CorrelationHypothesis> out;
   // The FFT, reshaped to each yaw's size on the common grid's buffers, a's
@@ -478,12 +481,11 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
           const float* from = rows.data() + (static_cast<std::size_t>(x) * rows_a[1] + y_) * n2;
           std::copy(from, from + n2, row);
         });
-        spectra->assign(spectrum, spectrum + fft.complex_size());
+        AssignInParallel(spectra, spectrum, fft.complex_size(), threads);
       };
       spectrum_of(occ_rows_a, &occ_a);
       spectrum_of(hit_rows_a, &hit_a);
       spectrum_of(cover_rows_a, &cover_a);
-      occ_b.resize(fft.complex_size());
     }
     const std::size_t spectrum_size = fft.complex_size();
     // b's rows, copied from the grid (laid out for n) into the transform's.
@@ -494,7 +496,7 @@ StatusOr<std::vector<CorrelationHypothesis>> SearchTranslations(
       };
     };
     const Complex* spectrum = fft.ForwardInBoxRows(extent, rows_of(occ));
-    std::copy(spectrum, spectrum + spectrum_size, occ_b.begin());
+    AssignInParallel(&occ_b, spectrum, spectrum_size, threads);
     // The score is normalised by the occupied cells each map has where the
     // other has data: sliding a corridor over more of the other map adds
     // hits but adds as many cells that miss. Overlaps below

@@ -157,13 +157,19 @@ void RealFft::ExecuteForwardInBox(std::array<int, 2> extent) {
     });
     found = box_plans_.emplace(extent, std::move(p)).first;
   }
-  // The passes read zeros where the rows were not transformed.
-  for (std::size_t x = 0; x < static_cast<std::size_t>(extent[0]); ++x) {
+  // The passes read zeros where the rows were not transformed. On the
+  // transform's threads: the first forward transform on fresh buffers is
+  // their first touch here, and the kernel's zeroing of the pages is shared
+  // (large_array.h, ResizeInParallel).
+  ParallelFor(static_cast<std::size_t>(extent[0]), threads_, [&](std::size_t x, std::size_t) {
     std::fill_n(spectrum_ + x * plane + static_cast<std::size_t>(extent[1]) * n2c,
                 static_cast<std::size_t>(n1 - extent[1]) * n2c, Complex(0, 0));
-  }
-  std::fill(spectrum_ + static_cast<std::size_t>(extent[0]) * plane, spectrum_ + complex_size_,
-            Complex(0, 0));
+  });
+  Complex* const tail = spectrum_ + static_cast<std::size_t>(extent[0]) * plane;
+  ParallelRanges(static_cast<std::size_t>(spectrum_ + complex_size_ - tail), threads_,
+                 [&](std::size_t begin, std::size_t end) {
+                   std::fill(tail + begin, tail + end, Complex(0, 0));
+                 });
   Execute(found->second.rows);
   Execute(found->second.columns);
   Execute(found->second.planes);
