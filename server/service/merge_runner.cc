@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <memory>
 #include <thread>
 #include <utility>
 
@@ -51,6 +52,10 @@ void MergeJob::Publish(MergeProgressEvent event) {
 }
 
 void MergeJob::Finish(StatusOr<voxel::MergeOutcome> result) {
+  // Freed on return, once the caller is woken: a campus pair's merged tree
+  // takes ~0.15 s of this thread, which the caller spends storing the merge.
+  std::shared_ptr<void> merged_tree;
+  if (result.ok()) merged_tree = std::move(result->merged_tree);
   std::lock_guard<std::mutex> lock(mu_);
   if (!abandoned_) result_.emplace(std::move(result));
   cv_.notify_all();

@@ -59,6 +59,7 @@ class MergeJob {
  private:
   friend class MergeRunner;
   void Publish(MergeProgressEvent event);
+  // Hands the result over, then frees its merged tree on the calling thread.
   void Finish(StatusOr<voxel::MergeOutcome> result);
   bool abandoned();
 

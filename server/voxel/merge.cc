@@ -357,6 +357,7 @@ StatusOr<MergeOutcome> MergeViews(const std::vector<PreparedSubmap::Parts*>& sub
   });
   if (!bytes.ok()) return bytes.status();
   outcome.merged_bt = std::move(bytes).value();
+  outcome.merged_tree = std::shared_ptr<void>(std::move(merged).value());
   outcome.free_voxels_skipped = stats.free_voxels_skipped;
   outcome.times.fusion_s = SecondsSince(stage_start);
   outcome.times.total_s = SecondsSince(start);

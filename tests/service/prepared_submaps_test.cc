@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/octomap_scenes.h"
+#include "service/merge_runner.h"
 #include "service/voxel_merge.h"
 
 namespace mapd::testing {
@@ -98,6 +100,32 @@ TEST_F(PreparedSubmapsTest, AViewLargerThanTheBudgetIsNotKept) {
   EXPECT_FALSE(small.Has({1, 1}));
   EXPECT_EQ(small.bytes(), 0u);
   EXPECT_FALSE(PreparedSubmaps(0).enabled());
+}
+
+// The runner hands a merge's outcome over without its merged tree, which the
+// library returns with it (voxel/merge.h, MergeOutcome::merged_tree): the
+// worker frees the tree after waking the handler (a campus pair's takes
+// ~0.15 s), so the handler does not wait for that before it stores the merge.
+TEST(MergeRunnerTest, HandsTheOutcomeOverAndFreesTheMergedTreeItself) {
+  const RoomScene room;
+  const std::string a = RoomSubmap(room, 0, 8, Eigen::Isometry3d::Identity());
+  const std::string b =
+      RoomSubmap(room, 3, 11, YawTranslation(M_PI / 2, Eigen::Vector3d(2.0, -1.0, 0.0)));
+  voxel::MergeParams params;
+  const auto library = service::MergeVoxelSubmaps({{1, a}, {2, b}}, params, {});
+  ASSERT_TRUE(library.ok()) << library.status().ToString();
+  EXPECT_NE(library->merged_tree, nullptr);
+
+  service::MergeRunner runner(1, 1, /*prepared_budget_bytes=*/0);
+  auto job = runner.Submit(runner.NewOwner(), {1, 2}, {a, b}, params);
+  ASSERT_TRUE(job.ok()) << job.status().ToString();
+  std::vector<service::MergeProgressEvent> events;
+  while (!(*job)->Wait(std::chrono::milliseconds(50), &events)) {
+  }
+  const StatusOr<voxel::MergeOutcome> outcome = (*job)->TakeResult();
+  ASSERT_TRUE(outcome.ok()) << outcome.status().ToString();
+  EXPECT_EQ(outcome->merged_tree, nullptr);
+  EXPECT_TRUE(outcome->merged_bt == library->merged_bt);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // from views read earlier, and kept for the next merge, decides exactly as a
 // merge from the bytes; the views' memory is measured; bad input is named.
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 
 #include <Eigen/Geometry>
 #include <memory>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "voxel/merge.h"
+#include "voxel/octree_reader.h"
 #include "voxel/support/same_outcome.h"
 #include "voxel/support/voxel_scene.h"
 
@@ -53,6 +55,13 @@ TEST_F(PreparedSubmapTest, MergesAsFromTheBytesAndAgainFromTheKeptViews) {
   ASSERT_TRUE(prepared.ok()) << prepared.status().ToString();
   EXPECT_EQ(prepared->times.reading_s, 0.0);
   ExpectSameOutcome(*from_bytes, *prepared);
+  // The merged tree comes with the outcome, for the caller to free when it
+  // suits: the tree merged_bt was written from.
+  ASSERT_NE(prepared->merged_tree, nullptr);
+  const auto written =
+      WriteBinaryOctree(*static_cast<const octomap::OcTree*>(prepared->merged_tree.get()));
+  ASSERT_TRUE(written.ok()) << written.status().ToString();
+  EXPECT_TRUE(*written == prepared->merged_bt);
   // The views keep what the merge computed of them (A's indexes at least)...
   EXPECT_GT((*views)[0]->MemoryBytes(), bytes_before[0]);
   for (std::size_t i = 0; i < views->size(); ++i)
