@@ -100,7 +100,7 @@ StatusOr<CorrelationRun> RunCorrelation(const PairSide& a, const PairSide& b,
                            params.correlation) > params.correlation.plan_view_first_min_cells) {
     const std::vector<double> heights =
         PlanViewHeights(*a.grid, frame_a->R_up, *b.grid, frame_b->R_up, refinement.window_yaws,
-                        refinement.window_shifts_m, refinement.pixel_m);
+                        refinement.window_shifts_m, refinement.pixel_m, params.threads);
     std::vector<std::size_t> order(heights.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {

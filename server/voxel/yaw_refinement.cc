@@ -371,7 +371,8 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
 std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
                                     const VoxelGrid& b, const Eigen::Matrix3d& R_b,
                                     const std::vector<double>& yaws,
-                                    const std::vector<Eigen::Vector2d>& t_m, double pixel_m) {
+                                    const std::vector<Eigen::Vector2d>& t_m, double pixel_m,
+                                    int threads) {
   std::vector<double> heights(yaws.size(), std::nan(""));
   if (!(pixel_m > 0) || a.empty() || b.empty()) return heights;
   // Column (ix, iy) as one key: both indices to 32 bits, no shift of a
@@ -398,13 +399,14 @@ std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R
     lowest_a.emplace_back(column(p), p.z());
   }
   lowest_of(&lowest_a);
-  Lowest lowest_b;
-  std::vector<double> dz;
-  for (std::size_t k = 0; k < yaws.size() && k < t_m.size(); ++k) {
-    if (!std::isfinite(yaws[k]) || !t_m[k].allFinite()) continue;
+  // One placement per index, on every thread: each sorts b's 150k columns
+  // of a campus crop (~10 ms), and a plan view tries several.
+  const std::size_t placements = std::min(yaws.size(), t_m.size());
+  ParallelFor(placements, threads, [&](std::size_t k, std::size_t) {
+    if (!std::isfinite(yaws[k]) || !t_m[k].allFinite()) return;
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaws[k], Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_b;
-    lowest_b.clear();
+    Lowest lowest_b;
     lowest_b.reserve(b.num_occupied());
     for (const Eigen::Vector3d& c : b.occupied_centres()) {
       Eigen::Vector3d p = R * c;
@@ -412,7 +414,7 @@ std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R
       lowest_b.emplace_back(column(p), p.z());
     }
     lowest_of(&lowest_b);
-    dz.clear();
+    std::vector<double> dz;
     auto in_a = lowest_a.begin();
     for (const auto& [key, z] : lowest_b) {
       in_a = std::lower_bound(in_a, lowest_a.end(), key,
@@ -420,11 +422,11 @@ std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R
       if (in_a == lowest_a.end()) break;
       if (in_a->first == key) dz.push_back(in_a->second - z);
     }
-    if (dz.empty()) continue;
+    if (dz.empty()) return;
     const auto middle = dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2);
     std::nth_element(dz.begin(), middle, dz.end());
     heights[k] = *middle;
-  }
+  });
   return heights;
 }
 

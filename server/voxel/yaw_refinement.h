@@ -104,11 +104,13 @@ StatusOr<std::vector<double>> RefineYaws(const VoxelGrid& a, const Eigen::Matrix
 // occupied voxels, of a's lowest voxel's height minus b's. One per
 // placement; NaN where no column is shared. On the benchmark's campus crops
 // the starts it completes were 0.48-1.30 m from the truth at B's centroid
-// (docs/voxel-merge.md).
+// (docs/voxel-merge.md). The placements run on `threads` threads (the same
+// heights on any number).
 std::vector<double> PlanViewHeights(const VoxelGrid& a, const Eigen::Matrix3d& R_a,
                                     const VoxelGrid& b, const Eigen::Matrix3d& R_b,
                                     const std::vector<double>& yaws,
-                                    const std::vector<Eigen::Vector2d>& t_m, double pixel_m);
+                                    const std::vector<Eigen::Vector2d>& t_m, double pixel_m,
+                                    int threads = 1);
 
 }  // namespace mapd::voxel
 

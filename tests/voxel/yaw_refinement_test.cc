@@ -119,6 +119,15 @@ TEST_F(YawRefinementTest, PlanViewHeightsPutTheGroundOnTheGround) {
   EXPECT_NEAR(heights[0], 0.4, kGroveResolutionM);
   EXPECT_TRUE(std::isnan(heights[1]));
   EXPECT_TRUE(std::isnan(heights[2]));
+  // On two threads, each placement's height is the same, in its place.
+  const std::vector<double> on_two =
+      PlanViewHeights(*a_, kUpright, *b_, kUpright, {std::nan(""), truth, truth},
+                      {Eigen::Vector2d(0, 0), Eigen::Vector2d(500, 0), Eigen::Vector2d(14.3, -2.2)},
+                      2 * kGroveResolutionM, /*threads=*/2);
+  ASSERT_EQ(on_two.size(), 3u);
+  EXPECT_TRUE(std::isnan(on_two[0]));
+  EXPECT_TRUE(std::isnan(on_two[1]));
+  EXPECT_EQ(on_two[2], heights[0]);
   // The same crop with its frame 2 m lower (x_a = R x_b + t, t.z 2.4 m).
   const VoxelGrid raised = GridOf(RasteriseSubmap(
       testing::Grove(),
