@@ -47,7 +47,15 @@ LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m, int threads) {
   LargeVector<Sample> samples;
   ResizeInParallel(&samples, count, threads);
   std::size_t k = 0;
-  for (const Eigen::Vector3d& c : grid.occupied_centres()) samples[k++] = {c, 0.0F, true};
+  const auto add = [&](const Sample& sample) {
+    if (k < samples.size()) {
+      samples[k] = sample;
+    } else {
+      samples.push_back(sample);  // never, while the count above is the fill below
+    }
+    ++k;
+  };
+  for (const Eigen::Vector3d& c : grid.occupied_centres()) add({c, 0.0F, true});
   grid.ForEachFreeCube([&](const VoxelKey& min_key, int edge) {
     const int step = std::min(edge, piece);
     const auto volume = static_cast<float>(std::pow(step, 3) / cell_volume);
@@ -55,11 +63,12 @@ LargeVector<Sample> Samples(const VoxelGrid& grid, double cell_m, int threads) {
       for (int y = 0; y < edge; y += step) {
         for (int z = 0; z < edge; z += step) {
           const Eigen::Vector3d corner = (min_key + VoxelKey(x, y, z)).cast<double>() * res;
-          samples[k++] = {corner + Eigen::Vector3d::Constant(0.5 * step * res), volume, false};
+          add({corner + Eigen::Vector3d::Constant(0.5 * step * res), volume, false});
         }
       }
     }
   });
+  samples.resize(k);
   return samples;
 }
 

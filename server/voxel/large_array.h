@@ -103,7 +103,7 @@ class ZeroedLargeArray {
 // that first touches it, and on this project's 2-core virtual machine that
 // runs at about 1 GB/s: the translation search's spectra and row copies
 // (~150 MB on a campus crop pair) were 0.1-0.2 s of a merge's wall time on
-// one thread (docs/voxel-merge.md, "Prepared submaps").
+// one thread (docs/voxel-merge.md, "One-thread parts shared").
 template <typename T>
 void ResizeInParallel(LargeVector<T>* v, std::size_t n, int threads) {
   if (n > v->size()) {
