@@ -115,7 +115,6 @@ void GlobalMapBuilder::Stop() {
   {
     std::lock_guard<std::mutex> lock(mu_);
     stop_ = true;
-    stopping_ = true;
     cv_.notify_all();
   }
   if (worker_.joinable()) worker_.join();
@@ -134,7 +133,7 @@ void GlobalMapBuilder::Loop() {
     if (!ready) {
       // Writes are refused while the core recovers: the build waits, asking
       // again every 100 ms (not in a spin: recovery needs the CPU).
-      cv_.wait_for(lock, std::chrono::milliseconds(100), [&] { return stop_; });
+      cv_.wait_for(lock, std::chrono::milliseconds(100), [&] { return stop_.load(); });
       continue;
     }
     const uint64_t covering = requested_;
@@ -142,7 +141,7 @@ void GlobalMapBuilder::Loop() {
     lock.unlock();
     Status built = first ? BackfillPlacements(core_) : Status::Ok();
     if (built.ok()) built = BuildOnce();
-    if (stopping_ && built.code() == StatusCode::kUnavailable) {
+    if (stop_ && built.code() == StatusCode::kUnavailable) {
       // Nothing was stored: the next start finds the members changed and
       // builds again. Not counted as built, so no waiter takes it for one.
       Log(LogLevel::kInfo, "global_map_abandoned", {{"why", "shutdown"}});
@@ -201,7 +200,7 @@ Status GlobalMapBuilder::BuildOnce() {
   bytes.reserve(members.size() - first);
   std::vector<voxel::PlacedSubmap> fuse;
   for (size_t i = first; i < members.size(); ++i) {
-    if (stopping_) return Status::Unavailable("the global map build was stopped");
+    if (stop_) return Status::Unavailable("the global map build was stopped");
     StatusOr<std::string> data = store.GetSubmapData(members[i].submap_id);
     if (!data.ok()) return data.status();
     bytes.push_back(*std::move(data));
@@ -211,9 +210,8 @@ Status GlobalMapBuilder::BuildOnce() {
                     members[i].T_map_submap.ToIsometry(), bytes[i - first]});
   }
   const auto start = std::chrono::steady_clock::now();
-  StatusOr<voxel::GlobalMapBuild> build =
-      ExtendVoxelGlobalMap(incremental ? std::string_view(previous->data) : std::string_view(),
-                           fuse, params_, &stopping_);
+  StatusOr<voxel::GlobalMapBuild> build = ExtendVoxelGlobalMap(
+      incremental ? std::string_view(previous->data) : std::string_view(), fuse, params_, &stop_);
   if (!build.ok()) return build.status();
   storage::GlobalMapRecord record;
   record.version = had_map ? previous->version + 1 : 1;

@@ -58,12 +58,13 @@ class GlobalMapBuilder {
   const voxel::FusionParams params_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
-  uint64_t requested_ = 1;             // GUARDED_BY(mu_): Invalidate() calls, plus the start
-  uint64_t built_ = 0;                 // GUARDED_BY(mu_): requests covered by a finished build
-  bool stop_ = false;                  // GUARDED_BY(mu_)
-  std::atomic<bool> stopping_{false};  // stop_, read by a build in progress
-  bool backfilled_ = false;            // GUARDED_BY(mu_): old merges' placements recorded
-  std::string last_error_;             // GUARDED_BY(mu_)
+  uint64_t requested_ = 1;  // GUARDED_BY(mu_): Invalidate() calls, plus the start
+  uint64_t built_ = 0;      // GUARDED_BY(mu_): requests covered by a finished build
+  // Set under mu_ (so the waits on cv_ see it), read without it by a build
+  // in progress.
+  std::atomic<bool> stop_{false};
+  bool backfilled_ = false;  // GUARDED_BY(mu_): old merges' placements recorded
+  std::string last_error_;   // GUARDED_BY(mu_)
   std::thread worker_;
 };
 
